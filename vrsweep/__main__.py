@@ -1,0 +1,3 @@
+from vrsweep.cli import main
+
+main()

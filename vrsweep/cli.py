@@ -1,0 +1,49 @@
+"""The ``vrsweep`` command line: thin click commands over the library.
+
+Each command lives in ``vrsweep/commands/<name>.py``; this module only groups them and turns the
+project's own exceptions into one clear message and an exit code (2: bad input, 1: runtime).
+"""
+
+import sys
+
+import click
+
+from vrsweep import __version__
+from vrsweep.errors import VrsweepError
+
+
+class _Group(click.Group):
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except VrsweepError as error:
+            click.echo(f"Error: {error}", err=True)
+            ctx.exit(error.exit_code)
+        except OSError as error:  # disk full, permission denied, ...: a message, not a traceback
+            click.echo(f"Error: {error.strerror or error}: {error.filename or ''}".rstrip(": "), err=True)
+            ctx.exit(1)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="vrsweep")
+def main():
+    """Vibrational resonance sweeps of a vibro-impact Van der Pol-Duffing oscillator."""
+
+
+def _register():
+    import importlib
+
+    for name in ("run", "theory", "validate", "plot", "simulate", "merge", "info"):
+        try:
+            module = importlib.import_module(f"vrsweep.commands.{name}")
+        except ModuleNotFoundError as error:
+            if error.name == f"vrsweep.commands.{name}":
+                continue  # command not built yet
+            raise
+        main.add_command(module.command)
+
+
+_register()
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

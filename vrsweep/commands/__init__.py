@@ -1,0 +1,1 @@
+"""One module per CLI command (after rasterio's ``rio``); shared options live in options.py."""

@@ -1,0 +1,84 @@
+"""The oscillator family, its parameters, and the original -> effective mapping.
+
+Both models of the paper are one family (DESIGN.md):
+
+    x'' + gamma (x^2 - mu) x' + stiffness x + alpha x^3 = c cos(omega t) + g cos(Omega t),   x < Delta
+    x'(+) = -e x'(-)  at x = Delta                                                            # eq2.2
+
+original  (eq2.1):  mu = 1, stiffness = -omega0^2, fast forcing g cos(Omega t)
+effective (eq2.10): mu = K (eq2.12), stiffness = wt2 (eq2.11, signed: ERRATA 5), no fast forcing
+
+The kernel sees only the coefficient vector built here, so it knows nothing of which model runs.
+"""
+
+import numpy as np
+
+PARAMETER_NAMES = ("gamma", "alpha", "c", "omega0", "omega", "Delta", "e", "g", "Omega")
+
+# The paper's values (Fig. 1; Omega = 4).
+DEFAULT_PARAMETERS = {
+    "gamma": 0.22, "alpha": 0.1, "c": 0.04, "omega0": 0.1, "omega": 0.5,
+    "Delta": 1.0, "e": 0.95, "g": 0.0, "Omega": 4.0,
+}
+
+PARAMETER_UNITS = {name: "1" for name in PARAMETER_NAMES}  # the paper's model is dimensionless
+PARAMETER_LONG_NAMES = {
+    "gamma": "Van der Pol damping coefficient gamma",
+    "alpha": "cubic stiffness alpha",
+    "c": "slow forcing amplitude c",
+    "omega0": "linear stiffness frequency omega0",
+    "omega": "slow forcing frequency omega",
+    "Delta": "barrier position Delta",
+    "e": "coefficient of restitution e",
+    "g": "fast forcing amplitude g",
+    "Omega": "fast forcing frequency Omega",
+}
+PARAMETER_SYMBOLS = {
+    "gamma": r"$\gamma$", "alpha": r"$\alpha$", "c": r"$c$", "omega0": r"$\omega_0$",
+    "omega": r"$\omega$", "Delta": r"$\Delta$", "e": r"$e$", "g": r"$g$", "Omega": r"$\Omega$",
+}
+
+MODELS = ("original", "effective")
+
+# Layout of the kernel's coefficient vector.
+GAMMA, MU, STIFFNESS, ALPHA, C, OMEGA, G, BIG_OMEGA, DELTA, E = range(10)
+N_COEFFICIENTS = 10
+
+
+def effective_stiffness(alpha, omega0, g, Omega):
+    """wt2 = 3 alpha g^2 / (2 Omega^4) - omega0^2, signed.  # eq2.11 (squared, ERRATA 5)"""
+    return 1.5 * alpha * np.square(g) / np.power(Omega, 4) - np.square(omega0)
+
+
+def effective_damping_level(g, Omega):
+    """K = 1 - g^2 / (2 Omega^4).  # eq2.12"""
+    return 1.0 - 0.5 * np.square(g) / np.power(Omega, 4)
+
+
+def kernel_coefficients(parameters, model="original"):
+    """Coefficient vectors for the kernel.
+
+    parameters: mapping name -> scalar or array (broadcast together), or a structured table.
+    Returns float64 array of shape broadcast_shape + (N_COEFFICIENTS,).
+    """
+    if model not in MODELS:
+        raise ValueError(f"model must be one of {MODELS}, not {model!r}")
+    p = {name: np.asarray(parameters[name], dtype=np.float64) for name in PARAMETER_NAMES}
+    shape = np.broadcast_shapes(*(v.shape for v in p.values()))
+    out = np.empty(shape + (N_COEFFICIENTS,))
+    out[..., GAMMA] = p["gamma"]
+    out[..., ALPHA] = p["alpha"]
+    out[..., C] = p["c"]
+    out[..., OMEGA] = p["omega"]
+    out[..., DELTA] = p["Delta"]
+    out[..., E] = p["e"]
+    out[..., BIG_OMEGA] = p["Omega"]
+    if model == "original":
+        out[..., MU] = 1.0  # eq2.1
+        out[..., STIFFNESS] = -np.square(p["omega0"])
+        out[..., G] = p["g"]
+    else:
+        out[..., MU] = effective_damping_level(p["g"], p["Omega"])  # eq2.12
+        out[..., STIFFNESS] = effective_stiffness(p["alpha"], p["omega0"], p["g"], p["Omega"])  # eq2.11
+        out[..., G] = 0.0  # eq2.10: the fast forcing has been averaged out
+    return out
