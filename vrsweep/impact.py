@@ -1,0 +1,162 @@
+"""Impacts with the barrier at x = Delta: event location on the dense output, sticking.
+
+Roots are located on the step's continuous extension (integrator.dense_value) in the step
+fraction theta in [0, 1]; the kernel then reaches the impact state with an exact step.
+"""
+
+import numpy as np
+from numba import njit
+
+from vrsweep.integrator import dense_value
+from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, G, OMEGA, STIFFNESS
+
+X, V = 0, 1  # state components
+
+# Step fraction to which roots are located: the impact time is then known to ~1e-15 h.
+THETA_TOLERANCE = 1e-15
+MAX_ROOT_ITERATIONS = 200
+# A step that starts on the barrier is scanned at this many interior points for a return to it:
+# a slow rebound can leave and come back within one step, with x(t + h) < Delta (a graze).
+BARRIER_SCAN_POINTS = 8
+NO_CROSSING = -1.0
+
+
+@njit(cache=True)
+def locate_root(dense, y, h, component, level, theta_low, theta_high):
+    """theta in [theta_low, theta_high] where the interpolant's component crosses ``level``.
+
+    Requires value(theta_low) < level <= value(theta_high) or the reverse; the Illinois
+    variant of regula falsi keeps the bracket and converges superlinearly.
+    Returns the upper end of the final bracket, so the located state is on the far side.
+    """
+    f_low = dense_value(dense, y, h, theta_low, component) - level
+    f_high = dense_value(dense, y, h, theta_high, component) - level
+    if f_high == 0.0:
+        return theta_high
+    side = 0
+    for _ in range(MAX_ROOT_ITERATIONS):
+        if theta_high - theta_low <= THETA_TOLERANCE:
+            break
+        theta = (theta_low * f_high - theta_high * f_low) / (f_high - f_low)
+        if not (theta_low < theta < theta_high):
+            theta = 0.5 * (theta_low + theta_high)
+        f_mid = dense_value(dense, y, h, theta, component) - level
+        if f_mid == 0.0:
+            return theta
+        if (f_mid < 0.0) == (f_low < 0.0):
+            theta_low, f_low = theta, f_mid
+            if side == -1:
+                f_high *= 0.5
+            side = -1
+        else:
+            theta_high, f_high = theta, f_mid
+            if side == 1:
+                f_low *= 0.5
+            side = 1
+    return theta_high
+
+
+@njit(cache=True)
+def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
+    """Upper bracket end for an excursion past Delta between a velocity maximum.
+
+    Called with v(theta_a) > 0 > v(theta_b) and x(theta_a) < Delta: locates the maximum of x
+    and returns it as the upper end of a crossing bracket if it reaches Delta, else NO_CROSSING.
+    """
+    theta_turn = locate_root(dense, y, h, V, 0.0, theta_a, theta_b)
+    if dense_value(dense, y, h, theta_turn, X) >= delta:
+        return theta_turn
+    return NO_CROSSING
+
+
+@njit(cache=True)
+def find_crossing(dense, y, y_new, h, delta, bracket):
+    """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high).
+
+    Cases (the state can never be above Delta at a step's start):
+    - started below the barrier: x(t + h) >= Delta, or a grazing excursion past Delta that
+      returns below it within the step (a velocity sign change from + to -);
+    - started on the barrier (after a rebound or a release): scan interior points for the
+      first return to Delta after leaving it.
+    Returns True when an impact lies inside the step. bracket[0] has x < Delta.
+    """
+    if y[X] < delta:
+        if y_new[X] >= delta:
+            bracket[0] = 0.0
+            bracket[1] = 1.0
+            return True
+        if y[V] > 0.0 and y_new[V] < 0.0:
+            theta_high = _crossing_after_turning_point(dense, y, h, delta, 0.0, 1.0)
+            if theta_high != NO_CROSSING:
+                bracket[0] = 0.0
+                bracket[1] = theta_high
+                return True
+        return False
+
+    # On the barrier: find where the mass has left it, then where it first comes back.
+    theta_prev = 0.0
+    v_prev = y[V]
+    left = False
+    for k in range(1, BARRIER_SCAN_POINTS + 1):
+        theta = k / BARRIER_SCAN_POINTS
+        x_k = y_new[X] if k == BARRIER_SCAN_POINTS else dense_value(dense, y, h, theta, X)
+        v_k = y_new[V] if k == BARRIER_SCAN_POINTS else dense_value(dense, y, h, theta, V)
+        if not left:
+            if x_k < delta:
+                left = True
+        elif x_k >= delta:
+            bracket[0] = theta_prev
+            bracket[1] = theta
+            return True
+        elif v_prev > 0.0 and v_k < 0.0:
+            theta_high = _crossing_after_turning_point(dense, y, h, delta, theta_prev, theta)
+            if theta_high != NO_CROSSING:
+                bracket[0] = theta_prev
+                bracket[1] = theta_high
+                return True
+        theta_prev = theta
+        v_prev = v_k
+    if not left and y_new[X] >= delta:
+        # Never got off the barrier (a release into a force that turns straight back):
+        # an impact at the step's end with whatever speed it has.
+        bracket[0] = 1.0
+        bracket[1] = 1.0
+        return True
+    return False
+
+
+@njit(cache=True)
+def force_at_barrier(t, coefficients):
+    """Acceleration of a mass resting at (Delta, 0): positive pushes it into the barrier.
+
+    The damping term vanishes with the velocity, so only stiffness and forcing remain.
+    """
+    delta = coefficients[DELTA]
+    return (coefficients[C] * np.cos(coefficients[OMEGA] * t)
+            + coefficients[G] * np.cos(coefficients[BIG_OMEGA] * t)
+            - coefficients[STIFFNESS] * delta - coefficients[ALPHA] * delta ** 3)
+
+
+@njit(cache=True)
+def release_time(t_start, t_limit, coefficients, scan_step):
+    """First t in (t_start, t_limit] where the force at the barrier stops pushing into it.
+
+    The force is an explicit function of t, so it is scanned in steps of ``scan_step``
+    (a fraction of the shortest forcing period, so no sign change is stepped over) and the
+    sign change is bisected to rounding. Returns t_limit + 1 if the mass stays stuck.
+    """
+    t_a = t_start
+    while t_a < t_limit:
+        t_b = min(t_a + scan_step, t_limit)
+        if force_at_barrier(t_b, coefficients) <= 0.0:
+            for _ in range(MAX_ROOT_ITERATIONS):
+                t_mid = 0.5 * (t_a + t_b)
+                if t_mid <= t_a or t_mid >= t_b:
+                    break
+                if force_at_barrier(t_mid, coefficients) <= 0.0:
+                    t_b = t_mid
+                else:
+                    t_a = t_mid
+            return t_b
+        t_a = t_b
+    return t_limit + 1.0

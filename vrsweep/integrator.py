@@ -1,0 +1,171 @@
+"""Dormand-Prince 5(4): tableau as data, one step, error norm, PI controller, dense output.
+
+Modelled on scipy/integrate/_ivp/rk.py: the tableau is named data, the step function is
+small, and step-control constants have names. Everything here is numba-jitted and knows
+nothing of impacts or of the oscillator: the right-hand side is a jitted function passed
+in (numbakit-ode style), with signature ``rhs(t, y, coefficients, dydt)`` writing dydt.
+
+Shapes used throughout (n = number of state components, here 4: x, v and two Fourier
+quadratures; only the first ``N_CONTROLLED`` take part in error control):
+
+    y, y_new, dydt    (n,)
+    K                 (N_STAGES + 1, n)   stage derivatives; K[-1] is f(t + h, y_new) (FSAL)
+    dense             (n, DENSE_ORDER)     coefficients of the continuous extension
+"""
+
+import numpy as np
+from numba import njit
+
+# --- Dormand & Prince (1980) RK5(4)7FM: c, A, b (5th order), e = b - b_hat (embedded 4th) ---
+N_STAGES = 6
+ORDER = 5
+ERROR_ESTIMATOR_ORDER = 4
+
+DP54_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0])
+DP54_A = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0],
+    [1 / 5, 0.0, 0.0, 0.0, 0.0],
+    [3 / 40, 9 / 40, 0.0, 0.0, 0.0],
+    [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0],
+    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0],
+    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656],
+])
+DP54_B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84])
+# Applied to all seven stages (the FSAL stage included): h * E . K is the local error estimate.
+DP54_E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
+
+# Continuous extension of order 4 (Shampine 1986, as in scipy's RK45): for theta in [0, 1],
+#   y(t + theta h) = y + h * sum_j (K^T P)[:, j] * theta^(j+1).
+DENSE_ORDER = 4
+DP54_P = np.array([
+    [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
+    [0.0, 0.0, 0.0, 0.0],
+    [0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
+    [0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
+    [0.0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
+    [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
+    [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
+])
+
+# --- step-size control ---
+SAFETY = 0.9
+MIN_FACTOR = 0.2   # never shrink a step by more than 5x at once
+MAX_FACTOR = 10.0  # never grow a step by more than 10x at once
+# PI controller (Hairer, Norsett & Wanner, vol. I, II.4; the DOPRI5 code's values):
+# factor = SAFETY * err^-PI_ALPHA * err_previous^PI_BETA.
+PI_BETA = 0.04
+PI_ALPHA = 1.0 / ORDER - 0.75 * PI_BETA
+ERR_PREVIOUS_FLOOR = 1e-4  # keeps the PI memory from exploding after a near-exact step
+
+# The first N_CONTROLLED components (x, v) are error-controlled (DESIGN.md); the Fourier
+# quadratures ride along: they are integrals of x, as accurate as x itself.
+N_CONTROLLED = 2
+
+
+# Inlined at numba-IR level so that the rhs argument becomes a direct call: a dispatcher passed
+# as a runtime value would be a "dynamic global" and the caller could not be cached.
+@njit(cache=True, inline="always")
+def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
+    """One Dormand-Prince step of size h from (t, y) with f = rhs(t, y) already known.
+
+    Fills K (N_STAGES + 1, n) with the stage derivatives, K[N_STAGES] = f(t + h, y_new)
+    (first same as last), and y_new (n,). ``stage`` (n,) is scratch, passed in so that the
+    hot loop allocates nothing. The error estimate is ``error_norm``'s job.
+    """
+    n = y.shape[0]
+    for j in range(n):
+        K[0, j] = f[j]
+    for s in range(1, N_STAGES):
+        for j in range(n):
+            acc = 0.0
+            for r in range(s):
+                acc += DP54_A[s, r] * K[r, j]
+            stage[j] = y[j] + h * acc
+        rhs(t + DP54_C[s] * h, stage, coefficients, K[s])
+    for j in range(n):
+        acc = 0.0
+        for r in range(N_STAGES):
+            acc += DP54_B[r] * K[r, j]
+        y_new[j] = y[j] + h * acc
+    rhs(t + h, y_new, coefficients, K[N_STAGES])
+
+
+@njit(cache=True)
+def error_norm(K, h, y, y_new, rtol, atol):
+    """RMS over the controlled components of the local error / (atol + rtol * max(|y|, |y_new|))."""
+    total = 0.0
+    for j in range(N_CONTROLLED):
+        err = 0.0
+        for r in range(N_STAGES + 1):
+            err += DP54_E[r] * K[r, j]
+        scale = atol + rtol * max(abs(y[j]), abs(y_new[j]))
+        ratio = h * err / scale
+        total += ratio * ratio
+    return np.sqrt(total / N_CONTROLLED)
+
+
+@njit(cache=True)
+def accepted_step_factor(err, err_previous):
+    """Growth factor after an accepted step (err <= 1): PI control, clipped."""
+    if err == 0.0:
+        return MAX_FACTOR
+    factor = SAFETY * err ** -PI_ALPHA * max(err_previous, ERR_PREVIOUS_FLOOR) ** PI_BETA
+    return min(MAX_FACTOR, max(MIN_FACTOR, factor))
+
+
+@njit(cache=True)
+def rejected_step_factor(err):
+    """Shrink factor after a rejected step (err > 1): plain I control, never growing."""
+    return min(1.0, max(MIN_FACTOR, SAFETY * err ** (-1.0 / ORDER)))
+
+
+@njit(cache=True)
+def dense_coefficients(K, dense):
+    """dense (n, DENSE_ORDER) = K^T P: the continuous extension of the last step."""
+    n = dense.shape[0]
+    for j in range(n):
+        for q in range(DENSE_ORDER):
+            acc = 0.0
+            for r in range(N_STAGES + 1):
+                acc += K[r, j] * DP54_P[r, q]
+            dense[j, q] = acc
+
+
+@njit(cache=True)
+def dense_value(dense, y, h, theta, component):
+    """Component of the continuous extension at t + theta h (Horner in theta)."""
+    acc = dense[component, DENSE_ORDER - 1]
+    for q in range(DENSE_ORDER - 2, -1, -1):
+        acc = acc * theta + dense[component, q]
+    return y[component] + h * theta * acc
+
+
+@njit(cache=True, inline="always")
+def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max):
+    """Starting step size (Hairer, Norsett & Wanner, vol. I, II.4, algorithm of 'hinit')."""
+    n = y.shape[0]
+    d0 = 0.0
+    d1 = 0.0
+    for j in range(N_CONTROLLED):
+        scale = atol + rtol * abs(y[j])
+        d0 += (y[j] / scale) ** 2
+        d1 += (f[j] / scale) ** 2
+    d0 = np.sqrt(d0 / N_CONTROLLED)
+    d1 = np.sqrt(d1 / N_CONTROLLED)
+    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h0 = min(h0, h_max)
+    y1 = np.empty(n)
+    for j in range(n):
+        y1[j] = y[j] + h0 * f[j]
+    f1 = np.empty(n)
+    rhs(t + h0, y1, coefficients, f1)
+    d2 = 0.0
+    for j in range(N_CONTROLLED):
+        scale = atol + rtol * abs(y[j])
+        d2 += ((f1[j] - f[j]) / scale) ** 2
+    d2 = np.sqrt(d2 / N_CONTROLLED) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / ORDER)
+    return min(100.0 * h0, h1, h_max)
