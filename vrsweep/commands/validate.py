@@ -1,0 +1,67 @@
+"""``vrsweep validate CONFIG.yaml``: check a config and say what running it would mean.
+
+Prints the model, the axes, the grid size, the output path and an estimate of the output size and
+run time, without compiling or running anything (numba is never imported). Exit 0 for a valid
+config, 2 with every problem listed for an invalid one.
+"""
+
+import click
+
+from vrsweep.commands.options import config_argument, set_option, threads_option
+from vrsweep.config import load_config
+from vrsweep.estimate import default_threads, estimate, format_bytes, format_duration, size_problem
+from vrsweep.model import PARAMETER_NAMES
+
+
+@click.command("validate")
+@config_argument
+@set_option
+@threads_option
+def command(config_path, overrides, threads):
+    """Check CONFIG.yaml (and any --set) and print the grid size and a time estimate.
+
+    Nothing is compiled or run. Exit 0 if the config is valid, 2 otherwise, with every problem
+    listed as FILE:LINE: field.path: message.
+    """
+    config = load_config(config_path, overrides)  # ConfigError -> every problem, exit 2 (cli.py)
+    threads = threads or default_threads()
+    guess = estimate(config, threads)
+
+    click.echo(f"{config.source_name}: valid")
+    click.echo(f"model:       {config.model}")
+    fixed = [f"{name}={config.parameters[name]:g}" for name in PARAMETER_NAMES if name not in config.axis_names]
+    click.echo(f"fixed:       {' '.join(fixed)}")
+    click.echo(f"initial:     x={config.initial['x']:g} v={config.initial['v']:g}")
+    if config.axes:
+        for index, axis in enumerate(config.axes):
+            label = "axes:" if index == 0 else ""
+            click.echo(f"{label:<12} {axis.name}: {_describe_axis(axis)}")
+    else:
+        click.echo("axes:        none (a single point)")
+    shape = " x ".join(str(n) for n in config.shape) or "1"
+    click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''} ({shape})")
+    integration = config.integration
+    click.echo(f"integration: rtol={integration.rtol:g} atol={integration.atol:g}, "
+               f"{integration.transient_periods} transient + {integration.measure_periods} measured "
+               f"slow periods")
+    click.echo(f"output:      {config.output_path()}")
+    click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, about {format_duration(guess.seconds)} "
+               f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)")
+    problem = size_problem(config, threads)
+    if problem is not None:
+        # A valid config, just a big one: `run` will ask for --allow-large.
+        click.echo(f"warning:     {problem}")
+
+
+def _describe_axis(axis) -> str:
+    values = axis.values
+    n = len(values)
+    if n == 1:
+        text = f"1 value, {values[0]:g}"
+    elif n <= 6:
+        text = f"{n} values: {', '.join(f'{value:g}' for value in values)}"
+    else:
+        text = f"{n} values from {values[0]:g} to {values[-1]:g}"
+    if axis.continuation:
+        text += f", continuation {axis.continuation}"
+    return text

@@ -1,0 +1,98 @@
+"""How big and how long a run will be, before anything is compiled or run.
+
+Rough on purpose: the point is to catch a grid that is out of proportion (a typo'd ``num``, an
+extra axis) before it fills a disk or a week, not to predict the finish time. Must not import
+numba: ``vrsweep validate`` uses it and promises to compile nothing.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+from vrsweep.errors import ConfigError
+
+# Wall time of one grid point over one slow period 2 pi/omega, on one thread, at rtol = 1e-9.
+# Placeholders until the lead calibrates them from benchmarks/ (the original model resolves the
+# fast forcing Omega, so it takes about ten times more steps per slow period than the effective).
+SECONDS_PER_POINT_PERIOD = {"original": 2e-4, "effective": 2e-5}
+REFERENCE_RTOL = 1e-9
+
+# What one point stores: R, Qs, Qc, impacts per period, status, steps, RHS evaluations, the final
+# state, ... (about 12 float64-sized variables) plus a stroboscopic sample (x, v) per strobe period.
+VARIABLES_PER_POINT = 12
+BYTES_PER_VALUE = 8
+
+# Beyond either, `run` wants --allow-large.
+MAX_OUTPUT_BYTES = 2e9
+MAX_SECONDS = 24 * 3600.0
+
+
+@dataclass(frozen=True)
+class Estimate:
+    n_points: int
+    output_bytes: int
+    seconds: float
+
+
+def default_threads() -> int:
+    """The thread count numba would use: NUMBA_NUM_THREADS if set, else the number of CPUs."""
+    try:
+        threads = int(os.environ.get("NUMBA_NUM_THREADS", ""))
+    except ValueError:
+        threads = 0
+    return threads if threads >= 1 else (os.cpu_count() or 1)
+
+
+def estimate(config, threads=None) -> Estimate:
+    """Output size and wall time of running ``config`` on ``threads`` threads (default: all)."""
+    threads = max(1, int(threads or default_threads()))
+    integration = config.integration
+    n_points = config.n_points
+    output_bytes = n_points * (VARIABLES_PER_POINT + 2 * integration.strobe_periods) * BYTES_PER_VALUE
+    periods = integration.transient_periods + integration.measure_periods
+    # DP5 takes about rtol^(-1/5) steps per unit time, so cost scales as (1e-9/rtol)^(1/5).
+    steps_factor = (REFERENCE_RTOL / integration.rtol) ** 0.2
+    seconds = n_points * periods * SECONDS_PER_POINT_PERIOD[config.model] * steps_factor / threads
+    return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds)
+
+
+def size_problem(config, threads=None) -> str | None:
+    """The message `check_size` would raise, or None when the run is of reasonable size."""
+    threads = max(1, int(threads or default_threads()))
+    guess = estimate(config, threads)
+    if guess.output_bytes <= MAX_OUTPUT_BYTES and guess.seconds <= MAX_SECONDS:
+        return None
+    return (f"{config.source_name}: grid of {guess.n_points} points, estimated "
+            f"{format_bytes(guess.output_bytes)} / {format_duration(guess.seconds)} on {threads} "
+            f"thread{'s' if threads != 1 else ''}; pass --allow-large to run it anyway")
+
+
+def check_size(config, threads=None, allow_large: bool = False) -> Estimate:
+    """Raise ConfigError if the run is out of proportion (> 2 GB or > 24 h) and not allowed."""
+    problem = size_problem(config, threads)
+    if problem is not None and not allow_large:
+        raise ConfigError([problem], source=config.source_name)
+    return estimate(config, threads)
+
+
+def format_bytes(size: float) -> str:
+    """1234567 -> '1.2 MB' (decimal units, as disks are sold)."""
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if size < 1000 or unit == "TB":
+            return f"{size:.0f} {unit}" if unit == "B" else f"{size:.1f} {unit}"
+        size /= 1000
+    raise AssertionError("unreachable")
+
+
+def format_duration(seconds: float) -> str:
+    """0.01 -> '< 0.1 s', 3.2 -> '3.2 s', 200 -> '3.3 min', 90000 -> '25.0 h', 2e6 -> '23.1 days'."""
+    if seconds < 0.1:
+        return "< 0.1 s"
+    if seconds < 60:
+        return f"{seconds:.1f} s"
+    if seconds < 3600:
+        return f"{seconds / 60:.1f} min"
+    if seconds < 48 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
