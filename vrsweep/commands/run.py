@@ -1,0 +1,79 @@
+"""vrsweep run CONFIG.yaml: sweep the response over the config's grid into an HDF5 file."""
+
+import shlex
+import sys
+
+import click
+
+from vrsweep.commands.options import (
+    config_argument, output_option, overwrite_option, quiet_option, set_option, threads_option,
+)
+
+
+@click.command("run")
+@config_argument
+@output_option
+@threads_option
+@set_option
+@quiet_option
+@click.option("--resume", is_flag=True, help="Continue an interrupted run: compute only the missing points.")
+@overwrite_option
+@click.option("--shard", default=None, metavar="I/N|auto",
+              help="Compute shard I of N (0-based) into its own file; 'auto' reads SLURM_ARRAY_TASK_ID/COUNT.")
+@click.option("--dask", "dask_address", default=None, metavar="ADDRESS",
+              help="Send chunks to a dask.distributed scheduler (or 'local:N' for a local cluster of N workers).")
+@click.option("--allow-large", is_flag=True, help="Run a grid whose estimated size or time is out of proportion.")
+def command(config_path, output, threads, overrides, quiet, resume, overwrite, shard, dask_address, allow_large):
+    """Sweep R (eq3.3) over the config's grid and write it to HDF5."""
+    from vrsweep.config import load_config
+    from vrsweep.errors import UsageError
+    from vrsweep.estimate import check_size
+
+    if resume and overwrite:
+        raise UsageError("--resume and --overwrite exclude each other")
+    config = load_config(config_path, overrides)
+    check_size(config, threads or _default_threads(), allow_large)
+
+    from vrsweep.job import parse_shard, run_job
+
+    shard_pair = parse_shard(shard)
+    executor = None
+    if dask_address:
+        from vrsweep.distributed import dask_executor
+
+        executor = dask_executor(dask_address, threads)
+    bars = []
+
+    def progress_factory(total, already_done):
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, initial=already_done, unit="pt", desc="vrsweep", disable=quiet,
+                   dynamic_ncols=True, file=sys.stderr)
+        bars.append(bar)
+        return bar.update
+
+    try:
+        report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
+                         shard=shard_pair, progress_factory=progress_factory, executor=executor)
+    except KeyboardInterrupt:
+        for bar in bars:
+            bar.close()
+        words = ["vrsweep", "run", config_path, "--resume"]
+        if output:
+            words += ["-o", output]
+        for item in overrides:
+            words += ["--set", item]
+        if shard:
+            words += ["--shard", shard]
+        click.echo("\nInterrupted: finished chunks are saved. Resume with:\n  " + shlex.join(words), err=True)
+        sys.exit(130)
+    for bar in bars:
+        bar.close()
+    if not quiet:
+        click.echo(report.summary_line(), err=True)
+
+
+def _default_threads():
+    from vrsweep.sweep import thread_count
+
+    return thread_count()

@@ -1,0 +1,170 @@
+"""A sweep job: config -> result file, checkpointed chunk by chunk, resumable, shardable.
+
+Glue between sweep (numerics), store (HDF5) and theory (the analytic columns). The CLI's
+``run`` command is a thin wrapper around ``run_job``.
+"""
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from vrsweep import __version__
+from vrsweep.errors import UsageError
+from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.results import Status
+from vrsweep.store import ResultWriter, VariableSpec
+from vrsweep.sweep import Grid, run_sweep
+from vrsweep.variables import point_variables
+
+
+@dataclass
+class JobReport:
+    output: Path
+    n_points: int          # points this job owns (the whole grid, or its shard)
+    n_run: int             # points computed now (less than n_points when resuming)
+    counts: dict = field(default_factory=dict)  # Status -> points, over the points run now
+
+    def summary_line(self):
+        parts = [f"{n} {status.name.lower()}" for status, n in sorted(self.counts.items())]
+        detail = ", ".join(parts) if parts else "nothing left to compute"
+        return f"{self.n_run} of {self.n_points} points computed ({detail}) -> {self.output}"
+
+
+def parse_shard(text, environ=None):
+    """'I/N' (0-based I) or 'auto' (SLURM_ARRAY_TASK_ID relative to SLURM_ARRAY_TASK_MIN)."""
+    environ = os.environ if environ is None else environ
+    if text is None:
+        return (0, 1)
+    if text == "auto":
+        try:
+            task = int(environ["SLURM_ARRAY_TASK_ID"])
+            count = int(environ["SLURM_ARRAY_TASK_COUNT"])
+        except (KeyError, ValueError):
+            raise UsageError("--shard auto needs SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT "
+                             "(run it inside a SLURM job array, or give --shard I/N)") from None
+        # Arrays may start anywhere (--array=1-8): index from the array's own minimum.
+        first = int(environ.get("SLURM_ARRAY_TASK_MIN", 0))
+        index = task - first
+    else:
+        try:
+            index_text, count_text = text.split("/")
+            index, count = int(index_text), int(count_text)
+        except ValueError:
+            raise UsageError(f"--shard {text}: expected I/N (e.g. 0/8) or 'auto'") from None
+    if not (count >= 1 and 0 <= index < count):
+        raise UsageError(f"--shard: index {index} is not in 0..{count - 1}")
+    return (index, count)
+
+
+def shard_output_path(path, shard):
+    index, count = shard
+    if count == 1:
+        return Path(path)
+    path = Path(path)
+    return path.with_name(f"{path.stem}.shard{index}of{count}{path.suffix}")
+
+
+def _variable_specs(config):
+    return [VariableSpec(name=name, dtype=dtype, extra_dims=extra, attrs=attrs)
+            for name, dtype, extra, attrs in point_variables(config.integration)]
+
+
+def _axes(grid):
+    axes = []
+    for name, values in zip(grid.axis_names, grid.axis_values):
+        if name == "direction":
+            attrs = {"units": "1", "long_name": "continuation direction (+1: up the axis, -1: down)"}
+        else:
+            attrs = {"units": PARAMETER_UNITS[name], "long_name": PARAMETER_LONG_NAMES[name]}
+        axes.append((name, values, attrs))
+    return axes
+
+
+def root_attributes(config, shard=(0, 1)):
+    attrs = {
+        "config": config.to_yaml(),
+        "model": config.model,
+        "vrsweep_version": __version__,
+        "numba_version": numba.__version__,
+        "numpy_version": np.__version__,
+    }
+    if shard[1] > 1:
+        attrs["shard"] = f"{shard[0]}/{shard[1]}"
+    return attrs
+
+
+def owned_mask(grid, shard):
+    from vrsweep.sweep import shuffled_lines
+
+    mask = np.zeros(grid.n_points, dtype=bool)
+    mask[shuffled_lines(grid, *shard).reshape(-1)] = True
+    return mask.reshape(grid.shape)
+
+
+def analytic_extras(config, grid):
+    """The analytic side stored beside the numerical grid (issue 3): theory.analytic_columns."""
+    from vrsweep import theory
+
+    table = grid.parameter_table(config)
+    parameters = {name: values.reshape(grid.shape) for name, values in table.items()}
+    columns = theory.analytic_columns(parameters)
+    extras = {}
+    for name, (array, dims_suffix, attrs) in columns.items():
+        array = np.asarray(array)
+        dims = tuple(grid.axis_names) + tuple(dims_suffix)
+        if name == "g_res":
+            array, dims = _reduce_constant_axes(array, grid.axis_names)
+        extras[name] = (array, dims, attrs)
+    return extras
+
+
+def _reduce_constant_axes(array, axis_names):
+    """Drop the axes along which a grid array does not vary (g_res depends on Omega only)."""
+    keep = []
+    for axis in range(array.ndim):
+        first = np.take(array, [0], axis=axis)
+        if not np.allclose(array, first, rtol=0, atol=0, equal_nan=True):
+            keep.append(axis)
+    index = tuple(slice(None) if axis in keep else 0 for axis in range(array.ndim))
+    return array[index], tuple(axis_names[axis] for axis in keep)
+
+
+def run_job(config, output=None, *, threads=None, resume=False, overwrite=False, shard=(0, 1),
+            progress_factory=None, executor=None):
+    """Run (or resume) a sweep into an HDF5 file. Returns a JobReport.
+
+    progress_factory(total_points, already_done) -> callable(n) advancing a progress bar, or None.
+    executor: optional callable with run_sweep's signature (e.g. the Dask backend).
+    """
+    grid = Grid.from_config(config)
+    path = shard_output_path(config.output_path(output), shard)
+    owned = owned_mask(grid, shard) if shard[1] > 1 else None
+    if resume and path.exists():
+        writer = ResultWriter.open_for_resume(path, config.to_yaml(),
+                                              expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None)
+    else:
+        writer = ResultWriter.create(path, _axes(grid), _variable_specs(config),
+                                     root_attributes(config, shard), overwrite=overwrite or resume,
+                                     owned_mask=owned)
+    try:
+        done = writer.done_mask().reshape(-1)
+        n_owned = int(owned.sum()) if owned is not None else grid.n_points
+        n_done = int(done[owned.reshape(-1)].sum()) if owned is not None else int(done.sum())
+        advance = progress_factory(n_owned, n_done) if progress_factory else None
+        run = executor or run_sweep
+        counts = run(config, threads=threads, shard=shard, done=done,
+                     on_chunk=writer.write_points,
+                     progress=(lambda n, total: advance(n)) if advance else None)
+        extras = analytic_extras(config, grid)
+    except BaseException:
+        writer.close()  # everything finished so far is on disk; --resume continues
+        raise
+    writer.finish(extra=extras)
+    return JobReport(path, n_owned, sum(counts.values()), counts)
+
+
+def status_counts_line(counts):
+    return ", ".join(f"{n} {Status(s).name.lower()}" for s, n in sorted(counts.items()))

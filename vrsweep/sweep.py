@@ -1,0 +1,206 @@
+"""A grid of points -> chunks -> the kernel in parallel (numba prange), with progress.
+
+The unit of parallel work is a *line*: a sequence of grid points run one after the other,
+each starting from the previous point's final state. An ordinary sweep has lines of one
+point; a continuation (hysteresis) sweep has one line per setting of the other axes, running
+along the continuation axis. Lines are shuffled with a fixed seed before being cut into
+chunks, so costly regions of the grid (many impacts) spread evenly over threads, chunks and
+shards; each line writes only its own output slots, so the result is independent of the
+order, the chunking and the thread count, bit for bit.
+
+This module knows nothing of files: finished chunks are handed to a callback.
+"""
+
+import os
+import time
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from vrsweep import kernel
+from vrsweep.diagnostics import point_diagnostics
+from vrsweep.model import kernel_coefficients
+from vrsweep.results import Status
+
+SHUFFLE_SEED = 20240607  # fixed: the same grid always gives the same chunks and shards
+DIRECTION_VALUES = {"up": 1, "down": -1}
+
+
+def integration_settings(integration):
+    """The kernel's settings vector from a config's integration section."""
+    settings = np.zeros(kernel.N_SETTINGS)
+    settings[kernel.RTOL] = integration.rtol
+    settings[kernel.ATOL] = integration.atol
+    settings[kernel.TRANSIENT_PERIODS] = integration.transient_periods
+    settings[kernel.MEASURE_PERIODS] = integration.measure_periods
+    settings[kernel.MAX_STEPS] = integration.max_steps
+    settings[kernel.MAX_IMPACTS_PER_PERIOD] = integration.max_impacts_per_period
+    settings[kernel.DIVERGENCE_BOUND] = integration.divergence_bound
+    settings[kernel.STICK_VELOCITY] = integration.stick_velocity
+    return settings
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The output grid of a config: its axes (plus `direction` for two-way continuation)."""
+
+    axis_names: tuple
+    axis_values: tuple
+    continuation_axis: int | None
+    directions: tuple
+
+    @classmethod
+    def from_config(cls, config):
+        names = [axis.name for axis in config.axes]
+        values = [np.asarray(axis.values, dtype=np.float64) for axis in config.axes]
+        continuation_axis = None
+        directions = ("up",)
+        for index, axis in enumerate(config.axes):
+            if axis.continuation:
+                continuation_axis = index
+                directions = ("up", "down") if axis.continuation == "both" else (axis.continuation,)
+        if len(directions) == 2:
+            names.append("direction")
+            values.append(np.array([DIRECTION_VALUES[d] for d in directions], dtype=np.float64))
+        return cls(tuple(names), tuple(values), continuation_axis, directions)
+
+    @property
+    def shape(self):
+        return tuple(len(v) for v in self.axis_values)
+
+    @property
+    def n_points(self):
+        return int(np.prod(self.shape, dtype=np.int64))
+
+    def lines(self):
+        """(n_lines, line_length) flat indices into the output grid, each row in run order."""
+        flat = np.arange(self.n_points, dtype=np.int64).reshape(self.shape)
+        if self.continuation_axis is None:
+            return flat.reshape(-1, 1)
+        rows = []
+        for direction_index, direction in enumerate(self.directions):
+            block = flat[..., direction_index] if len(self.directions) == 2 else flat
+            block = np.moveaxis(block, self.continuation_axis, -1)
+            if direction == "down":
+                block = block[..., ::-1]
+            rows.append(block.reshape(-1, block.shape[-1]))
+        return np.concatenate(rows)
+
+    def parameter_table(self, config):
+        """Every parameter over the output grid, flattened: name -> (n_points,)."""
+        grid = config.grid_parameters()
+        if len(self.directions) == 2:
+            grid = {name: np.repeat(values[..., None], 2, axis=-1) for name, values in grid.items()}
+        return {name: np.ascontiguousarray(values, dtype=np.float64).reshape(-1) for name, values in grid.items()}
+
+
+def shuffled_lines(grid, shard_index=0, shard_count=1):
+    """The lines this process runs, in run order: shuffled, then every shard_count-th."""
+    lines = grid.lines()
+    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
+    return lines[order[shard_index::shard_count]]
+
+
+@njit(parallel=True, cache=True)
+def run_lines(coefficients, initial_state, settings, lines, period_records, summaries, statuses):
+    """Run each line's points in order; lines in parallel.
+
+    coefficients    (n_points_total, N_COEFFICIENTS)  for every point of the grid
+    initial_state   (2,)                                state of each line's first point
+    settings        (N_SETTINGS,)
+    lines           (n_lines, line_length)             flat grid indices
+    period_records  (n_lines, line_length, n_periods, N_RECORD)   outputs, per line slot
+    summaries       (n_lines, line_length, N_SUMMARY)
+    statuses        (n_lines, line_length) int8
+    """
+    for line in prange(lines.shape[0]):
+        state = initial_state.copy()
+        no_samples = np.empty(0)
+        no_sample_out = np.empty((0, 2))
+        no_impacts = np.empty((0, 3))
+        no_sticks = np.empty((0, 2))
+        for slot in range(lines.shape[1]):
+            status = kernel.integrate(
+                coefficients[lines[line, slot]], state, settings, period_records[line, slot],
+                summaries[line, slot], no_samples, no_sample_out, no_impacts, no_sticks)
+            statuses[line, slot] = status
+            if status == Status.OK:
+                state[0] = summaries[line, slot, kernel.SUM_X_FINAL]
+                state[1] = summaries[line, slot, kernel.SUM_V_FINAL]
+            else:
+                # A failed point says nothing about where the next one starts: restart.
+                state[0] = initial_state[0]
+                state[1] = initial_state[1]
+
+
+def default_chunk_lines(threads, line_length):
+    """Enough lines per chunk to keep every thread busy and the progress bar moving."""
+    return max(threads, (16 * threads) // max(1, line_length))
+
+
+def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
+              progress=None, chunk_lines=None):
+    """Run the config's grid (or one shard of it), chunk by chunk.
+
+    done:      optional flat bool mask over the grid; lines whose points are all done are skipped.
+    on_chunk:  callback(flat_indices (n,), values: dict name -> (n, ...)) after every chunk.
+    progress:  callback(points_done_now, points_total) or None.
+    Returns a dict of status counts {Status: n} over the points run.
+    """
+    grid = Grid.from_config(config)
+    threads = threads or numba.config.NUMBA_NUM_THREADS
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    table = grid.parameter_table(config)
+    coefficients = np.ascontiguousarray(kernel_coefficients(table, config.model))
+    initial_state = np.array([config.initial["x"], config.initial["v"]], dtype=np.float64)
+    settings = integration_settings(config.integration)
+    lines = shuffled_lines(grid, *shard)
+    if done is not None:
+        lines = lines[~np.all(done.reshape(-1)[lines], axis=1)]
+    line_length = lines.shape[1] if lines.size else 1
+    chunk_lines = chunk_lines or default_chunk_lines(threads, line_length)
+    n_periods = config.integration.transient_periods + config.integration.measure_periods
+    counts = {}
+    total = lines.size
+    for start in range(0, len(lines), chunk_lines):
+        chunk = np.ascontiguousarray(lines[start:start + chunk_lines])
+        records = np.full((len(chunk), line_length, n_periods, kernel.N_RECORD), np.nan)
+        summaries = np.full((len(chunk), line_length, kernel.N_SUMMARY), np.nan)
+        statuses = np.full((len(chunk), line_length), Status.NOT_COMPUTED, dtype=np.int8)
+        with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
+            run_lines(coefficients, initial_state, settings, chunk, records, summaries, statuses)
+        flat = chunk.reshape(-1)
+        values = point_values(
+            records.reshape(-1, n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
+            statuses.reshape(-1), coefficients[flat], config.integration)
+        for code, n in zip(*np.unique(values["status"], return_counts=True)):
+            counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
+        if on_chunk is not None:
+            on_chunk(flat, values)
+        if progress is not None:
+            progress(flat.size, total)
+    return counts
+
+
+def point_values(records, summaries, statuses, coefficients, integration):
+    """Per-point output variables (DESIGN.md contract names) from the kernel's raw outputs."""
+    values = {
+        "R": summaries[:, kernel.SUM_R],
+        "Qs": summaries[:, kernel.SUM_QS],
+        "Qc": summaries[:, kernel.SUM_QC],
+        "Q_amplitude": summaries[:, kernel.SUM_Q_AMPLITUDE],
+        "impacts_per_period": summaries[:, kernel.SUM_IMPACTS_PER_PERIOD],
+        "status": statuses.astype(np.int8),
+        "n_steps": summaries[:, kernel.SUM_STEPS].astype(np.int64),
+        "n_rhs": summaries[:, kernel.SUM_RHS].astype(np.int64),
+        "x_final": summaries[:, kernel.SUM_X_FINAL],
+        "v_final": summaries[:, kernel.SUM_V_FINAL],
+    }
+    values.update(point_diagnostics(records, statuses, coefficients, integration))
+    return values
+
+
+def thread_count():
+    return int(os.environ.get("NUMBA_NUM_THREADS", numba.config.NUMBA_NUM_THREADS))

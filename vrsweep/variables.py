@@ -1,0 +1,46 @@
+"""Names, units and meanings of what a sweep stores per grid point (the HDF5 contract).
+
+Units: the paper's model is dimensionless, so x, v, t and the parameters carry units "1";
+what each quantity *is* (an amplitude of x, a gain |Q|/c, a count per slow period) is said
+in its long_name, so that a gain is never mistaken for an amplitude (ERRATA 6).
+"""
+
+import numpy as np
+
+from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES
+
+
+def point_variables(integration):
+    """(name, dtype, extra_dims, attrs) for every per-point variable, in storage order."""
+    strobe = (("strobe", integration.strobe_periods),)
+    return [
+        ("R", np.float64, (), {"units": "1", "long_name": "gain |Q|/c at the slow frequency omega (eq3.3)"}),
+        ("Qs", np.float64, (), {"units": "1", "long_name": "sine Fourier component of x at omega (eq3.1)"}),
+        ("Qc", np.float64, (), {"units": "1", "long_name": "cosine Fourier component of x at omega (eq3.2)"}),
+        ("Q_amplitude", np.float64, (), {
+            "units": "1",
+            "long_name": "amplitude |Q| = sqrt(Qs^2 + Qc^2) of x at omega (same units as x; compare with A_theory)"}),
+        ("R_err", np.float64, (), {
+            "units": "1",
+            "long_name": "95% half-width of R from batch means over the measurement window"}),
+        ("impacts_per_period", np.float64, (), {
+            "units": "1", "long_name": "mean number of impacts per slow period 2 pi/omega (measurement window)"}),
+        ("status", np.int8, (), {
+            "long_name": "how the point's integration ended",
+            "flag_values": np.array(FLAG_VALUES, dtype=np.int8), "flag_meanings": FLAG_MEANINGS}),
+        ("period", np.int64, (), {
+            "units": "1",
+            "long_name": "period of the stroboscopic samples in slow periods (0: none found up to max_period)"}),
+        ("impacts_per_cycle", np.int64, (), {
+            "units": "1", "long_name": "impacts in one cycle of the detected period (-1: no period)"}),
+        ("strobe_x", np.float64, strobe, {
+            "units": "1", "long_name": "stroboscopic x at t = nT over the last slow periods (T = 2 pi/omega)"}),
+        ("strobe_v", np.float64, strobe, {
+            "units": "1", "long_name": "stroboscopic velocity at t = nT over the last slow periods"}),
+        ("x_min", np.float64, (), {"units": "1", "long_name": "smallest x over the measurement window"}),
+        ("x_max", np.float64, (), {"units": "1", "long_name": "largest x over the measurement window"}),
+        ("x_final", np.float64, (), {"units": "1", "long_name": "x at the end of the run"}),
+        ("v_final", np.float64, (), {"units": "1", "long_name": "velocity at the end of the run"}),
+        ("n_steps", np.int64, (), {"units": "1", "long_name": "Dormand-Prince step attempts"}),
+        ("n_rhs", np.int64, (), {"units": "1", "long_name": "right-hand-side evaluations"}),
+    ]
