@@ -19,6 +19,10 @@ MAX_ROOT_ITERATIONS = 200
 # a slow rebound can leave and come back within one step, with x(t + h) < Delta (a graze).
 BARRIER_SCAN_POINTS = 8
 NO_CROSSING = -1.0
+# find_crossing's verdicts.
+NO_IMPACT = 0
+IMPACT = 1
+UNRESOLVED = 2  # left the barrier and came back between scan points: retry with a shorter step
 
 
 @njit(cache=True)
@@ -58,7 +62,7 @@ def locate_root(dense, y, h, component, level, theta_low, theta_high):
 
 @njit(cache=True)
 def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
-    """Upper bracket end for an excursion past Delta between a velocity maximum.
+    """Upper bracket end for an excursion past Delta around a maximum of x.
 
     Called with v(theta_a) > 0 > v(theta_b) and x(theta_a) < Delta: locates the maximum of x
     and returns it as the upper end of a crossing bracket if it reaches Delta, else NO_CROSSING.
@@ -70,7 +74,7 @@ def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
 
 
 @njit(cache=True)
-def find_crossing(dense, y, y_new, h, delta, bracket):
+def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high).
 
     Cases (the state can never be above Delta at a step's start):
@@ -78,20 +82,22 @@ def find_crossing(dense, y, y_new, h, delta, bracket):
       returns below it within the step (a velocity sign change from + to -);
     - started on the barrier (after a rebound or a release): scan interior points for the
       first return to Delta after leaving it.
-    Returns True when an impact lies inside the step. bracket[0] has x < Delta.
+    Returns IMPACT (bracket[0] has x < Delta), NO_IMPACT, or UNRESOLVED when the step is too
+    long to see the mass leave the barrier before it is back past it.
+    ``pushed_into_barrier``: the force at (Delta, 0) at the step's start points into the barrier.
     """
     if y[X] < delta:
         if y_new[X] >= delta:
             bracket[0] = 0.0
             bracket[1] = 1.0
-            return True
+            return IMPACT
         if y[V] > 0.0 and y_new[V] < 0.0:
             theta_high = _crossing_after_turning_point(dense, y, h, delta, 0.0, 1.0)
             if theta_high != NO_CROSSING:
                 bracket[0] = 0.0
                 bracket[1] = theta_high
-                return True
-        return False
+                return IMPACT
+        return NO_IMPACT
 
     # On the barrier: find where the mass has left it, then where it first comes back.
     theta_prev = 0.0
@@ -107,22 +113,25 @@ def find_crossing(dense, y, y_new, h, delta, bracket):
         elif x_k >= delta:
             bracket[0] = theta_prev
             bracket[1] = theta
-            return True
+            return IMPACT
         elif v_prev > 0.0 and v_k < 0.0:
             theta_high = _crossing_after_turning_point(dense, y, h, delta, theta_prev, theta)
             if theta_high != NO_CROSSING:
                 bracket[0] = theta_prev
                 bracket[1] = theta_high
-                return True
+                return IMPACT
         theta_prev = theta
         v_prev = v_k
-    if not left and y_new[X] >= delta:
-        # Never got off the barrier (a release into a force that turns straight back):
-        # an impact at the step's end with whatever speed it has.
-        bracket[0] = 1.0
-        bracket[1] = 1.0
-        return True
-    return False
+    if not left and y_new[X] > delta:
+        if y[V] >= 0.0 and pushed_into_barrier:
+            # Resting (or creeping) on the barrier and pressed into it: an impact at the
+            # step's start with no speed, which the kernel turns into sticking.
+            bracket[0] = 0.0
+            bracket[1] = 0.0
+            return IMPACT
+        return UNRESOLVED
+    # x == Delta to rounding (a release where the force has only just turned) is no impact.
+    return NO_IMPACT
 
 
 @njit(cache=True)

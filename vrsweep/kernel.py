@@ -18,7 +18,9 @@ import math
 import numpy as np
 from numba import njit
 
-from vrsweep.impact import X, V, find_crossing, force_at_barrier, locate_root, release_time
+from vrsweep.impact import (
+    IMPACT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root, release_time,
+)
 from vrsweep.integrator import (
     N_STAGES, accepted_step_factor, dense_coefficients, dense_value, dp54_step, error_norm,
     initial_step, rejected_step_factor, DENSE_ORDER,
@@ -70,6 +72,10 @@ STICK_SCAN_FRACTION = 1.0 / 64.0
 # The exact step to an impact is Newton-refined until x is this close to Delta (relative).
 IMPACT_POSITION_TOLERANCE = 1e-13
 IMPACT_NEWTON_ITERATIONS = 3
+# After a slow rebound, the first step covers at most this fraction of the predicted flight.
+REBOUND_STEP_FRACTION = 0.25
+# A step too long to resolve a departure from the barrier and return is retried this much shorter.
+UNRESOLVED_STEP_FACTOR = 0.125
 
 
 @njit(cache=True)
@@ -247,7 +253,16 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
             if y_new[X] >= delta or y[X] >= delta or (y[V] > 0.0 and y_new[V] < 0.0):
                 dense_coefficients(K, dense)
                 dense_ready = True
-                impact = find_crossing(dense, y, y_new, h_try, delta, bracket)
+                pushed = y[X] >= delta and force_at_barrier(t, coefficients) > 0.0
+                verdict = find_crossing(dense, y, y_new, h_try, delta, pushed, bracket)
+                if verdict == UNRESOLVED:
+                    # Off the barrier and back within the first scan interval: look closer.
+                    h = h_try * UNRESOLVED_STEP_FACTOR
+                    if h <= 4.0 * 2.2e-16 * max(abs(t), slow_period):
+                        status = Status.STEP_TOO_SMALL
+                        break
+                    continue
+                impact = verdict == IMPACT
             h_taken = h_try
             if impact:
                 # Locate on the dense output, then reach the impact with an exact step
@@ -311,6 +326,11 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
                 if not stuck:
                     rhs(t, y, coefficients, f)
                     n_rhs += 1
+                    # A slow rebound against a force pushing back returns after about
+                    # 2 |v| / a: step well inside that flight, so its return is seen.
+                    push = force_at_barrier(t, coefficients)
+                    if push > 0.0:
+                        h = min(h, REBOUND_STEP_FRACTION * 2.0 * -v_after / push)
                 err_previous = 1.0
 
             if not (math.isfinite(y[X]) and math.isfinite(y[V])):
@@ -369,5 +389,5 @@ def _summarize(period_records, n_transient, n_periods, slow_period, c, status, s
     summary[SUM_QS] = qs
     summary[SUM_QC] = qc
     summary[SUM_Q_AMPLITUDE] = amplitude
-    summary[SUM_R] = amplitude / c  # eq3.3
+    summary[SUM_R] = amplitude / c if c != 0.0 else np.nan  # eq3.3: a gain needs a drive
     summary[SUM_IMPACTS_PER_PERIOD] = impacts / n_measured

@@ -23,6 +23,7 @@ from vrsweep import kernel
 from vrsweep.diagnostics import point_diagnostics
 from vrsweep.model import kernel_coefficients
 from vrsweep.results import Status
+from vrsweep.trajectory import settings_vector
 
 SHUFFLE_SEED = 20240607  # fixed: the same grid always gives the same chunks and shards
 DIRECTION_VALUES = {"up": 1, "down": -1}
@@ -30,16 +31,7 @@ DIRECTION_VALUES = {"up": 1, "down": -1}
 
 def integration_settings(integration):
     """The kernel's settings vector from a config's integration section."""
-    settings = np.zeros(kernel.N_SETTINGS)
-    settings[kernel.RTOL] = integration.rtol
-    settings[kernel.ATOL] = integration.atol
-    settings[kernel.TRANSIENT_PERIODS] = integration.transient_periods
-    settings[kernel.MEASURE_PERIODS] = integration.measure_periods
-    settings[kernel.MAX_STEPS] = integration.max_steps
-    settings[kernel.MAX_IMPACTS_PER_PERIOD] = integration.max_impacts_per_period
-    settings[kernel.DIVERGENCE_BOUND] = integration.divergence_bound
-    settings[kernel.STICK_VELOCITY] = integration.stick_velocity
-    return settings
+    return settings_vector(**vars(integration))
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,79 @@
+"""One trajectory with everything the kernel can observe: dense samples, impacts, sticking.
+
+Used by ``vrsweep simulate`` and by the tests; a sweep uses the kernel directly.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vrsweep import kernel
+from vrsweep.results import Status
+
+DEFAULT_SETTINGS = {
+    "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
+    "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1e6,
+    "stick_velocity": 1e-7,
+}
+_SETTING_INDEX = {
+    "rtol": kernel.RTOL, "atol": kernel.ATOL, "transient_periods": kernel.TRANSIENT_PERIODS,
+    "measure_periods": kernel.MEASURE_PERIODS, "max_steps": kernel.MAX_STEPS,
+    "max_impacts_per_period": kernel.MAX_IMPACTS_PER_PERIOD,
+    "divergence_bound": kernel.DIVERGENCE_BOUND, "stick_velocity": kernel.STICK_VELOCITY,
+}
+
+
+def settings_vector(**settings):
+    """The kernel's settings vector; unknown names are ignored (configs carry more keys)."""
+    values = dict(DEFAULT_SETTINGS)
+    values.update({k: v for k, v in settings.items() if k in _SETTING_INDEX})
+    vector = np.zeros(kernel.N_SETTINGS)
+    for name, index in _SETTING_INDEX.items():
+        vector[index] = values[name]
+    return vector
+
+
+@dataclass
+class Trajectory:
+    status: Status
+    sample_times: np.ndarray     # (n_samples,)
+    samples: np.ndarray          # (n_samples, 2): x, v
+    impacts: np.ndarray          # (n_impacts, 3): t, v before, v after
+    sticks: np.ndarray           # (n_sticks, 2): start, end
+    period_records: np.ndarray   # (n_periods, N_RECORD), see kernel.REC_*
+    summary: np.ndarray          # (N_SUMMARY,), see kernel.SUM_*
+
+    @property
+    def impacts_per_period(self):
+        """Impacts in each slow period, transient included (Fig. impact_no)."""
+        return self.period_records[:, kernel.REC_IMPACTS].astype(np.int64)
+
+
+def simulate(coefficients, initial_state, settings, sample_times=(), impact_capacity=4096,
+             stick_capacity=1024):
+    """Integrate one point, keeping samples at ``sample_times`` and every impact and stick.
+
+    The logs grow and the run is repeated if they overflow: it is deterministic, so the
+    second run is the same trajectory.
+    """
+    coefficients = np.ascontiguousarray(coefficients, dtype=np.float64)
+    initial_state = np.ascontiguousarray(initial_state, dtype=np.float64)
+    settings = np.ascontiguousarray(settings, dtype=np.float64)
+    sample_times = np.ascontiguousarray(np.sort(np.asarray(sample_times, dtype=np.float64)))
+    n_periods = int(settings[kernel.TRANSIENT_PERIODS] + settings[kernel.MEASURE_PERIODS])
+    while True:
+        records = np.full((n_periods, kernel.N_RECORD), np.nan)
+        summary = np.full(kernel.N_SUMMARY, np.nan)
+        samples = np.full((len(sample_times), 2), np.nan)
+        impacts = np.full((impact_capacity, 3), np.nan)
+        sticks = np.full((stick_capacity, 2), np.nan)
+        status = kernel.integrate(coefficients, initial_state, settings, records, summary,
+                                  sample_times, samples, impacts, sticks)
+        n_impacts = int(summary[kernel.SUM_IMPACTS])
+        n_sticks = int(summary[kernel.SUM_STICKS])
+        if n_impacts <= impact_capacity and n_sticks <= stick_capacity:
+            break
+        impact_capacity = max(impact_capacity, 2 * n_impacts)
+        stick_capacity = max(stick_capacity, 2 * n_sticks)
+    return Trajectory(Status(int(status)), sample_times, samples, impacts[:n_impacts],
+                      sticks[:n_sticks], records, summary)
