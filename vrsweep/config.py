@@ -317,11 +317,15 @@ def parse_config(text: str, source_name: str = "<string>", overrides=()) -> Conf
 
 
 def with_overrides(config: Config, overrides) -> Config:
-    """``config`` with more ``NAME=VALUE`` overrides applied on top of those it already has.
+    """``config`` with more ``NAME=VALUE`` overrides applied on top of it.
 
-    Re-reads the original text so that error messages still point at the original lines.
+    Works from ``config.to_yaml()`` (so a Config changed with dataclasses.replace keeps its
+    changes); that text is valid, so any problem is one of the new overrides and says so.
     """
-    return parse_config(config.source_text, config.source_name, config.overrides + tuple(overrides))
+    overrides = tuple(overrides)
+    changed = parse_config(config.to_yaml(), f"{config.source_name} (resolved)", overrides)
+    return dataclasses.replace(changed, source_name=config.source_name, source_text=config.source_text,
+                               overrides=config.overrides + overrides)
 
 
 # --------------------------------------------------------------------------------------------
@@ -355,6 +359,8 @@ def _check_path(value: str) -> str:
         raise PydanticCustomError("bad_path", "must be a file path, got an empty string")
     if "\0" in value:
         raise PydanticCustomError("bad_path", "must be a file path, got a string containing a NUL character")
+    if any("\ud800" <= char <= "\udfff" for char in value):
+        raise PydanticCustomError("bad_path", "must be a file path, got a string with an unpaired surrogate")
     return value
 
 
@@ -375,7 +381,7 @@ _IntegrationModel = _section_model("Integration", INTEGRATION_DOMAINS, INTEGRATI
 class _Document(BaseModel):
     model_config = _STRICT
 
-    model: Literal["original", "effective"] = "original"
+    model: Literal[MODELS] = "original"
     parameters: _ParametersModel = Field(default_factory=_ParametersModel)
     initial: _InitialModel = Field(default_factory=_InitialModel)
     sweep: dict[str, Any] = Field(default_factory=dict)  # each axis validated by the models below
@@ -383,7 +389,7 @@ class _Document(BaseModel):
     output: Annotated[str, AfterValidator(_check_path)] | None = None
 
 
-_Continuation = Literal["up", "down", "both"] | None
+_Continuation = Literal[CONTINUATIONS] | None
 
 
 class _LinearAxis(BaseModel):
@@ -453,10 +459,14 @@ class _Validator:
         for length in range(len(path), 0, -1):
             setting = self.overridden.get(path[:length])
             if setting is not None:
-                self.problems.append(((1, 0, setting), f"--set {setting}: {text}"))
+                self.problems.append((self.setting_order(setting), f"--set {setting}: {text}"))
                 return
         line = self.line_of(path)
         self.problems.append(((0, line, ""), f"{self.source}:{line}: {text}"))
+
+    def setting_order(self, setting):
+        """Problems with --set options come after the file's, in the order the options were given."""
+        return (1, self.overrides.index(setting) if setting in self.overrides else 0, "")
 
     def report_raw(self, order, text):
         self.problems.append((order, text))
@@ -532,8 +542,11 @@ class _Validator:
             return {}
         try:
             data = _plain(self.root)
-        except (_CyclicAlias, RecursionError):
+        except _CyclicAlias:
             self.report_raw((0, 1, ""), f"{self.source}:1: the YAML refers to itself through an alias")
+            return None
+        except RecursionError:
+            self.report_raw((0, 1, ""), f"{self.source}:1: YAML nested too deeply to read")
             return None
         if not isinstance(data, dict):
             self.report((), f"the config must be a mapping of sections, got {_show(data)}",
@@ -610,16 +623,17 @@ class _Validator:
             name = name.strip()
             allowed = "a parameter, an integration key, initial.x, initial.v or model"
             if not sep or not name:
-                self.report_raw((1, 0, setting), f"--set {setting}: expected NAME=VALUE, e.g. --set g=5")
+                self.report_raw(self.setting_order(setting), f"--set {setting}: expected NAME=VALUE, e.g. --set g=5")
                 continue
             if name not in targets:
-                hint = _did_you_mean(name, list(targets))
-                self.report_raw((1, 0, setting), f"--set {setting}: unknown name {name!r}{hint} (allowed: {allowed})")
+                home = _KEY_HOME.get(name)  # e.g. x -> initial.x
+                hint = f" (did you mean {home}?)" if home in targets else _did_you_mean(name, list(targets))
+                self.report_raw(self.setting_order(setting), f"--set {setting}: unknown name {name!r}{hint} (allowed: {allowed})")
                 continue
             try:
                 value = _parse_scalar(value_text)
             except ValueError as error:
-                self.report_raw((1, 0, setting), f"--set {setting}: {error}")
+                self.report_raw(self.setting_order(setting), f"--set {setting}: {error}")
                 continue
             settings.append((targets[name], value, setting))
         return settings
@@ -752,7 +766,7 @@ class _Validator:
             try:
                 axis = model.model_validate(data)
             except ValidationError as error:
-                for item in error.errors(include_url=False):
+                for item in _without_missing_typos(error.errors(include_url=False)):
                     loc = tuple(item["loc"])
                     if kind == "list":
                         loc = loc[1:]  # the wrapper's "values" is not in the YAML
@@ -821,7 +835,7 @@ class _Validator:
             else:
                 delta = _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS)
                 if delta is not None and not delta > x:
-                    if "Delta" in parameters or "x" not in initial:
+                    if self.blame(("parameters", "Delta"), ("initial", "x"), "Delta" in parameters, "x" in initial):
                         self.report(("parameters", "Delta"),
                                     f"must be above initial.x = {_show(x)} (the mass starts below the barrier), "
                                     f"got {_show(delta)}")
@@ -833,7 +847,8 @@ class _Validator:
         strobe = _valid(integration, "strobe_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
         measure = _valid(integration, "measure_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
         if strobe is not None and measure is not None and strobe > measure:
-            if "strobe_periods" in integration or "measure_periods" not in integration:
+            if self.blame(("integration", "strobe_periods"), ("integration", "measure_periods"),
+                          "strobe_periods" in integration, "measure_periods" in integration):
                 self.report(("integration", "strobe_periods"),
                             f"must be <= integration.measure_periods = {measure}, got {strobe}")
             else:
@@ -844,6 +859,13 @@ class _Validator:
         for name in with_continuation[1:]:
             self.report(("sweep", name, "continuation"),
                         f"only one axis may have continuation, and sweep.{with_continuation[0]} has it")
+
+    def blame(self, first, second, first_given, second_given) -> bool:
+        """Whether a broken rule between two fields is reported at ``first`` (else at ``second``):
+        at a --set one if either is, else at one written in the file, ``first`` if both are."""
+        if first in self.overridden or second in self.overridden:
+            return first in self.overridden
+        return first_given or not second_given
 
     def check_delta_axis(self, axis, spec, x):
         values, _, kind = axis
@@ -890,7 +912,7 @@ def _plain(node, _active=None):
     if isinstance(node, float):
         return float(node)
     if isinstance(node, str):
-        return str(node)
+        return _join_surrogates(str(node))
     if isinstance(node, TaggedScalar):
         return _Opaque(f"{node.tag} {node.value}")
     if isinstance(node, (datetime.date, datetime.datetime)):
@@ -906,6 +928,16 @@ class _Opaque:
 
     def __repr__(self):
         return self.text
+
+
+def _join_surrogates(text: str) -> str:
+    """ruamel reads the escapes "\\ud83d\\ude00" as two lone surrogates; make them one character."""
+    if not any("\ud800" <= char <= "\udfff" for char in text):
+        return text
+    try:
+        return text.encode("utf-16", "surrogatepass").decode("utf-16")
+    except UnicodeDecodeError:
+        return text  # an unpaired surrogate: rejected where it matters (output)
 
 
 def _key(key):
@@ -958,6 +990,18 @@ def _valid(section, key, defaults, domains):
         except OverflowError:  # an int too large for a float
             good_type = False
     return value if good_type and domain.contains(value) else None
+
+
+def _without_missing_typos(errors):
+    """Drop "missing start" when "strat: unknown key (did you mean 'start'?)" already says it."""
+    suggested = set()
+    for item in errors:
+        if item["type"] == "extra_forbidden":
+            parent, key = tuple(item["loc"][:-1]), str(item["loc"][-1])
+            for choice in _LINEAR_KEYS + _VALUES_KEYS:
+                if _did_you_mean(key, [choice]):
+                    suggested.add(parent + (choice,))
+    return [item for item in errors if not (item["type"] == "missing" and tuple(item["loc"]) in suggested)]
 
 
 def _did_you_mean(word, choices) -> str:

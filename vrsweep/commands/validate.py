@@ -38,14 +38,15 @@ def command(config_path, overrides, threads):
             click.echo(f"{label:<12} {axis.name}: {_describe_axis(axis)}")
     else:
         click.echo("axes:        none (a single point)")
-    shape = " x ".join(str(n) for n in config.shape) or "1"
-    click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''} ({shape})")
+    shape = f" ({' x '.join(str(n) for n in config.shape)})" if config.axes else ""
+    click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''}{shape}")
     integration = config.integration
     click.echo(f"integration: rtol={integration.rtol:g} atol={integration.atol:g}, "
                f"{integration.transient_periods} transient + {integration.measure_periods} measured "
                f"slow periods")
     click.echo(f"output:      {config.output_path()}")
-    click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, about {format_duration(guess.seconds)} "
+    duration = format_duration(guess.seconds)
+    click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
                f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)")
     problem = size_problem(config, threads)
     if problem is not None:
