@@ -1,0 +1,156 @@
+"""``vrsweep validate``: exit codes, what it prints, and that it compiles nothing."""
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from vrsweep.cli import main
+from vrsweep.config import parse_config
+from vrsweep.errors import ConfigError
+from vrsweep.estimate import SECONDS_PER_POINT_PERIOD, check_size, estimate
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+
+
+def invoke(*args):
+    result = CliRunner().invoke(main, list(args))
+    output = result.output  # stdout and stderr together (click's default)
+    assert "Traceback" not in output, output
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return result, output
+
+
+def write(tmp_path, text, name="fig1.yaml"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def test_valid_config_prints_the_plan(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result, output = invoke("validate", str(CONFIGS / "map_g_Omega.yaml"), "--threads", "4")
+    assert result.exit_code == 0, output
+    for words in ("valid", "model:       original", "g: 41 values from 0 to 60", "Omega: 7 values from 3 to 6",
+                  "287 points (41 x 7)", "results/map_g_Omega.h5", "on 4 threads", "estimate:"):
+        assert words in output, (words, output)
+
+
+def test_set_is_applied(tmp_path):
+    result, output = invoke("validate", str(CONFIGS / "paper_fig1.yaml"), "--set", "g=5", "--set", "rtol=1e-10")
+    assert result.exit_code == 0, output
+    assert "none (a single point)" in output and "1 point" in output and "rtol=1e-10" in output
+
+
+@pytest.mark.parametrize("path", sorted(CONFIGS.glob("*.yaml")), ids=lambda path: path.name)
+def test_every_shipped_config_validates(path):
+    result, output = invoke("validate", str(path))
+    assert result.exit_code == 0, output
+    assert "warning" not in output  # none of them is too large to run without --allow-large
+
+
+def test_bad_config_exit_2_with_every_problem_and_its_line(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, """\
+        model: original
+        parameters:
+          e: 1.5
+          Delta: 0.5
+        sweep:
+          gg: [1, 2]
+          g: {start: 40, stop: 0, num: 81}
+        integration:
+          rtoll: 1e-9
+        """)
+    result, output = invoke("validate", "fig1.yaml")
+    assert result.exit_code == 2, output
+    assert "fig1.yaml:3: parameters.e: must be in (0, 1], got 1.5" in output
+    assert "fig1.yaml:4: parameters.Delta: must be above initial.x = 0.99" in output
+    assert "fig1.yaml:6: sweep.gg: not a parameter (did you mean 'g'?)" in output
+    assert "fig1.yaml:7: sweep.g.stop: must be >= start" in output
+    assert "fig1.yaml:9: integration.rtoll: unknown key (did you mean 'rtol'?)" in output
+
+
+def test_yaml_syntax_error_exit_2(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, "parameters:\n  e: 0.5\n   g: 3\n")
+    result, output = invoke("validate", "fig1.yaml")
+    assert result.exit_code == 2, output
+    assert "fig1.yaml:3:" in output and "YAML syntax error" in output
+
+
+def test_duplicate_axis_exit_2(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, "sweep:\n  g: [1, 2]\n  g: [3]\n")
+    result, output = invoke("validate", "fig1.yaml")
+    assert result.exit_code == 2 and "fig1.yaml:3: sweep.g: parameter given twice" in output, output
+
+
+def test_bad_override_exit_2(tmp_path):
+    result, output = invoke("validate", str(CONFIGS / "quickstart.yaml"), "--set", "e=2", "--set", "gama=1")
+    assert result.exit_code == 2, output
+    assert "--set e=2: parameters.e: must be in (0, 1], got 2.0" in output
+    assert "--set gama=1: unknown name 'gama' (did you mean 'gamma'?)" in output
+
+
+def test_missing_config_exit_2(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result, output = invoke("validate", "nope.yaml")
+    assert result.exit_code == 2 and "nope.yaml: no such config file" in output, output
+
+
+def test_too_large_grid_is_reported_not_refused(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, """\
+        sweep:
+          g: {start: 0, stop: 60, num: 10000}
+          Omega: {start: 3, stop: 6, num: 1000}
+        """, name="huge.yaml")
+    result, output = invoke("validate", "huge.yaml", "--threads", "8")
+    assert result.exit_code == 0, output
+    assert "10000000 points" in output and "pass --allow-large" in output and "on 8 threads" in output
+
+
+def test_validate_imports_no_numba(tmp_path):
+    """validate must not compile anything: numba is not even imported (through the whole CLI)."""
+    script = textwrap.dedent(f"""\
+        import sys
+        from vrsweep.cli import main
+        try:
+            main(["validate", {str(CONFIGS / "paper_fig1.yaml")!r}], standalone_mode=False)
+        finally:
+            print("numba imported:", "numba" in sys.modules)
+        """)
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "numba imported: False" in done.stdout, done.stdout + done.stderr
+    assert "valid" in done.stdout
+
+
+def test_estimate_scales_with_points_periods_threads_and_rtol():
+    config = parse_config("sweep: {g: {start: 0, stop: 1, num: 10}}\n"
+                          "integration: {transient_periods: 30, measure_periods: 20, strobe_periods: 4}")
+    guess = estimate(config, 2)
+    assert guess.n_points == 10
+    assert guess.output_bytes == 10 * (12 + 2 * 4) * 8
+    assert guess.seconds == pytest.approx(10 * 50 * SECONDS_PER_POINT_PERIOD["original"] / 2)
+    tighter = parse_config(config.to_yaml(), overrides=["rtol=1e-14"])
+    assert estimate(tighter, 2).seconds == pytest.approx(guess.seconds * 10)  # (1e5)^(1/5)
+    effective = parse_config(config.to_yaml(), overrides=["model=effective"])
+    assert estimate(effective, 2).seconds < guess.seconds
+
+
+def test_check_size_refuses_a_huge_grid_unless_allowed():
+    config = parse_config("sweep: {g: {start: 0, stop: 1, num: 100000}, Omega: {start: 1, stop: 2, num: 1000}}",
+                          source_name="huge.yaml")
+    with pytest.raises(ConfigError) as info:
+        check_size(config, 4, allow_large=False)
+    problem = info.value.problems[0]
+    for words in ("huge.yaml", "grid of 100000000 points", "GB", "on 4 threads", "pass --allow-large"):
+        assert words in problem
+    assert check_size(config, 4, allow_large=True).n_points == 100_000_000
+    assert check_size(parse_config(""), 1, allow_large=False).n_points == 1
