@@ -146,7 +146,7 @@ def _fsync(h5file):
 def _check_output_directory(path):
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
-        raise UsageError(f"output directory {directory} does not exist (output: {path})")
+        raise UsageError(f"output directory {directory} does not exist (output: {path}); create it (mkdir -p {directory}) or choose another with -o")
     if not os.access(directory, os.W_OK | os.X_OK):
         raise UsageError(f"output directory {directory} is not writable (output: {path})")
 
