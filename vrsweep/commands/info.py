@@ -1,0 +1,342 @@
+"""``vrsweep info RESULTS.h5 [--json]``: what a vrsweep file holds, without plotting it.
+
+For a sweep result or a shard: the format version, whether it is finished (points done of the
+total), the model, the axes, the fixed parameters, every variable with its units, the points per
+status, and when and with which versions it was written. ``--json`` prints the same as one object
+for scripts.
+
+Reading goes through ``store.read_results``, which turns every bad file (missing, not HDF5, not
+vrsweep, truncated, newer format, locked) into a ResultFileError: the CLI group prints that one
+line and exits 2. Other vrsweep files (a ``simulate`` trajectory has no grid and no ``done``
+mask) are described from their attributes and datasets instead.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import click
+import numpy as np
+
+from vrsweep.errors import ResultFileError
+
+# Root attributes shown in their own lines (or not at all), not under "attributes".
+_KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "config", "model",
+                     "vrsweep_version", "numba_version", "numpy_version", "shard")
+
+
+@click.command("info")
+@click.argument("path", metavar="RESULTS.h5", type=click.Path(dir_okay=True))
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
+@click.option("--config", "show_config", is_flag=True, help="Also print the config the file was run from.")
+def command(path, as_json, show_config):
+    """Summarise a results, shard or trajectory file: grid, progress, status counts, variables."""
+    summary = describe(path)
+    if as_json:
+        click.echo(json.dumps(summary, indent=2, allow_nan=False))
+    else:
+        click.echo(format_summary(summary, show_config))
+
+
+# --------------------------------------------------------------------------------------------
+# The summary as plain data (what --json prints)
+# --------------------------------------------------------------------------------------------
+
+
+def describe(path) -> dict:
+    """The summary of a vrsweep file as a JSON-ready dict; ResultFileError for a bad file."""
+    from vrsweep.store import read_results
+
+    try:
+        results = read_results(path)
+    except ResultFileError as error:
+        # read_results wants a sweep grid; a trajectory is a valid vrsweep file without one.
+        # Anything else keeps read_results' own message, which says what is wrong.
+        other = _describe_non_sweep(path)
+        if other is None:
+            raise error from None
+        return other
+    return _describe_sweep(results)
+
+
+def _describe_sweep(results) -> dict:
+    attrs = results.attrs
+    owned = results.owned if results.owned is not None else np.ones(results.shape, dtype=bool)
+    n_total = int(owned.sum())
+    n_done = int((results.done & owned).sum())
+    axes = []
+    for name, values in results.axes.items():
+        values = np.asarray(values)
+        axis_attrs = results.coord_attrs.get(name, {})
+        axes.append({
+            "name": name, "size": int(values.size),
+            "min": _number(values.min()), "max": _number(values.max()),
+            "first": _number(values[0]), "last": _number(values[-1]),
+            "units": axis_attrs.get("units"), "long_name": axis_attrs.get("long_name"),
+        })
+    variables = []
+    for name, array in results.variables.items():
+        var_attrs = results.var_attrs[name]
+        variables.append({
+            "name": name, "dims": list(results.dims[name]), "shape": list(np.shape(array)),
+            "dtype": str(np.asarray(array).dtype), "units": var_attrs.get("units"),
+            "long_name": var_attrs.get("long_name"),
+            "derived": name not in results.point_variables,
+        })
+    config_text = attrs.get("config")
+    return {
+        "path": os.fspath(results.path),
+        "kind": "shard" if results.shard else "sweep",
+        "format_version": attrs.get("vrsweep_format_version"),
+        "complete": results.complete,
+        "shard": results.shard,
+        "points_done": n_done,
+        "points_total": n_total,
+        "grid_points": int(math.prod(results.shape)),
+        "model": attrs.get("model") or _config_value(config_text, "model"),
+        "axes": axes,
+        "fixed_parameters": _fixed_parameters(config_text, [a["name"] for a in axes]),
+        "integration": _integration(config_text),
+        "status_counts": _status_counts(results, owned),
+        "variables": variables,
+        "created": attrs.get("created"),
+        "versions": _versions(attrs),
+        "attributes": _other_attributes(attrs),
+        "config": config_text,
+    }
+
+
+def _status_counts(results, owned) -> list[dict]:
+    """Points per status over the points this file owns, named by the file's own flag_meanings."""
+    if "status" not in results.variables:
+        return []
+    from vrsweep.results import MESSAGES, Status
+
+    status = np.asarray(results.variables["status"])[owned]
+    status_attrs = results.var_attrs.get("status", {})
+    flag_values = [int(v) for v in np.atleast_1d(status_attrs.get("flag_values", []))]
+    flag_meanings = str(status_attrs.get("flag_meanings", "")).split()
+    names = dict(zip(flag_values, flag_meanings))
+    counts = []
+    for code, n in zip(*np.unique(status, return_counts=True)):
+        code = int(code)
+        name = names.get(code, f"unknown code {code}")
+        try:
+            meaning = MESSAGES[Status(code)] if Status(code).name.lower() == name else None
+        except ValueError:  # a code this vrsweep does not know (a file from another version)
+            meaning = None
+        counts.append({"status": name, "code": code, "points": int(n), "meaning": meaning})
+    return counts
+
+
+def _describe_non_sweep(path) -> dict | None:
+    """A vrsweep file of this format without a sweep grid (a trajectory), or None.
+
+    None whenever the file is not exactly that, so the caller reports read_results' error.
+    """
+    import h5py
+
+    from vrsweep.store import FORMAT_VERSION
+
+    try:
+        with h5py.File(path, "r") as f:
+            version = f.attrs.get("vrsweep_format_version")
+            if version is None or int(version) != FORMAT_VERSION or "done" in f:
+                return None
+            attrs = {key: _plain(value) for key, value in f.attrs.items()}
+            variables = []
+
+            def visit(name, obj):
+                if isinstance(obj, h5py.Dataset):
+                    variables.append({
+                        "name": name, "dims": [], "shape": list(obj.shape), "dtype": str(obj.dtype),
+                        "units": _plain(obj.attrs.get("units")),
+                        "long_name": _plain(obj.attrs.get("long_name")), "derived": False,
+                    })
+
+            f.visititems(visit)
+    except (OSError, ValueError, TypeError, KeyError, RuntimeError):
+        return None
+    config_text = attrs.get("config")
+    complete = attrs.get("vrsweep_complete")
+    return {
+        "path": os.fspath(path),
+        "kind": str(attrs.get("kind", "trajectory")),
+        "format_version": int(version),
+        "complete": None if complete is None else bool(complete),
+        "shard": None,
+        "points_done": None,
+        "points_total": None,
+        "grid_points": None,
+        "model": attrs.get("model") or _config_value(config_text, "model"),
+        "axes": [],
+        "fixed_parameters": _fixed_parameters(config_text, []),
+        "integration": _integration(config_text),
+        "status_counts": [],
+        "variables": variables,
+        "created": attrs.get("created"),
+        "versions": _versions(attrs),
+        "attributes": _other_attributes(attrs),
+        "config": config_text,
+    }
+
+
+def _versions(attrs) -> dict:
+    return {name: attrs.get(f"{name}_version") for name in ("vrsweep", "numba", "numpy")
+            if attrs.get(f"{name}_version") is not None}
+
+
+def _other_attributes(attrs) -> dict:
+    return {key: _plain(value) for key, value in attrs.items() if key not in _KNOWN_ROOT_ATTRS}
+
+
+def _parsed_config(config_text):
+    """The stored config as a dict, or {}: info describes the file even if the text is odd."""
+    if not config_text:
+        return {}
+    import yaml
+
+    try:
+        parsed = yaml.safe_load(config_text)
+    except yaml.YAMLError:
+        return {}
+    return parsed if isinstance(parsed, dict) else {}
+
+
+def _config_value(config_text, key):
+    value = _parsed_config(config_text).get(key)
+    return None if value is None else str(value)
+
+
+def _fixed_parameters(config_text, axis_names) -> dict:
+    parameters = _parsed_config(config_text).get("parameters") or {}
+    if not isinstance(parameters, dict):
+        return {}
+    return {str(name): _plain(value) for name, value in parameters.items() if name not in axis_names}
+
+
+def _integration(config_text) -> dict:
+    integration = _parsed_config(config_text).get("integration") or {}
+    if not isinstance(integration, dict):
+        return {}
+    return {str(name): _plain(value) for name, value in integration.items()}
+
+
+def _number(value):
+    value = float(value)
+    return value if math.isfinite(value) else None  # JSON has no NaN
+
+
+def _plain(value):
+    """An HDF5 attribute value as something json.dumps takes."""
+    if value is None:
+        return None
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray):
+        return [_plain(v) for v in value.tolist()]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (str, int, float, bool)):
+        return value
+    return str(value)
+
+
+# --------------------------------------------------------------------------------------------
+# The summary as text
+# --------------------------------------------------------------------------------------------
+
+
+def format_summary(summary, show_config=False) -> str:
+    lines = []
+    kind = summary["kind"]
+    if summary["points_total"] is not None:
+        progress = f"{summary['points_done']} of {summary['points_total']} points done"
+        if kind == "shard":
+            progress += f" (shard {summary['shard']} of a {summary['grid_points']}-point grid)"
+        state = "complete" if summary["complete"] else "NOT complete"
+        if not summary["complete"]:
+            state += " (an interrupted run: `vrsweep run CONFIG --resume` continues it)"
+        lines.append(f"{summary['path']}: vrsweep {kind}, format {summary['format_version']}, {state}")
+        lines.append(f"points:      {progress}")
+    else:
+        state = {True: "complete", False: "NOT complete", None: "completeness not recorded"}[summary["complete"]]
+        lines.append(f"{summary['path']}: vrsweep {kind}, format {summary['format_version']}, {state}")
+    if summary["model"]:
+        lines.append(f"model:       {summary['model']}")
+    if summary["points_total"] is not None:
+        if summary["axes"]:
+            for index, axis in enumerate(summary["axes"]):
+                label = "axes:" if index == 0 else ""
+                lines.append(f"{label:<12} {_describe_axis(axis)}")
+        else:
+            lines.append("axes:        none (a single point)")
+    if summary["fixed_parameters"]:
+        fixed = " ".join(f"{name}={_short(value)}" for name, value in summary["fixed_parameters"].items())
+        lines.append(f"fixed:       {fixed}")
+    integration = summary["integration"]
+    if integration:
+        keys = ("rtol", "atol", "transient_periods", "measure_periods")
+        lines.append("integration: " + " ".join(f"{k}={_short(integration[k])}" for k in keys if k in integration))
+    if summary["status_counts"]:
+        for index, row in enumerate(summary["status_counts"]):
+            label = "status:" if index == 0 else ""
+            meaning = f"  ({row['meaning']})" if row["meaning"] else ""
+            lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
+    created = summary["created"] or "unknown time"
+    versions = summary["versions"]
+    written = f"{created}"
+    if "vrsweep" in versions:
+        written += f" by vrsweep {versions['vrsweep']}"
+    others = [f"{name} {versions[name]}" for name in ("numba", "numpy") if name in versions]
+    if others:
+        written += f" ({', '.join(others)})"
+    lines.append(f"written:     {written}")
+    for key, value in summary["attributes"].items():
+        lines.append(f"{key + ':':<12} {value}")
+    lines.append("variables:")
+    name_width = max((len(v["name"]) for v in summary["variables"]), default=0)
+    dims_width = max((len(_dims(v)) for v in summary["variables"]), default=0)
+    for variable in summary["variables"]:
+        units = variable["units"] if variable["units"] is not None else "-"
+        text = f"  {variable['name']:<{name_width}}  {_dims(variable):<{dims_width}}  [{units}]"
+        if variable["long_name"]:
+            text += f"  {variable['long_name']}"
+        if variable["derived"]:
+            text += "  (derived)"
+        lines.append(text)
+    if show_config and summary["config"]:
+        lines.append("config:")
+        lines += [f"  {line}" for line in summary["config"].splitlines()]
+    return "\n".join(lines)
+
+
+def _describe_axis(axis) -> str:
+    n = axis["size"]
+    if n == 1:
+        values = f"1 value, {_short(axis['first'])}"
+    else:
+        values = f"{n} values from {_short(axis['first'])} to {_short(axis['last'])}"
+    units = f" [{axis['units']}]" if axis["units"] is not None else ""
+    long_name = f"  {axis['long_name']}" if axis["long_name"] else ""
+    return f"{axis['name']}: {values}{units}{long_name}"
+
+
+def _dims(variable) -> str:
+    if variable["dims"]:
+        return "(" + ", ".join(variable["dims"]) + ")"
+    return "x".join(str(n) for n in variable["shape"]) or "scalar"
+
+
+def _count_width(summary) -> int:
+    return max(len(str(row["points"])) for row in summary["status_counts"])
+
+
+def _short(value) -> str:
+    return format(value, "g") if isinstance(value, float) else str(value)
