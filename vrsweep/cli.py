@@ -17,7 +17,13 @@ class _Group(click.Group):
         try:
             return super().invoke(ctx)
         except VrsweepError as error:
-            click.echo(f"Error: {error}", err=True)
+            problems = getattr(error, "problems", None)
+            if problems and len(problems) > 1:
+                click.echo(f"Error: {len(problems)} problems:", err=True)
+                for problem in problems:
+                    click.echo(f"  {problem}", err=True)
+            else:
+                click.echo(f"Error: {error}", err=True)
             ctx.exit(error.exit_code)
         except OSError as error:  # disk full, permission denied, ...: a message, not a traceback
             click.echo(f"Error: {error.strerror or error}: {error.filename or ''}".rstrip(": "), err=True)
