@@ -13,8 +13,7 @@ from dataclasses import dataclass
 from vrsweep.errors import ConfigError
 
 # Wall time of one grid point over one slow period 2 pi/omega, on one thread, at rtol = 1e-9.
-# Placeholders until the lead calibrates them from benchmarks/ (the original model resolves the
-# fast forcing Omega, so it takes about ten times more steps per slow period than the effective).
+# The original model resolves the fast forcing Omega, so it takes several times more steps.
 # Calibrated with `vrsweep run configs/paper_fig1.yaml --threads 1` (81 points x 200 periods at
 # rtol 1e-9, 2-core workstation): 5.7 s user for the original model, 2.2 s for the effective one,
 # less ~1.5 s of start-up. Points with many impacts cost several times the mean.
