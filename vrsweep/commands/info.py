@@ -146,12 +146,19 @@ def _describe_non_sweep(path) -> dict | None:
             if version is None or int(version) != FORMAT_VERSION or "done" in f:
                 return None
             attrs = {key: _plain(value) for key, value in f.attrs.items()}
-            variables = []
+            variables, statuses = [], []
 
             def visit(name, obj):
+                if isinstance(obj, h5py.Group) and "status_name" in obj.attrs:
+                    # A model run of a trajectory: one point, one status.
+                    statuses.append({
+                        "status": str(_plain(obj.attrs["status_name"])), "code": _plain(obj.attrs.get("status")),
+                        "points": 1, "meaning": _plain(obj.attrs.get("status_message")), "group": name,
+                    })
                 if isinstance(obj, h5py.Dataset):
                     variables.append({
-                        "name": name, "dims": [], "shape": list(obj.shape), "dtype": str(obj.dtype),
+                        "name": name, "dims": [_dimension_name(d) for d in obj.dims] if not obj.is_scale else [],
+                        "shape": list(obj.shape), "dtype": str(obj.dtype),
                         "units": _plain(obj.attrs.get("units")),
                         "long_name": _plain(obj.attrs.get("long_name")), "derived": False,
                     })
@@ -163,7 +170,7 @@ def _describe_non_sweep(path) -> dict | None:
     complete = attrs.get("vrsweep_complete")
     return {
         "path": os.fspath(path),
-        "kind": str(attrs.get("kind", "trajectory")),
+        "kind": str(attrs.get("vrsweep_file", "trajectory")),
         "format_version": int(version),
         "complete": None if complete is None else bool(complete),
         "shard": None,
@@ -174,13 +181,18 @@ def _describe_non_sweep(path) -> dict | None:
         "axes": [],
         "fixed_parameters": _fixed_parameters(config_text, []),
         "integration": _integration(config_text),
-        "status_counts": [],
+        "status_counts": statuses,
         "variables": variables,
         "created": attrs.get("created"),
         "versions": _versions(attrs),
         "attributes": _other_attributes(attrs),
         "config": config_text,
     }
+
+
+def _dimension_name(dim) -> str:
+    """The name of the scale attached to one dimension of a dataset ('' if none)."""
+    return dim[0].name.rsplit("/", 1)[-1] if len(dim) else ""
 
 
 def _versions(attrs) -> dict:
@@ -196,11 +208,13 @@ def _parsed_config(config_text):
     """The stored config as a dict, or {}: info describes the file even if the text is odd."""
     if not config_text:
         return {}
-    import yaml
+    # ruamel (YAML 1.2, the project's parser): "1e-09" is a float, as config.py reads it.
+    from ruamel.yaml import YAML
+    from ruamel.yaml.error import YAMLError
 
     try:
-        parsed = yaml.safe_load(config_text)
-    except yaml.YAMLError:
+        parsed = YAML(typ="safe", pure=True).load(config_text)
+    except YAMLError:
         return {}
     return parsed if isinstance(parsed, dict) else {}
 
@@ -288,7 +302,10 @@ def format_summary(summary, show_config=False) -> str:
         for index, row in enumerate(summary["status_counts"]):
             label = "status:" if index == 0 else ""
             meaning = f"  ({row['meaning']})" if row["meaning"] else ""
-            lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
+            if "group" in row:  # a trajectory: one status per model run
+                lines.append(f"{label:<12} {row['group']}: {row['status']}{meaning}")
+            else:
+                lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
     created = summary["created"] or "unknown time"
     versions = summary["versions"]
     written = f"{created}"
@@ -329,8 +346,8 @@ def _describe_axis(axis) -> str:
 
 
 def _dims(variable) -> str:
-    if variable["dims"]:
-        return "(" + ", ".join(variable["dims"]) + ")"
+    if any(variable["dims"]) and len(variable["dims"]) == len(variable["shape"]):
+        return "(" + ", ".join(f"{dim}: {n}" for dim, n in zip(variable["dims"], variable["shape"])) + ")"
     return "x".join(str(n) for n in variable["shape"]) or "scalar"
 
 

@@ -1,0 +1,170 @@
+"""``vrsweep info``: a readable and a --json summary of real run outputs.
+
+The files come from real (short) runs of the shipped quickstart config, so the summary is
+checked against what ``run`` actually writes, not against a hand-made layout.
+"""
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vrsweep import __version__
+from vrsweep.cli import main
+from vrsweep.store import FORMAT_VERSION, read_results
+
+QUICKSTART = Path(__file__).resolve().parent.parent / "configs" / "quickstart.yaml"
+SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
+
+
+def invoke(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert "Traceback" not in result.output, result.output
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return result
+
+
+def run_quickstart(path, *extra):
+    result = invoke("run", QUICKSTART, "-o", path, "--quiet", *SHORT, *extra)
+    assert result.exit_code == 0, result.output
+    return path
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    return run_quickstart(tmp_path_factory.mktemp("info") / "quickstart.h5")
+
+
+def info_json(path):
+    result = invoke("info", path, "--json")
+    assert result.exit_code == 0, result.output
+    return json.loads(result.stdout)
+
+
+def test_text_summary_of_a_finished_run(finished):
+    result = invoke("info", finished)
+    assert result.exit_code == 0, result.output
+    text = result.stdout
+    stored = read_results(finished)
+    n_ok = int(np.sum(stored.variables["status"] == 0))
+    for words in (f"format {FORMAT_VERSION}, complete", "9 of 9 points done", "model:       original",
+                  "g: 9 values from 0 to 40", "fast forcing amplitude g", "Omega=4",
+                  "transient_periods=2 measure_periods=2", f"by vrsweep {__version__}", "numba ", "numpy "):
+        assert words in text, (words, text)
+    assert re.search(rf"status:\s+{n_ok} ok\b", text), text
+    # Every stored variable is listed with its units and meaning.
+    for name in stored.variables:
+        assert re.search(rf"^  {re.escape(name)}\s", text, re.MULTILINE), (name, text)
+    assert re.search(r"^  R\s+\(g: 9\)\s+\[1\]\s+gain \|Q\|/c", text, re.MULTILINE), text
+    assert "config:" not in text
+    assert "sweep:" in invoke("info", finished, "--config").stdout  # the config as run, on request
+
+
+def test_json_matches_the_file(finished):
+    summary = info_json(finished)
+    stored = read_results(finished)
+    assert summary["format_version"] == FORMAT_VERSION
+    assert summary["complete"] is True and summary["kind"] == "sweep" and summary["shard"] is None
+    assert summary["points_done"] == summary["points_total"] == summary["grid_points"] == 9
+    assert summary["model"] == "original"
+    [axis] = summary["axes"]
+    assert (axis["name"], axis["size"], axis["min"], axis["max"], axis["units"]) == ("g", 9, 0.0, 40.0, "1")
+    codes, counts = np.unique(stored.variables["status"], return_counts=True)
+    assert {row["code"]: row["points"] for row in summary["status_counts"]} == dict(
+        zip(codes.tolist(), counts.tolist()))
+    assert sum(row["points"] for row in summary["status_counts"]) == 9
+    variables = {v["name"]: v for v in summary["variables"]}
+    assert list(variables) == list(stored.variables)
+    assert variables["R"]["units"] == "1" and variables["R"]["dims"] == ["g"]
+    assert variables["strobe_x"]["shape"] == [9, 2]
+    assert variables["g_res"]["derived"] and not variables["R"]["derived"]
+    assert summary["versions"]["vrsweep"] == __version__
+    assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", summary["created"])
+    assert summary["fixed_parameters"]["Omega"] == 4.0 and "g" not in summary["fixed_parameters"]
+    assert summary["integration"]["transient_periods"] == 2
+    assert summary["integration"]["rtol"] == 1e-9  # YAML 1.2: a float, not the string "1e-09"
+    assert summary["config"] == stored.attrs["config"]
+
+
+def test_an_unfinished_checkpoint_says_so(finished, tmp_path):
+    """A checkpoint (points missing, vrsweep_complete = 0) is reported as not complete, with the
+    missing points counted as not_computed."""
+    partial = tmp_path / "partial.h5"
+    shutil.copy(finished, partial)
+    with h5py.File(partial, "r+") as f:  # what a run killed after 5 points leaves
+        f["done"][5:] = 0
+        f["status"][5:] = -1
+        f.attrs.modify("vrsweep_complete", np.int32(0))
+    result = invoke("info", partial)
+    assert result.exit_code == 0, result.output
+    assert "NOT complete" in result.stdout and "--resume" in result.stdout
+    assert "5 of 9 points done" in result.stdout
+    assert re.search(r"\b4 not_computed\b", result.stdout), result.stdout
+    summary = info_json(partial)
+    assert summary["complete"] is False and summary["points_done"] == 5
+
+
+def test_a_shard_counts_its_own_points(tmp_path):
+    run_quickstart(tmp_path / "sharded.h5", "--shard", "1/2")
+    [shard] = tmp_path.glob("sharded.shard*.h5")
+    summary = info_json(shard)
+    owned = int(read_results(shard).owned.sum())
+    assert summary["kind"] == "shard" and summary["shard"] == "1/2"
+    assert summary["grid_points"] == 9 and summary["points_total"] == summary["points_done"] == owned < 9
+    assert sum(row["points"] for row in summary["status_counts"]) == owned
+    assert f"{owned} of {owned} points done (shard 1/2 of a 9-point grid)" in invoke("info", shard).stdout
+
+
+def test_a_single_point_run(tmp_path):
+    path = run_quickstart(tmp_path / "point.h5", "--set", "g=5")
+    text = invoke("info", path).stdout
+    assert "axes:        none (a single point)" in text and "1 of 1 points done" in text
+    assert "g=5" in text  # g is fixed now
+    assert info_json(path)["axes"] == []
+
+
+def test_a_vrsweep_file_without_a_grid_is_described(tmp_path):
+    """A trajectory (from ``simulate``) has no grid: info lists its attributes and datasets."""
+    path = tmp_path / "trajectory.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["vrsweep_format_version"] = np.int32(FORMAT_VERSION)
+        f.attrs["vrsweep_complete"] = np.int32(1)
+        f.attrs["created"] = "2024-01-01T00:00:00Z"
+        f.attrs["model"] = "effective"
+        f.attrs["vrsweep_version"] = __version__
+        samples = f.create_dataset("x", data=np.zeros(50))
+        samples.attrs.update({"units": "1", "long_name": "position x"})
+    result = invoke("info", path)
+    assert result.exit_code == 0, result.output
+    assert "vrsweep trajectory" in result.stdout and "effective" in result.stdout
+    assert re.search(r"^  x\s+50\s+\[1\]\s+position x", result.stdout, re.MULTILINE), result.stdout
+    summary = info_json(path)
+    assert summary["kind"] == "trajectory" and summary["points_total"] is None
+    assert summary["variables"][0]["shape"] == [50]
+
+
+def test_a_simulate_output_is_described(tmp_path):
+    if "simulate" not in main.commands:
+        pytest.skip("vrsweep simulate is not built yet")
+    path = tmp_path / "traj.h5"
+    result = invoke("simulate", QUICKSTART, "--set", "g=5", "--set", "transient_periods=2",
+                    "--set", "measure_periods=2", "--set", "strobe_periods=2", "-o", path)
+    assert result.exit_code == 0, result.output
+    result = invoke("info", path)
+    assert result.exit_code == 0, result.output
+    assert "vrsweep trajectory" in result.stdout and "g=5" in result.stdout
+    summary = info_json(path)
+    assert summary["format_version"] == FORMAT_VERSION and summary["complete"] is True
+    # One status per model run, named as the kernel names it.
+    assert {row["status"] for row in summary["status_counts"]} <= {"ok", "max_steps", "diverged",
+                                                                   "chatter_limit", "step_too_small",
+                                                                   "non_finite"}
+    assert summary["status_counts"], summary
+    names = {variable["name"] for variable in summary["variables"]}
+    assert any(name.endswith("/x") for name in names), names
