@@ -1,0 +1,47 @@
+"""vrsweep simulate CONFIG.yaml [--set ...] -o TRAJ.h5: one trajectory, densely sampled, to HDF5."""
+
+import click
+
+from vrsweep.commands.options import config_argument, output_option, overwrite_option, set_option
+from vrsweep.trajectory_file import DEFAULT_SAMPLES_PER_PERIOD
+
+
+@click.command("simulate")
+@config_argument
+@set_option
+@output_option
+@click.option("--samples-per-period", type=click.IntRange(min=1), default=DEFAULT_SAMPLES_PER_PERIOD,
+              show_default=True,
+              help="Samples of x and v per slow period 2 pi/omega, taken from the solver's dense output.")
+@click.option("--compare", type=click.Choice(["effective"]), default=None,
+              help="Also integrate the effective system (eq2.10) from the same initial state, and "
+                   "reconstruct it from the slow flow (eq2.21, eq2.24) -- Fig. 3-6 of the paper.")
+@overwrite_option
+@click.option("--quiet", "-q", is_flag=True, help="No summary.")
+def command(config_path, overrides, output, samples_per_period, compare, overwrite, quiet):
+    """Integrate one point of CONFIG.yaml and store its trajectory.
+
+    The config must describe a single point: fix swept parameters with --set (e.g. --set g=5).
+    The run lasts the config's transient_periods + measure_periods slow periods. Stored: x and v
+    at evenly spaced times, every impact (time, velocity before and after), every sticking
+    interval, and impacts per slow period, transient included. Plot it with `vrsweep plot`.
+    """
+    from vrsweep.config import load_config
+    from vrsweep.trajectory_file import check_single_point, simulate_point, write_trajectory
+
+    config = load_config(config_path, overrides)
+    check_single_point(config)  # before compiling anything
+    path = config.output_path(output)
+    if path.exists() and not overwrite:  # say so before integrating, not after
+        from vrsweep.errors import UsageError
+
+        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
+    data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
+    write_trajectory(path, data, config, overwrite=overwrite)
+    if not quiet:
+        for run in data.runs.values():
+            counts = run.impacts_per_period
+            click.echo(f"{run.model}: {run.status.name.lower()}, {len(run.t)} samples, {len(run.impacts)} impacts "
+                       f"({counts.sum() / max(1, len(counts)):.2f} per slow period), "
+                       f"{len(run.sticks)} sticking intervals", err=True)
+        click.echo(f"-> {path}", err=True)
