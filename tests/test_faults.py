@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from vrsweep import kernel
@@ -45,8 +45,8 @@ OK_SWEEP_VARIABLES = ("R", "Qs", "Qc", "Q_amplitude", "impacts_per_period", "x_m
 # R = |Q|/c: below this the gain of a finite |Q| can overflow (see test_vanishing_drive_...).
 MIN_DRIVE = 1e-6
 
-FAST = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-FAST_SWEEPS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+FAST = settings(max_examples=1000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+FAST_SWEEPS = settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
 def unit(low=0.0, high=1.0, **kwargs):
@@ -83,6 +83,7 @@ def test_simulate_ends_every_point_with_a_known_status_and_no_nan_ok(point):
     run = simulate(kernel_coefficients(parameters, model), list(initial), settings_vector(**run_settings))
 
     assert run.status == Status.OK or run.status in KNOWN_FAILURES, run.status
+    event(run.status.name.lower())  # --hypothesis-show-statistics: which statuses were reached
     if run.status == Status.OK:
         bad = {name: run.summary[k] for name, k in OK_SUMMARY.items() if not math.isfinite(run.summary[k])}
         assert not bad, f"ok point with non-finite {bad}"
@@ -136,6 +137,7 @@ def test_run_sweep_ends_every_point_with_a_known_status_and_no_nan_ok(text):
     for index, values in written.items():
         status = Status(int(values["status"]))
         assert status == Status.OK or status in KNOWN_FAILURES, (index, status)
+        event(status.name.lower())
         if status == Status.OK:
             bad = [name for name in OK_SWEEP_VARIABLES if not np.all(np.isfinite(values[name]))]
             assert not bad, f"point {index} is ok but holds non-finite {bad}\n{text}"
