@@ -398,3 +398,22 @@ def test_failed_points_are_counted_in_the_summary_and_stored(tmp_path):
     import json
 
     assert {row["status"]: row["points"] for row in json.loads(info.stdout)["status_counts"]} == reported
+
+
+def test_a_file_a_run_is_writing_is_reported_as_locked(finished, tmp_path):
+    """``info`` on the output of a run in progress: say it is locked and how to read it anyway."""
+    if os.environ.get("HDF5_USE_FILE_LOCKING", "").upper() == "FALSE":
+        pytest.skip("file locking is switched off in this environment")
+    path = tmp_path / "busy.h5"
+    shutil.copy(finished, path)
+    holder = subprocess.Popen(
+        [sys.executable, "-c",
+         "import sys, time, h5py; f = h5py.File(sys.argv[1], 'r+'); print('open', flush=True); time.sleep(60)",
+         str(path)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "open"
+        line = one_message(invoke("info", path), 2)
+    finally:
+        holder.kill()
+        holder.wait()
+    assert "locked" in line and "HDF5_USE_FILE_LOCKING=FALSE" in line

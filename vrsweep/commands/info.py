@@ -276,7 +276,9 @@ def format_summary(summary, show_config=False) -> str:
             progress += f" (shard {summary['shard']} of a {summary['grid_points']}-point grid)"
         state = "complete" if summary["complete"] else "NOT complete"
         if not summary["complete"]:
-            state += " (an interrupted run: `vrsweep run CONFIG --resume` continues it)"
+            # A checkpoint: either a run still writing it (read with file locking off) or one
+            # that was stopped; only the second needs --resume.
+            state += " (still running, or interrupted: `vrsweep run CONFIG --resume` continues it)"
         lines.append(f"{summary['path']}: vrsweep {kind}, format {summary['format_version']}, {state}")
         lines.append(f"points:      {progress}")
     else:
