@@ -151,7 +151,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     impact_log      (n_impact_log, 3)        t, v before, v after, for the first impacts
     stick_log       (n_stick_log, 2)         start and end of the first sticking intervals
     """
-    rhs = oscillator_rhs  # noqa
+    rhs = oscillator_rhs
     rtol = settings[RTOL]
     atol = settings[ATOL]
     n_transient = int(settings[TRANSIENT_PERIODS])
