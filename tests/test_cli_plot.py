@@ -1,0 +1,141 @@
+"""``vrsweep plot`` on the command line: outputs, formats, and every bad input as exit 2 with a message."""
+
+import shutil
+import textwrap
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from vrsweep.cli import main
+
+
+def invoke(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert "Traceback" not in result.output, result.output
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return result
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    directory = tmp_path_factory.mktemp("cli_plot")
+    config = directory / "sweep.yaml"
+    config.write_text(textwrap.dedent("""\
+        sweep:
+          g: {start: 0.0, stop: 30.0, num: 4}
+        integration: {transient_periods: 3, measure_periods: 6, strobe_periods: 3}
+        """))
+    out = directory / "sweep.h5"
+    assert invoke("run", config, "-o", out, "-q").exit_code == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def trajectory(tmp_path_factory):
+    directory = tmp_path_factory.mktemp("cli_plot_traj")
+    config = directory / "point.yaml"
+    config.write_text("parameters: {g: 5.0}\nintegration: {transient_periods: 2, measure_periods: 3, strobe_periods: 1}\n")
+    out = directory / "traj.h5"
+    assert invoke("simulate", config, "-o", out, "-q", "--compare", "effective", "--samples-per-period", 20).exit_code == 0
+    return out
+
+
+def test_default_output_is_next_to_the_file(sweep):
+    result = invoke("plot", sweep)
+    assert result.exit_code == 0, result.output
+    png = sweep.with_suffix(".png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert str(png) in result.output
+
+
+@pytest.mark.parametrize("suffix, magic", [(".pdf", b"%PDF"), (".svg", b"<?xml")])
+def test_pdf_and_svg(sweep, tmp_path, suffix, magic):
+    out = tmp_path / f"figure{suffix}"
+    assert invoke("plot", sweep, "-o", out, "--kind", "bifurcation").exit_code == 0
+    assert out.read_bytes().startswith(magic)
+
+
+def test_an_explicit_kind_names_the_default_output(sweep):
+    assert invoke("plot", sweep, "--kind", "status").exit_code == 0
+    assert sweep.with_name("sweep.status.png").exists()
+
+
+def test_trajectory_kinds(trajectory, tmp_path):
+    for kind in ("trajectory", "impacts", "slowflow"):
+        out = tmp_path / f"{kind}.png"
+        result = invoke("plot", trajectory, "--kind", kind, "-o", out, "--periods", "1:4")
+        assert result.exit_code == 0, result.output
+        assert out.stat().st_size > 10_000
+
+
+def test_an_unknown_format_is_refused(sweep, tmp_path):
+    result = invoke("plot", sweep, "-o", tmp_path / "figure.jpg2")
+    assert result.exit_code == 2 and ".png" in result.output
+
+
+def test_a_text_file_is_not_a_vrsweep_file(tmp_path):
+    path = tmp_path / "notes.h5"
+    path.write_text("not HDF5 at all\n")
+    result = invoke("plot", path, "-o", tmp_path / "f.png")
+    assert result.exit_code == 2 and "not an HDF5 file" in result.output
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_a_foreign_hdf5_file(tmp_path):
+    path = tmp_path / "foreign.h5"
+    with h5py.File(path, "w") as f:
+        f["data"] = np.arange(3)
+    result = invoke("plot", path, "-o", tmp_path / "f.png")
+    assert result.exit_code == 2 and "not a vrsweep" in result.output
+
+
+def test_a_missing_file(tmp_path):
+    result = invoke("plot", tmp_path / "absent.h5", "-o", tmp_path / "f.png")
+    assert result.exit_code == 2 and "not found" in result.output
+
+
+@pytest.mark.parametrize("which", ["sweep", "trajectory"])
+def test_a_truncated_file(which, sweep, trajectory, tmp_path):
+    source = {"sweep": sweep, "trajectory": trajectory}[which]
+    path = tmp_path / "truncated.h5"
+    path.write_bytes(source.read_bytes()[: source.stat().st_size // 2])
+    result = invoke("plot", path, "-o", tmp_path / "f.png")
+    assert result.exit_code == 2 and ("truncated" in result.output or "corrupt" in result.output), result.output
+
+
+def test_an_unfinished_sweep_is_plotted_with_a_warning(sweep, tmp_path):
+    path = tmp_path / "unfinished.h5"
+    shutil.copyfile(sweep, path)
+    with h5py.File(path, "r+") as f:  # as if the run had been killed after two of four points
+        f.attrs.modify("vrsweep_complete", np.int32(0))
+        f["done"][2:] = 0
+        f["R"][2:] = np.nan
+        f["status"][2:] = -1
+    result = invoke("plot", path, "-o", tmp_path / "f.png")
+    assert result.exit_code == 0, result.output
+    assert "unfinished" in result.output and (tmp_path / "f.png").exists()
+
+
+def test_usage_errors_exit_2(sweep, trajectory, tmp_path):
+    out = ["-o", tmp_path / "f.png"]
+    for args, message in [
+        ((sweep, "--kind", "slowflow"), "trajectory files"),
+        ((trajectory, "--kind", "map"), "sweep results"),
+        ((sweep, "--at", "g=3.3"), "not a value of the axis g"),
+        ((sweep, "--at", "g"), "NAME=VALUE"),
+        ((sweep, "--x", "Omega"), "not a swept axis"),
+        ((sweep, "--periods", "1:2"), "trajectory files"),
+        ((trajectory, "--periods", "5:2"), "FIRST:LAST"),
+        ((sweep, sweep), "several files"),
+    ]:
+        result = invoke("plot", *args, *out)
+        assert result.exit_code == 2, (args, result.output)
+        assert message in result.output, (args, result.output)
+
+
+def test_a_missing_output_directory(sweep, tmp_path):
+    result = invoke("plot", sweep, "-o", tmp_path / "nowhere" / "f.png")
+    assert result.exit_code == 2 and "does not exist" in result.output

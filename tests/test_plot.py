@@ -1,0 +1,325 @@
+"""vrsweep.plot: every kind of figure from small real runs, checked through matplotlib's objects
+(labels, lines, data), never through pixels."""
+
+import textwrap
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from matplotlib.collections import QuadMesh
+from matplotlib.figure import Figure
+
+from vrsweep import plot, theory
+from vrsweep.cli import main
+from vrsweep.errors import UsageError
+from vrsweep.model import DEFAULT_PARAMETERS
+from vrsweep.store import read_results
+from vrsweep.trajectory_file import read_trajectory
+
+SHORT = "integration: {transient_periods: 5, measure_periods: 16, strobe_periods: 8}\n"
+G_RES_4 = float(theory.g_res(0.1, 0.1, 0.5, 4.0))   # 21.065 (ERRATA 7)
+G_RES_5 = float(theory.g_res(0.1, 0.1, 0.5, 5.0))   # 32.914
+
+
+def _run(directory, name, text, *command):
+    config = directory / f"{name}.yaml"
+    config.write_text(textwrap.dedent(text))
+    out = directory / f"{name}.h5"
+    result = CliRunner().invoke(main, [*command, str(config), "-o", str(out), "-q"])
+    assert result.exit_code == 0, result.output
+    return out
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """Small real runs of every shape the plots take."""
+    d = tmp_path_factory.mktemp("plots")
+    return {
+        "g": _run(d, "g", "parameters: {Omega: 4.0}\nsweep:\n  g: {start: 0.0, stop: 40.0, num: 9}\n" + SHORT, "run"),
+        "g_Omega_short": _run(d, "g_Omega_short", "sweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n"
+                                                  "  Omega: [4.0, 5.0]\n" + SHORT, "run"),
+        "map": _run(d, "map", "sweep:\n  g: {start: 0.0, stop: 50.0, num: 7}\n"
+                              "  Omega: {start: 3.0, stop: 6.0, num: 6}\n"
+                              "integration: {transient_periods: 3, measure_periods: 4, strobe_periods: 2}\n", "run"),
+        "both": _run(d, "both", "parameters: {Omega: 4.0}\nsweep:\n"
+                                "  g: {start: 0.0, stop: 30.0, num: 4, continuation: both}\n" + SHORT, "run"),
+        "traj": _run(d, "traj", "parameters: {g: 5.0, Omega: 5.0}\n"
+                                "integration: {transient_periods: 4, measure_periods: 6, strobe_periods: 3}\n",
+                     "simulate", "--compare", "effective", "--samples-per-period", "50"),
+        "traj20": _run(d, "traj20", "parameters: {g: 20.0, Omega: 5.0}\n"
+                                    "integration: {transient_periods: 4, measure_periods: 6, strobe_periods: 3}\n",
+                       "simulate", "--samples-per-period", "20"),
+    }
+
+
+def lines_with_label(fig, text):
+    return [line for ax in fig.axes for line in ax.get_lines() if text in line.get_label()]
+
+
+def legend_texts(fig):
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    return [t.get_text() for legend in legends for t in legend.get_texts()]
+
+
+def vertical_lines_at(ax):
+    return [line.get_xdata()[0] for line in ax.get_lines()
+            if len(line.get_xdata()) == 2 and line.get_xdata()[0] == line.get_xdata()[1]]
+
+
+# --- response (Fig. 1, Fig. 2) -------------------------------------------------------------------
+
+
+def test_response_is_the_default_for_one_axis(files):
+    fig = plot.plot(files["g"])
+    assert isinstance(fig, Figure) and len(fig.axes) == 1
+    ax = fig.axes[0]
+    assert "$g$" in ax.get_xlabel() and "[1]" in ax.get_xlabel()
+    assert "R = |Q|/c" in ax.get_ylabel() and "A/c" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
+    assert "g.h5" in fig._suptitle.get_text() and "original" in fig._suptitle.get_text()
+    assert "Ω" in fig._suptitle.get_text() or "Omega" in fig._suptitle.get_text()
+
+
+def test_response_draws_every_point_and_flags_the_unreliable_ones(files):
+    results = read_results(files["g"])
+    R, period, R_err = (results.variables[n] for n in ("R", "period", "R_err"))
+    fig = plot.plot(files["g"])
+    ax = fig.axes[0]
+    reliable = lines_with_label(fig, "numerical R")
+    assert len(reliable) == 1
+    hollow = [line for line in ax.get_lines() if line.get_marker() == "o" and line.get_markerfacecolor() == "none"]
+    assert len(hollow) == 2
+    grey, coloured = hollow
+    assert grey.get_markeredgecolor() == plot.UNRELIABLE_GREY
+    aperiodic = period == 0
+    imprecise = (R_err > plot.RELATIVE_ERROR_LIMIT * R) & ~aperiodic
+    np.testing.assert_array_equal(np.sort(grey.get_ydata()), np.sort(R[aperiodic]))
+    np.testing.assert_array_equal(np.sort(coloured.get_ydata()), np.sort(R[imprecise]))
+    np.testing.assert_array_equal(np.sort(reliable[0].get_ydata()), np.sort(R[~aperiodic & ~imprecise]))
+    texts = legend_texts(fig)
+    assert any("no period found" in text for text in texts) and any("R_{err}" in text for text in texts)
+
+
+def test_response_marks_g_res_and_draws_the_analytic_gain(files):
+    fig = plot.plot(files["g"])
+    ax = fig.axes[0]
+    assert vertical_lines_at(ax) == pytest.approx([G_RES_4])
+    texts = legend_texts(fig)
+    assert any("21.065" in t for t in texts)
+    assert any("A/c, stable" in t for t in texts) and any("A/c, unstable" in t for t in texts)
+    analytic = [line for line in ax.get_lines() if len(line.get_xdata()) > 20]
+    solid = [line for line in analytic if line.get_linestyle() == "-"]
+    dashed = [line for line in analytic if line.get_linestyle() == "--"]
+    assert solid and dashed
+    # The gain A/c (ERRATA 6): the largest stable root at g = 0 is ~1.93, so A/c ~ 48
+    top = max(line.get_ydata().max() for line in solid)
+    A_top = np.nanmax(theory.response_branches(dict(DEFAULT_PARAMETERS, Omega=4.0), [0.0]).R)
+    assert top == pytest.approx(A_top / 0.04, rel=1e-6)
+
+
+def test_amplitude_draws_Q_and_A_unscaled(files):
+    results = read_results(files["g"])
+    fig = plot.plot(files["g"], amplitude=True)
+    ax = fig.axes[0]
+    assert "|Q|" in ax.get_ylabel() and "A/c" not in ax.get_ylabel()
+    drawn = np.concatenate([line.get_ydata() for line in ax.get_lines()
+                            if line.get_marker() == "o"])
+    np.testing.assert_allclose(np.sort(drawn), np.sort(results.variables["Q_amplitude"]))
+    solid = [line for line in ax.get_lines() if len(line.get_xdata()) > 20 and line.get_linestyle() == "-"]
+    assert max(line.get_ydata().max() for line in solid) < 2.0  # A, not A/c
+
+
+def test_analytic_branches_follow_the_fold():
+    """Omega = 4: three roots below g ~ 17.3, only the largest stable; one stable root above."""
+    g = np.linspace(0.0, 40.0, 2001)
+    branches = plot.analytic_branches(dict(DEFAULT_PARAMETERS, Omega=4.0), "g", g, gain=False)
+    assert len(branches) == 3
+    spans = sorted(branches, key=lambda b: b[0][-1] - b[0][0])
+    top_x, top_y, top_stable = spans[-1]
+    assert top_x[0] == 0.0 and top_x[-1] == 40.0 and top_stable.all()
+    assert top_y[0] == pytest.approx(1.93, abs=0.01)
+    for x, y, stable in spans[:2]:
+        assert not stable.any() and 17.0 < x[-1] < 17.6  # the unstable pair meets at the fold
+
+
+def test_resonance_positions_on_any_axis():
+    params = dict(DEFAULT_PARAMETERS, Omega=4.0)
+    assert plot.resonance_positions(params, "g", np.linspace(0, 40, 101)) == pytest.approx([G_RES_4])
+    # Along Omega at fixed g = 21.065, the resonance sits at Omega = 4
+    at_g = dict(DEFAULT_PARAMETERS, g=G_RES_4)
+    assert plot.resonance_positions(at_g, "Omega", np.linspace(3, 6, 3001)) == pytest.approx([4.0], abs=1e-5)
+    assert plot.resonance_positions(params, "Delta", np.linspace(0.5, 2, 50)) == []
+
+
+def test_a_short_second_axis_gives_one_curve_each(files):
+    fig = plot.plot(files["g_Omega_short"])
+    ax = fig.axes[0]
+    curves = lines_with_label(fig, "numerical R")
+    assert [line.get_label().split(", ")[-1] for line in curves] == ["$\\Omega$ = 4", "$\\Omega$ = 5"]
+    assert sorted(vertical_lines_at(ax)) == pytest.approx([G_RES_4, G_RES_5])
+
+
+def test_at_picks_a_coordinate(files):
+    fig = plot.plot(files["g_Omega_short"], at={"Omega": "5"})
+    assert len(lines_with_label(fig, "numerical R")) == 1
+    assert vertical_lines_at(fig.axes[0]) == pytest.approx([G_RES_5])
+    assert "Ω" in fig._suptitle.get_text() or "Omega" in fig._suptitle.get_text()
+    with pytest.raises(UsageError, match="not a value of the axis Omega"):
+        plot.plot(files["g_Omega_short"], at={"Omega": "4.5"})
+    with pytest.raises(UsageError, match="not an axis"):
+        plot.plot(files["g_Omega_short"], at={"alpha": "1"})
+
+
+def test_continuation_both_draws_up_and_down(files):
+    fig = plot.plot(files["both"])
+    labels = [line.get_label() for line in lines_with_label(fig, "numerical R")]
+    assert len(labels) == 2 and "sweep up" in labels[0] and "sweep down" in labels[1]
+
+
+# --- maps -------------------------------------------------------------------------------------
+
+
+def test_two_long_axes_make_a_map_with_g_res_over_it(files):
+    results = read_results(files["map"])
+    fig = plot.plot(files["map"])
+    ax = fig.axes[0]
+    meshes = [c for c in ax.collections if isinstance(c, QuadMesh)]
+    assert len(meshes) == 1
+    np.testing.assert_array_equal(np.ma.filled(meshes[0].get_array(), np.nan).reshape(6, 7),
+                                  results.variables["R"].T)
+    assert "$g$" in ax.get_xlabel() and "$\\Omega$" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
+    colorbar = fig.axes[1]
+    assert "R = |Q|/c" in colorbar.get_ylabel()
+    contours = [c for c in ax.collections if not isinstance(c, QuadMesh) and hasattr(c, "get_paths")
+                and c.get_paths() and len(c.get_paths()[0].vertices) > 50]
+    assert contours, "the resonance curve g_res(Omega)"
+    vertices = np.concatenate([p.vertices for c in contours for p in c.get_paths()])
+    expected_g = theory.g_res(0.1, 0.1, 0.5, vertices[:, 1])
+    np.testing.assert_allclose(vertices[:, 0], expected_g, rtol=2e-3)
+
+
+def test_map_of_impacts_and_status(files):
+    results = read_results(files["map"])
+    fig = plot.plot(files["map"], kind="impacts")
+    mesh = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)][0]
+    np.testing.assert_array_equal(mesh.get_array().reshape(6, 7), results.variables["impacts_per_period"].T)
+    fig = plot.plot(files["map"], kind="status")
+    labels = [t.get_text() for t in fig.axes[1].get_yticklabels()]
+    assert "ok" in labels and "chatter_limit" in labels
+
+
+# --- impacts, status, bifurcation of a 1-axis sweep -------------------------------------------
+
+
+def test_impacts_against_the_axis(files):
+    results = read_results(files["g"])
+    fig = plot.plot(files["g"], kind="impacts")
+    (line,) = fig.axes[0].get_lines()
+    np.testing.assert_array_equal(line.get_ydata(), results.variables["impacts_per_period"])
+    assert "impacts per slow period" in fig.axes[0].get_ylabel() and "[1]" in fig.axes[0].get_ylabel()
+
+
+def test_status_strip(files):
+    fig = plot.plot(files["g"], kind="status")
+    ax = fig.axes[0]
+    assert "ok" in [t.get_text() for t in ax.get_yticklabels()]
+    (points,) = ax.collections
+    assert len(points.get_offsets()) == 9
+    assert "9 ok" in fig._suptitle.get_text()
+
+
+def test_bifurcation_draws_every_strobe_sample(files):
+    results = read_results(files["g"])
+    fig = plot.plot(files["g"], kind="bifurcation")
+    ax = fig.axes[0]
+    (dots,) = lines_with_label(fig, "x(nT)")
+    assert len(dots.get_xdata()) == 9 * 8
+    np.testing.assert_array_equal(dots.get_ydata(), results.variables["strobe_x"].reshape(-1))
+    np.testing.assert_array_equal(dots.get_xdata(), np.repeat(results.axes["g"], 8))
+    assert "x(nT)" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
+
+
+def test_bifurcation_of_two_axes_needs_at(files):
+    with pytest.raises(UsageError, match="--at"):
+        plot.plot(files["g_Omega_short"], kind="bifurcation")
+    fig = plot.plot(files["g_Omega_short"], kind="bifurcation", at={"Omega": "4"})
+    assert len(lines_with_label(fig, "x(nT)")[0].get_xdata()) == 5 * 8
+
+
+# --- trajectories (Fig. 3-6, Fig. impact_no) --------------------------------------------------------
+
+
+def test_trajectory_puts_original_above_effective(files):
+    data = read_trajectory(files["traj"])
+    fig = plot.plot(files["traj"])
+    assert len(fig.axes) == 6
+    titles = [ax.get_title() for ax in fig.axes]
+    assert all("original" in t for t in titles[:3]) and all("effective" in t for t in titles[3:])
+    x_ax, v_ax, phase_ax = fig.axes[:3]
+    assert "$t$" in x_ax.get_xlabel() and "$x$" in x_ax.get_ylabel() and "[1]" in x_ax.get_ylabel()
+    assert "\\dot{x}" in v_ax.get_ylabel() and "$x$" in phase_ax.get_xlabel()
+    drawn_x = np.concatenate([line.get_ydata() for line in x_ax.get_lines() if len(line.get_xdata()) > 2])
+    run = data.runs["original"]
+    assert drawn_x.max() == pytest.approx(1.0)  # impacts inserted at the barrier
+    assert drawn_x.min() == pytest.approx(run.x.min())
+    assert x_ax.get_xlim() == pytest.approx((0.0, run.t[-1]))
+    assert "g = 5" in fig._suptitle.get_text()
+
+
+def test_with_impacts_jumps_at_the_barrier():
+    t = np.array([0.0, 1.0, 2.0])
+    impacts = np.array([[1.5, 2.0, -1.9]])
+    tt, xx, vv = plot.with_impacts(t, np.array([0.5, 0.9, 0.8]), np.array([1.0, 1.0, -1.0]), impacts, 1.0)
+    np.testing.assert_array_equal(tt, [0.0, 1.0, 1.5, 1.5, 2.0])
+    np.testing.assert_array_equal(xx, [0.5, 0.9, 1.0, 1.0, 0.8])
+    np.testing.assert_array_equal(vv, [1.0, 1.0, 2.0, -1.9, -1.0])
+
+
+def test_periods_window_the_trajectory(files):
+    fig = plot.plot(files["traj"], periods=(2, 3))
+    T = 4 * np.pi
+    assert fig.axes[0].get_xlim() == pytest.approx((T, 3 * T))
+    with pytest.raises(UsageError, match="slow periods"):
+        plot.plot(files["traj"], periods=(20, 30))
+
+
+def test_impacts_per_period_one_panel_per_file(files):
+    fig = plot.plot([files["traj"], files["traj20"]], kind="impacts")
+    assert len(fig.axes) == 2
+    for ax, name in zip(fig.axes, ("traj", "traj20")):
+        counts = read_trajectory(files[name]).runs["original"].impacts_per_period
+        (line,) = [line for line in ax.get_lines() if line.get_marker() == "o"]
+        np.testing.assert_array_equal(line.get_ydata(), counts)
+        np.testing.assert_array_equal(line.get_xdata(), np.arange(1, 11))
+        assert name + ".h5" in ax.get_title()
+        mean_lines = [c for c in ax.collections if c.get_label().startswith("mean")]
+        assert mean_lines and f"{counts[4:].mean():.2f}" in mean_lines[0].get_label()
+    assert "(a) g = 5" in fig.axes[0].get_title() and "(b) g = 20" in fig.axes[1].get_title()
+    assert "slow period number" in fig.axes[1].get_xlabel()
+
+
+def test_slowflow_draws_the_effective_system_and_three_reconstructions(files):
+    data = read_trajectory(files["traj"])
+    fig = plot.plot(files["traj"], kind="slowflow")
+    x_ax = fig.axes[0]
+    labels = [line.get_label() for line in x_ax.get_lines()]
+    assert sum("slow flow" in label for label in labels) == 3
+    assert any("printed in the paper" in label for label in labels)
+    (numerical,) = [line for line in x_ax.get_lines() if "numerical" in line.get_label()]
+    assert numerical.get_ydata().max() == pytest.approx(1.0)  # the effective system hits the barrier
+    (state,) = [line for line in x_ax.get_lines() if "x(0)" in line.get_label()]
+    np.testing.assert_array_equal(state.get_ydata(), data.slow_flow["state"].x)
+    assert "$X$" in x_ax.get_ylabel()
+
+
+def test_slowflow_needs_the_effective_run(files):
+    with pytest.raises(UsageError, match="--compare effective"):
+        plot.plot(files["traj20"], kind="slowflow")
+
+
+def test_kinds_that_do_not_fit_the_file(files):
+    with pytest.raises(UsageError, match="trajectory files"):
+        plot.plot(files["g"], kind="slowflow")
+    with pytest.raises(UsageError, match="sweep results"):
+        plot.plot(files["traj"], kind="map")
+    with pytest.raises(UsageError, match="separately"):
+        plot.plot([files["g"], files["traj"]], kind="impacts")

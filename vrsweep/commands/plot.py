@@ -1,0 +1,83 @@
+"""vrsweep plot FILE.h5 [-o FIG.png|.pdf|.svg] [--kind ...]: a figure from a sweep or a trajectory."""
+
+from pathlib import Path
+
+import click
+
+FORMATS = (".png", ".pdf", ".svg")
+
+
+def _parse_at(items):
+    """--at NAME=VALUE (repeatable) -> {name: value}; values stay text until the axis is known."""
+    from vrsweep.errors import UsageError
+
+    at = {}
+    for item in items:
+        name, equals, value = item.partition("=")
+        if not equals or not name.strip() or not value.strip():
+            raise UsageError(f"--at {item}: expected NAME=VALUE, e.g. --at Omega=4")
+        at[name.strip()] = value.strip()
+    return at
+
+
+def default_output(path, kind):
+    """RESULTS.h5 -> RESULTS.png next to it; an explicit --kind adds itself: RESULTS.bifurcation.png."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}.{kind}.png" if kind else f"{path.stem}.png")
+
+
+@click.command("plot")
+@click.argument("paths", nargs=-1, required=True, metavar="FILE.h5 [FILE.h5 ...]",
+                type=click.Path(dir_okay=True))
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+              help="Figure file, .png, .pdf or .svg (default: FILE.png, or FILE.KIND.png with --kind).")
+@click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "bifurcation",
+                                           "trajectory", "slowflow"]), default=None,
+              help="What to draw (default: chosen from the file, see below).")
+@click.option("--amplitude", is_flag=True,
+              help="Plot the amplitude |Q| and the analytic A instead of the gain R = |Q|/c and A/c.")
+@click.option("--at", "at_items", multiple=True, metavar="NAME=VALUE",
+              help="Fix a swept axis at one of its values, e.g. --at Omega=4 (repeatable; "
+                   "direction=up|down for a two-way continuation).")
+@click.option("--x", "x_axis", default=None, metavar="NAME", help="The swept parameter on the horizontal axis.")
+@click.option("--log", is_flag=True, help="Logarithmic response axis (response plots).")
+@click.option("--periods", default=None, metavar="FIRST:LAST",
+              help="Trajectory files: show slow periods FIRST to LAST only (1-based), e.g. 1:20.")
+@click.option("--dpi", type=click.IntRange(min=20, max=1200), default=150, show_default=True,
+              help="Resolution of a .png.")
+def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi):
+    """Draw a figure from a vrsweep file.
+
+    \b
+    Sweep results (vrsweep run), --kind:
+      response     R (or |Q| with --amplitude) against the axis, with the analytic
+                   branches (stable solid, unstable dashed) and g_res -- default for
+                   one axis, or two axes when one has at most 5 values (one curve each)
+      map          heat map over two axes with g_res(Omega) drawn on it -- default for two axes
+      impacts      mean impacts per slow period
+      status       how each point's integration ended
+      bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
+    Trajectory files (vrsweep simulate), --kind:
+      trajectory   position, velocity, phase portrait; original above effective (default)
+      impacts      impacts per slow period, period by period (several files: one panel each)
+      slowflow     effective system against the slow-flow reconstruction (needs --compare effective)
+
+    Hollow grey points: R unreliable (no period found, or R_err > 10% of R).
+    """
+    from vrsweep import plot
+    from vrsweep.errors import UsageError
+
+    path = Path(output) if output else default_output(paths[0], kind)
+    if path.suffix.lower() not in FORMATS:
+        raise UsageError(f"-o {path}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
+    data = [plot.load(p) for p in paths]
+    for path_in, loaded in zip(paths, data):
+        if not loaded.complete:
+            click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
+                       "(finish it with vrsweep run CONFIG --resume)", err=True)
+    figure = plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis, log=log,
+                       periods=plot.parse_periods(periods) if periods else None)
+    if not path.parent.exists():
+        raise UsageError(f"output directory {path.parent} does not exist (output: {path})")
+    figure.savefig(path, dpi=dpi)
+    click.echo(f"-> {path}", err=True)

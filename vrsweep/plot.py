@@ -1,0 +1,973 @@
+"""Figures from vrsweep files: every function returns a matplotlib Figure (no pyplot, no display).
+
+Sweep results (``vrsweep run``)
+    ``response``     R = |Q|/c (or the amplitude |Q|) against one swept parameter, one curve per
+                     value of the other axes, with the analytic branches of the corrected theory
+                     (stable solid, unstable dashed) in the same units and the resonance g_res
+                     (eq3.4) marked. Fig. 1 and Fig. 2 of the paper.
+    ``map``          a heat map over two swept parameters with the resonance curve drawn over it.
+    ``impacts``      mean impacts per slow period against the axis (or as a map).
+    ``status``       how each point's integration ended.
+    ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
+Trajectories (``vrsweep simulate``)
+    ``trajectory``   position, velocity and phase portrait, original above effective (Fig. 3-5).
+    ``impacts``      impacts in each slow period against the period number (Fig. impact_no).
+    ``slowflow``     the effective system against the slow-flow reconstruction (Fig. 6).
+
+Units: the paper's model is dimensionless, so every axis says ``[1]``. The gain R = |Q|/c of eq3.3
+and the analytic amplitude A of eq2.21 are different quantities (ERRATA 6): on a gain plot the
+analytic curves are A/c, on an amplitude plot (``amplitude=True``) the numbers are |Q| and A.
+
+Which R can be trusted (issue 5): a point is drawn hollow and grey where no period was found in
+its stroboscopic samples (period == 0: chaotic, quasi-periodic or still transient -- R is then one
+draw that depends on the window and the solver), hollow in its curve's colour where a period was
+found but R_err exceeds RELATIVE_ERROR_LIMIT of R (typically a tiny R, or a window that is not a
+whole number of cycles), and filled otherwise.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_SYMBOLS
+from vrsweep.results import Status
+
+SWEEP_KINDS = ("response", "map", "impacts", "status", "bifurcation")
+TRAJECTORY_KINDS = ("trajectory", "impacts", "slowflow")
+KINDS = ("response", "map", "impacts", "status", "bifurcation", "trajectory", "slowflow")
+
+RELATIVE_ERROR_LIMIT = 0.10
+"""R counts as unreliable where R_err > 10% of R (R_err is a 95% half-width, see diagnostics.py).
+A periodic point measured over a window that is not a whole number of its cycles carries a few
+per cent (R_err includes that offset); a chaotic one tens of per cent."""
+MAX_CURVES = 8          # more curves than this on one response plot is unreadable: ask for --at
+CURVES_NOT_MAP = 5      # a 2-axis sweep whose shorter axis has at most this many values: curves
+FINE_POINTS = 2001      # analytic curves are drawn on a grid this fine, not on the sweep's points
+UNITS = "[1]"           # dimensionless, like every quantity of the paper's model
+UNITS_NOTE = "[1] = dimensionless"
+
+MODEL_EQUATIONS = {"original": "original system eq2.1-eq2.2", "effective": "effective system eq2.10"}
+DIRECTION_NAMES = {1: "up", -1: "down"}
+RELIABLE_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
+                    "tab:pink", "tab:olive")
+UNRELIABLE_GREY = "0.55"
+
+
+# --------------------------------------------------------------------------------------------
+# Labels and captions
+# --------------------------------------------------------------------------------------------
+
+
+def parameter_label(name: str) -> str:
+    """'fast forcing amplitude $g$ [1]' for a parameter, with its symbol and units."""
+    if name == "direction":
+        return "continuation direction"
+    words = PARAMETER_LONG_NAMES.get(name, name)
+    if words.endswith(" " + name):
+        words = words[: -len(name) - 1]
+    return f"{words} {PARAMETER_SYMBOLS.get(name, name)} {UNITS}"
+
+
+def _number(value) -> str:
+    return f"{value:.6g}"
+
+
+def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
+    """File and model, then the parameters held fixed (swept ones and ``omit`` left out), initial
+    state and run length, wrapped at ``width`` characters between items (never inside 'name = value')."""
+    selected = dict(selected or {})
+    items = [os.path.basename(path), MODEL_EQUATIONS.get(model, model)]
+    if config is not None:
+        swept = ({axis.name for axis in config.axes} - set(selected)) | set(omit)
+        parameters = dict(config.parameters, **selected)
+        run = config.integration
+        items += [f"{PARAMETER_SYMBOLS[name]} = {_number(parameters[name])}"
+                  for name in PARAMETER_NAMES if name not in swept]
+        items += [f"x(0) = {_number(config.initial['x'])}", f"$\\dot{{x}}(0)$ = {_number(config.initial['v'])}",
+                  f"{run.transient_periods} transient + {run.measure_periods} measured slow periods"]
+    items += [UNITS_NOTE] + ([extra] if extra else [])
+    lines, line = [], ""
+    for item in items:
+        visible = len(item.replace("$", "").replace("\\", ""))  # mathtext markup takes no room
+        if line and len(line.replace("$", "").replace("\\", "")) + visible + 2 > width:
+            lines.append(line)
+            line = ""
+        line = f"{line},  {item}" if line else item
+    return "\n".join(lines + [line])
+
+
+def _parse_config(text):
+    """The config stored in a file, or None if it cannot be read back (then captions are shorter)."""
+    from vrsweep.config import parse_config
+    from vrsweep.errors import ConfigError
+
+    if not text:
+        return None
+    try:
+        return parse_config(text, "<stored config>")
+    except ConfigError:
+        return None
+
+
+def _new_figure(width, height):
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def _title(fig, what, caption):
+    fig.suptitle(f"{what}\n{caption}", fontsize=8.5)
+
+
+def _width(fig):
+    """Characters of caption text that fit across ``fig`` at the title's font size."""
+    return int(fig.get_figwidth() * 15)
+
+
+# --------------------------------------------------------------------------------------------
+# Loading
+# --------------------------------------------------------------------------------------------
+
+
+def load(path):
+    """A trajectory (TrajectoryData) or sweep result (ResultSet); ResultFileError otherwise."""
+    from vrsweep.store import read_results
+    from vrsweep.trajectory_file import is_trajectory_file, read_trajectory
+
+    if is_trajectory_file(path):
+        return read_trajectory(path)
+    return read_results(path)  # says what is wrong with anything that is not a results file
+
+
+def default_kind(data) -> str:
+    """What ``vrsweep plot FILE`` draws when no --kind is given."""
+    from vrsweep.trajectory_file import TrajectoryData
+
+    if isinstance(data, TrajectoryData):
+        return "trajectory"
+    return _sweep_default(data.axes)
+
+
+def _sweep_default(axes):
+    """Two long axes make a map; one axis, or a short second one (e.g. Omega: [4, 5]), curves."""
+    parameter_axes = [name for name in axes if name != "direction"]
+    if len(parameter_axes) == 2 and min(len(axes[name]) for name in parameter_axes) > CURVES_NOT_MAP:
+        return "map"
+    return "response"
+
+
+def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=False, periods=None) -> Figure:
+    """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
+
+    sources: a path, or a list of paths or of what ``load`` returned. at: {axis: value} fixing
+    sweep axes; x_axis: the swept parameter to draw against; log: a logarithmic response axis;
+    periods: (first, last) slow periods of a trajectory to show.
+    """
+    from vrsweep.trajectory_file import TrajectoryData
+
+    if isinstance(sources, (str, os.PathLike)):
+        sources = [sources]
+    if not sources:
+        raise UsageError("no file to plot")
+    data = [load(s) if isinstance(s, (str, os.PathLike)) else s for s in sources]
+    trajectories = [isinstance(d, TrajectoryData) for d in data]
+    if any(trajectories) and not all(trajectories):
+        raise UsageError("plot sweep results and trajectory files separately")
+    if len(data) > 1 and not (all(trajectories) and kind == "impacts"):
+        raise UsageError("several files go on one figure only with --kind impacts of trajectory files "
+                         "(Fig. impact_no); plot the others one at a time")
+    if all(trajectories):
+        kind = kind or "trajectory"
+        if kind not in TRAJECTORY_KINDS:
+            raise UsageError(f"--kind {kind} is for sweep results; a trajectory file takes "
+                             f"{', '.join(TRAJECTORY_KINDS)}")
+        if at or x_axis or amplitude or log:
+            raise UsageError("--at, --x, --amplitude and --log are for sweep results, not trajectory files")
+        if kind == "impacts":
+            return impacts_per_period_figure(data)
+        if kind == "slowflow":
+            return slow_flow_figure(data[0], periods=periods)
+        return trajectory_figure(data[0], periods=periods)
+    if periods is not None:
+        raise UsageError("--periods is for trajectory files (vrsweep simulate), not sweep results")
+    view = SweepView.from_results(data[0], at or {})
+    kind = kind or _sweep_default(view.axes)  # after --at: a fixed axis no longer counts
+    if kind not in SWEEP_KINDS:
+        raise UsageError(f"--kind {kind} is for trajectory files (vrsweep simulate); a sweep result takes "
+                         f"{', '.join(SWEEP_KINDS)}")
+    if kind == "response":
+        return response_figure(view, amplitude=amplitude, x_axis=x_axis, log=log)
+    if kind == "map":
+        return map_figure(view, "Q_amplitude" if amplitude else "R", x_axis=x_axis)
+    if kind == "impacts":
+        return impacts_figure(view, x_axis=x_axis)
+    if kind == "status":
+        return status_figure(view, x_axis=x_axis)
+    return bifurcation_figure(view, x_axis=x_axis)
+
+
+# --------------------------------------------------------------------------------------------
+# Sweeps: selecting what to draw
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class SweepView:
+    """A sweep result with some axes fixed by --at: what the sweep figures draw from."""
+
+    path: str
+    axes: dict              # remaining axes, name -> values ("direction" included if present)
+    variables: dict         # name -> array over the remaining axes (+ extra dims last)
+    dims: dict              # name -> dimension names
+    config: object          # vrsweep.config.Config or None
+    model: str
+    selected: dict = field(default_factory=dict)   # parameter -> value fixed by --at
+    complete: bool = True
+    n_done: int = 0
+    n_points: int = 0
+
+    @classmethod
+    def from_results(cls, results, at: dict):
+        axes = dict(results.axes)
+        variables = dict(results.variables)
+        dims = {name: tuple(d) for name, d in results.dims.items()}
+        selected = {}
+        done = np.asarray(results.done)
+        done_dims = tuple(results.axes)
+        for name, wanted in at.items():
+            if name not in axes:
+                raise UsageError(f"--at {name}=...: {name} is not an axis of {results.path} "
+                                 f"(axes: {', '.join(axes) or 'none'})")
+            values = np.asarray(axes[name], dtype=np.float64)
+            index = _axis_index(name, values, wanted)
+            for variable, array in variables.items():
+                if name in dims[variable]:
+                    position = dims[variable].index(name)
+                    variables[variable] = np.take(array, index, axis=position)
+                    dims[variable] = dims[variable][:position] + dims[variable][position + 1:]
+            done = np.take(done, index, axis=done_dims.index(name))
+            done_dims = tuple(d for d in done_dims if d != name)
+            if name != "direction":
+                selected[name] = float(values[index])
+            del axes[name]
+        config = _parse_config(results.attrs.get("config", ""))
+        return cls(path=results.path, axes=axes, variables=variables, dims=dims, config=config,
+                   model=str(results.attrs.get("model", config.model if config else "original")),
+                   selected=selected, complete=results.complete,
+                   n_done=int(np.sum(done)), n_points=int(np.size(done)))
+
+    @property
+    def parameter_axes(self):
+        return [name for name in self.axes if name != "direction"]
+
+    def parameters(self, **coordinates):
+        """The nine parameters at this view's fixed values and the given axis coordinates."""
+        if self.config is None:
+            raise UsageError(f"{self.path} holds no readable config: cannot compute the analytic side")
+        return dict(self.config.parameters, **self.selected, **coordinates)
+
+    def require(self, *names):
+        missing = [name for name in names if name not in self.variables]
+        if missing:
+            raise ResultFileError(f"{self.path} has no {', '.join(missing)} (written by an older vrsweep?)")
+
+    def along(self, name, x_axis, **coordinates):
+        """``name`` along ``x_axis`` at the given coordinates of the other axes (extra dims kept)."""
+        array = self.variables[name]
+        dims = list(self.dims[name])
+        for axis, index in coordinates.items():
+            if axis in dims:
+                position = dims.index(axis)
+                array = np.take(array, index, axis=position)
+                dims.pop(position)
+        if x_axis in dims:
+            array = np.moveaxis(array, dims.index(x_axis), 0)
+        return array
+
+    def curve_coordinates(self, x_axis):
+        """Every combination of the axes other than ``x_axis``: list of ({axis: index}, label)."""
+        others = [name for name in self.axes if name != x_axis]
+        combos = []
+        for indices in itertools.product(*(range(len(self.axes[name])) for name in others)):
+            where = dict(zip(others, indices))
+            label = ", ".join(_coordinate_text(name, self.axes[name][i]) for name, i in where.items())
+            combos.append((where, label))
+        return combos
+
+
+def _coordinate_text(name, value):
+    if name == "direction":
+        return f"sweep {DIRECTION_NAMES.get(int(value), value)}"
+    return f"{PARAMETER_SYMBOLS.get(name, name)} = {_number(value)}"
+
+
+def _axis_index(name, values, wanted):
+    """Index of ``wanted`` on an axis; 'up'/'down' allowed for direction. Must match a grid value."""
+    if name == "direction" and isinstance(wanted, str) and wanted in ("up", "down"):
+        wanted = 1.0 if wanted == "up" else -1.0
+    try:
+        wanted = float(wanted)
+    except ValueError:
+        raise UsageError(f"--at {name}={wanted}: not a number") from None
+    index = int(np.argmin(np.abs(values - wanted)))
+    if abs(values[index] - wanted) > 1e-9 * max(1.0, abs(wanted)):
+        shown = ", ".join(_number(v) for v in values[:12]) + (", ..." if len(values) > 12 else "")
+        raise UsageError(f"--at {name}={_number(wanted)}: not a value of the axis {name} ({shown})")
+    return index
+
+
+def _choose_x_axis(view, x_axis, need_axes=None):
+    axes = view.parameter_axes
+    if not axes:
+        raise UsageError(f"{view.path} is a single point{' after --at' if view.selected else ''}: nothing "
+                         "to plot against (vrsweep simulate draws one point's trajectory)")
+    if x_axis is not None:
+        if x_axis not in axes:
+            raise UsageError(f"--x {x_axis}: not a swept axis of {view.path} (axes: {', '.join(axes)})")
+        return x_axis
+    if need_axes is not None and len(axes) != need_axes:
+        raise UsageError(
+            f"{view.path} sweeps {', '.join(axes)}: this plot needs {need_axes} axis(es); fix the others "
+            f"with --at, e.g. --at {axes[-1]}={_number(view.axes[axes[-1]][0])}")
+    return "g" if "g" in axes else axes[0]
+
+
+def _reliability(view, x_axis, where):
+    """Masks along x_axis: (no period found, periodic but R_err large, status not ok)."""
+    status = view.along("status", x_axis, **where)
+    failed = (status != Status.OK) & (status != Status.NOT_COMPUTED)
+    aperiodic = np.zeros(status.shape, dtype=bool)
+    imprecise = np.zeros(status.shape, dtype=bool)
+    if "period" in view.variables:
+        aperiodic = view.along("period", x_axis, **where) == 0
+    if "R_err" in view.variables and "R" in view.variables:
+        R = view.along("R", x_axis, **where)
+        R_err = view.along("R_err", x_axis, **where)
+        with np.errstate(invalid="ignore"):
+            imprecise = (R_err > RELATIVE_ERROR_LIMIT * np.abs(R)) & ~aperiodic
+    return aperiodic & ~failed, imprecise & ~failed, failed
+
+
+# --------------------------------------------------------------------------------------------
+# Analytic side on a fine grid: branches and resonance positions
+# --------------------------------------------------------------------------------------------
+
+
+def _fine_parameters(parameters, axis, values):
+    """Every parameter as an array over ``values`` of ``axis`` (others constant)."""
+    fine = {name: np.full(values.shape, float(parameters[name])) for name in PARAMETER_NAMES}
+    fine[axis] = values
+    return fine
+
+
+def analytic_branches(parameters, axis, values, gain=True):
+    """Branches of the analytic response along ``axis``: list of (x, y, stable) polylines.
+
+    The roots of the fixed-point cubic (theory.analytic_columns: corrected eq2.24/eq2.27, ERRATA
+    1-3) come sorted by size, so a root's slot changes where roots appear or vanish in pairs at a
+    fold; each branch is followed by continuity instead. y is A/c with ``gain`` (ERRATA 6), else A.
+    """
+    from vrsweep import theory
+
+    fine = _fine_parameters(parameters, axis, values)
+    columns = theory.analytic_columns(fine)
+    roots = columns["A_theory"][0]
+    stable = columns["A_theory_stable"][0].astype(bool)
+    if gain:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            roots = roots / fine["c"][:, None]
+    return _follow_branches(values, roots, stable)
+
+
+def _follow_branches(x, roots, stable):
+    """Join roots at neighbouring x into polylines, nearest to nearest (greedy by distance)."""
+    finite = roots[np.isfinite(roots)]
+    if finite.size == 0:
+        return []
+    jump_limit = 0.05 * (finite.max() - finite.min() + abs(finite).max())  # a fold, not a continuation
+    active, finished = [], []
+    for i in range(len(x)):
+        present = [j for j in range(roots.shape[1]) if np.isfinite(roots[i, j])]
+        pairs = sorted((abs(branch["y"][-1] - roots[i, j]), b, j)
+                       for b, branch in enumerate(active) for j in present)
+        matched_branches, matched_roots = set(), set()
+        for distance, b, j in pairs:
+            if b in matched_branches or j in matched_roots or distance > jump_limit:
+                continue
+            matched_branches.add(b)
+            matched_roots.add(j)
+            active[b]["x"].append(x[i])
+            active[b]["y"].append(roots[i, j])
+            active[b]["stable"].append(stable[i, j])
+        still = [branch for b, branch in enumerate(active) if b in matched_branches]
+        finished += [branch for b, branch in enumerate(active) if b not in matched_branches]
+        still += [{"x": [x[i]], "y": [roots[i, j]], "stable": [stable[i, j]]}
+                  for j in present if j not in matched_roots]
+        active = still
+    finished += active
+    return [(np.array(b["x"]), np.array(b["y"]), np.array(b["stable"], dtype=bool)) for b in finished]
+
+
+def _draw_branches(ax, branches, colour):
+    """Stable runs solid, unstable runs dashed; each run shares its end point with the next."""
+    for x, y, stable in branches:
+        start = 0
+        for end in range(1, len(x) + 1):
+            if end == len(x) or stable[end] != stable[start]:
+                stop = min(end + 1, len(x))
+                ax.plot(x[start:stop], y[start:stop], color=colour, lw=1.3,
+                        ls="-" if stable[start] else "--", zorder=2)
+                start = end
+
+
+def resonance_positions(parameters, axis, values):
+    """Where along ``axis`` the effective frequency meets the slow one, wt2 = omega^2 (eq3.4).
+
+    For the g axis these are +-g_res; for other axes the root is found on the fine grid ``values``
+    (linear interpolation between sign changes). Empty where the axis leaves wt2 - omega^2 one-signed.
+    """
+    from vrsweep import theory
+
+    if axis == "g":
+        g_res = float(theory.g_res(parameters["alpha"], parameters["omega0"], parameters["omega"],
+                                   parameters["Omega"]))
+        return [g for g in (-g_res, g_res) if values.min() <= g <= values.max()]
+    fine = _fine_parameters(parameters, axis, values)
+    detuning = theory.effective_frequency_squared(fine) - np.square(fine["omega"])
+    positions = []
+    for i in np.flatnonzero(np.sign(detuning[:-1]) * np.sign(detuning[1:]) < 0):
+        fraction = detuning[i] / (detuning[i] - detuning[i + 1])
+        positions.append(float(values[i] + fraction * (values[i + 1] - values[i])))
+    return positions
+
+
+def _resonance_label(axis, position):
+    if axis == "g":
+        return f"$g_{{res}}$ = {position:.3f} (eq3.4)"
+    return f"$\\tilde\\omega^2 = \\omega^2$ (eq3.4) at {PARAMETER_SYMBOLS.get(axis, axis)} = {position:.4g}"
+
+
+# --------------------------------------------------------------------------------------------
+# Sweep figures
+# --------------------------------------------------------------------------------------------
+
+
+def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) -> Figure:
+    """R (or |Q|) against one axis with the analytic branches and the resonance (Fig. 1, Fig. 2).
+
+    log: a logarithmic response axis -- the analytic gain A/c reaches ~50 with the paper's
+    parameters while the numerical R spans 0.01-20, so only a log axis shows both.
+    """
+    x_axis = _choose_x_axis(view, x_axis)
+    name = "Q_amplitude" if amplitude else "R"
+    view.require(name, "status")
+    curves = view.curve_coordinates(x_axis)
+    if len(curves) > MAX_CURVES:
+        others = [n for n in view.parameter_axes if n != x_axis]
+        raise UsageError(f"{len(curves)} curves of {name} against {x_axis} on one plot: fix "
+                         f"{', '.join(others)} with --at, or draw --kind map")
+    x = np.asarray(view.axes[x_axis], dtype=np.float64)
+    fig = _new_figure(8.0, 6.0)
+    ax = fig.subplots()
+    analytic_done = set()
+    resonance_handles = []
+    for k, (where, label) in enumerate(curves):
+        colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
+        y = view.along(name, x_axis, **where)
+        aperiodic, imprecise, failed = _reliability(view, x_axis, where)
+        reliable = np.isfinite(y) & ~aperiodic & ~imprecise & ~failed
+        what = "numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)"
+        ax.plot(x, y, color=colour, lw=0.8, ls=":", zorder=3)
+        ax.plot(x[reliable], y[reliable], "o", color=colour, ms=4, zorder=4,
+                label=f"{what}{', ' + label if label else ''}")
+        ax.plot(x[aperiodic], y[aperiodic], "o", mfc="none", mec=UNRELIABLE_GREY, ms=4.5, zorder=4)
+        ax.plot(x[imprecise], y[imprecise], "o", mfc="none", mec=colour, ms=4.5, zorder=4)
+        if failed.any():
+            ax.plot(x[failed], np.zeros(failed.sum()), "x", color="tab:red", ms=6, zorder=5)
+
+        # The analytic side depends on the parameters only, not on the continuation direction.
+        parameter_where = {axis: index for axis, index in where.items() if axis != "direction"}
+        key = tuple(sorted(parameter_where.items()))
+        if view.config is None or key in analytic_done:
+            continue
+        analytic_done.add(key)
+        parameters = view.parameters(**{axis: float(view.axes[axis][i]) for axis, i in parameter_where.items()})
+        fine = np.linspace(x.min(), x.max(), FINE_POINTS)
+        _draw_branches(ax, analytic_branches(parameters, x_axis, fine, gain=not amplitude), colour)
+        barrier = _fine_parameters(parameters, x_axis, fine)
+        barrier_level = barrier["Delta"] if amplitude else barrier["Delta"] / barrier["c"]
+        ax.plot(fine, barrier_level, color=colour, lw=0.8, ls=(0, (1, 3)), zorder=1)
+        for position in resonance_positions(parameters, x_axis, fine):
+            ax.axvline(position, color=colour, ls="-.", lw=0.9, zorder=1)
+            resonance_handles.append(Line2D([], [], color=colour, ls="-.", lw=0.9,
+                                            label=_resonance_label(x_axis, position)))
+
+    analytic = "A" if amplitude else "A/c"
+    handles, _ = ax.get_legend_handles_labels()
+    handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec=UNRELIABLE_GREY,
+                          label="no period found (chaos?): R depends on the window"))
+    handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k",
+                          label=f"periodic, but $R_{{err}}$ > {RELATIVE_ERROR_LIMIT:.0%} of R"))
+    if any(_reliability(view, x_axis, where)[2].any() for where, _ in curves):
+        handles.append(Line2D([], [], ls="none", marker="x", color="tab:red", label="integration failed (status)"))
+    if view.config is not None:
+        handles.append(Line2D([], [], color="k", lw=1.3, label=f"analytic {analytic}, stable (corrected eq2.27)"))
+        handles.append(Line2D([], [], color="k", lw=1.3, ls="--", label=f"analytic {analytic}, unstable"))
+        handles.append(Line2D([], [], color="k", lw=0.8, ls=(0, (1, 3)),
+                              label=f"{'A = Δ' if amplitude else 'A/c = Δ/c'}: above, the analytic motion "
+                                    "crosses the barrier"))
+    handles += resonance_handles
+    fig.legend(handles=handles, fontsize=7.5, loc="outside lower center", ncol=2)
+    ax.set_xlabel(parameter_label(x_axis))
+    if amplitude:
+        ax.set_ylabel(f"amplitude $|Q|$ of x at $\\omega$, analytic $A$ {UNITS}")
+    else:
+        ax.set_ylabel(f"gain $R = |Q|/c$, analytic $A/c$ {UNITS}")
+    if log:
+        ax.set_yscale("log")
+    else:
+        ax.set_ylim(bottom=0.0)
+    ax.grid(alpha=0.3, which="both" if log else "major")
+    quantity = "amplitude |Q|" if amplitude else "gain R"
+    _title(fig, f"Response {quantity} against {x_axis}; analytic: first-order theory of the effective system "
+                f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})",
+           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+    return fig
+
+
+def _progress_note(view):
+    if view.complete:
+        return ""
+    return f"UNFINISHED: {view.n_done} of {view.n_points} points done"
+
+
+def _map_axes(view, x_axis):
+    axes = view.parameter_axes
+    if len(axes) != 2:
+        raise UsageError(f"a map needs two swept axes; {view.path} has {', '.join(axes) or 'none'}"
+                         f"{' left after --at' if view.selected else ''}")
+    x_axis = x_axis or ("g" if "g" in axes else axes[0])
+    if x_axis not in axes:
+        raise UsageError(f"--x {x_axis}: not a swept axis of {view.path} (axes: {', '.join(axes)})")
+    return x_axis, next(name for name in axes if name != x_axis)
+
+
+def _map_panels(view):
+    """One panel per continuation direction (one panel without continuation)."""
+    if "direction" not in view.axes:
+        return [({}, "")]
+    return [({"direction": i}, f"sweep {DIRECTION_NAMES.get(int(v), v)}")
+            for i, v in enumerate(view.axes["direction"])]
+
+
+def _draw_resonance_curve(ax, view, x_axis, y_axis):
+    """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega)."""
+    from vrsweep import theory
+
+    if view.config is None:
+        return None
+    xs = np.linspace(*_limits(view.axes[x_axis]), 400)
+    ys = np.linspace(*_limits(view.axes[y_axis]), 400)
+    X, Y = np.meshgrid(xs, ys)
+    mesh = {name: np.full(X.shape, float(value)) for name, value in view.parameters().items()}
+    mesh[x_axis], mesh[y_axis] = X, Y
+    detuning = theory.effective_frequency_squared(mesh) - np.square(mesh["omega"])
+    if not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
+        return None
+    ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
+    return Line2D([], [], color="white", ls="--", lw=1.6,
+                  label="$g_{res}(\\Omega)$: $\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
+
+
+def _limits(values):
+    values = np.asarray(values, dtype=np.float64)
+    return float(values.min()), float(values.max())
+
+
+def map_figure(view: SweepView, name="R", x_axis=None) -> Figure:
+    """A heat map of ``name`` over two axes with the resonance curve; unreliable points dotted."""
+    x_axis, y_axis = _map_axes(view, x_axis)
+    view.require(name)
+    panels = _map_panels(view)
+    fig = _new_figure(7.5 * len(panels), 5.0)
+    axes = np.atleast_1d(fig.subplots(1, len(panels), squeeze=False)[0])
+    label = {"R": f"gain $R = |Q|/c$ {UNITS}", "Q_amplitude": f"amplitude $|Q|$ {UNITS}",
+             "impacts_per_period": f"mean impacts per slow period $2\\pi/\\omega$ {UNITS}"}[name]
+    values = view.variables[name]
+    finite = values[np.isfinite(values)]
+    vmax = float(np.percentile(finite, 99)) if finite.size else 1.0  # one wild point must not wash out the map
+    for ax, (where, panel_title) in zip(axes, panels):
+        z = _as_x_y(view, name, x_axis, y_axis, where)
+        ax.set_facecolor("0.8")  # NaN cells (not computed, or failed) show the background
+        mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap="viridis",
+                             vmin=0.0, vmax=vmax)
+        fig.colorbar(mesh, ax=ax, label=label, extend="max" if finite.size and finite.max() > vmax else "neither")
+        handles = []
+        resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
+        if resonance is not None:
+            handles.append(resonance)
+        if name in ("R", "Q_amplitude") and "status" in view.variables:
+            unreliable = np.zeros(z.shape, dtype=bool)
+            failed = np.zeros(z.shape, dtype=bool)
+            for j in range(len(view.axes[y_axis])):
+                aperiodic, imprecise, f = _reliability(view, x_axis, {**where, y_axis: j})
+                unreliable[:, j], failed[:, j] = aperiodic | imprecise, f
+            X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
+            ax.plot(X[unreliable], Y[unreliable], ".", color="white", ms=2.5)
+            handles.append(Line2D([], [], ls="none", marker=".", color="white", mec="k", mew=0.3,
+                                  label=f"unreliable: no period or $R_{{err}}$ > {RELATIVE_ERROR_LIMIT:.0%} of R"))
+            if failed.any():
+                ax.plot(X[failed], Y[failed], "x", color="tab:red", ms=4)
+                handles.append(Line2D([], [], ls="none", marker="x", color="tab:red", label="integration failed"))
+        if handles:
+            legend = ax.legend(handles=handles, fontsize=7, loc="upper left", facecolor="0.3", framealpha=0.8)
+            for text in legend.get_texts():
+                text.set_color("white")
+        ax.set_xlabel(parameter_label(x_axis))
+        ax.set_ylabel(parameter_label(y_axis))
+        if panel_title:
+            ax.set_title(panel_title, fontsize=9)
+    _title(fig, f"{label.split(' [')[0]} over {PARAMETER_SYMBOLS[x_axis]} and {PARAMETER_SYMBOLS[y_axis]} "
+                "(grey: no value: not computed or failed)",
+           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+    return fig
+
+
+def _as_x_y(view, name, x_axis, y_axis, where):
+    """``name`` as a 2-D array indexed [x, y] at ``where`` (other dims already fixed)."""
+    array = view.variables[name]
+    dims = list(view.dims[name])
+    for axis, index in where.items():
+        position = dims.index(axis)
+        array = np.take(array, index, axis=position)
+        dims.pop(position)
+    return np.moveaxis(array, [dims.index(x_axis), dims.index(y_axis)], [0, 1]).astype(np.float64)
+
+
+def impacts_figure(view: SweepView, x_axis=None) -> Figure:
+    """Mean impacts per slow period over the measurement window: a curve (1 axis) or a map (2)."""
+    view.require("impacts_per_period")
+    if len(view.parameter_axes) == 2 and x_axis is None and _sweep_default(view.axes) == "map":
+        return map_figure(view, "impacts_per_period")
+    x_axis = _choose_x_axis(view, x_axis)
+    curves = view.curve_coordinates(x_axis)
+    if len(curves) > MAX_CURVES:
+        raise UsageError(f"{len(curves)} curves on one plot: fix the other axes with --at")
+    x = view.axes[x_axis]
+    fig = _new_figure(8.0, 4.5)
+    ax = fig.subplots()
+    for k, (where, label) in enumerate(curves):
+        y = view.along("impacts_per_period", x_axis, **where)
+        ax.plot(x, y, "o-", ms=3.5, lw=0.9, color=RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)],
+                label=label or "measurement window")
+    ax.set_xlabel(parameter_label(x_axis))
+    ax.set_ylabel(f"mean impacts per slow period $2\\pi/\\omega$ {UNITS}")
+    ax.set_ylim(bottom=0.0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    _title(fig, f"Impacts per slow period against {x_axis} (mean over the measurement window)",
+           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+    return fig
+
+
+def status_figure(view: SweepView, x_axis=None) -> Figure:
+    """How each point ended (ok, max_steps, diverged, ...): a strip (1 axis) or a map (2 axes)."""
+    view.require("status")
+    codes = [int(s) for s in Status]
+    names = [s.name.lower() for s in Status]
+    colours = ["0.85", "tab:green", "tab:orange", "tab:red", "tab:purple", "tab:brown", "k"]
+    cmap = ListedColormap(colours)
+    norm = BoundaryNorm(np.arange(min(codes) - 0.5, max(codes) + 1.5), cmap.N)
+    panels = _map_panels(view)
+    two_axes = len(view.parameter_axes) == 2
+    fig = _new_figure(7.5 * (len(panels) if two_axes else 1), 4.5 if two_axes else 3.5)
+    if two_axes:
+        x_axis, y_axis = _map_axes(view, x_axis)
+        axes = fig.subplots(1, len(panels), squeeze=False)[0]
+        for ax, (where, panel_title) in zip(axes, panels):
+            z = _as_x_y(view, "status", x_axis, y_axis, where)
+            mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap, norm=norm)
+            bar = fig.colorbar(mesh, ax=ax, ticks=codes)
+            bar.ax.set_yticklabels(names, fontsize=7)
+            ax.set_xlabel(parameter_label(x_axis))
+            ax.set_ylabel(parameter_label(y_axis))
+            if panel_title:
+                ax.set_title(panel_title, fontsize=9)
+    else:
+        x_axis = _choose_x_axis(view, x_axis, need_axes=1)
+        ax = fig.subplots()
+        for k, (where, label) in enumerate(view.curve_coordinates(x_axis)):
+            status = view.along("status", x_axis, **where).astype(int)
+            ax.scatter(view.axes[x_axis], status + 0.12 * k, c=[colours[codes.index(s)] for s in status],
+                       s=18, edgecolors="k", linewidths=0.3, label=label or None)
+        ax.set_yticks(codes, names, fontsize=8)
+        ax.set_ylim(min(codes) - 0.5, max(codes) + 0.5)
+        ax.set_xlabel(parameter_label(x_axis))
+        ax.set_ylabel("status of the point")
+        ax.grid(alpha=0.3)
+    counts = {name: int(np.sum(view.variables["status"] == code)) for code, name in zip(codes, names)}
+    summary = ", ".join(f"{n} {name}" for name, n in counts.items() if n)
+    _title(fig, f"How each point's integration ended ({summary})",
+           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+    return fig
+
+
+def bifurcation_figure(view: SweepView, x_axis=None) -> Figure:
+    """Stroboscopic x(nT) against one swept parameter, every sample a dot (issue 5)."""
+    view.require("strobe_x")
+    x_axis = _choose_x_axis(view, x_axis, need_axes=1)
+    fig = _new_figure(8.0, 5.0)
+    ax = fig.subplots()
+    x = np.asarray(view.axes[x_axis], dtype=np.float64)
+    n_strobe = view.variables["strobe_x"].shape[-1]
+    for k, (where, label) in enumerate(view.curve_coordinates(x_axis)):
+        strobe = view.along("strobe_x", x_axis, **where)  # (n_x, n_strobe)
+        xs = np.repeat(x, strobe.shape[-1])
+        ax.plot(xs, strobe.reshape(-1), ".", ms=2.5, color=RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)],
+                label=label or f"x(nT), last {n_strobe} slow periods of each point")
+    if view.config is not None:
+        ax.axhline(view.parameters()["Delta"], color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
+        parameters = view.parameters()
+        for position in resonance_positions(parameters, x_axis, np.linspace(x.min(), x.max(), FINE_POINTS)):
+            ax.axvline(position, color="0.4", ls="-.", lw=0.9, label=_resonance_label(x_axis, position))
+    ax.set_xlabel(parameter_label(x_axis))
+    ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$ {UNITS}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7.5, loc="best", markerscale=3)
+    _title(fig, f"Bifurcation diagram: x sampled once per slow period against {x_axis} "
+                "(one dot per period: a period-p orbit shows p dots)",
+           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+    return fig
+
+
+# --------------------------------------------------------------------------------------------
+# Trajectory figures
+# --------------------------------------------------------------------------------------------
+
+
+def with_impacts(t, x, v, impacts, delta):
+    """The samples with each impact inserted twice, (Delta, v before) then (Delta, v after).
+
+    Sampled on a fixed grid, a rebound would be drawn as a chord between the samples on either
+    side of it; with the impact points in place, lines reach the barrier and jump there.
+    """
+    if len(impacts) == 0 or delta is None:
+        return t, x, v
+    impact_t = impacts[:, 0]
+    all_t = np.concatenate([t, impact_t, impact_t])
+    all_x = np.concatenate([x, np.full(len(impacts), delta), np.full(len(impacts), delta)])
+    all_v = np.concatenate([v, impacts[:, 1], impacts[:, 2]])
+    rank = np.concatenate([np.ones(len(t)), np.zeros(len(impacts)), np.full(len(impacts), 2.0)])
+    order = np.lexsort((rank, all_t))
+    return all_t[order], all_x[order], all_v[order]
+
+
+def parse_periods(text):
+    """'FIRST:LAST' (slow periods, 1-based, inclusive; either may be empty) -> (first, last)."""
+    first, colon, last = str(text).partition(":")
+    try:
+        window = (int(first) if first.strip() else 1, int(last) if last.strip() else None)
+    except ValueError:
+        window = None
+    if not colon or window is None or window[0] < 1 or (window[1] is not None and window[1] < window[0]):
+        raise UsageError(f"--periods {text}: expected FIRST:LAST slow periods, e.g. 1:20 or 81:100")
+    return window
+
+
+def _time_window(data, periods):
+    """(t_start, t_end) of slow periods FIRST..LAST; the whole run for None."""
+    slow_period = float(data.attrs.get("slow_period", 0.0)) or None
+    run = next(iter(data.runs.values()))
+    if periods is None or slow_period is None:
+        return run.t[0], run.t[-1]
+    first, last = periods
+    n_periods = int(round((run.t[-1] - run.t[0]) / slow_period))
+    last = n_periods if last is None else last
+    if first > n_periods:
+        raise UsageError(f"--periods {first}:{last}: the run has {n_periods} slow periods")
+    return (first - 1) * slow_period, min(last, n_periods) * slow_period
+
+
+def _in_window(t, window, *arrays):
+    keep = (t >= window[0] - 1e-9) & (t <= window[1] + 1e-9)
+    return (t[keep],) + tuple(a[keep] for a in arrays)
+
+
+def _point_text(config):
+    if config is None:
+        return ""
+    return f"g = {_number(config.parameters['g'])}, Ω = {_number(config.parameters['Omega'])}"
+
+
+def _window_text(window, data):
+    slow_period = float(data.attrs.get("slow_period", 0.0))
+    if not slow_period:
+        return f"t in [{window[0]:.4g}, {window[1]:.4g}]"
+    return f"slow periods {round(window[0] / slow_period) + 1}-{round(window[1] / slow_period)} of T = 2π/ω"
+
+
+ROW_TITLES = {"original": "original system (eq2.1-eq2.2)", "effective": "effective system (eq2.10)"}
+TRANSIENT_COLOUR = "0.65"
+STEADY_COLOUR = "tab:blue"
+
+
+def trajectory_figure(data, periods=None) -> Figure:
+    """Position, velocity and phase portrait; original above effective (Fig. 3-5).
+
+    periods: (first, last) slow periods to show (1-based, inclusive), default the whole run. The
+    transient (the config's transient_periods) is drawn grey, the rest blue.
+    """
+    config = _parse_config(data.config_text)
+    delta = config.parameters["Delta"] if config is not None else None
+    window = _time_window(data, periods)
+    slow_period = float(data.attrs.get("slow_period", 0.0))
+    t_transient = config.integration.transient_periods * slow_period if config is not None else 0.0
+    runs = list(data.runs.values())
+    fig = _new_figure(13.0, 3.3 * len(runs) + 0.9)
+    grid = fig.subplots(len(runs), 3, squeeze=False)
+    letters = iter("abcdef")
+    for row, run in zip(grid, runs):
+        t, x, v = with_impacts(run.t, run.x, run.v, run.impacts, delta)
+        t, x, v = _in_window(t, window, x, v)
+        ax_x, ax_v, ax_phase = row
+        for part, colour, label in ((t <= t_transient, TRANSIENT_COLOUR, "transient"),
+                                    (t >= t_transient, STEADY_COLOUR, "after the transient")):
+            if np.count_nonzero(part) < 2:
+                continue
+            ax_x.plot(t[part], x[part], lw=0.4, color=colour)
+            ax_v.plot(t[part], v[part], lw=0.4, color=colour)
+            ax_phase.plot(x[part], v[part], lw=0.3, color=colour, label=label)
+        if delta is not None:
+            ax_x.axhline(delta, color="k", lw=0.8, ls="--")
+            ax_phase.axvline(delta, color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
+        ax_phase.legend(fontsize=7, loc="lower left")
+        status = "" if run.status == Status.OK else f" (stopped: {run.status.name.lower()})"
+        for ax, what in ((ax_x, "position"), (ax_v, "velocity"), (ax_phase, "phase portrait")):
+            ax.set_title(f"({next(letters)}) {ROW_TITLES.get(run.model, run.model)}: {what}{status}", fontsize=9)
+            ax.grid(alpha=0.3)
+        for ax in (ax_x, ax_v):
+            ax.set_xlabel(f"time $t$ {UNITS}")
+            ax.set_xlim(*window)
+        ax_x.set_ylabel(f"position $x$ {UNITS}")
+        ax_v.set_ylabel(f"velocity $\\dot{{x}}$ {UNITS}")
+        ax_phase.set_xlabel(f"position $x$ {UNITS}")
+        ax_phase.set_ylabel(f"velocity $\\dot{{x}}$ {UNITS}")
+    samples = data.attrs.get("samples_per_period", "?")
+    _title(fig, f"Trajectory at {_point_text(config)}, {_window_text(window, data)}: position, velocity, "
+                f"phase portrait ({samples} dense-output samples per slow period, impacts exact; dashed: barrier)",
+           _caption(data.path or "", config, " and ".join(ROW_TITLES.get(m, m) for m in data.runs),
+                    width=_width(fig)))
+    return fig
+
+
+def impacts_per_period_figure(datasets) -> Figure:
+    """Impacts in each slow period against the period number, transient included (Fig. impact_no).
+
+    One panel per file (e.g. g = 5 and g = 20), sharing the count axis. The measurement window's
+    mean -- what ``vrsweep run`` stores as impacts_per_period -- is drawn over it.
+    """
+    fig = _new_figure(8.0, 2.7 * len(datasets) + 1.0)
+    axes = fig.subplots(len(datasets), 1, squeeze=False, sharey=True, sharex=True)[:, 0]
+    configs = [_parse_config(data.config_text) for data in datasets]
+    for k, (ax, data, config) in enumerate(zip(axes, datasets, configs)):
+        run = data.runs.get(data.model) or next(iter(data.runs.values()))
+        counts = np.asarray(run.impacts_per_period)
+        periods = np.arange(1, len(counts) + 1)
+        ax.plot(periods, counts, "o-", color="tab:blue", lw=0.7, ms=2.5, label=ROW_TITLES.get(run.model, run.model))
+        if config is not None:
+            n_transient = config.integration.transient_periods
+            if 0 < n_transient < len(counts):
+                mean = counts[n_transient:].mean()
+                ax.axvline(n_transient + 0.5, color="0.4", ls=":", lw=1.0, label="end of the transient")
+                ax.hlines(mean, n_transient + 0.5, len(counts) + 0.5, color="tab:red", lw=1.4,
+                          label=f"mean over the measured periods: {mean:.2f}")
+        letter = f"({'abcdefgh'[k]}) " if len(datasets) > 1 else ""
+        ax.set_title(f"{letter}{_point_text(config)}  ·  {os.path.basename(data.path or '')}  ·  "
+                     f"{int(counts.sum())} impacts in {len(counts)} slow periods", fontsize=9)
+        ax.set_ylabel(f"impacts per slow period {UNITS}")
+        ax.set_ylim(bottom=0)
+        ax.set_xlim(0.5, len(counts) + 0.5)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7.5, loc="upper right")
+    axes[-1].set_xlabel(f"slow period number $n$ (period $T = 2\\pi/\\omega$) {UNITS}")
+    config = configs[0]
+    varying = {}
+    if config is not None and len(datasets) > 1:
+        varying = {name: config.parameters[name] for name in PARAMETER_NAMES
+                   if any(c is not None and c.parameters[name] != config.parameters[name] for c in configs)}
+    names = ", ".join(os.path.basename(data.path or "") for data in datasets)
+    _title(fig, "Impacts in each slow period $2\\pi/\\omega$, transient included"
+                + (f" (the panels differ in {', '.join(varying)})" if varying else ""),
+           _caption(names, config, datasets[0].model, omit=varying, width=_width(fig)))
+    return fig
+
+
+SLOW_FLOW_STYLES = {
+    "state": dict(color="tab:blue", ls="-", lw=1.1,
+                  label="slow flow (corrected eq2.24) from $R_0, \\theta_0$ of x(0), $\\dot{x}(0)$ (ERRATA 9)"),
+    "paper": dict(color="tab:green", ls="--", lw=1.1,
+                  label="slow flow (corrected eq2.24) from the paper's $R_0 = \\Delta$, $\\theta_0 = 0$ (eq2.22)"),
+    "paper_literal": dict(color="0.35", ls=":", lw=1.1,
+                          label="slow flow as printed in the paper (sin/cos swapped, ERRATA 1), paper's start"),
+}
+
+
+def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_literal")) -> Figure:
+    """The effective system (numerical) against the first-order reconstruction eq2.21 (Fig. 6)."""
+    if "effective" not in data.runs or not data.slow_flow:
+        raise UsageError(f"{data.path} holds no effective trajectory and slow flow: make it with "
+                         "vrsweep simulate --compare effective (or a config with model: effective)")
+    config = _parse_config(data.config_text)
+    delta = config.parameters["Delta"] if config is not None else None
+    window = _time_window(data, periods)
+    run = data.runs["effective"]
+    t, x, v = with_impacts(run.t, run.x, run.v, run.impacts, delta)
+    t, x, v = _in_window(t, window, x, v)
+    fig = _new_figure(13.0, 4.8)
+    ax_x, ax_v, ax_phase = fig.subplots(1, 3)
+    numerical = dict(color="tab:red", lw=1.6, alpha=0.8, label="effective system eq2.10, numerical (with impacts)")
+    ax_x.plot(t, x, **numerical)
+    ax_v.plot(t, v, **numerical)
+    ax_phase.plot(x, v, **numerical)
+    for start in starts:
+        if start not in data.slow_flow:
+            continue
+        flow = data.slow_flow[start]
+        flow_t, flow_x, flow_v = _in_window(flow.t, window, flow.x, flow.v)
+        style = SLOW_FLOW_STYLES.get(start, dict(label=start))
+        ax_x.plot(flow_t, flow_x, **style)
+        ax_v.plot(flow_t, flow_v, **style)
+        ax_phase.plot(flow_x, flow_v, **style)
+    if delta is not None:
+        ax_x.axhline(delta, color="k", lw=0.8, ls="-.", label="barrier $x = \\Delta$")
+        ax_phase.axvline(delta, color="k", lw=0.8, ls="-.")
+    for ax, what, letter in ((ax_x, "position", "a"), (ax_v, "velocity", "b"), (ax_phase, "phase portrait", "c")):
+        ax.set_title(f"({letter}) {what}", fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in (ax_x, ax_v):
+        ax.set_xlabel(f"time $t$ {UNITS}")
+        ax.set_xlim(*window)
+    ax_x.set_ylabel(f"position $x$, $X$ {UNITS}")
+    ax_v.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$ {UNITS}")
+    ax_phase.set_xlabel(f"position $x$, $X$ {UNITS}")
+    ax_phase.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$ {UNITS}")
+    handles, labels = ax_x.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=7.5)
+    _title(fig, f"Effective system against the slow-flow reconstruction X = R cos(ωt + θ) (eq2.21) at "
+                f"{_point_text(config)}, {_window_text(window, data)}; the first-order theory ignores the barrier",
+           _caption(data.path or "", config, "effective system eq2.10 and its slow flow", width=_width(fig)))
+    return fig
+
+
+__all__ = [
+    "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "load", "default_kind", "plot",
+    "SweepView", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
+    "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
+    "resonance_positions", "with_impacts", "parse_periods", "parameter_label",
+]
