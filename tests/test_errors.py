@@ -7,6 +7,7 @@ printed and that nothing that looks finished is left behind. Config errors (item
 """
 
 import errno
+import json
 import os
 import re
 import shutil
@@ -395,8 +396,6 @@ def test_failed_points_are_counted_in_the_summary_and_stored(tmp_path):
     assert stored.complete and stored.done.all()
 
     info = invoke("info", out, "--json")
-    import json
-
     assert {row["status"]: row["points"] for row in json.loads(info.stdout)["status_counts"]} == reported
 
 
