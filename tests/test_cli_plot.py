@@ -139,3 +139,11 @@ def test_usage_errors_exit_2(sweep, trajectory, tmp_path):
 def test_a_missing_output_directory(sweep, tmp_path):
     result = invoke("plot", sweep, "-o", tmp_path / "nowhere" / "f.png")
     assert result.exit_code == 2 and "does not exist" in result.output
+
+
+def test_a_single_point_has_nothing_to_plot_against(tmp_path):
+    config = tmp_path / "point.yaml"
+    config.write_text("integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 1}\n")
+    assert invoke("run", config, "-o", tmp_path / "point.h5", "-q").exit_code == 0
+    result = invoke("plot", tmp_path / "point.h5", "-o", tmp_path / "f.png")
+    assert result.exit_code == 2 and "single point" in result.output and "simulate" in result.output

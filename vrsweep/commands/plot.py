@@ -33,7 +33,7 @@ def default_output(path, kind):
               help="Figure file, .png, .pdf or .svg (default: FILE.png, or FILE.KIND.png with --kind).")
 @click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "bifurcation",
                                            "trajectory", "slowflow"]), default=None,
-              help="What to draw (default: chosen from the file, see below).")
+              help="What to draw (default: chosen from the file, see above).")
 @click.option("--amplitude", is_flag=True,
               help="Plot the amplitude |Q| and the analytic A instead of the gain R = |Q|/c and A/c.")
 @click.option("--at", "at_items", multiple=True, metavar="NAME=VALUE",
@@ -62,7 +62,9 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
       impacts      impacts per slow period, period by period (several files: one panel each)
       slowflow     effective system against the slow-flow reconstruction (needs --compare effective)
 
-    Hollow grey points: R unreliable (no period found, or R_err > 10% of R).
+    On response plots, hollow grey points have no period (R is one draw of a chaotic or
+    quasi-periodic motion), hollow coloured ones R_err > 10% of R; --log helps when the
+    analytic gain dwarfs R.
     """
     from vrsweep import plot
     from vrsweep.errors import UsageError
