@@ -22,7 +22,8 @@ def point_variables(integration):
             "long_name": "amplitude |Q| = sqrt(Qs^2 + Qc^2) of x at omega (same units as x; compare with A_theory)"}),
         ("R_err", np.float64, (), {
             "units": "1",
-            "long_name": "95% half-width of R from batch means over the measurement window"}),
+            "long_name": ("95% half-width of R: jackknife over 10 batches of whole periods (cycles) of the "
+                          "measurement window, plus R's offset from its whole-cycle value (vrsweep.diagnostics)")}),
         ("impacts_per_period", np.float64, (), {
             "units": "1", "long_name": "mean number of impacts per slow period 2 pi/omega (measurement window)"}),
         ("status", np.int8, (), {
@@ -30,7 +31,8 @@ def point_variables(integration):
             "flag_values": np.array(FLAG_VALUES, dtype=np.int8), "flag_meanings": FLAG_MEANINGS}),
         ("period", np.int64, (), {
             "units": "1",
-            "long_name": "period of the stroboscopic samples in slow periods (0: none found up to max_period)"}),
+            "long_name": ("period of the stroboscopic samples in slow periods, to period_tolerance (0: none up to "
+                          "max_period: chaotic, quasi-periodic, longer, or not yet converged)")}),
         ("impacts_per_cycle", np.int64, (), {
             "units": "1", "long_name": "impacts in one cycle of the detected period (-1: no period)"}),
         ("strobe_x", np.float64, strobe, {
