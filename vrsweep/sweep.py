@@ -67,14 +67,23 @@ class Grid:
         return int(np.prod(self.shape, dtype=np.int64))
 
     def lines(self):
-        """(n_lines, line_length) flat indices into the output grid, each row in run order."""
+        """(n_lines, line_length) flat indices into the output grid, each row in run order.
+
+        Without continuation every point is its own line. With it, a line runs along the
+        continuation axis at one setting of the other axes: `up` in increasing parameter value,
+        `down` in decreasing value (whatever order the config lists the values in; the stored
+        axis keeps the config's order). With `both`, the up lines fill direction index 0
+        (+1) and the down lines index 1 (-1).
+        """
         flat = np.arange(self.n_points, dtype=np.int64).reshape(self.shape)
         if self.continuation_axis is None:
             return flat.reshape(-1, 1)
+        # A stable sort, so equal values keep their config order (and up is exactly down reversed).
+        ascending = np.argsort(self.axis_values[self.continuation_axis], kind="stable")
         rows = []
         for direction_index, direction in enumerate(self.directions):
             block = flat[..., direction_index] if len(self.directions) == 2 else flat
-            block = np.moveaxis(block, self.continuation_axis, -1)
+            block = np.moveaxis(block, self.continuation_axis, -1)[..., ascending]
             if direction == "down":
                 block = block[..., ::-1]
             rows.append(block.reshape(-1, block.shape[-1]))
@@ -118,6 +127,9 @@ def run_lines(coefficients, initial_state, settings, lines, period_records, summ
                 coefficients[lines[line, slot]], state, settings, period_records[line, slot],
                 summaries[line, slot], no_samples, no_sample_out, no_impacts, no_sticks)
             statuses[line, slot] = status
+            # The next point starts at its own t = 0 from this one's state at t = n T: in phase
+            # with the slow force (omega n T = 2 pi n), and with the fast one when n Omega / omega
+            # is a whole number (Omega = 4, omega = 0.5: 8 n); otherwise the fast phase restarts.
             if status == Status.OK:
                 state[0] = summaries[line, slot, kernel.SUM_X_FINAL]
                 state[1] = summaries[line, slot, kernel.SUM_V_FINAL]
@@ -149,13 +161,15 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     initial_state = np.array([config.initial["x"], config.initial["v"]], dtype=np.float64)
     settings = integration_settings(config.integration)
     lines = shuffled_lines(grid, *shard)
-    if done is not None:
-        lines = lines[~np.all(done.reshape(-1)[lines], axis=1)]
+    # A continuation line is the unit of work: its points depend on each other, so a line with
+    # any point missing is run again from its start (the points already done come out the same).
+    not_done = np.ones(grid.n_points, dtype=bool) if done is None else ~done.reshape(-1)
+    lines = lines[np.any(not_done[lines], axis=1)]
     line_length = lines.shape[1] if lines.size else 1
     chunk_lines = chunk_lines or default_chunk_lines(threads, line_length)
     n_periods = config.integration.transient_periods + config.integration.measure_periods
     counts = {}
-    total = lines.size
+    total = int(np.count_nonzero(not_done[lines]))  # progress counts points newly done, not redone
     for start in range(0, len(lines), chunk_lines):
         chunk = np.ascontiguousarray(lines[start:start + chunk_lines])
         records = np.full((len(chunk), line_length, n_periods, kernel.N_RECORD), np.nan)
@@ -172,7 +186,7 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
         if on_chunk is not None:
             on_chunk(flat, values)
         if progress is not None:
-            progress(flat.size, total)
+            progress(int(np.count_nonzero(not_done[flat])), total)
     return counts
 
 
