@@ -396,7 +396,7 @@ def test_configs_differ_when_content_differs():
 @pytest.mark.parametrize("path", sorted(CONFIGS.glob("*.yaml")), ids=lambda path: path.name)
 def test_shipped_configs_load(path):
     config = load_config(path)
-    assert config.model == "original"
+    assert config.model in ("original", "effective")
     assert parse_config(config.to_yaml()) == config
 
 
@@ -489,13 +489,13 @@ def valid_documents(draw):
     """A random config that must be accepted."""
     x = draw(st.floats(-2, 2))
     parameters = {
-        "gamma": draw(finite), "alpha": draw(finite), "c": draw(finite), "omega0": draw(finite),
+        "gamma": draw(finite), "alpha": draw(finite), "c": draw(positive), "omega0": draw(finite),
         "omega": draw(positive), "Delta": draw(st.floats(x + 1e-3, 10)), "e": draw(st.floats(1e-3, 1)),
         "g": draw(finite), "Omega": draw(positive),
     }
     sweep = {}
     for name in draw(st.lists(st.sampled_from(["g", "Omega", "c", "alpha"]), unique=True, max_size=3)):
-        low = 0.1 if name == "Omega" else -5.0
+        low = 0.1 if name in ("Omega", "c") else -5.0
         if draw(st.booleans()):
             start = draw(st.floats(low, 10))
             sweep[name] = {"start": start, "stop": draw(st.floats(start, 20)), "num": draw(st.integers(2, 30))}

@@ -114,7 +114,8 @@ _POSITIVE = Domain(low=0.0)
 _COUNT = Domain(low=1, low_open=False, high=_INT64_MAX, high_open=False, integer=True)
 
 PARAMETER_DOMAINS = {
-    "gamma": _ANY, "alpha": _ANY, "c": _ANY, "omega0": _ANY,
+    "gamma": _ANY, "alpha": _ANY, "omega0": _ANY,
+    "c": _POSITIVE,  # R = |Q|/c (eq3.3) is a gain: undefined without a drive; -c is c half a period on
     "omega": _POSITIVE,                                  # the slow period 2 pi/omega sets the time unit
     "Delta": _ANY,                                       # must lie above initial.x: checked across fields
     "e": Domain(low=0.0, high=1.0, high_open=False),     # eq2.2: 0 < e <= 1

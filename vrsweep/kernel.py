@@ -355,7 +355,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
 
     if stuck and n_sticks - 1 < stick_log.shape[0]:
         stick_log[n_sticks - 1, 1] = t
-    _summarize(period_records, n_transient, n_periods, slow_period, coefficients[C], status, summary)
+    status = _summarize(period_records, n_transient, n_periods, slow_period, coefficients[C], status, summary)
     summary[SUM_STEPS] = n_steps
     summary[SUM_REJECTED] = n_rejected
     summary[SUM_RHS] = n_rhs
@@ -369,11 +369,22 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
 
 @njit(cache=True)
 def _summarize(period_records, n_transient, n_periods, slow_period, c, status, summary):
-    """eq3.1-eq3.3 over the measurement window, and the mean impacts per slow period."""
+    """eq3.1-eq3.3 over the measurement window, and the mean impacts per slow period.
+
+    Returns the status, turned into NON_FINITE if a result overflows (e.g. a subnormal c), so a
+    point marked ok holds finite numbers. Only c = 0 exactly (no drive, which configs refuse)
+    leaves the gain R undefined: NaN, with the trajectory itself ok.
+    """
+    if status == Status.OK:
+        status = _measure(period_records, n_transient, n_periods, slow_period, c, summary)
     if status != Status.OK:
         for k in (SUM_R, SUM_QS, SUM_QC, SUM_Q_AMPLITUDE, SUM_IMPACTS_PER_PERIOD):
             summary[k] = np.nan
-        return
+    return status
+
+
+@njit(cache=True)
+def _measure(period_records, n_transient, n_periods, slow_period, c, summary):
     n_measured = n_periods - n_transient
     sin_integral = 0.0
     cos_integral = 0.0
@@ -389,5 +400,12 @@ def _summarize(period_records, n_transient, n_periods, slow_period, c, status, s
     summary[SUM_QS] = qs
     summary[SUM_QC] = qc
     summary[SUM_Q_AMPLITUDE] = amplitude
-    summary[SUM_R] = amplitude / c if c != 0.0 else np.nan  # eq3.3: a gain needs a drive
     summary[SUM_IMPACTS_PER_PERIOD] = impacts / n_measured
+    if c == 0.0:
+        summary[SUM_R] = np.nan  # eq3.3 is a gain: undefined without a drive
+        return Status.OK
+    summary[SUM_R] = amplitude / c  # eq3.3
+    for k in (SUM_R, SUM_QS, SUM_QC):
+        if not math.isfinite(summary[k]):
+            return Status.NON_FINITE
+    return Status.OK

@@ -145,6 +145,8 @@ def _fsync(h5file):
 
 def _check_output_directory(path):
     directory = os.path.dirname(os.path.abspath(path))
+    if os.path.exists(directory) and not os.path.isdir(directory):
+        raise UsageError(f"output {path}: {directory} is a file, not a directory")
     if not os.path.isdir(directory):
         raise UsageError(f"output directory {directory} does not exist (output: {path}); create it (mkdir -p {directory}) or choose another with -o")
     if not os.access(directory, os.W_OK | os.X_OK):
@@ -269,6 +271,9 @@ def _create_point_variable(f, spec, grid_shape, scales):
     kwargs = {}
     if shape:  # HDF5 cannot chunk a scalar dataspace; a 0-d variable stays contiguous
         kwargs["chunks"] = _chunk_shape(tuple(grid_shape), spec.extra_shape, spec.dtype.itemsize)
+        # A checksum per chunk: bytes damaged on disk or in a copy are an error when read,
+        # never silently wrong numbers.
+        kwargs["fletcher32"] = True
     ds = f.create_dataset(spec.name, shape=shape, dtype=spec.dtype, fillvalue=spec.fill, dcpl=dcpl,
                           track_order=True, track_times=False, **kwargs)
     for i, scale in enumerate(scales):
@@ -362,9 +367,11 @@ def _scale_names(ds):
     """Names of the dimension scales attached to each dimension of ``ds``."""
     out = []
     for i, dim in enumerate(ds.dims):
-        if len(dim) == 0:
-            raise ResultFileError(f"dataset {ds.name} has no dimension scale on dimension {i}")
-        out.append(dim[0].name.rsplit("/", 1)[-1])
+        scale_name = dim[0].name if len(dim) else None
+        if not scale_name:  # no scale attached, or its reference is damaged
+            raise ResultFileError(f"{ds.file.filename}: dataset {ds.name} has no dimension scale on "
+                                  f"dimension {i}: corrupt, or not written by vrsweep")
+        out.append(scale_name.rsplit("/", 1)[-1])
     return tuple(out)
 
 
@@ -398,7 +405,8 @@ def _add_extras(f, extra, coords):
                 for scale in list(dim.values()):
                     old.dims[i].detach_scale(scale)
             del f[name]
-        ds = f.create_dataset(name, data=array, track_order=True, track_times=False)
+        checksum = {"chunks": array.shape, "fletcher32": True} if array.ndim else {}
+        ds = f.create_dataset(name, data=array, track_order=True, track_times=False, **checksum)
         for i, scale in enumerate(scales):
             ds.dims[i].attach_scale(scale)
         _write_attrs(ds, attrs or {}, array.dtype)
@@ -456,7 +464,7 @@ def _open_checked(path, mode="r"):
     except ResultFileError:
         f.close()
         raise
-    except (OSError, KeyError, ValueError) as error:
+    except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
         f.close()
         raise _corrupt_error(path, error) from None
     return f
@@ -546,7 +554,8 @@ class ResultWriter:
         specs = [v if isinstance(v, VariableSpec) else VariableSpec(**v) for v in variables]
 
         def write(tmp):
-            with h5py.File(tmp, "w", track_order=True, **_file_kwargs()) as f:
+            # HDF5 1.8 object headers carry checksums, so damaged metadata is caught too.
+            with h5py.File(tmp, "w", track_order=True, libver=("v108", "latest"), **_file_kwargs()) as f:
                 _build_skeleton(f, list(axes), specs, dict(attrs), extra_coords, owned_mask)
 
         atomic_write(path, write)
@@ -793,7 +802,7 @@ def read_results(path) -> ResultSet:
                 point_variables=point_variables, fill_values=fills)
     except ResultFileError:
         raise
-    except (OSError, KeyError, ValueError, RuntimeError) as error:
+    except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
         raise _corrupt_error(path, error) from None
 
 
