@@ -236,6 +236,12 @@ class Config:
     def n_points(self) -> int:
         return math.prod(self.shape)
 
+    @property
+    def n_runs(self) -> int:
+        """Integrations the grid takes: twice the points for ``continuation: both``."""
+        both = any(axis.continuation == "both" for axis in self.axes)
+        return self.n_points * (2 if both else 1)
+
     def grid_parameters(self) -> dict[str, np.ndarray]:
         """Every parameter as a float64 array of shape ``self.shape`` (writable, C-contiguous).
 

@@ -50,7 +50,7 @@ def estimate(config, threads=None) -> Estimate:
     """Output size and wall time of running ``config`` on ``threads`` threads (default: all)."""
     threads = max(1, int(threads or default_threads()))
     integration = config.integration
-    n_points = config.n_points
+    n_points = config.n_runs  # a two-way continuation stores and runs every point twice
     output_bytes = n_points * (VARIABLES_PER_POINT + 2 * integration.strobe_periods) * BYTES_PER_VALUE
     periods = integration.transient_periods + integration.measure_periods
     # DP5 takes about rtol^(-1/5) steps per unit time, so cost scales as (1e-9/rtol)^(1/5).

@@ -39,7 +39,8 @@ def command(config_path, overrides, threads):
     else:
         click.echo("axes:        none (a single point)")
     shape = f" ({' x '.join(str(n) for n in config.shape)})" if config.axes else ""
-    click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''}{shape}")
+    both = " x 2 directions (continuation: both)" if config.n_runs != config.n_points else ""
+    click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''}{shape}{both}")
     integration = config.integration
     click.echo(f"integration: rtol={integration.rtol:g} atol={integration.atol:g}, "
                f"{integration.transient_periods} transient + {integration.measure_periods} measured "
