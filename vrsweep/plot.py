@@ -470,7 +470,7 @@ def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) ->
     curves = view.curve_coordinates(x_axis)
     if len(curves) > MAX_CURVES:
         others = [n for n in view.parameter_axes if n != x_axis]
-        raise UsageError(f"{len(curves)} curves of {name} against {PARAMETER_SYMBOLS.get(x_axis, x_axis)} on one plot: fix "
+        raise UsageError(f"{len(curves)} curves of {name} against {x_axis} on one plot: fix "
                          f"{', '.join(others)} with --at, or draw --kind map")
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 6.0)
@@ -535,7 +535,8 @@ def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) ->
         ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3, which="both" if log else "major")
     quantity = "amplitude |Q|" if amplitude else "gain R"
-    _title(fig, f"Response {quantity} against {PARAMETER_SYMBOLS.get(x_axis, x_axis)}; analytic: first-order theory of the effective system "
+    symbol = PARAMETER_SYMBOLS.get(x_axis, x_axis)
+    _title(fig, f"Response {quantity} against {symbol}; analytic: first-order theory of the effective system "
                 f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})",
            _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
     return fig
@@ -671,7 +672,8 @@ def impacts_figure(view: SweepView, x_axis=None) -> Figure:
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    _title(fig, f"Impacts per slow period against {PARAMETER_SYMBOLS.get(x_axis, x_axis)} (mean over the measurement window)",
+    _title(fig, f"Impacts per slow period against {PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
+                "(mean over the measurement window)",
            _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
     return fig
 
@@ -740,7 +742,8 @@ def bifurcation_figure(view: SweepView, x_axis=None) -> Figure:
     ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$ {UNITS}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7.5, loc="best", markerscale=3)
-    _title(fig, f"Bifurcation diagram: x sampled once per slow period against {PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
+    _title(fig, "Bifurcation diagram: x sampled once per slow period against "
+                f"{PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
                 "(one dot per period: a period-p orbit shows p dots)",
            _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
     return fig
