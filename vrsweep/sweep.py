@@ -210,3 +210,40 @@ def point_values(records, summaries, statuses, coefficients, integration):
 
 def thread_count():
     return int(os.environ.get("NUMBA_NUM_THREADS", numba.config.NUMBA_NUM_THREADS))
+
+
+# ---------------------------------------------------------------------------------------------
+# For executors that pick the lines themselves (vrsweep.distributed: one Dask task per chunk).
+# It does exactly what one iteration of run_sweep's loop does, so a chunk run here is bit for bit
+# the chunk run_sweep would have produced.
+# ---------------------------------------------------------------------------------------------
+
+
+class LineRunner:
+    """Run given lines of a config's grid; built once per config, reused for many chunks."""
+
+    def __init__(self, config):
+        grid = Grid.from_config(config)
+        self.config = config
+        self.coefficients = np.ascontiguousarray(
+            kernel_coefficients(grid.parameter_table(config), config.model))
+        self.initial_state = np.array([config.initial["x"], config.initial["v"]], dtype=np.float64)
+        self.settings = integration_settings(config.integration)
+        self.n_periods = config.integration.transient_periods + config.integration.measure_periods
+
+    def run(self, lines, threads=None):
+        """lines (n_lines, line_length) flat indices -> (flat_indices, values) as run_sweep's on_chunk gets them."""
+        threads = threads or numba.config.NUMBA_NUM_THREADS
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        chunk = np.ascontiguousarray(lines, dtype=np.int64)
+        n_lines, line_length = chunk.shape
+        records = np.full((n_lines, line_length, self.n_periods, kernel.N_RECORD), np.nan)
+        summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
+        statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
+        with numba.parallel_chunksize(1):
+            run_lines(self.coefficients, self.initial_state, self.settings, chunk, records, summaries, statuses)
+        flat = chunk.reshape(-1)
+        values = point_values(
+            records.reshape(-1, self.n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
+            statuses.reshape(-1), self.coefficients[flat], self.config.integration)
+        return flat, values

@@ -1,0 +1,111 @@
+"""``vrsweep run --dask``: chunks on dask.distributed workers, one writer, same file as a local run."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+from result_files import assert_same_result, done_count, invoke, vrsweep_process, write_config
+
+pytest.importorskip("dask.distributed")
+
+TINY = """\
+    sweep:
+      g: {start: 0.0, stop: 30.0, num: 9}
+      Omega: [4.0, 5.0]
+    integration: {transient_periods: 5, measure_periods: 5, strobe_periods: 4}
+    """
+
+
+@pytest.fixture(scope="module")
+def single(tmp_path_factory):
+    directory = tmp_path_factory.mktemp("dask")
+    config = write_config(directory, TINY)
+    out = directory / "single.h5"
+    assert invoke("run", config, "-o", out, "-q").exit_code == 0
+    return config, out
+
+
+def test_a_local_cluster_of_two_workers_equals_a_single_run(single, tmp_path):
+    config, expected = single
+    out = tmp_path / "dask.h5"
+    result = invoke("run", config, "-o", out, "--dask", "local:2", "--threads", 1)
+    assert result.exit_code == 0, result.output
+    assert "18 of 18 points computed" in result.output
+    assert_same_result(out, expected)
+
+
+def test_dask_resumes_a_local_run_through_a_scheduler_address(single, tmp_path):
+    """Resumable as a local run: the client writes; a partial file is completed on a cluster."""
+    from dask.distributed import LocalCluster
+
+    from vrsweep.config import load_config
+    from vrsweep.job import GracefulStop, Interrupted, run_job
+    from vrsweep.sweep import run_sweep
+
+    config, expected = single
+    out = tmp_path / "partial.h5"
+    stop = GracefulStop()
+    stop.signum = signal.SIGINT  # stop after the first chunk
+    with pytest.raises(Interrupted):
+        run_job(load_config(config), out, threads=1, stop=stop,
+                executor=lambda c, **kw: run_sweep(c, chunk_lines=4, **kw))
+    assert done_count(out) == 4
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        result = invoke("run", config, "-o", out, "--resume", "--dask", cluster.scheduler_address)
+    assert result.exit_code == 0, result.output
+    assert "14 of 18 points computed" in result.output
+    assert_same_result(out, expected)
+
+
+def test_run_without_dask_never_imports_it(single, tmp_path):
+    config, _ = single
+    script = textwrap.dedent(f"""
+        import sys
+        from vrsweep.cli import main
+        import vrsweep.distributed  # the module itself imports dask lazily too
+        try:
+            main(["run", {str(config)!r}, "-o", {str(tmp_path / "plain.h5")!r}, "-q"])
+        except SystemExit as exit:
+            assert not exit.code, exit.code
+        print(sorted(m for m in sys.modules if m.split(".")[0] in ("dask", "distributed")))
+    """)
+    output = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    assert output.stdout.strip() == "[]", output
+
+
+def test_ctrl_c_in_a_terminal_stops_a_local_cluster_run_cleanly(tmp_path):
+    """A terminal's Ctrl-C goes to the whole process group, local workers included: the workers
+    must leave it to the client, which saves the chunk in flight, shuts the cluster down and
+    prints the resume command (a worker killed by it used to leave the client waiting forever)."""
+    config = write_config(tmp_path, """\
+        sweep:
+          g: {start: 0.0, stop: 40.0, num: 96}
+        integration: {transient_periods: 60, measure_periods: 60, strobe_periods: 8}
+        """)
+    out = tmp_path / "out.h5"
+    child = vrsweep_process("run", config, "-o", out, "--dask", "local:2", "--threads", 1,
+                            cwd=tmp_path, start_new_session=True)  # its own group, as in a terminal
+    try:
+        deadline = time.monotonic() + 120
+        while (done_count(out) or 0) < 16 and time.monotonic() < deadline and child.poll() is None:
+            time.sleep(0.02)
+        os.killpg(child.pid, signal.SIGINT)
+        _, stderr = child.communicate(timeout=60)
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+    assert child.returncode == 130, stderr
+    assert "Traceback" not in stderr and "WARNING" not in stderr, stderr
+    assert "--resume" in stderr and "--dask local:2" in stderr
+    saved = done_count(out)
+    assert 16 <= saved < 96
+
+    result = invoke("run", config, "-o", out, "--resume")
+    assert result.exit_code == 0 and f"{96 - saved} of 96 points computed" in result.output
+    assert invoke("run", config, "-o", tmp_path / "single.h5", "-q").exit_code == 0
+    assert_same_result(out, tmp_path / "single.h5")

@@ -1,0 +1,211 @@
+"""Run a sweep's chunks on dask.distributed workers; the client stays the only writer.
+
+``vrsweep run CONFIG --dask ADDRESS`` (or ``--dask local:N``) swaps run_sweep's local loop for
+:class:`DaskExecutor`, which has run_sweep's signature: the same shuffled, not-yet-done lines are
+cut into chunks, each chunk is one Dask task (:func:`run_chunk`) running the numba kernel on a
+worker, and results are handed to ``on_chunk`` as they arrive. ``on_chunk`` is the job's
+``ResultWriter.write_points``, so the HDF5 file is written by this one process exactly as in a
+local run: checkpointed chunk by chunk, resumable with ``--resume`` (with or without Dask), and
+bit for bit the same values (a chunk runs the same code on the same coefficients; see sweep.py).
+
+Dask is an optional extra (``pip install "vrsweep[dask]"``): nothing here imports it at module
+level, so ``vrsweep run`` without ``--dask`` never loads it.
+
+Threads: a task runs the kernel with ``--threads`` numba threads, or with as many as its worker
+has (``--nthreads``) when not given. Tasks in one worker process take a lock around the kernel,
+so a worker with several Dask threads still runs one parallel kernel at a time (numba's thread
+pool is per process; two kernels at once would oversubscribe the cores, and the ``workqueue``
+threading layer aborts on concurrent launches).
+"""
+
+import contextlib
+import functools
+import logging
+import signal
+import threading
+
+import numpy as np
+
+from vrsweep.errors import UsageError, VrsweepError
+from vrsweep.results import Status
+from vrsweep.sweep import Grid, default_chunk_lines, shuffled_lines
+
+LOCAL_PREFIX = "local:"
+CONNECT_TIMEOUT = "30s"
+INSTALL_HINT = 'pip install "vrsweep[dask]" (or dask[distributed])'
+
+
+def dask_executor(address, threads=None):
+    """A callable with run_sweep's signature that runs the chunks on dask.distributed.
+
+    address: a scheduler address (``tcp://host:8786``, a scheduler file is not supported) or
+    ``local:N`` for a LocalCluster of N worker processes with ``threads`` (default 1) threads each.
+    Checks the address and that dask.distributed is installed now, so a bad ``--dask`` fails
+    before any file is created; connects only when called.
+    """
+    n_local = parse_local(address)
+    try:
+        import dask.distributed  # noqa: F401
+    except ModuleNotFoundError:
+        raise UsageError(f"--dask needs dask.distributed, which is not installed: {INSTALL_HINT}") from None
+    return DaskExecutor(address, threads, n_local)
+
+
+def parse_local(address):
+    """``local:N`` -> N; any other address -> None."""
+    if not address.startswith(LOCAL_PREFIX):
+        return None
+    text = address[len(LOCAL_PREFIX):]
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise UsageError(f"--dask {address}: expected local:N with N >= 1 workers (e.g. local:4)")
+    return n
+
+
+# ---------------------------------------------------------------------------------------------
+# Worker side
+# ---------------------------------------------------------------------------------------------
+
+_KERNEL_LOCK = threading.Lock()
+
+
+@functools.lru_cache(maxsize=2)
+def _runner(config_text):
+    # Parsed and tabulated once per worker process and config, not once per chunk.
+    from vrsweep.config import parse_config
+    from vrsweep.sweep import LineRunner
+
+    return LineRunner(parse_config(config_text, "<config sent by the vrsweep client>"))
+
+
+def run_chunk(config_text, lines, threads=None):
+    """The Dask task: run ``lines`` of the config's grid; return (flat indices, values)."""
+    if threads is None:
+        threads = _worker_threads()
+    with _KERNEL_LOCK:
+        return _runner(config_text).run(lines, threads)
+
+
+def dask_setup(worker):
+    """Preload hook of the LocalCluster's workers (``preload=["vrsweep.distributed"]``).
+
+    Ctrl-C in a terminal sends SIGINT to the whole process group, local workers included; a
+    worker killed by it would leave its chunk unfinished and the client waiting for a worker that
+    never returns. Ignoring SIGINT there leaves it to the client, which stops after the next chunk
+    is saved and shuts the cluster down. (Runs in the worker's main thread, where the event loop of
+    a nanny-started worker lives; elsewhere it does nothing.)
+    """
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Shutting the cluster down is expected to cancel the chunks still running after a stop, and
+    # on a loaded machine a worker's last heartbeat can race the scheduler's exit (the scheduler
+    # is in the client's process, so it is never lost otherwise): no warning per worker for these.
+    _drop_messages("distributed.worker.state_machine", "ended with CancelledError")
+    _drop_messages("distributed.worker", "Failed to communicate with scheduler during heartbeat")
+
+
+def _drop_messages(logger, text):
+    logging.getLogger(logger).addFilter(lambda record: text not in record.getMessage())
+
+
+def _worker_threads():
+    try:
+        from distributed import get_worker
+
+        return int(get_worker().state.nthreads)
+    except (ImportError, ValueError, AttributeError):
+        return None  # not in a worker (or an old distributed): numba's default
+
+
+# ---------------------------------------------------------------------------------------------
+# Client side
+# ---------------------------------------------------------------------------------------------
+
+
+class DaskExecutor:
+    """run_sweep's signature, run on Dask. Connects (or starts a LocalCluster) per call."""
+
+    def __init__(self, address, threads=None, n_local=None):
+        self.address = address
+        self.threads = threads
+        self.n_local = n_local
+
+    def __call__(self, config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
+                 progress=None, chunk_lines=None):
+        threads = threads or self.threads
+        lines = shuffled_lines(Grid.from_config(config), *shard)
+        if done is not None:
+            lines = lines[~np.all(done.reshape(-1)[lines], axis=1)]
+        counts = {}
+        if len(lines) == 0:
+            return counts
+        total = lines.size
+        config_text = config.to_yaml()
+        with self._client() as client:
+            from dask.distributed import as_completed
+
+            if chunk_lines is None:
+                if not threads:  # chunks sized for the workers' threads: wait for one to know them
+                    client.wait_for_workers(1)
+                chunk_lines = default_chunk_lines(threads or _largest_worker(client), lines.shape[1])
+            # All chunks are submitted at once and Dask balances them over the workers; a result
+            # is dropped as soon as it is written, so neither side holds more than the chunks in
+            # flight.
+            pending = {}
+            for start in range(0, len(lines), chunk_lines):
+                chunk = np.ascontiguousarray(lines[start:start + chunk_lines])
+                future = client.submit(run_chunk, config_text, chunk, threads, pure=False)
+                pending[future.key] = future
+            try:
+                for future in as_completed(list(pending.values())):
+                    pending.pop(future.key)
+                    try:
+                        flat, values = future.result()
+                    except Exception as error:
+                        raise VrsweepError(
+                            f"a Dask task failed: {type(error).__name__}: {error} (finished chunks "
+                            "are saved; --resume continues)") from error
+                    if on_chunk is not None:
+                        on_chunk(flat, values)
+                    for code, n in zip(*np.unique(values["status"], return_counts=True)):
+                        counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
+                    if progress is not None:
+                        progress(flat.size, total)
+                    del future
+            finally:
+                # Interrupted or failed: do not leave a shared cluster computing for nobody (a
+                # LocalCluster is about to be shut down anyway).
+                if pending and self.n_local is None:
+                    client.cancel(list(pending.values()))
+        return counts
+
+    @contextlib.contextmanager
+    def _client(self):
+        from dask.distributed import Client, LocalCluster
+
+        if self.n_local is not None:
+            # Worker processes (not threads): each has its own numba thread pool. No dashboard, and
+            # the scheduler's small HTTP server on any free local port, not on 8787 (which a
+            # second run on the machine would find taken, and warn).
+            # The workers ignore SIGINT (dask_setup below), so Ctrl-C reaches only this client.
+            with LocalCluster(n_workers=self.n_local, threads_per_worker=self.threads or 1,
+                              processes=True, dashboard_address=None,
+                              scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                              preload=[__name__]) as cluster, \
+                    Client(cluster) as client:
+                yield client
+            return
+        try:
+            client = Client(self.address, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError) as error:
+            raise VrsweepError(f"cannot connect to the Dask scheduler at {self.address}: {error}") from None
+        with client:
+            yield client
+
+
+def _largest_worker(client):
+    workers = client.scheduler_info().get("workers", {})
+    return max((int(w.get("nthreads", 1)) for w in workers.values()), default=1)
