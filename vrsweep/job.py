@@ -5,6 +5,9 @@ Glue between sweep (numerics), store (HDF5) and theory (the analytic columns). T
 """
 
 import os
+import signal
+import sys
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,7 +37,12 @@ class JobReport:
 
 
 def parse_shard(text, environ=None):
-    """'I/N' (0-based I) or 'auto' (SLURM_ARRAY_TASK_ID relative to SLURM_ARRAY_TASK_MIN)."""
+    """'I/N' (0-based I) or 'auto': the shard of this task of a SLURM job array.
+
+    A job array need not start at 0 (``--array=1-8``) nor step by 1 (``--array=0-30:10``), so
+    the index is (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN) / SLURM_ARRAY_TASK_STEP, and N is
+    SLURM_ARRAY_TASK_COUNT. An array given as a list (``--array=1,4,7``) cannot be mapped.
+    """
     environ = os.environ if environ is None else environ
     if text is None:
         return (0, 1)
@@ -42,20 +50,28 @@ def parse_shard(text, environ=None):
         try:
             task = int(environ["SLURM_ARRAY_TASK_ID"])
             count = int(environ["SLURM_ARRAY_TASK_COUNT"])
+            first = int(environ.get("SLURM_ARRAY_TASK_MIN", 0))
+            step = int(environ.get("SLURM_ARRAY_TASK_STEP", 1) or 1)
         except (KeyError, ValueError):
             raise UsageError("--shard auto needs SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT "
                              "(run it inside a SLURM job array, or give --shard I/N)") from None
-        # Arrays may start anywhere (--array=1-8): index from the array's own minimum.
-        first = int(environ.get("SLURM_ARRAY_TASK_MIN", 0))
-        index = task - first
+        offset = task - first
+        if step < 1 or offset % step:
+            raise UsageError(
+                f"--shard auto: array task {task} is not on the range {first}, {first + step}, ...; "
+                "use a range --array=A-B (or A-B:STEP), not a list")
+        index = offset // step
+        where = f"SLURM array task {task} (first {first}, {count} tasks)"
     else:
         try:
             index_text, count_text = text.split("/")
             index, count = int(index_text), int(count_text)
         except ValueError:
             raise UsageError(f"--shard {text}: expected I/N (e.g. 0/8) or 'auto'") from None
+        where = f"--shard {text}"
     if not (count >= 1 and 0 <= index < count):
-        raise UsageError(f"--shard: index {index} is not in 0..{count - 1}")
+        hint = "; use --array=A-B (or A-B:STEP), not a list" if text == "auto" else ""
+        raise UsageError(f"{where}: shard index {index} is not in 0..{count - 1}{hint}")
     return (index, count)
 
 
@@ -104,16 +120,28 @@ def owned_mask(grid, shard):
     return mask.reshape(grid.shape)
 
 
+# Points per call of theory.analytic_columns. Its temporaries (companion matrices, complex
+# eigenvalues, stability tests) take ~0.5 kB a point: on the whole grid at once they were the
+# largest thing a run held (+50 MB peak at 10^5 points, so +5 GB at 10^7). In blocks they are
+# bounded; every point is computed on its own (elementwise numpy, one small eigenproblem per point),
+# so the blocks change no bit of the result.
+ANALYTIC_BLOCK_POINTS = 8192
+
+
 def analytic_extras(config, grid):
     """The analytic side stored beside the numerical grid (issue 3): theory.analytic_columns."""
     from vrsweep import theory
 
-    table = grid.parameter_table(config)
-    parameters = {name: values.reshape(grid.shape) for name, values in table.items()}
-    columns = theory.analytic_columns(parameters)
+    table = grid.parameter_table(config)  # flat: name -> (n_points,)
+    blocks = {}
+    for start in range(0, grid.n_points, ANALYTIC_BLOCK_POINTS):
+        part = {name: values[start:start + ANALYTIC_BLOCK_POINTS] for name, values in table.items()}
+        for name, (array, dims_suffix, attrs) in theory.analytic_columns(part).items():
+            blocks.setdefault(name, ([], dims_suffix, attrs))[0].append(np.asarray(array))
     extras = {}
-    for name, (array, dims_suffix, attrs) in columns.items():
-        array = np.asarray(array)
+    for name, (arrays, dims_suffix, attrs) in blocks.items():
+        array = np.concatenate(arrays)
+        array = array.reshape(grid.shape + array.shape[1:])
         dims = tuple(grid.axis_names) + tuple(dims_suffix)
         if name == "g_res":
             array, dims = _reduce_constant_axes(array, grid.axis_names)
@@ -133,11 +161,12 @@ def _reduce_constant_axes(array, axis_names):
 
 
 def run_job(config, output=None, *, threads=None, resume=False, overwrite=False, shard=(0, 1),
-            progress_factory=None, executor=None):
+            progress_factory=None, executor=None, stop=None):
     """Run (or resume) a sweep into an HDF5 file. Returns a JobReport.
 
     progress_factory(total_points, already_done) -> callable(n) advancing a progress bar, or None.
     executor: optional callable with run_sweep's signature (e.g. the Dask backend).
+    stop: optional GracefulStop; checked after each chunk is written (see GracefulStop).
     """
     grid = Grid.from_config(config)
     path = shard_output_path(config.output_path(output), shard)
@@ -155,8 +184,15 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         n_done = int(done[owned.reshape(-1)].sum()) if owned is not None else int(done.sum())
         advance = progress_factory(n_owned, n_done) if progress_factory else None
         run = executor or run_sweep
-        counts = run(config, threads=threads, shard=shard, done=done,
-                     on_chunk=writer.write_points,
+        left = [n_owned - n_done]
+
+        def on_chunk(flat_indices, values):
+            writer.write_points(flat_indices, values)
+            left[0] -= len(flat_indices)
+            if stop is not None and left[0] > 0:  # after the last chunk, finishing is better
+                stop.check()  # a stop asked for during the chunk takes effect now it is saved
+
+        counts = run(config, threads=threads, shard=shard, done=done, on_chunk=on_chunk,
                      progress=(lambda n, total: advance(n)) if advance else None)
         extras = analytic_extras(config, grid)
     except BaseException:
@@ -168,3 +204,60 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
 
 def status_counts_line(counts):
     return ", ".join(f"{n} {Status(s).name.lower()}" for s, n in sorted(counts.items()))
+
+
+class Interrupted(KeyboardInterrupt):
+    """The run was stopped by a signal (SIGINT: Ctrl-C; SIGTERM: scancel, a time limit)."""
+
+    def __init__(self, signum):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_code(self):
+        return 128 + self.signum  # what a shell reports for a process killed by the signal
+
+
+class GracefulStop:
+    """Turn SIGINT and SIGTERM into "stop after the chunk in flight is written".
+
+    The numba kernel cannot be interrupted, and a chunk computed but not written would be lost,
+    so the first signal only sets a flag (and says so on stderr); ``check()``, called by run_job
+    after each chunk is written, then raises :class:`Interrupted`. A second signal raises at once
+    (the file is crash-safe either way, only the chunk in flight is lost). SIGTERM is included
+    because SLURM sends it at the time limit and on scancel, some 30 s (KillWait) before SIGKILL.
+
+    A context manager; outside the main thread (where Python cannot handle signals) it does
+    nothing.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self, announce=True):
+        self.signum = None
+        self.announce = announce
+        self._previous = {}
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for signum in self.SIGNALS:
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+        self._previous.clear()
+
+    def _handle(self, signum, frame):
+        if self.signum is not None:
+            raise Interrupted(signum)
+        self.signum = signum
+        if self.announce:
+            sys.stderr.write(f"\n{signal.Signals(signum).name}: stopping once the chunk in progress is "
+                             "saved (send it again to stop at once)\n")
+            sys.stderr.flush()
+
+    def check(self):
+        if self.signum is not None:
+            raise Interrupted(self.signum)

@@ -24,7 +24,11 @@ from vrsweep.commands.options import (
               help="Send chunks to a dask.distributed scheduler (or 'local:N' for a local cluster of N workers).")
 @click.option("--allow-large", is_flag=True, help="Run a grid whose estimated size or time is out of proportion.")
 def command(config_path, output, threads, overrides, quiet, resume, overwrite, shard, dask_address, allow_large):
-    """Sweep R (eq3.3) over the config's grid and write it to HDF5."""
+    """Sweep R (eq3.3) over the config's grid and write it to HDF5.
+
+    The file is written chunk by chunk: after Ctrl-C, a crash or a kill, --resume computes only
+    what is missing. Ctrl-C (or SIGTERM) stops once the chunk in progress is saved; exit 130 (143).
+    """
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
     from vrsweep.estimate import check_size
@@ -32,16 +36,20 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
     config = load_config(config_path, overrides)
-    check_size(config, threads or _default_threads(), allow_large)
 
-    from vrsweep.job import parse_shard, run_job
+    from vrsweep.job import GracefulStop, parse_shard, run_job
 
     shard_pair = parse_shard(shard)
     executor = None
+    workers = 1
     if dask_address:
-        from vrsweep.distributed import dask_executor
+        from vrsweep.distributed import dask_executor, parse_local
 
         executor = dask_executor(dask_address, threads)
+        workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
+    # The size check is per process: a shard or a local Dask cluster shares the grid's time, while
+    # a shard's file is still the whole grid's size (see store.py).
+    check_size(config, (threads or _default_threads()) * shard_pair[1] * workers, allow_large)
     bars = []
 
     def progress_factory(total, already_done):
@@ -53,9 +61,11 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         return bar.update
 
     try:
-        report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
-                         shard=shard_pair, progress_factory=progress_factory, executor=executor)
-    except KeyboardInterrupt:
+        with GracefulStop() as stop:
+            report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
+                             shard=shard_pair, progress_factory=progress_factory, executor=executor,
+                             stop=stop)
+    except KeyboardInterrupt as interrupt:
         for bar in bars:
             bar.close()
         words = ["vrsweep", "run", config_path, "--resume"]
@@ -65,8 +75,15 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
             words += ["--set", item]
         if shard:
             words += ["--shard", shard]
-        click.echo("\nInterrupted: finished chunks are saved. Resume with:\n  " + shlex.join(words), err=True)
-        sys.exit(130)
+        if dask_address:
+            words += ["--dask", dask_address]
+        if threads:
+            words += ["--threads", str(threads)]
+        if allow_large:
+            words += ["--allow-large"]
+        click.echo(f"\nInterrupted ({interrupt or 'SIGINT'}): finished chunks are saved. Resume with:\n  "
+                   + shlex.join(words), err=True)
+        sys.exit(getattr(interrupt, "exit_code", 130))
     for bar in bars:
         bar.close()
     if not quiet:

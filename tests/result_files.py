@@ -1,0 +1,75 @@
+"""Helpers for the run/resume/shard/Dask tests: tiny configs, running the CLI, comparing files."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import h5py
+import numpy as np
+from click.testing import CliRunner
+
+from vrsweep.cli import main
+
+
+def write_config(tmp_path, text, name="sweep.yaml"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def invoke(*args, env=None):
+    """Run the CLI in this process; returns click's Result (output = stdout + stderr)."""
+    result = CliRunner().invoke(main, [str(a) for a in args], env=env)
+    assert "Traceback" not in result.output, result.output
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return result
+
+
+def vrsweep_process(*args, **kwargs):
+    """``vrsweep ARGS`` as a real subprocess (for kill -9 and signals), stderr piped."""
+    command = [sys.executable, "-m", "vrsweep", *[str(a) for a in args]]
+    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ), **kwargs)
+
+
+def done_count(path):
+    """Points marked done in a file another process may be writing (None if not readable yet)."""
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            return int(f["done"][()].sum())
+    except (OSError, KeyError):  # not created yet, or caught mid-write: ask again
+        return None
+
+
+def describe(path):
+    """Everything in a result file but its creation time: every dataset (bytes, type, shape,
+    chunks, fill, dimension scales) and every attribute, in order."""
+
+    def clean(attrs):
+        out = []
+        for key, value in attrs.items():
+            if key in ("created", "REFERENCE_LIST", "DIMENSION_LIST"):  # references: file addresses
+                continue
+            out.append((key, value.tobytes() if isinstance(value, np.ndarray) else repr(value)))
+        return out
+
+    with h5py.File(path, "r") as f:
+        result = {"/": clean(f.attrs)}
+        for name, ds in f.items():
+            result[name] = dict(
+                dtype=ds.dtype.str, shape=ds.shape, chunks=ds.chunks, fill=repr(ds.fillvalue),
+                attrs=clean(ds.attrs), data=ds[()].tobytes(),
+                dims=[[s.name for s in d.values()] for d in ds.dims])
+        return result
+
+
+def assert_same_result(a, b):
+    """Files a and b are identical bit for bit, apart from the ``created`` attribute."""
+    da, db = describe(a), describe(b)
+    assert list(da) == list(db), "different datasets"
+    for key in da:
+        if da[key] != db[key]:
+            differing = [k for k in da[key] if da[key][k] != db[key][k]] if key != "/" else "attributes"
+            raise AssertionError(f"{a} and {b} differ in {key!r}: {differing}")
