@@ -1,0 +1,175 @@
+"""Shards: SLURM array variables -> shard, shards 0..N-1 merged == one run, merge refusals."""
+
+import h5py
+import numpy as np
+import pytest
+from result_files import assert_same_result, invoke, write_config
+
+from vrsweep.errors import UsageError
+from vrsweep.job import parse_shard
+
+TINY = """\
+    sweep:
+      g: {start: 0.0, stop: 30.0, num: 7}
+      Omega: [4.0, 5.0]
+    integration: {transient_periods: 4, measure_periods: 4, strobe_periods: 2}
+    """
+N_SHARDS = 3
+
+
+def slurm(task, count, first=None, step=None):
+    env = {"SLURM_ARRAY_TASK_ID": str(task), "SLURM_ARRAY_TASK_COUNT": str(count)}
+    if first is not None:
+        env["SLURM_ARRAY_TASK_MIN"] = str(first)
+    if step is not None:
+        env["SLURM_ARRAY_TASK_STEP"] = str(step)
+    return env
+
+
+# ---------------------------------------------------------------------------------------------
+# parse_shard
+# ---------------------------------------------------------------------------------------------
+
+
+def test_explicit_shards():
+    assert parse_shard(None) == (0, 1)
+    assert parse_shard("0/1") == (0, 1)
+    assert parse_shard("3/8") == (3, 8)
+
+
+@pytest.mark.parametrize("env, expected", [
+    (slurm(0, 4, first=0), (0, 4)),            # --array=0-3
+    (slurm(3, 4, first=0), (3, 4)),
+    (slurm(1, 8, first=1), (0, 8)),            # --array=1-8: task 1 is shard 0
+    (slurm(8, 8, first=1), (7, 8)),
+    (slurm(105, 6, first=100), (5, 6)),        # --array=100-105
+    (slurm(20, 4, first=0, step=10), (2, 4)),  # --array=0-30:10
+    (slurm(2, 3), (2, 3)),                     # no TASK_MIN (very old SLURM): from 0
+])
+def test_slurm_array_variables_map_to_the_right_shard(env, expected):
+    assert parse_shard("auto", env) == expected
+
+
+def test_every_task_of_an_array_gets_its_own_shard():
+    shards = [parse_shard("auto", slurm(task, 5, first=11)) for task in range(11, 16)]
+    assert shards == [(i, 5) for i in range(5)]
+
+
+@pytest.mark.parametrize("text, env, words", [
+    ("auto", {}, "SLURM_ARRAY_TASK_ID"),
+    ("auto", slurm(9, 8, first=1), "index 8 is not in 0..7"),       # outside the array
+    ("auto", slurm(4, 3, first=1, step=2), "not on the range"),     # task 4 of --array=1-5:2?
+    ("auto", slurm(7, 3, first=1), "not a list"),                   # --array=1,4,7
+    ("auto", {"SLURM_ARRAY_TASK_ID": "x", "SLURM_ARRAY_TASK_COUNT": "2"}, "SLURM_ARRAY_TASK_ID"),
+    ("2/2", {}, "not in 0..1"),
+    ("-1/2", {}, "not in 0..1"),
+    ("1/0", {}, "not in"),
+    ("1", {}, "expected I/N"),
+    ("a/b", {}, "expected I/N"),
+])
+def test_bad_shards_are_usage_errors(text, env, words):
+    with pytest.raises(UsageError, match=words):
+        parse_shard(text, env)
+
+
+# ---------------------------------------------------------------------------------------------
+# Shards end to end
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """A single run and the N shards of the same config, as a 1-based SLURM array would run them."""
+    directory = tmp_path_factory.mktemp("shards")
+    config = write_config(directory, TINY)
+    single = directory / "single.h5"
+    assert invoke("run", config, "-o", single, "-q").exit_code == 0
+    out = directory / "map.h5"
+    for task in range(1, N_SHARDS + 1):
+        result = invoke("run", config, "-o", out, "--shard", "auto", env=slurm(task, N_SHARDS, first=1))
+        assert result.exit_code == 0, result.output
+    shards = [directory / f"map.shard{i}of{N_SHARDS}.h5" for i in range(N_SHARDS)]
+    return config, single, shards
+
+
+def test_shards_partition_the_grid_evenly(runs):
+    _, _, shards = runs
+    owned = []
+    for path in shards:
+        with h5py.File(path, "r") as f:
+            owned.append(f["owned"][()].astype(bool))
+            assert (f["done"][()].astype(bool) == owned[-1]).all()  # each did exactly its own points
+            assert f.attrs["vrsweep_complete"] == 1
+    total = np.sum(owned, axis=0)
+    assert (total == 1).all()  # every point in exactly one shard
+    sizes = [int(o.sum()) for o in owned]
+    assert max(sizes) - min(sizes) <= 1, sizes
+
+
+def test_merged_shards_equal_a_single_run(runs, tmp_path):
+    _, single, shards = runs
+    merged = tmp_path / "merged.h5"
+    result = invoke("merge", *shards[::-1], "-o", merged)  # the order of the shards does not matter
+    assert result.exit_code == 0, result.output
+    assert "14 of 14 points" in result.output
+    assert_same_result(merged, single)
+
+
+def test_merge_with_a_missing_shard_fails_and_says_which_points(runs, tmp_path):
+    _, _, shards = runs
+    merged = tmp_path / "merged.h5"
+    result = invoke("merge", shards[0], shards[2], "-o", merged)
+    assert result.exit_code == 2
+    assert "points are missing" in result.output and "g=" in result.output
+    assert "shard file missing" in result.output
+    assert not merged.exists()
+
+
+def test_merge_with_a_foreign_shard_fails_and_names_it(runs, tmp_path):
+    config, _, shards = runs
+    foreign = tmp_path / "other.h5"
+    result = invoke("run", config, "-o", foreign, "--set", "e=0.9", "--shard", f"1/{N_SHARDS}", "-q")
+    assert result.exit_code == 0, result.output
+    foreign = tmp_path / f"other.shard1of{N_SHARDS}.h5"
+    result = invoke("merge", shards[0], foreign, shards[2], "-o", tmp_path / "merged.h5")
+    assert result.exit_code == 2
+    assert str(foreign) in result.output and "different config" in result.output
+    assert "e: 0.9" in result.output
+
+
+def test_merge_refuses_to_overwrite(runs, tmp_path):
+    _, _, shards = runs
+    merged = tmp_path / "merged.h5"
+    merged.write_bytes(b"precious")
+    result = invoke("merge", *shards, "-o", merged)
+    assert result.exit_code == 2 and "--overwrite" in result.output
+    assert merged.read_bytes() == b"precious"
+    assert invoke("merge", *shards, "-o", merged, "--overwrite", "-q").exit_code == 0
+
+
+def test_a_partial_merge_is_completed_by_resume(runs, tmp_path):
+    """--allow-missing writes what there is; run --resume on the merged file computes the rest."""
+    config, single, shards = runs
+    merged = tmp_path / "merged.h5"
+    result = invoke("merge", shards[0], shards[1], "-o", merged, "--allow-missing")
+    assert result.exit_code == 0, result.output
+    assert "missing" in result.output and "incomplete" in result.output
+    with h5py.File(merged, "r") as f:
+        assert f.attrs["vrsweep_complete"] == 0
+    result = invoke("run", config, "-o", merged, "--resume")
+    assert result.exit_code == 0, result.output
+    with h5py.File(shards[2], "r") as f:
+        assert f"{int(f['owned'][()].sum())} of 14 points computed" in result.output
+    assert_same_result(merged, single)
+
+
+def test_a_shard_resumes_only_as_itself(runs, tmp_path):
+    config, _, shards = runs
+    copy = tmp_path / f"map.shard1of{N_SHARDS}.h5"
+    copy.write_bytes(shards[1].read_bytes())
+    result = invoke("run", config, "-o", tmp_path / "map.h5", "--shard", f"1/{N_SHARDS}", "--resume")
+    assert result.exit_code == 0 and "0 of" in result.output
+    whole = tmp_path / "whole.h5"
+    whole.write_bytes(shards[1].read_bytes())
+    result = invoke("run", config, "-o", whole, "--resume")  # not as a whole run
+    assert result.exit_code == 2 and "shard" in result.output
