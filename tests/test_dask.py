@@ -109,3 +109,12 @@ def test_ctrl_c_in_a_terminal_stops_a_local_cluster_run_cleanly(tmp_path):
     assert result.exit_code == 0 and f"{96 - saved} of 96 points computed" in result.output
     assert invoke("run", config, "-o", tmp_path / "single.h5", "-q").exit_code == 0
     assert_same_result(out, tmp_path / "single.h5")
+
+
+def test_without_dask_installed_dask_is_a_usage_error(single, tmp_path, monkeypatch):
+    config, _ = single
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import now fails as if absent
+    result = invoke("run", config, "-o", tmp_path / "out.h5", "--dask", "local:2")
+    assert result.exit_code == 2
+    assert "pip install" in result.output and "vrsweep[dask]" in result.output
+    assert not (tmp_path / "out.h5").exists()

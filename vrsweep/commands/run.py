@@ -84,8 +84,9 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         click.echo(f"\nInterrupted ({interrupt or 'SIGINT'}): finished chunks are saved. Resume with:\n  "
                    + shlex.join(words), err=True)
         sys.exit(getattr(interrupt, "exit_code", 130))
-    for bar in bars:
-        bar.close()
+    finally:
+        for bar in bars:  # before an error message, so that it does not land inside the bar's line
+            bar.close()
     if not quiet:
         click.echo(report.summary_line(), err=True)
 
