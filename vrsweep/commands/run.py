@@ -55,7 +55,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     def progress_factory(total, already_done):
         from tqdm import tqdm
 
-        bar = tqdm(total=total, initial=already_done, unit="pt", desc="vrsweep", disable=quiet,
+        # disable=None: no bar when stderr is not a terminal (a batch log would fill with redraws).
+        bar = tqdm(total=total, initial=already_done, unit="pt", desc="vrsweep", disable=True if quiet else None,
                    dynamic_ncols=True, file=sys.stderr)
         bars.append(bar)
         return bar.update
