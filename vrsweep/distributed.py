@@ -151,9 +151,9 @@ class DaskExecutor:
                 if not threads:  # chunks sized for the workers' threads: wait for one to know them
                     client.wait_for_workers(1)
                 chunk_lines = default_chunk_lines(threads or _largest_worker(client), lines.shape[1])
-            # All chunks are submitted at once and Dask balances them over the workers; a result
-            # is dropped as soon as it is written, so neither side holds more than the chunks in
-            # flight.
+            # All chunks are submitted at once and Dask balances them over the workers. Each result
+            # is fetched and written as soon as it is ready, then dropped (the future is no longer
+            # referenced), so results do not pile up on either side.
             pending = {}
             for start in range(0, len(lines), chunk_lines):
                 chunk = np.ascontiguousarray(lines[start:start + chunk_lines])
@@ -174,7 +174,6 @@ class DaskExecutor:
                         counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
                     if progress is not None:
                         progress(flat.size, total)
-                    del future
             finally:
                 # Interrupted or failed: do not leave a shared cluster computing for nobody (a
                 # LocalCluster is about to be shut down anyway).
@@ -190,7 +189,7 @@ class DaskExecutor:
             # Worker processes (not threads): each has its own numba thread pool. No dashboard, and
             # the scheduler's small HTTP server on any free local port, not on 8787 (which a
             # second run on the machine would find taken, and warn).
-            # The workers ignore SIGINT (dask_setup below), so Ctrl-C reaches only this client.
+            # The workers ignore SIGINT (dask_setup, preloaded), so Ctrl-C reaches only this client.
             with LocalCluster(n_workers=self.n_local, threads_per_worker=self.threads or 1,
                               processes=True, dashboard_address=None,
                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
