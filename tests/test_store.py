@@ -164,9 +164,11 @@ def test_chunks_are_sized_for_large_grids(tmp_path):
         for name in ("R", "roots", "status"):
             ds = f[name]
             nbytes = np.prod(ds.chunks) * ds.dtype.itemsize
-            assert 16 * 1024 <= nbytes <= 1024 * 1024, (name, ds.chunks)
+            # Small chunks: a sweep chunk writes shuffled points, each touching its own HDF5 chunk,
+            # and rewriting (and checksumming) a big one per point made checkpoints slow.
+            assert 1024 <= nbytes <= 16 * 1024, (name, ds.chunks)
             assert ds.chunks[1] == 250  # trailing axis whole: a C-order run hits few chunks
-            assert 1 < np.prod(ds.shape) / np.prod(ds.chunks) < 100 or name == "status"
+            assert 1 < np.prod(ds.shape) / np.prod(ds.chunks) < 1000
 
 
 def test_xarray_opens_a_2_axis_file(tmp_path):

@@ -132,10 +132,10 @@ def analytic_extras(config, grid):
     """The analytic side stored beside the numerical grid (issue 3): theory.analytic_columns."""
     from vrsweep import theory
 
-    table = grid.parameter_table(config)  # flat: name -> (n_points,)
     blocks = {}
     for start in range(0, grid.n_points, ANALYTIC_BLOCK_POINTS):
-        part = {name: values[start:start + ANALYTIC_BLOCK_POINTS] for name, values in table.items()}
+        flat = np.arange(start, min(start + ANALYTIC_BLOCK_POINTS, grid.n_points))
+        part = grid.parameters_at(config, flat)
         for name, (array, dims_suffix, attrs) in theory.analytic_columns(part).items():
             blocks.setdefault(name, ([], dims_suffix, attrs))[0].append(np.asarray(array))
     extras = {}

@@ -88,7 +88,7 @@ _BOOKKEEPING = ("done", "owned")
 
 # ~128 KiB chunks: well under HDF5's 1 MiB default chunk cache, a few chunks per variable for a
 # 10^5-point grid, and small enough that a chunk cache holds every chunk a write touches.
-CHUNK_TARGET_BYTES = 128 * 1024
+CHUNK_TARGET_BYTES = 4 * 1024  # small: a sweep chunk writes shuffled points, touching many HDF5 chunks
 # Chunk cache per open dataset: a scattered write (a shard's points) revisits the same chunks.
 _RDCC_NBYTES = 32 * 1024 * 1024
 _RDCC_NSLOTS = 10007  # a prime, ~100x the chunks that fit in the cache

@@ -89,12 +89,20 @@ class Grid:
             rows.append(block.reshape(-1, block.shape[-1]))
         return np.concatenate(rows)
 
-    def parameter_table(self, config):
-        """Every parameter over the output grid, flattened: name -> (n_points,)."""
-        grid = config.grid_parameters()
-        if len(self.directions) == 2:
-            grid = {name: np.repeat(values[..., None], 2, axis=-1) for name, values in grid.items()}
-        return {name: np.ascontiguousarray(values, dtype=np.float64).reshape(-1) for name, values in grid.items()}
+    def parameters_at(self, config, flat_indices):
+        """Every parameter at the given flat grid indices: name -> (n,) float64.
+
+        Built from the axes alone, so a chunk never needs a whole-grid table (memory stays flat
+        as the grid grows).
+        """
+        flat_indices = np.asarray(flat_indices, dtype=np.int64).reshape(-1)
+        table = {name: np.full(flat_indices.size, float(value)) for name, value in config.parameters.items()}
+        if self.shape:  # a single point (no axes) is just the fixed parameters
+            position = np.unravel_index(flat_indices, self.shape)
+            for axis, (name, values) in enumerate(zip(self.axis_names, self.axis_values)):
+                if name != "direction":
+                    table[name] = values[position[axis]]
+        return table
 
 
 def shuffled_lines(grid, shard_index=0, shard_count=1):
@@ -108,10 +116,10 @@ def shuffled_lines(grid, shard_index=0, shard_count=1):
 def run_lines(coefficients, initial_state, settings, lines, period_records, summaries, statuses):
     """Run each line's points in order; lines in parallel.
 
-    coefficients    (n_points_total, N_COEFFICIENTS)  for every point of the grid
+    coefficients    (n_points, N_COEFFICIENTS)         for every point the lines name
     initial_state   (2,)                                state of each line's first point
     settings        (N_SETTINGS,)
-    lines           (n_lines, line_length)             flat grid indices
+    lines           (n_lines, line_length)             indices into coefficients
     period_records  (n_lines, line_length, n_periods, N_RECORD)   outputs, per line slot
     summaries       (n_lines, line_length, N_SUMMARY)
     statuses        (n_lines, line_length) int8
@@ -144,6 +152,36 @@ def default_chunk_lines(threads, line_length):
     return max(threads, (16 * threads) // max(1, line_length))
 
 
+class LineRunner:
+    """Runs given lines of a config's grid: the one code path of local and Dask sweeps alike."""
+
+    def __init__(self, config):
+        self.config = config
+        self.grid = Grid.from_config(config)
+        self.initial_state = np.array([config.initial["x"], config.initial["v"]], dtype=np.float64)
+        self.settings = integration_settings(config.integration)
+        self.n_periods = config.integration.transient_periods + config.integration.measure_periods
+
+    def run(self, lines, threads=None):
+        """lines (n_lines, line_length) flat indices -> (flat_indices, values) for on_chunk."""
+        threads = threads or numba.config.NUMBA_NUM_THREADS
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        n_lines, line_length = lines.shape
+        flat = np.ascontiguousarray(lines, dtype=np.int64).reshape(-1)
+        coefficients = np.ascontiguousarray(
+            kernel_coefficients(self.grid.parameters_at(self.config, flat), self.config.model))
+        local_lines = np.arange(flat.size, dtype=np.int64).reshape(n_lines, line_length)
+        records = np.full((n_lines, line_length, self.n_periods, kernel.N_RECORD), np.nan)
+        summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
+        statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
+        with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
+            run_lines(coefficients, self.initial_state, self.settings, local_lines, records, summaries, statuses)
+        values = point_values(
+            records.reshape(-1, self.n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
+            statuses.reshape(-1), coefficients, self.config.integration)
+        return flat, values
+
+
 def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
               progress=None, chunk_lines=None):
     """Run the config's grid (or one shard of it), chunk by chunk.
@@ -153,34 +191,19 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     progress:  callback(points_done_now, points_total) or None.
     Returns a dict of status counts {Status: n} over the points run.
     """
-    grid = Grid.from_config(config)
+    runner = LineRunner(config)
     threads = threads or numba.config.NUMBA_NUM_THREADS
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-    table = grid.parameter_table(config)
-    coefficients = np.ascontiguousarray(kernel_coefficients(table, config.model))
-    initial_state = np.array([config.initial["x"], config.initial["v"]], dtype=np.float64)
-    settings = integration_settings(config.integration)
-    lines = shuffled_lines(grid, *shard)
+    lines = shuffled_lines(runner.grid, *shard)
     # A continuation line is the unit of work: its points depend on each other, so a line with
     # any point missing is run again from its start (the points already done come out the same).
-    not_done = np.ones(grid.n_points, dtype=bool) if done is None else ~done.reshape(-1)
+    not_done = np.ones(runner.grid.n_points, dtype=bool) if done is None else ~done.reshape(-1)
     lines = lines[np.any(not_done[lines], axis=1)]
     line_length = lines.shape[1] if lines.size else 1
     chunk_lines = chunk_lines or default_chunk_lines(threads, line_length)
-    n_periods = config.integration.transient_periods + config.integration.measure_periods
     counts = {}
     total = int(np.count_nonzero(not_done[lines]))  # progress counts points newly done, not redone
     for start in range(0, len(lines), chunk_lines):
-        chunk = np.ascontiguousarray(lines[start:start + chunk_lines])
-        records = np.full((len(chunk), line_length, n_periods, kernel.N_RECORD), np.nan)
-        summaries = np.full((len(chunk), line_length, kernel.N_SUMMARY), np.nan)
-        statuses = np.full((len(chunk), line_length), Status.NOT_COMPUTED, dtype=np.int8)
-        with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-            run_lines(coefficients, initial_state, settings, chunk, records, summaries, statuses)
-        flat = chunk.reshape(-1)
-        values = point_values(
-            records.reshape(-1, n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
-            statuses.reshape(-1), coefficients[flat], config.integration)
+        flat, values = runner.run(lines[start:start + chunk_lines], threads)
         for code, n in zip(*np.unique(values["status"], return_counts=True)):
             counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
         if on_chunk is not None:
@@ -210,40 +233,3 @@ def point_values(records, summaries, statuses, coefficients, integration):
 
 def thread_count():
     return int(os.environ.get("NUMBA_NUM_THREADS", numba.config.NUMBA_NUM_THREADS))
-
-
-# ---------------------------------------------------------------------------------------------
-# For executors that pick the lines themselves (vrsweep.distributed: one Dask task per chunk).
-# It does exactly what one iteration of run_sweep's loop does, so a chunk run here is bit for bit
-# the chunk run_sweep would have produced.
-# ---------------------------------------------------------------------------------------------
-
-
-class LineRunner:
-    """Run given lines of a config's grid; built once per config, reused for many chunks."""
-
-    def __init__(self, config):
-        grid = Grid.from_config(config)
-        self.config = config
-        self.coefficients = np.ascontiguousarray(
-            kernel_coefficients(grid.parameter_table(config), config.model))
-        self.initial_state = np.array([config.initial["x"], config.initial["v"]], dtype=np.float64)
-        self.settings = integration_settings(config.integration)
-        self.n_periods = config.integration.transient_periods + config.integration.measure_periods
-
-    def run(self, lines, threads=None):
-        """lines (n_lines, line_length) flat indices -> (flat_indices, values) as run_sweep's on_chunk gets them."""
-        threads = threads or numba.config.NUMBA_NUM_THREADS
-        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-        chunk = np.ascontiguousarray(lines, dtype=np.int64)
-        n_lines, line_length = chunk.shape
-        records = np.full((n_lines, line_length, self.n_periods, kernel.N_RECORD), np.nan)
-        summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
-        statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
-        with numba.parallel_chunksize(1):
-            run_lines(self.coefficients, self.initial_state, self.settings, chunk, records, summaries, statuses)
-        flat = chunk.reshape(-1)
-        values = point_values(
-            records.reshape(-1, self.n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
-            statuses.reshape(-1), self.coefficients[flat], self.config.integration)
-        return flat, values
