@@ -12,22 +12,15 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from vrsweep import __version__
 from vrsweep.cli import main
 from vrsweep.store import FORMAT_VERSION, read_results
 
+from result_files import invoke
+
 QUICKSTART = Path(__file__).resolve().parent.parent / "configs" / "quickstart.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
-
-
-def invoke(*args):
-    result = CliRunner().invoke(main, [str(a) for a in args])
-    assert "Traceback" not in result.output, result.output
-    if result.exception is not None and not isinstance(result.exception, SystemExit):
-        raise result.exception
-    return result
 
 
 def run_quickstart(path, *extra):

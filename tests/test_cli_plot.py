@@ -6,17 +6,9 @@ import textwrap
 import h5py
 import numpy as np
 import pytest
-from click.testing import CliRunner
-
-from vrsweep.cli import main
 
 
-def invoke(*args):
-    result = CliRunner().invoke(main, [str(a) for a in args])
-    assert "Traceback" not in result.output, result.output
-    if result.exception is not None and not isinstance(result.exception, SystemExit):
-        raise result.exception
-    return result
+from result_files import invoke
 
 
 @pytest.fixture(scope="module")

@@ -5,15 +5,15 @@ import textwrap
 import h5py
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from vrsweep import kernel
-from vrsweep.cli import main
 from vrsweep.config import load_config
 from vrsweep.model import kernel_coefficients
 from vrsweep.store import read_results
 from vrsweep.trajectory import settings_vector, simulate
 from vrsweep.trajectory_file import read_trajectory
+
+from result_files import invoke
 
 # The paper's parameters at Omega = 5 (Fig. impact_no), short runs: 5 transient + 10 measured periods.
 POINT = """\
@@ -27,14 +27,6 @@ SWEPT = """\
     integration: {transient_periods: 5, measure_periods: 10, strobe_periods: 5}
     """
 SAMPLES_PER_PERIOD = 40
-
-
-def invoke(*args):
-    result = CliRunner().invoke(main, [str(a) for a in args])
-    assert "Traceback" not in result.output, result.output
-    if result.exception is not None and not isinstance(result.exception, SystemExit):
-        raise result.exception
-    return result
 
 
 def write(tmp_path, text, name="point.yaml"):

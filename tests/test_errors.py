@@ -26,18 +26,11 @@ from vrsweep.cli import main
 from vrsweep.results import Status
 from vrsweep.store import FORMAT_VERSION, read_results
 
+from result_files import invoke
+
 QUICKSTART = Path(__file__).resolve().parent.parent / "configs" / "quickstart.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
 READERS = ("info", "plot", "merge")  # every command that reads a results file
-
-
-def invoke(*args):
-    """Run the CLI in-process; fail on a traceback or an exception the CLI let through."""
-    result = CliRunner().invoke(main, [str(a) for a in args])
-    assert "Traceback" not in result.output, result.output
-    if result.exception is not None and not isinstance(result.exception, SystemExit):
-        raise result.exception
-    return result
 
 
 def one_message(result, code):

@@ -148,7 +148,8 @@ def _check_output_directory(path):
     if os.path.exists(directory) and not os.path.isdir(directory):
         raise UsageError(f"output {path}: {directory} is a file, not a directory")
     if not os.path.isdir(directory):
-        raise UsageError(f"output directory {directory} does not exist (output: {path}); create it (mkdir -p {directory}) or choose another with -o")
+        raise UsageError(f"output directory {directory} does not exist (output: {path}); "
+                         f"create it (mkdir -p {directory}) or choose another with -o")
     if not os.access(directory, os.W_OK | os.X_OK):
         raise UsageError(f"output directory {directory} is not writable (output: {path})")
 

@@ -12,7 +12,6 @@ This module knows nothing of files: finished chunks are handed to a callback.
 """
 
 import os
-import time
 from dataclasses import dataclass
 
 import numba
