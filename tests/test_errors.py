@@ -327,6 +327,7 @@ def small_chunks(monkeypatch):
     import vrsweep.sweep
 
     monkeypatch.setattr(vrsweep.sweep, "default_chunk_lines", lambda threads, line_length: 2)
+    monkeypatch.setattr(vrsweep.sweep, "GROW_CHUNK_BELOW_SECONDS", 0.0)  # and they stay that small
 
 
 def test_disk_full_midway_keeps_finished_points_and_resumes(finished, tmp_path, monkeypatch, small_chunks):

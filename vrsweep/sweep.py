@@ -12,6 +12,7 @@ This module knows nothing of files: finished chunks are handed to a callback.
 """
 
 import os
+import time
 from dataclasses import dataclass
 
 import numba
@@ -146,6 +147,13 @@ def run_lines(coefficients, initial_state, settings, lines, period_records, summ
                 state[1] = initial_state[1]
 
 
+# A chunk is the unit of checkpointing and of progress: long enough that writing it is a small
+# part of computing it, short enough that a kill loses little. Chunks of cheap points (short
+# windows, the effective model) double while they last less than this.
+GROW_CHUNK_BELOW_SECONDS = 0.25
+MAX_CHUNK_LINES = 8192
+
+
 def default_chunk_lines(threads, line_length):
     """Enough lines per chunk to keep every thread busy and the progress bar moving."""
     return max(threads, (16 * threads) // max(1, line_length))
@@ -198,11 +206,17 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     not_done = np.ones(runner.grid.n_points, dtype=bool) if done is None else ~done.reshape(-1)
     lines = lines[np.any(not_done[lines], axis=1)]
     line_length = lines.shape[1] if lines.size else 1
+    adaptive = chunk_lines is None
     chunk_lines = chunk_lines or default_chunk_lines(threads, line_length)
     counts = {}
     total = int(np.count_nonzero(not_done[lines]))  # progress counts points newly done, not redone
-    for start in range(0, len(lines), chunk_lines):
+    start = 0
+    while start < len(lines):
+        began = time.perf_counter()
         flat, values = runner.run(lines[start:start + chunk_lines], threads)
+        start += chunk_lines
+        if adaptive and time.perf_counter() - began < GROW_CHUNK_BELOW_SECONDS:
+            chunk_lines = min(2 * chunk_lines, MAX_CHUNK_LINES)
         for code, n in zip(*np.unique(values["status"], return_counts=True)):
             counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
         if on_chunk is not None:
