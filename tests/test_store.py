@@ -28,6 +28,8 @@ from vrsweep.store import (
     read_results,
 )
 
+from result_files import describe
+
 xr = pytest.importorskip("xarray")
 pytest.importorskip("h5netcdf")
 
@@ -82,28 +84,6 @@ def write_file(path, axes, *, points=None, finish=True, **kwargs):
     else:
         writer.close()
     return path
-
-
-def describe(path):
-    """Everything a user can see in a file except its creation time, for 'identical' checks."""
-
-    def clean(attrs):
-        out = {}
-        for key, value in attrs.items():
-            if key in ("created", "REFERENCE_LIST", "DIMENSION_LIST"):
-                continue
-            out[key] = value.tobytes() if isinstance(value, np.ndarray) else repr(value)
-        return out
-
-    with h5py.File(path, "r") as f:
-        result = {"/": clean(f.attrs)}
-        for name, ds in f.items():
-            result[name] = dict(
-                dtype=ds.dtype.str, shape=ds.shape, chunks=ds.chunks, fill=repr(ds.fillvalue),
-                attrs=clean(ds.attrs), data=ds[()].tobytes(),
-                dims=[[s.name for s in d.values()] for d in ds.dims],
-            )
-        return result
 
 
 def assert_identical(a, b):
