@@ -10,7 +10,8 @@ the PNGs to docs/figures/ (committed, shown in the README).
 Figures: fig1, fig2 (R against g, Omega = 4 and 5, with the analytic response), their
 bifurcation diagrams (stroboscopic x against g: which R is trustworthy), fig_impact_no
 (impacts per slow period, g = 5 and 20), fig3-fig5 (original above effective trajectories),
-fig6 (effective system against the slow-flow reconstruction).
+fig6 (effective system against the slow-flow reconstruction); and, not in the paper, the
+hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down).
 """
 
 import argparse
@@ -58,6 +59,11 @@ COMMANDS = {
     "fig6": [
         ["simulate", "configs/fig6.yaml", "--overwrite"],
         ["plot", "results/fig6.h5", "--kind", "slowflow", "-o", "docs/figures/fig6.png"],
+    ],
+    # Not in the paper: hysteresis of the effective system found by continuation (issue 5).
+    "hysteresis": [
+        ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
+        ["plot", "results/hysteresis_effective.h5", "-o", "docs/figures/hysteresis.png"],
     ],
 }
 
