@@ -17,7 +17,6 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.errors import UsageError
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
-from vrsweep.results import Status
 from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.sweep import Grid, run_sweep
 from vrsweep.variables import point_variables
@@ -200,10 +199,6 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         raise
     writer.finish(extra=extras)
     return JobReport(path, n_owned, sum(counts.values()), counts)
-
-
-def status_counts_line(counts):
-    return ", ".join(f"{n} {Status(s).name.lower()}" for s, n in sorted(counts.items()))
 
 
 class Interrupted(KeyboardInterrupt):
