@@ -44,13 +44,14 @@ def done_count(path):
 
 
 def describe(path):
-    """Everything in a result file but its creation time: every dataset (bytes, type, shape,
+    """Everything in a result file but its creation time and command: every dataset (bytes, type, shape,
     chunks, fill, dimension scales) and every attribute, in order."""
 
     def clean(attrs):
         out = []
         for key, value in attrs.items():
-            if key in ("created", "REFERENCE_LIST", "DIMENSION_LIST"):  # references: file addresses
+            # when and by which command a file was written; references: file addresses
+            if key in ("created", "date_created", "history", "REFERENCE_LIST", "DIMENSION_LIST"):
                 continue
             out.append((key, value.tobytes() if isinstance(value, np.ndarray) else repr(value)))
         return out
@@ -66,7 +67,8 @@ def describe(path):
 
 
 def assert_same_result(a, b):
-    """Files a and b are identical bit for bit, apart from the ``created`` attribute."""
+    """Files a and b are identical bit for bit, apart from when and by which command they were
+    written (``created``, ``date_created``, ``history``)."""
     da, db = describe(a), describe(b)
     assert list(da) == list(db), "different datasets"
     for key in da:

@@ -1,7 +1,29 @@
 """vrsweep: vibrational resonance sweeps of a vibro-impact Van der Pol-Duffing oscillator.
 
 Implements Roy & Gupta, "Vibrational resonance in vibro-impact oscillator through fast
-harmonic excitation", with the corrections listed in the project's ERRATA.
+harmonic excitation", with the corrections listed in docs/errata.md.
+
+Results in Python::
+
+    import vrsweep
+    ds = vrsweep.open_results("results/quickstart.h5")   # an xarray.Dataset, read lazily
 """
 
-__version__ = "0.1.0"
+from vrsweep._version import __version__
+from vrsweep import numba_cache as _numba_cache
+
+_numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
+
+
+def open_results(path, **kwargs):
+    """Open a vrsweep sweep, shard or trajectory file as a lazily read ``xarray.Dataset``.
+
+    See :func:`vrsweep.reading.open_results`; xarray is imported only when this is called, so the
+    command line starts as fast as before.
+    """
+    from vrsweep.reading import open_results as _open_results
+
+    return _open_results(path, **kwargs)
+
+
+__all__ = ["__version__", "open_results"]

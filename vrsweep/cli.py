@@ -10,9 +10,15 @@ import click
 
 from vrsweep import __version__
 from vrsweep.errors import VrsweepError
+from vrsweep.provenance import record_command_line
 
 
 class _Group(click.Group):
+    def main(self, args=None, *pos, **kwargs):
+        # history (CF) records the exact command line, as typed
+        record_command_line(sys.argv[1:] if args is None else args)
+        return super().main(args, *pos, **kwargs)
+
     def invoke(self, ctx):
         try:
             return super().invoke(ctx)

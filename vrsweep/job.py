@@ -15,6 +15,7 @@ import numba
 import numpy as np
 
 from vrsweep import __version__
+from vrsweep.provenance import cf_attributes
 from vrsweep.errors import UsageError
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
@@ -98,6 +99,11 @@ def _axes(grid):
     return axes
 
 
+def _title(config):
+    axes = ", ".join(config.axis_names) if config.axes else "one point"
+    return f"vrsweep sweep of the {config.model} model over {axes}"
+
+
 def root_attributes(config, shard=(0, 1)):
     attrs = {
         "config": config.to_yaml(),
@@ -105,6 +111,7 @@ def root_attributes(config, shard=(0, 1)):
         "vrsweep_version": __version__,
         "numba_version": numba.__version__,
         "numpy_version": np.__version__,
+        **cf_attributes(_title(config)),
     }
     if shard[1] > 1:
         attrs["shard"] = f"{shard[0]}/{shard[1]}"

@@ -74,6 +74,7 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.provenance import cf_attributes
 
 FORMAT_VERSION = 1
 
@@ -951,6 +952,8 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
     extra_coords = {d: (ref.coords[d], ref.coord_attrs[d]) for d in ref.coords if d in point_dims}
     root_attrs = {k: v for k, v in ref.attrs.items()
                   if k not in _RESERVED_ROOT_ATTRS and k != "shard"}
+    if "history" in root_attrs:  # CF: the merge adds its own line to the first shard's history
+        root_attrs.update(cf_attributes(str(root_attrs.get("title", "")), history=str(root_attrs["history"])))
     axes = [(name, values, ref.coord_attrs[name]) for name, values in ref.axes.items()]
     specs = ref.variable_specs()
     complete = missing.size == 0

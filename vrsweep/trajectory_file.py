@@ -220,8 +220,12 @@ def slow_flow_runs(parameters, initial, times):
 def root_attributes(config):
     import numba
 
+    from vrsweep.provenance import cf_attributes
+
+    at = ", ".join(f"{name} = {config.parameters[name]:g}" for name in ("g", "Omega"))
     return {"config": config.to_yaml(), "vrsweep_version": __version__,
-            "numba_version": numba.__version__, "numpy_version": np.__version__}
+            "numba_version": numba.__version__, "numpy_version": np.__version__,
+            **cf_attributes(f"vrsweep trajectory of the {config.model} model at {at}")}
 
 
 def write_trajectory(path, data: TrajectoryData, config, overwrite=False):

@@ -1,0 +1,50 @@
+"""Where numba caches vrsweep's compiled kernels.
+
+numba's default is a ``__pycache__`` folder beside each source file, i.e. inside the installed
+package. That breaks twice: a read-only install cannot be cached at all, and a cache written into
+``site-packages/vrsweep/__pycache__`` outlives ``pip uninstall``, after which Python imports the
+left-over folder as an empty namespace package named ``vrsweep`` ahead of a later editable install
+(``ImportError: cannot import name '__version__'``). So unless the user says otherwise with
+``NUMBA_CACHE_DIR``, kernels go to a per-user cache folder, one sub-folder per vrsweep version::
+
+    ~/.cache/vrsweep/<version>/        (Linux; platformdirs.user_cache_dir elsewhere)
+
+:func:`configure` must run before numba compiles anything: ``vrsweep/__init__.py`` calls it
+first thing, so every entry point (the CLI, the library, Dask workers) gets the same folder.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+from vrsweep._version import __version__
+
+
+def cache_dir() -> Path:
+    """The folder that holds (or will hold) the compiled kernels of this vrsweep version."""
+    explicit = os.environ.get("NUMBA_CACHE_DIR")
+    if explicit:
+        return Path(explicit)
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("vrsweep", appauthor=False)) / __version__
+
+
+def configure() -> Path:
+    """Point numba's cache at :func:`cache_dir` unless ``NUMBA_CACHE_DIR`` is already set."""
+    folder = cache_dir()
+    if "NUMBA_CACHE_DIR" not in os.environ or not os.environ["NUMBA_CACHE_DIR"]:
+        # numba reads NUMBA_CACHE_DIR when it is imported; worker subprocesses inherit it.
+        os.environ["NUMBA_CACHE_DIR"] = str(folder)
+        numba_config = sys.modules.get("numba.core.config")
+        if numba_config is not None:  # numba imported before vrsweep (a notebook, say)
+            numba_config.CACHE_DIR = str(folder)
+    return folder
+
+
+def is_empty() -> bool:
+    """True when no kernel of this version has been cached yet: the next run compiles."""
+    folder = cache_dir()
+    return not folder.is_dir() or not any(folder.rglob("*.nbi"))

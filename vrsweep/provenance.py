@@ -1,0 +1,63 @@
+"""Where a result file comes from: the CF-1.10 global attributes every vrsweep file carries.
+
+``Conventions``, ``title``, ``history``, ``source``, ``references`` and ``date_created`` are the
+attributes CF and ACDD readers look for (they sit beside vrsweep's own ``config``,
+``vrsweep_version``... which stay as they were). ``history`` is the UTC time and the exact
+command line that wrote the file; a merge appends its own line, as CF asks.
+
+The command line is what the ``vrsweep`` program was given (:func:`record_command_line`, called
+by the CLI before a command runs); a file written from Python says so instead.
+"""
+
+from __future__ import annotations
+
+import datetime
+import shlex
+import sys
+
+CONVENTIONS = "CF-1.10"
+REFERENCES = ("S. Roy and S. Gupta, \"Vibrational resonance in vibro-impact oscillator through "
+              "fast harmonic excitation\", International Journal of Non-Linear Mechanics; "
+              "corrections in vrsweep's docs/errata.md")
+
+_command_line: str | None = None
+
+
+def record_command_line(args) -> None:
+    """Remember the arguments of this ``vrsweep`` invocation, for ``history``."""
+    global _command_line
+    _command_line = shlex.join(["vrsweep", *[str(a) for a in args]])
+
+
+def command_line() -> str:
+    """The recorded ``vrsweep ...`` command, or the Python program that called the library."""
+    if _command_line is not None:
+        return _command_line
+    return "python " + shlex.join(sys.argv) + " (vrsweep library)"
+
+
+def utc_now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def source() -> str:
+    import numba
+    import numpy
+
+    from vrsweep import __version__
+
+    return f"vrsweep {__version__} (numba {numba.__version__}, numpy {numpy.__version__})"
+
+
+def cf_attributes(title: str, history: str | None = None) -> dict:
+    """The CF global attributes of a new file; ``history`` continues an earlier one (merge)."""
+    now = utc_now()
+    line = f"{now} {command_line()}"
+    return {
+        "Conventions": CONVENTIONS,
+        "title": title,
+        "history": f"{history}\n{line}" if history else line,
+        "source": source(),
+        "references": REFERENCES,
+        "date_created": now,
+    }
