@@ -17,7 +17,8 @@ import sys
 
 CONVENTIONS = "CF-1.10"
 REFERENCES = ("S. Roy and S. Gupta, \"Vibrational resonance in vibro-impact oscillator through "
-              "fast harmonic excitation\", International Journal of Non-Linear Mechanics; "
+              "fast harmonic excitation\", International Journal of Non-Linear Mechanics "
+              "(arXiv:2407.17849); "
               "corrections in vrsweep's docs/errata.md")
 
 _command_line: str | None = None
