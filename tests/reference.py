@@ -1,6 +1,6 @@
 """SciPy reference solver for the vibro-impact oscillator, independent of vrsweep's kernel.
 
-The model family (vrsweep/model.py, DESIGN.md), for x < Delta:
+The model family (vrsweep/model.py, docs/design.md), for x < Delta:
 
     x'' + gamma (x^2 - mu) x' + stiffness x + alpha x^3 = c cos(omega t) + g cos(Omega t)   # eq2.1
     x'(+) = -e x'(-)   when x reaches Delta from below                                      # eq2.2

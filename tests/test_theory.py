@@ -374,6 +374,11 @@ def test_roots_of_the_cubic_are_fixed_points(gamma, alpha, c, omega0, omega, g, 
 
 def _effective_amplitude(params, x0, v0, transient_periods=150, measure_periods=40):
     """|Q| (eq3.1-eq3.3 without the division by c) of the effective system eq2.10 without impacts."""
+    return np.hypot(*_effective_fourier_components(params, x0, v0, transient_periods, measure_periods))
+
+
+def _effective_fourier_components(params, x0, v0, transient_periods=150, measure_periods=40):
+    """(Qs, Qc) of eq3.1-eq3.2 for the effective system eq2.10 without impacts (SciPy DOP853)."""
     from scipy.integrate import solve_ivp
 
     gamma, alpha, c, omega = params["gamma"], params["alpha"], params["c"], params["omega"]
@@ -388,7 +393,7 @@ def _effective_amplitude(params, x0, v0, transient_periods=150, measure_periods=
     n = measure_periods * 256
     t = start + np.arange(n) * (period / 256)  # whole periods: the rectangle rule is spectral here
     x = solve_ivp(rhs, (start, t[-1]), y0, method="DOP853", rtol=1e-10, atol=1e-12, t_eval=t).y[0]
-    return np.hypot(2 * np.mean(x * np.sin(omega * t)), 2 * np.mean(x * np.cos(omega * t)))
+    return 2 * np.mean(x * np.sin(omega * t)), 2 * np.mean(x * np.cos(omega * t))
 
 
 @pytest.mark.slow
@@ -405,3 +410,21 @@ def test_stable_amplitude_matches_the_effective_system(params, root, tolerance):
     R, theta = points.R[root], points.theta[root]
     x0, v0 = R * np.cos(theta), -params["omega"] * R * np.sin(theta)  # eq2.21 at t = 0
     assert _effective_amplitude(params, x0, v0) == pytest.approx(R, rel=tolerance)
+
+
+@pytest.mark.slow
+def test_the_corrected_phase_and_stability_are_those_of_the_effective_system():
+    # ERRATA 1: only the re-derived eq2.24 predicts the motion. X = R cos(omega t + theta) has
+    # Qc = R cos(theta) and Qs = -R sin(theta), so the simulated phase is atan2(-Qs, Qc). At g_res
+    # (Omega = 4) both flows have the one root R = 0.810; the corrected flow puts it at
+    # theta = -0.069 and calls it stable, the printed one at theta = 1.640 and calls it unstable.
+    # The effective system, started elsewhere, settles on it with theta = -0.080.
+    params = at(g=float(theory.g_res(0.1, 0.1, 0.5, 4.0)), Omega=4.0)
+    corrected, printed = theory.fixed_points(params), theory.fixed_points(params, literal=True)
+    assert len(corrected) == len(printed) == 1
+    Qs, Qc = _effective_fourier_components(params, 0.5, 0.0)
+    assert np.hypot(Qs, Qc) == pytest.approx(corrected.R[0], rel=0.005)
+    phase = np.arctan2(-Qs, Qc)
+    assert phase == pytest.approx(corrected.theta[0], abs=0.03)  # first-order accuracy
+    assert abs(phase - printed.theta[0]) > 1.5                   # about pi/2 off
+    assert corrected.stable[0] and not printed.stable[0]

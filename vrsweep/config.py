@@ -1,6 +1,6 @@
 """YAML config -> validated, fully resolved :class:`Config`.
 
-The schema (DESIGN.md); every key is optional and defaults to the paper's values::
+The schema (docs/design.md, "Config"); every key is optional and defaults to the paper's values::
 
     model: original                  # or: effective
     parameters: {gamma: 0.22, alpha: 0.1, c: 0.04, omega0: 0.1, omega: 0.5,

@@ -57,7 +57,7 @@ PI_BETA = 0.04
 PI_ALPHA = 1.0 / ORDER - 0.75 * PI_BETA
 ERR_PREVIOUS_FLOOR = 1e-4  # keeps the PI memory from exploding after a near-exact step
 
-# The first N_CONTROLLED components (x, v) are error-controlled (DESIGN.md); the Fourier
+# The first N_CONTROLLED components (x, v) are error-controlled (docs/design.md); the Fourier
 # quadratures ride along: they are integrals of x, as accurate as x itself.
 N_CONTROLLED = 2
 

@@ -1,6 +1,6 @@
 """The oscillator family, its parameters, and the original -> effective mapping.
 
-Both models of the paper are one family (DESIGN.md):
+Both models of the paper are one family (docs/design.md):
 
     x'' + gamma (x^2 - mu) x' + stiffness x + alpha x^3 = c cos(omega t) + g cos(Omega t),   x < Delta
     x'(+) = -e x'(-)  at x = Delta                                                            # eq2.2

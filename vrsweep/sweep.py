@@ -227,7 +227,7 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
 
 
 def point_values(records, summaries, statuses, coefficients, integration):
-    """Per-point output variables (DESIGN.md contract names) from the kernel's raw outputs."""
+    """Per-point output variables (the HDF5 contract's names, docs/design.md) from the kernel's raw outputs."""
     values = {
         "R": summaries[:, kernel.SUM_R],
         "Qs": summaries[:, kernel.SUM_QS],

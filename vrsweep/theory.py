@@ -1,4 +1,4 @@
-"""The paper's analysis (eq2.10-eq2.28, eq3.4), as corrected in ERRATA.md.
+"""The paper's analysis (eq2.10-eq2.28, eq3.4), as corrected in docs/errata.md.
 
 Reading order follows the paper:
 
