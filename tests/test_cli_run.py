@@ -107,3 +107,96 @@ def test_bad_shard_and_dask_options_are_usage_errors(tmp_path):
         assert result.exit_code == 2, (args, result.output)
         assert words in result.output, (args, result.output)
         assert not (tmp_path / "out.h5").exists()
+
+
+# Progress in a batch log (stderr not a terminal, as under CliRunner): lines, not a bar (issue 10).
+
+PROGRESS_LINE = r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d vrsweep: (\d+) of (\d+) points \((\d+\.\d)%\)(, .*)?"
+
+
+def test_progress_lines_every_interval_in_a_batch_log(tmp_path):
+    import re
+
+    config = write_config(tmp_path, """\
+        sweep:
+          g: {start: 0.0, stop: 30.0, num: 50}
+        integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}
+        """)
+    # One thread: chunks of 16, 32, ... points, so interval 0 gives a line after each chunk.
+    result = invoke("run", config, "-o", tmp_path / "out.h5", "--threads", 1, "--progress-interval", 0)
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.stderr.splitlines() if not line.startswith("Compiling")]
+    assert lines[-1].endswith("50 of 50 points computed (50 ok) -> " + str(tmp_path / "out.h5"))
+    matches = [re.fullmatch(PROGRESS_LINE, line) for line in lines[:-1]]
+    assert len(matches) >= 2 and all(matches), lines
+    done = [int(match[1]) for match in matches]
+    assert done == sorted(done) and done[-1] == 50 and {int(match[2]) for match in matches} == {50}
+    assert [float(match[3]) for match in matches] == [round(100 * n / 50, 1) for n in done]
+    assert "points/s, ETA" in lines[0] and "ETA" not in lines[-2]  # nothing left: no ETA
+
+
+def test_no_progress_line_before_the_interval(tmp_path):
+    config = write_config(tmp_path, TINY)
+    result = invoke("run", config, "-o", tmp_path / "out.h5")  # default: every 60 s
+    assert result.exit_code == 0, result.output
+    assert "points (" not in result.stderr, result.stderr
+
+
+def test_progress_log_arithmetic():
+    """Rate from the end of the first chunk (which carries compilation), ETA from the rate."""
+    import io
+    import time
+
+    from vrsweep.progress import ProgressLog
+
+    now = [100.0]
+    stream = io.StringIO()
+    log = ProgressLog(total=200, already_done=40, interval=60, stream=stream, clock=lambda: now[0],
+                      now=lambda: time.struct_time((2026, 1, 2, 3, 4, 5, 4, 2, 0)))
+    for at, n in ((130.0, 10), (150.0, 30), (159.0, 30)):  # first chunk: 30 s of compiling
+        now[0] = at
+        log.update(n)
+    assert stream.getvalue() == ""  # 59 s: no line yet
+    now[0] = 170.0
+    log.update(20)  # 130 of 200: 80 since the first chunk ended (50 done), 40 s ago; 70 to go
+    assert stream.getvalue() == ("2026-01-02 03:04:05 vrsweep: 130 of 200 points (65.0%), 2 points/s, "
+                                 "ETA 35.0 s\n")
+    now[0] = 229.0
+    log.update(10)
+    assert stream.getvalue().count("\n") == 1  # the next line comes 60 s after the last one
+
+
+@pytest.fixture
+def empty_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "empty-cache"))
+    return tmp_path / "empty-cache"
+
+
+def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache):
+    from vrsweep.numba_cache import kernel_is_cached
+
+    assert not kernel_is_cached()
+    # numba read its cache folder at import: this run loads the real cache, but vrsweep cannot
+    # know that, and says what it would say to a new user.
+    config = write_config(tmp_path, TINY)
+    result = invoke("run", config, "-o", tmp_path / "out.h5")
+    assert result.exit_code == 0, result.output
+    first, *rest = result.stderr.splitlines()
+    assert first.startswith("Compiling the numba kernel (about 30 s, once") and str(empty_cache) in first
+    assert not any("Compiling" in line for line in rest)
+    assert invoke("run", config, "-o", tmp_path / "out2.h5", "--quiet").output == ""
+
+
+def test_a_filled_cache_says_nothing(tmp_path, monkeypatch):
+    import numba
+
+    from vrsweep.numba_cache import cache_dir, kernel_is_cached
+
+    if not numba.config.CACHE_DIR:
+        pytest.skip("numba caches next to the sources here: vrsweep.numba_cache is not in use")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", numba.config.CACHE_DIR)
+    config = write_config(tmp_path, TINY)
+    assert invoke("run", config, "-o", tmp_path / "out.h5", "-q").exit_code == 0  # fills it if need be
+    assert cache_dir() == Path(numba.config.CACHE_DIR) and kernel_is_cached()
+    result = invoke("run", config, "-o", tmp_path / "out2.h5")
+    assert result.exit_code == 0 and "Compiling" not in result.output, result.output

@@ -154,3 +154,39 @@ def test_check_size_refuses_a_huge_grid_unless_allowed():
         assert words in problem
     assert check_size(config, 4, allow_large=True).n_points == 100_000_000
     assert check_size(parse_config(""), 1, allow_large=False).n_points == 1
+
+
+# An explicit axis list must be strictly increasing or strictly decreasing (issue 10).
+@pytest.mark.parametrize("text, line, words", [
+    ("sweep:\n  g: [5, 1, 5]\n", 2, ["sweep.g[2]", "5 is listed twice", "also item 0", "strictly increasing"]),
+    ("sweep:\n  g:\n    - 5\n    - 1\n    - 5\n", 5, ["sweep.g[2]", "5 is listed twice", "also item 0, line 3"]),
+    ("sweep:\n  Omega: {values: [4, 4.0]}\n", 2, ["sweep.Omega.values[1]", "4 is listed twice"]),
+    ("sweep:\n  g: [1, 5, 3]\n", 2, ["sweep.g[2]", "3 after 5 breaks the order", "increasing up to item 1"]),
+    ("sweep:\n  g: [40, 30, 35]\n", 2, ["sweep.g[2]", "35 after 30", "decreasing up to item 1"]),
+    ("sweep:\n  g:\n    start: 5\n    stop: 5\n    num: 3\n", 4,
+     ["sweep.g.stop", "must be > start = 5", "the same point 3 times", "set parameters.g"]),
+    ("sweep:\n  g: {start: 1, stop: 1.0000000000000002, num: 5}\n", 2, ["sweep.g", "5 distinct float64 values"]),
+])
+def test_an_axis_list_that_is_not_strictly_monotonic_is_refused(tmp_path, text, line, words):
+    path = tmp_path / "axis.yaml"
+    path.write_text(text)
+    result, output = invoke("validate", str(path))
+    assert result.exit_code == 2, output
+    assert f"{path}:{line}: " in output, output
+    for word in words:
+        assert word in output, (word, output)
+
+
+def test_every_repeated_value_is_named():
+    with pytest.raises(ConfigError) as caught:
+        parse_config("sweep:\n  g: [1, 2, 2, 1]\n", "axis.yaml")
+    assert caught.value.problems == [
+        "axis.yaml:2: sweep.g[2]: 2 is listed twice (also item 1): axis values must be strictly "
+        "increasing or strictly decreasing",
+        "axis.yaml:2: sweep.g[3]: 1 is listed twice (also item 0): axis values must be strictly "
+        "increasing or strictly decreasing"]
+
+
+def test_a_decreasing_list_is_an_axis_in_the_given_order():
+    config = parse_config("sweep:\n  g: [40, 30.5, 0]\n  Omega: {values: [5, 4]}\n")
+    assert [list(axis.values) for axis in config.axes] == [[40.0, 30.5, 0.0], [5.0, 4.0]]

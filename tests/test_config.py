@@ -341,10 +341,10 @@ def test_grid_parameters_broadcast_in_axis_order():
 
 
 def test_axis_values_are_float64_read_only_and_in_the_order_given():
-    config = parse_config("sweep:\n  g: [3, 1, 2]\n")
+    config = parse_config("sweep:\n  g: [3, 2, 1]\n")
     axis = config.axes[0]
     assert isinstance(axis, Axis) and axis.values.dtype == np.float64 and axis.values.ndim == 1
-    assert list(axis.values) == [3.0, 1.0, 2.0] and axis.continuation is None
+    assert list(axis.values) == [3.0, 2.0, 1.0] and axis.continuation is None
     with pytest.raises(ValueError):
         axis.values[0] = 7.0
 
@@ -498,9 +498,11 @@ def valid_documents(draw):
         low = 0.1 if name in ("Omega", "c") else -5.0
         if draw(st.booleans()):
             start = draw(st.floats(low, 10))
-            sweep[name] = {"start": start, "stop": draw(st.floats(start, 20)), "num": draw(st.integers(2, 30))}
+            stop = draw(st.floats(start, 20).filter(lambda stop: stop - start > 1e-9 * max(1, abs(start))))
+            sweep[name] = {"start": start, "stop": stop, "num": draw(st.integers(2, 30))}
         else:
-            sweep[name] = draw(st.lists(st.floats(low, 20), min_size=1, max_size=5))
+            values = sorted(draw(st.lists(st.floats(low, 20), min_size=1, max_size=5, unique=True)))
+            sweep[name] = values[::-1] if draw(st.booleans()) else values  # strictly monotonic, either way
     measure = draw(st.integers(1, 500))
     integration = {"rtol": draw(st.floats(1e-14, 0.5)), "measure_periods": measure,
                    "transient_periods": draw(st.integers(0, 500)), "strobe_periods": draw(st.integers(1, measure))}

@@ -43,10 +43,10 @@ def open_result(path):
 # --- config and run order -------------------------------------------------------------------------
 
 def test_up_and_down_lines_run_in_increasing_and_decreasing_parameter_value():
-    # The axis is listed out of order on purpose: up means increasing g, not config order.
+    # The axis is listed decreasing on purpose: up means increasing g, not config order.
     grid = grid_of("""\
         sweep:
-          g: {values: [3.0, 1.0, 2.0], continuation: up}
+          g: {values: [3.0, 2.0, 1.0], continuation: up}
           Omega: [4.0, 5.0]
         """)
     g = grid.axis_values[0]
@@ -59,7 +59,7 @@ def test_up_and_down_lines_run_in_increasing_and_decreasing_parameter_value():
         assert len(set(omega_index.tolist())) == 1
     down = grid_of("""\
         sweep:
-          g: {values: [3.0, 1.0, 2.0], continuation: down}
+          g: {values: [3.0, 2.0, 1.0], continuation: down}
           Omega: [4.0, 5.0]
         """).lines()
     assert np.array_equal(down, lines[:, ::-1])

@@ -117,4 +117,5 @@ def test_without_dask_installed_dask_is_a_usage_error(single, tmp_path, monkeypa
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--dask", "local:2")
     assert result.exit_code == 2
     assert "pip install" in result.output and "vrsweep[dask]" in result.output
+    assert 'pip install -e ".[dask]"' in result.output  # and how to do it in a clone
     assert not (tmp_path / "out.h5").exists()

@@ -1,9 +1,11 @@
 """The ``vrsweep`` command line: thin click commands over the library.
 
 Each command lives in ``vrsweep/commands/<name>.py``; this module only groups them and turns the
-project's own exceptions into one clear message and an exit code (2: bad input, 1: runtime).
+project's own exceptions into one clear message and an exit code (2: bad input, 1: runtime,
+130: Ctrl-C).
 """
 
+import os
 import sys
 
 import click
@@ -31,9 +33,23 @@ class _Group(click.Group):
             else:
                 click.echo(f"Error: {error}", err=True)
             ctx.exit(error.exit_code)
+        except BrokenPipeError:  # `vrsweep info ... | head`: the reader has all it wants
+            # Later writes (Python flushes stdout on exit) would fail too: send them nowhere.
+            try:
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            except (OSError, ValueError):  # no file descriptor (e.g. click's CliRunner)
+                pass
+            ctx.exit(141)  # 128 + SIGPIPE, what a shell reports for a writer killed by it
         except OSError as error:  # disk full, permission denied, ...: a message, not a traceback
             click.echo(f"Error: {error.strerror or error}: {error.filename or ''}".rstrip(": "), err=True)
             ctx.exit(1)
+        except KeyboardInterrupt as interrupt:
+            # Not click's "Aborted!" and exit 1: one line and the shell's code for SIGINT, 128 + 2,
+            # as `run` does (which handles its own, to say how to resume). Files are written to a
+            # temporary name and renamed into place, so an interrupted command leaves none half done.
+            newline = "\n" if sys.stderr.isatty() else ""  # off the terminal's "^C"
+            click.echo(f"{newline}Interrupted ({str(interrupt) or 'SIGINT'})", err=True)
+            ctx.exit(getattr(interrupt, "exit_code", 130))
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -45,7 +61,7 @@ def main():
 def _register():
     import importlib
 
-    for name in ("run", "theory", "validate", "plot", "simulate", "merge", "info"):
+    for name in ("init", "run", "theory", "validate", "plot", "simulate", "merge", "info"):
         try:
             module = importlib.import_module(f"vrsweep.commands.{name}")
         except ModuleNotFoundError as error:

@@ -7,8 +7,8 @@ The schema (docs/design.md, "Config"); every key is optional and defaults to the
                  Delta: 1.0, e: 0.95, g: 0.0, Omega: 4.0}
     initial: {x: 0.99, v: 0.5}
     sweep:                           # ordered axes, each named after a parameter
-      g: {start: 0.0, stop: 40.0, num: 81}            # linear, start <= stop
-      Omega: [4.0, 5.0]                               # explicit list, any order
+      g: {start: 0.0, stop: 40.0, num: 81}            # linear, start < stop (or num: 1)
+      Omega: [4.0, 5.0]                               # explicit list, strictly monotonic
       # or {values: [...], continuation: up|down|both}, or {start, stop, num, continuation}
     integration: {rtol: 1.0e-9, atol: 1.0e-11, transient_periods: 100, measure_periods: 100, ...}
     output: results/fig1.h5
@@ -803,6 +803,15 @@ class _Validator:
                 self.report(path, f"{_show(axis.start)} .. {_show(axis.stop)} cannot be divided into "
                                   f"{axis.num} finite values")
                 return None
+            if axis.num > 1 and axis.stop == axis.start:  # every point the same: like a repeated value
+                self.report(path + ("stop",), f"must be > start = {_show(axis.start)} when num = {axis.num}, "
+                                              f"got {_show(axis.stop)} (the same point {axis.num} times); "
+                                              f"to fix {name} at one value, set parameters.{name}")
+                return None
+            if not np.all(np.diff(values) > 0):  # so close together that float64 rounding repeats values
+                self.report(path, f"{_show(axis.start)} .. {_show(axis.stop)} cannot be divided into "
+                                  f"{axis.num} distinct float64 values")
+                return None
             # The domains are intervals, so the ends decide for the whole linspace.
             ok = self.check_values(name, path + ("start",), [axis.start])
             ok &= self.check_values(name, path + ("stop",), [axis.stop])
@@ -810,10 +819,45 @@ class _Validator:
             values = np.array(axis.values, dtype=np.float64)
             item_path = path if kind == "list" else path + ("values",)
             ok = self.check_values(name, item_path, axis.values, indexed=True)
+            ok = ok and self.check_monotonic(item_path, axis.values)
         if not ok:
             return None
         values.flags.writeable = False  # Axis is frozen; so are its values
         return values
+
+    def check_monotonic(self, path, values) -> bool:
+        """An explicit list must be strictly increasing or strictly decreasing.
+
+        A repeated value would compute and store the same grid point twice (and make the axis
+        useless for selecting by value); an unordered one draws a zigzag. Decreasing lists are
+        allowed: the stored axis keeps the config's order.
+        """
+        first_index = {}
+        repeated = False
+        for index, value in enumerate(values):
+            if value in first_index:
+                first = first_index[value]
+                where = f"item {first}"
+                first_line, line = self.line_of(path + (first,)), self.line_of(path + (index,))
+                if first_line != line:
+                    where += f", line {first_line}"
+                self.report(path + (index,), f"{_number(value)} is listed twice (also {where}): axis values "
+                                             "must be strictly increasing or strictly decreasing")
+                repeated = True
+            else:
+                first_index[value] = index
+        if repeated:
+            return False
+        steps = np.sign(np.diff(values))
+        breaks = np.flatnonzero(steps != steps[0]) if len(steps) else []
+        if len(breaks):
+            index = int(breaks[0]) + 1
+            order = "increasing" if steps[0] > 0 else "decreasing"
+            self.report(path + (index,), f"{_number(values[index])} after {_number(values[index - 1])} breaks "
+                                         f"the order of the list ({order} up to item {index - 1}): axis values "
+                                         "must be strictly increasing or strictly decreasing")
+            return False
+        return True
 
     def check_values(self, name, path, values, indexed=False) -> bool:
         """Each swept value must obey its parameter's domain."""

@@ -8,7 +8,8 @@ worker, and results are handed to ``on_chunk`` as they arrive. ``on_chunk`` is t
 local run: checkpointed chunk by chunk, resumable with ``--resume`` (with or without Dask), and
 bit for bit the same values (a chunk runs the same code on the same coefficients; see sweep.py).
 
-Dask is an optional extra (``pip install "vrsweep[dask]"``): nothing here imports it at module
+Dask is an optional extra (``pip install "vrsweep[dask]"``, from a clone ``pip install -e ".[dask]"``;
+``[slurm]`` adds dask-jobqueue for examples/slurm/dask_slurm.py): nothing here imports it at module
 level, so ``vrsweep run`` without ``--dask`` never loads it.
 
 Threads: a task runs the kernel with ``--threads`` numba threads, or with as many as its worker
@@ -32,7 +33,8 @@ from vrsweep.sweep import Grid, default_chunk_lines, shuffled_lines
 
 LOCAL_PREFIX = "local:"
 CONNECT_TIMEOUT = "30s"
-INSTALL_HINT = 'pip install "vrsweep[dask]" (or dask[distributed])'
+INSTALL_HINT = ('pip install "vrsweep[dask]", or in a clone of vrsweep: pip install -e ".[dask]" '
+                '(or just pip install "dask[distributed]")')
 
 
 def dask_executor(address, threads=None):

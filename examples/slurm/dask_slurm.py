@@ -8,7 +8,8 @@ numba thread per CPU of the job), and runs `vrsweep run CONFIG --dask <scheduler
 client (this job) is the only process that writes the result file, chunk by chunk as results come
 back; if anything stops it, running the same command again resumes (the run uses --resume).
 
-Needs `pip install dask-jobqueue` next to vrsweep[dask], and the same vrsweep installation on
+Needs the slurm extra (dask.distributed and dask-jobqueue): `pip install "vrsweep[slurm]"`, or in
+a clone of vrsweep `pip install -e ".[slurm]"`; and the same vrsweep installation on
 the worker nodes (a shared venv or module). Compared with the job array (array.sbatch), Dask
 balances the load dynamically and needs no merge step, but the client must outlive the sweep.
 """
@@ -16,7 +17,11 @@ balances the load dynamically and needs no merge step, but the client must outli
 import os
 import sys
 
-from dask_jobqueue import SLURMCluster
+try:
+    from dask_jobqueue import SLURMCluster
+except ModuleNotFoundError:
+    sys.exit('dask_slurm.py needs dask-jobqueue: pip install "vrsweep[slurm]", or in a clone of vrsweep: '
+             'pip install -e ".[slurm]"')
 
 from vrsweep.cli import main as vrsweep
 

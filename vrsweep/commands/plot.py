@@ -81,5 +81,8 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
                        periods=plot.parse_periods(periods) if periods else None)
     if not path.parent.exists():
         raise UsageError(f"output directory {path.parent} does not exist (output: {path})")
-    figure.savefig(path, dpi=dpi)
+    from vrsweep.store import atomic_write
+
+    # At a temporary name, then renamed: Ctrl-C or a full disk never leaves half a figure.
+    atomic_write(path, lambda tmp: figure.savefig(tmp, dpi=dpi, format=path.suffix[1:].lower()))
     click.echo(f"-> {path}", err=True)

@@ -1,0 +1,88 @@
+"""``vrsweep init``: starter configs from the shipped examples (issue 10)."""
+
+from pathlib import Path
+
+import pytest
+from result_files import invoke
+
+from vrsweep.commands.init import description, shipped_examples
+from vrsweep.config import load_config
+
+REPOSITORY = Path(__file__).resolve().parent.parent
+CONFIGS = REPOSITORY / "configs"
+
+
+def test_configs_is_the_package_folder_so_there_is_one_copy():
+    assert CONFIGS.is_symlink() and CONFIGS.resolve() == (REPOSITORY / "vrsweep" / "examples").resolve()
+    names = {path.stem for path in CONFIGS.glob("*.yaml")}
+    assert names == set(shipped_examples()) and "quickstart" in names
+
+
+def test_list_names_every_example_with_its_first_sentence():
+    result = invoke("init", "--list")
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()[1:]
+    assert [line.split()[0] for line in lines] == list(shipped_examples())
+    assert lines[0].split()[:2] == ["quickstart", "run"]
+    assert "Quickstart: a first look at vibrational resonance in a few seconds" in lines[0]
+    fig3 = next(line for line in lines if line.split()[0] == "fig3")
+    assert fig3.split()[1] == "simulate"  # a trajectory example says which command runs it
+
+
+def test_description_is_the_first_sentence_cut_at_a_word():
+    text = "# Paper Fig. 7: one thing. Then another.\n#\n# More.\nmodel: original\n"
+    assert description(text) == "Paper Fig. 7: one thing"
+    assert description(text, width=20) == "Paper Fig. 7: one..."
+    assert description(text, width=19) == "Paper Fig. 7..."
+
+
+def test_default_is_the_quickstart_and_it_validates_and_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = invoke("init")
+    assert result.exit_code == 0, result.output
+    written = tmp_path / "quickstart.yaml"
+    shipped = (CONFIGS / "quickstart.yaml").read_text()
+    def words(text):  # the comments after a command are re-aligned
+        return [line.split() for line in text.splitlines()]
+
+    assert words(written.read_text()) == words(shipped.replace("configs/quickstart.yaml", "quickstart.yaml"))
+    assert written.read_text().startswith("#")  # commented
+    assert "run it with: vrsweep run quickstart.yaml" in result.stderr
+    assert invoke("validate", "quickstart.yaml").exit_code == 0
+    run = invoke("run", "quickstart.yaml", "-q", "--set", "transient_periods=2", "--set", "measure_periods=2",
+                 "--set", "strobe_periods=2")
+    assert run.exit_code == 0, run.output
+    assert (tmp_path / load_config(written).output).exists()
+
+
+@pytest.mark.parametrize("name", list(shipped_examples()))
+def test_every_example_written_by_init_validates(name, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = invoke("init", "--example", name, "mine.yaml")
+    assert result.exit_code == 0, result.output
+    text = (tmp_path / "mine.yaml").read_text()
+    assert f"configs/{name}.yaml" not in text  # its comments name the new file
+    assert invoke("validate", "mine.yaml").exit_code == 0
+    output = load_config(tmp_path / "mine.yaml").output_path()
+    assert output.parent.is_dir()  # e.g. results/: run can write there
+
+
+def test_never_overwrites_without_the_flag(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    target = tmp_path / "quickstart.yaml"
+    target.write_text("# mine\n")
+    result = invoke("init")
+    assert result.exit_code == 2 and "--overwrite" in result.stderr and "already exists" in result.stderr
+    assert target.read_text() == "# mine\n"
+    assert invoke("init", "--overwrite").exit_code == 0 and target.read_text() != "# mine\n"
+
+
+def test_path_options_and_unknown_example(tmp_path):
+    (tmp_path / "dir").mkdir()
+    assert invoke("init", "-e", "fig2.yaml", tmp_path / "dir").exit_code == 0
+    assert (tmp_path / "dir" / "fig2.yaml").exists()  # a directory gets NAME.yaml
+    result = invoke("init", "-e", "fig7", tmp_path / "x.yaml")
+    assert result.exit_code == 2 and "fig7" in result.stderr and "quickstart" in result.stderr
+    result = invoke("init", tmp_path / "missing" / "x.yaml")
+    assert result.exit_code == 2 and "does not exist" in result.stderr
+    assert not (tmp_path / "x.yaml").exists()

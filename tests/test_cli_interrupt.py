@@ -1,0 +1,75 @@
+"""Ctrl-C in any command: one line and exit 130, never click's "Aborted!" and exit 1 (issue 10).
+
+``run`` has its own handling (stop after the chunk in progress, print the resume command; see
+test_resume.py); every other command goes through the group's.
+"""
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from vrsweep.cli import main
+
+FIG3 = Path(__file__).resolve().parent.parent / "configs" / "fig3.yaml"
+
+
+def _interrupted(*args, **kwargs):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("name", sorted(set(main.commands) - {"run"}))
+def test_ctrl_c_in_a_command_exits_130_with_one_line(name, monkeypatch, tmp_path):
+    monkeypatch.setattr(main.commands[name], "callback", _interrupted)
+    monkeypatch.chdir(tmp_path)
+    # Arguments that pass click's own checks, so that the command's body is reached.
+    args = {"merge": ["a.h5", "-o", "out.h5"], "init": []}.get(name, ["x.yaml"])
+    result = CliRunner().invoke(main, [name, *args])
+    assert result.exit_code == 130, result.output
+    assert result.stderr == "Interrupted (SIGINT)\n", result.stderr
+    assert result.stdout == ""
+
+
+def test_ctrl_c_inside_run_before_its_sweep_starts(monkeypatch, tmp_path):
+    """Loading the config comes before run's own handler: the group's applies."""
+    import vrsweep.config
+
+    monkeypatch.setattr(vrsweep.config, "load_config", _interrupted)
+    result = CliRunner().invoke(main, ["run", str(FIG3), "-o", str(tmp_path / "out.h5")])
+    assert result.exit_code == 130 and result.stderr == "Interrupted (SIGINT)\n", result.output
+
+
+@pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs /proc to see numba loaded")
+def test_a_real_sigint_to_simulate(tmp_path):
+    """SIGINT once the command is running (numba, which only a command loads, is in memory)."""
+    out = tmp_path / "traj.h5"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "vrsweep", "simulate", str(FIG3), "--set", "transient_periods=4000",
+         "--samples-per-period", "1", "-o", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while "llvmlite" not in Path(f"/proc/{process.pid}/maps").read_text():
+            assert process.poll() is None and time.monotonic() < deadline, "simulate never started"
+            time.sleep(0.02)
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert process.returncode == 130, stderr
+    assert stderr == "Interrupted (SIGINT)\n"
+    assert not out.exists() and list(tmp_path.iterdir()) == []  # no output, no temporary file
+
+
+def test_a_reader_that_stops_reading_is_no_error(tmp_path):
+    """`vrsweep validate CONFIG | head -0`: exit 141 (SIGPIPE's code), no "Error: Broken pipe"."""
+    process = subprocess.Popen([sys.executable, "-m", "vrsweep", "validate", str(FIG3)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process.stdout.close()  # before the command has written anything
+    stderr = process.stderr.read()
+    assert process.wait(timeout=60) == 141, stderr
+    assert stderr == ""

@@ -1,0 +1,125 @@
+"""vrsweep init [PATH] [--example NAME]: write a commented starter config (a shipped example).
+
+The examples are the YAML files of ``vrsweep/examples/`` (in a clone also reachable as
+``configs/``, a link to that folder), installed with the package so that ``pip install vrsweep``
+users have them too. Each one's description is the first sentence of its leading comment.
+"""
+
+import re
+import shlex
+from importlib import resources
+from pathlib import Path
+
+import click
+
+DEFAULT_EXAMPLE = "quickstart"
+
+
+@click.command("init")
+@click.argument("path", required=False, type=click.Path(), metavar="[PATH]")
+@click.option("--example", "-e", "name", default=DEFAULT_EXAMPLE, show_default=True, metavar="NAME",
+              help="The shipped example to start from (--list names them).")
+@click.option("--list", "list_only", is_flag=True, help="List the shipped examples and exit.")
+@click.option("--overwrite", is_flag=True, help="Replace PATH if it exists.")
+def command(path, name, list_only, overwrite):
+    """Write a commented starter config to PATH (default: NAME.yaml here).
+
+    The quickstart by default (a coarse R(g) sweep that runs in seconds), or any shipped example
+    with --example: the paper's figures, a g-Omega map, a hysteresis sweep. Then:
+    `vrsweep validate PATH`, `vrsweep run PATH`. An existing file is never replaced without
+    --overwrite; if PATH is a directory, the config is written into it as NAME.yaml.
+    """
+    from vrsweep.errors import UsageError
+
+    examples = shipped_examples()
+    if list_only:
+        _print_list(examples)
+        return
+    name = name.removesuffix(".yaml")
+    if name not in examples:
+        raise UsageError(f"--example {name}: no such example; shipped: {', '.join(examples)} "
+                         "(vrsweep init --list describes them)")
+    target = Path(path) if path else Path(f"{name}.yaml")
+    if target.is_dir():
+        target = target / f"{name}.yaml"
+    if target.exists() and not overwrite:
+        raise UsageError(f"{target} already exists: pass --overwrite to replace it")
+    if not target.parent.is_dir():
+        raise UsageError(f"directory {target.parent} does not exist (PATH: {target})")
+
+    text = examples[name].read_text(encoding="utf-8")
+    # Its comments show the commands that run it, written for the clone's configs/NAME.yaml: name
+    # the new file instead (padded where a comment follows, to keep the comments aligned).
+    written = shlex.quote(str(target))
+    text = re.sub(rf"configs/{re.escape(name)}\.yaml( +)(?=#)",
+                  lambda match: written.ljust(len(match.group(0)) - 1) + " ", text)
+    text = text.replace(f"configs/{name}.yaml", written)
+    target.write_text(text, encoding="utf-8")
+    click.echo(f"-> {target} (example {name}); run it with: {_run_command(text, written)}", err=True)
+    _make_output_folder(target)
+
+
+def shipped_examples():
+    """{name: resource} of the shipped example configs, the default first, then by name."""
+    folder = resources.files("vrsweep") / "examples"
+    found = {entry.name.removesuffix(".yaml"): entry for entry in folder.iterdir()
+             if entry.name.endswith(".yaml")}
+    order = sorted(found, key=lambda example: (example != DEFAULT_EXAMPLE, example))
+    return {example: found[example] for example in order}
+
+
+def description(text, width=None):
+    """The first sentence of a config's leading comment, cut to ``width`` characters."""
+    comment = []
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        words = line.lstrip("#").strip()
+        if not words and comment:  # a blank comment line ends the first paragraph
+            break
+        comment.append(words)
+    paragraph = " ".join(comment)
+    sentence = re.split(r"(?<!Fig)\.(?:\s|$)", paragraph, maxsplit=1)[0].strip()
+    if width and len(sentence) > width:
+        head = sentence[:width - 3]
+        if sentence[width - 3] != " ":  # cut inside a word: drop it
+            head = head.rsplit(" ", 1)[0]
+        sentence = head.rstrip(",;: ") + "..."
+    return sentence
+
+
+def _command_of(text):
+    """'simulate' for a trajectory example (its comments run `vrsweep simulate`), else 'run'."""
+    match = re.search(r"^#\s+vrsweep (run|simulate) ", text, flags=re.MULTILINE)
+    return match.group(1) if match else "run"
+
+
+def _run_command(text, written):
+    """The first `vrsweep run|simulate` command of the config's comments, else `vrsweep run PATH`."""
+    match = re.search(r"^#\s+(vrsweep (?:run|simulate) [^#]*)", text, flags=re.MULTILINE)
+    return " ".join(match.group(1).split()) if match else f"vrsweep run {written}"
+
+
+def _print_list(examples):
+    import shutil
+
+    width = max(len(example) for example in examples)
+    columns = shutil.get_terminal_size((120, 24)).columns  # one line per example
+    click.echo("Shipped examples (vrsweep init --example NAME [PATH] writes one):")
+    for example, resource in examples.items():
+        text = resource.read_text(encoding="utf-8")
+        start = f"  {example:<{width}}  {_command_of(text):<8}  "
+        click.echo(start + description(text, max(40, columns - 1 - len(start))))
+
+
+def _make_output_folder(target):
+    """A relative ``output: folder/file.h5`` needs its folder where the config will be run:
+    make it here, where the user is (run refuses to write into a missing folder)."""
+    from vrsweep.config import load_config
+
+    output = load_config(target).output_path()
+    folder = output.parent
+    if not output.is_absolute() and not folder.exists():
+        folder.mkdir(parents=True)
+        click.echo(f"   created {folder}/ for its output {output} (relative to the directory you run it in)",
+                   err=True)
