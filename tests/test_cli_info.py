@@ -19,23 +19,12 @@ from vrsweep.store import FORMAT_VERSION, read_results
 
 from result_files import invoke
 
-# The quickstart as it was before it moved to the effective model (issue 15): 9 points of the
-# original model, a small real file of every kind info describes.
-QUICKSTART_TEXT = """\
-model: original
-parameters:
-  Omega: 4.0
-sweep:
-  g: {start: 0.0, stop: 40.0, num: 9}
-output: quickstart.h5
-"""
+QUICKSTART = Path(__file__).resolve().parent / "data" / "quickstart_original.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
 
 
 def run_quickstart(path, *extra):
-    config = Path(path).with_name("quickstart.yaml")
-    config.write_text(QUICKSTART_TEXT)
-    result = invoke("run", config, "-o", path, "--quiet", *SHORT, *extra)
+    result = invoke("run", QUICKSTART, "-o", path, "--quiet", *SHORT, *extra)
     assert result.exit_code == 0, result.output
     return path
 
@@ -157,9 +146,7 @@ def test_a_simulate_output_is_described(tmp_path):
     if "simulate" not in main.commands:
         pytest.skip("vrsweep simulate is not built yet")
     path = tmp_path / "traj.h5"
-    config = tmp_path / "quickstart.yaml"
-    config.write_text(QUICKSTART_TEXT)
-    result = invoke("simulate", config, "--set", "g=5", "--set", "transient_periods=2",
+    result = invoke("simulate", QUICKSTART, "--set", "g=5", "--set", "transient_periods=2",
                     "--set", "measure_periods=2", "--set", "strobe_periods=2", "-o", path)
     assert result.exit_code == 0, result.output
     result = invoke("info", path)
