@@ -479,3 +479,15 @@ def test_at_names_the_nearest_grid_values_and_the_directions(files):
     with pytest.raises(UsageError, match="the direction is up or down"):
         plot.plot(files["both"], at={"direction": "sideways"})
     assert plot.plot(files["both"], at={"direction": "down"}) is not None
+
+
+def test_the_slow_flow_from_rest_is_drawn(tmp_path):
+    """simulate from x = v = 0 gave a slow flow of NaN that the legend listed and nothing drew."""
+    out = _run(tmp_path, "rest", "model: effective\nparameters: {gamma: 0.05, alpha: 0.05, g: 24.0, Omega: 4.0}\n"
+                                 "initial: {x: 0.0, v: 0.0}\n"
+                                 "integration: {transient_periods: 2, measure_periods: 4, strobe_periods: 2}\n",
+               "simulate", "--samples-per-period", "20")
+    fig = plot.plot(out, kind="slowflow")
+    (state,) = [line for line in fig.axes[0].get_lines() if "x(0)" in line.get_label()]
+    assert np.isfinite(state.get_ydata()).all() and np.ptp(state.get_ydata()) > 0
+    assert not any("not drawn" in text for text in legend_texts(fig))

@@ -18,11 +18,13 @@ Units: the paper's model is dimensionless, so every axis says ``[1]``. The gain 
 and the analytic amplitude A of eq2.21 are different quantities (ERRATA 6): on a gain plot the
 analytic curves are A/c, on an amplitude plot (``amplitude=True``) the numbers are |Q| and A.
 
-Which R can be trusted (issue 5): a point is drawn hollow and grey where no period was found in
-its stroboscopic samples (period == 0: chaotic, quasi-periodic or still transient -- R is then one
-draw that depends on the window and the solver), hollow in its curve's colour where a period was
-found but R_err exceeds RELATIVE_ERROR_LIMIT of R (typically a tiny R, or a window that is not a
-whole number of cycles), and filled otherwise.
+Which R can be trusted (issue 5, README "Can R be trusted?"): trust is judged by R_err alone --
+a point is drawn filled where R_err <= RELATIVE_ERROR_LIMIT of R and hollow where not -- and the
+kind of motion by ``period``: a circle where a period was found, a square where none was (chaos,
+quasi-periodic, a period above max_period, or a motion still settling; with a tiny R_err the last
+two are common and harmless). Points keep their curve's colour. Failed points (status not ok)
+have no value: they are x marks along the bottom edge, in axes coordinates, so that a log axis
+shows them too, and the title counts them (issue 15).
 """
 
 from __future__ import annotations
@@ -1159,7 +1161,9 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
             continue
         flow = data.slow_flow[start]
         flow_t, flow_x, flow_v = _in_window(flow.t, window, flow.x, flow.v)
-        style = SLOW_FLOW_STYLES.get(start, dict(label=start))
+        style = dict(SLOW_FLOW_STYLES.get(start, dict(label=start)))
+        if not np.isfinite(flow_x).any():  # say so rather than list a curve that draws nothing
+            style["label"] += ": no finite value (not drawn)"
         ax_x.plot(flow_t, flow_x, **style)
         ax_v.plot(flow_t, flow_v, **style)
         ax_phase.plot(flow_x, flow_v, **style)
