@@ -139,3 +139,24 @@ def test_a_single_point_has_nothing_to_plot_against(tmp_path):
     assert invoke("run", config, "-o", tmp_path / "point.h5", "-q").exit_code == 0
     result = invoke("plot", tmp_path / "point.h5", "-o", tmp_path / "f.png")
     assert result.exit_code == 2 and "single point" in result.output and "simulate" in result.output
+
+
+def test_log_and_linear(sweep, tmp_path):
+    """--log was ignored on --kind map (a byte-identical PNG); now it changes the map or is refused."""
+    for args in (("--log",), ("--linear",), ()):
+        assert invoke("plot", sweep, *args, "-o", tmp_path / f"r{len(args)}{args[:1]}.png").exit_code == 0
+    result = invoke("plot", sweep, "--kind", "bifurcation", "--log", "-o", tmp_path / "b.png")
+    assert result.exit_code == 2 and "--log is for response, map and impacts plots" in result.output
+
+
+def test_periods_beyond_the_run_are_clipped_with_a_word(trajectory, tmp_path):
+    result = invoke("plot", trajectory, "--periods", "2:90", "-o", tmp_path / "t.png")
+    assert result.exit_code == 0, result.output
+    assert "--periods 2:90: " in result.output and "has 5 slow periods; showing 2-5" in result.output
+    quiet = invoke("plot", trajectory, "--periods", "2:4", "-o", tmp_path / "t2.png")
+    assert "--periods" not in quiet.output
+
+
+def test_at_messages(sweep, tmp_path):
+    result = invoke("plot", sweep, "--at", "g=12", "-o", tmp_path / "f.png")
+    assert result.exit_code == 2 and "the nearest are 10 and 20" in result.output, result.output

@@ -31,8 +31,8 @@ def test_quickstart_through_xarray(quickstart):
     out, result = quickstart
     assert result.exit_code == 0, result.output
     with xr.open_dataset(out, engine="h5netcdf") as ds:
-        assert ds.sizes["g"] == 9 and "g" in ds.coords
-        np.testing.assert_array_equal(ds["g"].values, np.linspace(0.0, 40.0, 9))
+        assert ds.sizes["g"] == 41 and "g" in ds.coords
+        np.testing.assert_array_equal(ds["g"].values, np.linspace(0.0, 40.0, 41))
         for name in ("R", "Qs", "Qc", "Q_amplitude", "impacts_per_period", "status", "R_err"):
             assert ds[name].dims[0] == "g", name
             assert ds[name].attrs["long_name"], name
@@ -43,7 +43,7 @@ def test_quickstart_through_xarray(quickstart):
         assert ds["status"].attrs["flag_meanings"] == FLAG_MEANINGS
         assert (ds["status"].values == Status.OK).all()
         assert np.isfinite(ds["R"].values).all() and (ds["R"].values > 0).all()
-        assert "model: original" in ds.attrs["config"]
+        assert "model: effective" in ds.attrs["config"]
         for key in ("vrsweep_version", "numba_version", "numpy_version", "created"):
             assert key in ds.attrs
 
@@ -51,7 +51,25 @@ def test_quickstart_through_xarray(quickstart):
 def test_a_one_line_summary_of_statuses(quickstart):
     out, result = quickstart
     last = result.output.strip().splitlines()[-1]
-    assert last.endswith(f"9 of 9 points computed (9 ok) -> {out}"), last
+    assert last.endswith(f"41 of 41 points computed (41 ok) -> {out}"), last
+
+
+def test_the_quickstart_shows_the_resonance(quickstart):
+    """What configs/quickstart.yaml says it shows (issue 15): R low while the mass rattles against
+    the barrier, its largest value just below g_res = 21.07 (eq3.4) and capped by the barrier, and
+    past it periodic, impact-free points on the analytic gain A/c of the corrected theory."""
+    out, _ = quickstart
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        g, R = ds["g"].values, ds["R"].values
+        gain = ds["A_theory_max_stable"].values / 0.04  # c = 0.04: A/c (ERRATA 6)
+        g_res = float(ds["g_res"].values)
+        after = g >= 20.0
+        assert g_res == pytest.approx(21.065, abs=1e-3)
+        assert np.all(R[g < 16.0] < 2.0)
+        assert 17.0 <= g[np.argmax(R)] <= g_res and 20.0 < R.max() < 25.0  # Delta/c = 25: the barrier
+        assert (ds["period"].values[after] == 1).all() and (ds["impacts_per_period"].values[after] == 0).all()
+        assert np.all(ds["R_err"].values[after] < 1e-9 * R[after])
+        np.testing.assert_allclose(R[after], gain[after], rtol=5e-3)
 
 
 def test_quiet_prints_nothing(tmp_path):
@@ -200,3 +218,40 @@ def test_a_filled_cache_says_nothing(tmp_path, monkeypatch):
     assert cache_dir() == Path(numba.config.CACHE_DIR) and kernel_is_cached()
     result = invoke("run", config, "-o", tmp_path / "out2.h5")
     assert result.exit_code == 0 and "Compiling" not in result.output, result.output
+
+
+# --- adjustments and advice on stderr (issue 15) ----------------------------------------------------
+
+
+def test_more_threads_than_numba_has_are_capped_with_a_word(tmp_path):
+    config = write_config(tmp_path, TINY)
+    result = invoke("run", config, "-o", tmp_path / "out.h5", "--threads", 64, "-q",
+                    env={"NUMBA_NUM_THREADS": "1"})
+    assert result.exit_code == 0, result.output
+    assert "--threads 64: numba can run 1 thread here" in result.output and "using 1" in result.output
+    quiet = invoke("run", config, "-o", tmp_path / "out2.h5", "--threads", 1, "-q", env={"NUMBA_NUM_THREADS": "1"})
+    assert quiet.output == ""
+
+
+def test_fixing_a_swept_axis_says_so(tmp_path):
+    config = write_config(tmp_path, TINY)
+    result = invoke("run", config, "-o", tmp_path / "out.h5", "--set", "g=10", "--set", "Omega=5", "-q")
+    assert result.exit_code == 0, result.output
+    lines = result.output.strip().splitlines()
+    assert lines == ["--set g=10: g was swept (6 values from 0 to 30); it is now fixed and that axis is gone"]
+    validate = invoke("validate", config, "--set", "parameters.g=10")
+    assert "--set g=10: g was swept" in validate.output
+
+
+def test_many_failed_points_name_the_setting_to_change(tmp_path):
+    """54 of 63 points at max_steps and a silent exit 0 (issue 15): now the summary says what to raise."""
+    config = write_config(tmp_path, TINY)
+    result = invoke("run", config, "-o", tmp_path / "out.h5", "--set", "max_steps=500", "-q")
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(tmp_path / "out.h5", engine="h5netcdf") as ds:
+        n_failed = int((ds["status"].values == Status.MAX_STEPS).sum())
+    assert n_failed > 1
+    assert (f"Warning: {n_failed} of 6 points ({n_failed / 6:.0%}) ended with max_steps: raise "
+            "integration.max_steps (now 500), e.g. --set max_steps=5000") in result.output
+    healthy = invoke("run", config, "-o", tmp_path / "ok.h5", "-q")
+    assert "Warning" not in healthy.output

@@ -136,7 +136,8 @@ def test_estimate_scales_with_points_periods_threads_and_rtol():
                           "integration: {transient_periods: 30, measure_periods: 20, strobe_periods: 4}")
     guess = estimate(config, 2)
     assert guess.n_points == 10
-    assert guess.output_bytes == 10 * (12 + 2 * 4) * 8
+    more_strobe = parse_config(config.to_yaml(), overrides=["strobe_periods=8"])
+    assert estimate(more_strobe, 2).output_bytes - guess.output_bytes == 10 * 2 * 4 * 8  # strobe_x, strobe_v
     assert guess.seconds == pytest.approx(10 * 50 * SECONDS_PER_POINT_PERIOD["original"] / 2)
     tighter = parse_config(config.to_yaml(), overrides=["rtol=1e-14"])
     assert estimate(tighter, 2).seconds == pytest.approx(guess.seconds * 10)  # (1e5)^(1/5)
@@ -190,3 +191,17 @@ def test_every_repeated_value_is_named():
 def test_a_decreasing_list_is_an_axis_in_the_given_order():
     config = parse_config("sweep:\n  g: [40, 30.5, 0]\n  Omega: {values: [5, 4]}\n")
     assert [list(axis.values) for axis in config.axes] == [[40.0, 30.5, 0.0], [5.0, 4.0]]
+
+
+@pytest.mark.parametrize("sweep", ["g: {start: 0, stop: 40, num: 12}",
+                                   "g: {start: 20, stop: 30, num: 5, continuation: both}\n  Omega: [4.0, 5.0]"])
+def test_the_size_estimate_is_the_size_of_the_file(tmp_path, sweep):
+    """validate estimated 3.2 kB for a 77 kB quickstart file (issue 15): HDF5's per-dataset bytes
+    dominate small files. The estimate counts every array the run stores, and that overhead."""
+    path = tmp_path / "small.yaml"
+    path.write_text(f"model: effective\nsweep:\n  {sweep}\nintegration: {{transient_periods: 2, measure_periods: 16}}\n")
+    result, output = invoke("run", str(path), "-o", str(tmp_path / "small.h5"), "-q")
+    assert result.exit_code == 0, output
+    size = (tmp_path / "small.h5").stat().st_size
+    guess = estimate(parse_config(path.read_text()), 1).output_bytes
+    assert abs(guess - size) < 0.1 * size, (guess, size)

@@ -28,7 +28,7 @@ from vrsweep.store import FORMAT_VERSION, read_results
 
 from result_files import invoke
 
-QUICKSTART = Path(__file__).resolve().parent.parent / "configs" / "quickstart.yaml"
+QUICKSTART = Path(__file__).resolve().parent / "data" / "quickstart_original.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
 READERS = ("info", "plot", "merge")  # every command that reads a results file
 

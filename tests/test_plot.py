@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from matplotlib.collections import QuadMesh
+from matplotlib.colors import LogNorm
 from matplotlib.figure import Figure
 
 from vrsweep import plot, theory
@@ -46,6 +47,9 @@ def files(tmp_path_factory):
         "traj": _run(d, "traj", "parameters: {g: 5.0, Omega: 5.0}\n"
                                 "integration: {transient_periods: 4, measure_periods: 6, strobe_periods: 3}\n",
                      "simulate", "--compare", "effective", "--samples-per-period", "50"),
+        "failed": _run(d, "failed", "parameters: {Omega: 4.0}\nsweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n"
+                                    "integration: {transient_periods: 5, measure_periods: 16, strobe_periods: 8, "
+                                    "max_steps: 6000}\n", "run"),
         "traj20": _run(d, "traj20", "parameters: {g: 20.0, Omega: 5.0}\n"
                                     "integration: {transient_periods: 4, measure_periods: 6, strobe_periods: 3}\n",
                        "simulate", "--samples-per-period", "20"),
@@ -79,24 +83,63 @@ def test_response_is_the_default_for_one_axis(files):
     assert "Ω" in fig._suptitle.get_text() or "Omega" in fig._suptitle.get_text()
 
 
-def test_response_draws_every_point_and_flags_the_unreliable_ones(files):
+def markers(ax):
+    """The numerical points of a response plot by class: {gid: line}, gid = 'trusted periodic' etc."""
+    return {line.get_gid(): line for line in ax.get_lines()
+            if line.get_gid() and line.get_gid() != "failed"}
+
+
+def curve_labels(fig):
+    return [text for text in legend_texts(fig) if text.startswith("numerical")]
+
+
+def _classes(R, R_err, period):
+    trusted = R_err <= plot.RELATIVE_ERROR_LIMIT * R
+    return {"trusted periodic": trusted & (period > 0), "untrusted periodic": ~trusted & (period > 0),
+            "trusted aperiodic": trusted & (period == 0), "untrusted aperiodic": ~trusted & (period == 0)}
+
+
+def test_response_markers_follow_the_readme_rule(files):
+    """Trust by R_err (filled or hollow), kind of motion by period (circle or square), colour by curve."""
     results = read_results(files["g"])
     R, period, R_err = (results.variables[n] for n in ("R", "period", "R_err"))
-    fig = plot.plot(files["g"])
-    ax = fig.axes[0]
-    reliable = lines_with_label(fig, "numerical R")
-    assert len(reliable) == 1
-    hollow = [line for line in ax.get_lines() if line.get_marker() == "o" and line.get_markerfacecolor() == "none"]
-    assert len(hollow) == 2
-    grey, coloured = hollow
-    assert grey.get_markeredgecolor() == plot.UNRELIABLE_GREY
-    aperiodic = period == 0
-    imprecise = (R_err > plot.RELATIVE_ERROR_LIMIT * R) & ~aperiodic
-    np.testing.assert_array_equal(np.sort(grey.get_ydata()), np.sort(R[aperiodic]))
-    np.testing.assert_array_equal(np.sort(coloured.get_ydata()), np.sort(R[imprecise]))
-    np.testing.assert_array_equal(np.sort(reliable[0].get_ydata()), np.sort(R[~aperiodic & ~imprecise]))
+    fig = plot.plot(files["g"], log=False)
+    drawn = markers(fig.axes[0])
+    classes = _classes(R, R_err, period)
+    assert any(mask.any() for name, mask in classes.items() if name.startswith("untrusted"))
+    for name, mask in classes.items():
+        if not mask.any():
+            assert name not in drawn
+            continue
+        line = drawn[name]
+        np.testing.assert_array_equal(np.sort(line.get_ydata()), np.sort(R[mask]))
+        assert line.get_marker() == ("s" if "aperiodic" in name else "o")
+        assert line.get_markeredgecolor() == "tab:blue"
+        assert line.get_markerfacecolor() == ("none" if name.startswith("untrusted") else "tab:blue")
+    assert sum(len(line.get_ydata()) for line in drawn.values()) == 9
     texts = legend_texts(fig)
-    assert any("no period found" in text for text in texts) and any("R_{err}" in text for text in texts)
+    assert any("filled" in t and "R_{err}" in t for t in texts)
+
+
+def test_a_converged_point_without_a_period_is_not_called_chaos(files):
+    """Issue 15: period 0 with a tiny R_err (a slowly settling or long-period motion) is a
+    trusted R -- drawn filled, as a square -- not 'no period found (chaos?)'."""
+    results = read_results(files["g"])
+    results.variables["period"] = np.zeros_like(results.variables["period"])
+    results.variables["R_err"] = 1e-6 * results.variables["R"]
+    drawn = markers(plot.plot([results], log=False).axes[0])
+    assert list(drawn) == ["trusted aperiodic"]
+    assert drawn["trusted aperiodic"].get_markerfacecolor() == "tab:blue"
+    assert len(drawn["trusted aperiodic"].get_ydata()) == 9
+
+
+def test_hollow_points_keep_their_curves_colour(files):
+    results = read_results(files["g_Omega_short"])
+    results.variables["R_err"] = results.variables["R"].copy()  # every point untrusted
+    fig = plot.plot([results], log=False)
+    hollow = [line for line in fig.axes[0].get_lines() if (line.get_gid() or "").startswith("untrusted")]
+    assert {line.get_markeredgecolor() for line in hollow} == {"tab:blue", "tab:orange"}
+    assert all(line.get_markerfacecolor() == "none" for line in hollow)
 
 
 def test_response_marks_g_res_and_draws_the_analytic_gain(files):
@@ -118,12 +161,14 @@ def test_response_marks_g_res_and_draws_the_analytic_gain(files):
 
 def test_amplitude_draws_Q_and_A_unscaled(files):
     results = read_results(files["g"])
-    fig = plot.plot(files["g"], amplitude=True)
+    fig = plot.plot(files["g"], amplitude=True, log=False)
     ax = fig.axes[0]
     assert "|Q|" in ax.get_ylabel() and "A/c" not in ax.get_ylabel()
-    drawn = np.concatenate([line.get_ydata() for line in ax.get_lines()
-                            if line.get_marker() == "o"])
+    drawn = np.concatenate([line.get_ydata() for line in markers(ax).values()])
     np.testing.assert_allclose(np.sort(drawn), np.sort(results.variables["Q_amplitude"]))
+    texts = legend_texts(fig)
+    assert any("|Q|" in t and "filled" in t for t in texts)
+    assert not any(" of R" in t or "R =" in t for t in texts), texts  # the legend speaks of |Q|
     solid = [line for line in ax.get_lines() if len(line.get_xdata()) > 20 and line.get_linestyle() == "-"]
     assert max(line.get_ydata().max() for line in solid) < 2.0  # A, not A/c
 
@@ -153,14 +198,13 @@ def test_resonance_positions_on_any_axis():
 def test_a_short_second_axis_gives_one_curve_each(files):
     fig = plot.plot(files["g_Omega_short"])
     ax = fig.axes[0]
-    curves = lines_with_label(fig, "numerical R")
-    assert [line.get_label().split(", ")[-1] for line in curves] == ["$\\Omega$ = 4", "$\\Omega$ = 5"]
+    assert [label.split(", ")[-1] for label in curve_labels(fig)] == ["$\\Omega$ = 4", "$\\Omega$ = 5"]
     assert sorted(vertical_lines_at(ax)) == pytest.approx([G_RES_4, G_RES_5])
 
 
 def test_at_picks_a_coordinate(files):
     fig = plot.plot(files["g_Omega_short"], at={"Omega": "5"})
-    assert len(lines_with_label(fig, "numerical R")) == 1
+    assert len(curve_labels(fig)) == 1
     assert vertical_lines_at(fig.axes[0]) == pytest.approx([G_RES_5])
     assert "Ω" in fig._suptitle.get_text() or "Omega" in fig._suptitle.get_text()
     with pytest.raises(UsageError, match="not a value of the axis Omega"):
@@ -171,7 +215,7 @@ def test_at_picks_a_coordinate(files):
 
 def test_continuation_both_draws_up_and_down(files):
     fig = plot.plot(files["both"])
-    labels = [line.get_label() for line in lines_with_label(fig, "numerical R")]
+    labels = curve_labels(fig)
     assert len(labels) == 2 and "sweep up" in labels[0] and "sweep down" in labels[1]
 
 
@@ -323,3 +367,127 @@ def test_kinds_that_do_not_fit_the_file(files):
         plot.plot(files["traj"], kind="map")
     with pytest.raises(UsageError, match="separately"):
         plot.plot([files["g"], files["traj"]], kind="impacts")
+
+
+# --- nothing hidden, nothing misstated (issue 15) --------------------------------------------------
+
+
+def failed_marks(ax):
+    return [line for line in ax.get_lines() if line.get_gid() == "failed"]
+
+
+@pytest.mark.parametrize("log", [True, False])
+def test_failed_points_sit_on_the_bottom_edge_on_any_axis(files, log):
+    """Failed points have R = NaN: drawn at R = 0 they vanished on a log axis. Now they are x marks
+    in axes coordinates just above the bottom edge, and the title counts them."""
+    results = read_results(files["failed"])
+    failed = results.variables["status"] > 0
+    assert 0 < failed.sum() < 5
+    fig = plot.plot(files["failed"], log=log)
+    ax = fig.axes[0]
+    (marks,) = failed_marks(ax)
+    np.testing.assert_array_equal(marks.get_xdata(), results.axes["g"][failed])
+    assert marks.get_transform() == ax.get_xaxis_transform()  # y in axes fraction
+    assert all(0.0 < y < 0.1 for y in marks.get_ydata())
+    assert ax.get_yscale() == ("log" if log else "linear")
+    title = fig._suptitle.get_text()
+    assert f"{failed.sum()} of 5 points failed ({failed.sum()} max_steps)" in title
+    assert any("integration failed" in t for t in legend_texts(fig))
+
+
+def test_a_bifurcation_diagram_spans_the_grid_and_marks_failed_points(files):
+    """It stopped at the last good point (g = 0-21 of 0-40), reading as a sweep that stopped early."""
+    fig = plot.plot(files["failed"], kind="bifurcation")
+    ax = fig.axes[0]
+    low, high = ax.get_xlim()
+    assert low < 0.0 and high > 40.0
+    results = read_results(files["failed"])
+    (marks,) = failed_marks(ax)
+    np.testing.assert_array_equal(marks.get_xdata(), results.axes["g"][results.variables["status"] > 0])
+    assert "points failed" in fig._suptitle.get_text()
+
+
+def test_the_response_axis_turns_logarithmic_when_the_values_span_decades(files):
+    """Paper parameters: A/c ~ 48 at g = 0 and ~1.4 at g = 40, numerical R down to ~0.1."""
+    results = read_results(files["g"])
+    values = np.concatenate([results.variables["R"], [48.2]])
+    assert values.max() / values.min() > plot.LOG_SPAN
+    fig = plot.plot(files["g"])
+    assert fig.axes[0].get_yscale() == "log" and "log axis" in fig._suptitle.get_text()
+    assert plot.plot(files["g"], log=False).axes[0].get_yscale() == "linear"
+    assert "log axis" not in plot.plot(files["g"], log=True)._suptitle.get_text()  # asked for: no note
+
+
+def test_log_on_a_map_is_a_logarithmic_colour_scale(files):
+    fig = plot.plot(files["map"], log=True)
+    mesh = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)][0]
+    assert isinstance(mesh.norm, LogNorm)
+    R = read_results(files["map"]).variables["R"]
+    assert mesh.norm.vmin == pytest.approx(R[np.isfinite(R) & (R > 0)].min())
+    assert not isinstance([c for c in plot.plot(files["map"]).axes[0].collections
+                           if isinstance(c, QuadMesh)][0].norm, LogNorm)
+    with pytest.raises(UsageError, match="--log is for"):
+        plot.plot(files["g"], kind="status", log=True)
+
+
+def test_the_map_legend_hides_no_cell(files):
+    fig = plot.plot(files["map"])
+    assert fig.axes[0].get_legend() is None
+    (legend,) = fig.legends
+    assert any("g_{res}" in t.get_text() for t in legend.get_texts())
+    fig.canvas.draw()
+    box, cells = legend.get_window_extent(), fig.axes[0].get_window_extent()
+    assert box.y1 <= cells.y0 or not box.overlaps(cells)
+
+
+def test_a_shard_says_it_is_a_shard(files, tmp_path):
+    config = tmp_path / "shard.yaml"
+    config.write_text("parameters: {Omega: 4.0}\nsweep:\n  g: {start: 0.0, stop: 40.0, num: 9}\n" + SHORT)
+    result = CliRunner().invoke(main, ["run", str(config), "-o", str(tmp_path / "s.h5"), "--shard", "1/3", "-q"])
+    assert result.exit_code == 0, result.output
+    path = tmp_path / "s.shard1of3.h5"
+    done = int(read_results(path).done.sum())
+    assert 0 < done < 9
+    assert f"shard 1/3, {done} of 9 points" in plot.plot(path)._suptitle.get_text()
+
+
+def test_the_status_strip_names_the_rows_of_up_and_down(files):
+    fig = plot.plot(files["both"], kind="status")
+    ax = fig.axes[0]
+    up, down = ax.collections
+    assert up.get_offsets()[:, 1].max() < down.get_offsets()[:, 1].min()  # down drawn above up
+    texts = legend_texts(fig)
+    assert texts == ["sweep up: lower row", "sweep down: upper row"]
+
+
+def test_impacts_of_several_trajectories_clip_nothing(files):
+    """A shared count axis took its limits from the first panel and cut the second's peaks; zero
+    counts sat half hidden on the bottom edge."""
+    fig = plot.plot([files["traj"], files["traj20"]], kind="impacts")
+    for ax, name in zip(fig.axes, ("traj", "traj20")):
+        counts = read_trajectory(files[name]).runs["original"].impacts_per_period
+        low, high = ax.get_ylim()
+        assert low < 0.0 < counts.max() < high
+    assert fig.axes[0].get_shared_y_axes().get_siblings(fig.axes[0]) == [fig.axes[0]]
+
+
+def test_at_names_the_nearest_grid_values_and_the_directions(files):
+    with pytest.raises(UsageError, match=r"g=22: not a value of the axis g; the nearest are 20 and 25"):
+        plot.plot(files["g"], at={"g": "22"})
+    with pytest.raises(UsageError, match=r"the nearest is 40"):
+        plot.plot(files["g"], at={"g": "50"})
+    with pytest.raises(UsageError, match="the direction is up or down"):
+        plot.plot(files["both"], at={"direction": "sideways"})
+    assert plot.plot(files["both"], at={"direction": "down"}) is not None
+
+
+def test_the_slow_flow_from_rest_is_drawn(tmp_path):
+    """simulate from x = v = 0 gave a slow flow of NaN that the legend listed and nothing drew."""
+    out = _run(tmp_path, "rest", "model: effective\nparameters: {gamma: 0.05, alpha: 0.05, g: 24.0, Omega: 4.0}\n"
+                                 "initial: {x: 0.0, v: 0.0}\n"
+                                 "integration: {transient_periods: 2, measure_periods: 4, strobe_periods: 2}\n",
+               "simulate", "--samples-per-period", "20")
+    fig = plot.plot(out, kind="slowflow")
+    (state,) = [line for line in fig.axes[0].get_lines() if "x(0)" in line.get_label()]
+    assert np.isfinite(state.get_ydata()).all() and np.ptp(state.get_ydata()) > 0
+    assert not any("not drawn" in text for text in legend_texts(fig))

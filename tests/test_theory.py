@@ -10,6 +10,7 @@ Parameter sets used below:
 """
 
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -181,6 +182,43 @@ def test_the_bistable_case_ends_on_the_side_of_the_saddle_it_started():
                                                   saddle_theta + sign * unstable[1], 1500.0, 3)
         ends.append(R_path[-1])
     np.testing.assert_allclose(sorted(ends), points.R[[0, 2]], atol=1e-5)
+
+
+def test_the_cartesian_flow_is_the_polar_flow_written_in_u_and_w():
+    """d/dtau (R cos theta, R sin theta) from slow_flow's (dR, dtheta) equals slow_flow_cartesian."""
+    rng = np.random.default_rng(7)
+    R, theta = rng.uniform(0.1, 3.0, 50), rng.uniform(-np.pi, np.pi, 50)
+    for literal in (False, True):
+        dR, dtheta = theory.slow_flow(R, theta, BISTABLE, literal=literal)
+        du, dw = theory.slow_flow_cartesian(R * np.cos(theta), R * np.sin(theta), BISTABLE, literal=literal)
+        np.testing.assert_allclose(du, dR * np.cos(theta) - R * dtheta * np.sin(theta), rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(dw, dR * np.sin(theta) + R * dtheta * np.cos(theta), rtol=1e-12, atol=1e-14)
+
+
+def test_the_slow_flow_starts_from_rest():
+    """R0 = 0 is the polar form's singular point (issue 15: all NaN, divide-by-zero warnings).
+
+    configs/hysteresis_effective.yaml at g = 24, from x = v = 0: the flow leaves the origin at
+    once (dw/dtau = -F/2 there), agrees with the polar form started 1e-4 off rest, and settles on
+    the small stable fixed point (the up sweep's branch in the README's table).
+    """
+    params = dict(BISTABLE, g=24.0)
+    R0, theta0 = theory.initial_slow_state(params, rule="state", x0=0.0, v0=0.0)
+    assert R0 == 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning, no NaN
+        tau, R_path, theta_path = theory.integrate_slow_flow(params, R0, theta0, 400.0, 4001)
+        _, R_literal, _ = theory.integrate_slow_flow(params, R0, theta0, 400.0, 4001, literal=True)
+    assert np.all(np.isfinite(R_path)) and np.all(np.isfinite(theta_path)) and np.all(np.isfinite(R_literal))
+    F = 0.04 / 0.5**2
+    assert R_path[1] == pytest.approx(0.5 * F * tau[1], rel=1e-3)  # pushed off along -w at rate F/2
+    # The polar form just off rest (1e-4 along the same direction, theta = -pi/2) follows it.
+    _, R_near, _ = theory.integrate_slow_flow(params, 1e-4, -np.pi / 2, 400.0, 4001)
+    np.testing.assert_allclose(R_near[100:], R_path[100:], atol=1e-3)
+    points = theory.fixed_points(params)
+    small_stable = points.R[points.stable].min()
+    _, R_late, _ = theory.integrate_slow_flow(params, R0, theta0, 2000.0, 3)
+    assert R_late[-1] == pytest.approx(small_stable, abs=1e-6)
 
 
 def test_rk4_converges_with_fourth_order():

@@ -7,8 +7,11 @@ numba: ``vrsweep validate`` uses it and promises to compile nothing.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
+
+import numpy as np
 
 from vrsweep.errors import ConfigError
 
@@ -20,10 +23,15 @@ from vrsweep.errors import ConfigError
 SECONDS_PER_POINT_PERIOD = {"original": 2.6e-4, "effective": 4e-5}
 REFERENCE_RTOL = 1e-9
 
-# What one point stores: R, Qs, Qc, impacts per period, status, steps, RHS evaluations, the final
-# state, ... (about 12 float64-sized variables) plus a stroboscopic sample (x, v) per strobe period.
-VARIABLES_PER_POINT = 12
-BYTES_PER_VALUE = 8
+# HDF5's own bytes, measured on vrsweep's files (h5py 3, HDF5 1.14): each dataset's object header
+# and attributes take ~2.5 kB whatever its size, plus ~0.45 kB per grid dimension for the
+# dimension-scale links (a 9-point sweep's 25 datasets: 77 kB on disk, 3.9 kB of it
+# data); each chunk of a chunked dataset adds a B-tree entry and a checksum (~48 B per chunk of
+# store.CHUNK_TARGET_BYTES).
+BYTES_PER_DATASET = 2500
+BYTES_PER_DATASET_DIMENSION = 450
+BYTES_PER_CHUNK = 48
+CHUNK_BYTES = 4 * 1024  # store.CHUNK_TARGET_BYTES (not imported: store imports h5py)
 
 # Beyond either, `run` wants --allow-large.
 MAX_OUTPUT_BYTES = 2e9
@@ -51,12 +59,48 @@ def estimate(config, threads=None) -> Estimate:
     threads = max(1, int(threads or default_threads()))
     integration = config.integration
     n_points = config.n_runs  # a two-way continuation stores and runs every point twice
-    output_bytes = n_points * (VARIABLES_PER_POINT + 2 * integration.strobe_periods) * BYTES_PER_VALUE
+    output_bytes = stored_bytes(config)
     periods = integration.transient_periods + integration.measure_periods
     # DP5 takes about rtol^(-1/5) steps per unit time, so cost scales as (1e-9/rtol)^(1/5).
     steps_factor = (REFERENCE_RTOL / integration.rtol) ** 0.2
     seconds = n_points * periods * SECONDS_PER_POINT_PERIOD[config.model] * steps_factor / threads
     return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds)
+
+
+def stored_arrays(config):
+    """(name, bytes per grid point, dimension names beyond the grid) of every array a run stores:
+    the point variables (vrsweep.variables), the done mask and the analytic columns
+    (theory.analytic_columns, evaluated at one point to learn their shapes)."""
+    from vrsweep import theory
+    from vrsweep.variables import point_variables
+
+    arrays = [(name, np.dtype(dtype).itemsize * math.prod(n for _, n in extra), [dim for dim, _ in extra])
+              for name, dtype, extra, _ in point_variables(config.integration)]
+    arrays.append(("done", 1, []))
+    one_point = {name: np.array([value], dtype=np.float64) for name, value in config.parameters.items()}
+    for name, (array, dims_suffix, _) in theory.analytic_columns(one_point).items():
+        array = np.asarray(array)
+        if name == "g_res":  # stored once per value of Omega (job._reduce_constant_axes), ~nothing
+            continue
+        arrays.append((name, array.nbytes // max(1, array.shape[0]) if array.ndim else array.nbytes,
+                       list(dims_suffix)))
+    return arrays
+
+
+def stored_bytes(config) -> int:
+    """Size of the result file: the arrays' bytes plus HDF5's per-dataset and per-chunk overhead."""
+    n_points = config.n_runs
+    arrays = stored_arrays(config)
+    data = sum(per_point * n_points for _, per_point, _ in arrays)
+    chunks = sum(math.ceil(per_point * n_points / CHUNK_BYTES) for _, per_point, _ in arrays)
+    # Datasets: the arrays, g_res, the axes and the extra dimensions' coordinates (strobe, root, ...).
+    extra_dims = {dim for _, _, dims in arrays for dim in dims}
+    grid_dims = len(config.axes) + (config.n_runs != config.n_points)  # + direction
+    n_datasets = len(arrays) + 1 + grid_dims + len(extra_dims)
+    coordinates = 8 * (sum(len(axis.values) for axis in config.axes) + 64)
+    headers = n_datasets * BYTES_PER_DATASET + len(arrays) * grid_dims * BYTES_PER_DATASET_DIMENSION
+    return int(data + coordinates + chunks * BYTES_PER_CHUNK + headers
+               + 2 * len(config.to_yaml()))  # the config is kept as text (root attribute and done's)
 
 
 def size_problem(config, threads=None) -> str | None:

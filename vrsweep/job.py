@@ -17,10 +17,30 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.provenance import cf_attributes
 from vrsweep.errors import UsageError
+from vrsweep.results import Status
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.sweep import Grid, run_sweep
 from vrsweep.variables import point_variables
+
+
+FAILURE_ADVICE_FRACTION = 0.03
+"""Above this share of failed points (of those computed now), the summary says what to change."""
+
+
+def _remedy(status, run):
+    """The setting to change when many points end with ``status`` (run: the config's integration)."""
+    if status == Status.MAX_STEPS:
+        return (f"raise integration.max_steps (now {run.max_steps}), e.g. --set max_steps={run.max_steps * 10}")
+    if status == Status.CHATTER_LIMIT:
+        return (f"raise integration.max_impacts_per_period (now {run.max_impacts_per_period}), or "
+                f"integration.stick_velocity (now {run.stick_velocity:g}) so that a chattering mass sticks sooner")
+    if status == Status.DIVERGED:
+        return (f"if the motion is bounded, raise integration.divergence_bound (now {run.divergence_bound:g}); "
+                "otherwise these parameters blow up")
+    if status == Status.STEP_TOO_SMALL:
+        return f"loosen integration.rtol/atol (now {run.rtol:g}/{run.atol:g})"
+    return "check the parameters of those points (vrsweep info FILE lists them)"
 
 
 @dataclass
@@ -29,11 +49,25 @@ class JobReport:
     n_points: int          # points this job owns (the whole grid, or its shard)
     n_run: int             # points computed now (less than n_points when resuming)
     counts: dict = field(default_factory=dict)  # Status -> points, over the points run now
+    integration: object = None  # the config's Integration, for advice on failed points
 
     def summary_line(self):
         parts = [f"{n} {status.name.lower()}" for status, n in sorted(self.counts.items())]
         detail = ", ".join(parts) if parts else "nothing left to compute"
         return f"{self.n_run} of {self.n_points} points computed ({detail}) -> {self.output}"
+
+    def advice(self):
+        """One line per kind of failure that hit more than FAILURE_ADVICE_FRACTION of the points."""
+        if not self.n_run or self.integration is None:
+            return []
+        lines = []
+        for status, n in sorted(self.counts.items()):
+            if status in (Status.OK, Status.NOT_COMPUTED) or n <= FAILURE_ADVICE_FRACTION * self.n_run:
+                continue
+            lines.append(f"Warning: {n} of {self.n_run} points ({n / self.n_run:.0%}) ended with "
+                         f"{status.name.lower()}: {_remedy(status, self.integration)}, and run again "
+                         "with --overwrite")
+        return lines
 
 
 def parse_shard(text, environ=None):
@@ -205,7 +239,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         writer.close()  # everything finished so far is on disk; --resume continues
         raise
     writer.finish(extra=extras)
-    return JobReport(path, n_owned, sum(counts.values()), counts)
+    return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
 
 
 class Interrupted(KeyboardInterrupt):

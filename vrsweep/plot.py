@@ -18,11 +18,13 @@ Units: the paper's model is dimensionless, so every axis says ``[1]``. The gain 
 and the analytic amplitude A of eq2.21 are different quantities (ERRATA 6): on a gain plot the
 analytic curves are A/c, on an amplitude plot (``amplitude=True``) the numbers are |Q| and A.
 
-Which R can be trusted (issue 5): a point is drawn hollow and grey where no period was found in
-its stroboscopic samples (period == 0: chaotic, quasi-periodic or still transient -- R is then one
-draw that depends on the window and the solver), hollow in its curve's colour where a period was
-found but R_err exceeds RELATIVE_ERROR_LIMIT of R (typically a tiny R, or a window that is not a
-whole number of cycles), and filled otherwise.
+Which R can be trusted (issue 5, README "Can R be trusted?"): trust is judged by R_err alone --
+a point is drawn filled where R_err <= RELATIVE_ERROR_LIMIT of R and hollow where not -- and the
+kind of motion by ``period``: a circle where a period was found, a square where none was (chaos,
+quasi-periodic, a period above max_period, or a motion still settling; with a tiny R_err the last
+two are common and harmless). Points keep their curve's colour. Failed points (status not ok)
+have no value: they are x marks along the bottom edge, in axes coordinates, so that a log axis
+shows them too, and the title counts them (issue 15).
 """
 
 from __future__ import annotations
@@ -58,7 +60,10 @@ MODEL_EQUATIONS = {"original": "original system eq2.1-eq2.2", "effective": "effe
 DIRECTION_NAMES = {1: "up", -1: "down"}
 RELIABLE_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
                     "tab:pink", "tab:olive")
-UNRELIABLE_GREY = "0.55"
+FAILED_COLOUR = "tab:red"
+FAILED_ROW_HEIGHT = 0.035  # axes fraction per row of failed-point marks at the bottom edge
+MARKERS = {False: "o", True: "s"}  # period found: circle; none found (period 0): square
+LOG_SPAN = 100.0  # drawn values spanning this ratio (two decades) or more get a log axis
 
 
 # --------------------------------------------------------------------------------------------
@@ -162,12 +167,14 @@ def _sweep_default(axes):
     return "response"
 
 
-def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=False, periods=None) -> Figure:
+def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None) -> Figure:
     """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
 
     sources: a path, or a list of paths or of what ``load`` returned. at: {axis: value} fixing
-    sweep axes; x_axis: the swept parameter to draw against; log: a logarithmic response axis;
-    periods: (first, last) slow periods of a trajectory to show.
+    sweep axes; x_axis: the swept parameter to draw against; log: True for a logarithmic response
+    axis (or colour scale of a map), False for a linear one, None to choose (response plots: log
+    when the values span two decades or more; maps: linear); periods: (first, last) slow periods
+    of a trajectory to show.
     """
     from vrsweep.trajectory_file import TrajectoryData
 
@@ -187,8 +194,8 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=False, p
         if kind not in TRAJECTORY_KINDS:
             raise UsageError(f"--kind {kind} is for sweep results; a trajectory file takes "
                              f"{', '.join(TRAJECTORY_KINDS)}")
-        if at or x_axis or amplitude or log:
-            raise UsageError("--at, --x, --amplitude and --log are for sweep results, not trajectory files")
+        if at or x_axis or amplitude or log is not None:
+            raise UsageError("--at, --x, --amplitude and --log/--linear are for sweep results, not trajectory files")
         if kind == "impacts":
             return impacts_per_period_figure(data)
         if kind == "slowflow":
@@ -204,9 +211,11 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=False, p
     if kind == "response":
         return response_figure(view, amplitude=amplitude, x_axis=x_axis, log=log)
     if kind == "map":
-        return map_figure(view, "Q_amplitude" if amplitude else "R", x_axis=x_axis)
+        return map_figure(view, "Q_amplitude" if amplitude else "R", x_axis=x_axis, log=bool(log))
     if kind == "impacts":
-        return impacts_figure(view, x_axis=x_axis)
+        return impacts_figure(view, x_axis=x_axis, log=bool(log))
+    if log:  # never ignored quietly
+        raise UsageError(f"--log is for response, map and impacts plots, not --kind {kind}")
     if kind == "status":
         return status_figure(view, x_axis=x_axis)
     return bifurcation_figure(view, x_axis=x_axis)
@@ -231,6 +240,7 @@ class SweepView:
     complete: bool = True
     n_done: int = 0
     n_points: int = 0
+    shard: str | None = None  # "I/N" for a shard file (vrsweep run --shard)
 
     @classmethod
     def from_results(cls, results, at: dict):
@@ -260,7 +270,8 @@ class SweepView:
         return cls(path=results.path, axes=axes, variables=variables, dims=dims, config=config,
                    model=str(results.attrs.get("model", config.model if config else "original")),
                    selected=selected, complete=results.complete,
-                   n_done=int(np.sum(done)), n_points=int(np.size(done)))
+                   n_done=int(np.sum(done)), n_points=int(np.size(done)),
+                   shard=_text_attr(results.attrs.get("shard")))
 
     @property
     def parameter_axes(self):
@@ -309,17 +320,37 @@ def _coordinate_text(name, value):
 
 def _axis_index(name, values, wanted):
     """Index of ``wanted`` on an axis; 'up'/'down' allowed for direction. Must match a grid value."""
-    if name == "direction" and isinstance(wanted, str) and wanted in ("up", "down"):
-        wanted = 1.0 if wanted == "up" else -1.0
+    if name == "direction":
+        words = {"up": 1.0, "down": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
+        key = str(wanted).strip().lower()
+        if key not in words:
+            raise UsageError(f"--at direction={wanted}: the direction is up or down (+1 or -1)")
+        wanted = words[key]
     try:
         wanted = float(wanted)
     except ValueError:
-        raise UsageError(f"--at {name}={wanted}: not a number") from None
+        raise UsageError(f"--at {name}={wanted}: not a number; {name} takes values {_axis_span(values)}") from None
     index = int(np.argmin(np.abs(values - wanted)))
     if abs(values[index] - wanted) > 1e-9 * max(1.0, abs(wanted)):
-        shown = ", ".join(_number(v) for v in values[:12]) + (", ..." if len(values) > 12 else "")
-        raise UsageError(f"--at {name}={_number(wanted)}: not a value of the axis {name} ({shown})")
+        raise UsageError(f"--at {name}={_number(wanted)}: not a value of the axis {name}; "
+                         f"{_nearest_text(values, wanted)} (axis: {_axis_span(values)})")
     return index
+
+
+def _nearest_text(values, wanted):
+    """'the nearest are 19.5 and 21' -- the grid values on either side of ``wanted``."""
+    below, above = values[values < wanted], values[values > wanted]
+    sides = ([_number(below.max())] if below.size else []) + ([_number(above.min())] if above.size else [])
+    if len(sides) == 2:
+        return f"the nearest are {sides[0]} and {sides[1]}"
+    return f"the nearest is {sides[0]}"
+
+
+def _axis_span(values):
+    """'81 values from 0 to 40', or the values themselves when there are few."""
+    if len(values) <= 6:
+        return ", ".join(_number(v) for v in values)
+    return f"{len(values)} values from {_number(np.min(values))} to {_number(np.max(values))}"
 
 
 def _choose_x_axis(view, x_axis, need_axes=None):
@@ -338,20 +369,67 @@ def _choose_x_axis(view, x_axis, need_axes=None):
     return "g" if "g" in axes else axes[0]
 
 
-def _reliability(view, x_axis, where):
-    """Masks along x_axis: (no period found, periodic but R_err large, status not ok)."""
+def _point_classes(view, x_axis, where):
+    """Masks along x_axis: (trusted, aperiodic, failed), the README's rule ("Can R be trusted?").
+
+    Trust is judged by R_err alone: R is trusted where R_err <= RELATIVE_ERROR_LIMIT of R. The
+    kind of motion is what ``period`` says: period 0 (no period up to max_period) with a tiny
+    R_err is a converged R of a motion that is long-periodic or still settling, not chaos.
+    Failed points (status not ok) are neither; points not yet computed are in no mask.
+    """
     status = view.along("status", x_axis, **where)
     failed = (status != Status.OK) & (status != Status.NOT_COMPUTED)
+    ok = status == Status.OK
     aperiodic = np.zeros(status.shape, dtype=bool)
-    imprecise = np.zeros(status.shape, dtype=bool)
     if "period" in view.variables:
-        aperiodic = view.along("period", x_axis, **where) == 0
+        aperiodic = (view.along("period", x_axis, **where) == 0) & ok
     if "R_err" in view.variables and "R" in view.variables:
         R = view.along("R", x_axis, **where)
         R_err = view.along("R_err", x_axis, **where)
         with np.errstate(invalid="ignore"):
-            imprecise = (R_err > RELATIVE_ERROR_LIMIT * np.abs(R)) & ~aperiodic
-    return aperiodic & ~failed, imprecise & ~failed, failed
+            trusted = (R_err <= RELATIVE_ERROR_LIMIT * np.abs(R)) & ok
+    else:  # a file from before R_err: only the period can say anything
+        trusted = ok & ~aperiodic
+    return trusted, aperiodic, failed
+
+
+def _failure_counts(view):
+    """{'max_steps': 7, ...} over the view's points (failed statuses only)."""
+    status = np.asarray(view.variables["status"])
+    return {s.name.lower(): int(np.sum(status == s)) for s in Status
+            if s not in (Status.OK, Status.NOT_COMPUTED) and np.any(status == s)}
+
+
+def _failure_note(view, where_drawn):
+    """'7 of 9 points failed (7 max_steps): red x along the bottom edge', or ''."""
+    counts = _failure_counts(view)
+    if not counts:
+        return ""
+    n_failed = sum(counts.values())
+    detail = ", ".join(f"{n} {name}" for name, n in counts.items())
+    return (f"{n_failed} of {np.size(view.variables['status'])} points failed ({detail}): "
+            f"× {where_drawn}; see vrsweep info")
+
+
+def _draw_failed_rug(ax, x, failed, row=0, colour=FAILED_COLOUR):
+    """Failed points as x marks in a row just above the bottom edge of the axes.
+
+    Their value is NaN, so no data coordinate can show them; axes coordinates can, on a linear
+    or a log axis alike, and they do not move the data limits.
+    """
+    if not np.any(failed):
+        return None
+    (line,) = ax.plot(np.asarray(x)[failed], np.full(int(np.sum(failed)), FAILED_ROW_HEIGHT * (row + 0.7)),
+                      "x", color=colour, ms=6, mew=1.5, zorder=6, clip_on=False,
+                      transform=ax.get_xaxis_transform(), gid="failed")
+    return line
+
+
+def _span_grid(ax, values):
+    """The x limits of the whole grid (plus a margin), whatever could be drawn."""
+    low, high = _limits(values)
+    margin = 0.03 * (high - low) if high > low else 0.5 * max(1.0, abs(low))
+    ax.set_xlim(low - margin, high + margin)
 
 
 # --------------------------------------------------------------------------------------------
@@ -458,11 +536,17 @@ def _resonance_label(axis, position):
 # --------------------------------------------------------------------------------------------
 
 
-def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) -> Figure:
+def response_figure(view: SweepView, amplitude=False, x_axis=None, log=None) -> Figure:
     """R (or |Q|) against one axis with the analytic branches and the resonance (Fig. 1, Fig. 2).
 
-    log: a logarithmic response axis -- the analytic gain A/c reaches ~50 with the paper's
-    parameters while the numerical R spans 0.01-20, so only a log axis shows both.
+    Markers follow the README ("Can R be trusted?"): filled where R_err <= 10% of R (R can be
+    trusted), hollow where not; a circle where a period was found, a square where none was
+    (period 0); always in the curve's colour. Failed points (status not ok, R = NaN) are x marks
+    along the bottom edge, one row per curve, and counted in the title.
+
+    log: True/False for a logarithmic/linear response axis; None chooses: logarithmic when the
+    drawn values (numerical and analytic) span LOG_SPAN or more -- the analytic gain A/c reaches
+    ~50 with the paper's parameters while the numerical R may go down to 0.01.
     """
     x_axis = _choose_x_axis(view, x_axis)
     name = "Q_amplitude" if amplitude else "R"
@@ -476,20 +560,31 @@ def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) ->
     fig = _new_figure(8.0, 6.0)
     ax = fig.subplots()
     analytic_done = set()
-    resonance_handles = []
+    curve_handles, resonance_handles = [], []
+    drawn = []  # every value on the response axis, to choose its scale
+    kinds_seen = {"aperiodic": False, "untrusted": False}
+    symbol = "|Q|" if amplitude else "R"
+    what = "numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)"
     for k, (where, label) in enumerate(curves):
         colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
         y = view.along(name, x_axis, **where)
-        aperiodic, imprecise, failed = _reliability(view, x_axis, where)
-        reliable = np.isfinite(y) & ~aperiodic & ~imprecise & ~failed
-        what = "numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)"
+        trusted, aperiodic, failed = _point_classes(view, x_axis, where)
+        shown = np.isfinite(y) & ~failed
+        drawn.append(y[shown])
         ax.plot(x, y, color=colour, lw=0.8, ls=":", zorder=3)
-        ax.plot(x[reliable], y[reliable], "o", color=colour, ms=4, zorder=4,
-                label=f"{what}{', ' + label if label else ''}")
-        ax.plot(x[aperiodic], y[aperiodic], "o", mfc="none", mec=UNRELIABLE_GREY, ms=4.5, zorder=4)
-        ax.plot(x[imprecise], y[imprecise], "o", mfc="none", mec=colour, ms=4.5, zorder=4)
-        if failed.any():
-            ax.plot(x[failed], np.zeros(failed.sum()), "x", color="tab:red", ms=6, zorder=5)
+        for no_period in (False, True):
+            for trust in (True, False):
+                mask = shown & (aperiodic == no_period) & (trusted == trust)
+                if not mask.any():
+                    continue
+                kinds_seen["aperiodic"] |= no_period
+                kinds_seen["untrusted"] |= not trust
+                ax.plot(x[mask], y[mask], MARKERS[no_period], color=colour, mec=colour,
+                        mfc=colour if trust else "none", ms=4 if trust else 4.5, mew=1.0, zorder=4,
+                        gid=f"{'trusted' if trust else 'untrusted'} {'aperiodic' if no_period else 'periodic'}")
+        _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
+        curve_handles.append(Line2D([], [], ls=":", lw=0.8, marker="o", color=colour, ms=4,
+                                    label=f"{what}{', ' + label if label else ''}"))
 
         # The analytic side depends on the parameters only, not on the continuation direction.
         parameter_where = {axis: index for axis, index in where.items() if axis != "direction"}
@@ -499,7 +594,9 @@ def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) ->
         analytic_done.add(key)
         parameters = view.parameters(**{axis: float(view.axes[axis][i]) for axis, i in parameter_where.items()})
         fine = np.linspace(x.min(), x.max(), FINE_POINTS)
-        _draw_branches(ax, analytic_branches(parameters, x_axis, fine, gain=not amplitude), colour)
+        branches = analytic_branches(parameters, x_axis, fine, gain=not amplitude)
+        drawn += [branch_y for _, branch_y, _ in branches]
+        _draw_branches(ax, branches, colour)
         barrier = _fine_parameters(parameters, x_axis, fine)
         barrier_level = barrier["Delta"] if amplitude else barrier["Delta"] / barrier["c"]
         ax.plot(fine, barrier_level, color=colour, lw=0.8, ls=(0, (1, 3)), zorder=1)
@@ -509,13 +606,21 @@ def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) ->
                                             label=_resonance_label(x_axis, position)))
 
     analytic = "A" if amplitude else "A/c"
-    handles, _ = ax.get_legend_handles_labels()
-    handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec=UNRELIABLE_GREY,
-                          label="no period found (chaos?): R depends on the window"))
-    handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k",
-                          label=f"periodic, but $R_{{err}}$ > {RELATIVE_ERROR_LIMIT:.0%} of R"))
-    if any(_reliability(view, x_axis, where)[2].any() for where, _ in curves):
-        handles.append(Line2D([], [], ls="none", marker="x", color="tab:red", label="integration failed (status)"))
+    error = "error" if amplitude else "$R_{err}$"  # R_err/R is also the relative error of |Q|
+    handles = list(curve_handles)
+    handles.append(Line2D([], [], ls="none", marker="o", color="k", ms=4,
+                          label=f"filled: {error} ≤ {RELATIVE_ERROR_LIMIT:.0%} of {symbol} (trusted)"))
+    if kinds_seen["untrusted"]:
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=4.5,
+                              label=f"hollow: {error} > {RELATIVE_ERROR_LIMIT:.0%} of {symbol} (window-dependent)"))
+    if kinds_seen["aperiodic"]:
+        handles.append(Line2D([], [], ls="none", marker="s", mfc="none", mec="k", ms=4.5,
+                              label="square: no period found (period 0)"))
+    failure_note = _failure_note(view, "along the bottom edge")
+    if failure_note:
+        handles.append(Line2D([], [], ls="none", marker="x", mew=1.5,
+                              color=FAILED_COLOUR if len(curves) == 1 else "k",
+                              label="× at the bottom edge: integration failed"))
     if view.config is not None:
         handles.append(Line2D([], [], color="k", lw=1.3, label=f"analytic {analytic}, stable (corrected eq2.27)"))
         handles.append(Line2D([], [], color="k", lw=1.3, ls="--", label=f"analytic {analytic}, unstable"))
@@ -529,23 +634,52 @@ def response_figure(view: SweepView, amplitude=False, x_axis=None, log=False) ->
         ax.set_ylabel(f"amplitude $|Q|$ of x at $\\omega$, analytic $A$ {UNITS}")
     else:
         ax.set_ylabel(f"gain $R = |Q|/c$, analytic $A/c$ {UNITS}")
+    scale_note = ""
+    span = _decades(drawn)
+    if log is None:
+        log = span >= np.log10(LOG_SPAN)
+        if log:
+            scale_note = f"log axis: the values span {span:.1f} decades (--linear for a linear one)"
     if log:
         ax.set_yscale("log")
     else:
         ax.set_ylim(bottom=0.0)
+    _span_grid(ax, x)
     ax.grid(alpha=0.3, which="both" if log else "major")
     quantity = "amplitude |Q|" if amplitude else "gain R"
-    symbol = PARAMETER_SYMBOLS.get(x_axis, x_axis)
-    _title(fig, f"Response {quantity} against {symbol}; analytic: first-order theory of the effective system "
+    x_symbol = PARAMETER_SYMBOLS.get(x_axis, x_axis)
+    notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note) if note)
+    _title(fig, f"Response {quantity} against {x_symbol}; analytic: first-order theory of the effective system "
                 f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})",
-           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
 
+def _decades(arrays):
+    """log10(max/min) over the positive finite values of ``arrays``; 0 with fewer than two."""
+    values = np.concatenate([np.ravel(a) for a in arrays]) if arrays else np.array([])
+    values = values[np.isfinite(values) & (values > 0)]
+    if values.size < 2:
+        return 0.0
+    return float(np.log10(values.max() / values.min()))
+
+
 def _progress_note(view):
+    """What part of the grid the file holds: '' for a whole finished sweep."""
+    if view.shard:
+        # A shard's gaps belong to the other shards, not to a run that stopped.
+        unfinished = "" if view.complete else ", UNFINISHED"
+        return (f"shard {view.shard}, {view.n_done} of {view.n_points} points{unfinished} "
+                "(vrsweep merge joins the shards)")
     if view.complete:
         return ""
     return f"UNFINISHED: {view.n_done} of {view.n_points} points done"
+
+
+def _text_attr(value):
+    if value is None:
+        return None
+    return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def _map_axes(view, x_axis):
@@ -591,52 +725,72 @@ def _limits(values):
     return float(values.min()), float(values.max())
 
 
-def map_figure(view: SweepView, name="R", x_axis=None) -> Figure:
-    """A heat map of ``name`` over two axes with the resonance curve; unreliable points dotted."""
+def map_figure(view: SweepView, name="R", x_axis=None, log=False) -> Figure:
+    """A heat map of ``name`` over two axes with the resonance curve; untrusted R dotted, failed x.
+
+    log: a logarithmic colour scale (from the smallest positive value up). The legend goes below
+    the maps, where it hides no cell.
+    """
+    from matplotlib.colors import LogNorm, Normalize
+
     x_axis, y_axis = _map_axes(view, x_axis)
     view.require(name)
     panels = _map_panels(view)
-    fig = _new_figure(7.5 * len(panels), 5.0)
+    fig = _new_figure(7.5 * len(panels), 5.6)
     axes = np.atleast_1d(fig.subplots(1, len(panels), squeeze=False)[0])
     label = {"R": f"gain $R = |Q|/c$ {UNITS}", "Q_amplitude": f"amplitude $|Q|$ {UNITS}",
              "impacts_per_period": f"mean impacts per slow period $2\\pi/\\omega$ {UNITS}"}[name]
     values = view.variables[name]
     finite = values[np.isfinite(values)]
     vmax = float(np.percentile(finite, 99)) if finite.size else 1.0  # one wild point must not wash out the map
+    positive = finite[finite > 0]
+    if log and positive.size:
+        norm = LogNorm(vmin=float(positive.min()), vmax=max(vmax, float(positive.min()) * 10))
+    else:
+        norm = Normalize(vmin=0.0, vmax=vmax)
+    handles = {}
     for ax, (where, panel_title) in zip(axes, panels):
         z = _as_x_y(view, name, x_axis, y_axis, where)
         ax.set_facecolor("0.8")  # NaN cells (not computed, or failed) show the background
         mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap="viridis",
-                             vmin=0.0, vmax=vmax)
-        fig.colorbar(mesh, ax=ax, label=label, extend="max" if finite.size and finite.max() > vmax else "neither")
-        handles = []
+                             norm=norm)
+        fig.colorbar(mesh, ax=ax, label=label + (" (log scale)" if log else ""),
+                     extend="max" if finite.size and finite.max() > norm.vmax else "neither")
         resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
         if resonance is not None:
-            handles.append(resonance)
+            handles["resonance"] = resonance
         if name in ("R", "Q_amplitude") and "status" in view.variables:
-            unreliable = np.zeros(z.shape, dtype=bool)
+            untrusted = np.zeros(z.shape, dtype=bool)
             failed = np.zeros(z.shape, dtype=bool)
             for j in range(len(view.axes[y_axis])):
-                aperiodic, imprecise, f = _reliability(view, x_axis, {**where, y_axis: j})
-                unreliable[:, j], failed[:, j] = aperiodic | imprecise, f
+                trusted, _, f = _point_classes(view, x_axis, {**where, y_axis: j})
+                computed = view.along("status", x_axis, **where, **{y_axis: j}) == Status.OK
+                untrusted[:, j], failed[:, j] = computed & ~trusted, f
             X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
-            ax.plot(X[unreliable], Y[unreliable], ".", color="white", ms=2.5)
-            handles.append(Line2D([], [], ls="none", marker=".", color="white", mec="k", mew=0.3,
-                                  label=f"unreliable: no period or $R_{{err}}$ > {RELATIVE_ERROR_LIMIT:.0%} of R"))
+            if untrusted.any():
+                ax.plot(X[untrusted], Y[untrusted], ".", color="white", ms=2.5, gid="untrusted")
+                handles["untrusted"] = Line2D(
+                    [], [], ls="none", marker=".", color="white", mec="k", mew=0.3,
+                    label=f"white dot: $R_{{err}}$ > {RELATIVE_ERROR_LIMIT:.0%} of R (R depends on the window)")
             if failed.any():
-                ax.plot(X[failed], Y[failed], "x", color="tab:red", ms=4)
-                handles.append(Line2D([], [], ls="none", marker="x", color="tab:red", label="integration failed"))
-        if handles:
-            legend = ax.legend(handles=handles, fontsize=7, loc="upper left", facecolor="0.3", framealpha=0.8)
-            for text in legend.get_texts():
-                text.set_color("white")
+                ax.plot(X[failed], Y[failed], "x", color=FAILED_COLOUR, ms=4, gid="failed")
+                handles["failed"] = Line2D([], [], ls="none", marker="x", color=FAILED_COLOUR,
+                                           label="integration failed (status ≠ ok)")
         ax.set_xlabel(parameter_label(x_axis))
         ax.set_ylabel(parameter_label(y_axis))
         if panel_title:
             ax.set_title(panel_title, fontsize=9)
+    if handles:
+        legend = fig.legend(handles=list(handles.values()), fontsize=7, loc="outside lower center",
+                            ncol=len(handles), facecolor="0.3", framealpha=0.9)
+        for text in legend.get_texts():
+            text.set_color("white")
+    notes = "; ".join(note for note in (_progress_note(view), _failure_note(view, "on its cell")
+                                        if name in ("R", "Q_amplitude") and "status" in view.variables else "")
+                      if note)
     _title(fig, f"{label.split(' [')[0]} over {PARAMETER_SYMBOLS[x_axis]} and {PARAMETER_SYMBOLS[y_axis]} "
                 "(grey: no value: not computed or failed)",
-           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
 
@@ -651,30 +805,49 @@ def _as_x_y(view, name, x_axis, y_axis, where):
     return np.moveaxis(array, [dims.index(x_axis), dims.index(y_axis)], [0, 1]).astype(np.float64)
 
 
-def impacts_figure(view: SweepView, x_axis=None) -> Figure:
-    """Mean impacts per slow period over the measurement window: a curve (1 axis) or a map (2)."""
+def impacts_figure(view: SweepView, x_axis=None, log=False) -> Figure:
+    """Mean impacts per slow period over the measurement window: a curve (1 axis) or a map (2).
+
+    log: a logarithmic count axis (symmetric-log, so that zero counts stay on it) or colour scale.
+    """
     view.require("impacts_per_period")
     if len(view.parameter_axes) == 2 and x_axis is None and _sweep_default(view.axes) == "map":
-        return map_figure(view, "impacts_per_period")
+        return map_figure(view, "impacts_per_period", log=log)
     x_axis = _choose_x_axis(view, x_axis)
     curves = view.curve_coordinates(x_axis)
     if len(curves) > MAX_CURVES:
         raise UsageError(f"{len(curves)} curves on one plot: fix the other axes with --at")
-    x = view.axes[x_axis]
+    x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 4.5)
     ax = fig.subplots()
+    top = 0.0
     for k, (where, label) in enumerate(curves):
+        colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
         y = view.along("impacts_per_period", x_axis, **where)
-        ax.plot(x, y, "o-", ms=3.5, lw=0.9, color=RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)],
-                label=label or "measurement window")
+        ax.plot(x, y, "o-", ms=3.5, lw=0.9, color=colour, label=label or "measurement window")
+        top = max(top, float(np.nanmax(y, initial=0.0)))
+        if "status" in view.variables:
+            failed = _point_classes(view, x_axis, where)[2]
+            _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
+    failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
+    if failure_note:
+        ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ls="none",
+                label="integration failed (no count)")
     ax.set_xlabel(parameter_label(x_axis))
     ax.set_ylabel(f"mean impacts per slow period $2\\pi/\\omega$ {UNITS}")
-    ax.set_ylim(bottom=0.0)
+    if log:
+        ax.set_yscale("symlog", linthresh=1.0)  # zero counts stay on the axis
+        ax.set_ylim(-0.1, max(2.0, 1.5 * top))
+    else:
+        # A little room below zero: points with no impacts are drawn whole, not cut by the edge.
+        ax.set_ylim(-0.04 * max(top, 1.0), 1.06 * max(top, 1.0))
+    _span_grid(ax, x)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
+    notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
     _title(fig, f"Impacts per slow period against {PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
                 "(mean over the measurement window)",
-           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
 
@@ -704,20 +877,40 @@ def status_figure(view: SweepView, x_axis=None) -> Figure:
     else:
         x_axis = _choose_x_axis(view, x_axis, need_axes=1)
         ax = fig.subplots()
-        for k, (where, label) in enumerate(view.curve_coordinates(x_axis)):
+        curves = view.curve_coordinates(x_axis)
+        shapes = "os^Dv<>p"
+        for k, (where, label) in enumerate(curves):
             status = view.along("status", x_axis, **where).astype(int)
-            ax.scatter(view.axes[x_axis], status + 0.12 * k, c=[colours[codes.index(s)] for s in status],
-                       s=18, edgecolors="k", linewidths=0.3, label=label or None)
+            # Several curves (e.g. up and down): each its own row above each status, and its own
+            # marker, named in the legend.
+            row = k - (len(curves) - 1) / 2
+            ax.scatter(view.axes[x_axis], status + STATUS_ROW_STEP * row,
+                       c=[colours[codes.index(s)] for s in status], marker=shapes[k % len(shapes)],
+                       s=18, edgecolors="k", linewidths=0.3,
+                       label=f"{label}: {_row_name(k, len(curves))}" if label else None)
         ax.set_yticks(codes, names, fontsize=8)
         ax.set_ylim(min(codes) - 0.5, max(codes) + 0.5)
+        _span_grid(ax, view.axes[x_axis])
         ax.set_xlabel(parameter_label(x_axis))
         ax.set_ylabel("status of the point")
         ax.grid(alpha=0.3)
+        if len(curves) > 1:
+            fig.legend(fontsize=7.5, loc="outside lower center", ncol=min(len(curves), 4))
     counts = {name: int(np.sum(view.variables["status"] == code)) for code, name in zip(codes, names)}
     summary = ", ".join(f"{n} {name}" for name, n in counts.items() if n)
     _title(fig, f"How each point's integration ended ({summary})",
            _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
     return fig
+
+
+STATUS_ROW_STEP = 0.25  # status strip: offset between the rows of several curves
+
+
+def _row_name(k, n):
+    """Where curve k of n sits around each status: 'lower row', 'upper row', 'row 2 of 3 from below'."""
+    if n == 2:
+        return ("lower", "upper")[k] + " row"
+    return f"row {k + 1} of {n} from below"
 
 
 def bifurcation_figure(view: SweepView, x_axis=None) -> Figure:
@@ -728,24 +921,35 @@ def bifurcation_figure(view: SweepView, x_axis=None) -> Figure:
     ax = fig.subplots()
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     n_strobe = view.variables["strobe_x"].shape[-1]
-    for k, (where, label) in enumerate(view.curve_coordinates(x_axis)):
+    curves = view.curve_coordinates(x_axis)
+    for k, (where, label) in enumerate(curves):
+        colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
         strobe = view.along("strobe_x", x_axis, **where)  # (n_x, n_strobe)
         xs = np.repeat(x, strobe.shape[-1])
-        ax.plot(xs, strobe.reshape(-1), ".", ms=2.5, color=RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)],
+        ax.plot(xs, strobe.reshape(-1), ".", ms=2.5, color=colour,
                 label=label or f"x(nT), last {n_strobe} slow periods of each point")
+        if "status" in view.variables:
+            failed = _point_classes(view, x_axis, where)[2]
+            _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
+    failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
+    if failure_note:
+        ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ms=2.0, ls="none",
+                label="integration failed: no samples")  # ms x markerscale 3 = the drawn marks
     if view.config is not None:
         ax.axhline(view.parameters()["Delta"], color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
         parameters = view.parameters()
         for position in resonance_positions(parameters, x_axis, np.linspace(x.min(), x.max(), FINE_POINTS)):
             ax.axvline(position, color="0.4", ls="-.", lw=0.9, label=_resonance_label(x_axis, position))
+    _span_grid(ax, x)  # the whole grid, even where every point failed
     ax.set_xlabel(parameter_label(x_axis))
     ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$ {UNITS}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7.5, loc="best", markerscale=3)
+    notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
     _title(fig, "Bifurcation diagram: x sampled once per slow period against "
                 f"{PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
                 "(one dot per period: a period-p orbit shows p dots)",
-           _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
+           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
 
@@ -783,6 +987,15 @@ def parse_periods(text):
     return window
 
 
+def slow_periods_in(data):
+    """How many slow periods a trajectory file spans (None if it does not say its slow period)."""
+    slow_period = float(data.attrs.get("slow_period", 0.0)) or None
+    if slow_period is None:
+        return None
+    run = next(iter(data.runs.values()))
+    return int(round((run.t[-1] - run.t[0]) / slow_period))
+
+
 def _time_window(data, periods):
     """(t_start, t_end) of slow periods FIRST..LAST; the whole run for None."""
     slow_period = float(data.attrs.get("slow_period", 0.0)) or None
@@ -790,7 +1003,7 @@ def _time_window(data, periods):
     if periods is None or slow_period is None:
         return run.t[0], run.t[-1]
     first, last = periods
-    n_periods = int(round((run.t[-1] - run.t[0]) / slow_period))
+    n_periods = slow_periods_in(data)
     last = n_periods if last is None else last
     if first > n_periods:
         raise UsageError(f"--periods {first}:{last}: the run has {n_periods} slow periods")
@@ -872,11 +1085,14 @@ def trajectory_figure(data, periods=None) -> Figure:
 def impacts_per_period_figure(datasets) -> Figure:
     """Impacts in each slow period against the period number, transient included (Fig. impact_no).
 
-    One panel per file (e.g. g = 5 and g = 20), sharing the count axis. The measurement window's
-    mean -- what ``vrsweep run`` stores as impacts_per_period -- is drawn over it.
+    One panel per file (e.g. g = 5 and g = 20), each with its own count axis: a shared one would
+    take its limits from one panel and clip the others. The measurement window's mean -- what
+    ``vrsweep run`` stores as impacts_per_period -- is drawn over it.
     """
+    from matplotlib.ticker import MaxNLocator
+
     fig = _new_figure(8.0, 2.7 * len(datasets) + 1.0)
-    axes = fig.subplots(len(datasets), 1, squeeze=False, sharey=True, sharex=True)[:, 0]
+    axes = fig.subplots(len(datasets), 1, squeeze=False, sharex=len(datasets) > 1)[:, 0]
     configs = [_parse_config(data.config_text) for data in datasets]
     for k, (ax, data, config) in enumerate(zip(axes, datasets, configs)):
         run = data.runs.get(data.model) or next(iter(data.runs.values()))
@@ -894,7 +1110,9 @@ def impacts_per_period_figure(datasets) -> Figure:
         ax.set_title(f"{letter}{_point_text(config)}  ·  {os.path.basename(data.path or '')}  ·  "
                      f"{int(counts.sum())} impacts in {len(counts)} slow periods", fontsize=9)
         ax.set_ylabel(f"impacts per slow period {UNITS}")
-        ax.set_ylim(bottom=0)
+        top = max(1.0, float(counts.max(initial=0)))
+        ax.set_ylim(-0.06 * top, 1.08 * top)  # room for the markers of 0 and of the largest count
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_xlim(0.5, len(counts) + 0.5)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7.5, loc="upper right")
@@ -943,7 +1161,9 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
             continue
         flow = data.slow_flow[start]
         flow_t, flow_x, flow_v = _in_window(flow.t, window, flow.x, flow.v)
-        style = SLOW_FLOW_STYLES.get(start, dict(label=start))
+        style = dict(SLOW_FLOW_STYLES.get(start, dict(label=start)))
+        if not np.isfinite(flow_x).any():  # say so rather than list a curve that draws nothing
+            style["label"] += ": no finite value (not drawn)"
         ax_x.plot(flow_t, flow_x, **style)
         ax_v.plot(flow_t, flow_v, **style)
         ax_phase.plot(flow_x, flow_v, **style)
@@ -972,5 +1192,5 @@ __all__ = [
     "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "load", "default_kind", "plot",
     "SweepView", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
-    "resonance_positions", "with_impacts", "parse_periods", "parameter_label",
+    "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
 ]

@@ -776,7 +776,8 @@ def read_results(path) -> ResultSet:
             point_variables = _point_variables(f)
             axes, coords, coord_attrs = {}, {}, {}
             variables, dims, var_attrs, fills = {}, {}, {}, {}
-            for name, obj in f.items():
+            for name in f:
+                obj = f[name]  # not f.items(): its .get() turns an object that fails to open into None
                 if not isinstance(obj, h5py.Dataset):
                     continue
                 if obj.is_scale:

@@ -143,7 +143,7 @@ def slow_flow(R, theta, params: Mapping, literal: bool = False):
 
 
 def _slow_flow_rates(R, theta, co: SlowFlowCoefficients, literal: bool):
-    """``slow_flow`` with the coefficients already computed (the RK4 loop calls this)."""
+    """``slow_flow`` with the coefficients already computed."""
     sin_term, cos_term = np.sin(theta), np.cos(theta)
     if literal:
         sin_term, cos_term = cos_term, sin_term  # the paper's eq2.24 as printed
@@ -462,12 +462,16 @@ def integrate_slow_flow(params: Mapping, R0, theta0, tau_end, n_samples, literal
                         max_step: float = DEFAULT_SLOW_STEP):
     """Integrate the slow flow from (R0, theta0) at tau = 0 to tau_end.   # eq2.24 (corrected, ERRATA 1)
 
-    Classical fixed-step RK4 in numpy. The step is the largest h <= max_step that divides the
-    sample spacing tau_end/(n_samples - 1) evenly, so samples fall on steps (no interpolation).
-    R0, theta0 may be arrays (several starts at once). ``literal=True``: the paper's printed
-    eq2.24, for reproducing its Fig. 6 only.
+    Classical fixed-step RK4 in numpy, in the Cartesian coordinates u = R cos(theta),
+    w = R sin(theta) of ``slow_flow_cartesian``: the polar form divides by R, so a start at rest
+    (R0 = 0, e.g. x(0) = v(0) = 0) would give NaN from the first step, and a path passing close to
+    the origin would lose accuracy. The step is the largest h <= max_step that divides the sample
+    spacing tau_end/(n_samples - 1) evenly, so samples fall on steps (no interpolation). R0, theta0
+    may be arrays (several starts at once). ``literal=True``: the paper's printed eq2.24, for
+    reproducing its Fig. 6 only.
 
-    Returns tau (n_samples,), R and theta (n_samples, *shape of R0). theta is not wrapped.
+    Returns tau (n_samples,), R and theta (n_samples, *shape of R0). theta is continuous (not
+    wrapped), starting at theta0; where R = 0 the phase is undefined and theta keeps its last value.
     """
     if n_samples < 2:
         raise ValueError("n_samples must be at least 2")
@@ -483,25 +487,61 @@ def integrate_slow_flow(params: Mapping, R0, theta0, tau_end, n_samples, literal
     if all(np.ndim(value) == 0 for value in dataclasses.astuple(co)):
         co = SlowFlowCoefficients(*(float(value) for value in dataclasses.astuple(co)))  # cheaper scalars
 
-    def rates(R, theta):
-        return _slow_flow_rates(R, theta, co, literal)
+    def rates(u, w):
+        return _cartesian_rates(u, w, co, literal)
 
     R = np.asarray(R0, dtype=np.float64).copy()
     theta = np.broadcast_to(np.asarray(theta0, dtype=np.float64), R.shape).copy()
+    u, w = R * np.cos(theta), R * np.sin(theta)
     tau = np.linspace(0.0, tau_end, n_samples)
     R_out = np.empty((n_samples,) + R.shape)
     theta_out = np.empty((n_samples,) + R.shape)
     R_out[0], theta_out[0] = R, theta
     for sample in range(1, n_samples):
         for _ in range(steps_per_sample):
-            k1R, k1t = rates(R, theta)
-            k2R, k2t = rates(R + 0.5 * h * k1R, theta + 0.5 * h * k1t)
-            k3R, k3t = rates(R + 0.5 * h * k2R, theta + 0.5 * h * k2t)
-            k4R, k4t = rates(R + h * k3R, theta + h * k3t)
-            R = R + h / 6.0 * (k1R + 2.0 * k2R + 2.0 * k3R + k4R)
-            theta = theta + h / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
-        R_out[sample], theta_out[sample] = R, theta
+            k1u, k1w = rates(u, w)
+            k2u, k2w = rates(u + 0.5 * h * k1u, w + 0.5 * h * k1w)
+            k3u, k3w = rates(u + 0.5 * h * k2u, w + 0.5 * h * k2w)
+            k4u, k4w = rates(u + h * k3u, w + h * k3w)
+            u = u + h / 6.0 * (k1u + 2.0 * k2u + 2.0 * k3u + k4u)
+            w = w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w)
+            # Follow theta step by step: a step turns the phase by far less than pi (except right
+            # at the origin, where the phase means nothing), so the nearest branch is the path's.
+            turn = np.arctan2(w, u) - theta
+            theta = np.where((u != 0.0) | (w != 0.0), theta + (turn + np.pi) % (2.0 * np.pi) - np.pi, theta)
+        R_out[sample], theta_out[sample] = np.hypot(u, w), theta
     return tau, R_out, theta_out
+
+
+def slow_flow_cartesian(u, w, params: Mapping, literal: bool = False):
+    """(du/dtau, dw/dtau) of the slow flow in u = R cos(theta), w = R sin(theta).   # eq2.24 (ERRATA 1)
+
+    With X = R cos(tau + theta) = u cos(tau) - w sin(tau) (eq2.21), the corrected eq2.24 becomes
+
+        du/dtau = a u - b w,    dw/dtau = a w + b u - F/2,
+        a = Gamma (K/2 - R^2/8),  b = 3 Lambda R^2/8 - sigma/2,  R^2 = u^2 + w^2,
+
+    smooth everywhere, the origin (rest) included. Same fixed points and trajectories as
+    ``slow_flow`` wherever R > 0. The paper's printed form (``literal=True``, sin/cos swapped)
+    has forcing -(F/2)(cos 2 theta, sin 2 theta), whose direction is undefined at R = 0: there it
+    is taken at theta = 0.
+    """
+    co = slow_flow_coefficients(params)
+    return _cartesian_rates(np.asarray(u, dtype=np.float64), np.asarray(w, dtype=np.float64), co, literal)
+
+
+def _cartesian_rates(u, w, co: SlowFlowCoefficients, literal: bool):
+    R_squared = u * u + w * w
+    growth = co.Gamma * (0.5 * co.K - R_squared / 8.0)
+    shift = 3.0 * co.Lambda * R_squared / 8.0 - 0.5 * co.sigma
+    du = growth * u - shift * w
+    dw = growth * w + shift * u
+    if not literal:
+        return du, dw - 0.5 * co.F
+    safe = np.where(R_squared > 0.0, R_squared, 1.0)
+    cos_2theta = np.where(R_squared > 0.0, (u * u - w * w) / safe, 1.0)
+    sin_2theta = np.where(R_squared > 0.0, 2.0 * u * w / safe, 0.0)
+    return du - 0.5 * co.F * cos_2theta, dw - 0.5 * co.F * sin_2theta
 
 
 def initial_slow_state(params: Mapping, rule: str = "paper", l: float = 1, x0=None, v0=None):

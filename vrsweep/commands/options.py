@@ -18,3 +18,36 @@ threads_option = click.option(
 quiet_option = click.option("--quiet", "-q", is_flag=True, help="No progress bar or summary.")
 overwrite_option = click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
 config_argument = click.argument("config_path", metavar="CONFIG.yaml", type=click.Path(dir_okay=False))
+
+
+def capped_threads(threads):
+    """--threads, lowered to what numba can run here, saying so on stderr (never silently)."""
+    from vrsweep.estimate import default_threads
+
+    available = default_threads()
+    if threads is not None and threads > available:
+        click.echo(f"--threads {threads}: numba can run {available} thread{'s' if available != 1 else ''} "
+                   f"here (NUMBA_NUM_THREADS or the CPUs this process may use); using {available}", err=True)
+        return available
+    return threads
+
+
+def announce_fixed_axes(config_path, overrides, config):
+    """One stderr line for each --set that fixed a swept parameter, removing its axis."""
+    from vrsweep.config import load_config
+    from vrsweep.errors import ConfigError
+
+    names = {item.partition("=")[0].strip() for item in overrides}
+    names = {name.removeprefix("parameters.") for name in names}
+    if not names & (set(config.parameters) - set(config.axis_names)):
+        return
+    try:
+        as_written = load_config(config_path)
+    except ConfigError:  # the overrides are what make it valid: nothing to compare with
+        return
+    for axis in as_written.axes:
+        if axis.name in names and axis.name not in config.axis_names:
+            values = axis.values
+            click.echo(f"--set {axis.name}={config.parameters[axis.name]:g}: {axis.name} was swept "
+                       f"({len(values)} values from {min(values):g} to {max(values):g}); it is now fixed "
+                       "and that axis is gone", err=True)

@@ -40,7 +40,9 @@ def default_output(path, kind):
               help="Fix a swept axis at one of its values, e.g. --at Omega=4 (repeatable; "
                    "direction=up|down for a two-way continuation).")
 @click.option("--x", "x_axis", default=None, metavar="NAME", help="The swept parameter on the horizontal axis.")
-@click.option("--log", is_flag=True, help="Logarithmic response axis (response plots).")
+@click.option("--log/--linear", "log", default=None,
+              help="Logarithmic (or linear) response axis; on maps, colour scale. Default: response "
+                   "plots choose log when the values span two decades or more, maps are linear.")
 @click.option("--periods", default=None, metavar="FIRST:LAST",
               help="Trajectory files: show slow periods FIRST to LAST only (1-based), e.g. 1:20.")
 @click.option("--dpi", type=click.IntRange(min=20, max=1200), default=150, show_default=True,
@@ -62,9 +64,10 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
       impacts      impacts per slow period, period by period (several files: one panel each)
       slowflow     effective system against the slow-flow reconstruction (needs --compare effective)
 
-    On response plots, hollow grey points have no period (R is one draw of a chaotic or
-    quasi-periodic motion), hollow coloured ones R_err > 10% of R; --log helps when the
-    analytic gain dwarfs R.
+    On response plots a filled marker is an R to trust (R_err <= 10% of R), a hollow one is not
+    (R depends on the window: chaos or a transient); a circle is a motion with a period, a
+    square one without (period 0). Failed points are x marks along the bottom edge. The response
+    axis turns logarithmic by itself when the values span two decades (--log/--linear to choose).
     """
     from vrsweep import plot
     from vrsweep.errors import UsageError
@@ -74,11 +77,22 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
         raise UsageError(f"-o {path}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
     data = [plot.load(p) for p in paths]
     for path_in, loaded in zip(paths, data):
-        if not loaded.complete:
+        shard = getattr(loaded, "shard", None)
+        if shard:
+            click.echo(f"Note: {path_in} is shard {shard}: plotting its points only "
+                       "(vrsweep merge joins the shards into the whole grid)", err=True)
+        elif not loaded.complete:
             click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
                        "(finish it with vrsweep run CONFIG --resume)", err=True)
+    window = plot.parse_periods(periods) if periods else None
+    if window is not None and window[1] is not None:
+        for path_in, loaded in zip(paths, data):
+            n_periods = plot.slow_periods_in(loaded) if hasattr(loaded, "runs") else None
+            if n_periods is not None and window[0] <= n_periods < window[1]:
+                click.echo(f"--periods {periods}: {path_in} has {n_periods} slow periods; showing "
+                           f"{window[0]}-{n_periods}", err=True)
     figure = plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis, log=log,
-                       periods=plot.parse_periods(periods) if periods else None)
+                       periods=window)
     if not path.parent.exists():
         raise UsageError(f"output directory {path.parent} does not exist (output: {path})")
     from vrsweep.store import atomic_write

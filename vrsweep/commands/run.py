@@ -6,7 +6,8 @@ import sys
 import click
 
 from vrsweep.commands.options import (
-    config_argument, output_option, overwrite_option, quiet_option, set_option, threads_option,
+    announce_fixed_axes, capped_threads, config_argument, output_option, overwrite_option, quiet_option,
+    set_option, threads_option,
 )
 
 PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
@@ -47,6 +48,10 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
     config = load_config(config_path, overrides)
+    announce_fixed_axes(config_path, overrides, config)
+    requested_threads = threads
+    if not dask_address:  # a Dask worker's thread count is the worker's business
+        threads = capped_threads(threads)
 
     from vrsweep.distributed import parse_local
     from vrsweep.job import GracefulStop, parse_shard, run_job
@@ -98,8 +103,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
             words += ["--shard", shard]
         if dask_address:
             words += ["--dask", dask_address]
-        if threads:
-            words += ["--threads", str(threads)]
+        if requested_threads:
+            words += ["--threads", str(requested_threads)]
         if allow_large:
             words += ["--allow-large"]
         if progress_interval != PROGRESS_INTERVAL:
@@ -112,6 +117,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
             bar.close()
     if not quiet:
         click.echo(report.summary_line(), err=True)
+    for line in report.advice():  # even with --quiet: the file holds mostly failures
+        click.echo(line, err=True)
 
 
 # Measured with an empty cache: 29 s wall on a loaded 2-core machine (11 s of CPU).

@@ -7,7 +7,7 @@ config, 2 with every problem listed for an invalid one.
 
 import click
 
-from vrsweep.commands.options import config_argument, set_option, threads_option
+from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
 from vrsweep.config import load_config
 from vrsweep.estimate import default_threads, estimate, format_bytes, format_duration, size_problem
 from vrsweep.model import PARAMETER_NAMES
@@ -24,7 +24,8 @@ def command(config_path, overrides, threads):
     listed as FILE:LINE: field.path: message.
     """
     config = load_config(config_path, overrides)  # ConfigError -> every problem, exit 2 (cli.py)
-    threads = threads or default_threads()
+    announce_fixed_axes(config_path, overrides, config)
+    threads = threads or default_threads()  # not capped: the run may be planned for another machine
     guess = estimate(config, threads)
 
     click.echo(f"{config.source_name}: valid")
