@@ -1,12 +1,16 @@
 """Shards: SLURM array variables -> shard, shards 0..N-1 merged == one run, merge refusals."""
 
+import textwrap
+
 import h5py
 import numpy as np
 import pytest
 from result_files import assert_same_result, invoke, write_config
 
+from vrsweep.config import parse_config
 from vrsweep.errors import UsageError
-from vrsweep.job import parse_shard
+from vrsweep.job import owned_mask, parse_shard
+from vrsweep.sweep import Grid, shard_of_points
 
 TINY = """\
     sweep:
@@ -115,14 +119,73 @@ def test_merged_shards_equal_a_single_run(runs, tmp_path):
     assert_same_result(merged, single)
 
 
-def test_merge_with_a_missing_shard_fails_and_says_which_points(runs, tmp_path):
+def _labels(path, points):
+    """How a message names grid points: 'g=15, Omega=4'."""
+    with h5py.File(path, "r") as f:
+        g, omega = f["g"][()], f["Omega"][()]
+    return [f"g={g[i]:g}, Omega={omega[j]:g}" for i, j in points]
+
+
+def _owned(path):
+    with h5py.File(path, "r") as f:
+        return f["owned"][()].astype(bool)
+
+
+def test_merge_with_a_missing_shard_names_the_shard_and_its_file(runs, tmp_path):
+    """Issue 15: the points missing are those of shard 1/3, whose file was not given."""
     _, _, shards = runs
     merged = tmp_path / "merged.h5"
     result = invoke("merge", shards[0], shards[2], "-o", merged)
     assert result.exit_code == 2
-    assert "points are missing" in result.output and "g=" in result.output
-    assert "shard file missing" in result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Error: "), result.output
+    owned = _owned(shards[1])
+    n_missing = int(owned.sum())
+    first = "; ".join(_labels(shards[1], np.argwhere(owned)[:3]))  # in C order, as the grid runs
+    assert f"{n_missing} of 14 points are missing" in lines[0]
+    assert f"{n_missing} ({first}; ...) owned by shard 1/{N_SHARDS} ({shards[1]}, not given)" in lines[0]
+    assert "--allow-missing" in lines[0]
     assert not merged.exists()
+
+
+def test_merge_names_each_shard_that_points_are_missing_from(runs, tmp_path):
+    """A shard not given and a shard given but unfinished (killed before its last points): each
+    named with its own missing points, the unfinished one with how far it got."""
+    _, _, shards = runs
+    unfinished = tmp_path / shards[2].name
+    unfinished.write_bytes(shards[2].read_bytes())
+    owned = _owned(unfinished)
+    lost = np.argwhere(owned)[-2:]  # its last two points in grid order
+    with h5py.File(unfinished, "r+") as f:
+        done = f["done"][()]
+        for i, j in lost:
+            done[i, j] = 0
+        f["done"][()] = done
+    result = invoke("merge", shards[0], unfinished, "-o", tmp_path / "merged.h5")
+    assert result.exit_code == 2
+    n_owned_1, n_owned_2 = int(_owned(shards[1]).sum()), int(owned.sum())
+    assert f"{n_owned_1 + 2} of 14 points are missing" in result.output
+    # Named beside the first shard given, as `run --shard` names shard files.
+    assert f"owned by shard 1/{N_SHARDS} ({shards[1]}, not given)" in result.output
+    lost_labels = "; ".join(_labels(unfinished, lost))
+    assert (f"2 ({lost_labels}) owned by shard 2/{N_SHARDS} ({unfinished}, which finished "
+            f"{n_owned_2 - 2} of its {n_owned_2} points: resume it with --resume)") in result.output
+
+
+@pytest.mark.parametrize("sweep", [TINY, """\
+    model: effective
+    sweep:
+      g: {start: 21.0, stop: 27.0, num: 9, continuation: both}
+      Omega: [4.0, 4.5, 5.0]
+    """])
+@pytest.mark.parametrize("count", [1, 3, 4])
+def test_shard_of_points_is_the_ownership_of_run_shard(sweep, count):
+    """The merge's message names shards from sweep.shard_of_points: it must be exactly the set of
+    points each `run --shard I/N` runs (whole continuation lines included)."""
+    grid = Grid.from_config(parse_config(textwrap.dedent(sweep)))
+    owner = shard_of_points(grid, count)
+    for index in range(count):
+        assert np.array_equal(owner == index, owned_mask(grid, (index, count)))
 
 
 def test_merge_with_a_foreign_shard_fails_and_names_it(runs, tmp_path):
