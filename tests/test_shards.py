@@ -1,15 +1,19 @@
 """Shards: SLURM array variables -> shard, shards 0..N-1 merged == one run, merge refusals."""
 
+import errno
+import signal
 import textwrap
+import time
 
 import h5py
 import numpy as np
 import pytest
-from result_files import assert_same_result, invoke, write_config
+from result_files import assert_same_result, invoke, vrsweep_process, write_config
 
 from vrsweep.config import parse_config
 from vrsweep.errors import UsageError
 from vrsweep.job import owned_mask, parse_shard
+from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.sweep import Grid, shard_of_points
 
 TINY = """\
@@ -236,3 +240,80 @@ def test_a_shard_resumes_only_as_itself(runs, tmp_path):
     whole.write_bytes(shards[1].read_bytes())
     result = invoke("run", config, "-o", whole, "--resume")  # not as a whole run
     assert result.exit_code == 2 and "shard" in result.output
+
+
+# ---------------------------------------------------------------------------------------------
+# Signals during a merge
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def big_shards(tmp_path_factory):
+    """Two shard files of 10^4 points with 64 stroboscopic samples (6 MB each), written by the
+    store with values that are a function of the point."""
+    directory = tmp_path_factory.mktemp("big")
+    axes = [("g", np.linspace(0.0, 40.0, 200)), ("Omega", np.linspace(4.0, 5.0, 50))]
+    specs = [VariableSpec("R", np.float64, attrs={"units": "1", "long_name": "gain"}),
+             VariableSpec("strobe_x", np.float64, (("strobe", 64),), {"units": "1", "long_name": "x at t = nT"})]
+    paths = []
+    for index in range(2):
+        owned = np.arange(10_000) % 2 == index
+        path = directory / f"map.shard{index}of2.h5"
+        writer = ResultWriter.create(path, axes, specs, {"config": "sweep: {}\n", "shard": f"{index}/2"},
+                                     owned_mask=owned.reshape(200, 50))
+        points = np.flatnonzero(owned)
+        writer.write_points(points, {"R": np.sin(points), "strobe_x": np.cos(points[:, None] + np.arange(64))})
+        writer.finish()
+        paths.append(path)
+    return paths
+
+
+@pytest.mark.parametrize("signum, code, existing", [
+    (signal.SIGTERM, 143, None),          # scancel, or a SLURM time limit
+    (signal.SIGINT, 130, b"precious"),    # Ctrl-C while --overwrite replaces an older file
+])
+def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, signum, code, existing):
+    """Issue 14: a real `python -m vrsweep merge` stopped while it writes: exit 128 + signal, one
+    line, OUT as it was, and no temporary file."""
+    out = tmp_path / "merged.h5"
+    options = []
+    if existing is not None:
+        out.write_bytes(existing)
+        options = ["--overwrite"]
+    # Each shard given 50 times: every block is read and compared 100 times, so the merge would take
+    # seconds; it is stopped as soon as its temporary file appears, long before the end.
+    child = vrsweep_process("merge", *(big_shards * 50), "-o", out, *options)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(tmp_path.glob(".merged.h5.*.tmp")):
+            assert child.poll() is None, child.communicate()
+            assert time.monotonic() < deadline, "the merge never started writing"
+            time.sleep(0.002)
+        child.send_signal(signum)
+        _, stderr = child.communicate(timeout=120)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    assert child.returncode == code, stderr
+    state = "left as it was" if existing else "not written"
+    name = signal.Signals(signum).name
+    assert stderr.strip().splitlines() == [f"Interrupted ({name}): merge stopped, {out} {state} (no partial file)"]
+    assert [p.name for p in tmp_path.iterdir()] == (["merged.h5"] if existing else [])
+    assert existing is None or out.read_bytes() == existing
+
+
+def test_a_write_failure_during_merge_is_one_line_and_leaves_nothing(runs, tmp_path, monkeypatch):
+    """A runtime failure while writing (here a full disk): exit 1, one line naming the output, and
+    no temporary file."""
+    import vrsweep.merge
+
+    def full_disk(out, *args):
+        raise OSError(errno.ENOSPC, "No space left on device", out.file.filename)
+
+    monkeypatch.setattr(vrsweep.merge, "_merge_variable", full_disk)
+    _, _, shards = runs
+    out = tmp_path / "merged.h5"
+    result = invoke("merge", *shards, "-o", out)
+    assert result.exit_code == 1
+    assert result.output.strip().splitlines() == [f"Error: cannot write {out}: No space left on device"]
+    assert list(tmp_path.iterdir()) == []

@@ -40,9 +40,8 @@ from vrsweep.store import (
 # Bytes of one variable per block: large enough that HDF5 calls are few, small enough that a few
 # blocks are nothing beside the start-up of Python, numpy and h5py.
 BLOCK_BYTES = 4 * 1024 * 1024
-# A merge reads every chunk of a shard once (blocks are whole chunks), so a chunk cache would
-# only hold memory; the store's large cache, times the shards open at once, would grow with them.
-_READ_CACHE_BYTES = 0
+# Blocks are written as whole chunks, so the output needs no chunk cache either.
+_WRITE_CACHE_BYTES = 0
 _EXAMPLES = 3  # points named in a message
 _GROUPS = 6    # shards named in a missing-points message
 
@@ -87,23 +86,28 @@ class MergeReport:
 
 
 class _Shard:
-    """A shard file open for reading. Data is read on demand; any damage found while reading is a
-    ResultFileError naming the file (HDF5 chunks carry checksums)."""
+    """A shard file: its metadata in memory, its data read on demand. Any damage found while
+    reading is a ResultFileError naming the file (HDF5 chunks carry checksums).
+
+    The file is open only while a block is read: HDF5 keeps a few hundred bytes for every chunk
+    read from a file until the file is closed (about a tenth of the data read), so shards held
+    open for the whole merge would make its memory grow with their number.
+    """
 
     def __init__(self, path):
         self.path = path
-        self.file = _open_checked(path, "r")
+        f = _open_checked(path, "r")
         try:
-            self._read_metadata()
+            self._read_metadata(f)
+            self._identity = _identity(path)
         except ResultFileError:
-            self.close()
             raise
         except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
-            self.close()
             raise _corrupt_error(path, error) from None
+        finally:
+            f.close()
 
-    def _read_metadata(self):
-        f = self.file
+    def _read_metadata(self, f):
         done = f["done"]
         self.axis_names = _scale_names(done) if done.ndim else ()
         self.shape = tuple(done.shape)
@@ -138,12 +142,13 @@ class _Shard:
         return self.attrs.get("shard")
 
     def read(self, name, selection=()):
-        """``name[selection]`` as an array, through a dataset handle without a chunk cache."""
-        access = h5py.h5p.create(h5py.h5p.DATASET_ACCESS)
-        access.set_chunk_cache(521, _READ_CACHE_BYTES, 0.75)  # HDF5's default slots and policy
+        """``name[selection]`` as an array (the file opened for this read, with no chunk cache:
+        blocks are whole chunks, each read once)."""
+        if _identity(self.path) != self._identity:
+            raise ResultFileError(f"{self.path} was changed or replaced while it was being merged")
         try:
-            dataset = h5py.Dataset(h5py.h5d.open(self.file.id, name.encode(), access))
-            return np.asarray(dataset[selection])
+            with h5py.File(self.path, "r", rdcc_nbytes=0, **_file_kwargs()) as f:
+                return np.asarray(f[name][selection])
         except Exception as error:  # noqa: BLE001 - a failed checksum is an OSError, others vary
             raise _corrupt_error(self.path, error) from None
 
@@ -167,12 +172,15 @@ class _Shard:
         where = np.unravel_index(int(flat_index), self.shape)
         return ", ".join(f"{name}={values[i]:g}" for (name, values), i in zip(self.axes.items(), where))
 
-    def close(self):
-        if self.file is not None:
-            try:
-                self.file.close()
-            finally:
-                self.file = None
+
+
+def _identity(path):
+    """What tells that a file is still the one first opened: not replaced, not written to."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
 
 
 def _layout_difference(a: _Shard, b: _Shard):
@@ -251,14 +259,7 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
             raise UsageError(f"output {out_path} already exists: pass --overwrite to replace it")
     _check_output_directory(out_path)
 
-    shards = []
-    try:
-        for path in paths:
-            shards.append(_Shard(path))
-        return _merge(shards, out_path, allow_missing)
-    finally:
-        for shard in shards:
-            shard.close()
+    return _merge([_Shard(path) for path in paths], out_path, allow_missing)
 
 
 def _merge(shards, out_path, allow_missing):
@@ -292,16 +293,20 @@ def _merge(shards, out_path, allow_missing):
         # The same file options as ResultWriter.create: checksummed object headers.
         with h5py.File(tmp, "w", track_order=True, libver=("v108", "latest"), **_file_kwargs()) as out:
             _build_skeleton(out, axes, ref.variable_specs(), root_attrs, extra_coords, None)
-            for name in ref.point_variables:
+        for name in ref.point_variables:  # reopened for each: see _Shard on HDF5's memory per chunk
+            with h5py.File(tmp, "r+", rdcc_nbytes=_WRITE_CACHE_BYTES, **_file_kwargs()) as out:
                 _merge_variable(out[name], name, shards, supplier, duplicates > 0, ref)
+        with h5py.File(tmp, "r+", **_file_kwargs()) as out:
             out["done"][()] = merged_done.astype(np.int8)
             if complete:
                 _copy_derived_variables(out, shards, ref, warnings)
                 out.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
 
     try:
-        atomic_write(out_path, write)
-    except (ValueError, RuntimeError) as error:  # h5py's other ways to fail writing (OSError: the CLI)
+        atomic_write(out_path, write)  # on any error or signal, removes the temporary file
+    except OSError as error:  # full disk, quota, a folder gone: the shards' errors are ResultFileErrors
+        raise MergeWriteError(f"cannot write {out_path}: {error.strerror or error}") from None
+    except (ValueError, RuntimeError) as error:  # how h5py reports some HDF5 write failures
         raise MergeWriteError(f"cannot write {out_path}: {error}") from None
     return MergeReport(
         out_path=out_path, n_points=n_points, n_done=int(merged_done.sum()),
@@ -332,12 +337,10 @@ def _check_one_run(shards):
             raise ResultFileError(f"{s.path} does not have the layout of {ref.path}: {problem}")
 
     warnings = []
-    seen = set()
+    given = {}
     for s in shards:
-        key = os.path.realpath(s.path)
-        if key in seen:
-            warnings.append(f"{s.path} given more than once")
-        seen.add(key)
+        given.setdefault(os.path.realpath(s.path), []).append(s.path)
+    warnings.extend(f"{paths[0]} given {len(paths)} times" for paths in given.values() if len(paths) > 1)
     labels = [s.shard for s in shards if s.shard]
     counts = {str(label).split("/")[-1] for label in labels}
     if len(counts) > 1:
