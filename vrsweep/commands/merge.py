@@ -1,5 +1,10 @@
 """vrsweep merge SHARD.h5 ... -o OUT.h5: join the shard files of one run into one result file."""
 
+import os
+import signal
+import sys
+import threading
+
 import click
 
 from vrsweep.commands.options import overwrite_option, quiet_option
@@ -19,9 +24,65 @@ def command(shards, output, overwrite, allow_missing, quiet):
     Every shard must come from the same config; every point must be in some shard (else exit 2,
     naming the missing points and the shard they belong to, unless --allow-missing); a point in
     two shards must have identical values. The result is the file a single run would have written.
+    It is written under a temporary name and renamed at the end: Ctrl-C (exit 130), SIGTERM (143)
+    or an error leave OUT.h5 as it was and no temporary file.
     """
-    from vrsweep.store import merge_results
+    from vrsweep.merge import merge_results
 
-    report = merge_results(shards, output, overwrite=overwrite, allow_missing=allow_missing)
+    before = _identity(output)
+    try:
+        with _SignalsRaise():
+            report = merge_results(shards, output, overwrite=overwrite, allow_missing=allow_missing)
+    except KeyboardInterrupt as stop:
+        name = getattr(stop, "name", "SIGINT")
+        if _identity(output) not in (before, None):  # the signal came after the rename
+            click.echo(f"Interrupted ({name}) after the merge had finished: {output} is complete", err=True)
+        else:
+            state = "left as it was" if before is not None else "not written"
+            click.echo(f"Interrupted ({name}): merge stopped, {output} {state} (no partial file)", err=True)
+        sys.exit(128 + getattr(stop, "signum", signal.SIGINT))
     if not quiet:
         click.echo(str(report), err=True)
+
+
+def _identity(path):
+    """(device, inode, mtime) of ``path``, or None: tells whether a rename replaced it."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino, st.st_mtime_ns)
+
+
+class _Stopped(KeyboardInterrupt):
+    def __init__(self, signum):
+        self.signum = signum
+        self.name = signal.Signals(signum).name
+        super().__init__(self.name)
+
+
+class _SignalsRaise:
+    """SIGINT and SIGTERM (scancel, a SLURM time limit) raise _Stopped, so that the merge unwinds
+    and removes its temporary file (store.atomic_write). Only the first signal raises: a second
+    one, while the temporary file is being removed, is ignored so that the clean-up finishes."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self):
+        self._previous = {}
+        self._raised = False
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for signum in self.SIGNALS:
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+
+    def _handle(self, signum, frame):
+        if not self._raised:
+            self._raised = True
+            raise _Stopped(signum)
