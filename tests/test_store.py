@@ -603,6 +603,29 @@ def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path):
     assert not (tmp_path / "merged2.h5").exists()
 
 
+def test_merge_keeps_the_first_derived_variables_and_says_if_others_differ(tmp_path):
+    shards = write_shards(tmp_path)
+    assert merge_results(shards, tmp_path / "merged.h5").warnings == []
+    # Shard 2 holds g_res stored another way (contiguous, no checksum) but with the same values:
+    # its stored bytes differ, its values do not.
+    with h5py.File(shards[1], "r+") as f:
+        attrs = dict(f["g_res"].attrs)
+        f["g_res"].dims[0].detach_scale(f["Omega"])
+        del f["g_res"]
+        ds = f.create_dataset("g_res", data=np.array([1.0, 2.0, 3.0]))
+        ds.dims[0].attach_scale(f["Omega"])
+        for key in ("units", "long_name"):
+            ds.attrs[key] = attrs[key]
+    assert merge_results(shards, tmp_path / "merged2.h5").warnings == []
+    # Shard 3's differ: kept from the first shard, with a warning naming both.
+    with h5py.File(shards[2], "r+") as f:
+        f["g_res"][1] = 2.5
+    report = merge_results(shards, tmp_path / "merged3.h5")
+    assert report.warnings == [f"derived variables of {shards[2]} differ from {shards[0]}; "
+                               f"kept those of {shards[0]}"]
+    assert list(read_results(tmp_path / "merged3.h5").variables["g_res"]) == [1.0, 2.0, 3.0]
+
+
 def test_merge_refuses_to_overwrite_and_reports_bad_shards(tmp_path):
     shards = write_shards(tmp_path)
     (tmp_path / "merged.h5").write_text("precious")

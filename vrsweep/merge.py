@@ -21,6 +21,7 @@ signal leaves no partial file.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import re
@@ -33,7 +34,7 @@ import numpy as np
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
 from vrsweep.store import (
     _BOOKKEEPING, _RESERVED_ROOT_ATTRS, VariableSpec, _add_extras, _build_skeleton,
-    _check_output_directory, _clean_attrs, _corrupt_error, _decode, _file_kwargs, _first_difference,
+    _check_output_directory, _clean_attrs, _corrupt_error, _file_kwargs, _first_difference,
     _open_checked, _point_variables, _scale_names, atomic_write,
 )
 
@@ -81,7 +82,7 @@ class MergeReport:
 
 
 # --------------------------------------------------------------------------------------------
-# One shard file, open, with only its metadata in memory
+# One shard file: its metadata in memory, its data read block by block
 # --------------------------------------------------------------------------------------------
 
 
@@ -144,13 +145,40 @@ class _Shard:
     def read(self, name, selection=()):
         """``name[selection]`` as an array (the file opened for this read, with no chunk cache:
         blocks are whole chunks, each read once)."""
-        if _identity(self.path) != self._identity:
-            raise ResultFileError(f"{self.path} was changed or replaced while it was being merged")
         try:
-            with h5py.File(self.path, "r", rdcc_nbytes=0, **_file_kwargs()) as f:
+            with self._open() as f:
                 return np.asarray(f[name][selection])
+        except ResultFileError:
+            raise
         except Exception as error:  # noqa: BLE001 - a failed checksum is an OSError, others vary
             raise _corrupt_error(self.path, error) from None
+
+    def _open(self):
+        """The file, opened for one read, if it is still the file whose metadata was read."""
+        if _identity(self.path) != self._identity:
+            raise ResultFileError(f"{self.path} was changed or replaced while it was being merged")
+        return h5py.File(self.path, "r", rdcc_nbytes=0, **_file_kwargs())
+
+    def stored_digest(self, name):
+        """SHA-256 of a variable as stored on disk (chunk checksums included), one chunk at a
+        time: equal digests mean equal values, without decoding either whole variable."""
+        digest = hashlib.sha256()
+        try:
+            with self._open() as f:
+                ds = f[name]
+                if ds.chunks is None:  # a 0-d variable: contiguous, and small
+                    digest.update(np.asarray(ds[()]).tobytes())
+                    return digest.hexdigest()
+                for index in range(ds.id.get_num_chunks()):
+                    offset = ds.id.get_chunk_info(index).chunk_offset
+                    filter_mask, data = ds.id.read_direct_chunk(offset)
+                    digest.update(repr((offset, filter_mask, len(data))).encode())
+                    digest.update(data)
+        except ResultFileError:
+            raise
+        except Exception as error:  # noqa: BLE001 - as in read()
+            raise _corrupt_error(self.path, error) from None
+        return digest.hexdigest()
 
     def read_mask(self, name):
         return np.asarray(self.read(name), dtype=bool).reshape(self.shape)
@@ -171,7 +199,6 @@ class _Shard:
             return "the single point"
         where = np.unravel_index(int(flat_index), self.shape)
         return ", ".join(f"{name}={values[i]:g}" for (name, values), i in zip(self.axes.items(), where))
-
 
 
 def _identity(path):
@@ -367,28 +394,25 @@ def _merge_variable(out, name, shards, supplier, may_duplicate, ref):
         merged = None if (who >= 0).all() else np.asarray(out[block]).reshape((who.size,) + extra_shape)
         for k, s in enumerate(shards):
             supplies = who == k
-            if not (supplies.any() or may_duplicate[k]):
+            # Points this shard has too, supplied by an earlier one (so already in merged).
+            twice = (np.flatnonzero(s.read("done", block).reshape(-1).astype(bool) & (who >= 0) & ~supplies)
+                     if may_duplicate[k] else np.empty(0, dtype=np.int64))
+            if not supplies.any() and twice.size == 0:
                 continue
             values = s.read(name, block).reshape((who.size,) + extra_shape)
             if merged is None:
                 merged = values if supplies.all() else np.empty_like(values)
             if merged is not values:
                 merged[supplies] = values[supplies]
-            if not may_duplicate[k]:
-                continue
-            # Points this shard has too, supplied by an earlier one (already in merged).
-            twice = np.flatnonzero(s.read("done", block).reshape(-1).astype(bool) & (who >= 0) & ~supplies)
-            if twice.size == 0:
-                continue
-            # Compare bytes, not values: NaN must equal NaN, and -0.0 must not equal 0.0.
-            a, b = merged[twice], values[twice]
-            differs = np.any(a.view(np.uint8).reshape(twice.size, -1)
-                             != b.view(np.uint8).reshape(twice.size, -1), axis=1)
-            if differs.any() and first_conflict is None:
-                at = twice[np.argmax(differs)]
-                first_conflict = (_grid_index(block, grid_shape, at), shards[who[at]], s, a[np.argmax(differs)],
-                                  b[np.argmax(differs)])
-            conflicts += int(differs.sum())
+            if twice.size:
+                # Compare bytes, not values: NaN must equal NaN, and -0.0 must not equal 0.0.
+                a, b = merged[twice], values[twice]
+                differs = np.any(a.view(np.uint8).reshape(twice.size, -1)
+                                 != b.view(np.uint8).reshape(twice.size, -1), axis=1)
+                if differs.any() and first_conflict is None:
+                    i = int(np.argmax(differs))
+                    first_conflict = (_grid_index(block, grid_shape, twice[i]), shards[who[twice[i]]], s, a[i], b[i])
+                conflicts += int(differs.sum())
         out[block] = merged.reshape(_block_shape(block) + extra_shape)
     if conflicts:
         flat, supplied_by, also_in, a, b = first_conflict
@@ -410,6 +434,11 @@ def _block_shape(block):
     return tuple(s.stop - s.start for s in block)
 
 
+def _same_bytes(a, b):
+    return a.shape == b.shape and a.dtype == b.dtype and np.array_equal(
+        a.reshape(-1).view(np.uint8), b.reshape(-1).view(np.uint8))
+
+
 def _copy_derived_variables(out, shards, ref, warnings):
     """Derived variables (theory columns) from the first finished shard that has them, one at a
     time; the others' must agree, or a warning says whose were kept."""
@@ -421,10 +450,12 @@ def _copy_derived_variables(out, shards, ref, warnings):
     differing = set()
     for name in source.derived_variables:
         array = source.read(name)
+        digest = source.stored_digest(name)
         for other in with_extras[1:]:
-            if name not in other.dtypes or other.dtypes[name] != array.dtype or \
-                    other.shapes[name] != array.shape or other.read(name).tobytes() != array.tobytes():
+            if name not in other.dtypes or other.dtypes[name] != array.dtype or other.shapes[name] != array.shape:
                 differing.add(other.path)
+            elif other.stored_digest(name) != digest and not _same_bytes(other.read(name), array):
+                differing.add(other.path)  # stored differently (another version?) and different
         coords = {d: (source.coords[d], source.coord_attrs[d])
                   for d in source.dims[name] if d not in point_dims}
         _add_extras(out, {name: (array, source.dims[name], source.var_attrs[name])}, coords)
