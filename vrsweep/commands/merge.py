@@ -24,8 +24,9 @@ def command(shards, output, overwrite, allow_missing, quiet):
     Every shard must come from the same config; every point must be in some shard (else exit 2,
     naming the missing points and the shard they belong to, unless --allow-missing); a point in
     two shards must have identical values. The result is the file a single run would have written.
-    It is written under a temporary name and renamed at the end: Ctrl-C (exit 130), SIGTERM (143)
-    or an error leave OUT.h5 as it was and no temporary file.
+    Shards are read block by block, so memory does not grow with their number. OUT.h5 is written
+    under a temporary name and renamed at the end: Ctrl-C (exit 130), SIGTERM (143) or an error
+    leave OUT.h5 as it was and no temporary file.
     """
     from vrsweep.merge import merge_results
 
