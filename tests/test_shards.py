@@ -268,13 +268,15 @@ def big_shards(tmp_path_factory):
     return paths
 
 
-@pytest.mark.parametrize("signum, code, existing", [
-    (signal.SIGTERM, 143, None),          # scancel, or a SLURM time limit
-    (signal.SIGINT, 130, b"precious"),    # Ctrl-C while --overwrite replaces an older file
+@pytest.mark.parametrize("signum, code, existing, delay", [
+    (signal.SIGTERM, 143, None, 0.0),          # scancel, or a SLURM time limit
+    (signal.SIGTERM, 143, None, 0.3),
+    (signal.SIGINT, 130, b"precious", 0.1),    # Ctrl-C while --overwrite replaces an older file
 ])
-def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, signum, code, existing):
-    """Issue 14: a real `python -m vrsweep merge` stopped while it writes: exit 128 + signal, one
-    line, OUT as it was, and no temporary file."""
+def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, signum, code, existing, delay):
+    """Issue 14: a real `python -m vrsweep merge` stopped while it writes (as its temporary file
+    appears, or ``delay`` seconds later): exit 128 + signal, one line, OUT as it was, and no
+    temporary file."""
     out = tmp_path / "merged.h5"
     options = []
     if existing is not None:
@@ -289,6 +291,7 @@ def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, si
             assert child.poll() is None, child.communicate()
             assert time.monotonic() < deadline, "the merge never started writing"
             time.sleep(0.002)
+        time.sleep(delay)
         child.send_signal(signum)
         _, stderr = child.communicate(timeout=120)
     finally:

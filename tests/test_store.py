@@ -515,6 +515,9 @@ def write_shards(tmp_path, n_shards=3, axes=AXES_2D, skip=()):
 
 
 def test_merge_of_three_shards_equals_a_single_run(tmp_path):
+    import vrsweep.store
+
+    assert vrsweep.store.merge_results is merge_results  # where it was before vrsweep/merge.py
     single = write_file(tmp_path / "single.h5", AXES_2D)
     shards = write_shards(tmp_path)
     report = merge_results(shards, tmp_path / "merged.h5")
@@ -624,6 +627,25 @@ def test_merge_keeps_the_first_derived_variables_and_says_if_others_differ(tmp_p
     assert report.warnings == [f"derived variables of {shards[2]} differ from {shards[0]}; "
                                f"kept those of {shards[0]}"]
     assert list(read_results(tmp_path / "merged3.h5").variables["g_res"]) == [1.0, 2.0, 3.0]
+
+
+def test_merge_stops_when_asked_and_leaves_nothing(tmp_path):
+    """``stop`` is called before every read of a shard; what it raises ends the merge, and the
+    temporary file of the output is removed (the CLI's SIGINT/SIGTERM)."""
+    shards = write_shards(tmp_path)
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    reads = []
+
+    def stop():
+        reads.append(1)
+        if len(reads) > 10:  # 3 shards opened, 3 done masks read: now it is writing
+            assert len(list(out_dir.glob(".merged.h5.*.tmp"))) == 1
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        merge_results(shards, out_dir / "merged.h5", stop=stop)
+    assert list(out_dir.iterdir()) == []
 
 
 def test_merge_refuses_to_overwrite_and_reports_bad_shards(tmp_path):

@@ -95,8 +95,10 @@ class _Shard:
     open for the whole merge would make its memory grow with their number.
     """
 
-    def __init__(self, path):
+    def __init__(self, path, stop):
+        stop()
         self.path = path
+        self._stop = stop
         f = _open_checked(path, "r")
         try:
             self._read_metadata(f)
@@ -154,7 +156,9 @@ class _Shard:
             raise _corrupt_error(self.path, error) from None
 
     def _open(self):
-        """The file, opened for one read, if it is still the file whose metadata was read."""
+        """The file, opened for one read, if it is still the file whose metadata was read (and the
+        merge has not been asked to stop: every read is a point where it can)."""
+        self._stop()
         if _identity(self.path) != self._identity:
             raise ResultFileError(f"{self.path} was changed or replaced while it was being merged")
         return h5py.File(self.path, "r", rdcc_nbytes=0, **_file_kwargs())
@@ -265,7 +269,8 @@ def _blocks(grid_shape, chunk_shape, max_points):
 # --------------------------------------------------------------------------------------------
 
 
-def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missing=False) -> MergeReport:
+def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missing=False,
+                  stop=None) -> MergeReport:
     """Merge shard files of one config into a file identical to a single-process run.
 
     Checks that every shard has the same ``config`` (else ResultFileError naming the foreign
@@ -274,6 +279,9 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
     that owns it) unless ``allow_missing`` (the result is then marked incomplete and can be
     resumed). Writes ``out_path`` atomically; same variables and attributes as a single run
     (``created`` is the merge time; no ``shard``/``owned``).
+
+    ``stop``: called before every read of a shard; whatever it raises (the CLI: a KeyboardInterrupt
+    after SIGINT or SIGTERM) ends the merge, and the temporary file is removed.
     """
     paths = [os.fspath(p) for p in shard_paths]
     out_path = os.fspath(out_path)
@@ -286,7 +294,8 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
             raise UsageError(f"output {out_path} already exists: pass --overwrite to replace it")
     _check_output_directory(out_path)
 
-    return _merge([_Shard(path) for path in paths], out_path, allow_missing)
+    stop = stop or (lambda: None)
+    return _merge([_Shard(path, stop) for path in paths], out_path, allow_missing)
 
 
 def _merge(shards, out_path, allow_missing):

@@ -32,16 +32,18 @@ def command(shards, output, overwrite, allow_missing, quiet):
 
     before = _identity(output)
     try:
-        with _SignalsRaise():
-            report = merge_results(shards, output, overwrite=overwrite, allow_missing=allow_missing)
-    except KeyboardInterrupt as stop:
-        name = getattr(stop, "name", "SIGINT")
+        with _StopOnSignal() as stop:
+            report = merge_results(shards, output, overwrite=overwrite, allow_missing=allow_missing,
+                                   stop=stop.check)
+            stop.check()  # a signal during the final rename: the output is complete
+    except KeyboardInterrupt as interrupt:
+        name = getattr(interrupt, "name", "SIGINT")
         if _identity(output) not in (before, None):  # the signal came after the rename
-            click.echo(f"Interrupted ({name}) after the merge had finished: {output} is complete", err=True)
+            click.echo(f"Interrupted ({name}) as the merge finished: {output} is complete", err=True)
         else:
             state = "left as it was" if before is not None else "not written"
             click.echo(f"Interrupted ({name}): merge stopped, {output} {state} (no partial file)", err=True)
-        sys.exit(128 + getattr(stop, "signum", signal.SIGINT))
+        sys.exit(128 + getattr(interrupt, "signum", signal.SIGINT))
     if not quiet:
         click.echo(str(report), err=True)
 
@@ -62,16 +64,17 @@ class _Stopped(KeyboardInterrupt):
         super().__init__(self.name)
 
 
-class _SignalsRaise:
-    """SIGINT and SIGTERM (scancel, a SLURM time limit) raise _Stopped, so that the merge unwinds
-    and removes its temporary file (store.atomic_write). Only the first signal raises: a second
-    one, while the temporary file is being removed, is ignored so that the clean-up finishes."""
+class _StopOnSignal:
+    """SIGINT and SIGTERM (scancel, a SLURM time limit) stop the merge at its next read of a shard
+    (``check``, within milliseconds), so that it unwinds and removes its temporary file
+    (store.atomic_write). The handler only takes note: an exception raised from a signal handler
+    can land in a finalizer, where Python drops it. A second signal raises at once."""
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
     def __init__(self):
+        self.signum = None
         self._previous = {}
-        self._raised = False
 
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
@@ -84,6 +87,10 @@ class _SignalsRaise:
             signal.signal(signum, handler)
 
     def _handle(self, signum, frame):
-        if not self._raised:
-            self._raised = True
-            raise _Stopped(signum)
+        if self.signum is not None:
+            raise _Stopped(self.signum)
+        self.signum = signum
+
+    def check(self):
+        if self.signum is not None:
+            raise _Stopped(self.signum)
