@@ -322,7 +322,7 @@ def _merge(shards, out_path, allow_missing):
 
     point_dims = {d for n in ref.point_variables for d in ref.dims[n][len(ref.axes):]}
     extra_coords = {d: (ref.coords[d], ref.coord_attrs[d]) for d in ref.coords if d in point_dims}
-    root_attrs = {k: v for k, v in ref.attrs.items() if k not in _RESERVED_ROOT_ATTRS and k != "shard"}
+    root_attrs = _root_attributes(ref)
     axes = [(name, values, ref.coord_attrs[name]) for name, values in ref.axes.items()]
 
     def write(tmp):
@@ -348,6 +348,12 @@ def _merge(shards, out_path, allow_missing):
         out_path=out_path, n_points=n_points, n_done=int(merged_done.sum()),
         n_missing=int(missing.size), missing_examples=examples, n_duplicated=int(duplicates.sum()),
         shards=[(s.path, s.shard, n) for s, n in zip(shards, n_done_by_shard)], warnings=warnings)
+
+
+def _root_attributes(ref):
+    """The merged file's root attributes: the reference shard's, but for those the store sets
+    (``created``: the merge time) and the shard label."""
+    return {k: v for k, v in ref.attrs.items() if k not in _RESERVED_ROOT_ATTRS and k != "shard"}
 
 
 def _check_one_run(shards):

@@ -38,11 +38,13 @@ def command(shards, output, overwrite, allow_missing, quiet):
             stop.check()  # a signal during the final rename: the output is complete
     except KeyboardInterrupt as interrupt:
         name = getattr(interrupt, "name", "SIGINT")
+        newline = "\n" if sys.stderr.isatty() else ""  # off the terminal's "^C"
         if _identity(output) not in (before, None):  # the signal came after the rename
-            click.echo(f"Interrupted ({name}) as the merge finished: {output} is complete", err=True)
+            click.echo(f"{newline}Interrupted ({name}) as the merge finished: {output} is complete", err=True)
         else:
             state = "left as it was" if before is not None else "not written"
-            click.echo(f"Interrupted ({name}): merge stopped, {output} {state} (no partial file)", err=True)
+            click.echo(f"{newline}Interrupted ({name}): merge stopped, {output} {state} (no partial file)",
+                       err=True)
         sys.exit(128 + getattr(interrupt, "signum", signal.SIGINT))
     if not quiet:
         click.echo(str(report), err=True)
