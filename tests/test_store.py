@@ -6,6 +6,7 @@ a known function of the flat point index.
 
 import inspect
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -646,6 +647,24 @@ def test_merge_stops_when_asked_and_leaves_nothing(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         merge_results(shards, out_dir / "merged.h5", stop=stop)
     assert list(out_dir.iterdir()) == []
+
+
+def test_merge_refuses_a_shard_replaced_while_it_is_merged(tmp_path):
+    """Shards are reopened for every block: one replaced in between (a resumed or re-run shard) is
+    an error naming it, not a mix of two files."""
+    shards = write_shards(tmp_path)
+    reads = []
+
+    def replace_shard_1_when_writing_starts():
+        reads.append(1)
+        if len(reads) == 7:  # after the 3 opens and 3 done masks
+            copy = tmp_path / "copy.h5"
+            copy.write_bytes(shards[1].read_bytes())
+            os.replace(copy, shards[1])  # the same bytes, another file
+
+    with pytest.raises(ResultFileError, match=re.escape(f"{shards[1]} was changed or replaced while")):
+        merge_results(shards, tmp_path / "merged.h5", stop=replace_shard_1_when_writing_starts)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in shards)
 
 
 def test_merge_refuses_to_overwrite_and_reports_bad_shards(tmp_path):
