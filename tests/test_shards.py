@@ -1,12 +1,20 @@
 """Shards: SLURM array variables -> shard, shards 0..N-1 merged == one run, merge refusals."""
 
+import errno
+import signal
+import textwrap
+import time
+
 import h5py
 import numpy as np
 import pytest
-from result_files import assert_same_result, invoke, write_config
+from result_files import assert_same_result, invoke, vrsweep_process, write_config
 
+from vrsweep.config import parse_config
 from vrsweep.errors import UsageError
-from vrsweep.job import parse_shard
+from vrsweep.job import owned_mask, parse_shard
+from vrsweep.store import ResultWriter, VariableSpec
+from vrsweep.sweep import Grid, shard_of_points
 
 TINY = """\
     sweep:
@@ -115,14 +123,73 @@ def test_merged_shards_equal_a_single_run(runs, tmp_path):
     assert_same_result(merged, single)
 
 
-def test_merge_with_a_missing_shard_fails_and_says_which_points(runs, tmp_path):
+def _labels(path, points):
+    """How a message names grid points: 'g=15, Omega=4'."""
+    with h5py.File(path, "r") as f:
+        g, omega = f["g"][()], f["Omega"][()]
+    return [f"g={g[i]:g}, Omega={omega[j]:g}" for i, j in points]
+
+
+def _owned(path):
+    with h5py.File(path, "r") as f:
+        return f["owned"][()].astype(bool)
+
+
+def test_merge_with_a_missing_shard_names_the_shard_and_its_file(runs, tmp_path):
+    """Issue 15: the points missing are those of shard 1/3, whose file was not given."""
     _, _, shards = runs
     merged = tmp_path / "merged.h5"
     result = invoke("merge", shards[0], shards[2], "-o", merged)
     assert result.exit_code == 2
-    assert "points are missing" in result.output and "g=" in result.output
-    assert "shard file missing" in result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Error: "), result.output
+    owned = _owned(shards[1])
+    n_missing = int(owned.sum())
+    first = "; ".join(_labels(shards[1], np.argwhere(owned)[:3]))  # in C order, as the grid runs
+    assert f"{n_missing} of 14 points are missing" in lines[0]
+    assert f"{n_missing} ({first}; ...) owned by shard 1/{N_SHARDS} ({shards[1]}, not given)" in lines[0]
+    assert "--allow-missing" in lines[0]
     assert not merged.exists()
+
+
+def test_merge_names_each_shard_that_points_are_missing_from(runs, tmp_path):
+    """A shard not given and a shard given but unfinished (killed before its last points): each
+    named with its own missing points, the unfinished one with how far it got."""
+    _, _, shards = runs
+    unfinished = tmp_path / shards[2].name
+    unfinished.write_bytes(shards[2].read_bytes())
+    owned = _owned(unfinished)
+    lost = np.argwhere(owned)[-2:]  # its last two points in grid order
+    with h5py.File(unfinished, "r+") as f:
+        done = f["done"][()]
+        for i, j in lost:
+            done[i, j] = 0
+        f["done"][()] = done
+    result = invoke("merge", shards[0], unfinished, "-o", tmp_path / "merged.h5")
+    assert result.exit_code == 2
+    n_owned_1, n_owned_2 = int(_owned(shards[1]).sum()), int(owned.sum())
+    assert f"{n_owned_1 + 2} of 14 points are missing" in result.output
+    # Named beside the first shard given, as `run --shard` names shard files.
+    assert f"owned by shard 1/{N_SHARDS} ({shards[1]}, not given)" in result.output
+    lost_labels = "; ".join(_labels(unfinished, lost))
+    assert (f"2 ({lost_labels}) owned by shard 2/{N_SHARDS} ({unfinished}, which finished "
+            f"{n_owned_2 - 2} of its {n_owned_2} points: resume it with --resume)") in result.output
+
+
+@pytest.mark.parametrize("sweep", [TINY, """\
+    model: effective
+    sweep:
+      g: {start: 21.0, stop: 27.0, num: 9, continuation: both}
+      Omega: [4.0, 4.5, 5.0]
+    """])
+@pytest.mark.parametrize("count", [1, 3, 4])
+def test_shard_of_points_is_the_ownership_of_run_shard(sweep, count):
+    """The merge's message names shards from sweep.shard_of_points: it must be exactly the set of
+    points each `run --shard I/N` runs (whole continuation lines included)."""
+    grid = Grid.from_config(parse_config(textwrap.dedent(sweep)))
+    owner = shard_of_points(grid, count)
+    for index in range(count):
+        assert np.array_equal(owner == index, owned_mask(grid, (index, count)))
 
 
 def test_merge_with_a_foreign_shard_fails_and_names_it(runs, tmp_path):
@@ -173,3 +240,83 @@ def test_a_shard_resumes_only_as_itself(runs, tmp_path):
     whole.write_bytes(shards[1].read_bytes())
     result = invoke("run", config, "-o", whole, "--resume")  # not as a whole run
     assert result.exit_code == 2 and "shard" in result.output
+
+
+# ---------------------------------------------------------------------------------------------
+# Signals during a merge
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def big_shards(tmp_path_factory):
+    """Two shard files of 10^4 points with 64 stroboscopic samples (6 MB each), written by the
+    store with values that are a function of the point."""
+    directory = tmp_path_factory.mktemp("big")
+    axes = [("g", np.linspace(0.0, 40.0, 200)), ("Omega", np.linspace(4.0, 5.0, 50))]
+    specs = [VariableSpec("R", np.float64, attrs={"units": "1", "long_name": "gain"}),
+             VariableSpec("strobe_x", np.float64, (("strobe", 64),), {"units": "1", "long_name": "x at t = nT"})]
+    paths = []
+    for index in range(2):
+        owned = np.arange(10_000) % 2 == index
+        path = directory / f"map.shard{index}of2.h5"
+        writer = ResultWriter.create(path, axes, specs, {"config": "sweep: {}\n", "shard": f"{index}/2"},
+                                     owned_mask=owned.reshape(200, 50))
+        points = np.flatnonzero(owned)
+        writer.write_points(points, {"R": np.sin(points), "strobe_x": np.cos(points[:, None] + np.arange(64))})
+        writer.finish()
+        paths.append(path)
+    return paths
+
+
+@pytest.mark.parametrize("signum, code, existing, delay", [
+    (signal.SIGTERM, 143, None, 0.0),          # scancel, or a SLURM time limit
+    (signal.SIGTERM, 143, None, 0.3),
+    (signal.SIGINT, 130, b"precious", 0.1),    # Ctrl-C while --overwrite replaces an older file
+])
+def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, signum, code, existing, delay):
+    """Issue 14: a real `python -m vrsweep merge` stopped while it writes (as its temporary file
+    appears, or ``delay`` seconds later): exit 128 + signal, one line, OUT as it was, and no
+    temporary file."""
+    out = tmp_path / "merged.h5"
+    options = []
+    if existing is not None:
+        out.write_bytes(existing)
+        options = ["--overwrite"]
+    # Each shard given 50 times: every block is read and compared 100 times, so the merge would take
+    # seconds; it is stopped as soon as its temporary file appears, long before the end.
+    child = vrsweep_process("merge", *(big_shards * 50), "-o", out, *options)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(tmp_path.glob(".merged.h5.*.tmp")):
+            assert child.poll() is None, child.communicate()
+            assert time.monotonic() < deadline, "the merge never started writing"
+            time.sleep(0.002)
+        time.sleep(delay)
+        child.send_signal(signum)
+        _, stderr = child.communicate(timeout=120)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    assert child.returncode == code, stderr
+    state = "left as it was" if existing else "not written"
+    name = signal.Signals(signum).name
+    assert stderr.strip().splitlines() == [f"Interrupted ({name}): merge stopped, {out} {state} (no partial file)"]
+    assert [p.name for p in tmp_path.iterdir()] == (["merged.h5"] if existing else [])
+    assert existing is None or out.read_bytes() == existing
+
+
+def test_a_write_failure_during_merge_is_one_line_and_leaves_nothing(runs, tmp_path, monkeypatch):
+    """A runtime failure while writing (here a full disk): exit 1, one line naming the output, and
+    no temporary file."""
+    import vrsweep.merge
+
+    def full_disk(out, *args):
+        raise OSError(errno.ENOSPC, "No space left on device", out.file.filename)
+
+    monkeypatch.setattr(vrsweep.merge, "_merge_variable", full_disk)
+    _, _, shards = runs
+    out = tmp_path / "merged.h5"
+    result = invoke("merge", *shards, "-o", out)
+    assert result.exit_code == 1
+    assert result.output.strip().splitlines() == [f"Error: cannot write {out}: No space left on device"]
+    assert list(tmp_path.iterdir()) == []

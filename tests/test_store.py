@@ -6,6 +6,7 @@ a known function of the flat point index.
 
 import inspect
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -16,15 +17,17 @@ import warnings
 import h5py
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.merge import merge_results
 from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES, Status
 from vrsweep.store import (
     FORMAT_VERSION,
     ResultWriter,
     VariableSpec,
     atomic_write,
-    merge_results,
     read_results,
 )
 
@@ -513,6 +516,9 @@ def write_shards(tmp_path, n_shards=3, axes=AXES_2D, skip=()):
 
 
 def test_merge_of_three_shards_equals_a_single_run(tmp_path):
+    import vrsweep.store
+
+    assert vrsweep.store.merge_results is merge_results  # where it was before vrsweep/merge.py
     single = write_file(tmp_path / "single.h5", AXES_2D)
     shards = write_shards(tmp_path)
     report = merge_results(shards, tmp_path / "merged.h5")
@@ -548,8 +554,9 @@ def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(
     with pytest.raises(ResultFileError) as info:
         merge_results(shards, tmp_path / "merged.h5")
     message = str(info.value)
-    assert "2 of 15 points are missing" in message and "shard1.h5 (shard 2/3)" in message
-    assert "finished 3 of its 5 points" in message and "--resume" in message
+    assert "2 of 15 points are missing" in message
+    assert f"2 (g=1, Omega=4.5; g=2, Omega=4.5) owned by shard 2/3 ({shards[1]}, which finished 3 of its 5 points" in message
+    assert "--resume" in message
 
     report = merge_results(shards, tmp_path / "merged.h5", allow_missing=True)
     assert not report.complete and report.n_missing == 2 and "2 point(s) missing" in str(report)
@@ -560,6 +567,16 @@ def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(
     writer.finish({"g_res": (np.array([1.0, 2.0, 3.0]), ("Omega",),
                              {"units": "1", "long_name": "theory column"})})
     assert_identical(write_file(tmp_path / "single.h5", AXES_2D), tmp_path / "merged.h5")
+
+
+def test_merge_of_unfinished_whole_runs_says_no_file_has_the_missing_points(tmp_path):
+    partial = write_file(tmp_path / "partial.h5", AXES_2D, points=range(12), finish=False)
+    with pytest.raises(ResultFileError) as info:
+        merge_results([partial], tmp_path / "merged.h5")
+    message = str(info.value)
+    assert "3 of 15 points are missing" in message
+    assert "3 (g=4, Omega=4; g=4, Omega=4.5; g=4, Omega=5) were computed by none of the files given" in message
+    assert not (tmp_path / "merged.h5").exists()
 
 
 def test_merge_names_a_foreign_shard(tmp_path):
@@ -590,6 +607,66 @@ def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path):
     assert not (tmp_path / "merged2.h5").exists()
 
 
+def test_merge_keeps_the_first_derived_variables_and_says_if_others_differ(tmp_path):
+    shards = write_shards(tmp_path)
+    assert merge_results(shards, tmp_path / "merged.h5").warnings == []
+    # Shard 2 holds g_res stored another way (contiguous, no checksum) but with the same values:
+    # its stored bytes differ, its values do not.
+    with h5py.File(shards[1], "r+") as f:
+        attrs = dict(f["g_res"].attrs)
+        f["g_res"].dims[0].detach_scale(f["Omega"])
+        del f["g_res"]
+        ds = f.create_dataset("g_res", data=np.array([1.0, 2.0, 3.0]))
+        ds.dims[0].attach_scale(f["Omega"])
+        for key in ("units", "long_name"):
+            ds.attrs[key] = attrs[key]
+    assert merge_results(shards, tmp_path / "merged2.h5").warnings == []
+    # Shard 3's differ: kept from the first shard, with a warning naming both.
+    with h5py.File(shards[2], "r+") as f:
+        f["g_res"][1] = 2.5
+    report = merge_results(shards, tmp_path / "merged3.h5")
+    assert report.warnings == [f"derived variables of {shards[2]} differ from {shards[0]}; "
+                               f"kept those of {shards[0]}"]
+    assert list(read_results(tmp_path / "merged3.h5").variables["g_res"]) == [1.0, 2.0, 3.0]
+
+
+def test_merge_stops_when_asked_and_leaves_nothing(tmp_path):
+    """``stop`` is called before every read of a shard; what it raises ends the merge, and the
+    temporary file of the output is removed (the CLI's SIGINT/SIGTERM)."""
+    shards = write_shards(tmp_path)
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    reads = []
+
+    def stop():
+        reads.append(1)
+        if len(reads) > 10:  # 3 shards opened, 3 done masks read: now it is writing
+            assert len(list(out_dir.glob(".merged.h5.*.tmp"))) == 1
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        merge_results(shards, out_dir / "merged.h5", stop=stop)
+    assert list(out_dir.iterdir()) == []
+
+
+def test_merge_refuses_a_shard_replaced_while_it_is_merged(tmp_path):
+    """Shards are reopened for every block: one replaced in between (a resumed or re-run shard) is
+    an error naming it, not a mix of two files."""
+    shards = write_shards(tmp_path)
+    reads = []
+
+    def replace_shard_1_when_writing_starts():
+        reads.append(1)
+        if len(reads) == 7:  # after the 3 opens and 3 done masks
+            copy = tmp_path / "copy.h5"
+            copy.write_bytes(shards[1].read_bytes())
+            os.replace(copy, shards[1])  # the same bytes, another file
+
+    with pytest.raises(ResultFileError, match=re.escape(f"{shards[1]} was changed or replaced while")):
+        merge_results(shards, tmp_path / "merged.h5", stop=replace_shard_1_when_writing_starts)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in shards)
+
+
 def test_merge_refuses_to_overwrite_and_reports_bad_shards(tmp_path):
     shards = write_shards(tmp_path)
     (tmp_path / "merged.h5").write_text("precious")
@@ -602,6 +679,77 @@ def test_merge_refuses_to_overwrite_and_reports_bad_shards(tmp_path):
     (tmp_path / "junk.h5").write_text("junk")
     with pytest.raises(ResultFileError, match="junk.h5 is not an HDF5 file"):
         merge_results(shards + [tmp_path / "junk.h5"], tmp_path / "m3.h5")
+
+
+AXES_3D = [("g", np.linspace(0.0, 6.0, 7)), ("Omega", np.array([4.0, 4.5, 5.0])),
+           ("c", np.array([0.1, 0.2, 0.3, 0.4]))]
+
+
+@pytest.fixture
+def small_blocks(monkeypatch):
+    """HDF5 chunks of 64 bytes and merge blocks of 160: an 84-point grid then takes many blocks,
+    chunks cut axes, and blocks fix leading axes, as a large grid would."""
+    import vrsweep.merge
+    import vrsweep.store
+
+    monkeypatch.setattr(vrsweep.store._chunk_shape, "__defaults__", (64,))
+    monkeypatch.setattr(vrsweep.merge, "BLOCK_BYTES", 160)
+
+
+def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks):
+    single = write_file(tmp_path / "single.h5", AXES_3D)
+    with h5py.File(single, "r") as f:
+        assert f["R"].chunks == (1, 2, 4) and f["roots"].chunks == (1, 1, 4, 2)
+    shards = write_shards(tmp_path, n_shards=4, axes=AXES_3D)
+    merge_results(shards, tmp_path / "merged.h5")
+    assert_identical(single, tmp_path / "merged.h5")
+    # The single run given again after them: every point twice, compared block by block.
+    report = merge_results(shards + [single], tmp_path / "twice.h5")
+    assert report.n_duplicated == 84
+    assert_identical(single, tmp_path / "twice.h5")
+    # A value changed in the last block: found, and counted over all blocks.
+    with h5py.File(single, "r+") as f:
+        f["roots"][6, 2, 3, 1] = 0.0
+        f["roots"][0, 0, 1, 0] = -1.0
+    with pytest.raises(ResultFileError) as info:
+        merge_results(shards + [single], tmp_path / "conflict.h5")
+    message = str(info.value)
+    assert "g=0, Omega=4, c=0.2 was computed by both" in message and "different values of roots" in message
+    assert "2 point(s) conflict" in message
+    assert not (tmp_path / "conflict.h5").exists()
+
+
+def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks):
+    lost = (5, 40, 41, 83)
+    partial = write_file(tmp_path / "partial.h5", AXES_3D,
+                         points=[p for p in range(84) if p not in lost], finish=False)
+    shards = write_shards(tmp_path, n_shards=4, axes=AXES_3D, skip=lost)
+    report = merge_results(shards, tmp_path / "merged.h5", allow_missing=True)
+    assert report.n_missing == 4 and not report.complete
+    assert_identical(partial, tmp_path / "merged.h5")  # unwritten points hold the fill values
+
+
+@settings(max_examples=200, deadline=None)
+@given(shape=st.lists(st.integers(1, 6), max_size=4), extra=st.integers(1, 40),
+       chunk_bytes=st.sampled_from([8, 64, 512, 4096]), max_points=st.integers(1, 400))
+def test_merge_blocks_cover_the_grid_once_in_order_without_cutting_chunks(shape, extra, chunk_bytes,
+                                                                          max_points):
+    from vrsweep.merge import _blocks
+    from vrsweep.store import _chunk_shape
+
+    shape = tuple(shape)
+    chunks = _chunk_shape(shape, (extra,), 8, chunk_bytes)[:len(shape)]
+    flat = np.arange(int(np.prod(shape))).reshape(shape)
+    next_point = 0
+    for block in _blocks(shape, chunks, max_points):
+        points = flat[block].reshape(-1)
+        # A run of consecutive points, where the previous block stopped: C order, each point once.
+        assert np.array_equal(points, np.arange(next_point, next_point + points.size))
+        next_point += points.size
+        for k, part in enumerate(block):  # starts and ends on chunk boundaries (or the grid's end)
+            assert part.start % chunks[k] == 0
+            assert part.stop % chunks[k] == 0 or part.stop == shape[k]
+    assert next_point == flat.size
 
 
 # ---------------------------------------------------------------------------------------------

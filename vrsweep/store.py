@@ -67,14 +67,13 @@ import os
 import shutil
 import uuid
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
+from typing import Callable
 
 import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
-from vrsweep.provenance import cf_attributes
 
 FORMAT_VERSION = 1
 
@@ -810,249 +809,16 @@ def read_results(path) -> ResultSet:
 
 
 # --------------------------------------------------------------------------------------------
-# Merge (issue 6)
+# Merge: vrsweep/merge.py (it streams the shards block by block); importable from here as before
 # --------------------------------------------------------------------------------------------
 
 
-@dataclass
-class MergeReport:
-    """What a merge found; ``str()`` is a short summary for the CLI."""
+def __getattr__(name):
+    if name in ("merge_results", "MergeReport"):
+        from vrsweep import merge
 
-    out_path: str
-    n_points: int
-    n_done: int
-    n_missing: int
-    missing_examples: list
-    n_duplicated: int
-    shards: list  # (path, shard label or None, points done)
-    warnings: list = field(default_factory=list)
-
-    @property
-    def complete(self) -> bool:
-        return self.n_missing == 0
-
-    def __str__(self):
-        lines = [f"merged {len(self.shards)} shard(s) into {self.out_path}: "
-                 f"{self.n_done} of {self.n_points} points"]
-        if self.n_missing:
-            lines.append(f"{self.n_missing} point(s) missing, e.g. {'; '.join(self.missing_examples)}"
-                         " (the file is marked incomplete)")
-        if self.n_duplicated:
-            lines.append(f"{self.n_duplicated} point(s) computed by more than one shard "
-                         "(identical values, kept once)")
-        lines.extend(f"warning: {w}" for w in self.warnings)
-        return "\n".join(lines)
-
-
-_EXAMPLES = 3
-
-
-def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missing=False) -> MergeReport:
-    """Merge shard files of one config into a file identical to a single-process run.
-
-    Checks that every shard has the same ``config`` (else ResultFileError naming the foreign
-    shard) and the same layout; combines the done masks; a point done in two shards is fine if its
-    values are bit-for-bit identical and an error otherwise; refuses to write if any point is
-    missing unless ``allow_missing`` (the result is then marked incomplete and can be resumed).
-    Writes ``out_path`` atomically; same variables and attributes as a single run (``created`` is
-    the merge time; no ``shard``/``owned``).
-    """
-    paths = [os.fspath(p) for p in shard_paths]
-    out_path = os.fspath(out_path)
-    if not paths:
-        raise UsageError("merge needs at least one shard file")
-    if os.path.lexists(out_path):
-        if any(os.path.exists(p) and os.path.samefile(p, out_path) for p in paths):
-            raise UsageError(f"output {out_path} is one of the shards being merged")
-        if not overwrite:
-            raise UsageError(f"output {out_path} already exists: pass --overwrite to replace it")
-    _check_output_directory(out_path)
-
-    shards = [read_results(p) for p in paths]
-    warnings = []
-
-    # One config: the largest group of identical configs is the reference (ties: the first file),
-    # so the message names the odd one out, not the innocent majority.
-    groups = {}
-    for s in shards:
-        groups.setdefault(s.attrs.get("config", ""), []).append(s)
-    reference_config = max(groups, key=lambda c: (len(groups[c]), -shards.index(groups[c][0])))
-    ref = groups[reference_config][0]
-    foreign = [s for s in shards if s.attrs.get("config", "") != reference_config]
-    if foreign:
-        s = foreign[0]
-        raise ResultFileError(
-            f"{s.path} was written from a different config than {ref.path} "
-            f"({_first_difference(s.attrs.get('config', ''), reference_config)}); "
-            f"{len(foreign)} of {len(shards)} shard(s) do not belong to this run")
-    for s in shards[1:]:
-        problem = _layout_difference(ref, s)
-        if problem:
-            raise ResultFileError(f"{s.path} does not have the layout of {ref.path}: {problem}")
-
-    seen = {}
-    for s in shards:
-        key = os.path.realpath(s.path)
-        if key in seen:
-            warnings.append(f"{s.path} given more than once")
-        seen[key] = True
-    labels = [s.shard for s in shards if s.shard]
-    counts = {str(label).split("/")[-1] for label in labels}
-    if len(counts) > 1:
-        warnings.append(f"shard labels disagree on the number of shards: {', '.join(labels)}")
-    for key in ("vrsweep_version", "numba_version", "numpy_version"):
-        found = sorted({str(s.attrs.get(key)) for s in shards})
-        if len(found) > 1:
-            warnings.append(f"shards were written with different {key}: {', '.join(found)} "
-                            f"(the merged file records {ref.attrs.get(key)})")
-
-    # Combine point by point.
-    shape = ref.shape
-    n_points = math.prod(shape)
-    merged = {name: np.array(ref.variables[name], copy=True) for name in ref.point_variables}
-    for name in merged:  # start from the fill values, not from the first shard's unfinished rows
-        merged[name][...] = ref.fill_values[name]
-    merged_done = np.zeros(shape, dtype=bool)
-    owner = np.full(n_points, -1, dtype=np.int64)  # which shard supplied each point (messages)
-    n_duplicated = 0
-    for k, s in enumerate(shards):
-        overlap = (s.done & merged_done).reshape(-1)
-        if overlap.any():
-            _check_duplicates(shards, k, overlap, owner, merged, ref)
-            n_duplicated += int(overlap.sum())
-        new = (s.done & ~merged_done)
-        for name in merged:
-            merged[name][new] = s.variables[name][new]
-        owner[new.reshape(-1)] = k
-        merged_done |= s.done
-
-    missing = np.flatnonzero(~merged_done.reshape(-1))
-    examples = [ref.point_label(i) for i in missing[:_EXAMPLES]]
-    if missing.size and not allow_missing:
-        raise ResultFileError(
-            f"{missing.size} of {n_points} points are missing from the shards "
-            f"(e.g. {'; '.join(examples)}); {_missing_owners(shards, missing)}")
-
-    # Derived variables: from the first finished shard that has them.
-    with_extras = [s for s in shards if s.derived_variables]
-    extras, extra_coords_new = {}, {}
-    if with_extras:
-        src = with_extras[0]
-        for other in with_extras[1:]:
-            if not _same_arrays(src, other, src.derived_variables):
-                warnings.append(f"derived variables of {other.path} differ from {src.path}; "
-                                f"kept those of {src.path}")
-        point_dims = set(ref.axes) | {d for n in ref.point_variables for d in ref.dims[n]}
-        for name in src.derived_variables:
-            extras[name] = (src.variables[name], src.dims[name], src.var_attrs[name])
-            for d in src.dims[name]:
-                if d not in point_dims:
-                    extra_coords_new[d] = (src.coords[d], src.coord_attrs[d])
-
-    point_dims = {d for n in ref.point_variables for d in ref.dims[n][len(ref.axes):]}
-    extra_coords = {d: (ref.coords[d], ref.coord_attrs[d]) for d in ref.coords if d in point_dims}
-    root_attrs = {k: v for k, v in ref.attrs.items()
-                  if k not in _RESERVED_ROOT_ATTRS and k != "shard"}
-    if "history" in root_attrs:  # CF: the merge adds its own line to the first shard's history
-        root_attrs.update(cf_attributes(str(root_attrs.get("title", "")), history=str(root_attrs["history"])))
-    axes = [(name, values, ref.coord_attrs[name]) for name, values in ref.axes.items()]
-    specs = ref.variable_specs()
-    complete = missing.size == 0
-
-    def write(tmp):
-        with h5py.File(tmp, "w", track_order=True, **_file_kwargs()) as f:
-            grid_shape = _build_skeleton(f, axes, specs, root_attrs, extra_coords, None)
-            for name, array in merged.items():
-                if grid_shape == () or merged_done.all():
-                    f[name][()] = array
-                else:  # leave unwritten points at the dataset's fill value, as a run does
-                    _write_masked(f[name], array, merged_done)
-            f["done"][()] = merged_done.astype(np.int8)
-            if complete:
-                _add_extras(f, extras, extra_coords_new)
-                f.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
-
-    atomic_write(out_path, write)
-    return MergeReport(
-        out_path=out_path, n_points=n_points, n_done=int(merged_done.sum()),
-        n_missing=int(missing.size), missing_examples=examples, n_duplicated=n_duplicated,
-        shards=[(s.path, s.shard, int(s.done.sum())) for s in shards], warnings=warnings)
-
-
-def _write_masked(ds, array, mask):
-    flat = np.flatnonzero(mask.reshape(-1))
-    if flat.size == 0:
-        return
-    extra = array.shape[mask.ndim:]
-    _write_selection(ds, tuple(mask.shape), flat, array.reshape((-1,) + extra)[flat])
-
-
-def _layout_difference(a: ResultSet, b: ResultSet):
-    if list(a.axes) != list(b.axes):
-        return f"axes {list(b.axes)} instead of {list(a.axes)}"
-    for name in a.axes:
-        if a.axes[name].shape != b.axes[name].shape or a.axes[name].tobytes() != b.axes[name].tobytes():
-            return f"different values of axis {name!r}"
-    if a.point_variables != b.point_variables:
-        return f"variables {list(b.point_variables)} instead of {list(a.point_variables)}"
-    for name in a.point_variables:
-        va, vb = a.variables[name], b.variables[name]
-        if va.dtype != vb.dtype or va.shape != vb.shape or a.dims[name] != b.dims[name]:
-            return f"variable {name!r} differs in type or shape"
-    return None
-
-
-def _check_duplicates(shards, k, overlap, owner, merged, ref):
-    """Points done by shard k and by an earlier shard must agree bit for bit."""
-    s = shards[k]
-    flat_overlap = np.flatnonzero(overlap)
-    for name in ref.point_variables:
-        a = merged[name].reshape((overlap.size, -1))[flat_overlap]
-        b = s.variables[name].reshape((overlap.size, -1))[flat_overlap]
-        # Compare bytes, not values: NaN must equal NaN, and -0.0 must not equal 0.0.
-        differs = np.any(a.view(np.uint8).reshape(a.shape[0], -1)
-                         != b.view(np.uint8).reshape(b.shape[0], -1), axis=1)
-        if differs.any():
-            bad = flat_overlap[differs]
-            first = bad[0]
-            other = shards[owner[first]]
-            raise ResultFileError(
-                f"{ref.point_label(first)} was computed by both {other.path} and {s.path} with "
-                f"different values of {name} ({merged[name].reshape(overlap.size, -1)[first]} vs "
-                f"{s.variables[name].reshape(overlap.size, -1)[first]}); {bad.size} point(s) "
-                "conflict: were the shards run with different software versions?")
-
-
-def _missing_owners(shards, missing):
-    """Say which shards the missing points belong to, when the shard files record it."""
-    parts = []
-    owned_any = np.zeros(missing.size, dtype=bool)
-    for s in shards:
-        if s.owned is None:
-            continue
-        mine = s.owned.reshape(-1)[missing]
-        owned_any |= mine
-        if mine.any():
-            n_own = int(s.owned.sum())
-            n_done = int((s.done & s.owned).sum())
-            parts.append(f"{s.path} (shard {s.shard}) finished {n_done} of its {n_own} points: "
-                         "resume it with --resume")
-    n_orphan = int((~owned_any).sum())
-    if n_orphan:
-        labels = ", ".join(str(s.shard) for s in shards if s.shard) or "none"
-        parts.append(f"{n_orphan} point(s) belong to no shard given (shards given: {labels}); "
-                     "is a shard file missing from the list?")
-    return "; ".join(parts) + "; run or resume the missing shards, then merge again"
-
-
-def _same_arrays(a: ResultSet, b: ResultSet, names):
-    for name in names:
-        if name not in b.variables:
-            return False
-        x, y = a.variables[name], b.variables[name]
-        if x.dtype != y.dtype or x.shape != y.shape or x.tobytes() != y.tobytes():
-            return False
-    return True
+        return getattr(merge, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = [

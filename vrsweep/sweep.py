@@ -112,6 +112,19 @@ def shuffled_lines(grid, shard_index=0, shard_count=1):
     return lines[order[shard_index::shard_count]]
 
 
+def shard_of_points(grid, shard_count):
+    """For every grid point (over grid.shape), the shard 0..shard_count-1 that runs it.
+
+    The inverse of shuffled_lines: the line at place p of the shuffled order goes to shard
+    p mod shard_count. Used to say which shard file a missing point belongs to.
+    """
+    lines = grid.lines()
+    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
+    shard = np.empty(grid.n_points, dtype=np.int64)
+    shard[lines[order]] = (np.arange(len(lines)) % shard_count)[:, None]
+    return shard.reshape(grid.shape)
+
+
 @njit(parallel=True, cache=True)
 def run_lines(coefficients, initial_state, settings, lines, period_records, summaries, statuses):
     """Run each line's points in order; lines in parallel.

@@ -1,0 +1,600 @@
+"""Merge the shard files of one run into the file a single run would have written, streaming.
+
+A merge never holds a shard, or the result, in memory:
+
+1. Each shard file is opened and only its metadata is read (root attributes, axes, the type and
+   shape of each variable): every shard must have the same ``config`` and the same layout.
+2. The ``done`` masks are read one at a time to decide which shard supplies each point (the first
+   one, in the order given, that has it done); a point done by several shards is a duplicate.
+3. Points that no shard has done are an error naming the shard each belongs to (shards own points
+   in a fixed shuffled order, ``vrsweep.sweep.shard_of_points``), unless ``allow_missing``.
+4. The output is written variable by variable, block by block: a block is a run of whole HDF5
+   chunks of a few MiB; it is read from each shard that supplies points in it, those points are
+   kept, duplicates are compared bit for bit with the supplier's values, and the block is written.
+
+Peak memory is therefore start-up, a few blocks, a few bytes per grid point (which shard supplies
+it) and the largest derived variable (a theory column, stored as one chunk), whatever the number of
+shards; benchmarks/bench_merge.py measures it (benchmarks/README.md, "Merge"). The output is
+written under a temporary name and renamed into place (``store.atomic_write``), so an error or a
+signal leaves no partial file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from typing import Iterable
+
+import h5py
+import numpy as np
+
+from vrsweep.errors import ResultFileError, UsageError, VrsweepError
+from vrsweep.provenance import cf_attributes
+from vrsweep.store import (
+    _BOOKKEEPING, _RESERVED_ROOT_ATTRS, VariableSpec, _add_extras, _build_skeleton,
+    _check_output_directory, _clean_attrs, _corrupt_error, _file_kwargs, _first_difference,
+    _open_checked, _point_variables, _scale_names, atomic_write,
+)
+
+# Bytes of one variable per block: large enough that HDF5 calls are few, small enough that a few
+# blocks are nothing beside the start-up of Python, numpy and h5py.
+BLOCK_BYTES = 4 * 1024 * 1024
+# Blocks are written as whole chunks, so the output needs no chunk cache either.
+_WRITE_CACHE_BYTES = 0
+_EXAMPLES = 3  # points named in a message
+_GROUPS = 6    # shards named in a missing-points message
+
+
+class MergeWriteError(VrsweepError):
+    """The merged file could not be written (a runtime failure: exit 1)."""
+
+
+@dataclass
+class MergeReport:
+    """What a merge found; ``str()`` is a short summary for the CLI."""
+
+    out_path: str
+    n_points: int
+    n_done: int
+    n_missing: int
+    missing_examples: list
+    n_duplicated: int
+    shards: list  # (path, shard label or None, points done)
+    warnings: list = field(default_factory=list)
+
+    @property
+    def complete(self) -> bool:
+        return self.n_missing == 0
+
+    def __str__(self):
+        lines = [f"merged {len(self.shards)} shard(s) into {self.out_path}: "
+                 f"{self.n_done} of {self.n_points} points"]
+        if self.n_missing:
+            lines.append(f"{self.n_missing} point(s) missing, e.g. {'; '.join(self.missing_examples)}"
+                         " (the file is marked incomplete)")
+        if self.n_duplicated:
+            lines.append(f"{self.n_duplicated} point(s) computed by more than one shard "
+                         "(identical values, kept once)")
+        lines.extend(f"warning: {w}" for w in self.warnings)
+        return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------------
+# One shard file: its metadata in memory, its data read block by block
+# --------------------------------------------------------------------------------------------
+
+
+class _Shard:
+    """A shard file: its metadata in memory, its data read on demand. Any damage found while
+    reading is a ResultFileError naming the file (HDF5 chunks carry checksums).
+
+    The file is open only while a block is read: HDF5 keeps a few hundred bytes for every chunk
+    read from a file until the file is closed (about a tenth of the data read), so shards held
+    open for the whole merge would make its memory grow with their number.
+    """
+
+    def __init__(self, path, stop):
+        stop()
+        self.path = path
+        self._stop = stop
+        f = _open_checked(path, "r")
+        try:
+            self._read_metadata(f)
+            self._identity = _identity(path)
+        except ResultFileError:
+            raise
+        except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
+            raise _corrupt_error(path, error) from None
+        finally:
+            f.close()
+
+    def _read_metadata(self, f):
+        done = f["done"]
+        self.axis_names = _scale_names(done) if done.ndim else ()
+        self.shape = tuple(done.shape)
+        self.point_variables = _point_variables(f)
+        axes, self.coords, self.coord_attrs = {}, {}, {}
+        self.dtypes, self.shapes, self.dims, self.var_attrs, self.fill_values = {}, {}, {}, {}, {}
+        for name, obj in f.items():
+            if not isinstance(obj, h5py.Dataset):
+                continue
+            if obj.is_scale:  # coordinates: small, read whole
+                (axes if name in self.axis_names else self.coords)[name] = obj[()]
+                self.coord_attrs[name] = _clean_attrs(obj.attrs)
+                continue
+            if name in _BOOKKEEPING:
+                continue
+            self.dtypes[name] = obj.dtype
+            self.shapes[name] = tuple(obj.shape)
+            self.dims[name] = _scale_names(obj) if obj.ndim else ()
+            self.var_attrs[name] = _clean_attrs(obj.attrs)
+            self.fill_values[name] = obj.fillvalue
+        self.axes = {name: axes[name] for name in self.axis_names}
+        missing = [n for n in self.point_variables if n not in self.dtypes]
+        if missing:
+            raise ResultFileError(f"{self.path} is corrupt: variables {missing} are missing")
+        self.derived_variables = tuple(n for n in self.dtypes if n not in self.point_variables)
+        self.attrs = _clean_attrs(f.attrs)
+        self.has_owned = "owned" in f
+
+    @property
+    def shard(self):
+        """The shard label "I/N", or None for a whole run."""
+        return self.attrs.get("shard")
+
+    def read(self, name, selection=()):
+        """``name[selection]`` as an array (the file opened for this read, with no chunk cache:
+        blocks are whole chunks, each read once)."""
+        try:
+            with self._open() as f:
+                return np.asarray(f[name][selection])
+        except ResultFileError:
+            raise
+        except Exception as error:  # noqa: BLE001 - a failed checksum is an OSError, others vary
+            raise _corrupt_error(self.path, error) from None
+
+    def _open(self):
+        """The file, opened for one read, if it is still the file whose metadata was read (and the
+        merge has not been asked to stop: every read is a point where it can)."""
+        self._stop()
+        if _identity(self.path) != self._identity:
+            raise ResultFileError(f"{self.path} was changed or replaced while it was being merged")
+        return h5py.File(self.path, "r", rdcc_nbytes=0, **_file_kwargs())
+
+    def stored_digest(self, name):
+        """SHA-256 of a variable as stored on disk (chunk checksums included), one chunk at a
+        time: equal digests mean equal values, without decoding either whole variable."""
+        digest = hashlib.sha256()
+        try:
+            with self._open() as f:
+                ds = f[name]
+                if ds.chunks is None:  # a 0-d variable: contiguous, and small
+                    digest.update(np.asarray(ds[()]).tobytes())
+                    return digest.hexdigest()
+                for index in range(ds.id.get_num_chunks()):
+                    offset = ds.id.get_chunk_info(index).chunk_offset
+                    filter_mask, data = ds.id.read_direct_chunk(offset)
+                    digest.update(repr((offset, filter_mask, len(data))).encode())
+                    digest.update(data)
+        except ResultFileError:
+            raise
+        except Exception as error:  # noqa: BLE001 - as in read()
+            raise _corrupt_error(self.path, error) from None
+        return digest.hexdigest()
+
+    def read_mask(self, name):
+        return np.asarray(self.read(name), dtype=bool).reshape(self.shape)
+
+    def variable_specs(self):
+        """The VariableSpec list that created this file's point variables."""
+        n_axes = len(self.axes)
+        specs = []
+        for name in self.point_variables:
+            attrs = {k: v for k, v in self.var_attrs[name].items() if k != "_FillValue"}
+            extra = tuple((d, len(self.coords[d])) for d in self.dims[name][n_axes:])
+            specs.append(VariableSpec(name, self.dtypes[name], extra, attrs, self.fill_values[name]))
+        return specs
+
+    def point_label(self, flat_index) -> str:
+        """``g=1.5, Omega=4`` for a flat grid index (for messages)."""
+        if not self.axes:
+            return "the single point"
+        where = np.unravel_index(int(flat_index), self.shape)
+        return ", ".join(f"{name}={values[i]:g}" for (name, values), i in zip(self.axes.items(), where))
+
+
+def _identity(path):
+    """What tells that a file is still the one first opened: not replaced, not written to."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+
+
+def _layout_difference(a: _Shard, b: _Shard):
+    if list(a.axes) != list(b.axes):
+        return f"axes {list(b.axes)} instead of {list(a.axes)}"
+    for name in a.axes:
+        if a.axes[name].shape != b.axes[name].shape or a.axes[name].tobytes() != b.axes[name].tobytes():
+            return f"different values of axis {name!r}"
+    if a.point_variables != b.point_variables:
+        return f"variables {list(b.point_variables)} instead of {list(a.point_variables)}"
+    for name in a.point_variables:
+        if (a.dtypes[name] != b.dtypes[name] or a.shapes[name] != b.shapes[name]
+                or a.dims[name] != b.dims[name]):
+            return f"variable {name!r} differs in type or shape"
+    return None
+
+
+# --------------------------------------------------------------------------------------------
+# Blocks of grid points
+# --------------------------------------------------------------------------------------------
+
+
+def _blocks(grid_shape, chunk_shape, max_points):
+    """Hyperslabs (tuples of slices) that cover the grid in C order, each whole HDF5 chunks.
+
+    A block fixes the axes before a split axis, takes a range of the split axis (a multiple of
+    its chunk length) and all of the axes after it, so that no chunk is cut and each is read once.
+    The store's chunks hold whole trailing axes, part of one axis and one row of the leading ones
+    (store._chunk_shape), so the split axis is never after the first axis a chunk spans more than
+    one row of; it is the first one whose chunk rows fit ``max_points``.
+    """
+    n_axes = len(grid_shape)
+    if n_axes == 0:
+        yield ()
+        return
+    chunk_shape = tuple(chunk_shape[:n_axes]) if chunk_shape else (1,) * n_axes
+    last_allowed = next((k for k in range(n_axes) if chunk_shape[k] > 1), n_axes - 1)
+    split = last_allowed
+    for k in range(last_allowed + 1):
+        if chunk_shape[k] * math.prod(grid_shape[k + 1:]) <= max_points:
+            split = k
+            break
+    inner = math.prod(grid_shape[split + 1:])
+    rows = chunk_shape[split]
+    step = max(rows, (max_points // max(inner, 1)) // rows * rows)
+    tail = tuple(slice(0, n) for n in grid_shape[split + 1:])
+    for lead in np.ndindex(*grid_shape[:split]):
+        head = tuple(slice(i, i + 1) for i in lead)
+        for start in range(0, grid_shape[split], step):
+            yield head + (slice(start, min(start + step, grid_shape[split])),) + tail
+
+
+# --------------------------------------------------------------------------------------------
+# The merge
+# --------------------------------------------------------------------------------------------
+
+
+def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missing=False,
+                  stop=None) -> MergeReport:
+    """Merge shard files of one config into a file identical to a single-process run.
+
+    Checks that every shard has the same ``config`` (else ResultFileError naming the foreign
+    shard) and the same layout; a point done in two shards is fine if its values are bit-for-bit
+    identical and an error otherwise; refuses to write if any point is missing (naming the shard
+    that owns it) unless ``allow_missing`` (the result is then marked incomplete and can be
+    resumed). Writes ``out_path`` atomically; same variables and attributes as a single run
+    (``created`` is the merge time; no ``shard``/``owned``).
+
+    ``stop``: called before every read of a shard; whatever it raises (the CLI: a KeyboardInterrupt
+    after SIGINT or SIGTERM) ends the merge, and the temporary file is removed.
+    """
+    paths = [os.fspath(p) for p in shard_paths]
+    out_path = os.fspath(out_path)
+    if not paths:
+        raise UsageError("merge needs at least one shard file")
+    if os.path.lexists(out_path):
+        if any(os.path.exists(p) and os.path.samefile(p, out_path) for p in paths):
+            raise UsageError(f"output {out_path} is one of the shards being merged")
+        if not overwrite:
+            raise UsageError(f"output {out_path} already exists: pass --overwrite to replace it")
+    _check_output_directory(out_path)
+
+    stop = stop or (lambda: None)
+    return _merge([_Shard(path, stop) for path in paths], out_path, allow_missing)
+
+
+def _merge(shards, out_path, allow_missing):
+    ref, warnings = _check_one_run(shards)
+
+    # Which shard supplies each point: the first, in the order given, that has it done.
+    shape = ref.shape
+    n_points = math.prod(shape)
+    supplier = np.full(shape, -1, dtype=np.int32)
+    n_done_by_shard = []
+    duplicates = np.zeros(len(shards), dtype=np.int64)  # points shard k has that an earlier one had
+    for k, s in enumerate(shards):
+        done = s.read_mask("done")
+        n_done_by_shard.append(int(done.sum()))
+        duplicates[k] = int((done & (supplier >= 0)).sum())
+        supplier[done & (supplier < 0)] = k
+        del done
+    merged_done = supplier >= 0
+    missing = np.flatnonzero(~merged_done.reshape(-1))
+    examples = [ref.point_label(i) for i in missing[:_EXAMPLES]]
+    if missing.size and not allow_missing:
+        raise ResultFileError(_missing_points_message(shards, ref, missing, n_done_by_shard))
+    complete = missing.size == 0
+
+    point_dims = {d for n in ref.point_variables for d in ref.dims[n][len(ref.axes):]}
+    extra_coords = {d: (ref.coords[d], ref.coord_attrs[d]) for d in ref.coords if d in point_dims}
+    root_attrs = _root_attributes(ref)
+    axes = [(name, values, ref.coord_attrs[name]) for name, values in ref.axes.items()]
+
+    def write(tmp):
+        # The same file options as ResultWriter.create: checksummed object headers.
+        with h5py.File(tmp, "w", track_order=True, libver=("v108", "latest"), **_file_kwargs()) as out:
+            _build_skeleton(out, axes, ref.variable_specs(), root_attrs, extra_coords, None)
+        for name in ref.point_variables:  # reopened for each: see _Shard on HDF5's memory per chunk
+            with h5py.File(tmp, "r+", rdcc_nbytes=_WRITE_CACHE_BYTES, **_file_kwargs()) as out:
+                _merge_variable(out[name], name, shards, supplier, duplicates > 0, ref)
+        with h5py.File(tmp, "r+", **_file_kwargs()) as out:
+            out["done"][()] = merged_done.astype(np.int8)
+            if complete:
+                _copy_derived_variables(out, shards, ref, warnings)
+                out.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
+
+    try:
+        atomic_write(out_path, write)  # on any error or signal, removes the temporary file
+    except OSError as error:  # full disk, quota, a folder gone: the shards' errors are ResultFileErrors
+        raise MergeWriteError(f"cannot write {out_path}: {error.strerror or error}") from None
+    except (ValueError, RuntimeError) as error:  # how h5py reports some HDF5 write failures
+        raise MergeWriteError(f"cannot write {out_path}: {error}") from None
+    return MergeReport(
+        out_path=out_path, n_points=n_points, n_done=int(merged_done.sum()),
+        n_missing=int(missing.size), missing_examples=examples, n_duplicated=int(duplicates.sum()),
+        shards=[(s.path, s.shard, n) for s, n in zip(shards, n_done_by_shard)], warnings=warnings)
+
+
+def _root_attributes(ref):
+    """The merged file's root attributes: the reference shard's, but for those the store sets
+    (``created``: the merge time) and the shard label; ``history`` gains the merge's line."""
+    attrs = {k: v for k, v in ref.attrs.items() if k not in _RESERVED_ROOT_ATTRS and k != "shard"}
+    if "history" in attrs:  # CF: the merge adds its own line to the first shard's history
+        attrs.update(cf_attributes(str(attrs.get("title", "")), history=str(attrs["history"])))
+    return attrs
+
+
+def _check_one_run(shards):
+    """The reference shard (for layout and attributes) and the warnings; raises if the shards are
+    not of one run."""
+    # One config: the largest group of identical configs is the reference (ties: the first file),
+    # so the message names the odd one out, not the innocent majority.
+    groups = {}
+    for s in shards:
+        groups.setdefault(s.attrs.get("config", ""), []).append(s)
+    reference_config = max(groups, key=lambda c: (len(groups[c]), -shards.index(groups[c][0])))
+    ref = groups[reference_config][0]
+    foreign = [s for s in shards if s.attrs.get("config", "") != reference_config]
+    if foreign:
+        s = foreign[0]
+        raise ResultFileError(
+            f"{s.path} was written from a different config than {ref.path} "
+            f"({_first_difference(s.attrs.get('config', ''), reference_config)}); "
+            f"{len(foreign)} of {len(shards)} shard(s) do not belong to this run")
+    for s in shards:
+        problem = _layout_difference(ref, s) if s is not ref else None
+        if problem:
+            raise ResultFileError(f"{s.path} does not have the layout of {ref.path}: {problem}")
+
+    warnings = []
+    given = {}
+    for s in shards:
+        given.setdefault(os.path.realpath(s.path), []).append(s.path)
+    warnings.extend(f"{paths[0]} given {len(paths)} times" for paths in given.values() if len(paths) > 1)
+    labels = [s.shard for s in shards if s.shard]
+    counts = {str(label).split("/")[-1] for label in labels}
+    if len(counts) > 1:
+        warnings.append(f"shard labels disagree on the number of shards: {', '.join(labels)}")
+    for key in ("vrsweep_version", "numba_version", "numpy_version"):
+        found = sorted({str(s.attrs.get(key)) for s in shards})
+        if len(found) > 1:
+            warnings.append(f"shards were written with different {key}: {', '.join(found)} "
+                            f"(the merged file records {ref.attrs.get(key)})")
+    return ref, warnings
+
+
+def _merge_variable(out, name, shards, supplier, may_duplicate, ref):
+    """Copy one point variable into ``out`` block by block; duplicates must agree bit for bit."""
+    grid_shape = supplier.shape
+    extra_shape = tuple(out.shape[len(grid_shape):])
+    point_bytes = out.dtype.itemsize * math.prod(extra_shape)
+    conflicts, first_conflict = 0, None
+    for block in _blocks(grid_shape, out.chunks, max(1, BLOCK_BYTES // point_bytes)):
+        who = supplier[block].reshape(-1)
+        if (who < 0).all():
+            continue  # no shard has these points: they keep the fill value, as in a run
+        # Points no shard has keep the fill value's bytes exactly as HDF5 wrote them.
+        merged = None if (who >= 0).all() else np.asarray(out[block]).reshape((who.size,) + extra_shape)
+        for k, s in enumerate(shards):
+            supplies = who == k
+            # Points this shard has too, supplied by an earlier one (so already in merged).
+            twice = (np.flatnonzero(s.read("done", block).reshape(-1).astype(bool) & (who >= 0) & ~supplies)
+                     if may_duplicate[k] else np.empty(0, dtype=np.int64))
+            if not supplies.any() and twice.size == 0:
+                continue
+            values = s.read(name, block).reshape((who.size,) + extra_shape)
+            if merged is None:
+                merged = values if supplies.all() else np.empty_like(values)
+            if merged is not values:
+                merged[supplies] = values[supplies]
+            if twice.size:
+                # Compare bytes, not values: NaN must equal NaN, and -0.0 must not equal 0.0.
+                a, b = merged[twice], values[twice]
+                differs = np.any(a.view(np.uint8).reshape(twice.size, -1)
+                                 != b.view(np.uint8).reshape(twice.size, -1), axis=1)
+                if differs.any() and first_conflict is None:
+                    i = int(np.argmax(differs))
+                    first_conflict = (_grid_index(block, grid_shape, twice[i]), shards[who[twice[i]]], s, a[i], b[i])
+                conflicts += int(differs.sum())
+        out[block] = merged.reshape(_block_shape(block) + extra_shape)
+    if conflicts:
+        flat, supplied_by, also_in, a, b = first_conflict
+        raise ResultFileError(
+            f"{ref.point_label(flat)} was computed by both {supplied_by.path} and {also_in.path} with "
+            f"different values of {name} ({a} vs {b}); {conflicts} point(s) conflict: were the "
+            "shards run with different software versions?")
+
+
+def _grid_index(block, grid_shape, at):
+    """The flat grid index of the point at flat position ``at`` of ``block``."""
+    if not block:
+        return 0
+    where = np.unravel_index(at, _block_shape(block))
+    return int(np.ravel_multi_index(tuple(i + s.start for i, s in zip(where, block)), grid_shape))
+
+
+def _block_shape(block):
+    return tuple(s.stop - s.start for s in block)
+
+
+def _same_bytes(a, b):
+    return a.shape == b.shape and a.dtype == b.dtype and np.array_equal(
+        a.reshape(-1).view(np.uint8), b.reshape(-1).view(np.uint8))
+
+
+def _copy_derived_variables(out, shards, ref, warnings):
+    """Derived variables (theory columns) from the first finished shard that has them, one at a
+    time; the others' must agree, or a warning says whose were kept."""
+    with_extras = [s for s in shards if s.derived_variables]
+    if not with_extras:
+        return
+    source = with_extras[0]
+    point_dims = set(ref.axes) | {d for n in ref.point_variables for d in ref.dims[n]}
+    differing = set()
+    for name in source.derived_variables:
+        array = source.read(name)
+        digest = source.stored_digest(name)
+        for other in with_extras[1:]:
+            if name not in other.dtypes or other.dtypes[name] != array.dtype or other.shapes[name] != array.shape:
+                differing.add(other.path)
+            elif other.stored_digest(name) != digest and not _same_bytes(other.read(name), array):
+                differing.add(other.path)  # stored differently (another version?) and different
+        coords = {d: (source.coords[d], source.coord_attrs[d])
+                  for d in source.dims[name] if d not in point_dims}
+        _add_extras(out, {name: (array, source.dims[name], source.var_attrs[name])}, coords)
+        del array
+    for other in with_extras[1:]:
+        if other.path in differing or set(other.derived_variables) != set(source.derived_variables):
+            warnings.append(f"derived variables of {other.path} differ from {source.path}; "
+                            f"kept those of {source.path}")
+
+
+# --------------------------------------------------------------------------------------------
+# Missing points: whose are they?
+# --------------------------------------------------------------------------------------------
+
+
+def _missing_points_message(shards, ref, missing, n_done_by_shard):
+    """'N of M points are missing from the shards: n (g=..; ..) owned by shard i/N (file, not
+    given); ...', from the run's own assignment of points to shards when it can be recomputed."""
+    n_points = math.prod(ref.shape)
+    head = f"{missing.size} of {n_points} points are missing from the shards: "
+    tail = ("; run or resume those shards, then merge again (or pass --allow-missing to write an "
+            "incomplete file that 'vrsweep run CONFIG --resume -o OUT.h5' completes)")
+
+    def examples(points):
+        more = "; ..." if points.size > _EXAMPLES else ""
+        return "; ".join(ref.point_label(i) for i in points[:_EXAMPLES]) + more
+
+    def given_shard(s, n_owned):
+        n_done = n_done_by_shard[shards.index(s)]
+        return f"{s.path}, which finished {n_done} of its {n_owned} points: resume it with --resume"
+
+    ownership = _run_ownership(shards, ref)
+    groups = []
+    if ownership is not None:
+        owner, count = ownership
+        missing_owner = owner[missing]
+        by_index = {_shard_index(s): s for s in reversed(shards) if _shard_index(s) is not None}
+        for index in np.unique(missing_owner):
+            points = missing[missing_owner == index]
+            s = by_index.get(int(index))
+            where = (given_shard(s, int((owner == index).sum())) if s is not None
+                     else f"{_sibling_path(shards, int(index), count) or 'its file'}, not given")
+            groups.append((points.size, f"{points.size} ({examples(points)}) owned by shard "
+                                        f"{index}/{count} ({where})"))
+    else:  # the files do not say how the run assigned points: what their 'owned' masks say
+        claimed = np.zeros(missing.size, dtype=bool)
+        for s in shards:
+            if not s.has_owned:
+                continue
+            owned = s.read_mask("owned").reshape(-1)
+            mine = owned[missing] & ~claimed
+            claimed |= mine
+            if mine.any():
+                points = missing[mine]
+                groups.append((points.size, f"{points.size} ({examples(points)}) owned by shard "
+                                            f"{s.shard} ({given_shard(s, int(owned.sum()))})"))
+        if not claimed.all():
+            points = missing[~claimed]
+            if any(s.has_owned for s in shards):
+                labels = ", ".join(str(s.shard) for s in shards if s.shard) or "none"
+                whose = (f"belong to no shard given (shards given: {labels}); is a shard file "
+                         "missing from the list?")
+            else:
+                whose = "were computed by none of the files given"
+            groups.append((points.size, f"{points.size} ({examples(points)}) {whose}"))
+    shown = [text for _, text in groups[:_GROUPS]]
+    if len(groups) > _GROUPS:
+        rest = sum(n for n, _ in groups[_GROUPS:])
+        shown.append(f"{rest} more in {len(groups) - _GROUPS} more shard(s)")
+    return head + "; ".join(shown) + tail
+
+
+def _shard_index(s):
+    """I of the label "I/N", or None."""
+    try:
+        return int(str(s.shard).split("/")[0]) if s.shard else None
+    except ValueError:
+        return None
+
+
+def _run_ownership(shards, ref):
+    """(the shard of every point, flat; the number of shards) as the run assigned them, or None.
+
+    Recomputed from the config (the shuffled order of vrsweep.sweep.shard_of_points), so that
+    points of a shard that is not given can be attributed too; trusted only if it agrees with the
+    ``owned`` mask of every shard given.
+    """
+    labels = [str(s.shard) for s in shards if s.shard]
+    counts = {label.split("/")[-1] for label in labels}
+    if not labels or len(counts) != 1 or len(labels) != len(shards):
+        return None
+    try:
+        count = int(counts.pop())
+        from vrsweep.config import parse_config
+        from vrsweep.sweep import Grid, shard_of_points
+
+        grid = Grid.from_config(parse_config(ref.attrs.get("config", "")))
+        if grid.shape != ref.shape:
+            return None
+        owner = shard_of_points(grid, count).reshape(-1)
+    except Exception:  # noqa: BLE001 - only a hint for a message: a config this version cannot parse
+        return None
+    for s in shards:
+        index = _shard_index(s)
+        if index is None or not 0 <= index < count or not s.has_owned:
+            return None
+        if not np.array_equal(s.read_mask("owned").reshape(-1), owner == index):
+            return None
+    return owner, count
+
+
+def _sibling_path(shards, index, count):
+    """The file name shard ``index`` of ``count`` has beside the given ones (run --shard names
+    them OUT.shardIofN.h5), or None if the given files are not named that way."""
+    for s in shards:
+        directory, base = os.path.split(s.path)
+        match = re.fullmatch(r"(.*)\.shard\d+of(\d+)(\.[^.]*)?", base)
+        if match and int(match.group(2)) == count:
+            return os.path.join(directory, f"{match.group(1)}.shard{index}of{count}{match.group(3) or ''}")
+    return None
+
+
+__all__ = ["merge_results", "MergeReport", "MergeWriteError", "BLOCK_BYTES"]
