@@ -22,7 +22,6 @@ Prints a Markdown table and the ratios (benchmarks/README.md, section "Merge", r
 """
 
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
