@@ -69,11 +69,27 @@ def reader_args(command, path, tmp_path):
 # --------------------------------------------------------------------------------------------
 
 
-def test_output_directory_that_does_not_exist(tmp_path):
+def test_an_output_folder_that_does_not_exist_is_created_and_named(tmp_path):
+    """Shipped configs write to results/ relative to the current directory (issue 15)."""
     out = tmp_path / "no" / "such" / "dir" / "out.h5"
-    line = one_message(invoke("run", QUICKSTART, "-o", out, *SHORT), 2)
-    assert "does not exist" in line and str(out.parent) in line
-    assert not (tmp_path / "no").exists()
+    result = invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT)
+    assert result.exit_code == 0, result.output
+    assert result.stderr.strip().splitlines() == [f"Created the output folder {out.parent}"]
+    assert read_results(out).complete
+
+
+@pytest.mark.parametrize("command", ["simulate", "plot"])
+def test_other_commands_create_a_missing_output_folder_too(command, finished, tmp_path):
+    if command == "simulate":
+        out = tmp_path / "new" / "trajectory.h5"
+        args = ["simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", out, "--quiet"]
+    else:
+        out = tmp_path / "new" / "figure.png"
+        args = ["plot", finished, "-o", out]
+    result = invoke(*args)
+    assert result.exit_code == 0, result.output
+    assert f"Created the output folder {out.parent}" in result.stderr.splitlines()
+    assert out.stat().st_size > 0
 
 
 def test_output_directory_that_is_a_file(tmp_path):
@@ -269,7 +285,7 @@ def test_no_traceback_across_the_process_boundary(tmp_path):
     """What a user's shell shows: one line on stderr, exit 2, nothing on stdout."""
     text = tmp_path / "results.h5"
     text.write_text("not a results file\n")
-    for args in (["info", text], ["run", QUICKSTART, "-o", tmp_path / "missing" / "out.h5", *SHORT]):
+    for args in (["info", text], ["run", QUICKSTART, "-o", text / "out.h5", *SHORT]):
         proc = cli_subprocess(*args)
         assert proc.returncode == 2, proc.stderr
         assert "Traceback" not in proc.stderr and proc.stdout == ""

@@ -79,7 +79,13 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
                        "(finish it with vrsweep run CONFIG --resume)", err=True)
     figure = plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis, log=log,
                        periods=plot.parse_periods(periods) if periods else None)
-    if not path.parent.exists():
-        raise UsageError(f"output directory {path.parent} does not exist (output: {path})")
-    figure.savefig(path, dpi=dpi)
+    # Rendered in memory, then written whole: a full disk leaves no half figure, and the
+    # message can say how many bytes the figure needs.
+    import io
+
+    from vrsweep.fileio import write_bytes
+
+    image = io.BytesIO()
+    figure.savefig(image, format=path.suffix.lower()[1:], dpi=dpi)
+    write_bytes(path, image.getvalue())
     click.echo(f"-> {path}", err=True)
