@@ -180,6 +180,9 @@ def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp
         other = write_config(tmp_path, "sweep:\n  g: {start: 0.0, stop: 40.0, num: 40}\n", name="b.yaml")
         still_running(writer)
         proc = run_process("-m", "vrsweep", "run", other, "-o", out, "--overwrite")
+        # Nor may a second writer resume it, even with HDF5's locks switched off.
+        resumed = run_process("-m", "vrsweep", "run", slow_config, "-o", out, "--resume",
+                              env=dict(os.environ, HDF5_USE_FILE_LOCKING="FALSE"))
         still_running(writer)
         _, stderr = writer.communicate(timeout=120)
     finally:
@@ -187,7 +190,9 @@ def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp
             writer.kill()
     assert proc.returncode == 2, proc.stderr
     line = one_error_line(proc.stderr)
-    assert f"output {out} is being written by another process" in line
+    assert f"cannot replace {out}: it is being written by another process" in line
+    assert resumed.returncode == 2, resumed.stderr
+    assert f"cannot resume {out}: it is being written by another process" in one_error_line(resumed.stderr)
     assert writer.returncode == 0, stderr
     written = read_results(out)
     assert written.complete and written.done.all() and "num: 160" in written.attrs["config"]

@@ -124,11 +124,12 @@ def being_written(path) -> bool:
     return False
 
 
-def refuse_if_being_written(path) -> None:
-    """UsageError (exit 2) if another process is writing ``path``: never pull a file from under it."""
+def refuse_if_being_written(path, action="replace") -> None:
+    """UsageError (exit 2) if another process is writing ``path``: never pull a file from under
+    it (``--overwrite``), nor write it twice (``--resume``)."""
     if being_written(path):
-        raise UsageError(f"output {path} is being written by another process (a run in progress?): "
-                         "not replacing it; wait for that run to end, stop it, or choose another -o")
+        raise UsageError(f"cannot {action} {path}: it is being written by another process (a run in "
+                         "progress?); wait for that run to end, stop it, or choose another -o")
 
 
 def identity(fd):
@@ -173,7 +174,7 @@ def close_without_writing(file) -> None:
     its last successful flush: a checkpoint stays resumable (a point is marked done only after its
     values were flushed), and a temporary file is deleted by the caller anyway.
     """
-    file_id = file.id if isinstance(file, h5py.File) else file
+    file_id = file if isinstance(file, h5py.h5f.FileID) else file.id
     try:
         if not file_id.valid:
             return
@@ -246,20 +247,23 @@ def free_bytes(path) -> int | None:
         return None
 
 
-def _space_words(path, needed_bytes):
+def _space_words(path, needed_bytes, written_bytes=None):
     free = free_bytes(path)
     folder = os.path.dirname(os.path.abspath(path))
     parts = []
     if needed_bytes:
         parts.append(f"the file needs about {format_bytes(needed_bytes)}")
+    elif written_bytes:
+        parts.append(f"the file needs more than the {format_bytes(written_bytes)} written")
     if free is not None:
         parts.append(f"{format_bytes(free)} free in {folder}")
     return ", ".join(parts)
 
 
-def write_failure(path, error, needed_bytes=None, doing="write") -> OutputError | None:
+def write_failure(path, error, needed_bytes=None, doing="write", written_bytes=None) -> OutputError | None:
     """The one-line OutputError for ``error`` raised while writing ``path``, or None if ``error``
-    is not about the file system (a bug, an interrupt: let it through)."""
+    is not about the file system (a bug, an interrupt: let it through). On a full disk it says
+    how much space the file needs (``needed_bytes``), or else how much had been written."""
     if isinstance(error, (OutputError, UsageError)):
         return error
     if not isinstance(error, Exception):
@@ -269,7 +273,7 @@ def write_failure(path, error, needed_bytes=None, doing="write") -> OutputError 
         return None
     cause = os.strerror(number)
     if number in _SPACE_ERRNOS:
-        space = _space_words(path, needed_bytes)
+        space = _space_words(path, needed_bytes, written_bytes)
         return OutputError(f"cannot {doing} {path}: {cause}" + (f" ({space})" if space else ""))
     return OutputError(f"cannot {doing} {path}: {cause}")
 
@@ -418,13 +422,15 @@ def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None
         os.replace(tmp, path)
     except BaseException as error:  # KeyboardInterrupt too: never leave the temporary file behind
         close_hdf5_files_on(tmp)
+        written_bytes = None
         try:
+            written_bytes = os.path.getsize(tmp)  # when the size needed is not known, say this
             os.remove(tmp)
         except FileNotFoundError:
             pass
         except OSError:
             pass  # its folder is gone, or worse: the error below says what matters
-        failure = write_failure(path, error, needed_bytes, doing)
+        failure = write_failure(path, error, needed_bytes, doing, written_bytes)
         if failure is None or failure is error:
             raise
         raise failure from None

@@ -585,6 +585,7 @@ class ResultWriter:
         path = os.fspath(path)
         if not os.path.exists(path):
             raise ResultFileError(f"cannot resume: {path} does not exist (run without --resume)")
+        refuse_if_being_written(path, "resume")  # also where HDF5's own locking is switched off
         f = _open_checked(path, "r+")
         try:
             stored = _decode(f.attrs.get("config", ""))
