@@ -7,11 +7,17 @@ Life of a result file
 1. :meth:`ResultWriter.create` writes the whole layout up front: one coordinate per sweep axis,
    every variable pre-allocated and filled with its fill value, a per-point ``done`` mask, and the
    root attributes with ``vrsweep_complete = 0``. The skeleton is written under a temporary name
-   and renamed into place, so whatever exists at ``path`` is always a readable vrsweep file.
+   and renamed into place, so whatever exists at ``path`` is always a readable vrsweep file. The
+   writer keeps that very file open (and locked) until ``finish``: it never reopens the path,
+   and checks before each write that the path still names its file (a run with ``--overwrite``
+   or a scratch purge may have replaced or removed it; see ``fileio``).
 2. :meth:`ResultWriter.write_points` fills finished points chunk by chunk and flushes: this file
    *is* the checkpoint. A ``kill -9`` at any moment loses at most the chunk in flight.
-3. :meth:`ResultWriter.finish` adds derived variables (theory columns), sets
-   ``vrsweep_complete = 1`` and renames the result into place.
+3. :meth:`ResultWriter.finish` copies the file it holds, adds derived variables (theory
+   columns) to the copy, sets ``vrsweep_complete = 1`` and renames the copy into place.
+
+A full disk at any of these steps ends in one line (``OutputError``, exit 1) saying how much
+space the file needs, with HDF5 closed cleanly and no temporary file left (``fileio``).
 
 Layout (netCDF-4 compatible; ``xarray.open_dataset(path, engine="h5netcdf")`` reads it)
 ------------------------------------------------------------------------------------
@@ -57,6 +63,9 @@ supported (some NFS and Lustre mounts) HDF5 would refuse to open anything, so wh
 ``HDF5_USE_FILE_LOCKING`` is set (``FALSE`` is the usual advice on NFS), vrsweep passes nothing and
 HDF5 obeys the variable. Reading a file a running sweep is writing fails with a message saying so;
 ``HDF5_USE_FILE_LOCKING=FALSE`` lets you read it anyway (at your own risk: it may be mid-write).
+A writer also takes a ``flock`` of its own on its file, so that ``--overwrite`` and ``--resume``
+refuse a file that another run writes even when that run switched HDF5's locking off. All files
+are opened through ``fileio.open_hdf5``, which also copes with an h5py too old for ``locking=``.
 """
 
 from __future__ import annotations
