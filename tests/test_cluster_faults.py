@@ -318,3 +318,34 @@ def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path):
                         "--set", "measure_periods=2", "--set", "strobe_periods=1")
     assert result.exit_code == 0, result.output
     assert "measure_periods: 2" in read_results(out).attrs["config"]
+
+
+# --------------------------------------------------------------------------------------------
+# The mechanism behind a clean stop on a full disk
+# --------------------------------------------------------------------------------------------
+
+
+def test_closing_without_writing_keeps_the_checkpoint_of_the_last_flush(tmp_path):
+    """After a failed write HDF5 must be closed without writing what it still holds (on a full
+    disk that write fails again, and the library then crashes at exit). The file keeps the state
+    of its last flush: the points marked done then, and nothing of what came after."""
+    import numpy as np
+
+    from vrsweep.fileio import close_without_writing
+    from vrsweep.store import ResultWriter, VariableSpec
+
+    path = tmp_path / "checkpoint.h5"
+    spec = VariableSpec("R", np.float64, attrs={"units": "1", "long_name": "response R"})
+    writer = ResultWriter.create(path, [("g", np.linspace(0.0, 4.0, 5))], [spec], {"config": "x: 1\n"})
+    writer.write_points([0, 1], {"R": np.array([1.0, 2.0])})  # flushed, marked done
+    done = writer._file["done"]  # open, as in the frame of a write that failed: HDF5 keeps
+    done[2] = 1  # this write in the dataset's chunk cache until the dataset is closed
+    writer._file.attrs["unsaved"] = 1
+    close_without_writing(writer._file)
+    del done
+
+    assert h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE) == []
+    checkpoint = read_results(path)
+    assert checkpoint.done.tolist() == [True, True, False, False, False]
+    assert checkpoint.variables["R"][:2].tolist() == [1.0, 2.0] and "unsaved" not in checkpoint.attrs
+    writer._file = None  # closed above
