@@ -91,10 +91,11 @@ def small_disk(tmp_path):
         subprocess.run(["umount", "-l", str(mount)], capture_output=True)
 
 
-# The CLI with the up-front free-space check switched off, so that HDF5 itself hits the full disk.
-WITHOUT_SPACE_CHECK = ("-c", "import sys, vrsweep.store as store; "
-                       "store.check_free_space = lambda *args, **kwargs: None; "
-                       "from vrsweep.cli import main; sys.exit(main(sys.argv[1:], prog_name='vrsweep'))")
+# The CLI without reserving the file's space first (as on a file system that cannot allocate
+# ahead), so that HDF5 itself meets the full disk.
+WITHOUT_RESERVING = ("-c", "import sys, vrsweep.store as store; "
+                     "store.reserve_space = lambda *args, **kwargs: None; "
+                     "from vrsweep.cli import main; sys.exit(main(sys.argv[1:], prog_name='vrsweep'))")
 
 
 def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_disk, tmp_path):
@@ -103,7 +104,7 @@ def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_di
     assert invoke("run", config, "-o", reference, "-q").exit_code == 0
     out = small_disk.path / "sweep.h5"
 
-    # 256 kB for a ~420 kB file: refused before anything is written.
+    # 256 kB for a ~420 kB file: its space cannot be reserved, so HDF5 writes nothing.
     proc = run_process("-m", "vrsweep", "run", config, "-o", out)
     assert proc.returncode == 1, proc.stderr
     line = one_error_line(proc.stderr)
@@ -113,7 +114,7 @@ def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_di
 
     # The same with HDF5 hitting the full disk itself: HDF5 fails twice (the write, then the
     # close) and, left alone, crashed the interpreter at exit (exit 139).
-    proc = run_process(*WITHOUT_SPACE_CHECK, "run", config, "-o", out)
+    proc = run_process(*WITHOUT_RESERVING, "run", config, "-o", out)
     assert proc.returncode == 1, proc.stderr
     assert "No space left on device" in one_error_line(proc.stderr)
     assert small_disk.entries() == []  # no temporary file left
@@ -349,3 +350,34 @@ def test_closing_without_writing_keeps_the_checkpoint_of_the_last_flush(tmp_path
     assert checkpoint.done.tolist() == [True, True, False, False, False]
     assert checkpoint.variables["R"][:2].tolist() == [1.0, 2.0] and "unsaved" not in checkpoint.attrs
     writer._file = None  # closed above
+
+
+@pytest.mark.parametrize("sweep", [
+    "parameters: {g: 5.0}\n",                                                    # one point
+    "sweep:\n  g: {start: 0.0, stop: 40.0, num: 9}\n",
+    "sweep:\n  g: {start: 0.0, stop: 40.0, num: 200}\n  Omega: {start: 1.0, stop: 10.0, num: 50}\n"
+    "integration: {strobe_periods: 32}\n",                                       # the issue's 10^4
+    "sweep:\n  g: {start: 0.0, stop: 40.0, num: 1000}\n  Omega: {start: 1.0, stop: 10.0, num: 100}\n",
+])
+def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, sweep):
+    """HDF5 must never meet a full disk (it cannot recover), so a file's space is allocated
+    before HDF5 writes: creation_reserve must bound the new file, layout_bytes from below, and
+    finish_reserve what finishing adds. Checked on real files from 1 to 10^5 points."""
+    from vrsweep.config import parse_config
+    from vrsweep.job import _axes, _variable_specs, analytic_extras, root_attributes
+    from vrsweep.store import ResultWriter, creation_reserve, finish_reserve, layout_bytes
+    from vrsweep.sweep import Grid
+
+    config = parse_config(sweep, "sizes.yaml")
+    grid = Grid.from_config(config)
+    axes, specs = _axes(grid), _variable_specs(config)
+    path = tmp_path / "sizes.h5"
+    writer = ResultWriter.create(path, axes, specs, root_attributes(config))
+    created = path.stat().st_size
+    assert layout_bytes(axes, specs) <= created <= creation_reserve(axes, specs)
+    if grid.n_points >= 10_000:  # where a full disk matters, the bounds are tight
+        assert creation_reserve(axes, specs) < 1.06 * created
+    extras = analytic_extras(config, grid)
+    writer.finish(extra=extras)
+    assert 0 < path.stat().st_size - created <= finish_reserve(extras)
+    assert read_results(path).complete

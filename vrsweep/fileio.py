@@ -4,11 +4,14 @@ Everything vrsweep writes (result files, checkpoints, shard merges, trajectories
 through :func:`atomic_write`, and every HDF5 file it opens through :func:`open_hdf5`. What a
 shared machine does to a run, and what happens then (README, "Long runs and clusters"):
 
-- **A full disk or quota.** Whatever HDF5 still holds open on the file being written is closed
-  without writing another byte (:func:`close_without_writing`), the temporary file is removed, and
+- **A full disk or quota.** HDF5 cannot recover from a failed write: closing what it holds
+  writes again, fails again, and the process crashes (at exit, or at the next HDF5 call). So the
+  space an HDF5 file will take is allocated before HDF5 writes (:func:`reserve_space`), and
+  where that is not possible a file whose write failed is closed without writing another byte
+  (:func:`close_without_writing`, :func:`writing_hdf5`). The temporary file is removed, and
   :class:`~vrsweep.errors.OutputError` says in one line which file, why, how much space it needs
-  and how much is free. Without that care HDF5 fails a second time while closing (its close
-  flushes), keeps the file open, and the interpreter crashes at exit.
+  and how much is free. Files that are not HDF5 (figures) and small HDF5 files (trajectories)
+  are built in memory and written as plain bytes.
 - **Another process writing the same output.** A writer holds a lock on its file
   (:func:`lock_for_writing`); :func:`refuse_if_being_written` refuses to replace a locked file.
 - **A file or folder removed or replaced under a writer** (a scratch purge, a run with
@@ -200,21 +203,30 @@ def _unlinked_tempfile():
     return handle
 
 
-def close_hdf5_files_on(path) -> None:
-    """close_without_writing every HDF5 file this process still has open at ``path``."""
-    target = os.path.abspath(path)
+@contextmanager
+def closed_without_writing_on_failure(h5file):
+    """Close ``h5file`` without writing if the block raises (see close_without_writing)."""
     try:
-        open_files = h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE)
-    except Exception:  # noqa: BLE001
-        return
-    for file_id in open_files:
-        try:
-            name = file_id.name
-            name = name.decode() if isinstance(name, bytes) else name
-        except Exception:  # noqa: BLE001
-            continue
-        if os.path.abspath(name) == target:
-            close_without_writing(file_id)
+        yield h5file
+    except BaseException:
+        close_without_writing(h5file)
+        raise
+
+
+@contextmanager
+def writing_hdf5(path, mode="r+", **kwargs):
+    """``with writing_hdf5(path) as f:`` instead of ``with h5py.File(path, "r+") as f:``.
+
+    The plain form closes the file when the block fails, and closing flushes: on a full disk that
+    flush fails as well, half-way through h5py's close, and from then on any use of HDF5 (even the
+    interpreter's exit) can crash the process. Here a failed block closes without writing, and the
+    final flush happens before the close, where its failure can still be handled the same way.
+    """
+    h5file = open_hdf5(path, mode, **kwargs)
+    with closed_without_writing_on_failure(h5file):
+        yield h5file
+        h5file.flush()
+    h5file.close()
 
 
 # --------------------------------------------------------------------------------------------
@@ -278,16 +290,23 @@ def write_failure(path, error, needed_bytes=None, doing="write", written_bytes=N
     return OutputError(f"cannot {doing} {path}: {cause}")
 
 
-def check_free_space(path, needed_bytes, doing="write") -> None:
-    """OutputError at once if the folder of ``path`` has less than ``needed_bytes`` free.
+def reserve_space(fd, length, offset=0) -> None:
+    """Allocate ``length`` bytes of the open file ``fd`` from ``offset`` on, before HDF5 writes there.
 
-    ``needed_bytes`` must be a lower bound of what the write takes, so that a write that could
-    succeed is never refused; quotas are not seen here (they fail later, with the same message).
+    HDF5 cannot take a full disk: once a write fails, closing anything it holds writes again, and
+    the library ends in a crash (h5py reports the failures as "Exception ignored" while the
+    program goes on). So the space a file will take is allocated first: a full disk or quota is
+    then a clean OSError here, and HDF5's writes land in blocks that already exist. Where the
+    file system cannot allocate ahead, HDF5 meets the full disk itself, and the file is closed
+    without writing (:func:`close_without_writing`).
     """
-    free = free_bytes(path)
-    if needed_bytes and free is not None and free < needed_bytes:
-        raise OutputError(f"cannot {doing} {path}: {os.strerror(errno.ENOSPC)} "
-                          f"({_space_words(path, needed_bytes)})")
+    if length <= 0 or not hasattr(os, "posix_fallocate"):
+        return
+    try:
+        os.posix_fallocate(fd, offset, length)
+    except OSError as error:
+        if error.errno not in (errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL):
+            raise
 
 
 # --------------------------------------------------------------------------------------------
@@ -405,11 +424,12 @@ def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None
               doing="write"):
     """Yield a temporary path beside ``path``; when the block ends, rename it over ``path``.
 
-    The block writes (and makes durable) the whole new file at the temporary path. If it fails,
-    HDF5 files still open there are closed without writing, the temporary file is removed, and a
-    file-system error becomes a one-line OutputError (with ``needed_bytes``, the size of the new
-    file, when the disk is full). ``before_replace`` runs just before the rename (a writer checks
-    there that ``path`` is still its own file).
+    The block writes (and makes durable) the whole new file at the temporary path; an HDF5 file
+    written there must be opened with :func:`writing_hdf5` (or be guarded by
+    :func:`closed_without_writing_on_failure`). If the block fails, the temporary file is removed
+    and a file-system error becomes a one-line OutputError (with ``needed_bytes``, the size of
+    the new file, when the disk is full). ``before_replace`` runs just before the rename (a
+    writer checks there that ``path`` is still its own file).
     """
     path = os.fspath(path)
     prepare_output_directory(path)
@@ -421,7 +441,6 @@ def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None
             before_replace()
         os.replace(tmp, path)
     except BaseException as error:  # KeyboardInterrupt too: never leave the temporary file behind
-        close_hdf5_files_on(tmp)
         written_bytes = None
         try:
             written_bytes = os.path.getsize(tmp)  # when the size needed is not known, say this
