@@ -1,7 +1,8 @@
 """Opening and writing files so that faults end in one line, never in a traceback or a lost result.
 
-Everything vrsweep writes (result files, checkpoints, shard merges, trajectories, figures) goes
-through :func:`atomic_write`, and every HDF5 file it opens through :func:`open_hdf5`. What a
+Everything vrsweep writes whole (result files, finished results, shard merges, trajectories,
+figures) is written beside its path and renamed into place (:func:`replacing`,
+:func:`atomic_write`), and every HDF5 file it opens goes through :func:`open_hdf5`. What a
 shared machine does to a run, and what happens then (README, "Long runs and clusters"):
 
 - **A full disk or quota.** HDF5 cannot recover from a failed write: closing what it holds
