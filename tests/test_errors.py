@@ -471,7 +471,8 @@ def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_c
 
 @pytest.mark.parametrize("command", ["simulate", "plot", "merge"])
 def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monkeypatch):
-    """Trajectories, figures and merged files are written whole: the same one line, nothing left."""
+    """Trajectories, figures and merged files are written whole: the same one line, nothing left
+    (the disk fills after HDF5 is done: merge still writes with HDF5 straight to the disk)."""
     import vrsweep.fileio
 
     out = tmp_path / {"simulate": "trajectory.h5", "plot": "figure.png", "merge": "merged.h5"}[command]
