@@ -37,6 +37,7 @@ SLOW = """\
     integration: {transient_periods: 60, measure_periods: 60, strobe_periods: 8}
     """
 CHUNK = 16
+SHORT_WINDOWS = "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n"
 
 
 def error_lines(stderr):
@@ -264,8 +265,7 @@ sys.exit(main(sys.argv[1:], prog_name="vrsweep"))
 
 
 def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes(tmp_path):
-    config = write_config(tmp_path, "sweep:\n  g: {start: 0.0, stop: 40.0, num: 3}\n"
-                                    "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")
+    config = write_config(tmp_path, "sweep:\n  g: {start: 0.0, stop: 40.0, num: 3}\n" + SHORT_WINDOWS)
     out = tmp_path / "out.h5"
     child = subprocess.Popen([sys.executable, *STUCK_IN_CREATION, "run", str(config), "-o", str(out)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -290,7 +290,7 @@ def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes
 def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path):
     """A temporary file written on another node of a shared file system, or by a vrsweep of
     unknown host: its writer's state cannot be told from here."""
-    config = write_config(tmp_path, "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")
+    config = write_config(tmp_path, SHORT_WINDOWS)
     out = tmp_path / "out.h5"
     foreign = tmp_path / f".out.h5.node17.4242.{uuid.uuid4().hex[:8]}.tmp"
     older = tmp_path / f".out.h5.4243.{uuid.uuid4().hex[:8]}.tmp"
@@ -374,10 +374,13 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, sweep):
     path = tmp_path / "sizes.h5"
     writer = ResultWriter.create(path, axes, specs, root_attributes(config))
     created = path.stat().st_size
+    assert created == writer._file.id.get_filesize()  # what was reserved and not used is given back
     assert layout_bytes(axes, specs) <= created <= creation_reserve(axes, specs)
     if grid.n_points >= 10_000:  # where a full disk matters, the bounds are tight
         assert creation_reserve(axes, specs) < 1.06 * created
     extras = analytic_extras(config, grid)
     writer.finish(extra=extras)
     assert 0 < path.stat().st_size - created <= finish_reserve(extras)
+    with h5py.File(path, "r") as finished:
+        assert finished.id.get_filesize() == path.stat().st_size
     assert read_results(path).complete

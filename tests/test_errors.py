@@ -459,7 +459,7 @@ def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_c
     monkeypatch.setattr(vrsweep.store, "_write_selection", write_selection)
     out = tmp_path / "full.h5"
     line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
-    assert line.startswith(f"Error: cannot save points to {out}: No space left on device (the file needs about ")
+    assert line.startswith(f"Error: cannot save points to {out}: No space left on device (the file needs")
     assert open_hdf5_files() == [] and sorted(p.name for p in tmp_path.iterdir()) == ["full.h5"]
     checkpoint = read_results(out)
     assert not checkpoint.complete and int(checkpoint.done.sum()) == 4

@@ -215,19 +215,35 @@ def closed_without_writing_on_failure(h5file):
 
 
 @contextmanager
-def writing_hdf5(path, mode="r+", **kwargs):
-    """``with writing_hdf5(path) as f:`` instead of ``with h5py.File(path, "r+") as f:``.
+def writing_hdf5(path, mode="r+", reserve=0, **kwargs):
+    """``with writing_hdf5(path, "w", reserve=N) as f:`` instead of ``with h5py.File(path, "w") as f:``.
 
-    The plain form closes the file when the block fails, and closing flushes: on a full disk that
-    flush fails as well, half-way through h5py's close, and from then on any use of HDF5 (even the
-    interpreter's exit) can crash the process. Here a failed block closes without writing, and the
-    final flush happens before the close, where its failure can still be handled the same way.
+    ``reserve``: bytes the block will add to the file, at most; they are allocated first
+    (:func:`reserve_space`), so that a full disk fails before HDF5 writes, and what the file did
+    not use is given back at the end. The plain form closes the file when the block fails, and
+    closing flushes: on a full disk that flush fails as well, half-way through h5py's close, and
+    from then on any use of HDF5 (even the interpreter's exit) can crash the process. Here a
+    failed block closes without writing, and the final flush happens before the close, where its
+    failure can still be handled the same way.
     """
     h5file = open_hdf5(path, mode, **kwargs)
     with closed_without_writing_on_failure(h5file):
+        if reserve:
+            fd = h5file.id.get_vfd_handle()
+            reserve_space(fd, reserve, offset=os.fstat(fd).st_size)
         yield h5file
         h5file.flush()
+        if reserve:
+            trim_to_contents(h5file)
     h5file.close()
+
+
+def trim_to_contents(h5file) -> None:
+    """Give back the space reserved beyond what a flushed HDF5 file uses (its end of allocation)."""
+    fd = h5file.id.get_vfd_handle()
+    end = h5file.id.get_filesize()
+    if os.fstat(fd).st_size > end:
+        os.ftruncate(fd, end)
 
 
 # --------------------------------------------------------------------------------------------

@@ -83,7 +83,7 @@ from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.fileio import (
     atomic_write, check_still_at_path, close_without_writing, closed_without_writing_on_failure,
     fsync_path, hdf5_locking_kwargs, identity, lock_for_writing, open_hdf5, prepare_output_directory,
-    refuse_if_being_written, replacing, reserve_space, write_failure, writing_hdf5,
+    refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure, writing_hdf5,
 )
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 
@@ -120,11 +120,10 @@ def _h5open(path, mode, **kwargs):
     return open_hdf5(path, mode, rdcc_nbytes=_RDCC_NBYTES, rdcc_nslots=_RDCC_NSLOTS, **kwargs)
 
 
-def _copy_open_file(fd, destination, size, reserve=0, block=1 << 20):
-    """Copy the first ``size`` bytes of the open file ``fd`` (positioned reads: HDF5 shares it),
-    and allocate ``reserve`` bytes more after them (see fileio.reserve_space)."""
+def _copy_open_file(fd, destination, size, block=1 << 20):
+    """Copy the first ``size`` bytes of the open file ``fd`` (positioned reads: HDF5 shares it)."""
     with open(destination, "wb") as out:
-        reserve_space(out.fileno(), size + reserve)
+        reserve_space(out.fileno(), size)  # a full disk fails here, at once
         offset = 0
         while offset < size:
             data = os.pread(fd, min(block, size - offset), offset)
@@ -597,7 +596,7 @@ class ResultWriter:
                 reserve_space(fd, reserve)  # a full disk fails here, before HDF5 writes anything
                 _build_skeleton(f, list(axes), specs, dict(attrs), extra_coords, owned_mask)
                 f.flush()
-                os.ftruncate(fd, f.id.get_filesize())  # give back the reserve the file did not use
+                trim_to_contents(f)
                 _fsync(f)
         try:
             return cls(path, f)
@@ -718,8 +717,9 @@ class ResultWriter:
 
             with replacing(self.path, size + reserve, before_replace=self._check_still_mine,
                            doing="finish") as tmp:
-                _copy_open_file(self._fd, tmp, size, reserve)  # HDF5 closes it down to its size
-                with writing_hdf5(tmp, "r+", rdcc_nbytes=_RDCC_NBYTES, rdcc_nslots=_RDCC_NSLOTS) as f:
+                _copy_open_file(self._fd, tmp, size)
+                with writing_hdf5(tmp, "r+", reserve=reserve, rdcc_nbytes=_RDCC_NBYTES,
+                                  rdcc_nslots=_RDCC_NSLOTS) as f:
                     _add_extras(f, extra, coords)
                     f.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
                 fsync_path(tmp)
