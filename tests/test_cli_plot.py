@@ -128,9 +128,10 @@ def test_usage_errors_exit_2(sweep, trajectory, tmp_path):
         assert message in result.output, (args, result.output)
 
 
-def test_a_missing_output_directory(sweep, tmp_path):
+def test_a_missing_output_directory_is_created(sweep, tmp_path):
     result = invoke("plot", sweep, "-o", tmp_path / "nowhere" / "f.png")
-    assert result.exit_code == 2 and "does not exist" in result.output
+    assert result.exit_code == 0 and f"Created the output folder {tmp_path / 'nowhere'}" in result.output
+    assert (tmp_path / "nowhere" / "f.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_a_single_point_has_nothing_to_plot_against(tmp_path):

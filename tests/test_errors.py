@@ -26,7 +26,7 @@ from vrsweep.cli import main
 from vrsweep.results import Status
 from vrsweep.store import FORMAT_VERSION, read_results
 
-from result_files import invoke
+from result_files import assert_same_result, invoke
 
 QUICKSTART = Path(__file__).resolve().parent / "data" / "quickstart_original.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
@@ -69,11 +69,27 @@ def reader_args(command, path, tmp_path):
 # --------------------------------------------------------------------------------------------
 
 
-def test_output_directory_that_does_not_exist(tmp_path):
+def test_an_output_folder_that_does_not_exist_is_created_and_named(tmp_path):
+    """Shipped configs write to results/ relative to the current directory (issue 15)."""
     out = tmp_path / "no" / "such" / "dir" / "out.h5"
-    line = one_message(invoke("run", QUICKSTART, "-o", out, *SHORT), 2)
-    assert "does not exist" in line and str(out.parent) in line
-    assert not (tmp_path / "no").exists()
+    result = invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT)
+    assert result.exit_code == 0, result.output
+    assert result.stderr.strip().splitlines() == [f"Created the output folder {out.parent}"]
+    assert read_results(out).complete
+
+
+@pytest.mark.parametrize("command", ["simulate", "plot"])
+def test_other_commands_create_a_missing_output_folder_too(command, finished, tmp_path):
+    if command == "simulate":
+        out = tmp_path / "new" / "trajectory.h5"
+        args = ["simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", out, "--quiet"]
+    else:
+        out = tmp_path / "new" / "figure.png"
+        args = ["plot", finished, "-o", out]
+    result = invoke(*args)
+    assert result.exit_code == 0, result.output
+    assert f"Created the output folder {out.parent}" in result.stderr.splitlines()
+    assert out.stat().st_size > 0
 
 
 def test_output_directory_that_is_a_file(tmp_path):
@@ -269,7 +285,7 @@ def test_no_traceback_across_the_process_boundary(tmp_path):
     """What a user's shell shows: one line on stderr, exit 2, nothing on stdout."""
     text = tmp_path / "results.h5"
     text.write_text("not a results file\n")
-    for args in (["info", text], ["run", QUICKSTART, "-o", tmp_path / "missing" / "out.h5", *SHORT]):
+    for args in (["info", text], ["run", QUICKSTART, "-o", text / "out.h5", *SHORT]):
         proc = cli_subprocess(*args)
         assert proc.returncode == 2, proc.stderr
         assert "Traceback" not in proc.stderr and proc.stdout == ""
@@ -369,10 +385,142 @@ def test_a_crash_while_finishing_leaves_the_checkpoint(tmp_path, monkeypatch):
 
     monkeypatch.setattr(vrsweep.store, "_add_extras", fail)
     out = tmp_path / "finishing.h5"
-    one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
+    line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
+    assert f"cannot finish {out}: No space left on device (the file needs about" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["finishing.h5"]
+    assert open_hdf5_files() == []
     checkpoint = read_results(out)
     assert not checkpoint.complete and checkpoint.done.all()  # every point kept
+
+
+# --------------------------------------------------------------------------------------------
+# A full disk at every write path (injected; test_cluster_faults.py fills a real one)
+# --------------------------------------------------------------------------------------------
+
+# What h5py raises when HDF5 cannot write (HDF5's message, errno 28 inside it).
+HDF5_DISK_FULL = ValueError(
+    "Unable to synchronously create dataset (file write failed: time = Mon Nov 23 09:37:31 2026\n, "
+    "filename = 'x.tmp', file descriptor = 3, errno = 28, error message = 'No space left on device', "
+    "buf = 0x5564876c7a99, total write size = 3243, bytes this sub-write = 3243, offset = 3153920)")
+
+
+def open_hdf5_files():
+    """Names of the HDF5 files this process still has open (a failed close leaves them open,
+    and HDF5 then crashes the interpreter at exit)."""
+    return [file_id.name for file_id in h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE)]
+
+
+def fail_on_call(number, error):
+    """A replacement that raises ``error`` on its ``number``-th call and calls through otherwise."""
+    def wrap(original):
+        calls = []
+
+        def replacement(*args, **kwargs):
+            calls.append(1)
+            if len(calls) == number:
+                raise error
+            return original(*args, **kwargs)
+        return replacement
+    return wrap
+
+
+def test_disk_full_while_creating_the_result_file(tmp_path, monkeypatch):
+    """HDF5 fails half-way through the skeleton: one line with the space the file needs, no
+    temporary file, no HDF5 file left open, and the next run starts afresh."""
+    import vrsweep.store
+
+    monkeypatch.setattr(vrsweep.store, "_create_point_variable",
+                        fail_on_call(3, HDF5_DISK_FULL)(vrsweep.store._create_point_variable))
+    out = tmp_path / "new.h5"
+    line = one_message(invoke("run", QUICKSTART, "-o", out, *SHORT), 1)
+    assert line.startswith(f"Error: cannot create {out}: No space left on device (the file needs about ")
+    assert f"free in {tmp_path})" in line
+    assert list(tmp_path.iterdir()) == [] and open_hdf5_files() == []
+    monkeypatch.undo()
+    assert invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT).exit_code == 0
+    assert read_results(out).complete
+
+
+def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_chunks):
+    """ENOSPC inside the store's write of the third chunk: one line, the two chunks before it
+    stay saved, the file is closed without a second error, and --resume completes it."""
+    import vrsweep.store
+
+    original = vrsweep.store._write_selection
+    chunks_saved = []
+
+    def write_selection(ds, *args):
+        if len(chunks_saved) == 2:  # the third chunk: its first variable
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        original(ds, *args)
+        if ds.name == "/done":  # written last, once a chunk's values are on disk
+            chunks_saved.append(1)
+
+    monkeypatch.setattr(vrsweep.store, "_write_selection", write_selection)
+    out = tmp_path / "full.h5"
+    line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
+    assert line.startswith(f"Error: cannot save points to {out}: No space left on device (the file needs")
+    assert open_hdf5_files() == [] and sorted(p.name for p in tmp_path.iterdir()) == ["full.h5"]
+    checkpoint = read_results(out)
+    assert not checkpoint.complete and int(checkpoint.done.sum()) == 4
+    monkeypatch.undo()
+    result = invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT)
+    assert result.exit_code == 0, result.output
+    assert_same_result(out, finished)
+
+
+@pytest.mark.parametrize("command", ["simulate", "plot", "merge"])
+def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monkeypatch):
+    """Trajectories, figures and merged files are written whole: the same one line, nothing left
+    (the disk fills after HDF5 is done: merge still writes with HDF5 straight to the disk)."""
+    import vrsweep.fileio
+
+    out = tmp_path / {"simulate": "trajectory.h5", "plot": "figure.png", "merge": "merged.h5"}[command]
+    args = {"simulate": ["simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", out],
+            "plot": ["plot", finished, "-o", out],
+            "merge": ["merge", finished, "-o", out]}[command]
+
+    def disk_full(path):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(vrsweep.fileio, "fsync_path", disk_full)
+    line = one_message(invoke(*args), 1)
+    assert line.startswith(f"Error: cannot write {out}: No space left on device (the file needs ")
+    assert f"free in {tmp_path})" in line
+    assert list(tmp_path.iterdir()) == [] and open_hdf5_files() == []
+
+
+def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch):
+    """h5py built on HDF5 < 1.10.7 refuses the locking= argument (ValueError): every command
+    opens its files without it, with no traceback and no message."""
+    import vrsweep.fileio
+
+    real_file = h5py.File
+
+    def old_h5py(*args, **kwargs):
+        if "locking" in kwargs:
+            raise ValueError("HDF5 version >= 1.12.1 or 1.10.x >= 1.10.7 required for file locking.")
+        return real_file(*args, **kwargs)
+
+    monkeypatch.delenv("HDF5_USE_FILE_LOCKING", raising=False)
+    monkeypatch.setattr(vrsweep.fileio, "_locking_argument_supported", True)
+    monkeypatch.setattr(h5py, "File", old_h5py)
+    out = tmp_path / "run.h5"
+    trajectory = tmp_path / "trajectory.h5"
+    for args in (["run", QUICKSTART, "-o", out, "--quiet", *SHORT],
+                 ["run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT],
+                 ["info", out],
+                 ["plot", out, "-o", tmp_path / "run.png"],
+                 ["merge", out, "-o", tmp_path / "merged.h5"],
+                 ["simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", trajectory, "--quiet"],
+                 ["info", trajectory],
+                 ["plot", trajectory, "-o", tmp_path / "trajectory.png"]):
+        result = invoke(*args)
+        assert result.exit_code == 0, (args, result.output)
+        assert "lock" not in result.stderr.replace(str(tmp_path), "").lower(), result.stderr
+    assert vrsweep.fileio._locking_argument_supported is False
+    monkeypatch.undo()
+    assert_same_result(out, finished)
 
 
 # --------------------------------------------------------------------------------------------

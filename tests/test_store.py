@@ -267,9 +267,10 @@ def test_create_refuses_an_existing_path(tmp_path):
     assert not read_results(path).done.any()
 
 
-def test_create_in_a_missing_directory_is_a_usage_error(tmp_path):
-    with pytest.raises(UsageError, match="does not exist"):
-        ResultWriter.create(tmp_path / "no" / "r.h5", AXES_1D, specs(), ATTRS)
+def test_create_in_a_missing_directory_creates_it(tmp_path, capsys):
+    ResultWriter.create(tmp_path / "no" / "r.h5", AXES_1D, specs(), ATTRS).close()
+    assert capsys.readouterr().err == f"Created the output folder {tmp_path / 'no'}\n"
+    assert not read_results(tmp_path / "no" / "r.h5").done.any()
 
 
 def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path):

@@ -34,3 +34,10 @@ class ResultFileError(VrsweepError):
     """A results file is missing, not a vrsweep file, truncated, unfinished, or too new."""
 
     exit_code = 2
+
+
+class OutputError(VrsweepError):
+    """Writing an output failed at run time: the disk or a quota is full, the file or its folder
+    was removed or replaced by another process, an I/O error. Exit 1, unlike bad input (exit 2)."""
+
+    exit_code = 1

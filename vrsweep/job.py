@@ -236,7 +236,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
                      progress=(lambda n, total: advance(n)) if advance else None)
         extras = analytic_extras(config, grid)
     except BaseException:
-        writer.close()  # everything finished so far is on disk; --resume continues
+        writer.abandon()  # everything finished so far is on disk; --resume continues
         raise
     writer.finish(extra=extras)
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)

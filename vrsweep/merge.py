@@ -36,7 +36,7 @@ from vrsweep.provenance import cf_attributes
 from vrsweep.store import (
     _BOOKKEEPING, _RESERVED_ROOT_ATTRS, VariableSpec, _add_extras, _build_skeleton,
     _check_output_directory, _clean_attrs, _corrupt_error, _file_kwargs, _first_difference,
-    _open_checked, _point_variables, _scale_names, atomic_write,
+    _open_checked, _point_variables, _scale_names, atomic_write, creation_reserve, writing_hdf5,
 )
 
 # Bytes of one variable per block: large enough that HDF5 calls are few, small enough that a few
@@ -326,14 +326,20 @@ def _merge(shards, out_path, allow_missing):
     root_attrs = _root_attributes(ref)
     axes = [(name, values, ref.coord_attrs[name]) for name, values in ref.axes.items()]
 
+    specs = ref.variable_specs()
+    derived_bytes = _derived_bytes(shards) if complete else 0
+
     def write(tmp):
-        # The same file options as ResultWriter.create: checksummed object headers.
-        with h5py.File(tmp, "w", track_order=True, libver=("v108", "latest"), **_file_kwargs()) as out:
-            _build_skeleton(out, axes, ref.variable_specs(), root_attrs, extra_coords, None)
+        # As ResultWriter.create: checksummed object headers, and the file's space allocated before
+        # HDF5 writes (writing_hdf5), so a full disk is one clean error, never a crash in HDF5.
+        with writing_hdf5(tmp, "w", reserve=creation_reserve(axes, specs), track_order=True,
+                          libver=("v108", "latest")) as out:
+            _build_skeleton(out, axes, specs, root_attrs, extra_coords, None)
         for name in ref.point_variables:  # reopened for each: see _Shard on HDF5's memory per chunk
-            with h5py.File(tmp, "r+", rdcc_nbytes=_WRITE_CACHE_BYTES, **_file_kwargs()) as out:
+            # Space allocated at creation: point values overwrite it in place.
+            with writing_hdf5(tmp, "r+", rdcc_nbytes=_WRITE_CACHE_BYTES) as out:
                 _merge_variable(out[name], name, shards, supplier, duplicates > 0, ref)
-        with h5py.File(tmp, "r+", **_file_kwargs()) as out:
+        with writing_hdf5(tmp, "r+", reserve=2 * derived_bytes + 64 * 1024 + 8192 * len(specs)) as out:
             out["done"][()] = merged_done.astype(np.int8)
             if complete:
                 _copy_derived_variables(out, shards, ref, warnings)
@@ -456,6 +462,17 @@ def _block_shape(block):
 def _same_bytes(a, b):
     return a.shape == b.shape and a.dtype == b.dtype and np.array_equal(
         a.reshape(-1).view(np.uint8), b.reshape(-1).view(np.uint8))
+
+
+def _derived_bytes(shards):
+    """Bytes of the derived variables that the merge will copy (from their stored types and
+    shapes), for reserving space before HDF5 writes them."""
+    with_extras = [s for s in shards if s.derived_variables]
+    if not with_extras:
+        return 0
+    source = with_extras[0]
+    return sum(int(np.prod(source.shapes[name], dtype=np.int64)) * source.dtypes[name].itemsize
+               for name in source.derived_variables)
 
 
 def _copy_derived_variables(out, shards, ref, warnings):

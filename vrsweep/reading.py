@@ -27,9 +27,9 @@ __all__ = ["open_results", "status_names", "file_kind"]
 
 
 def _locking_kwargs():
-    from vrsweep.store import _file_kwargs
+    from vrsweep.fileio import hdf5_locking_kwargs
 
-    return _file_kwargs()
+    return hdf5_locking_kwargs()
 
 
 def file_kind(path) -> str:

@@ -7,11 +7,17 @@ Life of a result file
 1. :meth:`ResultWriter.create` writes the whole layout up front: one coordinate per sweep axis,
    every variable pre-allocated and filled with its fill value, a per-point ``done`` mask, and the
    root attributes with ``vrsweep_complete = 0``. The skeleton is written under a temporary name
-   and renamed into place, so whatever exists at ``path`` is always a readable vrsweep file.
+   and renamed into place, so whatever exists at ``path`` is always a readable vrsweep file. The
+   writer keeps that very file open (and locked) until ``finish``: it never reopens the path,
+   and checks before each write that the path still names its file (a run with ``--overwrite``
+   or a scratch purge may have replaced or removed it; see ``fileio``).
 2. :meth:`ResultWriter.write_points` fills finished points chunk by chunk and flushes: this file
    *is* the checkpoint. A ``kill -9`` at any moment loses at most the chunk in flight.
-3. :meth:`ResultWriter.finish` adds derived variables (theory columns), sets
-   ``vrsweep_complete = 1`` and renames the result into place.
+3. :meth:`ResultWriter.finish` copies the file it holds, adds derived variables (theory
+   columns) to the copy, sets ``vrsweep_complete = 1`` and renames the copy into place.
+
+A full disk at any of these steps ends in one line (``OutputError``, exit 1) saying how much
+space the file needs, with HDF5 closed cleanly and no temporary file left (``fileio``).
 
 Layout (netCDF-4 compatible; ``xarray.open_dataset(path, engine="h5netcdf")`` reads it)
 ------------------------------------------------------------------------------------
@@ -57,6 +63,9 @@ supported (some NFS and Lustre mounts) HDF5 would refuse to open anything, so wh
 ``HDF5_USE_FILE_LOCKING`` is set (``FALSE`` is the usual advice on NFS), vrsweep passes nothing and
 HDF5 obeys the variable. Reading a file a running sweep is writing fails with a message saying so;
 ``HDF5_USE_FILE_LOCKING=FALSE`` lets you read it anyway (at your own risk: it may be mid-write).
+A writer also takes a ``flock`` of its own on its file, so that ``--overwrite`` and ``--resume``
+refuse a file that another run writes even when that run switched HDF5's locking off. All files
+are opened through ``fileio.open_hdf5``, which also copes with an h5py too old for ``locking=``.
 """
 
 from __future__ import annotations
@@ -64,15 +73,17 @@ from __future__ import annotations
 import datetime
 import math
 import os
-import shutil
-import uuid
 from dataclasses import dataclass, field
-from typing import Callable
 
 import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.fileio import (
+    atomic_write, check_still_at_path, close_without_writing, closed_without_writing_on_failure,
+    fsync_path, hdf5_locking_kwargs, identity, lock_for_writing, open_hdf5, prepare_output_directory,
+    refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure, writing_hdf5,
+)
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 
 FORMAT_VERSION = 1
@@ -100,15 +111,25 @@ _RDCC_NSLOTS = 10007  # a prime, ~100x the chunks that fit in the cache
 
 
 def _file_kwargs():
-    """Keyword arguments for every ``h5py.File`` the store opens (locking: see module docstring)."""
-    if "HDF5_USE_FILE_LOCKING" in os.environ:
-        return {}
-    return {"locking": "best-effort"}
+    """Keyword arguments for an ``h5py.File`` (locking: see module docstring); prefer open_hdf5."""
+    return hdf5_locking_kwargs()
 
 
 def _h5open(path, mode, **kwargs):
-    return h5py.File(path, mode, rdcc_nbytes=_RDCC_NBYTES, rdcc_nslots=_RDCC_NSLOTS,
-                     **_file_kwargs(), **kwargs)
+    return open_hdf5(path, mode, rdcc_nbytes=_RDCC_NBYTES, rdcc_nslots=_RDCC_NSLOTS, **kwargs)
+
+
+def _copy_open_file(fd, destination, size, block=1 << 20):
+    """Copy the first ``size`` bytes of the open file ``fd`` (positioned reads: HDF5 shares it)."""
+    with open(destination, "wb") as out:
+        reserve_space(out.fileno(), size)  # a full disk fails here, at once
+        offset = 0
+        while offset < size:
+            data = os.pread(fd, min(block, size - offset), offset)
+            if not data:
+                break
+            out.write(data)
+            offset += len(data)
 
 
 def _utc_now_iso():
@@ -143,50 +164,8 @@ def _fsync(h5file):
         pass
 
 
-def _check_output_directory(path):
-    directory = os.path.dirname(os.path.abspath(path))
-    if os.path.exists(directory) and not os.path.isdir(directory):
-        raise UsageError(f"output {path}: {directory} is a file, not a directory")
-    if not os.path.isdir(directory):
-        raise UsageError(f"output directory {directory} does not exist (output: {path}); "
-                         f"create it (mkdir -p {directory}) or choose another with -o")
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise UsageError(f"output directory {directory} is not writable (output: {path})")
-
-
-def atomic_write(path, write_fn: Callable[[str], object]):
-    """Write a whole file so that ``path`` holds either the old file or the complete new one.
-
-    ``write_fn(tmp_path)`` writes the file at a temporary name in the same directory (so the
-    rename stays on one file system); the result is fsynced and renamed over ``path`` with
-    ``os.replace``. If ``write_fn`` raises, the temporary file is removed and the exception
-    propagates: no partial file is ever left at ``path``. Returns what ``write_fn`` returns.
-    """
-    path = os.fspath(path)
-    _check_output_directory(path)
-    directory, base = os.path.split(os.path.abspath(path))
-    # Not tempfile.mkstemp: that creates the file mode 0600, and the rename would keep it.
-    tmp = os.path.join(directory, f".{base}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
-    try:
-        result = write_fn(tmp)
-        with open(tmp, "rb") as handle:
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:  # KeyboardInterrupt too: never leave the temporary file behind
-        try:
-            os.remove(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    try:  # make the rename itself durable; not possible everywhere, harmless to skip
-        dir_fd = os.open(directory, os.O_RDONLY)
-        try:
-            os.fsync(dir_fd)
-        finally:
-            os.close(dir_fd)
-    except OSError:
-        pass
-    return result
+# Where an output's folder is missing it is created; merge calls this before reading shards.
+_check_output_directory = prepare_output_directory
 
 
 # --------------------------------------------------------------------------------------------
@@ -235,6 +214,50 @@ def _chunk_shape(grid_shape, extra_shape, itemsize, target_bytes=CHUNK_TARGET_BY
         chunk.append(take)
         budget = max(1, budget // take)
     return tuple(reversed(chunk)) + tuple(extra_shape)
+
+
+def layout_bytes(axes, specs, shard=False) -> int:
+    """Bytes that the pre-allocated data of a new result file take on disk.
+
+    Every chunk of every point variable (chunks at the grid's edge are stored whole) with its
+    4-byte checksum, ``done`` (and ``owned``), and the coordinates. HDF5's metadata comes on top,
+    so this is a lower bound of the file's size: what a check of free space may ask for.
+    """
+    grid_shape = tuple(len(axis[1]) for axis in axes)
+    bookkeeping = [VariableSpec("done", np.int8)] + ([VariableSpec("owned", np.int8)] if shard else [])
+    specs = [s if isinstance(s, VariableSpec) else VariableSpec(**s) for s in specs] + bookkeeping
+    total = sum(np.asarray(axis[1]).nbytes for axis in axes)
+    total += sum(4 * n for n in dict(d for s in specs for d in s.extra_dims).values())  # int32 indices
+    for spec in specs:
+        shape = grid_shape + spec.extra_shape
+        if not shape:
+            total += spec.dtype.itemsize
+            continue
+        if not grid_shape:
+            total += math.prod(shape) * spec.dtype.itemsize + 4
+            continue
+        chunk = _chunk_shape(grid_shape, spec.extra_shape, spec.dtype.itemsize)
+        n_chunks = math.prod(-(-n // c) for n, c in zip(shape, chunk))
+        total += n_chunks * (math.prod(chunk) * spec.dtype.itemsize + 4)
+    return total
+
+
+def creation_reserve(axes, specs, shard=False) -> int:
+    """Bytes to allocate before HDF5 builds a result file: an upper bound of its size.
+
+    layout_bytes plus HDF5's metadata: about 20 kB for the smallest file, 2.5 kB per variable
+    (headers, attributes, dimension scales) and under 2 % for the chunk indexes of large grids
+    (measured from 1 to 10^5 points); the allowance doubles each.
+    """
+    data = layout_bytes(axes, specs, shard)
+    return data + 64 * 1024 + 4096 * (len(specs) + 2) + data // 25
+
+
+def finish_reserve(extra) -> int:
+    """Bytes that finishing adds to a result file, at most: the derived variables, twice over
+    for their chunks and coordinates, and the metadata of each (measured: about 2 kB each)."""
+    arrays = [np.asarray(item[0]) for item in (extra or {}).values()]
+    return 2 * sum(a.nbytes for a in arrays) + 64 * 1024 + 8192 * len(arrays)
 
 
 def _coerce_attr(value, dtype=None):
@@ -521,6 +544,11 @@ class ResultWriter:
     def __init__(self, path, h5file):
         self.path = os.fspath(path)
         self._file = h5file
+        # The writer holds its file open from creation to finish and never reopens it by path:
+        # it checks instead that the path still names this very file (see _check_still_mine).
+        self._fd = h5file.id.get_vfd_handle()
+        self._identity = identity(self._fd)
+        lock_for_writing(self._fd)
         done = h5file["done"]
         self.axis_names = _scale_names(done) if done.ndim else ()
         self.grid_shape = tuple(done.shape)
@@ -549,21 +577,31 @@ class ResultWriter:
         path = os.fspath(path)
         if os.path.isdir(path):
             raise UsageError(f"output {path} is a directory")
-        if os.path.lexists(path) and not overwrite:
-            raise UsageError(f"output {path} already exists: pass --overwrite to replace it, "
-                             "or --resume to continue the run that wrote it")
+        if os.path.lexists(path):
+            if not overwrite:
+                raise UsageError(f"output {path} already exists: pass --overwrite to replace it, "
+                                 "or --resume to continue the run that wrote it")
+            refuse_if_being_written(path)
         specs = [v if isinstance(v, VariableSpec) else VariableSpec(**v) for v in variables]
+        reserve = creation_reserve(axes, specs, shard=owned_mask is not None)
 
-        def write(tmp):
+        # Built under a temporary name and renamed into place while still open: the writer
+        # keeps the very file it built, never a file that someone else put at the path since.
+        with replacing(path, reserve, doing="create") as tmp:
             # HDF5 1.8 object headers carry checksums, so damaged metadata is caught too.
-            with h5py.File(tmp, "w", track_order=True, libver=("v108", "latest"), **_file_kwargs()) as f:
+            f = _h5open(tmp, "w", track_order=True, libver=("v108", "latest"))
+            with closed_without_writing_on_failure(f):
+                fd = f.id.get_vfd_handle()
+                reserve_space(fd, reserve)  # a full disk fails here, before HDF5 writes anything
                 _build_skeleton(f, list(axes), specs, dict(attrs), extra_coords, owned_mask)
-
-        atomic_write(path, write)
+                f.flush()
+                trim_to_contents(f)
+                _fsync(f)
         try:
-            return cls(path, _h5open(path, "r+"))
-        except OSError as error:
-            raise _corrupt_error(path, error) from None
+            return cls(path, f)
+        except BaseException:
+            close_without_writing(f)
+            raise
 
     @classmethod
     def open_for_resume(cls, path, expected_config_text: str, expected_shard=None):
@@ -576,6 +614,7 @@ class ResultWriter:
         path = os.fspath(path)
         if not os.path.exists(path):
             raise ResultFileError(f"cannot resume: {path} does not exist (run without --resume)")
+        refuse_if_being_written(path, "resume")  # also where HDF5's own locking is switched off
         f = _open_checked(path, "r+")
         try:
             stored = _decode(f.attrs.get("config", ""))
@@ -645,12 +684,19 @@ class ResultWriter:
                 raise ValueError(f"values[{name!r}] has shape {array.shape}, expected {expected}")
             arrays[name] = array[order]
 
-        for name, array in arrays.items():
-            _write_selection(self._file[name], self.grid_shape, idx, array)
-        self._file.flush()
-        _fsync(self._file)
-        _write_selection(self._file["done"], self.grid_shape, idx, np.ones(n, dtype=np.int8))
-        self._file.flush()
+        self._check_still_mine()
+        try:
+            for name, array in arrays.items():
+                _write_selection(self._file[name], self.grid_shape, idx, array)
+            self._file.flush()
+            _fsync(self._file)
+            _write_selection(self._file["done"], self.grid_shape, idx, np.ones(n, dtype=np.int8))
+            self._file.flush()
+        except Exception as error:
+            failure = write_failure(self.path, error, os.fstat(self._fd).st_size, doing="save points to")
+            if failure is None:
+                raise
+            raise failure from None
         self._done.reshape(-1)[idx] = True
 
     def finish(self, extra=None, coords=None) -> None:
@@ -658,27 +704,57 @@ class ResultWriter:
 
         extra: ``{name: (array, dims, attrs)}``; dims name sweep axes, extra dims, or new dims
         (given values in ``coords = {dim: (values, attrs)}``, else an int32 index). The work is
-        done on a copy renamed into place, so a crash here leaves the checkpoint intact.
+        done on a copy renamed into place, so a crash here leaves the checkpoint intact. The copy
+        is read from the file this writer holds (still locked), not from the path.
         """
+        try:
+            self._check_still_mine()
+            self._file.flush()
+            _fsync(self._file)
+            size = os.fstat(self._fd).st_size
+            reserve = finish_reserve(extra)
+
+            with replacing(self.path, size + reserve, before_replace=self._check_still_mine,
+                           doing="finish") as tmp:
+                _copy_open_file(self._fd, tmp, size)
+                with writing_hdf5(tmp, "r+", reserve=reserve, rdcc_nbytes=_RDCC_NBYTES,
+                                  rdcc_nslots=_RDCC_NSLOTS) as f:
+                    _add_extras(f, extra, coords)
+                    f.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
+                fsync_path(tmp)
+        except BaseException:
+            self.abandon()  # the checkpoint stays as it was: --resume finishes it
+            raise
         self.close()
 
-        def write(tmp):
-            shutil.copyfile(self.path, tmp)
-            with _h5open(tmp, "r+") as f:
-                _add_extras(f, extra, coords)
-                f.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
-
-        atomic_write(self.path, write)
+    def _check_still_mine(self):
+        check_still_at_path(self.path, self._identity)
 
     def close(self) -> None:
-        """Flush and close (the file stays a resumable checkpoint). Idempotent."""
-        if self._file is not None:
-            try:
-                if self._file.id.valid:
-                    self._file.flush()
-                    self._file.close()
-            finally:
-                self._file = None
+        """Flush and close (the file stays a resumable checkpoint). Idempotent.
+
+        If the flush fails (a full disk), the file is closed without writing, keeping its last
+        successful flush, and the error is raised.
+        """
+        f, self._file = self._file, None
+        if f is None or not f.id.valid:
+            return
+        try:
+            f.flush()
+            f.close()
+        except BaseException as error:
+            close_without_writing(f)
+            failure = write_failure(self.path, error, doing="save")
+            if failure is None:
+                raise
+            raise failure from None
+
+    def abandon(self) -> None:
+        """Close after a failure, never raising: what is on disk is the last successful flush."""
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 - the error that made us abandon is the one to report
+            pass
 
     def __enter__(self):
         return self
@@ -687,10 +763,7 @@ class ResultWriter:
         self.close()
 
     def __del__(self):
-        try:
-            self.close()
-        except Exception:
-            pass
+        self.abandon()
 
 
 # --------------------------------------------------------------------------------------------

@@ -36,12 +36,14 @@ root attributes: ``vrsweep_file = "trajectory"``, ``vrsweep_format_version``, ``
     R, theta (time): the slow flow at tau = omega t
     attrs: start, literal, R0, theta0, description
 
-The file is written whole through ``store.atomic_write``: it exists complete or not at all.
+The file is built in memory and written whole through ``fileio.write_bytes``: it exists complete
+or not at all.
 """
 
 from __future__ import annotations
 
 import datetime
+import io
 import os
 from dataclasses import dataclass, field
 
@@ -51,7 +53,8 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.results import MESSAGES, Status
-from vrsweep.store import FORMAT_VERSION, atomic_write
+from vrsweep.fileio import open_hdf5, write_bytes
+from vrsweep.store import FORMAT_VERSION
 
 FILE_KIND = "trajectory"
 DEFAULT_SAMPLES_PER_PERIOD = 200
@@ -240,18 +243,19 @@ def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
              "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
              **root_attributes(config), **data.attrs}
 
-    def write(tmp):
-        with _open(tmp, "w") as f:
-            for name, value in attrs.items():
-                f.attrs[name] = value
-            for model, run in data.runs.items():
-                _write_model_run(f.create_group(model, track_order=True), run)
-            if data.slow_flow:
-                group = f.create_group("slow_flow", track_order=True)
-                for start, run in data.slow_flow.items():
-                    _write_slow_flow(group.create_group(start, track_order=True), run)
-
-    atomic_write(path, write)
+    # Built in memory, then written whole: the disk only ever sees plain bytes, so a full disk
+    # is one clear error, and its message knows the file's exact size.
+    image = io.BytesIO()
+    with h5py.File(image, "w") as f:  # a buffer, not a file: no locking to decide
+        for name, value in attrs.items():
+            f.attrs[name] = value
+        for model, run in data.runs.items():
+            _write_model_run(f.create_group(model, track_order=True), run)
+        if data.slow_flow:
+            group = f.create_group("slow_flow", track_order=True)
+            for start, run in data.slow_flow.items():
+                _write_slow_flow(group.create_group(start, track_order=True), run)
+    write_bytes(path, image.getvalue())
 
 
 def _dimension(group, name, values, long_name):
@@ -320,10 +324,7 @@ def _write_slow_flow(group, run: SlowFlowRun):
 
 
 def _open(path, mode):
-    # As the results store does: lock where the file system can, read anyway where it cannot,
-    # unless HDF5_USE_FILE_LOCKING says otherwise.
-    kwargs = {} if "HDF5_USE_FILE_LOCKING" in os.environ else {"locking": "best-effort"}
-    return h5py.File(path, mode, **kwargs)
+    return open_hdf5(path, mode)  # the results store's locking policy
 
 
 def is_trajectory_file(path) -> bool:

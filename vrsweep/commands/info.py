@@ -138,12 +138,11 @@ def _describe_non_sweep(path) -> dict | None:
     """
     import h5py
 
+    from vrsweep.fileio import open_hdf5
     from vrsweep.store import FORMAT_VERSION
 
     try:
-        # The store's locking policy: best effort, unless HDF5_USE_FILE_LOCKING decides.
-        locking = {} if "HDF5_USE_FILE_LOCKING" in os.environ else {"locking": "best-effort"}
-        with h5py.File(path, "r", **locking) as f:
+        with open_hdf5(path, "r") as f:
             version = f.attrs.get("vrsweep_format_version")
             if version is None or int(version) != FORMAT_VERSION or "done" in f:
                 return None

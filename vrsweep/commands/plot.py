@@ -93,10 +93,13 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
                            f"{window[0]}-{n_periods}", err=True)
     figure = plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis, log=log,
                        periods=window)
-    if not path.parent.exists():
-        raise UsageError(f"output directory {path.parent} does not exist (output: {path})")
-    from vrsweep.store import atomic_write
+    # Rendered in memory, then written whole: a full disk leaves no half figure, and the
+    # message can say how many bytes the figure needs.
+    import io
 
-    # At a temporary name, then renamed: Ctrl-C or a full disk never leaves half a figure.
-    atomic_write(path, lambda tmp: figure.savefig(tmp, dpi=dpi, format=path.suffix[1:].lower()))
+    from vrsweep.fileio import write_bytes
+
+    image = io.BytesIO()
+    figure.savefig(image, format=path.suffix.lower()[1:], dpi=dpi)
+    write_bytes(path, image.getvalue())
     click.echo(f"-> {path}", err=True)

@@ -36,6 +36,9 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
         from vrsweep.errors import UsageError
 
         raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
+    from vrsweep.fileio import prepare_output_directory
+
+    prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
     data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
     write_trajectory(path, data, config, overwrite=overwrite)
     if not quiet:

@@ -1,0 +1,497 @@
+"""Opening and writing files so that faults end in one line, never in a traceback or a lost result.
+
+Everything vrsweep writes whole (result files, finished results, shard merges, trajectories,
+figures) is written beside its path and renamed into place (:func:`replacing`,
+:func:`atomic_write`), and every HDF5 file it opens goes through :func:`open_hdf5`. What a
+shared machine does to a run, and what happens then (README, "Long runs and clusters"):
+
+- **A full disk or quota.** HDF5 cannot recover from a failed write: closing what it holds
+  writes again, fails again, and the process crashes (at exit, or at the next HDF5 call). So the
+  space an HDF5 file will take is allocated before HDF5 writes (:func:`reserve_space`), and
+  where that is not possible a file whose write failed is closed without writing another byte
+  (:func:`close_without_writing`, :func:`writing_hdf5`). The temporary file is removed, and
+  :class:`~vrsweep.errors.OutputError` says in one line which file, why, how much space it needs
+  and how much is free. Files that are not HDF5 (figures) and small HDF5 files (trajectories)
+  are built in memory and written as plain bytes.
+- **Another process writing the same output.** A writer holds a lock on its file
+  (:func:`lock_for_writing`); :func:`refuse_if_being_written` refuses to replace a locked file.
+- **A file or folder removed or replaced under a writer** (a scratch purge, a run with
+  ``--overwrite`` on a file system without locks): :func:`identity` lets a writer check that the
+  path still names the file that it created before it touches it again.
+- **A process killed while it writes a file** leaves a temporary file beside the output; the next
+  write of that output removes it, or names it when it cannot tell that its writer is gone
+  (:func:`clean_stale_temporaries`).
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import re
+import shutil
+import socket
+import sys
+import uuid
+from contextlib import contextmanager
+from typing import Callable
+
+import h5py
+
+from vrsweep.errors import OutputError, UsageError
+from vrsweep.estimate import format_bytes
+
+try:  # POSIX; elsewhere nothing is locked and nothing can be told about other writers
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None
+
+
+def notice(message: str) -> None:
+    """One line on stderr about something done on the user's behalf (not an error)."""
+    print(message, file=sys.stderr, flush=True)
+
+
+# --------------------------------------------------------------------------------------------
+# Opening HDF5 files: the locking policy
+# --------------------------------------------------------------------------------------------
+
+# h5py built on HDF5 older than 1.10.7 has no file-locking property and raises ValueError for
+# the locking= argument; after the first such refusal every file is opened without it.
+_locking_argument_supported = True
+
+
+def hdf5_locking_kwargs() -> dict:
+    """``locking="best-effort"`` unless ``HDF5_USE_FILE_LOCKING`` decides or HDF5 is too old.
+
+    Best effort: lock where the file system can, carry on where it cannot (some NFS and Lustre
+    mounts), so that a reader never blocks on a file system without locks.
+    """
+    if "HDF5_USE_FILE_LOCKING" in os.environ or not _locking_argument_supported:
+        return {}
+    return {"locking": "best-effort"}
+
+
+def open_hdf5(path, mode="r", **kwargs) -> h5py.File:
+    """``h5py.File(path, mode, **kwargs)`` with vrsweep's locking policy (hdf5_locking_kwargs).
+
+    On an HDF5 without the locking property the file is opened without it: HDF5 then locks as it
+    always did, and ``HDF5_USE_FILE_LOCKING=FALSE`` still switches locking off.
+    """
+    global _locking_argument_supported
+    locking = hdf5_locking_kwargs()
+    if locking:
+        try:
+            return h5py.File(path, mode, **locking, **kwargs)
+        except ValueError as error:
+            if "lock" not in str(error).lower():
+                raise
+            _locking_argument_supported = False
+    return h5py.File(path, mode, **kwargs)
+
+
+# --------------------------------------------------------------------------------------------
+# Who else writes this file
+# --------------------------------------------------------------------------------------------
+
+
+def lock_for_writing(fd) -> None:
+    """Take an exclusive lock on the open file ``fd`` for as long as it stays open.
+
+    HDF5 already holds one when its own locking is on; this covers ``HDF5_USE_FILE_LOCKING=FALSE``.
+    Both are ``flock`` locks on the same open file, so they never conflict with each other. Where
+    locks are not supported nothing happens (and nothing can be told about other writers).
+    """
+    if fcntl is None:
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        pass  # held already (by HDF5, on this open file), or no locks on this file system
+
+
+def being_written(path) -> bool:
+    """True if another process holds ``path`` open for writing (an exclusive lock on it)."""
+    if fcntl is None:
+        return False
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False  # no locks on this file system: cannot tell
+    finally:
+        os.close(fd)  # releases the probe's shared lock too
+    return False
+
+
+def refuse_if_being_written(path, action="replace") -> None:
+    """UsageError (exit 2) if another process is writing ``path``: never pull a file from under
+    it (``--overwrite``), nor write it twice (``--resume``)."""
+    if being_written(path):
+        raise UsageError(f"cannot {action} {path}: it is being written by another process (a run in "
+                         "progress?); wait for that run to end, stop it, or choose another -o")
+
+
+def identity(fd):
+    """(device, inode) of an open file: what a writer compares the path against later."""
+    stat = os.fstat(fd)
+    return (stat.st_dev, stat.st_ino)
+
+
+def check_still_at_path(path, expected_identity, doing="writing") -> None:
+    """OutputError (exit 1) unless ``path`` still names the file with ``expected_identity``.
+
+    A writer holds its file open; if the path was deleted (by hand, or a scratch purge that took
+    the whole folder) or now names another file, writing on would compute into a file nobody can
+    see, and reopening the path would find someone else's file.
+    """
+    try:
+        stat = os.stat(path)
+    except FileNotFoundError:
+        folder = os.path.dirname(os.path.abspath(path))
+        gone = (f"its folder {folder} was removed (a scratch purge?)" if not os.path.isdir(folder)
+                else "it was deleted")
+        raise OutputError(f"{path} is gone: {gone} while this run was {doing} it; stopping, its "
+                          "points are lost: run again") from None
+    if (stat.st_dev, stat.st_ino) != tuple(expected_identity):
+        raise OutputError(f"{path} was replaced by another file while this run was {doing} it "
+                          "(another run with --overwrite?); stopping without touching the new file: "
+                          "this run's points are not in it") from None
+
+
+# --------------------------------------------------------------------------------------------
+# Closing after a failure
+# --------------------------------------------------------------------------------------------
+
+
+def close_without_writing(file) -> None:
+    """Close an HDF5 file (h5py.File or FileID) after a failed write, without a second error.
+
+    HDF5 flushes what it holds (dirty chunks, metadata) when it closes a file. After a write
+    failed on a full disk that flush fails too, the file stays open inside the library, and the
+    library crashes when the interpreter exits. So the file's descriptor is first pointed at an
+    anonymous file in memory: the flush lands there and the close succeeds. The file on disk keeps
+    its last successful flush: a checkpoint stays resumable (a point is marked done only after its
+    values were flushed), and a temporary file is deleted by the caller anyway.
+    """
+    file_id = file if isinstance(file, h5py.h5f.FileID) else file.id
+    try:
+        if not file_id.valid:
+            return
+        fd = file_id.get_vfd_handle()
+        sink = os.memfd_create("vrsweep-discard") if hasattr(os, "memfd_create") else _unlinked_tempfile()
+        try:
+            os.dup2(sink, fd)
+        finally:
+            os.close(sink)
+    except (OSError, ValueError, TypeError, NotImplementedError):
+        pass  # no plain descriptor: close as it is
+    try:
+        h5py.File(file_id).close()
+    except Exception:  # noqa: BLE001 - nothing more can be done; the first error is the one to report
+        pass
+
+
+def _unlinked_tempfile():
+    import tempfile
+
+    handle, name = tempfile.mkstemp(prefix="vrsweep-discard-")
+    os.unlink(name)
+    return handle
+
+
+@contextmanager
+def closed_without_writing_on_failure(h5file):
+    """Close ``h5file`` without writing if the block raises (see close_without_writing)."""
+    try:
+        yield h5file
+    except BaseException:
+        close_without_writing(h5file)
+        raise
+
+
+@contextmanager
+def writing_hdf5(path, mode="r+", reserve=0, **kwargs):
+    """``with writing_hdf5(path, "w", reserve=N) as f:`` instead of ``with h5py.File(path, "w") as f:``.
+
+    ``reserve``: bytes the block will add to the file, at most; they are allocated first
+    (:func:`reserve_space`), so that a full disk fails before HDF5 writes, and what the file did
+    not use is given back at the end. The plain form closes the file when the block fails, and
+    closing flushes: on a full disk that flush fails as well, half-way through h5py's close, and
+    from then on any use of HDF5 (even the interpreter's exit) can crash the process. Here a
+    failed block closes without writing, and the final flush happens before the close, where its
+    failure can still be handled the same way.
+    """
+    h5file = open_hdf5(path, mode, **kwargs)
+    with closed_without_writing_on_failure(h5file):
+        if reserve:
+            fd = h5file.id.get_vfd_handle()
+            reserve_space(fd, reserve, offset=os.fstat(fd).st_size)
+        yield h5file
+        h5file.flush()
+        if reserve:
+            trim_to_contents(h5file)
+    h5file.close()
+
+
+def trim_to_contents(h5file) -> None:
+    """Give back the space reserved beyond what a flushed HDF5 file uses (its end of allocation)."""
+    fd = h5file.id.get_vfd_handle()
+    end = h5file.id.get_filesize()
+    if os.fstat(fd).st_size > end:
+        os.ftruncate(fd, end)
+
+
+# --------------------------------------------------------------------------------------------
+# Space, and what a failed write tells the user
+# --------------------------------------------------------------------------------------------
+
+_SPACE_ERRNOS = (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC), errno.EFBIG)
+_HDF5_ERRNO = re.compile(r"errno = (\d+)")
+
+
+def _errno_of(error):
+    """The operating system's error number behind ``error`` (h5py puts it in its message), or None."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        seen.add(id(error))
+        if isinstance(error, OSError) and error.errno:
+            return error.errno
+        match = _HDF5_ERRNO.search(str(error))
+        if match:
+            return int(match.group(1))
+        error = error.__cause__ or error.__context__
+    return None
+
+
+def free_bytes(path) -> int | None:
+    """Bytes free for this user in the folder of ``path`` (None if that cannot be told)."""
+    try:
+        return shutil.disk_usage(os.path.dirname(os.path.abspath(path))).free
+    except OSError:
+        return None
+
+
+def _space_words(path, needed_bytes, written_bytes=None):
+    free = free_bytes(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    parts = []
+    if needed_bytes:
+        parts.append(f"the file needs about {format_bytes(needed_bytes)}")
+    elif written_bytes:
+        parts.append(f"the file needs more than the {format_bytes(written_bytes)} written")
+    if free is not None:
+        parts.append(f"{format_bytes(free)} free in {folder}")
+    return ", ".join(parts)
+
+
+def write_failure(path, error, needed_bytes=None, doing="write", written_bytes=None) -> OutputError | None:
+    """The one-line OutputError for ``error`` raised while writing ``path``, or None if ``error``
+    is not about the file system (a bug, an interrupt: let it through). On a full disk it says
+    how much space the file needs (``needed_bytes``), or else how much had been written."""
+    if isinstance(error, (OutputError, UsageError)):
+        return error
+    if not isinstance(error, Exception):
+        return None  # KeyboardInterrupt, SystemExit
+    number = _errno_of(error)
+    if number is None:
+        return None
+    cause = os.strerror(number)
+    if number in _SPACE_ERRNOS:
+        space = _space_words(path, needed_bytes, written_bytes)
+        return OutputError(f"cannot {doing} {path}: {cause}" + (f" ({space})" if space else ""))
+    return OutputError(f"cannot {doing} {path}: {cause}")
+
+
+def reserve_space(fd, length, offset=0) -> None:
+    """Allocate ``length`` bytes of the open file ``fd`` from ``offset`` on, before HDF5 writes there.
+
+    HDF5 cannot take a full disk: once a write fails, closing anything it holds writes again, and
+    the library ends in a crash (h5py reports the failures as "Exception ignored" while the
+    program goes on). So the space a file will take is allocated first: a full disk or quota is
+    then a clean OSError here, and HDF5's writes land in blocks that already exist. Where the
+    file system cannot allocate ahead, HDF5 meets the full disk itself, and the file is closed
+    without writing (:func:`close_without_writing`).
+    """
+    if length <= 0 or not hasattr(os, "posix_fallocate"):
+        return
+    try:
+        os.posix_fallocate(fd, offset, length)
+    except OSError as error:
+        if error.errno not in (errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL):
+            raise
+
+
+# --------------------------------------------------------------------------------------------
+# Output folders and temporary files
+# --------------------------------------------------------------------------------------------
+
+
+def prepare_output_directory(path) -> None:
+    """Make sure the folder of ``path`` exists (creating it, and saying so) and is writable.
+
+    Shipped configs write to ``results/`` relative to the current directory: run from elsewhere,
+    that folder is missing, and creating it is what the user wants.
+    """
+    directory = os.path.dirname(os.path.abspath(path))
+    if os.path.exists(directory) and not os.path.isdir(directory):
+        raise UsageError(f"output {path}: {directory} is a file, not a directory")
+    if not os.path.isdir(directory):
+        blocker = directory
+        while not os.path.exists(blocker):
+            blocker = os.path.dirname(blocker)
+        if not os.path.isdir(blocker):
+            raise UsageError(f"output {path}: {blocker} is a file, not a directory")
+        try:
+            os.makedirs(directory, exist_ok=True)
+        except OSError as error:
+            raise UsageError(f"output directory {directory} does not exist and cannot be created "
+                             f"({error.strerror or error}); choose another with -o") from None
+        notice(f"Created the output folder {directory}")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise UsageError(f"output directory {directory} is not writable (output: {path})")
+
+
+_HOST = re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname().split(".")[0]) or "host"
+# After ".NAME.": HOST.PID.TAG.tmp, or PID.TAG.tmp from vrsweep before hosts were recorded.
+_TEMPORARY_TAIL = re.compile(r"(?:(?P<host>[A-Za-z0-9_-]+)\.)?(?P<pid>\d+)\.[0-9a-f]{8}\.tmp")
+
+
+def temporary_path(path) -> str:
+    """A new temporary name beside ``path`` (same folder, so the final rename stays on one file
+    system) that says which host and process wrote it."""
+    directory, base = os.path.split(os.path.abspath(path))
+    return os.path.join(directory, f".{base}.{_HOST}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+
+
+def _process_alive(pid) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True  # exists, owned by someone else
+    return True
+
+
+_named_temporaries = set()
+
+
+def clean_stale_temporaries(path) -> None:
+    """Remove the temporary files that killed writers of ``path`` left beside it; name the rest.
+
+    A temporary file is stale when no process holds it locked and the process that wrote it (its
+    name says which, on which host) is gone. One written on another host, or by a process of
+    unknown host, cannot be judged from here: it is named on stderr, and left alone.
+    """
+    directory, base = os.path.split(os.path.abspath(path))
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return
+    prefix = f".{base}."
+    for name in sorted(names):
+        match = _TEMPORARY_TAIL.fullmatch(name[len(prefix):]) if name.startswith(prefix) else None
+        if not match:
+            continue
+        temporary = os.path.join(directory, name)
+        if being_written(temporary):
+            continue  # another process is writing it right now
+        pid, host = int(match.group("pid")), match.group("host")
+        if host == _HOST and not _process_alive(pid):
+            try:
+                os.remove(temporary)
+            except OSError:
+                continue
+            notice(f"Removed {temporary}, left by an interrupted vrsweep (process {pid})")
+        elif (host != _HOST or pid != os.getpid()) and temporary not in _named_temporaries:
+            _named_temporaries.add(temporary)  # once: a run writes its output more than once
+            writer = f"process {pid} on {host}" if host else f"process {pid}"
+            notice(f"Note: {temporary} looks like a temporary file left by vrsweep ({writer}); "
+                   "delete it if that process is no longer running")
+
+
+# --------------------------------------------------------------------------------------------
+# Atomic writes
+# --------------------------------------------------------------------------------------------
+
+
+def fsync_path(path) -> None:
+    with open(path, "rb") as handle:
+        os.fsync(handle.fileno())
+
+
+def _fsync_directory(directory) -> None:
+    try:  # make a rename durable; not possible everywhere, harmless to skip
+        dir_fd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(dir_fd)
+        finally:
+            os.close(dir_fd)
+    except OSError:
+        pass
+
+
+@contextmanager
+def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None = None,
+              doing="write"):
+    """Yield a temporary path beside ``path``; when the block ends, rename it over ``path``.
+
+    The block writes (and makes durable) the whole new file at the temporary path; an HDF5 file
+    written there must be opened with :func:`writing_hdf5` (or be guarded by
+    :func:`closed_without_writing_on_failure`). If the block fails, the temporary file is removed
+    and a file-system error becomes a one-line OutputError (with ``needed_bytes``, the size of
+    the new file, when the disk is full). ``before_replace`` runs just before the rename (a
+    writer checks there that ``path`` is still its own file).
+    """
+    path = os.fspath(path)
+    prepare_output_directory(path)
+    clean_stale_temporaries(path)
+    tmp = temporary_path(path)
+    try:
+        yield tmp
+        if before_replace is not None:
+            before_replace()
+        os.replace(tmp, path)
+    except BaseException as error:  # KeyboardInterrupt too: never leave the temporary file behind
+        written_bytes = None
+        try:
+            written_bytes = os.path.getsize(tmp)  # when the size needed is not known, say this
+            os.remove(tmp)
+        except FileNotFoundError:
+            pass
+        except OSError:
+            pass  # its folder is gone, or worse: the error below says what matters
+        failure = write_failure(path, error, needed_bytes, doing, written_bytes)
+        if failure is None or failure is error:
+            raise
+        raise failure from None
+    _fsync_directory(os.path.dirname(os.path.abspath(path)))
+
+
+def atomic_write(path, write_fn: Callable[[str], object], needed_bytes=None, doing="write"):
+    """Write a whole file so that ``path`` holds either the old file or the complete new one.
+
+    ``write_fn(tmp_path)`` writes the file at a temporary name in the same directory; the result
+    is fsynced and renamed over ``path``. If anything fails, the temporary file is removed and
+    nothing changes at ``path`` (see :func:`replacing` for the error raised). Returns what
+    ``write_fn`` returns.
+    """
+    with replacing(path, needed_bytes, doing=doing) as tmp:
+        result = write_fn(tmp)
+        fsync_path(tmp)
+    return result
+
+
+def write_bytes(path, data: bytes, doing="write") -> None:
+    """Write ``data`` to ``path`` atomically (figures: rendered in memory, then saved)."""
+
+    def write(tmp):
+        with open(tmp, "wb") as handle:
+            handle.write(data)
+
+    atomic_write(path, write, needed_bytes=len(data), doing=doing)
