@@ -17,7 +17,7 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.provenance import cf_attributes
 from vrsweep.errors import UsageError
-from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.model import AXIS_LONG_NAMES, AXIS_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.sweep import Grid, run_sweep
 from vrsweep.variables import point_variables
@@ -94,7 +94,7 @@ def _axes(grid):
         if name == "direction":
             attrs = {"units": "1", "long_name": "continuation direction (+1: up the axis, -1: down)"}
         else:
-            attrs = {"units": PARAMETER_UNITS[name], "long_name": PARAMETER_LONG_NAMES[name]}
+            attrs = {"units": AXIS_UNITS[name], "long_name": AXIS_LONG_NAMES[name]}
         axes.append((name, values, attrs))
     return axes
 
@@ -155,6 +155,19 @@ def analytic_extras(config, grid):
     return extras
 
 
+def basin_extras(config, writer):
+    """The attractor labels and table of a sweep with x0 / v0 axes (vrsweep.attractors); ({}, {})
+    without. Reads the finished points back from the checkpoint, which it closes."""
+    from vrsweep import attractors
+    from vrsweep.store import read_results
+
+    if not attractors.has_initial_state_axes(config.axis_names):
+        return {}, {}
+    writer.close()
+    results = read_results(writer.path)
+    return attractors.attractor_extras(results.axes, results.variables, config.integration.period_tolerance)
+
+
 def _reduce_constant_axes(array, axis_names):
     """Drop the axes along which a grid array does not vary (g_res depends on Omega only)."""
     keep = []
@@ -204,7 +217,11 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     except BaseException:
         writer.close()  # everything finished so far is on disk; --resume continues
         raise
-    writer.finish(extra=extras)
+    coords = {}
+    if shard[1] == 1:  # a shard sees part of each slice: the merge labels the whole grid
+        attractors, coords = basin_extras(config, writer)
+        extras.update(attractors)
+    writer.finish(extra=extras, coords=coords)
     return JobReport(path, n_owned, sum(counts.values()), counts)
 
 
