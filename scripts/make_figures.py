@@ -11,7 +11,8 @@ Figures: fig1, fig2 (R against g, Omega = 4 and 5, with the analytic response), 
 bifurcation diagrams (stroboscopic x against g: which R is trustworthy), fig_impact_no
 (impacts per slow period, g = 5 and 20), fig3-fig5 (original above effective trajectories),
 fig6 (effective system against the slow-flow reconstruction); and, not in the paper, the
-hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down).
+hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down) and the basins of
+attraction of that bistable example at g = 23 (configs/basins_g23.yaml).
 """
 
 import argparse
@@ -64,6 +65,11 @@ COMMANDS = {
     "hysteresis": [
         ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
         ["plot", "results/hysteresis_effective.h5", "-o", "docs/figures/hysteresis.png"],
+    ],
+    # Not in the paper: basins of attraction of the bistable hysteresis example at g = 23 (issue 13).
+    "basins_g23": [
+        ["run", "configs/basins_g23.yaml", "-o", "results/basins_g23.h5", "--overwrite"],
+        ["plot", "results/basins_g23.h5", "--kind", "basin", "-o", "docs/figures/basins_g23.png"],
     ],
 }
 
