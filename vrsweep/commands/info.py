@@ -357,8 +357,10 @@ def _format_attractors(slices) -> list[str]:
         lines.append(f"attractors:  {found} found{where}")
         for row in entry["attractors"]:
             period = f"period {row['period']}" if row["period"] > 0 else "no period"
-            impacts = (f"{row['impacts_per_cycle']} impacts/cycle" if row["impacts_per_cycle"] >= 0
-                       else f"{_short(row['impacts_per_period'])} impacts/period")
+            if row["impacts_per_cycle"] >= 0:
+                impacts = f"{row['impacts_per_cycle']} impact{'' if row['impacts_per_cycle'] == 1 else 's'} per cycle"
+            else:
+                impacts = f"{_short(row['impacts_per_period'])} impacts per slow period"
             R = "R = nan" if row["R"] is None else f"R = {row['R']:.6g} +- {row['R_err']:.2g}"
             start = ""
             if row.get("x0") is not None or row.get("v0") is not None:
