@@ -770,7 +770,7 @@ class _Validator:
         for name, spec in sweep.items():
             path = ("sweep", name)
             if name not in AXIS_NAMES:
-                self.report(path, f"not a parameter or x0, v0{_did_you_mean(name, AXIS_NAMES)}",
+                self.report(path, f"not a parameter{_did_you_mean(name, AXIS_NAMES)}",
                             allowed=", ".join(AXIS_NAMES))
                 continue
             if isinstance(spec, list):
