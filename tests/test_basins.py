@@ -296,6 +296,14 @@ def test_basin_plot(bistable, tmp_path):
     assert out.stat().st_size > 10_000
 
 
+def test_basin_plot_along_one_initial_state_axis_is_a_strip(tmp_path):
+    path = write_config(tmp_path, SHORT + "sweep: {v0: [-1.0, 0.0, 1.0]}\n")
+    out = tmp_path / "v0.h5"
+    run_ok("run", path, "-o", out, "--quiet")
+    run_ok("plot", out, "-o", tmp_path / "v0.png")  # the default kind of a basin sweep
+    assert (tmp_path / "v0.png").stat().st_size > 5_000
+
+
 def test_basin_plot_of_a_sweep_without_initial_state_axes_is_a_usage_error(tmp_path):
     path = write_config(tmp_path, SHORT + "sweep: {g: [22.5, 23.0]}\n")
     out = tmp_path / "g.h5"

@@ -58,7 +58,8 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
       status       how each point's integration ended
       bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
       basin        the x0-v0 plane coloured by the attractor each start reached
-                   (sweeps with x0 / v0 axes; other axes: pick a slice with --at)
+                   (sweeps with x0 / v0 axes, their default; other axes: pick a slice
+                   with --at)
     Trajectory files (vrsweep simulate), --kind:
       trajectory   position, velocity, phase portrait; original above effective (default)
       impacts      impacts per slow period, period by period (several files: one panel each)
@@ -79,6 +80,8 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
         if not loaded.complete:
             click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
                        "(finish it with vrsweep run CONFIG --resume)", err=True)
+    if kind is None and len(data) == 1 and "attractor" in getattr(data[0], "variables", {}):
+        kind = "basin"  # a sweep over the initial state: its basins are what it is for
     if kind == "basin":
         if len(data) > 1:
             raise UsageError("--kind basin draws one file; plot the others one at a time")
