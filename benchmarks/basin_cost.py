@@ -76,7 +76,7 @@ def main():
     print(f"| g axis ({n} values) | {best['parameter']:.2f} | {1e3 * best['parameter'] / n:.2f} |")
     print(f"| x0 x v0 at g = 23 ({n} points, {count} attractors) | {best['basin']:.2f} | "
           f"{1e3 * best['basin'] / n:.2f} |")
-    print(f"| of which labelling (attractors.label_grid) | {labelling:.3f} | {1e3 * labelling / n:.3f} |")
+    print(f"| of which labelling (attractors.label_grid) | {labelling:.4f} | {1e3 * labelling / n:.4f} |")
     print(f"basin / parameter sweep: {best['basin'] / best['parameter']:.2f}x")
 
 
