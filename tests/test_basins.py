@@ -338,3 +338,18 @@ def test_labels_of_merged_shards_equal_the_single_runs(small_sweep, tmp_path):
         assert np.array_equal(array, single.variables[name], equal_nan=True), name
         assert dims == single.dims[name]
     assert np.array_equal(coords["attractor_label"][0], single.coords["attractor_label"])
+
+
+def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp_path):
+    path, whole = small_sweep
+    for index in range(2):
+        run_ok("run", path, "--shard", f"{index}/2", "-o", tmp_path / "sweep.h5", "--quiet")
+    merged = tmp_path / "merged.h5"
+    merge_results([tmp_path / f"sweep.shard{index}of2.h5" for index in range(2)], merged)
+    if "attractor" not in read_results(merged).variables:  # a merge that does not label (yet)
+        result = invoke("plot", merged, "--kind", "basin", "-o", tmp_path / "x.png")
+        assert result.exit_code == 2 and "--resume" in result.output
+    run_ok("run", path, "--resume", "-o", merged, "--quiet")
+    labelled, single = read_results(merged), read_results(whole)
+    for name in single.derived_variables:
+        assert np.array_equal(labelled.variables[name], single.variables[name], equal_nan=True), name

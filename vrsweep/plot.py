@@ -1007,6 +1007,9 @@ def basin_plot(results, at=None) -> Figure:
         if not any(name in data.axes for name in ("x0", "v0")):
             raise UsageError(f"{data.path} has no x0 or v0 axis: a basin plot needs a sweep over the "
                              "initial state (sweep: {x0: ..., v0: ...})")
+        raise ResultFileError(f"{data.path} has x0 / v0 axes but no attractor labels (merged or written by a "
+                              "vrsweep that does not label them): 'vrsweep run CONFIG --resume -o "
+                              f"{data.path}' adds them without computing any point again")
     at = dict(at or {})
     for name, values in data.axes.items():  # a one-value axis needs no --at
         if name not in at and name not in ("x0", "v0") and len(values) == 1:
