@@ -236,6 +236,15 @@ def test_slices_are_labelled_apart_and_the_table_counts_their_points():
     assert labels_swapped.T.tolist() == labels.tolist()
 
 
+def test_a_slice_of_failed_points_has_no_attractor_and_a_filler_row():
+    flat = synthetic([FAILED, FAILED])
+    labels, table, counts = label_grid({"v0": np.array([0.0, 1.0])}, flat, 1e-6)
+    assert labels.tolist() == [-1, -1] and int(counts) == 0
+    assert table["points"].tolist() == [0] and table["period"].tolist() == [-1]
+    extra, coords = attractor_extras({"v0": np.array([0.0, 1.0])}, flat, 1e-6)
+    assert extra["attractor_R"][1] == ("attractor_label",) and coords["attractor_label"][0].tolist() == [0]
+
+
 def test_a_grid_without_initial_state_axes_gets_no_labels():
     assert attractor_extras({"g": np.array([1.0, 2.0])}, {}, 1e-6) == ({}, {})
 

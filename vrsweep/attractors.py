@@ -128,8 +128,8 @@ def _rank(group, values):
     return (-group["members"].size, R if np.isfinite(R) else np.inf, group["period"], group["representative"])
 
 
-def _slices(axis_names, shape):
-    """(slice axes, their shape, initial-state axes' positions): x0 / v0 moved last."""
+def _slices(axis_names):
+    """Positions of the slice axes (every axis but x0, v0) and of the initial-state axes."""
     state_axes = [k for k, name in enumerate(axis_names) if name in INITIAL_STATE_KEYS]
     slice_axes = [k for k in range(len(axis_names)) if k not in state_axes]
     return slice_axes, state_axes
@@ -144,8 +144,8 @@ def label_grid(axes, variables, period_tolerance):
     """
     names = list(axes)
     shape = tuple(len(axes[name]) for name in names)
-    slice_axes, state_axes = _slices(names, shape)
-    order = slice_axes + state_axes
+    slice_axes, state_axes = _slices(names)
+    order = slice_axes + state_axes  # x0 / v0 last: a slice is then one row of a 2-D table
     slice_shape = tuple(shape[k] for k in slice_axes)
     n_slices = int(np.prod(slice_shape, dtype=np.int64))
     per_slice = int(np.prod([shape[k] for k in state_axes], dtype=np.int64))
@@ -159,7 +159,7 @@ def label_grid(axes, variables, period_tolerance):
     arranged = {name: by_slice(variables[name]) for name in NEEDED}
     # Each point's own initial state, for the table's example starting state.
     starts = {}
-    for axis_name, key in INITIAL_STATE_KEYS.items():
+    for axis_name in INITIAL_STATE_KEYS:
         if axis_name in axes:
             along = [1] * len(shape)
             along[names.index(axis_name)] = shape[names.index(axis_name)]
@@ -171,7 +171,9 @@ def label_grid(axes, variables, period_tolerance):
     for s in range(n_slices):
         labels[s], groups = label_slice({name: arranged[name][s] for name in NEEDED}, tolerance)
         found.append(groups)
-    n_attractors = max((len(groups) for groups in found), default=0)
+    # At least one row, so that the table exists (HDF5 has no chunked empty datasets) even when
+    # every point failed; its filler says "no such attractor".
+    n_attractors = max(1, max((len(groups) for groups in found), default=0))
     table = {
         "period": np.full((n_slices, n_attractors), -1, dtype=np.int64),
         "R": np.full((n_slices, n_attractors), np.nan),
