@@ -289,6 +289,32 @@ def test_the_bistable_example_has_exactly_its_two_attractors(bistable):
         assert np.allclose(R, float(data.attractor_R.sel(attractor_label=label)), rtol=1e-6, atol=0)
 
 
+def test_the_tolerance_picks_one_of_four_coexisting_orbits_of_the_original_model(tmp_path):
+    """gamma = 0.1, alpha = 0.2, g = 5, Omega = 4: runs from (0.99, 0.5) at three tolerances end on
+    different period-1 orbits; a 6 x 6 basin sweep finds four, and each single run is one of them."""
+    path = CONFIGS / "basins_g5_original.yaml"
+    out = tmp_path / "basins.h5"
+    small = tmp_path / "small.yaml"
+    small.write_text(path.read_text().replace("num: 31", "num: 6"))
+    run_ok("run", small, "-o", out, "--quiet", "--overwrite")
+    data = xr.open_dataset(out, engine="h5netcdf")
+    assert int(data.attractor_count) == 4
+    assert data.attractor_period.values.tolist() == [1] * 4
+    assert data.attractor_impacts_per_cycle.values.tolist() == [4] * 4
+    R = np.sort(data.attractor_R.values)
+    assert np.all(np.diff(R) > 1e-3)  # four distinct orbits, not one split by the tolerance
+    reached = set()
+    for rtol in ("1e-8", "1e-10", "1e-12"):
+        single = tmp_path / f"single_{rtol}.h5"
+        run_ok("run", path, "-o", single, "--quiet", "--set", "x0=0.99", "--set", "v0=0.5", "--set", f"rtol={rtol}")
+        one = xr.open_dataset(single, engine="h5netcdf")
+        assert int(one.period) == 1 and int(one.impacts_per_cycle) == 4
+        nearest = int(np.argmin(np.abs(R - float(one.R))))
+        assert abs(R[nearest] - float(one.R)) < 1e-6, (rtol, float(one.R), R)
+        reached.add(nearest)
+    assert len(reached) >= 2  # the tolerance changes which orbit a run from one start reaches
+
+
 def test_info_prints_the_attractor_table(bistable):
     text = run_ok("info", bistable)
     assert "attractors:  2 found" in text
