@@ -12,13 +12,16 @@ import json
 import textwrap
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 import xarray as xr
 
 from result_files import invoke, write_config
 from vrsweep import attractors
-from vrsweep.attractors import SAME_ORBIT_FACTOR, attractor_extras, label_grid, label_slice
+from vrsweep.attractors import (
+    SAME_ORBIT_FACTOR, attractor_extras, attractor_extras_from_file, label_grid, label_slice,
+)
 from vrsweep.config import load_config, parse_config
 from vrsweep.errors import ConfigError
 from vrsweep.results import Status
@@ -365,14 +368,18 @@ def test_labels_of_merged_shards_equal_the_single_runs(small_sweep, tmp_path):
     merged = tmp_path / "merged.h5"
     merge_results(shards, merged)
     results = read_results(merged)
-    # What a merge must add: the labelling of the merged point variables (see store.merge_results).
-    extra, coords = attractor_extras(results.axes, results.variables,
-                                     load_config(path).integration.period_tolerance)
-    single = read_results(whole)
-    for name, (array, dims, _) in extra.items():
-        assert np.array_equal(array, single.variables[name], equal_nan=True), name
-        assert dims == single.dims[name]
-    assert np.array_equal(coords["attractor_label"][0], single.coords["attractor_label"])
+    # What a merge must add: the labelling of the merged point variables, read from the file.
+    tolerance = load_config(path).integration.period_tolerance
+    with h5py.File(merged, "r") as f:
+        from_file = attractor_extras_from_file(f, tolerance)
+    for extra, coords in (attractor_extras(results.axes, results.variables, tolerance), from_file):
+        single = read_results(whole)
+        for name, (array, dims, _) in extra.items():
+            assert np.array_equal(array, single.variables[name], equal_nan=True), name
+            assert dims == single.dims[name]
+        assert set(extra) == set(single.derived_variables) - {"A_theory", "A_theory_stable",
+                                                              "A_theory_max_stable", "g_res"}
+        assert np.array_equal(coords["attractor_label"][0], single.coords["attractor_label"])
 
 
 def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp_path):

@@ -260,6 +260,18 @@ def attractor_extras(axes, variables, period_tolerance):
     return extra, coords
 
 
+def attractor_extras_from_file(f, period_tolerance):
+    """attractor_extras for an open h5py File whose point variables are all written (a merge's
+    output before its derived variables are added): the grid's axes are the dimension scales of
+    ``done``. Reads only the variables in NEEDED. A merge then adds the result with
+    ``store._add_extras(f, *attractor_extras_from_file(f, period_tolerance))``."""
+    names = [dim[0].name.rsplit("/", 1)[-1] for dim in f["done"].dims] if f["done"].ndim else []
+    if not has_initial_state_axes(names):
+        return {}, {}
+    axes = {name: f[name][()] for name in names}
+    return attractor_extras(axes, {name: f[name][()] for name in NEEDED}, period_tolerance)
+
+
 def attractor_rows(results, at=None):
     """The table of a result file, as a list of (slice description, [row dicts]) for printing.
 
