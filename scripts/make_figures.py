@@ -12,7 +12,9 @@ against g with the analytic response), fig1, fig2 (R against g, Omega = 4 and 5,
 analytic response), their bifurcation diagrams (stroboscopic x against g: which R is trustworthy), fig_impact_no
 (impacts per slow period, g = 5 and 20), fig3-fig5 (original above effective trajectories),
 fig6 (effective system against the slow-flow reconstruction); and, not in the paper, the
-hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down).
+hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down) and the basins of
+attraction of that bistable example at g = 23 (configs/basins_g23.yaml) and of four coexisting
+orbits of the original model at g = 5 (configs/basins_g5_original.yaml).
 """
 
 import argparse
@@ -70,6 +72,16 @@ COMMANDS = {
     "hysteresis": [
         ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
         ["plot", "results/hysteresis_effective.h5", "-o", "docs/figures/hysteresis.png"],
+    ],
+    # Not in the paper: basins of attraction of the bistable hysteresis example at g = 23 (issue 13).
+    "basins_g23": [
+        ["run", "configs/basins_g23.yaml", "-o", "results/basins_g23.h5", "--overwrite"],
+        ["plot", "results/basins_g23.h5", "--kind", "basin", "-o", "docs/figures/basins_g23.png"],
+    ],
+    # Not in the paper: four coexisting orbits of the original model at g = 5 (issue 13).
+    "basins_g5_original": [
+        ["run", "configs/basins_g5_original.yaml", "-o", "results/basins_g5_original.h5", "--overwrite"],
+        ["plot", "results/basins_g5_original.h5", "--kind", "basin", "-o", "docs/figures/basins_g5_original.png"],
     ],
 }
 

@@ -6,7 +6,7 @@ The schema (docs/design.md, "Config"); every key is optional and defaults to the
     parameters: {gamma: 0.22, alpha: 0.1, c: 0.04, omega0: 0.1, omega: 0.5,
                  Delta: 1.0, e: 0.95, g: 0.0, Omega: 4.0}
     initial: {x: 0.99, v: 0.5}
-    sweep:                           # ordered axes, each named after a parameter
+    sweep:                           # ordered axes, each named after a parameter, or x0 / v0
       g: {start: 0.0, stop: 40.0, num: 81}            # linear, start < stop (or num: 1)
       Omega: [4.0, 5.0]                               # explicit list, strictly monotonic
       # or {values: [...], continuation: up|down|both}, or {start, stop, num, continuation}
@@ -55,7 +55,9 @@ from ruamel.yaml.nodes import MappingNode, SequenceNode
 from ruamel.yaml.reader import ReaderError
 
 from vrsweep.errors import ConfigError
-from vrsweep.model import DEFAULT_PARAMETERS, MODELS, PARAMETER_NAMES
+from vrsweep.model import (
+    DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
+)
 
 __all__ = [
     "Axis", "Integration", "Config", "load_config", "parse_config", "with_overrides",
@@ -125,6 +127,9 @@ PARAMETER_DOMAINS = {
 
 INITIAL_DEFAULTS = {"x": 0.99, "v": 0.5}  # the paper's Fig. 6 caption
 INITIAL_DOMAINS = {"x": _ANY, "v": _ANY}
+# What a sweep axis may be named: a parameter, or x0 / v0 (the initial state, basins of attraction).
+AXIS_NAMES = PARAMETER_NAMES + INITIAL_STATE_AXES
+AXIS_DOMAINS = {**PARAMETER_DOMAINS, **{axis: INITIAL_DOMAINS[key] for axis, key in INITIAL_STATE_KEYS.items()}}
 
 INTEGRATION_DEFAULTS = {
     "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
@@ -164,7 +169,8 @@ _VALUES_KEYS = ("values", "continuation")
 
 @dataclass(frozen=True, eq=False)
 class Axis:
-    """One sweep axis: a parameter name and its values (float64, 1-D, read-only, in config order).
+    """One sweep axis: a parameter name (or x0 / v0, the initial state) and its values (float64,
+    1-D, read-only, in config order).
 
     ``continuation`` (``up``, ``down``, ``both`` or None) asks the sweep to run this axis in order,
     each point starting from the previous point's final state; the values themselves stay as given.
@@ -210,7 +216,7 @@ class Config:
 
     Equality compares content only (not the file name, text or overrides it came from), so
     ``parse_config(c.to_yaml()) == c``. ``parameters`` holds all nine parameters; a swept one keeps
-    its fixed value there, which the sweep ignores.
+    its fixed value there, which the sweep ignores (so does ``initial`` for a swept x0 or v0).
     """
 
     model: str
@@ -245,11 +251,14 @@ class Config:
     def grid_parameters(self) -> dict[str, np.ndarray]:
         """Every parameter as a float64 array of shape ``self.shape`` (writable, C-contiguous).
 
-        Axis k's values vary along dimension k; fixed parameters are constant arrays.
+        Axis k's values vary along dimension k; fixed parameters are constant arrays. An x0 or v0
+        axis is a dimension of every array but not a parameter: it is not in the result.
         """
         shape = self.shape
         grid = {name: np.full(shape, self.parameters[name], dtype=np.float64) for name in PARAMETER_NAMES}
         for k, axis in enumerate(self.axes):
+            if axis.name not in grid:
+                continue
             along_k = [1] * len(shape)
             along_k[k] = len(axis.values)
             grid[axis.name] = np.array(np.broadcast_to(axis.values.reshape(along_k), shape), dtype=np.float64)
@@ -286,7 +295,9 @@ class Config:
             note = f"  # swept: see sweep.{name}" if name in swept else ""
             lines.append(f"  {name}: {_yaml_float(self.parameters[name])}{note}")
         lines.append("initial:")
-        lines += [f"  {key}: {_yaml_float(self.initial[key])}" for key in ("x", "v")]
+        for axis, key in INITIAL_STATE_KEYS.items():
+            note = f"  # swept: see sweep.{axis}" if axis in swept else ""
+            lines.append(f"  {key}: {_yaml_float(self.initial[key])}{note}")
         lines.append("sweep:" if self.axes else "sweep: {}")
         lines += [f"  {axis.name}: {_yaml_axis(axis)}" for axis in self.axes]
         lines.append("integration:")
@@ -432,7 +443,7 @@ _ALLOWED_KEYS = {
 _KEY_HOME = {
     **{name: f"parameters.{name}" for name in PARAMETER_NAMES},
     **{key: f"integration.{key}" for key in INTEGRATION_DEFAULTS},
-    "x": "initial.x", "v": "initial.v",
+    "x": "initial.x", "v": "initial.v", "x0": "initial.x", "v0": "initial.v",
     **{key: key for key in _SECTIONS},
 }
 
@@ -628,7 +639,7 @@ class _Validator:
             setting = str(setting)
             name, sep, value_text = setting.partition("=")
             name = name.strip()
-            allowed = "a parameter, an integration key, initial.x, initial.v or model"
+            allowed = "a parameter, an integration key, initial.x (or x0), initial.v (or v0) or model"
             if not sep or not name:
                 self.report_raw(self.setting_order(setting), f"--set {setting}: expected NAME=VALUE, e.g. --set g=5")
                 continue
@@ -658,9 +669,11 @@ class _Validator:
                     continue  # the section itself is reported as not being a mapping
                 data[section] = {**data[section], key: value}
                 sweep = data.get("sweep")
-                if section == "parameters" and isinstance(sweep, dict) and key in sweep:
-                    # Fixing a swept parameter removes its axis: `simulate fig1.yaml --set g=5`.
-                    data["sweep"] = {name: spec for name, spec in sweep.items() if name != key}
+                axis = {"x": "x0", "v": "v0"}.get(key) if section == "initial" else key
+                if section in ("parameters", "initial") and isinstance(sweep, dict) and axis in sweep:
+                    # Fixing a swept parameter removes its axis: `simulate fig1.yaml --set g=5`;
+                    # so does fixing a swept initial state: `--set x0=0.5` (or initial.x=0.5).
+                    data["sweep"] = {name: spec for name, spec in sweep.items() if name != axis}
             self.overridden[path] = setting
         return data
 
@@ -756,9 +769,9 @@ class _Validator:
             return axes  # None: no sweep; anything else was reported by validate_document
         for name, spec in sweep.items():
             path = ("sweep", name)
-            if name not in PARAMETER_NAMES:
-                self.report(path, f"not a parameter{_did_you_mean(name, PARAMETER_NAMES)}",
-                            allowed=", ".join(PARAMETER_NAMES))
+            if name not in AXIS_NAMES:
+                self.report(path, f"not a parameter{_did_you_mean(name, AXIS_NAMES)}",
+                            allowed=", ".join(AXIS_NAMES))
                 continue
             if isinstance(spec, list):
                 model, data, kind = _ListAxis, {"values": spec}, "list"
@@ -767,7 +780,7 @@ class _Validator:
                                      else (_LinearAxis, spec, "linear"))
             else:
                 self.report(path, f"must be {{start, stop, num}}, a list or {{values: [...]}}, got "
-                                  f"{_show(spec)} (to fix {name} at one value, set parameters.{name})",
+                                  f"{_show(spec)} (to fix {name} at one value, set {_home(name)})",
                             allowed=_AXIS_FORMS)
                 continue
             try:
@@ -779,9 +792,21 @@ class _Validator:
                         loc = loc[1:]  # the wrapper's "values" is not in the YAML
                     self.report_pydantic({**item, "loc": loc}, path)
                 continue
+            continuation = getattr(axis, "continuation", None)
+            if continuation and name in INITIAL_STATE_AXES:
+                # A continuation line starts each point from the previous one's final state, which
+                # is exactly what an initial-state axis overrides: the two contradict each other.
+                key = INITIAL_STATE_KEYS[name]
+                self.report(path + ("continuation",),
+                            f"{name} is the initial state, not a parameter: there is nothing to continue "
+                            f"along it (each point starts from its own {name}); remove continuation, or "
+                            f"put it on a parameter axis (each line then starts from its {name})",
+                            allowed=f"continuation on a parameter axis; initial.{key} or sweep.{name} "
+                                    "without continuation")
+                continue
             values = self.axis_values(path, axis, kind)
             if values is not None:
-                axes[name] = (values, getattr(axis, "continuation", None), kind)
+                axes[name] = (values, continuation, kind)
         return axes
 
     def axis_values(self, path, axis, kind):
@@ -806,7 +831,7 @@ class _Validator:
             if axis.num > 1 and axis.stop == axis.start:  # every point the same: like a repeated value
                 self.report(path + ("stop",), f"must be > start = {_show(axis.start)} when num = {axis.num}, "
                                               f"got {_show(axis.stop)} (the same point {axis.num} times); "
-                                              f"to fix {name} at one value, set parameters.{name}")
+                                              f"to fix {name} at one value, set {_home(name)}")
                 return None
             if not np.all(np.diff(values) > 0):  # so close together that float64 rounding repeats values
                 self.report(path, f"{_show(axis.start)} .. {_show(axis.stop)} cannot be divided into "
@@ -861,7 +886,7 @@ class _Validator:
 
     def check_values(self, name, path, values, indexed=False) -> bool:
         """Each swept value must obey its parameter's domain."""
-        domain = PARAMETER_DOMAINS[name]
+        domain = AXIS_DOMAINS[name]
         ok = True
         for index, value in enumerate(values):
             if not domain.contains(value):
@@ -877,9 +902,14 @@ class _Validator:
         initial = _section(data, "initial")
         integration = _section(data, "integration")
 
+        sweep = data.get("sweep") if isinstance(data.get("sweep"), dict) else {}
         x = _valid(initial, "x", INITIAL_DEFAULTS, INITIAL_DOMAINS)
-        if x is not None:
-            sweep = data.get("sweep") if isinstance(data.get("sweep"), dict) else {}
+        if "x0" in sweep:
+            if "x0" in axes:
+                self.check_x0_axis(axes["x0"][0], axes["Delta"][0] if "Delta" in axes else None,
+                                   None if "Delta" in sweep else
+                                   _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS))
+        elif x is not None:
             if "Delta" in sweep:
                 if "Delta" in axes:
                     self.check_delta_axis(axes["Delta"], sweep["Delta"], x)
@@ -917,6 +947,19 @@ class _Validator:
         if first in self.overridden or second in self.overridden:
             return first in self.overridden
         return first_given or not second_given
+
+    def check_x0_axis(self, x0_values, delta_values, delta):
+        """Every x0 must lie below the barrier: below parameters.Delta, or below every swept Delta."""
+        highest = float(np.max(x0_values))
+        if delta_values is not None:
+            lowest = float(np.min(delta_values))
+            if not lowest > highest:
+                self.report(("sweep", "x0"), f"every x0 must be below every swept Delta (the mass starts below "
+                                             f"the barrier), got x0 up to {_show(highest)} and Delta from "
+                                             f"{_show(lowest)}")
+        elif delta is not None and not delta > highest:
+            self.report(("sweep", "x0"), f"every x0 must be below parameters.Delta = {_show(delta)} (the mass "
+                                         f"starts below the barrier), got {_show(highest)}")
 
     def check_delta_axis(self, axis, spec, x):
         values, _, kind = axis
@@ -1013,12 +1056,19 @@ def _parse_scalar(text):
 
 def _override_targets():
     """--set NAME -> path in the document; both 'g' and 'parameters.g' spellings."""
-    targets = {"model": ("model",), "initial.x": ("initial", "x"), "initial.v": ("initial", "v")}
+    targets = {"model": ("model",), "initial.x": ("initial", "x"), "initial.v": ("initial", "v"),
+               "x0": ("initial", "x"), "v0": ("initial", "v")}  # x0, v0: the names of the sweep axes
     for name in PARAMETER_NAMES:
         targets[name] = targets[f"parameters.{name}"] = ("parameters", name)
     for key in INTEGRATION_DEFAULTS:
         targets[key] = targets[f"integration.{key}"] = ("integration", key)
     return targets
+
+
+def _home(axis_name) -> str:
+    """Where a sweep axis's fixed value lives: parameters.g, initial.x (for x0)."""
+    key = INITIAL_STATE_KEYS.get(axis_name)
+    return f"initial.{key}" if key else f"parameters.{axis_name}"
 
 
 def _section(data, name) -> dict:

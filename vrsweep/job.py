@@ -18,7 +18,7 @@ from vrsweep import __version__
 from vrsweep.provenance import cf_attributes
 from vrsweep.errors import UsageError
 from vrsweep.results import Status
-from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.model import AXIS_LONG_NAMES, AXIS_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.sweep import Grid, run_sweep
 from vrsweep.variables import point_variables
@@ -128,7 +128,7 @@ def _axes(grid):
         if name == "direction":
             attrs = {"units": "1", "long_name": "continuation direction (+1: up the axis, -1: down)"}
         else:
-            attrs = {"units": PARAMETER_UNITS[name], "long_name": PARAMETER_LONG_NAMES[name]}
+            attrs = {"units": AXIS_UNITS[name], "long_name": AXIS_LONG_NAMES[name]}
         axes.append((name, values, attrs))
     return axes
 
@@ -189,6 +189,19 @@ def analytic_extras(config, grid):
     return extras
 
 
+def basin_extras(config, writer):
+    """The attractor labels and table of a sweep with x0 / v0 axes (vrsweep.attractors); ({}, {})
+    without. Reads the finished points back from the checkpoint the writer holds."""
+    from vrsweep import attractors
+
+    if not attractors.has_initial_state_axes(config.axis_names):
+        return {}, {}
+    grid = Grid.from_config(config)
+    axes = dict(zip(grid.axis_names, grid.axis_values))
+    stored = writer.read_variables(attractors.NEEDED)
+    return attractors.attractor_extras(axes, stored, config.integration.period_tolerance)
+
+
 def _reduce_constant_axes(array, axis_names):
     """Drop the axes along which a grid array does not vary (g_res depends on Omega only)."""
     keep = []
@@ -238,7 +251,11 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     except BaseException:
         writer.abandon()  # everything finished so far is on disk; --resume continues
         raise
-    writer.finish(extra=extras)
+    coords = {}
+    if shard[1] == 1:  # a shard sees part of each slice: the merge labels the whole grid
+        attractors, coords = basin_extras(config, writer)
+        extras.update(attractors)
+    writer.finish(extra=extras, coords=coords)
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
 
 

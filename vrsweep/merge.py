@@ -327,7 +327,8 @@ def _merge(shards, out_path, allow_missing):
     axes = [(name, values, ref.coord_attrs[name]) for name, values in ref.axes.items()]
 
     specs = ref.variable_specs()
-    derived_bytes = _derived_bytes(shards) if complete else 0
+    # Attractor labels (8 bytes a point at most) come from the whole grid, not from a shard.
+    derived_bytes = _derived_bytes(shards) + 8 * n_points if complete else 0
 
     def write(tmp):
         # As ResultWriter.create: checksummed object headers, and the file's space allocated before
@@ -343,6 +344,7 @@ def _merge(shards, out_path, allow_missing):
             out["done"][()] = merged_done.astype(np.int8)
             if complete:
                 _copy_derived_variables(out, shards, ref, warnings)
+                _add_attractor_labels(out, ref)
                 out.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
 
     try:
@@ -473,6 +475,18 @@ def _derived_bytes(shards):
     source = with_extras[0]
     return sum(int(np.prod(source.shapes[name], dtype=np.int64)) * source.dtypes[name].itemsize
                for name in source.derived_variables)
+
+
+def _add_attractor_labels(out, ref):
+    """A sweep over the initial state gets its attractor labels from the whole grid, as a single
+    run's finish does (a shard sees only part of each slice, so shards carry none)."""
+    from vrsweep import attractors
+    from vrsweep.config import parse_config
+
+    if not attractors.has_initial_state_axes(tuple(ref.axes)):
+        return
+    tolerance = parse_config(str(ref.attrs["config"])).integration.period_tolerance
+    _add_extras(out, *attractors.attractor_extras_from_file(out, tolerance))
 
 
 def _copy_derived_variables(out, shards, ref, warnings):

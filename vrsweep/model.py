@@ -38,6 +38,18 @@ PARAMETER_SYMBOLS = {
     "omega": r"$\omega$", "Delta": r"$\Delta$", "e": r"$e$", "g": r"$g$", "Omega": r"$\Omega$",
 }
 
+# The initial state x(0), x'(0) may be swept too (the paper's x0, v0): each grid point then starts
+# from its own state instead of the config's `initial` (basins of attraction, docs/design.md).
+INITIAL_STATE_AXES = ("x0", "v0")
+INITIAL_STATE_KEYS = {"x0": "x", "v0": "v"}  # axis -> key of the config's `initial` section
+INITIAL_STATE_UNITS = {"x0": "1", "v0": "1"}
+INITIAL_STATE_LONG_NAMES = {"x0": "initial position x(0)", "v0": "initial velocity x'(0)"}
+INITIAL_STATE_SYMBOLS = {"x0": r"$x(0)$", "v0": r"$\dot{x}(0)$"}
+
+# Everything a sweep axis can be: a parameter or an initial-state component.
+AXIS_UNITS = {**PARAMETER_UNITS, **INITIAL_STATE_UNITS}
+AXIS_LONG_NAMES = {**PARAMETER_LONG_NAMES, **INITIAL_STATE_LONG_NAMES}
+
 MODELS = ("original", "effective")
 
 # Layout of the kernel's coefficient vector.

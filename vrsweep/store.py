@@ -651,6 +651,11 @@ class ResultWriter:
     def complete(self) -> bool:
         return bool(_decode(self._file.attrs["vrsweep_complete"]))
 
+    def read_variables(self, names) -> dict:
+        """The named variables as written so far, read from the file this writer holds (never by
+        path: the path may since name another file)."""
+        return {name: self._file[name][()] for name in names}
+
     # -- writing --------------------------------------------------------------------------
 
     def write_points(self, flat_indices, values) -> None:

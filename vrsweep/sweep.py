@@ -21,7 +21,7 @@ from numba import njit, prange
 
 from vrsweep import kernel
 from vrsweep.diagnostics import point_diagnostics
-from vrsweep.model import kernel_coefficients
+from vrsweep.model import INITIAL_STATE_KEYS, kernel_coefficients
 from vrsweep.results import Status
 from vrsweep.trajectory import settings_vector
 
@@ -100,9 +100,23 @@ class Grid:
         if self.shape:  # a single point (no axes) is just the fixed parameters
             position = np.unravel_index(flat_indices, self.shape)
             for axis, (name, values) in enumerate(zip(self.axis_names, self.axis_values)):
-                if name != "direction":
+                if name in table:  # not direction, x0, v0
                     table[name] = values[position[axis]]
         return table
+
+    def initial_states_at(self, config, flat_indices):
+        """(n, 2) starting state (x, v) at the given flat grid indices: ``initial``, or the point's
+        own x0 / v0 where those are axes (basins of attraction)."""
+        flat_indices = np.asarray(flat_indices, dtype=np.int64).reshape(-1)
+        states = np.empty((flat_indices.size, 2), dtype=np.float64)
+        states[:, 0] = config.initial["x"]
+        states[:, 1] = config.initial["v"]
+        if self.shape:
+            position = np.unravel_index(flat_indices, self.shape)
+            for axis, (name, values) in enumerate(zip(self.axis_names, self.axis_values)):
+                if name in INITIAL_STATE_KEYS:
+                    states[:, "xv".index(INITIAL_STATE_KEYS[name])] = values[position[axis]]
+        return states
 
 
 def shuffled_lines(grid, shard_index=0, shard_count=1):
@@ -126,11 +140,11 @@ def shard_of_points(grid, shard_count):
 
 
 @njit(parallel=True, cache=True)
-def run_lines(coefficients, initial_state, settings, lines, period_records, summaries, statuses):
+def run_lines(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
     """Run each line's points in order; lines in parallel.
 
     coefficients    (n_points, N_COEFFICIENTS)         for every point the lines name
-    initial_state   (2,)                                state of each line's first point
+    initial_states  (n_lines, 2)                        state of each line's first point
     settings        (N_SETTINGS,)
     lines           (n_lines, line_length)             indices into coefficients
     period_records  (n_lines, line_length, n_periods, N_RECORD)   outputs, per line slot
@@ -138,7 +152,7 @@ def run_lines(coefficients, initial_state, settings, lines, period_records, summ
     statuses        (n_lines, line_length) int8
     """
     for line in prange(lines.shape[0]):
-        state = initial_state.copy()
+        state = initial_states[line].copy()
         no_samples = np.empty(0)
         no_sample_out = np.empty((0, 2))
         no_impacts = np.empty((0, 3))
@@ -156,8 +170,8 @@ def run_lines(coefficients, initial_state, settings, lines, period_records, summ
                 state[1] = summaries[line, slot, kernel.SUM_V_FINAL]
             else:
                 # A failed point says nothing about where the next one starts: restart.
-                state[0] = initial_state[0]
-                state[1] = initial_state[1]
+                state[0] = initial_states[line, 0]
+                state[1] = initial_states[line, 1]
 
 
 # A chunk is the unit of checkpointing and of progress: long enough that writing it is a small
@@ -178,7 +192,6 @@ class LineRunner:
     def __init__(self, config):
         self.config = config
         self.grid = Grid.from_config(config)
-        self.initial_state = np.array([config.initial["x"], config.initial["v"]], dtype=np.float64)
         self.settings = integration_settings(config.integration)
         self.n_periods = config.integration.transient_periods + config.integration.measure_periods
 
@@ -191,11 +204,14 @@ class LineRunner:
         coefficients = np.ascontiguousarray(
             kernel_coefficients(self.grid.parameters_at(self.config, flat), self.config.model))
         local_lines = np.arange(flat.size, dtype=np.int64).reshape(n_lines, line_length)
+        # A line runs along a parameter axis only (continuation along x0 / v0 is refused), so
+        # its first point's x0 / v0 is the whole line's.
+        initial_states = self.grid.initial_states_at(self.config, lines[:, 0])
         records = np.full((n_lines, line_length, self.n_periods, kernel.N_RECORD), np.nan)
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
         with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-            run_lines(coefficients, self.initial_state, self.settings, local_lines, records, summaries, statuses)
+            run_lines(coefficients, initial_states, self.settings, local_lines, records, summaries, statuses)
         values = point_values(
             records.reshape(-1, self.n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
             statuses.reshape(-1), coefficients, self.config.integration)

@@ -100,6 +100,7 @@ def _describe_sweep(results) -> dict:
         "fixed_parameters": _fixed_parameters(config_text, [a["name"] for a in axes]),
         "integration": _integration(config_text),
         "status_counts": _status_counts(results, owned),
+        "attractors": _attractors(results),
         "variables": variables,
         "created": attrs.get("created"),
         "versions": _versions(attrs),
@@ -129,6 +130,14 @@ def _status_counts(results, owned) -> list[dict]:
             meaning = None
         counts.append({"status": name, "code": code, "points": int(n), "meaning": meaning})
     return counts
+
+
+def _attractors(results) -> list[dict]:
+    """The attractor table of a basin sweep (x0 / v0 axes), one entry per slice; [] otherwise."""
+    from vrsweep.attractors import attractor_rows
+
+    return [{"slice": where, "attractors": [{key: _plain(value) for key, value in row.items()} for row in rows]}
+            for where, rows in attractor_rows(results)]
 
 
 def _describe_non_sweep(path) -> dict | None:
@@ -309,6 +318,7 @@ def format_summary(summary, show_config=False) -> str:
                 lines.append(f"{label:<12} {row['group']}: {row['status']}{meaning}")
             else:
                 lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
+    lines += _format_attractors(summary.get("attractors") or [])
     created = summary["created"] or "unknown time"
     versions = summary["versions"]
     written = f"{created}"
@@ -335,6 +345,29 @@ def format_summary(summary, show_config=False) -> str:
         lines.append("config:")
         lines += [f"  {line}" for line in summary["config"].splitlines()]
     return "\n".join(lines)
+
+
+def _format_attractors(slices) -> list[str]:
+    """One line per attractor of each slice: label, period, R, impacts, basin fraction, a start."""
+    lines = []
+    for entry in slices:
+        where = f" at {entry['slice']}" if entry["slice"] else ""
+        found = len(entry["attractors"])
+        lines.append(f"attractors:  {found} found{where}")
+        for row in entry["attractors"]:
+            period = f"period {row['period']}" if row["period"] > 0 else "no period"
+            if row["impacts_per_cycle"] >= 0:
+                impacts = f"{row['impacts_per_cycle']} impact{'' if row['impacts_per_cycle'] == 1 else 's'} per cycle"
+            else:
+                impacts = f"{_short(row['impacts_per_period'])} impacts per slow period"
+            R = "R = nan" if row["R"] is None else f"R = {row['R']:.6g} +- {row['R_err']:.2g}"
+            start = ""
+            if row.get("x0") is not None or row.get("v0") is not None:
+                start = "  e.g. from " + ", ".join(
+                    f"{name}={_short(row[name])}" for name in ("x0", "v0") if row.get(name) is not None)
+            lines.append(f"  {row['label']:>3}: {period}, {R}, {impacts}, basin {100 * row['fraction']:.1f}% "
+                         f"({row['points']} points){start}")
+    return lines
 
 
 def _describe_axis(axis) -> str:

@@ -32,7 +32,7 @@ def default_output(path, kind):
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Figure file, .png, .pdf or .svg (default: FILE.png, or FILE.KIND.png with --kind).")
 @click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "bifurcation",
-                                           "trajectory", "slowflow"]), default=None,
+                                           "trajectory", "slowflow", "basin"]), default=None,
               help="What to draw (default: chosen from the file, see above).")
 @click.option("--amplitude", is_flag=True,
               help="Plot the amplitude |Q| and the analytic A instead of the gain R = |Q|/c and A/c.")
@@ -59,6 +59,9 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
       impacts      mean impacts per slow period
       status       how each point's integration ended
       bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
+      basin        the x0-v0 plane coloured by the attractor each start reached
+                   (sweeps with x0 / v0 axes, their default; other axes: pick a slice
+                   with --at)
     Trajectory files (vrsweep simulate), --kind:
       trajectory   position, velocity, phase portrait; original above effective (default)
       impacts      impacts per slow period, period by period (several files: one panel each)
@@ -91,8 +94,17 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
             if n_periods is not None and window[0] <= n_periods < window[1]:
                 click.echo(f"--periods {periods}: {path_in} has {n_periods} slow periods; showing "
                            f"{window[0]}-{n_periods}", err=True)
-    figure = plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis, log=log,
-                       periods=window)
+    if kind is None and len(data) == 1 and "attractor" in getattr(data[0], "variables", {}):
+        kind = "basin"  # a sweep over the initial state: its basins are what it is for
+    if kind == "basin":
+        if len(data) > 1:
+            raise UsageError("--kind basin draws one file; plot the others one at a time")
+        if x_axis or amplitude or log or periods:
+            raise UsageError("--x, --amplitude, --log and --periods do not apply to --kind basin")
+        figure = plot.basin_plot(data[0], at=_parse_at(at_items))
+    else:
+        figure = plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis,
+                           log=log, periods=window)
     # Rendered in memory, then written whole: a full disk leaves no half figure, and the
     # message can say how many bytes the figure needs.
     import io

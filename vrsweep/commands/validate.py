@@ -32,7 +32,9 @@ def command(config_path, overrides, threads):
     click.echo(f"model:       {config.model}")
     fixed = [f"{name}={config.parameters[name]:g}" for name in PARAMETER_NAMES if name not in config.axis_names]
     click.echo(f"fixed:       {' '.join(fixed)}")
-    click.echo(f"initial:     x={config.initial['x']:g} v={config.initial['v']:g}")
+    initial = [f"{key}=swept ({axis})" if axis in config.axis_names else f"{key}={config.initial[key]:g}"
+               for axis, key in (("x0", "x"), ("v0", "v"))]
+    click.echo(f"initial:     {' '.join(initial)}")
     if config.axes:
         for index, axis in enumerate(config.axes):
             label = "axes:" if index == 0 else ""
