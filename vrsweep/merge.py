@@ -36,7 +36,7 @@ from vrsweep.provenance import cf_attributes
 from vrsweep.store import (
     _BOOKKEEPING, _RESERVED_ROOT_ATTRS, VariableSpec, _add_extras, _build_skeleton,
     _check_output_directory, _clean_attrs, _corrupt_error, _file_kwargs, _first_difference,
-    _open_checked, _point_variables, _scale_names, atomic_write, creation_reserve, writing_hdf5,
+    _open_checked, _point_variables, _scale_names, atomic_write, point_label, creation_reserve, writing_hdf5,
 )
 
 # Bytes of one variable per block: large enough that HDF5 calls are few, small enough that a few
@@ -200,10 +200,7 @@ class _Shard:
 
     def point_label(self, flat_index) -> str:
         """``g=1.5, Omega=4`` for a flat grid index (for messages)."""
-        if not self.axes:
-            return "the single point"
-        where = np.unravel_index(int(flat_index), self.shape)
-        return ", ".join(f"{name}={values[i]:g}" for (name, values), i in zip(self.axes.items(), where))
+        return point_label(self.axes, flat_index)
 
 
 def _identity(path):

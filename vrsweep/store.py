@@ -828,10 +828,16 @@ class ResultSet:
 
     def point_label(self, flat_index) -> str:
         """``g=1.5, Omega=4`` for a flat grid index (for messages)."""
-        if not self.axes:
-            return "the single point"
-        where = np.unravel_index(int(flat_index), self.shape)
-        return ", ".join(f"{name}={values[i]:g}" for (name, values), i in zip(self.axes.items(), where))
+        return point_label(self.axes, flat_index)
+
+
+def point_label(axes, flat_index) -> str:
+    """``g=1.5, Omega=4``: the point at a flat (C-order) index of the grid of ``axes``
+    (name -> values), for messages."""
+    if not axes:
+        return "the single point"
+    where = np.unravel_index(int(flat_index), tuple(len(values) for values in axes.values()))
+    return ", ".join(f"{name}={values[i]:g}" for (name, values), i in zip(axes.items(), where))
 
 
 def _clean_attrs(attrs):

@@ -3,7 +3,6 @@
 import os
 import signal
 import sys
-import threading
 
 import click
 
@@ -29,15 +28,19 @@ def command(shards, output, overwrite, allow_missing, quiet):
     leave OUT.h5 as it was and no temporary file.
     """
     from vrsweep.merge import merge_results
+    from vrsweep.signals import GracefulStop
 
     before = _identity(output)
     try:
-        with _StopOnSignal() as stop:
+        # A signal only takes note; the merge stops at its next read of a shard (stop.check,
+        # within milliseconds) and unwinds, removing its temporary file (an exception raised from
+        # the handler itself could land in a finalizer, where Python drops it).
+        with GracefulStop(announce=False) as stop:
             report = merge_results(shards, output, overwrite=overwrite, allow_missing=allow_missing,
                                    stop=stop.check)
             stop.check()  # a signal during the final rename: the output is complete
     except KeyboardInterrupt as interrupt:
-        name = getattr(interrupt, "name", "SIGINT")
+        name = str(interrupt) if getattr(interrupt, "signum", None) else "SIGINT"
         newline = "\n" if sys.stderr.isatty() else ""  # off the terminal's "^C"
         if _identity(output) not in (before, None):  # the signal came after the rename
             click.echo(f"{newline}Interrupted ({name}) as the merge finished: {output} is complete", err=True)
@@ -57,42 +60,3 @@ def _identity(path):
     except OSError:
         return None
     return (st.st_dev, st.st_ino, st.st_mtime_ns)
-
-
-class _Stopped(KeyboardInterrupt):
-    def __init__(self, signum):
-        self.signum = signum
-        self.name = signal.Signals(signum).name
-        super().__init__(self.name)
-
-
-class _StopOnSignal:
-    """SIGINT and SIGTERM (scancel, a SLURM time limit) stop the merge at its next read of a shard
-    (``check``, within milliseconds), so that it unwinds and removes its temporary file
-    (store.atomic_write). The handler only takes note: an exception raised from a signal handler
-    can land in a finalizer, where Python drops it. A second signal raises at once."""
-
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-    def __init__(self):
-        self.signum = None
-        self._previous = {}
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            for signum in self.SIGNALS:
-                self._previous[signum] = signal.signal(signum, self._handle)
-        return self
-
-    def __exit__(self, *exc):
-        for signum, handler in self._previous.items():
-            signal.signal(signum, handler)
-
-    def _handle(self, signum, frame):
-        if self.signum is not None:
-            raise _Stopped(self.signum)
-        self.signum = signum
-
-    def check(self):
-        if self.signum is not None:
-            raise _Stopped(self.signum)

@@ -1,0 +1,66 @@
+"""Signals as "stop at the next safe point": SIGINT (Ctrl-C) and SIGTERM (scancel, a SLURM
+time limit) for long commands (run, merge).
+
+No numerics and no I/O libraries here, so that any command can use it without importing numba.
+"""
+
+import signal
+import sys
+import threading
+
+
+class Interrupted(KeyboardInterrupt):
+    """The run was stopped by a signal (SIGINT: Ctrl-C; SIGTERM: scancel, a time limit)."""
+
+    def __init__(self, signum):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_code(self):
+        return 128 + self.signum  # what a shell reports for a process killed by the signal
+
+
+class GracefulStop:
+    """Turn SIGINT and SIGTERM into "stop after the chunk in flight is written".
+
+    The numba kernel cannot be interrupted, and a chunk computed but not written would be lost,
+    so the first signal only sets a flag (and says so on stderr); ``check()``, called by run_job
+    after each chunk is written, then raises :class:`Interrupted`. A second signal raises at once
+    (the file is crash-safe either way, only the chunk in flight is lost). SIGTERM is included
+    because SLURM sends it at the time limit and on scancel, some 30 s (KillWait) before SIGKILL.
+
+    A context manager; outside the main thread (where Python cannot handle signals) it does
+    nothing.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self, announce=True):
+        self.signum = None
+        self.announce = announce
+        self._previous = {}
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for signum in self.SIGNALS:
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+        self._previous.clear()
+
+    def _handle(self, signum, frame):
+        if self.signum is not None:
+            raise Interrupted(signum)
+        self.signum = signum
+        if self.announce:
+            sys.stderr.write(f"\n{signal.Signals(signum).name}: stopping once the chunk in progress is "
+                             "saved (send it again to stop at once)\n")
+            sys.stderr.flush()
+
+    def check(self):
+        if self.signum is not None:
+            raise Interrupted(self.signum)
