@@ -5,9 +5,9 @@ fraction theta in [0, 1]; the kernel then reaches the impact state with an exact
 """
 
 import numpy as np
-from numba import njit
 
 from vrsweep.integrator import dense_value
+from vrsweep.jit import kernel_jit
 from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, G, OMEGA, STIFFNESS
 
 X, V = 0, 1  # state components
@@ -25,7 +25,7 @@ IMPACT = 1
 UNRESOLVED = 2  # left the barrier and came back between scan points: retry with a shorter step
 
 
-@njit(cache=True)
+@kernel_jit
 def locate_root(dense, y, h, component, level, theta_low, theta_high):
     """theta in [theta_low, theta_high] where the interpolant's component crosses ``level``.
 
@@ -60,7 +60,7 @@ def locate_root(dense, y, h, component, level, theta_low, theta_high):
     return theta_high
 
 
-@njit(cache=True)
+@kernel_jit
 def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
     """Upper bracket end for an excursion past Delta around a maximum of x.
 
@@ -73,7 +73,7 @@ def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
     return NO_CROSSING
 
 
-@njit(cache=True)
+@kernel_jit
 def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high).
 
@@ -134,7 +134,7 @@ def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     return NO_IMPACT
 
 
-@njit(cache=True)
+@kernel_jit
 def force_at_barrier(t, coefficients):
     """Acceleration of a mass resting at (Delta, 0): positive pushes it into the barrier.
 
@@ -146,16 +146,22 @@ def force_at_barrier(t, coefficients):
             - coefficients[STIFFNESS] * delta - coefficients[ALPHA] * delta ** 3)
 
 
-@njit(cache=True)
-def release_time(t_start, t_limit, coefficients, scan_step):
+@kernel_jit
+def release_time(t_start, t_limit, coefficients, scan_step, max_scans):
     """First t in (t_start, t_limit] where the force at the barrier stops pushing into it.
 
     The force is an explicit function of t, so it is scanned in steps of ``scan_step``
     (a fraction of the shortest forcing period, so no sign change is stepped over) and the
-    sign change is bisected to rounding. Returns t_limit + 1 if the mass stays stuck.
+    sign change is bisected to rounding. Returns (t, scans): t = t_limit + 1 if the mass stays
+    stuck, NaN if ``max_scans`` scan intervals did not reach either (a fast forcing period
+    so short that the scan would never end, e.g. Omega = 1e12).
     """
     t_a = t_start
+    scans = 0
     while t_a < t_limit:
+        if scans >= max_scans:
+            return np.nan, scans
+        scans += 1
         t_b = min(t_a + scan_step, t_limit)
         if force_at_barrier(t_b, coefficients) <= 0.0:
             for _ in range(MAX_ROOT_ITERATIONS):
@@ -166,6 +172,6 @@ def release_time(t_start, t_limit, coefficients, scan_step):
                     t_b = t_mid
                 else:
                     t_a = t_mid
-            return t_b
+            return t_b, scans
         t_a = t_b
-    return t_limit + 1.0
+    return t_limit + 1.0, scans

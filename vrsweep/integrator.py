@@ -14,7 +14,8 @@ quadratures; only the first ``N_CONTROLLED`` take part in error control):
 """
 
 import numpy as np
-from numba import njit
+
+from vrsweep.jit import kernel_jit
 
 # --- Dormand & Prince (1980) RK5(4)7FM: c, A, b (5th order), e = b - b_hat (embedded 4th) ---
 N_STAGES = 6
@@ -64,7 +65,7 @@ N_CONTROLLED = 2
 
 # Inlined at numba-IR level so that the rhs argument becomes a direct call: a dispatcher passed
 # as a runtime value would be a "dynamic global" and the caller could not be cached.
-@njit(cache=True, inline="always")
+@kernel_jit(inline="always")
 def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
     """One Dormand-Prince step of size h from (t, y) with f = rhs(t, y) already known.
 
@@ -90,7 +91,7 @@ def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
     rhs(t + h, y_new, coefficients, K[N_STAGES])
 
 
-@njit(cache=True)
+@kernel_jit
 def error_norm(K, h, y, y_new, rtol, atol):
     """RMS over the controlled components of the local error / (atol + rtol * max(|y|, |y_new|))."""
     total = 0.0
@@ -104,7 +105,7 @@ def error_norm(K, h, y, y_new, rtol, atol):
     return np.sqrt(total / N_CONTROLLED)
 
 
-@njit(cache=True)
+@kernel_jit
 def accepted_step_factor(err, err_previous):
     """Growth factor after an accepted step (err <= 1): PI control, clipped."""
     if err == 0.0:
@@ -113,13 +114,13 @@ def accepted_step_factor(err, err_previous):
     return min(MAX_FACTOR, max(MIN_FACTOR, factor))
 
 
-@njit(cache=True)
+@kernel_jit
 def rejected_step_factor(err):
     """Shrink factor after a rejected step (err > 1): plain I control, never growing."""
     return min(1.0, max(MIN_FACTOR, SAFETY * err ** (-1.0 / ORDER)))
 
 
-@njit(cache=True)
+@kernel_jit
 def dense_coefficients(K, dense):
     """dense (n, DENSE_ORDER) = K^T P: the continuous extension of the last step."""
     n = dense.shape[0]
@@ -131,7 +132,7 @@ def dense_coefficients(K, dense):
             dense[j, q] = acc
 
 
-@njit(cache=True)
+@kernel_jit
 def dense_value(dense, y, h, theta, component):
     """Component of the continuous extension at t + theta h (Horner in theta)."""
     acc = dense[component, DENSE_ORDER - 1]
@@ -140,7 +141,7 @@ def dense_value(dense, y, h, theta, component):
     return y[component] + h * theta * acc
 
 
-@njit(cache=True, inline="always")
+@kernel_jit(inline="always")
 def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max):
     """Starting step size (Hairer, Norsett & Wanner, vol. I, II.4, algorithm of 'hinit')."""
     n = y.shape[0]

@@ -16,7 +16,6 @@ as accurate as x itself; while stuck they are added in closed form.
 import math
 
 import numpy as np
-from numba import njit
 
 from vrsweep.impact import (
     IMPACT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root, release_time,
@@ -25,6 +24,7 @@ from vrsweep.integrator import (
     N_STAGES, accepted_step_factor, dense_coefficients, dense_value, dp54_step, error_norm,
     initial_step, rejected_step_factor, DENSE_ORDER,
 )
+from vrsweep.jit import kernel_jit
 from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS
 from vrsweep.results import Status
 
@@ -78,7 +78,7 @@ REBOUND_STEP_FRACTION = 0.25
 UNRESOLVED_STEP_FACTOR = 0.125
 
 
-@njit(cache=True)
+@kernel_jit
 def oscillator_rhs(t, y, coefficients, dydt):
     """x'' + gamma (x^2 - mu) x' + k x + alpha x^3 = c cos(omega t) + g cos(Omega t).
 
@@ -96,7 +96,13 @@ def oscillator_rhs(t, y, coefficients, dydt):
     dydt[QC_INTEGRAL] = x * math.cos(omega_t)
 
 
-@njit(cache=True)
+@kernel_jit
+def _smallest_step(t, slow_period):
+    """A step this short no longer moves t by more than a few units of its last place."""
+    return 4.0 * 2.2e-16 * max(abs(t), slow_period)
+
+
+@kernel_jit
 def _emit_samples(sample_times, samples, next_sample, t0, h, y, dense, t_end):
     """Write the dense output at every sample time in (.., t_end] of the step [t0, t0 + h]."""
     while next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_end:
@@ -107,7 +113,7 @@ def _emit_samples(sample_times, samples, next_sample, t0, h, y, dense, t_end):
     return next_sample
 
 
-@njit(cache=True)
+@kernel_jit
 def _update_extremes(record, dense, y, y_new, h):
     """Fold the step's end and any turning point of x inside it into the period's min/max."""
     x_end = y_new[X]
@@ -124,7 +130,7 @@ def _update_extremes(record, dense, y, y_new, h):
             record[REC_X_MAX] = x_turn
 
 
-@njit(cache=True)
+@kernel_jit
 def _start_period(record, x):
     record[REC_IMPACTS] = 0.0
     record[REC_QS] = 0.0
@@ -136,7 +142,7 @@ def _start_period(record, x):
     record[REC_STUCK_TIME] = 0.0
 
 
-@njit(cache=True)
+@kernel_jit
 def integrate(coefficients, initial_state, settings, period_records, summary,
               sample_times, samples, impact_log, stick_log):
     """Integrate one point over transient + measurement slow periods. Returns a Status code.
@@ -191,6 +197,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     n_rejected = 0
     n_impacts = 0
     n_sticks = 0
+    n_scans = 0
     stuck = False
     status = Status.OK
 
@@ -207,7 +214,11 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
         record = period_records[period]
         if stuck:
             # Held at (Delta, 0) until the force lets go or the period ends.
-            t_release = release_time(t, t_boundary, coefficients, stick_scan_step)
+            t_release, scans = release_time(t, t_boundary, coefficients, stick_scan_step, max_steps - n_scans)
+            n_scans += scans
+            if t_release != t_release:
+                status = Status.MAX_STEPS  # the force scan has a budget of max_steps intervals too
+                break
             t_end = min(t_release, t_boundary)
             y[QS_INTEGRAL] += delta * (math.cos(omega * t) - math.cos(omega * t_end)) / omega
             y[QC_INTEGRAL] += delta * (math.sin(omega * t_end) - math.sin(omega * t)) / omega
@@ -228,6 +239,11 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
             if n_steps >= max_steps:
                 status = Status.MAX_STEPS
                 break
+            if not (h > _smallest_step(t, slow_period)):
+                # An overflowing start (g = 1e200: the first step estimate is 0 or NaN) would
+                # otherwise take zero-length steps up to the step cap.
+                status = Status.STEP_TOO_SMALL if h == h else Status.NON_FINITE
+                break
             h_try = min(h, h_max)
             clipped = False
             if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
@@ -240,7 +256,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
             if not (err <= 1.0):  # also catches NaN from an overflowing trial step
                 n_rejected += 1
                 h = h_try * (rejected_step_factor(err) if err == err else 0.2)
-                if h <= 4.0 * 2.2e-16 * max(abs(t), slow_period):
+                if h <= _smallest_step(t, slow_period):
                     status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
                     break
                 continue
@@ -258,7 +274,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
                 if verdict == UNRESOLVED:
                     # Off the barrier and back within the first scan interval: look closer.
                     h = h_try * UNRESOLVED_STEP_FACTOR
-                    if h <= 4.0 * 2.2e-16 * max(abs(t), slow_period):
+                    if h <= _smallest_step(t, slow_period):
                         status = Status.STEP_TOO_SMALL
                         break
                     continue
@@ -367,7 +383,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     return status
 
 
-@njit(cache=True)
+@kernel_jit
 def _summarize(period_records, n_transient, n_periods, slow_period, c, status, summary):
     """eq3.1-eq3.3 over the measurement window, and the mean impacts per slow period.
 
@@ -383,7 +399,7 @@ def _summarize(period_records, n_transient, n_periods, slow_period, c, status, s
     return status
 
 
-@njit(cache=True)
+@kernel_jit
 def _measure(period_records, n_transient, n_periods, slow_period, c, summary):
     n_measured = n_periods - n_transient
     sin_integral = 0.0

@@ -17,10 +17,11 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from vrsweep import kernel
 from vrsweep.diagnostics import point_diagnostics
+from vrsweep.jit import kernel_jit
 from vrsweep.model import kernel_coefficients
 from vrsweep.results import Status
 from vrsweep.trajectory import settings_vector
@@ -112,7 +113,7 @@ def shuffled_lines(grid, shard_index=0, shard_count=1):
     return lines[order[shard_index::shard_count]]
 
 
-@njit(parallel=True, cache=True)
+@kernel_jit(parallel=True)
 def run_lines(coefficients, initial_state, settings, lines, period_records, summaries, statuses):
     """Run each line's points in order; lines in parallel.
 
