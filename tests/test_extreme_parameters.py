@@ -30,7 +30,7 @@ from result_files import invoke
 
 KNOWN_FAILURES = {Status.MAX_STEPS, Status.DIVERGED, Status.CHATTER_LIMIT, Status.STEP_TOO_SMALL,
                   Status.NON_FINITE}
-METHODS = ("rk45",)
+METHODS = ("rk45", "dop853")
 
 
 def magnitudes(signed):
@@ -86,7 +86,7 @@ def test_extreme_parameters_end_in_a_status(point, method):
     assert parameters["Delta"] > initial[0]
     with np.errstate(all="ignore"):  # the effective model's K and wt2 may overflow: inf is honest
         coefficients = kernel_coefficients(parameters, model)
-    run = simulate(coefficients, list(initial), settings_vector(**run_settings))
+    run = simulate(coefficients, list(initial), settings_vector(**run_settings), method=method)
     assert run.status == Status.OK or run.status in KNOWN_FAILURES
     event(run.status.name.lower())
     if run.status == Status.OK:
@@ -103,7 +103,7 @@ def test_extreme_values_in_a_parallel_sweep(method):
     text = ("sweep:\n  g: [1.0e+200, 1.0e+300, -1.0e+300, 1.0e-300, 10.0]\n"
             "  Omega: [4.0, 1.0e+300]\n"
             f"integration: {{transient_periods: 1, measure_periods: 1, strobe_periods: 1, "
-            f"max_steps: 5000}}\n")
+            f"max_steps: 5000, method: {method}}}\n")
     statuses = {}
 
     def keep(flat, values):

@@ -6,7 +6,8 @@ nothing of impacts or of the oscillator: the right-hand side is a jitted functio
 in (numbakit-ode style), with signature ``rhs(t, y, coefficients, dydt)`` writing dydt.
 
 Shapes used throughout (n = number of state components, here 4: x, v and two Fourier
-quadratures; only the first ``N_CONTROLLED`` take part in error control):
+quadratures; only the first ``N_CONTROLLED`` take part in error control, and only the first
+``N_DYNAMIC`` are read by the right-hand side and interpolated):
 
     y, y_new, dydt    (n,)
     K                 (N_STAGES + 1, n)   stage derivatives; K[-1] is f(t + h, y_new) (FSAL)
@@ -61,6 +62,10 @@ ERR_PREVIOUS_FLOOR = 1e-4  # keeps the PI memory from exploding after a near-exa
 # The first N_CONTROLLED components (x, v) are error-controlled (DESIGN.md); the Fourier
 # quadratures ride along: they are integrals of x, as accurate as x itself.
 N_CONTROLLED = 2
+# The right-hand side reads only the first N_DYNAMIC components (x, v): the quadratures feed
+# nothing back, so their stage values are never formed (half the work of a stage), and no
+# dense output is made for them.
+N_DYNAMIC = 2
 
 
 # Inlined at numba-IR level so that the rhs argument becomes a direct call: a dispatcher passed
@@ -77,7 +82,7 @@ def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
     for j in range(n):
         K[0, j] = f[j]
     for s in range(1, N_STAGES):
-        for j in range(n):
+        for j in range(N_DYNAMIC):
             acc = 0.0
             for r in range(s):
                 acc += DP54_A[s, r] * K[r, j]
@@ -122,9 +127,8 @@ def rejected_step_factor(err):
 
 @kernel_jit
 def dense_coefficients(K, dense):
-    """dense (n, DENSE_ORDER) = K^T P: the continuous extension of the last step."""
-    n = dense.shape[0]
-    for j in range(n):
+    """dense (n, DENSE_ORDER) = K^T P: the continuous extension of the last step (x and v only)."""
+    for j in range(N_DYNAMIC):
         for q in range(DENSE_ORDER):
             acc = 0.0
             for r in range(N_STAGES + 1):
@@ -132,17 +136,29 @@ def dense_coefficients(K, dense):
             dense[j, q] = acc
 
 
+@kernel_jit(inline="always")
+def dp54_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage):
+    """dense_coefficients behind the interface of dop853.dop853_dense: no extra RHS evaluation."""
+    dense_coefficients(K, dense)
+    return 0
+
+
 @kernel_jit
 def dense_value(dense, y, h, theta, component):
-    """Component of the continuous extension at t + theta h (Horner in theta)."""
-    acc = dense[component, DENSE_ORDER - 1]
-    for q in range(DENSE_ORDER - 2, -1, -1):
+    """Component of the continuous extension at t + theta h (Horner in theta).
+
+    Any method's dense output in the form y + h theta sum_q dense[component, q] theta^q; its
+    degree is dense.shape[1] (4 for DP5(4), 7 for DOP853).
+    """
+    order = dense.shape[1]
+    acc = dense[component, order - 1]
+    for q in range(order - 2, -1, -1):
         acc = acc * theta + dense[component, q]
     return y[component] + h * theta * acc
 
 
 @kernel_jit(inline="always")
-def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max):
+def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order):
     """Starting step size (Hairer, Norsett & Wanner, vol. I, II.4, algorithm of 'hinit')."""
     n = y.shape[0]
     d0 = 0.0
@@ -168,5 +184,5 @@ def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max):
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
     else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / ORDER)
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / order)
     return min(100.0 * h0, h1, h_max)

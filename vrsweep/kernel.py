@@ -1,6 +1,7 @@
 """One grid point: the integration loop of the impact oscillator with its observers.
 
-The loop advances Dormand-Prince steps (integrator.py), stops every step at the slow-period
+The loop advances Runge-Kutta steps of the configured method (integration.method: rk45, the
+Dormand-Prince 5(4) pair of integrator.py, or dop853, Hairer's 8(5,3) of dop853.py), stops every step at the slow-period
 boundaries t = nT (T = 2 pi / omega) so that every period is measured exactly, locates
 impacts on the dense output (impact.py), applies the restitution law (eq2.2), and holds the
 mass on the barrier while chatter has died out and the force presses it there (sticking).
@@ -17,12 +18,16 @@ import math
 
 import numpy as np
 
+from vrsweep import dop853
+from vrsweep.dop853 import (
+    dop853_accepted_step_factor, dop853_dense, dop853_error_norm, dop853_rejected_step_factor, dop853_step,
+)
 from vrsweep.impact import (
     IMPACT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root, release_time,
 )
 from vrsweep.integrator import (
-    N_STAGES, accepted_step_factor, dense_coefficients, dense_value, dp54_step, error_norm,
-    initial_step, rejected_step_factor, DENSE_ORDER,
+    DENSE_ORDER, N_STAGES, ORDER, accepted_step_factor, dense_value, dp54_dense, dp54_step, error_norm,
+    initial_step, rejected_step_factor,
 )
 from vrsweep.jit import kernel_jit
 from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS
@@ -143,8 +148,8 @@ def _start_period(record, x):
 
 
 @kernel_jit
-def integrate(coefficients, initial_state, settings, period_records, summary,
-              sample_times, samples, impact_log, stick_log):
+def integrate_rk45(coefficients, initial_state, settings, period_records, summary,
+                   sample_times, samples, impact_log, stick_log):
     """Integrate one point over transient + measurement slow periods. Returns a Status code.
 
     coefficients    (N_COEFFICIENTS,)        model.kernel_coefficients
@@ -156,6 +161,43 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     samples         (n_samples, 2)           x, v at sample_times
     impact_log      (n_impact_log, 3)        t, v before, v after, for the first impacts
     stick_log       (n_stick_log, 2)         start and end of the first sticking intervals
+
+    With Dormand-Prince 5(4) steps (integration.method: rk45, integrator.py).
+    """
+    return _integrate(dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      ORDER, N_STAGES, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log)
+
+
+@kernel_jit
+def integrate_dop853(coefficients, initial_state, settings, period_records, summary,
+                     sample_times, samples, impact_log, stick_log):
+    """integrate_rk45 with DOP853 steps (integration.method: dop853, dop853.py)."""
+    return _integrate(dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
+                      dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log)
+
+
+# integration.method -> the kernel. Each is compiled (or loaded from the cache) on its first call,
+# so a run compiles only the method it uses.
+INTEGRATORS = {"rk45": integrate_rk45, "dop853": integrate_dop853}
+METHODS = tuple(INTEGRATORS)
+
+
+# Inlined into each method's kernel above, so that the method's functions become direct calls
+# (a function passed as a runtime value would be a "dynamic global" and could not be cached).
+@kernel_jit(inline="always")
+def _integrate(step, step_error, dense_output, accepted_factor, rejected_factor, hold_after_reject,
+               initial_order, n_stages, K, dense, coefficients, initial_state, settings, period_records, summary,
+               sample_times, samples, impact_log, stick_log):
+    """The integration loop of every method; see integrate_rk45 for the arguments.
+
+    step(rhs, t, y, f, h, coefficients, K, y_new, stage) fills K (K[n_stages] = f(t + h, y_new))
+    and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled error norm; dense_output(rhs,
+    t, y, h, coefficients, K, y_new, dense, stage) fills dense and returns its extra RHS count.
     """
     rhs = oscillator_rhs
     rtol = settings[RTOL]
@@ -181,8 +223,6 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     f = np.empty(N_STATE)
-    K = np.empty((N_STAGES + 1, N_STATE))
-    dense = np.empty((N_STATE, DENSE_ORDER))
     bracket = np.empty(2)
 
     y[X] = initial_state[0]
@@ -190,7 +230,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     t = 0.0
     rhs(t, y, coefficients, f)
     n_rhs = 1
-    h = initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max)
+    h = initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, initial_order)
     n_rhs += 1
     err_previous = 1.0
     n_steps = 0
@@ -198,6 +238,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     n_impacts = 0
     n_sticks = 0
     n_scans = 0
+    retrying = False
     stuck = False
     status = Status.OK
 
@@ -249,25 +290,29 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
             if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
                 h_try = t_boundary - t
                 clipped = True
-            dp54_step(rhs, t, y, f, h_try, coefficients, K, y_new, stage)
+            step(rhs, t, y, f, h_try, coefficients, K, y_new, stage)
             n_steps += 1
-            n_rhs += N_STAGES
-            err = error_norm(K, h_try, y, y_new, rtol, atol)
+            n_rhs += n_stages
+            err = step_error(K, h_try, y, y_new, rtol, atol)
             if not (err <= 1.0):  # also catches NaN from an overflowing trial step
                 n_rejected += 1
-                h = h_try * (rejected_step_factor(err) if err == err else 0.2)
+                retrying = True
+                h = h_try * (rejected_factor(err) if err == err else 0.2)
                 if h <= _smallest_step(t, slow_period):
                     status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
                     break
                 continue
-            h_next = h_try * accepted_step_factor(err, err_previous)
+            h_next = h_try * accepted_factor(err, err_previous)
+            if retrying and hold_after_reject:
+                h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
+            retrying = False
             err_previous = err
             h = max(h_next, h) if clipped else h_next
 
             impact = False
             dense_ready = False
             if y_new[X] >= delta or y[X] >= delta or (y[V] > 0.0 and y_new[V] < 0.0):
-                dense_coefficients(K, dense)
+                n_rhs += dense_output(rhs, t, y, h_try, coefficients, K, y_new, dense, stage)
                 dense_ready = True
                 pushed = y[X] >= delta and force_at_barrier(t, coefficients) > 0.0
                 verdict = find_crossing(dense, y, y_new, h_try, delta, pushed, bracket)
@@ -282,15 +327,15 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
             h_taken = h_try
             if impact:
                 # Locate on the dense output, then reach the impact with an exact step
-                # (5th order, not the 4th-order interpolant), Newton-corrected onto Delta.
+                # (the step's order, not the interpolant's), Newton-corrected onto Delta.
                 if bracket[0] < bracket[1]:
                     theta = locate_root(dense, y, h_try, X, delta, bracket[0], bracket[1])
                 else:
                     theta = bracket[1]
                 h_taken = theta * h_try
                 for _ in range(IMPACT_NEWTON_ITERATIONS):
-                    dp54_step(rhs, t, y, f, h_taken, coefficients, K, y_new, stage)
-                    n_rhs += N_STAGES
+                    step(rhs, t, y, f, h_taken, coefficients, K, y_new, stage)
+                    n_rhs += n_stages
                     miss = y_new[X] - delta
                     if abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(delta)) or y_new[V] <= 0.0:
                         break
@@ -298,23 +343,23 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
                     if not (0.0 < h_corrected <= h_try):
                         break
                     h_taken = h_corrected
-                dense_coefficients(K, dense)
+                n_rhs += dense_output(rhs, t, y, h_taken, coefficients, K, y_new, dense, stage)
                 dense_ready = True
 
             t_new = t_boundary if (clipped and not impact) else t + h_taken
             if next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_new:
                 if not dense_ready:
-                    dense_coefficients(K, dense)
+                    n_rhs += dense_output(rhs, t, y, h_taken, coefficients, K, y_new, dense, stage)
                     dense_ready = True
                 next_sample = _emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
             if y[V] * y_new[V] < 0.0 and not dense_ready:
-                dense_coefficients(K, dense)
+                n_rhs += dense_output(rhs, t, y, h_taken, coefficients, K, y_new, dense, stage)
             _update_extremes(record, dense, y, y_new, h_taken)
 
             t = t_new
             for j in range(N_STATE):
                 y[j] = y_new[j]
-                f[j] = K[N_STAGES, j]
+                f[j] = K[n_stages, j]
 
             if impact:
                 v_before = max(y[V], 0.0)
