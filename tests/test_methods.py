@@ -165,3 +165,42 @@ def test_methods_agree_on_grazing(overshoot):
     assert len(first.impacts) == len(second.impacts) >= 1
     tolerance = 10 * 1e-8 / first.impacts[:, 1].min()
     np.testing.assert_allclose(first.impacts, second.impacts, rtol=0, atol=tolerance)
+
+
+# --- integration.method in configs, runs and stored files --------------------------------------
+
+def test_method_key_in_config():
+    from vrsweep.config import ConfigError, parse_config
+
+    assert parse_config("").integration.method == "rk45"
+    config = parse_config("integration: {method: dop853}\n")
+    assert config.integration.method == "dop853"
+    assert "  method: dop853\n" in config.to_yaml() and parse_config(config.to_yaml()) == config
+    # The default is not written: a run's stored config is the text it was before the key existed,
+    # so files written then still resume (the resume check compares the text).
+    assert "method" not in parse_config("").to_yaml()
+    assert parse_config("", overrides=["method=dop853"]).integration.method == "dop853"
+    with pytest.raises(ConfigError) as error:
+        parse_config("integration:\n  method: dop85\n", "m.yaml")
+    assert str(error.value).startswith("m.yaml:2: integration.method: must be one of rk45, dop853, got 'dop85'")
+    assert "did you mean 'dop853'" in str(error.value)
+
+
+def test_a_dop853_run_stores_its_method_and_resumes(tmp_path):
+    from result_files import invoke
+
+    from vrsweep.store import read_results
+
+    config = tmp_path / "m.yaml"
+    config.write_text("sweep:\n  g: [5.0, 10.0, 30.0]\n"
+                      "integration: {method: dop853, transient_periods: 3, measure_periods: 3, strobe_periods: 2}\n")
+    out = tmp_path / "m.h5"
+    result = invoke("run", config, "-o", out, "--quiet")
+    assert result.exit_code == 0, result.output
+    stored = read_results(out)
+    assert "method: dop853" in stored.attrs["config"]
+    assert invoke("run", config, "-o", out, "--resume", "--quiet").exit_code == 0
+    # Same points as simulate with the same method: the sweep ran dop853.
+    vector = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0), "original")
+    run = simulate(vector, [0.99, 0.5], settings_vector(transient_periods=3, measure_periods=3), method="dop853")
+    assert stored.variables["R"][1] == run.summary[kernel.SUM_R]
