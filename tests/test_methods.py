@@ -18,8 +18,11 @@ from numba import njit
 
 from vrsweep import dop853, integrator, kernel
 from vrsweep.dop853 import dop853_dense, dop853_step
-from vrsweep.integrator import dense_value, dp54_dense, dp54_step
-from vrsweep.kernel import N_STATE, oscillator_rhs
+from vrsweep.integrator import DP54_C, dense_value, dp54_dense, dp54_step
+from vrsweep.kernel import (
+    N_STATE, no_preparation, no_scratch, oscillator_rhs, oscillator_rhs_rotated, prepare_rotations,
+    rotation_scratch,
+)
 from vrsweep.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.results import Status
 from vrsweep.trajectory import settings_vector, simulate
@@ -27,10 +30,15 @@ from vrsweep.trajectory import settings_vector, simulate
 from closed_form import LinearOscillator
 from reference import coefficient_vector
 
-# method -> (step, dense output, rows of K, FSAL row, order, dense-output order)
+# method -> (step, dense output, rows of K, FSAL row, order, dense-output order) and the kernel's
+# stage right-hand side for it: (rhs, its per-step preparation, its scratch, the nodes)
 STEPPERS = {
     "rk45": (dp54_step, dp54_dense, integrator.N_STAGES + 1, integrator.N_STAGES, 5, 4),
     "dop853": (dop853_step, dop853_dense, dop853.N_STAGES_EXTENDED, dop853.N_STAGES, 8, 7),
+}
+STAGE_RHS = {
+    "rk45": (oscillator_rhs, no_preparation, no_scratch, DP54_C),
+    "dop853": (oscillator_rhs_rotated, prepare_rotations, rotation_scratch, dop853.C_STAGES),
 }
 assert set(STEPPERS) == set(kernel.INTEGRATORS)
 
@@ -45,8 +53,9 @@ def _linear_coefficients():
 
 
 @njit
-def _fixed_steps(step, k_rows, fsal_row, coefficients, x0, v0, t_end, n_steps):
-    """(x, v) at t_end after n_steps equal steps of ``step``."""
+def _fixed_steps(step, stage_rhs, prepare, make_scratch, nodes, k_rows, fsal_row, coefficients, x0, v0, t_end,
+                 n_steps):
+    """(x, v) at t_end after n_steps equal steps of ``step``, as the kernel runs it."""
     y = np.zeros(N_STATE)
     y[0], y[1] = x0, v0
     f = np.empty(N_STATE)
@@ -54,10 +63,12 @@ def _fixed_steps(step, k_rows, fsal_row, coefficients, x0, v0, t_end, n_steps):
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     h = t_end / n_steps
+    scratch = make_scratch(h, nodes)
     t = 0.0
-    oscillator_rhs(t, y, coefficients, f)
+    oscillator_rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
     for i in range(n_steps):
-        step(oscillator_rhs, t, y, f, h, coefficients, K, y_new, stage)
+        prepare(t, h, coefficients, scratch)
+        step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch)
         y[:] = y_new
         f[:] = K[fsal_row]
         t = (i + 1) * h
@@ -65,7 +76,8 @@ def _fixed_steps(step, k_rows, fsal_row, coefficients, x0, v0, t_end, n_steps):
 
 
 @njit
-def _one_step_midpoint(step, dense_output, k_rows, n_dense, coefficients, x0, v0, h):
+def _one_step_midpoint(step, dense_output, stage_rhs, prepare, make_scratch, nodes, k_rows, n_dense, coefficients,
+                       x0, v0, h):
     """(x, v) of the dense output at the middle of one step of size h from (0, x0, v0)."""
     y = np.zeros(N_STATE)
     y[0], y[1] = x0, v0
@@ -74,9 +86,11 @@ def _one_step_midpoint(step, dense_output, k_rows, n_dense, coefficients, x0, v0
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     dense = np.empty((N_STATE, n_dense))
-    oscillator_rhs(0.0, y, coefficients, f)
-    step(oscillator_rhs, 0.0, y, f, h, coefficients, K, y_new, stage)
-    dense_output(oscillator_rhs, 0.0, y, h, coefficients, K, y_new, dense, stage)
+    scratch = make_scratch(h, nodes)
+    oscillator_rhs(0.0, 0.0, -1, 0.0, y, coefficients, f, scratch)
+    prepare(0.0, h, coefficients, scratch)
+    step(stage_rhs, 0.0, y, f, h, coefficients, K, y_new, stage, scratch)
+    dense_output(stage_rhs, 0.0, y, h, coefficients, K, y_new, dense, stage, scratch)
     return dense_value(dense, y, h, 0.5, 0), dense_value(dense, y, h, 0.5, 1)
 
 
@@ -93,7 +107,7 @@ def test_convergence_order(method):
     counts = np.array([25, 35, 50, 70, 100])
     errors = []
     for n in counts:
-        x, v = _fixed_steps(step, k_rows, fsal_row, coefficients, X0, V0, 10.0, n)
+        x, v = _fixed_steps(step, *STAGE_RHS[method], k_rows, fsal_row, coefficients, X0, V0, 10.0, n)
         errors.append(math.hypot(x - exact[0], v - exact[1]))
     assert min(errors) > 1e-13  # still far above rounding, so the slope is the method's
     assert _slope(10.0 / counts, errors) == pytest.approx(order, abs=0.4)
@@ -107,7 +121,8 @@ def test_dense_output_order(method):
     step_sizes = np.array([0.4, 0.28, 0.2, 0.14, 0.1])
     errors = []
     for h in step_sizes:
-        x, v = _one_step_midpoint(step, dense_output, k_rows, dense_order, coefficients, X0, V0, h)
+        x, v = _one_step_midpoint(step, dense_output, *STAGE_RHS[method], k_rows, dense_order, coefficients,
+                                  X0, V0, h)
         exact = oscillator.state(0.0, X0, V0, 0.5 * h)
         errors.append(math.hypot(x - exact[0], v - exact[1]))
     assert min(errors) > 1e-14
@@ -204,3 +219,48 @@ def test_a_dop853_run_stores_its_method_and_resumes(tmp_path):
     vector = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0), "original")
     run = simulate(vector, [0.99, 0.5], settings_vector(transient_periods=3, measure_periods=3), method="dop853")
     assert stored.variables["R"][1] == run.summary[kernel.SUM_R]
+
+
+# --- the dop853 kernel's rotated phases -------------------------------------------------------
+
+@njit
+def _stage_derivatives(coefficients, t, h, h_max):
+    """dydt at every DOP853 node of a step (t, h): rotated (as the kernel) and from the library."""
+    nodes = dop853.C_STAGES
+    scratch = rotation_scratch(h_max, nodes)
+    prepare_rotations(t, h, coefficients, scratch)
+    y = np.array([0.3, -0.8, 0.0, 0.0])
+    rotated = np.empty((nodes.shape[0], N_STATE))
+    library = np.empty((nodes.shape[0], N_STATE))
+    for node in range(nodes.shape[0]):
+        oscillator_rhs_rotated(t, h, node, nodes[node], y, coefficients, rotated[node], scratch)
+        oscillator_rhs(t, h, -1, nodes[node], y, coefficients, library[node], scratch)
+    return rotated, library
+
+
+@pytest.mark.parametrize("on_grid", [True, False])
+def test_rotated_phases_equal_the_library(on_grid):
+    from vrsweep.kernel import grid_step
+
+    coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0, Omega=4.0), "original")
+    h_max = 2 * math.pi / 4.0 / 8
+    scratch = rotation_scratch(h_max, dop853.C_STAGES)
+    h = grid_step(0.1, scratch) if on_grid else 0.1
+    assert (h != 0.1) == on_grid and 0.1 * 2 ** (-1 / 16) < h <= 0.1
+    for t in (0.0, 3.7, 2513.0):  # up to the end of 200 slow periods
+        rotated, library = _stage_derivatives(coefficients, t, h, h_max)
+        # Both carry the rounding of the time t + c h (a phase error of Omega * ulp(t)): they may
+        # differ by a few of those times the forcing amplitudes, and by no more.
+        phase_rounding = (0.04 * 0.5 + 10.0 * 4.0) * np.spacing(max(t, 1.0))
+        np.testing.assert_allclose(rotated, library, rtol=0, atol=1e-15 + 8 * phase_rounding)
+
+
+def test_grid_step_is_the_largest_grid_size_below():
+    from vrsweep.kernel import N_STEP_LEVELS, STEP_GRID, grid_step
+
+    scratch = rotation_scratch(0.2, dop853.C_STAGES)
+    grid = scratch[STEP_GRID:STEP_GRID + N_STEP_LEVELS]
+    for h in np.concatenate([grid, np.geomspace(grid[-1], 0.2, 1001), [0.2 * (1 - 1e-16)]]):
+        step = grid_step(h, scratch)
+        assert step <= h and step in grid and not np.any((grid > step) & (grid <= h))
+    assert grid_step(1e-9, scratch) == 1e-9  # below the grid: the step itself

@@ -2,9 +2,9 @@
 
 The same interface as the DP5(4) functions of integrator.py, so that kernel.py runs either:
 
-    dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage)     12 stages + FSAL
+    dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch)     12 stages + FSAL
     dop853_error_norm(K, h, y, y_new, rtol, atol)                   Hairer's 5th/3rd-order blend
-    dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage) -> extra RHS evaluations
+    dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch) -> extra RHS evaluations
 
 Shapes: K (N_STAGES_EXTENDED, n): rows 0..11 the stages, row 12 = f(t + h, y_new) (first same as
 last), rows 13..15 the three extra stages of the dense output, computed only when a step needs
@@ -43,7 +43,7 @@ D_ROWS = np.ascontiguousarray(D)
 
 
 @kernel_jit(inline="always")
-def _stage(rhs, t, y, h, coefficients, K, s, stage):
+def _stage(rhs, t, y, h, coefficients, K, s, stage, scratch):
     """K[s] = rhs(t + c_s h, y + h sum_{r<s} a_sr K[r]): one stage, skipping the tableau's zeros.
 
     Only the components the right-hand side reads (x, v) are formed (integrator.N_DYNAMIC).
@@ -55,17 +55,17 @@ def _stage(rhs, t, y, h, coefficients, K, s, stage):
             if a != 0.0:
                 acc += a * K[r, j]
         stage[j] = y[j] + h * acc
-    rhs(t + C_STAGES[s] * h, stage, coefficients, K[s])
+    rhs(t, h, s, C_STAGES[s], stage, coefficients, K[s], scratch)
 
 
 @kernel_jit(inline="always")
-def dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
+def dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch):
     """One 8th-order step of size h from (t, y) with f = rhs(t, y); K[N_STAGES] = f(t + h, y_new)."""
     n = y.shape[0]
     for j in range(n):
         K[0, j] = f[j]
     for s in range(1, N_STAGES):
-        _stage(rhs, t, y, h, coefficients, K, s, stage)
+        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch)
     for j in range(n):
         acc = 0.0
         for r in range(N_STAGES):
@@ -73,7 +73,7 @@ def dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
             if b != 0.0:
                 acc += b * K[r, j]
         y_new[j] = y[j] + h * acc
-    rhs(t + h, y_new, coefficients, K[N_STAGES])
+    rhs(t, h, N_STAGES, C_STAGES[N_STAGES], y_new, coefficients, K[N_STAGES], scratch)
 
 
 @kernel_jit
@@ -117,7 +117,7 @@ def dop853_rejected_step_factor(err):
 
 
 @kernel_jit(inline="always")
-def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage):
+def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
     """dense (n, 7): the 7th-order continuous extension of the step [t, t + h], in powers of theta.
 
     Needs K of the step (with its FSAL row) and computes the three extra stages 13..15.
@@ -128,7 +128,7 @@ def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage):
     expanded here, innermost factor first, into y + h theta sum_q dense[q] theta^q.
     """
     for s in range(N_STAGES + 1, N_STAGES_EXTENDED):
-        _stage(rhs, t, y, h, coefficients, K, s, stage)
+        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch)
     F = np.empty(DENSE_ORDER)
     poly = np.empty(DENSE_ORDER + 1)
     for j in range(N_DYNAMIC):

@@ -3,7 +3,11 @@
 Modelled on scipy/integrate/_ivp/rk.py: the tableau is named data, the step function is
 small, and step-control constants have names. Everything here is numba-jitted and knows
 nothing of impacts or of the oscillator: the right-hand side is a jitted function passed
-in (numbakit-ode style), with signature ``rhs(t, y, coefficients, dydt)`` writing dydt.
+in (numbakit-ode style), with signature ``rhs(t, h, node, c, y, coefficients, dydt, scratch)``
+writing dydt, the derivative at time t + c h: a step evaluates its stage ``node`` (an index into
+the method's nodes c; -1 for a time that is no node) at t + c h, so that a right-hand side may
+prepare work for all the stages of a step (kernel.py: the forcing's phases). ``scratch`` belongs
+to the right-hand side and is passed through.
 
 Shapes used throughout (n = number of state components, here 4: x, v and two Fourier
 quadratures; only the first ``N_CONTROLLED`` take part in error control, and only the first
@@ -71,7 +75,7 @@ N_DYNAMIC = 2
 # Inlined at numba-IR level so that the rhs argument becomes a direct call: a dispatcher passed
 # as a runtime value would be a "dynamic global" and the caller could not be cached.
 @kernel_jit(inline="always")
-def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
+def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch):
     """One Dormand-Prince step of size h from (t, y) with f = rhs(t, y) already known.
 
     Fills K (N_STAGES + 1, n) with the stage derivatives, K[N_STAGES] = f(t + h, y_new)
@@ -87,13 +91,13 @@ def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
             for r in range(s):
                 acc += DP54_A[s, r] * K[r, j]
             stage[j] = y[j] + h * acc
-        rhs(t + DP54_C[s] * h, stage, coefficients, K[s])
+        rhs(t, h, s, DP54_C[s], stage, coefficients, K[s], scratch)
     for j in range(n):
         acc = 0.0
         for r in range(N_STAGES):
             acc += DP54_B[r] * K[r, j]
         y_new[j] = y[j] + h * acc
-    rhs(t + h, y_new, coefficients, K[N_STAGES])
+    rhs(t, h, N_STAGES, 1.0, y_new, coefficients, K[N_STAGES], scratch)
 
 
 @kernel_jit
@@ -137,7 +141,7 @@ def dense_coefficients(K, dense):
 
 
 @kernel_jit(inline="always")
-def dp54_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage):
+def dp54_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
     """dense_coefficients behind the interface of dop853.dop853_dense: no extra RHS evaluation."""
     dense_coefficients(K, dense)
     return 0
@@ -158,7 +162,7 @@ def dense_value(dense, y, h, theta, component):
 
 
 @kernel_jit(inline="always")
-def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order):
+def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order, scratch):
     """Starting step size (Hairer, Norsett & Wanner, vol. I, II.4, algorithm of 'hinit')."""
     n = y.shape[0]
     d0 = 0.0
@@ -175,7 +179,7 @@ def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order):
     for j in range(n):
         y1[j] = y[j] + h0 * f[j]
     f1 = np.empty(n)
-    rhs(t + h0, y1, coefficients, f1)
+    rhs(t, h0, -1, 1.0, y1, coefficients, f1, scratch)
     d2 = 0.0
     for j in range(N_CONTROLLED):
         scale = atol + rtol * abs(y[j])
