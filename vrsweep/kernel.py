@@ -1,8 +1,9 @@
 """One grid point: the integration loop of the impact oscillator with its observers.
 
 The loop advances Runge-Kutta steps of the configured method (integration.method: rk45, the
-Dormand-Prince 5(4) pair of integrator.py, or dop853, Hairer's 8(5,3) of dop853.py), stops every step at the slow-period
-boundaries t = nT (T = 2 pi / omega) so that every period is measured exactly, locates
+Dormand-Prince 5(4) pair of integrator.py, or dop853, Hairer's 8(5,3) of dop853.py), stops
+every step at the slow-period boundaries t = nT (T = 2 pi / omega) so that every period is
+measured exactly, locates
 impacts on the dense output (impact.py), applies the restitution law (eq2.2), and holds the
 mass on the barrier while chatter has died out and the force presses it there (sticking).
 
@@ -299,6 +300,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     stick_log       (n_stick_log, 2)         start and end of the first sticking intervals
 
     With Dormand-Prince 5(4) steps (integration.method: rk45, integrator.py).
+    The library's cosines at every evaluation, so results are those of earlier versions bit for bit.
     """
     return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_scratch, False, DP54_C,
                       dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
@@ -310,7 +312,12 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
 @kernel_jit
 def integrate_dop853(coefficients, initial_state, settings, period_records, summary,
                      sample_times, samples, impact_log, stick_log):
-    """integrate_rk45 with DOP853 steps (integration.method: dop853, dop853.py)."""
+    """integrate_rk45 with DOP853 steps (integration.method: dop853, dop853.py).
+
+    Its stages evaluate the forcing by rotating the phases of the step's start (prepare_rotations,
+    oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
+    library (oscillator_rhs).
+    """
     return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_rotations, rotation_scratch, True,
                       dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
                       dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES,
