@@ -117,6 +117,17 @@ def dop853_rejected_step_factor(err):
 
 
 @kernel_jit(inline="always")
+def _d_row(q, K, j):
+    """sum_r D[q, r] K[r, j], skipping the zeros of D."""
+    acc = 0.0
+    for r in range(N_STAGES_EXTENDED):
+        d = D_ROWS[q, r]
+        if d != 0.0:
+            acc += d * K[r, j]
+    return acc
+
+
+@kernel_jit(inline="always")
 def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
     """dense (n, 7): the 7th-order continuous extension of the step [t, t + h], in powers of theta.
 
@@ -125,39 +136,26 @@ def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
 
     SciPy's form is y + theta (F0 + (1 - theta)(F1 + theta (F2 + (1 - theta)(F3 + theta (F4
     + (1 - theta)(F5 + theta F6)))))), F0..F2 from y, y_new, f, f_new and F3..F6 = h D K; it is
-    expanded here, innermost factor first, into y + h theta sum_q dense[q] theta^q.
+    multiplied out here into y + h theta sum_q dense[q] theta^q (no arrays: this runs at every
+    impact and turning point).
     """
     for s in range(N_STAGES + 1, N_STAGES_EXTENDED):
         _stage(rhs, t, y, h, coefficients, K, s, stage, scratch)
-    F = np.empty(DENSE_ORDER)
-    poly = np.empty(DENSE_ORDER + 1)
     for j in range(N_DYNAMIC):
         delta_y = y_new[j] - y[j]
-        F[0] = delta_y
-        F[1] = h * K[0, j] - delta_y
-        F[2] = 2.0 * delta_y - h * (K[N_STAGES, j] + K[0, j])
-        for q in range(3, DENSE_ORDER):
-            acc = 0.0
-            for r in range(N_STAGES_EXTENDED):
-                d = D_ROWS[q - 3, r]
-                if d != 0.0:
-                    acc += d * K[r, j]
-            F[q] = h * acc
-        # Expand from the innermost factor out; poly[k] is the coefficient of theta^k.
-        degree = 0
-        poly[0] = F[DENSE_ORDER - 1]
-        for i in range(1, DENSE_ORDER + 1):
-            if i % 2 == 1:  # multiply by theta
-                for k in range(degree + 1, 0, -1):
-                    poly[k] = poly[k - 1]
-                poly[0] = 0.0
-            else:  # multiply by (1 - theta)
-                poly[degree + 1] = -poly[degree]
-                for k in range(degree, 0, -1):
-                    poly[k] = poly[k] - poly[k - 1]
-            degree += 1
-            if i < DENSE_ORDER:
-                poly[0] += F[DENSE_ORDER - 1 - i]
-        for q in range(DENSE_ORDER):
-            dense[j, q] = poly[q + 1] / h
+        f0 = delta_y
+        f1 = h * K[0, j] - delta_y
+        f2 = 2.0 * delta_y - h * (K[N_STAGES, j] + K[0, j])
+        f3 = h * _d_row(0, K, j)
+        f4 = h * _d_row(1, K, j)
+        f5 = h * _d_row(2, K, j)
+        f6 = h * _d_row(3, K, j)
+        # The nested form multiplied out (coefficients of theta^1 .. theta^7), over h.
+        dense[j, 0] = (f0 + f1) / h
+        dense[j, 1] = (f2 + f3 - f1) / h
+        dense[j, 2] = (f4 + f5 - f2 - 2.0 * f3) / h
+        dense[j, 3] = (f3 + f6 - 2.0 * f4 - 3.0 * f5) / h
+        dense[j, 4] = (f4 + 3.0 * f5 - 3.0 * f6) / h
+        dense[j, 5] = (3.0 * f6 - f5) / h
+        dense[j, 6] = -f6 / h
     return N_STAGES_EXTENDED - N_STAGES - 1
