@@ -19,6 +19,9 @@ MAX_ROOT_ITERATIONS = 200
 # a slow rebound can leave and come back within one step, with x(t + h) < Delta (a graze).
 BARRIER_SCAN_POINTS = 8
 NO_CROSSING = -1.0
+# find_crossing's bracket: (theta_low, theta_high, the turning point it located)
+N_BRACKET = 3
+TURNING_POINT = 2
 # find_crossing's verdicts.
 NO_IMPACT = 0
 IMPACT = 1
@@ -75,7 +78,10 @@ def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
 
 @kernel_jit
 def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
-    """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high).
+    """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high, .).
+
+    bracket[TURNING_POINT] is the located maximum of x inside a step that starts below the
+    barrier with v > 0 and ends with v < 0 (NaN if none was located).
 
     Cases (the state can never be above Delta at a step's start):
     - started below the barrier: x(t + h) >= Delta, or a grazing excursion past Delta that
@@ -86,16 +92,20 @@ def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     long to see the mass leave the barrier before it is back past it.
     ``pushed_into_barrier``: the force at (Delta, 0) at the step's start points into the barrier.
     """
+    bracket[TURNING_POINT] = np.nan
     if y[X] < delta:
         if y_new[X] >= delta:
             bracket[0] = 0.0
             bracket[1] = 1.0
             return IMPACT
         if y[V] > 0.0 and y_new[V] < 0.0:
-            theta_high = _crossing_after_turning_point(dense, y, h, delta, 0.0, 1.0)
-            if theta_high != NO_CROSSING:
+            # A maximum of x inside the step: an impact if it reaches Delta. Kept in the bracket,
+            # so the step's extremes (kernel._update_extremes) need not locate it again.
+            theta_turn = locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
+            bracket[TURNING_POINT] = theta_turn
+            if dense_value(dense, y, h, theta_turn, X) >= delta:
                 bracket[0] = 0.0
-                bracket[1] = theta_high
+                bracket[1] = theta_turn
                 return IMPACT
         return NO_IMPACT
 

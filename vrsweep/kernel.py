@@ -24,7 +24,8 @@ from vrsweep.dop853 import (
     dop853_accepted_step_factor, dop853_dense, dop853_error_norm, dop853_rejected_step_factor, dop853_step,
 )
 from vrsweep.impact import (
-    IMPACT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root, release_time,
+    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root,
+    release_time,
 )
 from vrsweep.integrator import (
     DENSE_ORDER, DP54_C, N_STAGES, ORDER, accepted_step_factor, dense_value, dp54_dense, dp54_step,
@@ -256,15 +257,18 @@ def _emit_samples(sample_times, samples, next_sample, t0, h, y, dense, t_end):
 
 
 @kernel_jit
-def _update_extremes(record, dense, y, y_new, h):
-    """Fold the step's end and any turning point of x inside it into the period's min/max."""
+def _update_extremes(record, dense, y, y_new, h, theta_turn):
+    """Fold the step's end and any turning point of x inside it into the period's min/max.
+
+    theta_turn: the turning point if find_crossing located it on this dense output, else NaN.
+    """
     x_end = y_new[X]
     if x_end < record[REC_X_MIN]:
         record[REC_X_MIN] = x_end
     if x_end > record[REC_X_MAX]:
         record[REC_X_MAX] = x_end
     if y[V] * y_new[V] < 0.0:
-        theta = locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
+        theta = theta_turn if theta_turn == theta_turn else locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
         x_turn = dense_value(dense, y, h, theta, X)
         if x_turn < record[REC_X_MIN]:
             record[REC_X_MIN] = x_turn
@@ -372,7 +376,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     f = np.empty(N_STATE)
-    bracket = np.empty(2)
+    bracket = np.empty(N_BRACKET)
     scratch = make_scratch(h_max, nodes)  # the stage right-hand side's own
 
     y[X] = initial_state[0]
@@ -464,6 +468,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
 
             impact = False
             dense_ready = False
+            theta_turn = np.nan
             if y_new[X] >= delta or y[X] >= delta or (y[V] > 0.0 and y_new[V] < 0.0):
                 prepare_step(t, h_try, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch)
@@ -478,6 +483,8 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                         break
                     continue
                 impact = verdict == IMPACT
+                if not impact:
+                    theta_turn = bracket[TURNING_POINT]
             h_taken = h_try
             if impact:
                 # Locate on the dense output, then reach the impact with an exact step
@@ -512,7 +519,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             if y[V] * y_new[V] < 0.0 and not dense_ready:
                 prepare_step(t, h_taken, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch)
-            _update_extremes(record, dense, y, y_new, h_taken)
+            _update_extremes(record, dense, y, y_new, h_taken, theta_turn)
 
             t = t_new
             for j in range(N_STATE):
