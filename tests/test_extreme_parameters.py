@@ -142,3 +142,19 @@ def test_sticking_under_a_very_fast_forcing_ends():
                                    max_steps=2_000))
     assert run.status == Status.MAX_STEPS
     assert len(run.sticks) == 1 and math.isnan(run.summary[kernel.SUM_R])
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_an_unused_fast_frequency_cannot_overflow(method):
+    """The effective model has no fast forcing (g enters K and wt2 only, eq2.10-eq2.12): an
+    Omega so large that Omega t overflows must not make the point non-finite."""
+    parameters = dict(gamma=0.22, alpha=0.1, c=0.04, omega0=0.1, omega=0.5, Delta=1.0, e=0.95, g=10.0)
+    settings = settings_vector(transient_periods=2, measure_periods=2)
+    huge = simulate(kernel_coefficients(dict(parameters, Omega=1e308), "effective"), [0.99, 0.5], settings,
+                    method=method)
+    # Omega = 1e308 makes K = 1 and wt2 = -omega0^2 (Omega^4 overflows): the effective model at
+    # g = 0; Omega t overflows from t = 2 on.
+    plain = simulate(kernel_coefficients(dict(parameters, g=0.0, Omega=4.0), "effective"), [0.99, 0.5], settings,
+                     method=method)
+    assert huge.status == Status.OK
+    np.testing.assert_array_equal(huge.summary, plain.summary)

@@ -96,8 +96,9 @@ def oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch):
     """
     time = t + c * h
     omega_t = coefficients[OMEGA] * time
-    _oscillator_derivative(y, coefficients, math.cos(omega_t), math.sin(omega_t),
-                           math.cos(coefficients[BIG_OMEGA] * time), dydt)
+    # Without the fast forcing (the effective model) Omega may be anything, even overflow Omega t.
+    cos_fast = math.cos(coefficients[BIG_OMEGA] * time) if coefficients[G] != 0.0 else 0.0
+    _oscillator_derivative(y, coefficients, math.cos(omega_t), math.sin(omega_t), cos_fast, dydt)
 
 
 @kernel_jit(inline="always")
