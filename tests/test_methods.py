@@ -264,3 +264,33 @@ def test_grid_step_is_the_largest_grid_size_below():
         step = grid_step(h, scratch)
         assert step <= h and step in grid and not np.any((grid > step) & (grid <= h))
     assert grid_step(1e-9, scratch) == 1e-9  # below the grid: the step itself
+
+
+@njit
+def _phases_along_steps(coefficients, h, n_steps):
+    """The phases prepare_rotations holds at each of n_steps consecutive steps of size h."""
+    scratch = rotation_scratch(2 * h, dop853.C_STAGES)
+    phases = np.empty((n_steps, 4))
+    times = np.empty(n_steps)
+    t = 1000.0
+    for k in range(n_steps):
+        prepare_rotations(t, h, coefficients, scratch)
+        phases[k] = scratch[2:6]  # COS_SLOW, SIN_SLOW, COS_FAST, SIN_FAST
+        times[k] = t
+        t = t + h
+    return times, phases
+
+
+def test_phases_rotated_from_step_to_step_stay_exact():
+    """A step's start phases are the last step's rotated by its size, resynchronised with the
+    library every RESYNC_STEPS steps: the drift stays at rounding level."""
+    from vrsweep.kernel import COS_SLOW, RESYNC_STEPS, SIN_FAST
+
+    assert (COS_SLOW, SIN_FAST) == (2, 5)
+    coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0, Omega=4.0), "original")
+    times, phases = _phases_along_steps(coefficients, 0.1, 5 * RESYNC_STEPS)
+    omega, big_omega = 0.5, 4.0
+    exact = np.column_stack([np.cos(omega * times), np.sin(omega * times),
+                             np.cos(big_omega * times), np.sin(big_omega * times)])
+    # The library's own argument rounding at t ~ 1000 is Omega * ulp(t) ~ 5e-13.
+    np.testing.assert_allclose(phases, exact, rtol=0, atol=4 * big_omega * np.spacing(1000.0) * RESYNC_STEPS)

@@ -134,9 +134,12 @@ STEP_LEVELS_PER_OCTAVE = 16
 N_STEP_LEVELS = 128
 MAX_NODES = 16
 ROTATION_VALUES = 4 * MAX_NODES  # cos, sin of omega c h and of Omega c h, per node
+# The phases at the next step's start are the last step's rotated by its full step (a node c = 1),
+# recomputed by the library every RESYNC_STEPS steps so that rounding cannot accumulate.
+RESYNC_STEPS = 16
 # scratch layout
-PHASE_TIME, PHASE_STEP, COS_SLOW, SIN_SLOW, COS_FAST, SIN_FAST = range(6)
-ROTATION = 6                                         # the current step's rotations, per node
+PHASE_TIME, PHASE_STEP, COS_SLOW, SIN_SLOW, COS_FAST, SIN_FAST, FULL_STEP_NODE, ROTATED_STEPS = range(8)
+ROTATION = 8                                         # the current step's rotations, per node
 NODES = ROTATION + ROTATION_VALUES                   # the method's nodes c
 STEP_GRID = NODES + MAX_NODES                        # the grid of step sizes
 LEVEL_READY = STEP_GRID + N_STEP_LEVELS              # 1 once a grid step's rotations are tabulated
@@ -153,8 +156,11 @@ def rotation_scratch(h_max, nodes):
     scratch[PHASE_STEP] = np.nan
     scratch[NODES:STEP_GRID] = 0.0
     scratch[LEVEL_READY:LEVEL_ROTATIONS] = 0.0
+    scratch[FULL_STEP_NODE] = -1.0
     for node in range(nodes.shape[0]):
         scratch[NODES + node] = nodes[node]
+        if nodes[node] == 1.0 and scratch[FULL_STEP_NODE] < 0.0:
+            scratch[FULL_STEP_NODE] = node
     for k in range(N_STEP_LEVELS):
         scratch[STEP_GRID + k] = h_max * 2.0 ** (-k / STEP_LEVELS_PER_OCTAVE)
     return scratch
@@ -204,12 +210,28 @@ def _rotations(h, coefficients, scratch, out):
 def prepare_rotations(t, h, coefficients, scratch):
     """Make scratch hold the phases at t and the rotations for a step of size h."""
     if t != scratch[PHASE_TIME]:
-        omega_t = coefficients[OMEGA] * t
-        scratch[COS_SLOW] = math.cos(omega_t)
-        scratch[SIN_SLOW] = math.sin(omega_t)
-        if coefficients[G] != 0.0:
-            scratch[COS_FAST] = math.cos(coefficients[BIG_OMEGA] * t)
-            scratch[SIN_FAST] = math.sin(coefficients[BIG_OMEGA] * t)
+        full = int(scratch[FULL_STEP_NODE])
+        if (t == scratch[PHASE_TIME] + scratch[PHASE_STEP] and full >= 0
+                and scratch[ROTATED_STEPS] < RESYNC_STEPS):
+            # The step just taken ended at t: rotate its start's phases by the whole step.
+            r = ROTATION + 4 * full
+            cos_slow = scratch[COS_SLOW] * scratch[r] - scratch[SIN_SLOW] * scratch[r + 1]
+            sin_slow = scratch[SIN_SLOW] * scratch[r] + scratch[COS_SLOW] * scratch[r + 1]
+            cos_fast = scratch[COS_FAST] * scratch[r + 2] - scratch[SIN_FAST] * scratch[r + 3]
+            sin_fast = scratch[SIN_FAST] * scratch[r + 2] + scratch[COS_FAST] * scratch[r + 3]
+            scratch[COS_SLOW] = cos_slow
+            scratch[SIN_SLOW] = sin_slow
+            scratch[COS_FAST] = cos_fast
+            scratch[SIN_FAST] = sin_fast
+            scratch[ROTATED_STEPS] += 1.0
+        else:
+            omega_t = coefficients[OMEGA] * t
+            scratch[COS_SLOW] = math.cos(omega_t)
+            scratch[SIN_SLOW] = math.sin(omega_t)
+            if coefficients[G] != 0.0:
+                scratch[COS_FAST] = math.cos(coefficients[BIG_OMEGA] * t)
+                scratch[SIN_FAST] = math.sin(coefficients[BIG_OMEGA] * t)
+            scratch[ROTATED_STEPS] = 0.0
         scratch[PHASE_TIME] = t
     if h != scratch[PHASE_STEP]:
         level = _grid_level(h, scratch)
