@@ -95,7 +95,7 @@ def test_design_documents_every_config_key_with_its_default():
         row = _table_row(text, key)
         if row is None:
             problems.append(f"{key}: no row in the config table")
-        elif float(row[1]) != default:
+        elif (row[1] != default) if isinstance(default, str) else (float(row[1]) != default):
             problems.append(f"{key}: documented default {row[1]}, code has {default}")
     row = _table_row(text, "initial.x`, `initial.v")
     if row is None or [float(v) for v in row[1].split(",")] != [INITIAL_DEFAULTS["x"], INITIAL_DEFAULTS["v"]]:

@@ -16,6 +16,9 @@ from vrsweep.model import (
 from vrsweep.results import Status
 from vrsweep.trajectory import settings_vector, simulate
 
+METHODS = tuple(kernel.INTEGRATORS)  # every test marked with @every_method runs for each
+every_method = pytest.mark.parametrize("method", METHODS)
+
 from closed_form import CLOSED_FORM_CASES, closed_form_impacts
 from reference import CONVERGED_POINTS, point_coefficients, reference_point
 
@@ -31,7 +34,8 @@ def coefficients(gamma=0.0, mu=1.0, k=0.0, alpha=0.0, c=0.0, omega=0.5, g=0.0, O
 # --- closed form: gamma = alpha = 0, linear between impacts ------------------------------------
 
 @pytest.mark.parametrize("case", CLOSED_FORM_CASES, ids=["slow-forcing", "slow+fast-forcing"])
-def test_impacts_match_closed_form(case):
+@every_method
+def test_impacts_match_closed_form(case, method):
     times, v_before, v_after = closed_form_impacts(**case)
     n = case["n_impacts"]
     assert n >= 20
@@ -40,7 +44,7 @@ def test_impacts_match_closed_form(case):
     vector = coefficients(k=case["k"], c=case["c"], omega=case["omega"], g=case["g"],
                           Omega=case["Omega"], Delta=case["Delta"], e=case["e"])
     run = simulate(vector, [case["x0"], case["v0"]],
-                   settings_vector(rtol=1e-12, atol=1e-14, transient_periods=0, measure_periods=periods))
+                   settings_vector(rtol=1e-12, atol=1e-14, transient_periods=0, measure_periods=periods), method=method)
     assert run.status == Status.OK
     assert len(run.impacts) >= n
     np.testing.assert_allclose(run.impacts[:n, 0], times, rtol=0, atol=1e-8)
@@ -55,12 +59,13 @@ def _energy(x, v, k, alpha):
 
 
 @pytest.mark.parametrize("rtol", [1e-8, 1e-10])
-def test_energy_conserved_across_impacts(rtol):
+@every_method
+def test_energy_conserved_across_impacts(rtol, method):
     k, alpha = -0.01, 0.1  # the paper's double well, with the barrier cutting its right well
     vector = coefficients(k=k, alpha=alpha, e=1.0, Delta=1.0)
     times = np.linspace(0.0, 30 * 4 * math.pi, 20001)
     run = simulate(vector, [0.2, 1.0], settings_vector(rtol=rtol, atol=rtol * 1e-2, transient_periods=0,
-                                                       measure_periods=30), sample_times=times)
+                                                       measure_periods=30), sample_times=times, method=method)
     assert run.status == Status.OK
     assert len(run.impacts) >= 40
     np.testing.assert_allclose(run.impacts[:, 2], -run.impacts[:, 1], rtol=1e-15)  # e = 1
@@ -72,14 +77,15 @@ def test_energy_conserved_across_impacts(rtol):
 
 # --- accuracy scales with rtol ------------------------------------------------------------------
 
-def test_global_error_falls_with_rtol():
+@every_method
+def test_global_error_falls_with_rtol(method):
     vector = kernel_coefficients(dict(gamma=0.22, alpha=0.1, c=0.04, omega0=0.1, omega=0.5,
                                       Delta=1.0, e=0.95, g=10.0, Omega=4.0), "original")
     times = np.linspace(0.0, 3 * 4 * math.pi, 301)
 
     def samples(rtol):
         run = simulate(vector, [0.99, 0.5], settings_vector(rtol=rtol, atol=rtol * 1e-2, transient_periods=0,
-                                                            measure_periods=3), sample_times=times)
+                                                            measure_periods=3), sample_times=times, method=method)
         assert run.status == Status.OK
         return run.samples
 
@@ -93,11 +99,12 @@ def test_global_error_falls_with_rtol():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("point", CONVERGED_POINTS, ids=[p["note"][:40] for p in CONVERGED_POINTS])
-def test_response_matches_scipy(point):
+@every_method
+def test_response_matches_scipy(point, method):
     reference = reference_point(point, rtol=1e-11, atol=1e-13)
     run = simulate(point_coefficients(point), [point["x0"], point["v0"]],
                    settings_vector(rtol=1e-11, atol=1e-13, transient_periods=point["transient_periods"],
-                                   measure_periods=point["measure_periods"]))
+                                   measure_periods=point["measure_periods"]), method=method)
     assert run.status == Status.OK
     amplitude = math.hypot(reference["Qs"], reference["Qc"])
     assert run.summary[kernel.SUM_R] == pytest.approx(reference["R"], rel=1e-5)
@@ -109,7 +116,8 @@ def test_response_matches_scipy(point):
 # --- grazing ----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("overshoot, expect_impact", [(1e-6, True), (-1e-6, False)])
-def test_grazing_excursion_inside_one_step(overshoot, expect_impact):
+@every_method
+def test_grazing_excursion_inside_one_step(overshoot, expect_impact, method):
     # x = v0 sin t: its peak v0 lies 1e-6 past (or short of) Delta, so x > Delta only for
     # |t - pi/2| < 1.4e-3, far shorter than the steps at rtol 1e-8 (~0.03): both ends of the
     # step around the peak lie below Delta and only the turning-point test sees the excursion.
@@ -117,7 +125,7 @@ def test_grazing_excursion_inside_one_step(overshoot, expect_impact):
     v0 = Delta * (1.0 + overshoot)
     vector = coefficients(k=1.0, Delta=Delta, e=0.5, omega=0.25)  # slow period 8 pi: one peak
     run = simulate(vector, [0.0, v0], settings_vector(rtol=1e-8, atol=1e-10, transient_periods=0,
-                                                      measure_periods=1))
+                                                      measure_periods=1), method=method)
     assert run.status == Status.OK
     if not expect_impact:
         assert len(run.impacts) == 0
@@ -135,7 +143,8 @@ def test_grazing_excursion_inside_one_step(overshoot, expect_impact):
 
 # --- chatter and sticking -----------------------------------------------------------------------
 
-def test_chatter_ends_in_sticking_and_release():
+@every_method
+def test_chatter_ends_in_sticking_and_release(method):
     # No stiffness, force c cos(omega t) into the barrier for t < pi/(2 omega): the mass hits,
     # chatters with e = 0.5 (a geometric, Zeno sequence), sticks, and is released exactly where
     # the force changes sign.
@@ -143,7 +152,7 @@ def test_chatter_ends_in_sticking_and_release():
     vector = coefficients(c=1.0, omega=omega, Delta=1.0, e=0.5)
     times = np.linspace(0.0, 4 * math.pi, 4001)
     run = simulate(vector, [0.9, 0.0], settings_vector(rtol=1e-10, atol=1e-12, transient_periods=0,
-                                                       measure_periods=1), sample_times=times)
+                                                       measure_periods=1), sample_times=times, method=method)
     assert run.status == Status.OK
     assert 10 < len(run.impacts) < 200  # finite: the chatter sequence was cut by sticking
     assert len(run.sticks) >= 1
@@ -163,7 +172,8 @@ def test_chatter_ends_in_sticking_and_release():
     assert np.all(np.isfinite(run.samples))
 
 
-def test_fourier_sums_include_sticking_intervals():
+@every_method
+def test_fourier_sums_include_sticking_intervals(method):
     # Stiffness pulls the mass off the barrier, the slow force (5 > k Delta) pushes it back for
     # part of every slow period: it sticks, is released, and returns, period after period. The
     # kernel's quadrature states must equal the integral of its own dense samples.
@@ -172,7 +182,7 @@ def test_fourier_sums_include_sticking_intervals():
     slow_period = 2 * math.pi / omega
     settings = settings_vector(rtol=1e-11, atol=1e-13, transient_periods=2, measure_periods=2)
     times = np.linspace(2 * slow_period, 4 * slow_period, 400001)
-    run = simulate(vector, [0.0, 0.0], settings, sample_times=times)
+    run = simulate(vector, [0.0, 0.0], settings, sample_times=times, method=method)
     assert run.status == Status.OK
     assert len(run.sticks) >= 2
     stuck_time = np.sum(run.period_records[2:, kernel.REC_STUCK_TIME])
@@ -193,27 +203,30 @@ def _paper_point(**changes):
     return kernel_coefficients(parameters, "original")
 
 
-def test_divergence_sets_status():
+@every_method
+def test_divergence_sets_status(method):
     # Negative linear stiffness and nothing cubic: the mass runs away from the barrier.
     vector = coefficients(k=-1.0, Delta=1.0, e=0.9)
     run = simulate(vector, [0.5, -10.0], settings_vector(transient_periods=1, measure_periods=1,
-                                                         divergence_bound=1e6))
+                                                         divergence_bound=1e6), method=method)
     assert run.status == Status.DIVERGED
     assert math.isnan(run.summary[kernel.SUM_R])
     assert abs(run.summary[kernel.SUM_X_FINAL]) > 1e6
 
 
-def test_step_cap_sets_status():
-    run = simulate(_paper_point(), [0.99, 0.5], settings_vector(max_steps=50, transient_periods=1, measure_periods=1))
+@every_method
+def test_step_cap_sets_status(method):
+    run = simulate(_paper_point(), [0.99, 0.5], settings_vector(max_steps=50, transient_periods=1, measure_periods=1), method=method)
     assert run.status == Status.MAX_STEPS
     assert math.isnan(run.summary[kernel.SUM_R])
     assert run.summary[kernel.SUM_STEPS] == 50
 
 
-def test_chatter_cap_sets_status():
+@every_method
+def test_chatter_cap_sets_status(method):
     vector = coefficients(c=1.0, omega=0.5, Delta=1.0, e=0.5)
     run = simulate(vector, [0.9, 0.0], settings_vector(max_impacts_per_period=5, transient_periods=0,
-                                                       measure_periods=1))
+                                                       measure_periods=1), method=method)
     assert run.status == Status.CHATTER_LIMIT
     assert math.isnan(run.summary[kernel.SUM_R])
 
@@ -227,8 +240,9 @@ def test_original_and_effective_share_the_kernel():
     np.testing.assert_array_equal(original.summary, effective.summary)
 
 
-def test_impact_log_agrees_with_period_counts():
-    run = simulate(_paper_point(), [0.99, 0.5], settings_vector(transient_periods=5, measure_periods=5))
+@every_method
+def test_impact_log_agrees_with_period_counts(method):
+    run = simulate(_paper_point(), [0.99, 0.5], settings_vector(transient_periods=5, measure_periods=5), method=method)
     assert run.status == Status.OK
     assert run.impacts_per_period.sum() == len(run.impacts)
     slow_period = 4 * math.pi

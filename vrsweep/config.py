@@ -10,7 +10,7 @@ The schema (docs/design.md, "Config"); every key is optional and defaults to the
       g: {start: 0.0, stop: 40.0, num: 81}            # linear, start < stop (or num: 1)
       Omega: [4.0, 5.0]                               # explicit list, strictly monotonic
       # or {values: [...], continuation: up|down|both}, or {start, stop, num, continuation}
-    integration: {rtol: 1.0e-9, atol: 1.0e-11, transient_periods: 100, measure_periods: 100, ...}
+    integration: {method: rk45, rtol: 1.0e-9, atol: 1.0e-11, transient_periods: 100, ...}
     output: results/fig1.h5
 
 Paths: a relative ``output`` is relative to the current directory, like any path given on the
@@ -62,7 +62,7 @@ from vrsweep.model import (
 __all__ = [
     "Axis", "Integration", "Config", "load_config", "parse_config", "with_overrides",
     "Domain", "PARAMETER_DOMAINS", "INITIAL_DEFAULTS", "INTEGRATION_DEFAULTS", "INTEGRATION_DOMAINS",
-    "CONTINUATIONS", "MAX_AXIS_POINTS",
+    "CONTINUATIONS", "MAX_AXIS_POINTS", "METHODS",
 ]
 
 
@@ -131,8 +131,11 @@ INITIAL_DOMAINS = {"x": _ANY, "v": _ANY}
 AXIS_NAMES = PARAMETER_NAMES + INITIAL_STATE_AXES
 AXIS_DOMAINS = {**PARAMETER_DOMAINS, **{axis: INITIAL_DOMAINS[key] for axis, key in INITIAL_STATE_KEYS.items()}}
 
+# The integration methods (kernel.INTEGRATORS): rk45 is Dormand-Prince 5(4), dop853 Hairer's 8(5,3).
+METHODS = ("rk45", "dop853")
+
 INTEGRATION_DEFAULTS = {
-    "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
+    "method": "rk45", "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
     "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1.0e6,
     "stick_velocity": 1.0e-7, "strobe_periods": 16, "max_period": 8, "period_tolerance": 1.0e-6,
 }
@@ -197,6 +200,7 @@ class Axis:
 class Integration:
     """Solver settings (see INTEGRATION_DEFAULTS for the defaults and INTEGRATION_DOMAINS for ranges)."""
 
+    method: str
     rtol: float
     atol: float
     transient_periods: int
@@ -302,6 +306,12 @@ class Config:
         lines += [f"  {axis.name}: {_yaml_axis(axis)}" for axis in self.axes]
         lines.append("integration:")
         for key, value in dataclasses.asdict(self.integration).items():
+            if key == "method":
+                # Written only when not the default: files written before the key existed store
+                # the same text for the same run, so they still resume (the check compares text).
+                if value != INTEGRATION_DEFAULTS["method"]:
+                    lines.append(f"  method: {value}")
+                continue
             lines.append(f"  {key}: {value if isinstance(value, int) else _yaml_float(value)}")
         lines.append(f"output: {'null' if self.output is None else _yaml_string(self.output)}")
         return "\n".join(lines) + "\n"
@@ -393,7 +403,9 @@ def _section_model(name, domains, defaults):
 
 _ParametersModel = _section_model("Parameters", PARAMETER_DOMAINS, DEFAULT_PARAMETERS)
 _InitialModel = _section_model("Initial", INITIAL_DOMAINS, INITIAL_DEFAULTS)
-_IntegrationModel = _section_model("Integration", INTEGRATION_DOMAINS, INTEGRATION_DEFAULTS)
+_IntegrationModel = create_model(
+    "Integration", __base__=_section_model("NumericIntegration", INTEGRATION_DOMAINS, INTEGRATION_DEFAULTS),
+    method=(Literal[METHODS], INTEGRATION_DEFAULTS["method"]))
 
 
 class _Document(BaseModel):
@@ -709,7 +721,7 @@ class _Validator:
         elif kind in ("out_of_range", "bad_path"):
             self.report(path, item["msg"])
         elif kind == "literal_error":
-            choices = MODELS if path[-1:] == ("model",) else CONTINUATIONS
+            choices = {("model",): MODELS, ("method",): METHODS}.get(path[-1:], CONTINUATIONS)
             hint = _did_you_mean(value, choices) if isinstance(value, str) else ""
             self.report(path, f"must be one of {', '.join(choices)}, got {_show(value)}{hint}")
         elif kind in ("model_type", "dict_type"):

@@ -22,6 +22,11 @@ from vrsweep.errors import ConfigError
 # less ~1.5 s of start-up. Points with many impacts cost several times the mean.
 SECONDS_PER_POINT_PERIOD = {"original": 2.6e-4, "effective": 4e-5}
 REFERENCE_RTOL = 1e-9
+# integration.method: cost relative to rk45 at REFERENCE_RTOL, and the order that sets how the
+# step count grows as rtol tightens (about rtol^(-1/order)). dop853 took 0.35x the time of rk45 at
+# rtol 1e-9 on the original model and 0.2x on the effective one (paper points, one thread).
+METHOD_COST = {"rk45": 1.0, "dop853": 0.35}
+METHOD_ORDER = {"rk45": 5, "dop853": 8}
 
 # HDF5's own bytes, measured on vrsweep's files (h5py 3, HDF5 1.14): each dataset's object header
 # and attributes take ~2.5 kB whatever its size, plus ~0.45 kB per grid dimension for the
@@ -61,8 +66,9 @@ def estimate(config, threads=None) -> Estimate:
     n_points = config.n_runs  # a two-way continuation stores and runs every point twice
     output_bytes = stored_bytes(config)
     periods = integration.transient_periods + integration.measure_periods
-    # DP5 takes about rtol^(-1/5) steps per unit time, so cost scales as (1e-9/rtol)^(1/5).
-    steps_factor = (REFERENCE_RTOL / integration.rtol) ** 0.2
+    # A method of order p takes about rtol^(-1/p) steps per unit time: DP5 (1e-9/rtol)^(1/5).
+    method = getattr(integration, "method", "rk45")
+    steps_factor = METHOD_COST[method] * (REFERENCE_RTOL / integration.rtol) ** (1.0 / METHOD_ORDER[method])
     seconds = n_points * periods * SECONDS_PER_POINT_PERIOD[config.model] * steps_factor / threads
     return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds)
 

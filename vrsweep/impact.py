@@ -5,9 +5,9 @@ fraction theta in [0, 1]; the kernel then reaches the impact state with an exact
 """
 
 import numpy as np
-from numba import njit
 
 from vrsweep.integrator import dense_value
+from vrsweep.jit import kernel_jit
 from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, G, OMEGA, STIFFNESS
 
 X, V = 0, 1  # state components
@@ -19,13 +19,16 @@ MAX_ROOT_ITERATIONS = 200
 # a slow rebound can leave and come back within one step, with x(t + h) < Delta (a graze).
 BARRIER_SCAN_POINTS = 8
 NO_CROSSING = -1.0
+# find_crossing's bracket: (theta_low, theta_high, the turning point it located)
+N_BRACKET = 3
+TURNING_POINT = 2
 # find_crossing's verdicts.
 NO_IMPACT = 0
 IMPACT = 1
 UNRESOLVED = 2  # left the barrier and came back between scan points: retry with a shorter step
 
 
-@njit(cache=True)
+@kernel_jit
 def locate_root(dense, y, h, component, level, theta_low, theta_high):
     """theta in [theta_low, theta_high] where the interpolant's component crosses ``level``.
 
@@ -60,7 +63,7 @@ def locate_root(dense, y, h, component, level, theta_low, theta_high):
     return theta_high
 
 
-@njit(cache=True)
+@kernel_jit
 def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
     """Upper bracket end for an excursion past Delta around a maximum of x.
 
@@ -73,9 +76,12 @@ def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
     return NO_CROSSING
 
 
-@njit(cache=True)
+@kernel_jit
 def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
-    """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high).
+    """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high, .).
+
+    bracket[TURNING_POINT] is the located maximum of x inside a step that starts below the
+    barrier with v > 0 and ends with v < 0 (NaN if none was located).
 
     Cases (the state can never be above Delta at a step's start):
     - started below the barrier: x(t + h) >= Delta, or a grazing excursion past Delta that
@@ -86,16 +92,20 @@ def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     long to see the mass leave the barrier before it is back past it.
     ``pushed_into_barrier``: the force at (Delta, 0) at the step's start points into the barrier.
     """
+    bracket[TURNING_POINT] = np.nan
     if y[X] < delta:
         if y_new[X] >= delta:
             bracket[0] = 0.0
             bracket[1] = 1.0
             return IMPACT
         if y[V] > 0.0 and y_new[V] < 0.0:
-            theta_high = _crossing_after_turning_point(dense, y, h, delta, 0.0, 1.0)
-            if theta_high != NO_CROSSING:
+            # A maximum of x inside the step: an impact if it reaches Delta. Kept in the bracket,
+            # so the step's extremes (kernel._update_extremes) need not locate it again.
+            theta_turn = locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
+            bracket[TURNING_POINT] = theta_turn
+            if dense_value(dense, y, h, theta_turn, X) >= delta:
                 bracket[0] = 0.0
-                bracket[1] = theta_high
+                bracket[1] = theta_turn
                 return IMPACT
         return NO_IMPACT
 
@@ -134,7 +144,7 @@ def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     return NO_IMPACT
 
 
-@njit(cache=True)
+@kernel_jit
 def force_at_barrier(t, coefficients):
     """Acceleration of a mass resting at (Delta, 0): positive pushes it into the barrier.
 
@@ -146,16 +156,22 @@ def force_at_barrier(t, coefficients):
             - coefficients[STIFFNESS] * delta - coefficients[ALPHA] * delta ** 3)
 
 
-@njit(cache=True)
-def release_time(t_start, t_limit, coefficients, scan_step):
+@kernel_jit
+def release_time(t_start, t_limit, coefficients, scan_step, max_scans):
     """First t in (t_start, t_limit] where the force at the barrier stops pushing into it.
 
     The force is an explicit function of t, so it is scanned in steps of ``scan_step``
     (a fraction of the shortest forcing period, so no sign change is stepped over) and the
-    sign change is bisected to rounding. Returns t_limit + 1 if the mass stays stuck.
+    sign change is bisected to rounding. Returns (t, scans): t = t_limit + 1 if the mass stays
+    stuck, NaN if ``max_scans`` scan intervals did not reach either (a fast forcing period
+    so short that the scan would never end, e.g. Omega = 1e12).
     """
     t_a = t_start
+    scans = 0
     while t_a < t_limit:
+        if scans >= max_scans:
+            return np.nan, scans
+        scans += 1
         t_b = min(t_a + scan_step, t_limit)
         if force_at_barrier(t_b, coefficients) <= 0.0:
             for _ in range(MAX_ROOT_ITERATIONS):
@@ -166,6 +182,6 @@ def release_time(t_start, t_limit, coefficients, scan_step):
                     t_b = t_mid
                 else:
                     t_a = t_mid
-            return t_b
+            return t_b, scans
         t_a = t_b
-    return t_limit + 1.0
+    return t_limit + 1.0, scans

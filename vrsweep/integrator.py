@@ -3,10 +3,15 @@
 Modelled on scipy/integrate/_ivp/rk.py: the tableau is named data, the step function is
 small, and step-control constants have names. Everything here is numba-jitted and knows
 nothing of impacts or of the oscillator: the right-hand side is a jitted function passed
-in (numbakit-ode style), with signature ``rhs(t, y, coefficients, dydt)`` writing dydt.
+in (numbakit-ode style), with signature ``rhs(t, h, node, c, y, coefficients, dydt, scratch)``
+writing dydt, the derivative at time t + c h: a step evaluates its stage ``node`` (an index into
+the method's nodes c; -1 for a time that is no node) at t + c h, so that a right-hand side may
+prepare work for all the stages of a step (kernel.py: the forcing's phases). ``scratch`` belongs
+to the right-hand side and is passed through.
 
 Shapes used throughout (n = number of state components, here 4: x, v and two Fourier
-quadratures; only the first ``N_CONTROLLED`` take part in error control):
+quadratures; only the first ``N_CONTROLLED`` take part in error control, and only the first
+``N_DYNAMIC`` are read by the right-hand side and interpolated):
 
     y, y_new, dydt    (n,)
     K                 (N_STAGES + 1, n)   stage derivatives; K[-1] is f(t + h, y_new) (FSAL)
@@ -14,7 +19,8 @@ quadratures; only the first ``N_CONTROLLED`` take part in error control):
 """
 
 import numpy as np
-from numba import njit
+
+from vrsweep.jit import kernel_jit
 
 # --- Dormand & Prince (1980) RK5(4)7FM: c, A, b (5th order), e = b - b_hat (embedded 4th) ---
 N_STAGES = 6
@@ -60,12 +66,16 @@ ERR_PREVIOUS_FLOOR = 1e-4  # keeps the PI memory from exploding after a near-exa
 # The first N_CONTROLLED components (x, v) are error-controlled (docs/design.md); the Fourier
 # quadratures ride along: they are integrals of x, as accurate as x itself.
 N_CONTROLLED = 2
+# The right-hand side reads only the first N_DYNAMIC components (x, v): the quadratures feed
+# nothing back, so their stage values are never formed (half the work of a stage), and no
+# dense output is made for them.
+N_DYNAMIC = 2
 
 
 # Inlined at numba-IR level so that the rhs argument becomes a direct call: a dispatcher passed
 # as a runtime value would be a "dynamic global" and the caller could not be cached.
-@njit(cache=True, inline="always")
-def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
+@kernel_jit(inline="always")
+def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch):
     """One Dormand-Prince step of size h from (t, y) with f = rhs(t, y) already known.
 
     Fills K (N_STAGES + 1, n) with the stage derivatives, K[N_STAGES] = f(t + h, y_new)
@@ -76,21 +86,21 @@ def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage):
     for j in range(n):
         K[0, j] = f[j]
     for s in range(1, N_STAGES):
-        for j in range(n):
+        for j in range(N_DYNAMIC):
             acc = 0.0
             for r in range(s):
                 acc += DP54_A[s, r] * K[r, j]
             stage[j] = y[j] + h * acc
-        rhs(t + DP54_C[s] * h, stage, coefficients, K[s])
+        rhs(t, h, s, DP54_C[s], stage, coefficients, K[s], scratch)
     for j in range(n):
         acc = 0.0
         for r in range(N_STAGES):
             acc += DP54_B[r] * K[r, j]
         y_new[j] = y[j] + h * acc
-    rhs(t + h, y_new, coefficients, K[N_STAGES])
+    rhs(t, h, N_STAGES, 1.0, y_new, coefficients, K[N_STAGES], scratch)
 
 
-@njit(cache=True)
+@kernel_jit
 def error_norm(K, h, y, y_new, rtol, atol):
     """RMS over the controlled components of the local error / (atol + rtol * max(|y|, |y_new|))."""
     total = 0.0
@@ -104,7 +114,7 @@ def error_norm(K, h, y, y_new, rtol, atol):
     return np.sqrt(total / N_CONTROLLED)
 
 
-@njit(cache=True)
+@kernel_jit
 def accepted_step_factor(err, err_previous):
     """Growth factor after an accepted step (err <= 1): PI control, clipped."""
     if err == 0.0:
@@ -113,17 +123,16 @@ def accepted_step_factor(err, err_previous):
     return min(MAX_FACTOR, max(MIN_FACTOR, factor))
 
 
-@njit(cache=True)
+@kernel_jit
 def rejected_step_factor(err):
     """Shrink factor after a rejected step (err > 1): plain I control, never growing."""
     return min(1.0, max(MIN_FACTOR, SAFETY * err ** (-1.0 / ORDER)))
 
 
-@njit(cache=True)
+@kernel_jit
 def dense_coefficients(K, dense):
-    """dense (n, DENSE_ORDER) = K^T P: the continuous extension of the last step."""
-    n = dense.shape[0]
-    for j in range(n):
+    """dense (n, DENSE_ORDER) = K^T P: the continuous extension of the last step (x and v only)."""
+    for j in range(N_DYNAMIC):
         for q in range(DENSE_ORDER):
             acc = 0.0
             for r in range(N_STAGES + 1):
@@ -131,17 +140,29 @@ def dense_coefficients(K, dense):
             dense[j, q] = acc
 
 
-@njit(cache=True)
+@kernel_jit(inline="always")
+def dp54_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
+    """dense_coefficients behind the interface of dop853.dop853_dense: no extra RHS evaluation."""
+    dense_coefficients(K, dense)
+    return 0
+
+
+@kernel_jit
 def dense_value(dense, y, h, theta, component):
-    """Component of the continuous extension at t + theta h (Horner in theta)."""
-    acc = dense[component, DENSE_ORDER - 1]
-    for q in range(DENSE_ORDER - 2, -1, -1):
+    """Component of the continuous extension at t + theta h (Horner in theta).
+
+    Any method's dense output in the form y + h theta sum_q dense[component, q] theta^q; its
+    degree is dense.shape[1] (4 for DP5(4), 7 for DOP853).
+    """
+    order = dense.shape[1]
+    acc = dense[component, order - 1]
+    for q in range(order - 2, -1, -1):
         acc = acc * theta + dense[component, q]
     return y[component] + h * theta * acc
 
 
-@njit(cache=True, inline="always")
-def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max):
+@kernel_jit(inline="always")
+def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order, scratch):
     """Starting step size (Hairer, Norsett & Wanner, vol. I, II.4, algorithm of 'hinit')."""
     n = y.shape[0]
     d0 = 0.0
@@ -158,7 +179,7 @@ def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max):
     for j in range(n):
         y1[j] = y[j] + h0 * f[j]
     f1 = np.empty(n)
-    rhs(t + h0, y1, coefficients, f1)
+    rhs(t, h0, -1, 1.0, y1, coefficients, f1, scratch)
     d2 = 0.0
     for j in range(N_CONTROLLED):
         scale = atol + rtol * abs(y[j])
@@ -167,5 +188,5 @@ def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max):
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
     else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / ORDER)
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / order)
     return min(100.0 * h0, h1, h_max)

@@ -1,7 +1,9 @@
 """One grid point: the integration loop of the impact oscillator with its observers.
 
-The loop advances Dormand-Prince steps (integrator.py), stops every step at the slow-period
-boundaries t = nT (T = 2 pi / omega) so that every period is measured exactly, locates
+The loop advances Runge-Kutta steps of the configured method (integration.method: rk45, the
+Dormand-Prince 5(4) pair of integrator.py, or dop853, Hairer's 8(5,3) of dop853.py), stops
+every step at the slow-period boundaries t = nT (T = 2 pi / omega) so that every period is
+measured exactly, locates
 impacts on the dense output (impact.py), applies the restitution law (eq2.2), and holds the
 mass on the barrier while chatter has died out and the force presses it there (sticking).
 
@@ -16,15 +18,20 @@ as accurate as x itself; while stuck they are added in closed form.
 import math
 
 import numpy as np
-from numba import njit
 
+from vrsweep import dop853
+from vrsweep.dop853 import (
+    dop853_accepted_step_factor, dop853_dense, dop853_error_norm, dop853_rejected_step_factor, dop853_step,
+)
 from vrsweep.impact import (
-    IMPACT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root, release_time,
+    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root,
+    release_time,
 )
 from vrsweep.integrator import (
-    N_STAGES, accepted_step_factor, dense_coefficients, dense_value, dp54_step, error_norm,
-    initial_step, rejected_step_factor, DENSE_ORDER,
+    DENSE_ORDER, DP54_C, N_STAGES, ORDER, accepted_step_factor, dense_value, dp54_dense, dp54_step,
+    error_norm, initial_step, rejected_step_factor,
 )
+from vrsweep.jit import kernel_jit
 from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS
 from vrsweep.results import Status
 
@@ -78,25 +85,190 @@ REBOUND_STEP_FRACTION = 0.25
 UNRESOLVED_STEP_FACTOR = 0.125
 
 
-@njit(cache=True)
-def oscillator_rhs(t, y, coefficients, dydt):
-    """x'' + gamma (x^2 - mu) x' + k x + alpha x^3 = c cos(omega t) + g cos(Omega t).
+@kernel_jit
+def oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch):
+    """x'' + gamma (x^2 - mu) x' + k x + alpha x^3 = c cos(omega t) + g cos(Omega t), at t + c h.
 
     eq2.1 (mu = 1, k = -omega0^2) and eq2.10 (mu = K, k = wt2, g = 0) alike; the last two
-    components accumulate the integrands of eq3.1 and eq3.2.
+    components accumulate the integrands of eq3.1 and eq3.2. The cosines are the library's at
+    every evaluation (``node`` and ``scratch`` are unused): the rk45 kernel's stages, and every
+    evaluation outside a step.
     """
+    time = t + c * h
+    omega_t = coefficients[OMEGA] * time
+    # Without the fast forcing (the effective model) Omega may be anything, even overflow Omega t.
+    cos_fast = math.cos(coefficients[BIG_OMEGA] * time) if coefficients[G] != 0.0 else 0.0
+    _oscillator_derivative(y, coefficients, math.cos(omega_t), math.sin(omega_t), cos_fast, dydt)
+
+
+@kernel_jit(inline="always")
+def _oscillator_derivative(y, coefficients, cos_slow, sin_slow, cos_fast, dydt):
     x = y[X]
     v = y[V]
-    omega_t = coefficients[OMEGA] * t
-    forcing = coefficients[C] * math.cos(omega_t) + coefficients[G] * math.cos(coefficients[BIG_OMEGA] * t)
+    forcing = coefficients[C] * cos_slow + coefficients[G] * cos_fast
     dydt[X] = v
     dydt[V] = (forcing - coefficients[GAMMA] * (x * x - coefficients[MU]) * v
                - coefficients[STIFFNESS] * x - coefficients[ALPHA] * x * x * x)
-    dydt[QS_INTEGRAL] = x * math.sin(omega_t)
-    dydt[QC_INTEGRAL] = x * math.cos(omega_t)
+    dydt[QS_INTEGRAL] = x * sin_slow
+    dydt[QC_INTEGRAL] = x * cos_slow
 
 
-@njit(cache=True)
+@kernel_jit
+def no_scratch(h_max, nodes):
+    return np.empty(0)
+
+
+@kernel_jit
+def no_preparation(t, h, coefficients, scratch):
+    return
+
+
+# --- the forcing's phases rotated to the stage times (the dop853 kernel) ------------------------
+# At a stage time t + c h, cos(a + d) = cos a cos d - sin a sin d and sin(a + d) = sin a cos d
+# + cos a sin d, with a = omega t (Omega t) at the step's start and d = omega c h (Omega c h).
+# prepare_rotations computes the phases at t (library calls once per step) and the rotations of
+# every node for the step size h; oscillator_rhs_rotated then costs a few multiplications where
+# oscillator_rhs makes three library calls. Step sizes are rounded down to the grid
+# h_max 2^(-k / STEP_LEVELS_PER_OCTAVE) (grid_step), whose rotations are tabulated once per point.
+STEP_LEVELS_PER_OCTAVE = 16
+N_STEP_LEVELS = 128
+MAX_NODES = 16
+ROTATION_VALUES = 4 * MAX_NODES  # cos, sin of omega c h and of Omega c h, per node
+# The phases at the next step's start are the last step's rotated by its full step (a node c = 1),
+# recomputed by the library every RESYNC_STEPS steps so that rounding cannot accumulate.
+RESYNC_STEPS = 16
+# scratch layout
+PHASE_TIME, PHASE_STEP, COS_SLOW, SIN_SLOW, COS_FAST, SIN_FAST, FULL_STEP_NODE, ROTATED_STEPS = range(8)
+ROTATION = 8                                         # the current step's rotations, per node
+NODES = ROTATION + ROTATION_VALUES                   # the method's nodes c
+STEP_GRID = NODES + MAX_NODES                        # the grid of step sizes
+LEVEL_READY = STEP_GRID + N_STEP_LEVELS              # 1 once a grid step's rotations are tabulated
+LEVEL_ROTATIONS = LEVEL_READY + N_STEP_LEVELS        # N_STEP_LEVELS x ROTATION_VALUES
+N_ROTATION_SCRATCH = LEVEL_ROTATIONS + N_STEP_LEVELS * ROTATION_VALUES
+
+
+@kernel_jit
+def rotation_scratch(h_max, nodes):
+    """oscillator_rhs_rotated's scratch for steps up to h_max of a method with these nodes."""
+    scratch = np.empty(N_ROTATION_SCRATCH)  # 68 kB: only what is read before it is written is set
+    scratch[:ROTATION] = 0.0
+    scratch[PHASE_TIME] = np.nan
+    scratch[PHASE_STEP] = np.nan
+    scratch[NODES:STEP_GRID] = 0.0
+    scratch[LEVEL_READY:LEVEL_ROTATIONS] = 0.0
+    scratch[FULL_STEP_NODE] = -1.0
+    for node in range(nodes.shape[0]):
+        scratch[NODES + node] = nodes[node]
+        if nodes[node] == 1.0 and scratch[FULL_STEP_NODE] < 0.0:
+            scratch[FULL_STEP_NODE] = node
+    for k in range(N_STEP_LEVELS):
+        scratch[STEP_GRID + k] = h_max * 2.0 ** (-k / STEP_LEVELS_PER_OCTAVE)
+    return scratch
+
+
+@kernel_jit
+def grid_step(h, scratch):
+    """The largest step size of the grid that is <= h; h itself below the grid (or if NaN)."""
+    if not (h >= scratch[STEP_GRID + N_STEP_LEVELS - 1]):
+        return h
+    k = int(math.ceil(STEP_LEVELS_PER_OCTAVE * math.log2(scratch[STEP_GRID] / h)))
+    k = min(max(k, 0), N_STEP_LEVELS - 1)
+    while k > 0 and scratch[STEP_GRID + k - 1] <= h:  # log2's rounding: take the largest <= h
+        k -= 1
+    while k < N_STEP_LEVELS - 1 and scratch[STEP_GRID + k] > h:
+        k += 1
+    return scratch[STEP_GRID + k]
+
+
+@kernel_jit
+def _grid_level(h, scratch):
+    """k with h equal to the grid's k-th step size, or -1."""
+    if not (scratch[STEP_GRID + N_STEP_LEVELS - 1] <= h <= scratch[STEP_GRID]):
+        return -1
+    k = int(round(STEP_LEVELS_PER_OCTAVE * math.log2(scratch[STEP_GRID] / h)))
+    for j in (k, k - 1, k + 1):
+        if 0 <= j < N_STEP_LEVELS and scratch[STEP_GRID + j] == h:
+            return j
+    return -1
+
+
+@kernel_jit
+def _rotations(h, coefficients, scratch, out):
+    """cos and sin of omega c h and Omega c h for every node c, into scratch[out:out + 64]."""
+    omega = coefficients[OMEGA]
+    big_omega = coefficients[BIG_OMEGA]
+    fast = coefficients[G] != 0.0  # without the fast forcing Omega may be anything: leave it out
+    for node in range(MAX_NODES):
+        dt = scratch[NODES + node] * h
+        scratch[out + 4 * node] = math.cos(omega * dt)
+        scratch[out + 4 * node + 1] = math.sin(omega * dt)
+        scratch[out + 4 * node + 2] = math.cos(big_omega * dt) if fast else 0.0
+        scratch[out + 4 * node + 3] = math.sin(big_omega * dt) if fast else 0.0
+
+
+@kernel_jit
+def prepare_rotations(t, h, coefficients, scratch):
+    """Make scratch hold the phases at t and the rotations for a step of size h."""
+    if t != scratch[PHASE_TIME]:
+        full = int(scratch[FULL_STEP_NODE])
+        if (t == scratch[PHASE_TIME] + scratch[PHASE_STEP] and full >= 0
+                and scratch[ROTATED_STEPS] < RESYNC_STEPS):
+            # The step just taken ended at t: rotate its start's phases by the whole step.
+            r = ROTATION + 4 * full
+            cos_slow = scratch[COS_SLOW] * scratch[r] - scratch[SIN_SLOW] * scratch[r + 1]
+            sin_slow = scratch[SIN_SLOW] * scratch[r] + scratch[COS_SLOW] * scratch[r + 1]
+            cos_fast = scratch[COS_FAST] * scratch[r + 2] - scratch[SIN_FAST] * scratch[r + 3]
+            sin_fast = scratch[SIN_FAST] * scratch[r + 2] + scratch[COS_FAST] * scratch[r + 3]
+            scratch[COS_SLOW] = cos_slow
+            scratch[SIN_SLOW] = sin_slow
+            scratch[COS_FAST] = cos_fast
+            scratch[SIN_FAST] = sin_fast
+            scratch[ROTATED_STEPS] += 1.0
+        else:
+            omega_t = coefficients[OMEGA] * t
+            scratch[COS_SLOW] = math.cos(omega_t)
+            scratch[SIN_SLOW] = math.sin(omega_t)
+            if coefficients[G] != 0.0:
+                scratch[COS_FAST] = math.cos(coefficients[BIG_OMEGA] * t)
+                scratch[SIN_FAST] = math.sin(coefficients[BIG_OMEGA] * t)
+            scratch[ROTATED_STEPS] = 0.0
+        scratch[PHASE_TIME] = t
+    if h != scratch[PHASE_STEP]:
+        level = _grid_level(h, scratch)
+        if level < 0:  # a step clipped to a period's end, or to an impact
+            _rotations(h, coefficients, scratch, ROTATION)
+        else:
+            table = LEVEL_ROTATIONS + level * ROTATION_VALUES
+            if scratch[LEVEL_READY + level] == 0.0:
+                _rotations(h, coefficients, scratch, table)
+                scratch[LEVEL_READY + level] = 1.0
+            scratch[ROTATION:ROTATION + ROTATION_VALUES] = scratch[table:table + ROTATION_VALUES]
+        scratch[PHASE_STEP] = h
+
+
+@kernel_jit
+def oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
+    """oscillator_rhs at a stage node of a step prepared by prepare_rotations (t and h unused).
+
+    No branch and no library call: with either, an evaluation cost as much as oscillator_rhs.
+    """
+    r = ROTATION + 4 * node
+    cos_d = scratch[r]
+    sin_d = scratch[r + 1]
+    _oscillator_derivative(y, coefficients,
+                           scratch[COS_SLOW] * cos_d - scratch[SIN_SLOW] * sin_d,
+                           scratch[SIN_SLOW] * cos_d + scratch[COS_SLOW] * sin_d,
+                           scratch[COS_FAST] * scratch[r + 2] - scratch[SIN_FAST] * scratch[r + 3],
+                           dydt)
+
+
+@kernel_jit
+def _smallest_step(t, slow_period):
+    """A step this short no longer moves t by more than a few units of its last place."""
+    return 4.0 * 2.2e-16 * max(abs(t), slow_period)
+
+
+@kernel_jit
 def _emit_samples(sample_times, samples, next_sample, t0, h, y, dense, t_end):
     """Write the dense output at every sample time in (.., t_end] of the step [t0, t0 + h]."""
     while next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_end:
@@ -107,16 +279,19 @@ def _emit_samples(sample_times, samples, next_sample, t0, h, y, dense, t_end):
     return next_sample
 
 
-@njit(cache=True)
-def _update_extremes(record, dense, y, y_new, h):
-    """Fold the step's end and any turning point of x inside it into the period's min/max."""
+@kernel_jit
+def _update_extremes(record, dense, y, y_new, h, theta_turn):
+    """Fold the step's end and any turning point of x inside it into the period's min/max.
+
+    theta_turn: the turning point if find_crossing located it on this dense output, else NaN.
+    """
     x_end = y_new[X]
     if x_end < record[REC_X_MIN]:
         record[REC_X_MIN] = x_end
     if x_end > record[REC_X_MAX]:
         record[REC_X_MAX] = x_end
     if y[V] * y_new[V] < 0.0:
-        theta = locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
+        theta = theta_turn if theta_turn == theta_turn else locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
         x_turn = dense_value(dense, y, h, theta, X)
         if x_turn < record[REC_X_MIN]:
             record[REC_X_MIN] = x_turn
@@ -124,7 +299,7 @@ def _update_extremes(record, dense, y, y_new, h):
             record[REC_X_MAX] = x_turn
 
 
-@njit(cache=True)
+@kernel_jit
 def _start_period(record, x):
     record[REC_IMPACTS] = 0.0
     record[REC_QS] = 0.0
@@ -136,9 +311,9 @@ def _start_period(record, x):
     record[REC_STUCK_TIME] = 0.0
 
 
-@njit(cache=True)
-def integrate(coefficients, initial_state, settings, period_records, summary,
-              sample_times, samples, impact_log, stick_log):
+@kernel_jit
+def integrate_rk45(coefficients, initial_state, settings, period_records, summary,
+                   sample_times, samples, impact_log, stick_log):
     """Integrate one point over transient + measurement slow periods. Returns a Status code.
 
     coefficients    (N_COEFFICIENTS,)        model.kernel_coefficients
@@ -150,8 +325,57 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     samples         (n_samples, 2)           x, v at sample_times
     impact_log      (n_impact_log, 3)        t, v before, v after, for the first impacts
     stick_log       (n_stick_log, 2)         start and end of the first sticking intervals
+
+    With Dormand-Prince 5(4) steps (integration.method: rk45, integrator.py).
+    The library's cosines at every evaluation, so results are those of earlier versions bit for bit.
     """
-    rhs = oscillator_rhs
+    return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_scratch, False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      ORDER, N_STAGES, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log)
+
+
+@kernel_jit
+def integrate_dop853(coefficients, initial_state, settings, period_records, summary,
+                     sample_times, samples, impact_log, stick_log):
+    """integrate_rk45 with DOP853 steps (integration.method: dop853, dop853.py).
+
+    Its stages evaluate the forcing by rotating the phases of the step's start (prepare_rotations,
+    oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
+    library (oscillator_rhs).
+    """
+    return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_rotations, rotation_scratch, True,
+                      dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
+                      dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log)
+
+
+# integration.method -> the kernel. Each is compiled (or loaded from the cache) on its first call,
+# so a run compiles only the method it uses.
+INTEGRATORS = {"rk45": integrate_rk45, "dop853": integrate_dop853}
+METHODS = tuple(INTEGRATORS)
+
+
+# Inlined into each method's kernel above, so that the method's functions become direct calls
+# (a function passed as a runtime value would be a "dynamic global" and could not be cached).
+@kernel_jit(inline="always")
+def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, step, step_error, dense_output,
+               accepted_factor, rejected_factor, hold_after_reject, initial_order, n_stages, K, dense,
+               coefficients, initial_state, settings, period_records, summary, sample_times, samples,
+               impact_log, stick_log):
+    """The integration loop of every method; see integrate_rk45 for the arguments.
+
+    rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
+    same at a step's stages, after prepare_step(t, h, coefficients, scratch), with scratch =
+    make_scratch(h_max, nodes); grid_steps rounds each step size down to grid_step's grid.
+    step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch) fills K (K[n_stages] =
+    f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled error norm;
+    dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch) fills dense and
+    returns its extra RHS count.
+    """
     rtol = settings[RTOL]
     atol = settings[ATOL]
     n_transient = int(settings[TRANSIENT_PERIODS])
@@ -175,22 +399,23 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     f = np.empty(N_STATE)
-    K = np.empty((N_STAGES + 1, N_STATE))
-    dense = np.empty((N_STATE, DENSE_ORDER))
-    bracket = np.empty(2)
+    bracket = np.empty(N_BRACKET)
+    scratch = make_scratch(h_max, nodes)  # the stage right-hand side's own
 
     y[X] = initial_state[0]
     y[V] = initial_state[1]
     t = 0.0
-    rhs(t, y, coefficients, f)
+    rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
     n_rhs = 1
-    h = initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max)
+    h = initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, initial_order, scratch)
     n_rhs += 1
     err_previous = 1.0
     n_steps = 0
     n_rejected = 0
     n_impacts = 0
     n_sticks = 0
+    n_scans = 0
+    retrying = False
     stuck = False
     status = Status.OK
 
@@ -207,7 +432,11 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
         record = period_records[period]
         if stuck:
             # Held at (Delta, 0) until the force lets go or the period ends.
-            t_release = release_time(t, t_boundary, coefficients, stick_scan_step)
+            t_release, scans = release_time(t, t_boundary, coefficients, stick_scan_step, max_steps - n_scans)
+            n_scans += scans
+            if t_release != t_release:
+                status = Status.MAX_STEPS  # the force scan has a budget of max_steps intervals too
+                break
             t_end = min(t_release, t_boundary)
             y[QS_INTEGRAL] += delta * (math.cos(omega * t) - math.cos(omega * t_end)) / omega
             y[QC_INTEGRAL] += delta * (math.sin(omega * t_end) - math.sin(omega * t)) / omega
@@ -221,60 +450,77 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
                 stuck = False
                 if n_sticks - 1 < stick_log.shape[0]:
                     stick_log[n_sticks - 1, 1] = t
-                rhs(t, y, coefficients, f)
+                rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
                 n_rhs += 1
                 err_previous = 1.0
         else:
             if n_steps >= max_steps:
                 status = Status.MAX_STEPS
                 break
+            if not (h > _smallest_step(t, slow_period)):
+                # An overflowing start (g = 1e200: the first step estimate is 0 or NaN) would
+                # otherwise take zero-length steps up to the step cap.
+                status = Status.STEP_TOO_SMALL if h == h else Status.NON_FINITE
+                break
             h_try = min(h, h_max)
+            if grid_steps:
+                h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
             clipped = False
             if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
                 h_try = t_boundary - t
                 clipped = True
-            dp54_step(rhs, t, y, f, h_try, coefficients, K, y_new, stage)
+            prepare_step(t, h_try, coefficients, scratch)
+            step(stage_rhs, t, y, f, h_try, coefficients, K, y_new, stage, scratch)
             n_steps += 1
-            n_rhs += N_STAGES
-            err = error_norm(K, h_try, y, y_new, rtol, atol)
+            n_rhs += n_stages
+            err = step_error(K, h_try, y, y_new, rtol, atol)
             if not (err <= 1.0):  # also catches NaN from an overflowing trial step
                 n_rejected += 1
-                h = h_try * (rejected_step_factor(err) if err == err else 0.2)
-                if h <= 4.0 * 2.2e-16 * max(abs(t), slow_period):
+                retrying = True
+                h = h_try * (rejected_factor(err) if err == err else 0.2)
+                if h <= _smallest_step(t, slow_period):
                     status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
                     break
                 continue
-            h_next = h_try * accepted_step_factor(err, err_previous)
+            h_next = h_try * accepted_factor(err, err_previous)
+            if retrying and hold_after_reject:
+                h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
+            retrying = False
             err_previous = err
             h = max(h_next, h) if clipped else h_next
 
             impact = False
             dense_ready = False
+            theta_turn = np.nan
             if y_new[X] >= delta or y[X] >= delta or (y[V] > 0.0 and y_new[V] < 0.0):
-                dense_coefficients(K, dense)
+                prepare_step(t, h_try, coefficients, scratch)
+                n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch)
                 dense_ready = True
                 pushed = y[X] >= delta and force_at_barrier(t, coefficients) > 0.0
                 verdict = find_crossing(dense, y, y_new, h_try, delta, pushed, bracket)
                 if verdict == UNRESOLVED:
                     # Off the barrier and back within the first scan interval: look closer.
                     h = h_try * UNRESOLVED_STEP_FACTOR
-                    if h <= 4.0 * 2.2e-16 * max(abs(t), slow_period):
+                    if h <= _smallest_step(t, slow_period):
                         status = Status.STEP_TOO_SMALL
                         break
                     continue
                 impact = verdict == IMPACT
+                if not impact:
+                    theta_turn = bracket[TURNING_POINT]
             h_taken = h_try
             if impact:
                 # Locate on the dense output, then reach the impact with an exact step
-                # (5th order, not the 4th-order interpolant), Newton-corrected onto Delta.
+                # (the step's order, not the interpolant's), Newton-corrected onto Delta.
                 if bracket[0] < bracket[1]:
                     theta = locate_root(dense, y, h_try, X, delta, bracket[0], bracket[1])
                 else:
                     theta = bracket[1]
                 h_taken = theta * h_try
                 for _ in range(IMPACT_NEWTON_ITERATIONS):
-                    dp54_step(rhs, t, y, f, h_taken, coefficients, K, y_new, stage)
-                    n_rhs += N_STAGES
+                    prepare_step(t, h_taken, coefficients, scratch)
+                    step(stage_rhs, t, y, f, h_taken, coefficients, K, y_new, stage, scratch)
+                    n_rhs += n_stages
                     miss = y_new[X] - delta
                     if abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(delta)) or y_new[V] <= 0.0:
                         break
@@ -282,23 +528,26 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
                     if not (0.0 < h_corrected <= h_try):
                         break
                     h_taken = h_corrected
-                dense_coefficients(K, dense)
+                prepare_step(t, h_taken, coefficients, scratch)
+                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch)
                 dense_ready = True
 
             t_new = t_boundary if (clipped and not impact) else t + h_taken
             if next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_new:
                 if not dense_ready:
-                    dense_coefficients(K, dense)
+                    prepare_step(t, h_taken, coefficients, scratch)
+                    n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch)
                     dense_ready = True
                 next_sample = _emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
             if y[V] * y_new[V] < 0.0 and not dense_ready:
-                dense_coefficients(K, dense)
-            _update_extremes(record, dense, y, y_new, h_taken)
+                prepare_step(t, h_taken, coefficients, scratch)
+                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch)
+            _update_extremes(record, dense, y, y_new, h_taken, theta_turn)
 
             t = t_new
             for j in range(N_STATE):
                 y[j] = y_new[j]
-                f[j] = K[N_STAGES, j]
+                f[j] = K[n_stages, j]
 
             if impact:
                 v_before = max(y[V], 0.0)
@@ -324,7 +573,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
                     impact_log[n_impacts - 1, 1] = v_before
                     impact_log[n_impacts - 1, 2] = v_after
                 if not stuck:
-                    rhs(t, y, coefficients, f)
+                    rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
                     n_rhs += 1
                     # A slow rebound against a force pushing back returns after about
                     # 2 |v| / a: step well inside that flight, so its return is seen.
@@ -367,7 +616,7 @@ def integrate(coefficients, initial_state, settings, period_records, summary,
     return status
 
 
-@njit(cache=True)
+@kernel_jit
 def _summarize(period_records, n_transient, n_periods, slow_period, c, status, summary):
     """eq3.1-eq3.3 over the measurement window, and the mean impacts per slow period.
 
@@ -383,7 +632,7 @@ def _summarize(period_records, n_transient, n_periods, slow_period, c, status, s
     return status
 
 
-@njit(cache=True)
+@kernel_jit
 def _measure(period_records, n_transient, n_periods, slow_period, c, summary):
     n_measured = n_periods - n_transient
     sin_integral = 0.0

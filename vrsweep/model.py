@@ -59,12 +59,14 @@ N_COEFFICIENTS = 10
 
 def effective_stiffness(alpha, omega0, g, Omega):
     """wt2 = 3 alpha g^2 / (2 Omega^4) - omega0^2, signed.  # eq2.11 (squared, ERRATA 5)"""
-    return 1.5 * alpha * np.square(g) / np.power(Omega, 4) - np.square(omega0)
+    with np.errstate(over="ignore"):  # g = 1e200: wt2 = inf, and the kernel reports non_finite
+        return 1.5 * alpha * np.square(g) / np.power(Omega, 4) - np.square(omega0)
 
 
 def effective_damping_level(g, Omega):
     """K = 1 - g^2 / (2 Omega^4).  # eq2.12"""
-    return 1.0 - 0.5 * np.square(g) / np.power(Omega, 4)
+    with np.errstate(over="ignore"):
+        return 1.0 - 0.5 * np.square(g) / np.power(Omega, 4)
 
 
 def kernel_coefficients(parameters, model="original"):

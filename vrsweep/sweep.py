@@ -17,10 +17,11 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from vrsweep import kernel
 from vrsweep.diagnostics import point_diagnostics
+from vrsweep.jit import kernel_jit
 from vrsweep.model import INITIAL_STATE_KEYS, kernel_coefficients
 from vrsweep.results import Status
 from vrsweep.trajectory import settings_vector
@@ -139,8 +140,33 @@ def shard_of_points(grid, shard_count):
     return shard.reshape(grid.shape)
 
 
-@njit(parallel=True, cache=True)
-def run_lines(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+@kernel_jit(inline="always")
+def _run_line(integrate, coefficients, initial_state, settings, line_points, records, summaries, statuses):
+    """One line's points in order, each starting from the previous point's final state
+    (the first from initial_state, (2,))."""
+    state = initial_state.copy()
+    no_samples = np.empty(0)
+    no_sample_out = np.empty((0, 2))
+    no_impacts = np.empty((0, 3))
+    no_sticks = np.empty((0, 2))
+    for slot in range(line_points.shape[0]):
+        status = integrate(coefficients[line_points[slot]], state, settings, records[slot], summaries[slot],
+                           no_samples, no_sample_out, no_impacts, no_sticks)
+        statuses[slot] = status
+        # The next point starts at its own t = 0 from this one's state at t = n T: in phase
+        # with the slow force (omega n T = 2 pi n), and with the fast one when n Omega / omega
+        # is a whole number (Omega = 4, omega = 0.5: 8 n); otherwise the fast phase restarts.
+        if status == Status.OK:
+            state[0] = summaries[slot, kernel.SUM_X_FINAL]
+            state[1] = summaries[slot, kernel.SUM_V_FINAL]
+        else:
+            # A failed point says nothing about where the next one starts: restart.
+            state[0] = initial_state[0]
+            state[1] = initial_state[1]
+
+
+@kernel_jit(parallel=True)
+def run_lines_rk45(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
     """Run each line's points in order; lines in parallel.
 
     coefficients    (n_points, N_COEFFICIENTS)         for every point the lines name
@@ -152,26 +178,20 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
     statuses        (n_lines, line_length) int8
     """
     for line in prange(lines.shape[0]):
-        state = initial_states[line].copy()
-        no_samples = np.empty(0)
-        no_sample_out = np.empty((0, 2))
-        no_impacts = np.empty((0, 3))
-        no_sticks = np.empty((0, 2))
-        for slot in range(lines.shape[1]):
-            status = kernel.integrate(
-                coefficients[lines[line, slot]], state, settings, period_records[line, slot],
-                summaries[line, slot], no_samples, no_sample_out, no_impacts, no_sticks)
-            statuses[line, slot] = status
-            # The next point starts at its own t = 0 from this one's state at t = n T: in phase
-            # with the slow force (omega n T = 2 pi n), and with the fast one when n Omega / omega
-            # is a whole number (Omega = 4, omega = 0.5: 8 n); otherwise the fast phase restarts.
-            if status == Status.OK:
-                state[0] = summaries[line, slot, kernel.SUM_X_FINAL]
-                state[1] = summaries[line, slot, kernel.SUM_V_FINAL]
-            else:
-                # A failed point says nothing about where the next one starts: restart.
-                state[0] = initial_states[line, 0]
-                state[1] = initial_states[line, 1]
+        _run_line(kernel.integrate_rk45, coefficients, initial_states[line], settings, lines[line],
+                  period_records[line], summaries[line], statuses[line])
+
+
+@kernel_jit(parallel=True)
+def run_lines_dop853(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+    """run_lines_rk45 with the DOP853 kernel."""
+    for line in prange(lines.shape[0]):
+        _run_line(kernel.integrate_dop853, coefficients, initial_states[line], settings, lines[line],
+                  period_records[line], summaries[line], statuses[line])
+
+
+# integration.method -> the parallel loop; each is compiled (or loaded) only when a run uses it.
+RUN_LINES = {"rk45": run_lines_rk45, "dop853": run_lines_dop853}
 
 
 # A chunk is the unit of checkpointing and of progress: long enough that writing it is a small
@@ -193,6 +213,7 @@ class LineRunner:
         self.config = config
         self.grid = Grid.from_config(config)
         self.settings = integration_settings(config.integration)
+        self.method = config.integration.method
         self.n_periods = config.integration.transient_periods + config.integration.measure_periods
 
     def run(self, lines, threads=None):
@@ -211,7 +232,8 @@ class LineRunner:
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
         with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-            run_lines(coefficients, initial_states, self.settings, local_lines, records, summaries, statuses)
+            RUN_LINES[self.method](coefficients, initial_states, self.settings, local_lines, records,
+                                   summaries, statuses)
         values = point_values(
             records.reshape(-1, self.n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
             statuses.reshape(-1), coefficients, self.config.integration)

@@ -50,12 +50,15 @@ class Trajectory:
 
 
 def simulate(coefficients, initial_state, settings, sample_times=(), impact_capacity=4096,
-             stick_capacity=1024):
+             stick_capacity=1024, method="rk45"):
     """Integrate one point, keeping samples at ``sample_times`` and every impact and stick.
+
+    ``method``: the integration method, a key of kernel.INTEGRATORS (rk45, dop853).
 
     The logs grow and the run is repeated if they overflow: it is deterministic, so the
     second run is the same trajectory.
     """
+    integrate = kernel.INTEGRATORS[method]
     coefficients = np.ascontiguousarray(coefficients, dtype=np.float64)
     initial_state = np.ascontiguousarray(initial_state, dtype=np.float64)
     settings = np.ascontiguousarray(settings, dtype=np.float64)
@@ -67,8 +70,8 @@ def simulate(coefficients, initial_state, settings, sample_times=(), impact_capa
         samples = np.full((len(sample_times), 2), np.nan)
         impacts = np.full((impact_capacity, 3), np.nan)
         sticks = np.full((stick_capacity, 2), np.nan)
-        status = kernel.integrate(coefficients, initial_state, settings, records, summary,
-                                  sample_times, samples, impacts, sticks)
+        status = integrate(coefficients, initial_state, settings, records, summary,
+                           sample_times, samples, impacts, sticks)
         n_impacts = int(summary[kernel.SUM_IMPACTS])
         n_sticks = int(summary[kernel.SUM_STICKS])
         if n_impacts <= impact_capacity and n_sticks <= stick_capacity:

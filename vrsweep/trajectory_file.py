@@ -176,7 +176,8 @@ def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compar
     models = [config.model] + (["effective"] if compare_effective else [])
     runs = {}
     for model in models:
-        result = trajectory.simulate(kernel_coefficients(config.parameters, model), initial_state, settings, times)
+        result = trajectory.simulate(kernel_coefficients(config.parameters, model), initial_state, settings, times,
+                                     method=config.integration.method)
         runs[model] = _model_run(model, result)
 
     slow_flow = {}

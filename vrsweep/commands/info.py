@@ -308,7 +308,7 @@ def format_summary(summary, show_config=False) -> str:
         lines.append(f"fixed:       {fixed}")
     integration = summary["integration"]
     if integration:
-        keys = ("rtol", "atol", "transient_periods", "measure_periods")
+        keys = ("method", "rtol", "atol", "transient_periods", "measure_periods")  # method: only if not rk45
         lines.append("integration: " + " ".join(f"{k}={_short(integration[k])}" for k in keys if k in integration))
     if summary["status_counts"]:
         for index, row in enumerate(summary["status_counts"]):

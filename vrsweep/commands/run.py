@@ -74,7 +74,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         if quiet:
             return None
         if already_done < total and (not dask_address or parse_local(dask_address)):
-            _say_if_compiling()  # a remote cluster's workers have caches of their own
+            _say_if_compiling(config.integration.method)  # a remote cluster's workers have caches of their own
         if not sys.stderr.isatty():  # a batch log: lines, not a bar's redraws
             from vrsweep.progress import ProgressLog
 
@@ -121,14 +121,15 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         click.echo(line, err=True)
 
 
-# Measured with an empty cache: 29 s wall on a loaded 2-core machine (11 s of CPU).
+# Measured with an empty cache on a loaded 2-core machine: rk45 29 s wall (11 s of CPU); dop853
+# 17-19 s in benchmarks/README.md's runs, up to 30 s at load 3-4.
 COMPILE_SECONDS = "about 30 s"
 
 
-def _say_if_compiling():
+def _say_if_compiling(method):
     from vrsweep.numba_cache import cache_dir, kernel_is_cached
 
-    if not kernel_is_cached():
+    if not kernel_is_cached(method):
         click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, once: later runs load it from "
                    f"{cache_dir()})", err=True)
 

@@ -45,7 +45,7 @@ def command(config_path, overrides, threads):
     both = " x 2 directions (continuation: both)" if config.n_runs != config.n_points else ""
     click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''}{shape}{both}")
     integration = config.integration
-    click.echo(f"integration: rtol={integration.rtol:g} atol={integration.atol:g}, "
+    click.echo(f"integration: {integration.method}, rtol={integration.rtol:g} atol={integration.atol:g}, "
                f"{integration.transient_periods} transient + {integration.measure_periods} measured "
                f"slow periods")
     click.echo(f"output:      {config.output_path()}")

@@ -1,0 +1,18 @@
+"""The numba decorator of the numerical kernel: cached, with numpy's floating-point error model.
+
+``error_model="numpy"``: a float division by zero gives inf or nan, as in numpy, instead of
+raising ZeroDivisionError. Inside a ``prange`` loop such an exception cannot be raised cleanly
+(it surfaced as "SystemError: ... returned a result with an exception set" for g = 1e200), and
+every non-finite value is already turned into a point status (``non_finite``, ``step_too_small``)
+by the kernel. It also drops the zero test before every division from the hot loop.
+"""
+
+from numba import njit
+
+
+def kernel_jit(function=None, **options):
+    """``njit(cache=True, error_model="numpy", **options)``, usable with or without arguments."""
+    options = {"cache": True, "error_model": "numpy", **options}
+    if function is None:
+        return njit(**options)
+    return njit(**options)(function)
