@@ -4,17 +4,28 @@ numba's default is a ``__pycache__`` folder beside each source file, i.e. inside
 package. That breaks twice: a read-only install cannot be cached at all, and a cache written into
 ``site-packages/vrsweep/__pycache__`` outlives ``pip uninstall``, after which Python imports the
 left-over folder as an empty namespace package named ``vrsweep`` ahead of a later editable install
-(``ImportError: cannot import name '__version__'``). So unless the user says otherwise with
-``NUMBA_CACHE_DIR``, kernels go to a per-user cache folder, one sub-folder per vrsweep version::
+(``ImportError: cannot import name '__version__'``). So kernels go to a per-user cache folder::
 
-    ~/.cache/vrsweep/<version>/        (Linux; platformdirs.user_cache_dir elsewhere)
+    ~/.cache/vrsweep/vrsweep-<version>-<source digest>/    (Linux; platformdirs elsewhere)
+
+or, when ``NUMBA_CACHE_DIR`` is set, to the same sub-folder of it.
+
+Why a digest of the sources in the name: numba checks a cached function against its *own* source
+file only. The parallel loops in ``sweep.py`` have the whole kernel compiled into them, so after
+an edit of ``kernel.py`` alone (a ``git pull`` into an editable install, a patched release with
+the same version number) numba would load the old kernel and compute with it, silently. A folder
+per state of the package's sources makes every change compile afresh; the old folders are inert
+and may be deleted.
 
 :func:`configure` must run before numba compiles anything: ``vrsweep/__init__.py`` calls it
-first thing, so every entry point (the CLI, the library, Dask workers) gets the same folder.
+first thing, so every entry point (the CLI, the library, Dask workers) gets the same folder, and
+it is idempotent: a subprocess that inherits the variable keeps the folder.
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import os
 import sys
 from pathlib import Path
@@ -22,26 +33,41 @@ from pathlib import Path
 from vrsweep._version import __version__
 
 
+@functools.lru_cache(maxsize=None)
+def sources_digest() -> str:
+    """12 hex digits of SHA-1 over the package's own modules (names and bytes): ~1 ms."""
+    digest = hashlib.sha1()
+    for path in sorted(Path(__file__).resolve().parent.glob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
+def folder_name() -> str:
+    return f"vrsweep-{__version__}-{sources_digest()}"
+
+
 def cache_dir() -> Path:
-    """The folder that holds (or will hold) the compiled kernels of this vrsweep version."""
+    """The folder that holds (or will hold) the compiled kernels of these vrsweep sources."""
     explicit = os.environ.get("NUMBA_CACHE_DIR")
     if explicit:
-        return Path(explicit)
-    import platformdirs
+        base = Path(explicit)
+    else:
+        import platformdirs
 
-    return Path(platformdirs.user_cache_dir("vrsweep", appauthor=False)) / __version__
+        base = Path(platformdirs.user_cache_dir("vrsweep", appauthor=False))
+    return base if base.name == folder_name() else base / folder_name()
 
 
 def configure() -> Path:
-    """Point numba's cache at :func:`cache_dir` unless ``NUMBA_CACHE_DIR`` is already set."""
-    folder = cache_dir()
-    if "NUMBA_CACHE_DIR" not in os.environ or not os.environ["NUMBA_CACHE_DIR"]:
-        # numba reads NUMBA_CACHE_DIR when it is imported; worker subprocesses inherit it.
-        os.environ["NUMBA_CACHE_DIR"] = str(folder)
-        numba_config = sys.modules.get("numba.core.config")
-        if numba_config is not None:  # numba imported before vrsweep (a notebook, say)
-            numba_config.CACHE_DIR = str(folder)
-    return folder
+    """Point numba's cache at :func:`cache_dir` (set before numba is imported; idempotent)."""
+    folder = str(cache_dir())
+    # numba reads NUMBA_CACHE_DIR when it is imported; worker subprocesses inherit it.
+    os.environ["NUMBA_CACHE_DIR"] = folder
+    numba_config = sys.modules.get("numba.core.config")
+    if numba_config is not None:  # numba imported before vrsweep (a notebook, say)
+        numba_config.CACHE_DIR = folder
+    return Path(folder)
 
 
 def is_empty() -> bool:
