@@ -491,3 +491,11 @@ def test_the_slow_flow_from_rest_is_drawn(tmp_path):
     (state,) = [line for line in fig.axes[0].get_lines() if "x(0)" in line.get_label()]
     assert np.isfinite(state.get_ydata()).all() and np.ptp(state.get_ydata()) > 0
     assert not any("not drawn" in text for text in legend_texts(fig))
+
+
+def test_axis_labels_of_the_initial_state_name_it_once():
+    from vrsweep.plot import parameter_label
+
+    assert parameter_label("x0") == "initial position $x(0)$ [1]"
+    assert parameter_label("v0") == r"initial velocity $\dot{x}(0)$ [1]"
+    assert parameter_label("g") == "fast forcing amplitude $g$ [1]"

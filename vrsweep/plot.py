@@ -39,7 +39,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_SYMBOLS
+from vrsweep.model import (
+    INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_SYMBOLS,
+)
 from vrsweep.results import Status
 
 SWEEP_KINDS = ("response", "map", "impacts", "status", "bifurcation")
@@ -75,6 +77,9 @@ def parameter_label(name: str) -> str:
     """'fast forcing amplitude $g$ [1]' for a parameter, with its symbol and units."""
     if name == "direction":
         return "continuation direction"
+    if name in INITIAL_STATE_LONG_NAMES:  # x0, v0: 'initial position $x(0)$ [1]'
+        words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
+        return f"{words} {INITIAL_STATE_SYMBOLS[name]} {UNITS}"
     words = PARAMETER_LONG_NAMES.get(name, name)
     if words.endswith(" " + name):
         words = words[: -len(name) - 1]
