@@ -11,8 +11,10 @@ Results in Python::
 
 from vrsweep._version import __version__
 from vrsweep import numba_cache as _numba_cache
+from vrsweep import threads as _threads
 
 _numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
+_threads.drop_unreadable_setting()
 
 
 def open_results(path, **kwargs):

@@ -8,12 +8,12 @@ numba: ``vrsweep validate`` uses it and promises to compile nothing.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from vrsweep.errors import ConfigError
+from vrsweep.threads import available_threads
 
 # Wall time of one grid point over one slow period 2 pi/omega, on one thread, at rtol = 1e-9.
 # The original model resolves the fast forcing Omega, so it takes several times more steps.
@@ -50,18 +50,9 @@ class Estimate:
     seconds: float
 
 
-def default_threads() -> int:
-    """The thread count numba would use: NUMBA_NUM_THREADS if set, else the number of CPUs."""
-    try:
-        threads = int(os.environ.get("NUMBA_NUM_THREADS", ""))
-    except ValueError:
-        threads = 0
-    return threads if threads >= 1 else (os.cpu_count() or 1)
-
-
 def estimate(config, threads=None) -> Estimate:
     """Output size and wall time of running ``config`` on ``threads`` threads (default: all)."""
-    threads = max(1, int(threads or default_threads()))
+    threads = max(1, int(threads or available_threads()))
     integration = config.integration
     n_points = config.n_runs  # a two-way continuation stores and runs every point twice
     output_bytes = stored_bytes(config)
@@ -111,7 +102,7 @@ def stored_bytes(config) -> int:
 
 def size_problem(config, threads=None) -> str | None:
     """The message `check_size` would raise, or None when the run is of reasonable size."""
-    threads = max(1, int(threads or default_threads()))
+    threads = max(1, int(threads or available_threads()))
     guess = estimate(config, threads)
     if guess.output_bytes <= MAX_OUTPUT_BYTES and guess.seconds <= MAX_SECONDS:
         return None

@@ -11,7 +11,6 @@ order, the chunking and the thread count, bit for bit.
 This module knows nothing of files: finished chunks are handed to a callback.
 """
 
-import os
 import time
 from dataclasses import dataclass
 
@@ -293,7 +292,3 @@ def point_values(records, summaries, statuses, coefficients, integration):
     }
     values.update(point_diagnostics(records, statuses, coefficients, integration))
     return values
-
-
-def thread_count():
-    return int(os.environ.get("NUMBA_NUM_THREADS", numba.config.NUMBA_NUM_THREADS))

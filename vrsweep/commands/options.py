@@ -22,9 +22,9 @@ config_argument = click.argument("config_path", metavar="CONFIG.yaml", type=clic
 
 def capped_threads(threads):
     """--threads, lowered to what numba can run here, saying so on stderr (never silently)."""
-    from vrsweep.estimate import default_threads
+    from vrsweep.threads import available_threads
 
-    available = default_threads()
+    available = available_threads()
     if threads is not None and threads > available:
         click.echo(f"--threads {threads}: numba can run {available} thread{'s' if available != 1 else ''} "
                    f"here (NUMBA_NUM_THREADS or the CPUs this process may use); using {available}", err=True)

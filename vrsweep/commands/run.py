@@ -44,6 +44,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
     from vrsweep.estimate import check_size
+    from vrsweep.threads import available_threads
 
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
@@ -66,7 +67,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
     # The size check is per process: a shard or a local Dask cluster shares the grid's time, while
     # a shard's file is still the whole grid's size (see store.py).
-    check_size(config, (threads or _default_threads()) * shard_pair[1] * workers, allow_large)
+    check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large)
     bars = []
 
     def progress_factory(total, already_done):
@@ -132,9 +133,3 @@ def _say_if_compiling(method):
     if not kernel_is_cached(method):
         click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, once: later runs load it from "
                    f"{cache_dir()})", err=True)
-
-
-def _default_threads():
-    from vrsweep.sweep import thread_count
-
-    return thread_count()

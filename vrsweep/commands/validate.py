@@ -9,7 +9,8 @@ import click
 
 from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
 from vrsweep.config import load_config
-from vrsweep.estimate import default_threads, estimate, format_bytes, format_duration, size_problem
+from vrsweep.estimate import estimate, format_bytes, format_duration, size_problem
+from vrsweep.threads import available_threads
 from vrsweep.model import PARAMETER_NAMES
 
 
@@ -25,7 +26,7 @@ def command(config_path, overrides, threads):
     """
     config = load_config(config_path, overrides)  # ConfigError -> every problem, exit 2 (cli.py)
     announce_fixed_axes(config_path, overrides, config)
-    threads = threads or default_threads()  # not capped: the run may be planned for another machine
+    threads = threads or available_threads()  # not capped: the run may be planned for another machine
     guess = estimate(config, threads)
 
     click.echo(f"{config.source_name}: valid")

@@ -1,0 +1,39 @@
+"""How many threads numba runs here: one answer for the whole program, without importing numba.
+
+numba's ceiling is NUMBA_NUM_THREADS when that is a whole number ≥ 1, else the CPUs this process
+may run on (its affinity mask: what SLURM's --cpus-per-task gives a bound task), not the machine's
+CPU count. numba ignores an unreadable NUMBA_NUM_THREADS with a warning; so does this.
+"""
+
+import os
+import sys
+
+
+def available_threads() -> int:
+    """numba's thread ceiling in this process (``--threads`` can lower it, never raise it)."""
+    try:
+        threads = int(os.environ.get("NUMBA_NUM_THREADS", "").strip() or 0)
+    except ValueError:
+        threads = 0
+    if threads >= 1:
+        return threads
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # no affinity masks (macOS)
+        return os.cpu_count() or 1
+
+
+def drop_unreadable_setting() -> None:
+    """An unreadable NUMBA_NUM_THREADS ('abc', '0'): say so in one line and unset it, before numba
+    is imported. numba would ignore it too, but with a warning that prints a traceback."""
+    value = os.environ.get("NUMBA_NUM_THREADS")
+    if value is None or "numba" in sys.modules:
+        return
+    try:
+        readable = int(value.strip()) >= 1
+    except ValueError:
+        readable = False
+    if not readable:
+        del os.environ["NUMBA_NUM_THREADS"]
+        sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={value!r} is not a whole number >= 1: ignored, "
+                         f"using the {available_threads()} CPUs this process may run on\n")
