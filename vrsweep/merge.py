@@ -32,10 +32,11 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
+from vrsweep.fileio import open_hdf5, prepare_output_directory
 from vrsweep.provenance import cf_attributes
 from vrsweep.store import (
     _BOOKKEEPING, _RESERVED_ROOT_ATTRS, VariableSpec, _add_extras, _build_skeleton,
-    _check_output_directory, _clean_attrs, _corrupt_error, _file_kwargs, _first_difference,
+    _clean_attrs, _corrupt_error, _first_difference,
     _open_checked, _point_variables, _scale_names, atomic_write, point_label, creation_reserve, writing_hdf5,
 )
 
@@ -162,7 +163,7 @@ class _Shard:
         self._stop()
         if _identity(self.path) != self._identity:
             raise ResultFileError(f"{self.path} was changed or replaced while it was being merged")
-        return h5py.File(self.path, "r", rdcc_nbytes=0, **_file_kwargs())
+        return open_hdf5(self.path, "r", rdcc_nbytes=0)
 
     def stored_digest(self, name):
         """SHA-256 of a variable as stored on disk (chunk checksums included), one chunk at a
@@ -290,7 +291,7 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
             raise UsageError(f"output {out_path} is one of the shards being merged")
         if not overwrite:
             raise UsageError(f"output {out_path} already exists: pass --overwrite to replace it")
-    _check_output_directory(out_path)
+    prepare_output_directory(out_path)
 
     stop = stop or (lambda: None)
     return _merge([_Shard(path, stop) for path in paths], out_path, allow_missing)

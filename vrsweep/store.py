@@ -81,8 +81,7 @@ import numpy as np
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.fileio import (
     atomic_write, check_still_at_path, close_without_writing, closed_without_writing_on_failure,
-    fsync_path, hdf5_locking_kwargs, identity, lock_for_writing, open_hdf5, prepare_output_directory,
-    refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure, writing_hdf5,
+    fsync_path, identity, lock_for_writing, open_hdf5, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure, writing_hdf5,
 )
 from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 
@@ -108,11 +107,6 @@ _RDCC_NSLOTS = 10007  # a prime, ~100x the chunks that fit in the cache
 # --------------------------------------------------------------------------------------------
 # Small helpers
 # --------------------------------------------------------------------------------------------
-
-
-def _file_kwargs():
-    """Keyword arguments for an ``h5py.File`` (locking: see module docstring); prefer open_hdf5."""
-    return hdf5_locking_kwargs()
 
 
 def _h5open(path, mode, **kwargs):
@@ -163,9 +157,6 @@ def _fsync(h5file):
     except (OSError, ValueError, TypeError, NotImplementedError):  # driver without a plain fd
         pass
 
-
-# Where an output's folder is missing it is created; merge calls this before reading shards.
-_check_output_directory = prepare_output_directory
 
 
 # --------------------------------------------------------------------------------------------
