@@ -19,7 +19,7 @@ import numpy as np
 
 from vrsweep.dop853_coefficients import A, C, D, E3, E5, N_STAGES, N_STAGES_EXTENDED
 from vrsweep.integrator import (
-    ERR_PREVIOUS_FLOOR, MAX_FACTOR, MIN_FACTOR, N_CONTROLLED, N_DYNAMIC, PI_BETA, SAFETY,
+    ERR_PREVIOUS_FLOOR, MAX_FACTOR, MIN_FACTOR, N_CONTROLLED, N_DYNAMIC, N_INTERPOLATED, PI_BETA, SAFETY,
 )
 from vrsweep.jit import kernel_jit
 
@@ -43,12 +43,12 @@ D_ROWS = np.ascontiguousarray(D)
 
 
 @kernel_jit(inline="always")
-def _stage(rhs, t, y, h, coefficients, K, s, stage, scratch):
+def _stage(rhs, t, y, h, coefficients, K, s, stage, scratch, n_dynamic):
     """K[s] = rhs(t + c_s h, y + h sum_{r<s} a_sr K[r]): one stage, skipping the tableau's zeros.
 
-    Only the components the right-hand side reads (x, v) are formed (integrator.N_DYNAMIC).
+    Only the components the right-hand side reads are formed (the first n_dynamic).
     """
-    for j in range(N_DYNAMIC):
+    for j in range(n_dynamic):
         acc = 0.0
         for r in range(s):
             a = A_STAGES[s, r]
@@ -59,13 +59,13 @@ def _stage(rhs, t, y, h, coefficients, K, s, stage, scratch):
 
 
 @kernel_jit(inline="always")
-def dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch):
+def dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic=N_DYNAMIC):
     """One 8th-order step of size h from (t, y) with f = rhs(t, y); K[N_STAGES] = f(t + h, y_new)."""
     n = y.shape[0]
     for j in range(n):
         K[0, j] = f[j]
     for s in range(1, N_STAGES):
-        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch)
+        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch, n_dynamic)
     for j in range(n):
         acc = 0.0
         for r in range(N_STAGES):
@@ -128,7 +128,7 @@ def _d_row(q, K, j):
 
 
 @kernel_jit(inline="always")
-def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
+def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch, n_dynamic=N_DYNAMIC):
     """dense (n, 7): the 7th-order continuous extension of the step [t, t + h], in powers of theta.
 
     Needs K of the step (with its FSAL row) and computes the three extra stages 13..15.
@@ -140,8 +140,8 @@ def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
     impact and turning point).
     """
     for s in range(N_STAGES + 1, N_STAGES_EXTENDED):
-        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch)
-    for j in range(N_DYNAMIC):
+        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch, n_dynamic)
+    for j in range(N_INTERPOLATED):
         delta_y = y_new[j] - y[j]
         f0 = delta_y
         f1 = h * K[0, j] - delta_y

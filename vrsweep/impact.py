@@ -9,8 +9,8 @@ import numpy as np
 from vrsweep.integrator import dense_value
 from vrsweep.jit import kernel_jit
 from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, G, OMEGA, STIFFNESS
+from vrsweep.state import V, X
 
-X, V = 0, 1  # state components
 
 # Step fraction to which roots are located: the impact time is then known to ~1e-15 h.
 THETA_TOLERANCE = 1e-15

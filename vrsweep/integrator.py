@@ -9,9 +9,10 @@ the method's nodes c; -1 for a time that is no node) at t + c h, so that a right
 prepare work for all the stages of a step (kernel.py: the forcing's phases). ``scratch`` belongs
 to the right-hand side and is passed through.
 
-Shapes used throughout (n = number of state components, here 4: x, v and two Fourier
-quadratures; only the first ``N_CONTROLLED`` take part in error control, and only the first
-``N_DYNAMIC`` are read by the right-hand side and interpolated):
+Shapes used throughout (n = number of state components, state.py: x, v, two Fourier
+quadratures, and in the Lyapunov kernels two tangent vectors; only the first ``N_CONTROLLED``
+take part in error control, only the first ``n_dynamic`` are read by the right-hand side (so only
+those stage values are formed) and only x and v are interpolated):
 
     y, y_new, dydt    (n,)
     K                 (N_STAGES + 1, n)   stage derivatives; K[-1] is f(t + h, y_new) (FSAL)
@@ -66,27 +67,30 @@ ERR_PREVIOUS_FLOOR = 1e-4  # keeps the PI memory from exploding after a near-exa
 # The first N_CONTROLLED components (x, v) are error-controlled (docs/design.md); the Fourier
 # quadratures ride along: they are integrals of x, as accurate as x itself.
 N_CONTROLLED = 2
-# The right-hand side reads only the first N_DYNAMIC components (x, v): the quadratures feed
-# nothing back, so their stage values are never formed (half the work of a stage), and no
-# dense output is made for them.
+# The oscillator's right-hand side reads only the first N_DYNAMIC components (x, v): the
+# quadratures feed nothing back, so their stage values are never formed (half the work of a
+# stage). A right-hand side that reads more (the tangent vectors) passes its own n_dynamic.
 N_DYNAMIC = 2
+# The continuous extension is made for x and v only: events and samples need nothing else.
+N_INTERPOLATED = 2
 
 
 # Inlined at numba-IR level so that the rhs argument becomes a direct call: a dispatcher passed
 # as a runtime value would be a "dynamic global" and the caller could not be cached.
 @kernel_jit(inline="always")
-def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch):
+def dp54_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic=N_DYNAMIC):
     """One Dormand-Prince step of size h from (t, y) with f = rhs(t, y) already known.
 
     Fills K (N_STAGES + 1, n) with the stage derivatives, K[N_STAGES] = f(t + h, y_new)
     (first same as last), and y_new (n,). ``stage`` (n,) is scratch, passed in so that the
-    hot loop allocates nothing. The error estimate is ``error_norm``'s job.
+    hot loop allocates nothing; its first n_dynamic components are formed. The error estimate
+    is ``error_norm``'s job.
     """
     n = y.shape[0]
     for j in range(n):
         K[0, j] = f[j]
     for s in range(1, N_STAGES):
-        for j in range(N_DYNAMIC):
+        for j in range(n_dynamic):
             acc = 0.0
             for r in range(s):
                 acc += DP54_A[s, r] * K[r, j]
@@ -132,7 +136,7 @@ def rejected_step_factor(err):
 @kernel_jit
 def dense_coefficients(K, dense):
     """dense (n, DENSE_ORDER) = K^T P: the continuous extension of the last step (x and v only)."""
-    for j in range(N_DYNAMIC):
+    for j in range(N_INTERPOLATED):
         for q in range(DENSE_ORDER):
             acc = 0.0
             for r in range(N_STAGES + 1):
@@ -141,7 +145,7 @@ def dense_coefficients(K, dense):
 
 
 @kernel_jit(inline="always")
-def dp54_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch):
+def dp54_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch, n_dynamic=N_DYNAMIC):
     """dense_coefficients behind the interface of dop853.dop853_dense: no extra RHS evaluation."""
     dense_coefficients(K, dense)
     return 0

@@ -12,7 +12,11 @@ needs the per-period records) and a trajectory (samples, impact and sticking log
 observer with zero length costs nothing. The kernel knows nothing of files or configs.
 
 Fourier sums (eq3.1, eq3.2) are quadrature states integrated with the motion, so they are
-as accurate as x itself; while stuck they are added in closed form.
+as accurate as x itself; while stuck they are added in closed form. With integration.lyapunov
+the state also carries two tangent vectors (tangent.py) and every period records their growth.
+
+Array layouts: the state vector is state.py's; the settings vector, the per-period record and
+the summary are this module's (below); the coefficient vector is model.py's.
 """
 
 import math
@@ -24,20 +28,19 @@ from vrsweep.dop853 import (
     dop853_accepted_step_factor, dop853_dense, dop853_error_norm, dop853_rejected_step_factor, dop853_step,
 )
 from vrsweep.impact import (
-    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, X, V, find_crossing, force_at_barrier, locate_root,
-    release_time,
+    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, force_at_barrier, locate_root, release_time,
 )
 from vrsweep.integrator import (
-    DENSE_ORDER, DP54_C, N_STAGES, ORDER, accepted_step_factor, dense_value, dp54_dense, dp54_step,
+    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, dense_value, dp54_dense, dp54_step,
     error_norm, initial_step, rejected_step_factor,
 )
 from vrsweep.jit import kernel_jit
 from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS
 from vrsweep.results import Status
-
-# --- state: position, velocity, and the two Fourier quadratures of the current slow period ---
-N_STATE = 4
-QS_INTEGRAL, QC_INTEGRAL = 2, 3
+from vrsweep.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
+from vrsweep.tangent import (
+    apply_saltation, collapse_tangents, renormalise_tangents, seed_tangents, tangent_derivative,
+)
 
 # --- settings vector layout (float64), filled by sweep.integration_settings ---
 RTOL, ATOL, TRANSIENT_PERIODS, MEASURE_PERIODS, MAX_STEPS, MAX_IMPACTS_PER_PERIOD, \
@@ -53,7 +56,9 @@ REC_V = 4           # stroboscopic v at the period's end
 REC_X_MIN = 5       # smallest x in the period
 REC_X_MAX = 6       # largest x in the period
 REC_STUCK_TIME = 7  # time spent stuck on the barrier in the period
-N_RECORD = 8
+REC_LOG_STRETCH = 8  # log growth of the leading tangent vector over the period (NaN without tangents)
+REC_LOG_AREA = 9     # log growth of the tangent parallelogram's area (both exponents' sum)
+N_RECORD = 10
 
 # --- summary of a run ---
 SUM_R = 0                   # gain |Q| / c, eq3.3
@@ -69,7 +74,9 @@ SUM_V_FINAL = 9
 SUM_T_FINAL = 10
 SUM_IMPACTS = 11            # all impacts, transient included
 SUM_STICKS = 12             # sticking intervals
-N_SUMMARY = 13
+SUM_LYAPUNOV = 13           # largest Lyapunov exponent over the window, per unit time (tangent.py)
+SUM_LYAPUNOV_SUM = 14       # sum of both exponents over the window, per unit time
+N_SUMMARY = 15
 
 # Largest step as a fraction of the shortest forcing period: a longer step could carry the
 # mass to the barrier and back between its ends with no sign change the event test can see.
@@ -111,6 +118,13 @@ def _oscillator_derivative(y, coefficients, cos_slow, sin_slow, cos_fast, dydt):
                - coefficients[STIFFNESS] * x - coefficients[ALPHA] * x * x * x)
     dydt[QS_INTEGRAL] = x * sin_slow
     dydt[QC_INTEGRAL] = x * cos_slow
+
+
+@kernel_jit
+def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
+    """oscillator_rhs and the variational equations of the tangent vectors (tangent.py)."""
+    oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch)
+    tangent_derivative(y, coefficients, dydt)
 
 
 @kernel_jit
@@ -263,6 +277,13 @@ def oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
 
 
 @kernel_jit
+def oscillator_tangent_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
+    """oscillator_rhs_rotated and the variational equations of the tangent vectors (tangent.py)."""
+    oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch)
+    tangent_derivative(y, coefficients, dydt)
+
+
+@kernel_jit
 def _smallest_step(t, slow_period):
     """A step this short no longer moves t by more than a few units of its last place."""
     return 4.0 * 2.2e-16 * max(abs(t), slow_period)
@@ -309,6 +330,8 @@ def _start_period(record, x):
     record[REC_X_MIN] = x
     record[REC_X_MAX] = x
     record[REC_STUCK_TIME] = 0.0
+    record[REC_LOG_STRETCH] = np.nan
+    record[REC_LOG_AREA] = np.nan
 
 
 @kernel_jit
@@ -331,7 +354,8 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     """
     return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_scratch, False, DP54_C,
                       dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
-                      ORDER, N_STAGES, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
+                      ORDER, N_STAGES, False, N_DYNAMIC,
+                      np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log)
 
@@ -348,7 +372,39 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_rotations, rotation_scratch, True,
                       dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
                       dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES,
+                      False, N_DYNAMIC,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log)
+
+
+@kernel_jit
+def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_records, summary,
+                            sample_times, samples, impact_log, stick_log):
+    """integrate_rk45 with the tangent vectors (integration.lyapunov: true; tangent.py).
+
+    The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
+    error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
+    """
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
+                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
+                      np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log)
+
+
+@kernel_jit
+def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
+                              sample_times, samples, impact_log, stick_log):
+    """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
+                      rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
+                      dop853_accepted_step_factor, dop853_rejected_step_factor, True,
+                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
+                      np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log)
 
@@ -357,24 +413,39 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
 # so a run compiles only the method it uses.
 INTEGRATORS = {"rk45": integrate_rk45, "dop853": integrate_dop853}
 METHODS = tuple(INTEGRATORS)
+# The same with the tangent vectors (integration.lyapunov: true).
+LYAPUNOV_INTEGRATORS = {"rk45": integrate_rk45_lyapunov, "dop853": integrate_dop853_lyapunov}
+
+
+def integrator(method, lyapunov=False):
+    """The kernel for an integration method, with or without the tangent vectors."""
+    return (LYAPUNOV_INTEGRATORS if lyapunov else INTEGRATORS)[method]
 
 
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
 def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, step, step_error, dense_output,
-               accepted_factor, rejected_factor, hold_after_reject, initial_order, n_stages, K, dense,
-               coefficients, initial_state, settings, period_records, summary, sample_times, samples,
+               accepted_factor, rejected_factor, hold_after_reject, initial_order, n_stages, tangents, n_dynamic,
+               K, dense, coefficients, initial_state, settings, period_records, summary, sample_times, samples,
                impact_log, stick_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
     same at a step's stages, after prepare_step(t, h, coefficients, scratch), with scratch =
     make_scratch(h_max, nodes); grid_steps rounds each step size down to grid_step's grid.
-    step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch) fills K (K[n_stages] =
-    f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled error norm;
-    dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch) fills dense and
-    returns its extra RHS count.
+    step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic) fills K
+    (K[n_stages] = f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled
+    error norm; dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch,
+    n_dynamic) fills dense and returns its extra RHS count. tangents: the state carries the
+    tangent vectors (state.py) and the right-hand sides integrate them; n_dynamic is the number of
+    state components the right-hand sides read. K (rows, n_state) and dense (n_state, order) are
+    the method's work arrays, their width the state's size.
+
+    Each pass of the loop is one of: hold the mass on the barrier up to its release or the period's
+    end; or attempt a step, and if it is accepted, resolve an impact inside it (reach it with an
+    exact step), feed the observers, and apply the restitution law or start sticking. A pass that
+    reaches the period's end closes the period.
     """
     rtol = settings[RTOL]
     atol = settings[ATOL]
@@ -386,24 +457,26 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     stick_velocity = settings[STICK_VELOCITY]
     delta = coefficients[DELTA]
     restitution = coefficients[E]
-    omega = coefficients[OMEGA]
 
-    slow_period = 2.0 * math.pi / omega
+    slow_period = 2.0 * math.pi / coefficients[OMEGA]
     shortest_period = slow_period
     if coefficients[G] != 0.0:
         shortest_period = min(shortest_period, 2.0 * math.pi / coefficients[BIG_OMEGA])
     h_max = MAX_STEP_FRACTION * shortest_period
     stick_scan_step = STICK_SCAN_FRACTION * shortest_period
 
-    y = np.zeros(N_STATE)
-    y_new = np.empty(N_STATE)
-    stage = np.empty(N_STATE)
-    f = np.empty(N_STATE)
+    n_state = K.shape[1]
+    y = np.zeros(n_state)
+    y_new = np.empty(n_state)
+    stage = np.empty(n_state)
+    f = np.empty(n_state)
     bracket = np.empty(N_BRACKET)
     scratch = make_scratch(h_max, nodes)  # the stage right-hand side's own
 
     y[X] = initial_state[0]
     y[V] = initial_state[1]
+    if tangents:
+        seed_tangents(y)
     t = 0.0
     rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
     n_rhs = 1
@@ -422,28 +495,20 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     period = 0
     t_boundary = slow_period
     _start_period(period_records[0], y[X])
-    next_sample = 0
-    while next_sample < sample_times.shape[0] and sample_times[next_sample] <= 0.0:
-        samples[next_sample, 0] = y[X]
-        samples[next_sample, 1] = y[V]
-        next_sample += 1
+    next_sample = _emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
 
     while True:
         record = period_records[period]
         if stuck:
-            # Held at (Delta, 0) until the force lets go or the period ends.
+            # --- held at (Delta, 0) until the force lets go or the period ends ---
             t_release, scans = release_time(t, t_boundary, coefficients, stick_scan_step, max_steps - n_scans)
             n_scans += scans
             if t_release != t_release:
                 status = Status.MAX_STEPS  # the force scan has a budget of max_steps intervals too
                 break
             t_end = min(t_release, t_boundary)
-            y[QS_INTEGRAL] += delta * (math.cos(omega * t) - math.cos(omega * t_end)) / omega
-            y[QC_INTEGRAL] += delta * (math.sin(omega * t_end) - math.sin(omega * t)) / omega
-            while next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_end:
-                samples[next_sample, 0] = delta
-                samples[next_sample, 1] = 0.0
-                next_sample += 1
+            _add_stuck_quadratures(y, delta, coefficients[OMEGA], t, t_end)
+            next_sample = _emit_state(sample_times, samples, next_sample, t_end, delta, 0.0)
             record[REC_STUCK_TIME] += t_end - t
             t = t_end
             if t_release <= t_boundary:
@@ -454,6 +519,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 n_rhs += 1
                 err_previous = 1.0
         else:
+            # --- attempt a step ---
             if n_steps >= max_steps:
                 status = Status.MAX_STEPS
                 break
@@ -470,7 +536,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 h_try = t_boundary - t
                 clipped = True
             prepare_step(t, h_try, coefficients, scratch)
-            step(stage_rhs, t, y, f, h_try, coefficients, K, y_new, stage, scratch)
+            step(stage_rhs, t, y, f, h_try, coefficients, K, y_new, stage, scratch, n_dynamic)
             n_steps += 1
             n_rhs += n_stages
             err = step_error(K, h_try, y, y_new, rtol, atol)
@@ -489,12 +555,14 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             err_previous = err
             h = max(h_next, h) if clipped else h_next
 
+            # --- does the step cross the barrier? ---
             impact = False
             dense_ready = False
             theta_turn = np.nan
             if y_new[X] >= delta or y[X] >= delta or (y[V] > 0.0 and y_new[V] < 0.0):
                 prepare_step(t, h_try, coefficients, scratch)
-                n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch)
+                n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
+                                      n_dynamic)
                 dense_ready = True
                 pushed = y[X] >= delta and force_at_barrier(t, coefficients) > 0.0
                 verdict = find_crossing(dense, y, y_new, h_try, delta, pushed, bracket)
@@ -510,47 +578,37 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     theta_turn = bracket[TURNING_POINT]
             h_taken = h_try
             if impact:
-                # Locate on the dense output, then reach the impact with an exact step
-                # (the step's order, not the interpolant's), Newton-corrected onto Delta.
-                if bracket[0] < bracket[1]:
-                    theta = locate_root(dense, y, h_try, X, delta, bracket[0], bracket[1])
-                else:
-                    theta = bracket[1]
-                h_taken = theta * h_try
-                for _ in range(IMPACT_NEWTON_ITERATIONS):
-                    prepare_step(t, h_taken, coefficients, scratch)
-                    step(stage_rhs, t, y, f, h_taken, coefficients, K, y_new, stage, scratch)
-                    n_rhs += n_stages
-                    miss = y_new[X] - delta
-                    if abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(delta)) or y_new[V] <= 0.0:
-                        break
-                    h_corrected = h_taken - miss / y_new[V]
-                    if not (0.0 < h_corrected <= h_try):
-                        break
-                    h_taken = h_corrected
-                prepare_step(t, h_taken, coefficients, scratch)
-                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch)
+                h_taken, spent = _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynamic,
+                                               t, y, f, h_try, delta, bracket, coefficients, K, y_new, dense,
+                                               stage, scratch)
+                n_rhs += spent
                 dense_ready = True
 
+            # --- observers: samples and the period's extremes, on the step's dense output ---
             t_new = t_boundary if (clipped and not impact) else t + h_taken
             if next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_new:
                 if not dense_ready:
                     prepare_step(t, h_taken, coefficients, scratch)
-                    n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch)
+                    n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
+                                          n_dynamic)
                     dense_ready = True
                 next_sample = _emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
             if y[V] * y_new[V] < 0.0 and not dense_ready:
                 prepare_step(t, h_taken, coefficients, scratch)
-                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch)
+                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
+                                      n_dynamic)
             _update_extremes(record, dense, y, y_new, h_taken, theta_turn)
 
+            # --- advance ---
             t = t_new
-            for j in range(N_STATE):
+            for j in range(n_state):
                 y[j] = y_new[j]
                 f[j] = K[n_stages, j]
 
+            # --- the impact: restitution (eq2.2), or the start of sticking ---
             if impact:
                 v_before = max(y[V], 0.0)
+                acceleration_before = f[V]
                 y[X] = delta
                 n_impacts += 1
                 record[REC_IMPACTS] += 1.0
@@ -572,9 +630,15 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     impact_log[n_impacts - 1, 0] = t
                     impact_log[n_impacts - 1, 1] = v_before
                     impact_log[n_impacts - 1, 2] = v_after
-                if not stuck:
+                if stuck:
+                    if tangents:
+                        collapse_tangents(y)
+                else:
                     rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
                     n_rhs += 1
+                    if tangents:
+                        apply_saltation(y, v_before, acceleration_before, f[V], restitution)
+                        tangent_derivative(y, coefficients, f)  # f of the jumped tangent vectors
                     # A slow rebound against a force pushing back returns after about
                     # 2 |v| / a: step well inside that flight, so its return is seen.
                     push = force_at_barrier(t, coefficients)
@@ -590,12 +654,19 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 break
 
         if t >= t_boundary:
+            # --- close the period: record it, reset the quadratures, renormalise the tangents ---
             record[REC_QS] = y[QS_INTEGRAL]
             record[REC_QC] = y[QC_INTEGRAL]
             record[REC_X] = y[X]
             record[REC_V] = y[V]
             y[QS_INTEGRAL] = 0.0
             y[QC_INTEGRAL] = 0.0
+            if tangents:
+                record[REC_LOG_STRETCH], record[REC_LOG_AREA] = renormalise_tangents(y)
+                if stuck:
+                    collapse_tangents(y)  # still on the barrier: the next period starts from zero
+                else:
+                    tangent_derivative(y, coefficients, f)  # f of the renormalised vectors
             period += 1
             if period == n_periods:
                 break
@@ -616,6 +687,54 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     return status
 
 
+@kernel_jit(inline="always")
+def _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynamic, t, y, f, h_try, delta,
+                  bracket, coefficients, K, y_new, dense, stage, scratch):
+    """Step exactly to the impact that find_crossing bracketed in the step [t, t + h_try].
+
+    Locates it on the dense output, then reaches it with a step of the method's own order (not
+    the interpolant's), Newton-corrected onto x = Delta; leaves y_new, K and dense for that step.
+    Returns (its size, the RHS evaluations spent).
+    """
+    n_rhs = 0
+    if bracket[0] < bracket[1]:
+        theta = locate_root(dense, y, h_try, X, delta, bracket[0], bracket[1])
+    else:
+        theta = bracket[1]
+    h_taken = theta * h_try
+    for _ in range(IMPACT_NEWTON_ITERATIONS):
+        prepare_step(t, h_taken, coefficients, scratch)
+        step(stage_rhs, t, y, f, h_taken, coefficients, K, y_new, stage, scratch, n_dynamic)
+        n_rhs += n_stages
+        miss = y_new[X] - delta
+        if abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(delta)) or y_new[V] <= 0.0:
+            break
+        h_corrected = h_taken - miss / y_new[V]
+        if not (0.0 < h_corrected <= h_try):
+            break
+        h_taken = h_corrected
+    prepare_step(t, h_taken, coefficients, scratch)
+    n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch, n_dynamic)
+    return h_taken, n_rhs
+
+
+@kernel_jit
+def _add_stuck_quadratures(y, delta, omega, t_start, t_end):
+    """eq3.1, eq3.2 integrands over [t_start, t_end] with x = Delta held: in closed form."""
+    y[QS_INTEGRAL] += delta * (math.cos(omega * t_start) - math.cos(omega * t_end)) / omega
+    y[QC_INTEGRAL] += delta * (math.sin(omega * t_end) - math.sin(omega * t_start)) / omega
+
+
+@kernel_jit
+def _emit_state(sample_times, samples, next_sample, t_end, x, v):
+    """The state (x, v), constant up to t_end (a start, or a stick), at every sample time <= t_end."""
+    while next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_end:
+        samples[next_sample, 0] = x
+        samples[next_sample, 1] = v
+        next_sample += 1
+    return next_sample
+
+
 @kernel_jit
 def _summarize(period_records, n_transient, n_periods, slow_period, c, status, summary):
     """eq3.1-eq3.3 over the measurement window, and the mean impacts per slow period.
@@ -627,7 +746,7 @@ def _summarize(period_records, n_transient, n_periods, slow_period, c, status, s
     if status == Status.OK:
         status = _measure(period_records, n_transient, n_periods, slow_period, c, summary)
     if status != Status.OK:
-        for k in (SUM_R, SUM_QS, SUM_QC, SUM_Q_AMPLITUDE, SUM_IMPACTS_PER_PERIOD):
+        for k in (SUM_R, SUM_QS, SUM_QC, SUM_Q_AMPLITUDE, SUM_IMPACTS_PER_PERIOD, SUM_LYAPUNOV, SUM_LYAPUNOV_SUM):
             summary[k] = np.nan
     return status
 
@@ -650,6 +769,7 @@ def _measure(period_records, n_transient, n_periods, slow_period, c, summary):
     summary[SUM_QC] = qc
     summary[SUM_Q_AMPLITUDE] = amplitude
     summary[SUM_IMPACTS_PER_PERIOD] = impacts / n_measured
+    _lyapunov_exponents(period_records, n_transient, n_periods, window, summary)
     if c == 0.0:
         summary[SUM_R] = np.nan  # eq3.3 is a gain: undefined without a drive
         return Status.OK
@@ -658,3 +778,19 @@ def _measure(period_records, n_transient, n_periods, slow_period, c, summary):
         if not math.isfinite(summary[k]):
             return Status.NON_FINITE
     return Status.OK
+
+
+@kernel_jit
+def _lyapunov_exponents(period_records, n_transient, n_periods, window, summary):
+    """The largest exponent and the sum of both: the window's log growths per unit time.
+
+    NaN without tangent vectors (their records are NaN); -inf when the mass stuck in the window
+    (tangent.py: the tangent map of a sticking interval is zero).
+    """
+    stretch = 0.0
+    area = 0.0
+    for k in range(n_transient, n_periods):
+        stretch += period_records[k, REC_LOG_STRETCH]
+        area += period_records[k, REC_LOG_AREA]
+    summary[SUM_LYAPUNOV] = stretch / window
+    summary[SUM_LYAPUNOV_SUM] = area / window

@@ -50,15 +50,17 @@ class Trajectory:
 
 
 def simulate(coefficients, initial_state, settings, sample_times=(), impact_capacity=4096,
-             stick_capacity=1024, method="rk45"):
+             stick_capacity=1024, method="rk45", lyapunov=False):
     """Integrate one point, keeping samples at ``sample_times`` and every impact and stick.
 
     ``method``: the integration method, a key of kernel.INTEGRATORS (rk45, dop853).
+    ``lyapunov``: carry the tangent vectors too (tangent.py): the records then hold each period's
+    REC_LOG_STRETCH and REC_LOG_AREA, the summary SUM_LYAPUNOV and SUM_LYAPUNOV_SUM.
 
     The logs grow and the run is repeated if they overflow: it is deterministic, so the
     second run is the same trajectory.
     """
-    integrate = kernel.INTEGRATORS[method]
+    integrate = kernel.integrator(method, lyapunov)
     coefficients = np.ascontiguousarray(coefficients, dtype=np.float64)
     initial_state = np.ascontiguousarray(initial_state, dtype=np.float64)
     settings = np.ascontiguousarray(settings, dtype=np.float64)

@@ -1,0 +1,237 @@
+"""Lyapunov exponents (tangent.py, integration.lyapunov): checks that would fail if they were wrong.
+
+- the largest exponent of a periodic orbit against the Floquet multipliers of its monodromy
+  matrix, obtained by central differences of the stroboscopic map computed by SciPy (an
+  independent solver with its own impact handling, tests/reference.py);
+- with the barrier out of reach, against the variational equations of the smooth system
+  integrated by SciPy with Gram-Schmidt every slow period;
+- on a chaotic point: positive, and equal to a two-trajectory (Benettin) estimate built from the
+  state integration alone along the same stroboscopic points;
+- the sum of both exponents against the time average of the flow's divergence (from the kernel's
+  own dense samples) plus 2 ln e per impact per unit time (the saltation matrix's determinant
+  is e^2): no reference solver needed, derivation in docs/design.md;
+- a point that sticks has -inf (the tangent map of a sticking interval is zero);
+- carrying the tangent vectors changes nothing else: every record and R bit for bit.
+No reference value is stored: each is computed at test time.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import simpson, solve_ivp
+
+from vrsweep import kernel
+from vrsweep.diagnostics import detect_period, lyapunov_error
+from vrsweep.model import DEFAULT_PARAMETERS, E, GAMMA, MU, kernel_coefficients
+from vrsweep.results import Status
+from vrsweep.trajectory import settings_vector, simulate
+
+from reference import coefficient_vector, reference_trajectory
+
+METHODS = tuple(kernel.INTEGRATORS)
+every_method = pytest.mark.parametrize("method", METHODS)
+
+
+def _paper_coefficients(model="original", **changes):
+    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0)
+    parameters.update(changes)
+    return kernel_coefficients({k: np.array([v]) for k, v in parameters.items()}, model)[0]
+
+
+def _slow_period(coefficients):
+    return 2.0 * math.pi / coefficients[kernel.OMEGA]
+
+
+def _lyapunov_run(coefficients, start, transient, measure, rtol=1e-11, method="dop853", sample_times=()):
+    settings = settings_vector(rtol=rtol, atol=rtol * 1e-2, transient_periods=transient, measure_periods=measure)
+    run = simulate(coefficients, start, settings, method=method, lyapunov=True, sample_times=sample_times)
+    assert run.status == Status.OK
+    return run
+
+
+def _strobe(run):
+    return run.period_records[:, [kernel.REC_X, kernel.REC_V]]
+
+
+def _monodromy(coefficients, state, periods, h=1e-5):
+    """d(P^periods)/d(x, v) at state, by central differences of SciPy's stroboscopic map."""
+    duration = periods * _slow_period(coefficients)
+
+    def power_map(s):
+        out = reference_trajectory(coefficients, s[0], s[1], duration, rtol=1e-12, atol=1e-14)
+        return np.array([out["x_final"], out["v_final"]])
+
+    assert np.allclose(power_map(state), state, rtol=0, atol=1e-9)  # it is a periodic point
+    jacobian = np.empty((2, 2))
+    for j in range(2):
+        step = np.zeros(2)
+        step[j] = h
+        jacobian[:, j] = (power_map(state + step) - power_map(state - step)) / (2 * h)
+    return jacobian
+
+
+# The paper's parameters at Omega = 4 (original model): period-1 orbits with real Floquet
+# multipliers of distinct moduli, 8 and 4 impacts per slow period. The phase of both forces is
+# the same at every t = nT (Omega T = 16 pi), so the stroboscopic map does not depend on n.
+REAL_MULTIPLIER_POINTS = [dict(g=40.0), dict(g=25.0)]
+
+
+@pytest.mark.parametrize("changes", REAL_MULTIPLIER_POINTS, ids=lambda c: f"g={c['g']:g}")
+@every_method
+def test_largest_exponent_is_that_of_the_monodromy_matrix(changes, method):
+    coefficients = _paper_coefficients(**changes)
+    run = _lyapunov_run(coefficients, [0.99, 0.5], 100, 40, method=method)
+    strobe = _strobe(run)
+    assert detect_period(strobe[None, -20:, 0], strobe[None, -20:, 1], 8, 1e-8)[0] == 1
+    assert run.period_records[-1, kernel.REC_IMPACTS] >= 4  # the saltation matrices matter
+    multipliers = np.linalg.eigvals(_monodromy(coefficients, strobe[-1], 1))
+    assert np.all(np.abs(multipliers.imag) == 0.0)
+    expected = math.log(np.max(np.abs(multipliers))) / _slow_period(coefficients)
+    # Real multipliers of distinct moduli: the tangent vector aligns exponentially fast, so the
+    # window's mean is the orbit's exponent up to the solvers' accuracy.
+    assert run.summary[kernel.SUM_LYAPUNOV] == pytest.approx(expected, rel=1e-4)
+
+
+@every_method
+def test_complex_multipliers_give_half_the_sum_and_a_covered_largest_exponent(method):
+    # The hysteresis example's impacting orbit (effective model, gamma = alpha = 0.05, g = 23):
+    # period 1, one impact per period, a complex pair of multipliers. Both exponents are then
+    # ln|mu| / T; a single tangent vector rotates with the pair, and its mean stretch over m
+    # periods converges only as 1/m, which lyapunov_err must cover.
+    coefficients = _paper_coefficients("effective", gamma=0.05, alpha=0.05, g=23.0)
+    run = _lyapunov_run(coefficients, [0.9, 1.0], 100, 200, method=method)
+    strobe = _strobe(run)
+    multipliers = np.linalg.eigvals(_monodromy(coefficients, strobe[-1], 1))
+    assert abs(multipliers[0].imag) > 0.1
+    expected = math.log(abs(multipliers[0])) / _slow_period(coefficients)
+    assert run.summary[kernel.SUM_LYAPUNOV_SUM] / 2 == pytest.approx(expected, rel=1e-5)
+    error = lyapunov_error(run.period_records[100:, kernel.REC_LOG_STRETCH], _slow_period(coefficients), 1)
+    assert run.summary[kernel.SUM_LYAPUNOV] == pytest.approx(expected, rel=0.03)  # "a few per cent"
+    assert abs(run.summary[kernel.SUM_LYAPUNOV] - expected) <= error
+
+
+def _smooth_exponents(coefficients, start, transient, measure):
+    """Both exponents of the smooth system by SciPy: x, v and two tangent vectors, Gram-Schmidt
+    (numpy's QR) every slow period, logs summed over the measurement window."""
+    gamma, mu, k, alpha, c, omega, g, big_omega = (coefficients[i] for i in (
+        kernel.GAMMA, kernel.MU, kernel.STIFFNESS, kernel.ALPHA, kernel.C, kernel.OMEGA, kernel.G,
+        kernel.BIG_OMEGA))
+
+    def rhs(t, y):
+        x, v = y[0], y[1]
+        tangents = y[2:].reshape(2, 2).T  # columns (dx, dv)
+        jacobian = np.array([[0.0, 1.0], [-(2 * gamma * x * v + k + 3 * alpha * x * x), -gamma * (x * x - mu)]])
+        acceleration = (c * math.cos(omega * t) + g * math.cos(big_omega * t) - gamma * (x * x - mu) * v
+                        - k * x - alpha * x ** 3)
+        return np.concatenate([[v, acceleration], (jacobian @ tangents).T.ravel()])
+
+    period = _slow_period(coefficients)
+    state = np.array(start, dtype=float)
+    basis = np.eye(2)
+    logs = np.zeros(2)
+    for n in range(transient + measure):
+        y0 = np.concatenate([state, basis.T.ravel()])
+        y = solve_ivp(rhs, (n * period, (n + 1) * period), y0, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
+        state = y[:2]
+        q, r = np.linalg.qr(y[2:].reshape(2, 2).T)
+        basis = q * np.sign(np.diag(r))
+        if n >= transient:
+            logs += np.log(np.abs(np.diag(r)))
+    return logs / (measure * period)
+
+
+@every_method
+def test_barrier_out_of_reach_matches_the_smooth_system(method):
+    coefficients = _paper_coefficients(g=10.0, Delta=3.0)  # |x| < 2.43: no impact ever
+    run = _lyapunov_run(coefficients, [0.99, 0.5], 30, 20, method=method)
+    assert run.summary[kernel.SUM_IMPACTS] == 0
+    largest, second = _smooth_exponents(coefficients, [0.99, 0.5], 30, 20)
+    assert run.summary[kernel.SUM_LYAPUNOV] == pytest.approx(largest, rel=1e-5)
+    assert run.summary[kernel.SUM_LYAPUNOV_SUM] == pytest.approx(largest + second, rel=1e-5)
+
+
+def _benettin(coefficients, strobe_states, method, separation=1e-7):
+    """Per-period log growth of a small separation, from the state integration alone.
+
+    Period n runs a trajectory from each stroboscopic state s_n of the run under test and one
+    from s_n + separation u_n, u_n the direction the previous period's separation took (the
+    first along x): the two-trajectory method of Benettin et al., on the same points as the
+    tangent vector.
+    """
+    one_period = settings_vector(rtol=1e-11, atol=1e-13, transient_periods=0, measure_periods=1)
+    direction = np.array([1.0, 0.0])
+    logs = []
+    for state in strobe_states:
+        ends = []
+        for start in (state, state + separation * direction):
+            summary = simulate(coefficients, start, one_period, method=method).summary
+            ends.append(summary[[kernel.SUM_X_FINAL, kernel.SUM_V_FINAL]])
+        difference = ends[1] - ends[0]
+        length = np.linalg.norm(difference)
+        logs.append(math.log(length / separation))
+        direction = difference / length
+    return np.array(logs)
+
+
+@every_method
+def test_chaotic_point_is_positive_and_agrees_with_two_trajectories(method):
+    # The paper's parameters at g = 5, Omega = 4 (original model): R over 100 periods depends on
+    # the tolerance alone (diagnostics.py), a chaotic orbit with impacts and no sticking.
+    coefficients = _paper_coefficients(g=5.0)
+    transient, measure = 20, 40
+    run = _lyapunov_run(coefficients, [0.99, 0.5], transient, measure, method=method)
+    assert run.summary[kernel.SUM_IMPACTS] > 40 and len(run.sticks) == 0
+    period = _slow_period(coefficients)
+    strobe_states = np.vstack([[0.99, 0.5], _strobe(run)[:-1]])
+    logs = _benettin(coefficients, strobe_states, method)
+    benettin = logs[transient:].sum() / (measure * period)
+    largest = run.summary[kernel.SUM_LYAPUNOV]
+    assert largest > 0.1
+    assert largest == pytest.approx(benettin, rel=1e-3)
+
+
+@pytest.mark.parametrize("changes", [dict(g=10.0), dict(g=5.0)], ids=["periodic", "chaotic"])
+@every_method
+def test_sum_of_exponents_is_mean_divergence_plus_saltation(changes, method):
+    # d/dt ln(area) = div f = -gamma (x^2 - mu) between impacts; each impact multiplies areas by
+    # det S = e^2. So lambda_1 + lambda_2 = <-gamma (x^2 - mu)> + 2 ln(e) (impacts / time).
+    coefficients = _paper_coefficients(**changes)
+    transient, measure = 20, 20
+    period = _slow_period(coefficients)
+    times = np.linspace(transient * period, (transient + measure) * period, measure * 2000 + 1)
+    run = _lyapunov_run(coefficients, [0.99, 0.5], transient, measure, rtol=1e-10, method=method,
+                        sample_times=times)
+    x = run.samples[:, 0]
+    window = measure * period
+    mean_divergence = -coefficients[GAMMA] * (simpson(x * x, x=times) / window - coefficients[MU])
+    impacts = run.period_records[transient:, kernel.REC_IMPACTS].sum()
+    assert impacts > 20
+    expected = mean_divergence + 2.0 * math.log(coefficients[E]) * impacts / window
+    assert run.summary[kernel.SUM_LYAPUNOV_SUM] == pytest.approx(expected, rel=1e-5)
+
+
+@every_method
+def test_sticking_gives_minus_infinity(method):
+    # Stiffness pulls the mass off the barrier and the slow force (5 > k Delta) pushes it back
+    # for part of every slow period: it sticks in every period (tests/test_kernel.py).
+    coefficients = coefficient_vector(gamma=0.1, stiffness=1.0, c=5.0, omega=0.5, Delta=1.0, e=0.5)
+    run = _lyapunov_run(coefficients, [0.0, 0.0], 2, 4, rtol=1e-10, method=method)
+    assert len(run.sticks) >= 4
+    assert run.summary[kernel.SUM_LYAPUNOV] == -math.inf
+    assert lyapunov_error(run.period_records[2:, kernel.REC_LOG_STRETCH], 4 * math.pi, 0) == 0.0
+
+
+@pytest.mark.parametrize("changes", [dict(g=5.0), dict(g=40.0)], ids=["chaotic", "periodic"])
+@every_method
+def test_tangent_vectors_change_nothing_else(changes, method):
+    coefficients = _paper_coefficients(**changes)
+    settings = settings_vector(rtol=1e-9, atol=1e-11, transient_periods=10, measure_periods=10)
+    plain = simulate(coefficients, [0.99, 0.5], settings, method=method)
+    with_tangents = simulate(coefficients, [0.99, 0.5], settings, method=method, lyapunov=True)
+    columns = slice(0, kernel.REC_LOG_STRETCH)
+    np.testing.assert_array_equal(plain.period_records[:, columns], with_tangents.period_records[:, columns])
+    np.testing.assert_array_equal(plain.summary[:kernel.SUM_LYAPUNOV], with_tangents.summary[:kernel.SUM_LYAPUNOV])
+    assert np.all(np.isnan(plain.period_records[:, kernel.REC_LOG_STRETCH]))
+    assert np.isnan(plain.summary[kernel.SUM_LYAPUNOV])
+    assert np.isfinite(with_tangents.summary[kernel.SUM_LYAPUNOV])

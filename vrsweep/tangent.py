@@ -1,0 +1,104 @@
+"""Lyapunov exponents of the impact oscillator: variational equations, saltation, renormalisation.
+
+The largest exponent is the mean exponential growth rate of a tangent vector u = (dx, dv)
+carried along the trajectory (docs/design.md, "Lyapunov exponents", derives every formula):
+
+- between impacts, u' = J(x, v, t) u with the Jacobian of the flow
+      J = [[0, 1], [-(2 gamma x v + k + 3 alpha x^2), -gamma (x^2 - mu)]]          (eq2.1, eq2.10)
+  integrated with the motion, in the same Runge-Kutta steps (kernel.py);
+- at an impact (x = Delta, v- > 0 -> v+ = -e v-, eq2.2) u jumps by the saltation matrix
+      S = [[-e, 0], [(a+ + e a-) / v-, -e]],   det S = e^2,
+  a- and a+ the accelerations just before and after the impact;
+- while stuck on the barrier the state is (Delta, 0) whatever it was before: the tangent map
+  of the flow over a sticking interval is zero, and u collapses to zero (the exponent of a
+  point that sticks in the measurement window is -inf, exactly);
+- every slow period the two tangent vectors are orthonormalised (Gram-Schmidt): the log of the
+  first one's length is that period's stretch, the log of the parallelogram's area the sum of
+  both exponents' contributions (Benettin et al. 1980).
+
+State layout: state.py (TANGENT); per-period records: kernel.REC_LOG_STRETCH, REC_LOG_AREA.
+"""
+
+import math
+
+from vrsweep.jit import kernel_jit
+from vrsweep.model import ALPHA, GAMMA, MU, STIFFNESS
+from vrsweep.state import N_TANGENT_VECTORS, TANGENT, V, X
+
+
+@kernel_jit(inline="always")
+def tangent_derivative(y, coefficients, dydt):
+    """dydt[tangent] = J(x, v) u for both tangent vectors (the forcing does not enter J)."""
+    x = y[X]
+    v = y[V]
+    gamma = coefficients[GAMMA]
+    # d(v')/dx and d(v')/dv of x'' = c cos + g cos - gamma (x^2 - mu) v - k x - alpha x^3
+    dv_dx = -(2.0 * gamma * x * v + coefficients[STIFFNESS] + 3.0 * coefficients[ALPHA] * x * x)
+    dv_dv = -gamma * (x * x - coefficients[MU])
+    for i in range(N_TANGENT_VECTORS):
+        dx = y[TANGENT + 2 * i]
+        dv = y[TANGENT + 2 * i + 1]
+        dydt[TANGENT + 2 * i] = dv
+        dydt[TANGENT + 2 * i + 1] = dv_dx * dx + dv_dv * dv
+
+
+@kernel_jit(inline="always")
+def seed_tangents(y):
+    """The tangent vectors as the unit vectors along x and v."""
+    for i in range(N_TANGENT_VECTORS):
+        y[TANGENT + 2 * i] = 1.0 if i == 0 else 0.0
+        y[TANGENT + 2 * i + 1] = 1.0 if i == 1 else 0.0
+
+
+@kernel_jit(inline="always")
+def collapse_tangents(y):
+    """Sticking: the state is (Delta, 0) whatever it was before, so every tangent vector is 0."""
+    for j in range(TANGENT, TANGENT + 2 * N_TANGENT_VECTORS):
+        y[j] = 0.0
+
+
+@kernel_jit(inline="always")
+def apply_saltation(y, v_before, acceleration_before, acceleration_after, restitution):
+    """u -> S u at an impact with x'(-) = v_before > 0 (module doc; eq2.2).
+
+    The coupling term: a trajectory displaced by dx < 0 reaches the barrier tau = -dx / v- after
+    the nominal one, gaining a- tau in speed before its reflection while the reflected nominal
+    one gains a+ tau: dv+ = -e dv - (a+ + e a-) tau.
+    """
+    coupling = (acceleration_after + restitution * acceleration_before) / v_before
+    for i in range(N_TANGENT_VECTORS):
+        dx = y[TANGENT + 2 * i]
+        dv = y[TANGENT + 2 * i + 1]
+        y[TANGENT + 2 * i] = -restitution * dx
+        y[TANGENT + 2 * i + 1] = coupling * dx - restitution * dv
+
+
+@kernel_jit(inline="always")
+def renormalise_tangents(y):
+    """Gram-Schmidt on the two tangent vectors; returns (log stretch, log area) since the last call.
+
+    The vectors were orthonormal at the last call, so the first one's length is the stretch of
+    the direction the flow favours, and the product of the two lengths after orthogonalisation
+    the factor by which areas grew. A vector of length zero (after sticking) gives -inf and is
+    seeded again, so that the next period measures afresh.
+    """
+    a = TANGENT
+    b = TANGENT + 2
+    length_1 = math.hypot(y[a], y[a + 1])
+    if not (length_1 > 0.0 and math.isfinite(length_1)):
+        log_stretch = -math.inf if length_1 == 0.0 else math.nan
+        seed_tangents(y)
+        return log_stretch, log_stretch
+    y[a] /= length_1
+    y[a + 1] /= length_1
+    projection = y[a] * y[b] + y[a + 1] * y[b + 1]
+    y[b] -= projection * y[a]
+    y[b + 1] -= projection * y[a + 1]
+    length_2 = math.hypot(y[b], y[b + 1])
+    if not (length_2 > 0.0 and math.isfinite(length_2)):
+        y[b] = -y[a + 1]  # any unit vector orthogonal to the first
+        y[b + 1] = y[a]
+        return math.log(length_1), (-math.inf if length_2 == 0.0 else math.nan)
+    y[b] /= length_2
+    y[b + 1] /= length_2
+    return math.log(length_1), math.log(length_1) + math.log(length_2)
