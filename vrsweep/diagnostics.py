@@ -54,6 +54,16 @@ Stroboscopic (Poincare) samples
 
 ``x_min``, ``x_max``
     The extremes of x over the measurement window (turning points located on the dense output).
+
+``lyapunov_err`` (95% half-width of ``lyapunov``, with integration.lyapunov)
+    The largest exponent is the mean of the per-period log stretches of the tangent vector over
+    the window (tangent.py), a linear statistic: the same B = 10 batches as R_err (L whole
+    periods, L a multiple of ``period``) each give an exponent lambda_b, and
+    lyapunov_err = t_{0.975, B-1} std(lambda_b) / sqrt(B), plus |lambda(window) - lambda(whole
+    cycles)| for a period-p orbit with m not a multiple of p. On an orbit whose two Floquet
+    multipliers are a complex pair the per-period stretch oscillates with the pair's rotation and
+    the window's mean carries an O(1/m) bias, which the batches see as spread. A point that stuck
+    in the window has lyapunov = -inf exactly (tangent.py) and lyapunov_err = 0.
 """
 
 import numpy as np
@@ -145,6 +155,44 @@ def batch_error(records, n_transient, slow_period, c, period, ok):
         r_err[i] = r_error(records[i, n_transient:, kernel.REC_QS], records[i, n_transient:, kernel.REC_QC],
                            slow_period[i], c[i], period[i])
     return r_err
+
+
+def lyapunov_error(log_stretch, slow_period, period):
+    """lyapunov_err of one point (module doc). log_stretch: (m,) per-period log stretches."""
+    n_measured = len(log_stretch)
+    unit = int(period) if period > 0 else 1
+    if n_measured < 2 * unit:
+        return np.nan
+    if np.isneginf(log_stretch).any():
+        return 0.0  # the tangent map collapsed (sticking): lyapunov is -inf, exactly
+    batch_length = (n_measured // N_BATCHES // unit) * unit
+    n_batches = N_BATCHES
+    if batch_length == 0:
+        batch_length = unit
+        n_batches = n_measured // unit
+    used = n_batches * batch_length
+    exponents = log_stretch[n_measured - used:].reshape(n_batches, batch_length).sum(axis=1) / (
+        batch_length * slow_period)
+    half_width = _T975.get(n_batches - 1, 1.96) * np.std(exponents, ddof=1) / np.sqrt(n_batches)
+    if period > 0 and n_measured % unit:
+        whole = (n_measured // unit) * unit
+        half_width += abs(log_stretch.sum() / (n_measured * slow_period)
+                          - log_stretch[-whole:].sum() / (whole * slow_period))
+    return half_width
+
+
+def lyapunov_values(records, summaries, statuses, coefficients, integration, period):
+    """lyapunov and lyapunov_err for every point of a chunk (NaN where not ok)."""
+    ok = statuses == Status.OK
+    lyapunov = summaries[:, kernel.SUM_LYAPUNOV].copy()
+    lyapunov_err = np.full(len(lyapunov), np.nan)
+    slow_period = 2.0 * np.pi / coefficients[:, OMEGA]
+    n_transient = integration.transient_periods
+    for i in np.flatnonzero(ok):
+        lyapunov_err[i] = lyapunov_error(records[i, n_transient:, kernel.REC_LOG_STRETCH], slow_period[i],
+                                         period[i])
+    lyapunov[~ok] = np.nan
+    return {"lyapunov": lyapunov, "lyapunov_err": lyapunov_err}
 
 
 def point_diagnostics(records, statuses, coefficients, integration):

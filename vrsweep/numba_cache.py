@@ -76,9 +76,9 @@ def is_empty() -> bool:
     return not folder.is_dir() or not any(folder.rglob("*.nbi"))
 
 
-def kernel_is_cached(method: str = "rk45") -> bool:
-    """Whether the sweep kernel of ``method`` (sweep.RUN_LINES[method]) has been compiled into the
-    cache already.
+def kernel_is_cached(method: str = "rk45", lyapunov: bool = False) -> bool:
+    """Whether the sweep kernel of ``method`` (sweep.RUN_LINES[method, lyapunov]) has been compiled
+    into the cache already.
 
     Looks for numba's index file of that function where numba puts it: in ``cache_dir()``, under
     a sub-folder named after the source folder (numba.core.caching's get_suitable_cache_subpath),
@@ -94,7 +94,7 @@ def kernel_is_cached(method: str = "rk45") -> bool:
 
     source = Path(os.path.abspath(sweep.__file__))  # abspath, not resolve(): as numba does
     subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
-    function = sweep.RUN_LINES[method].py_func
+    function = sweep.RUN_LINES[method, lyapunov].py_func
     index = (cache_dir() / subfolder /
              f"{source.stem}.{function.__qualname__}-{function.__code__.co_firstlineno}"
              f".py{sys.version_info.major}{sys.version_info.minor}.nbi")

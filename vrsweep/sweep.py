@@ -19,7 +19,7 @@ import numpy as np
 from numba import prange
 
 from vrsweep import kernel
-from vrsweep.diagnostics import point_diagnostics
+from vrsweep.diagnostics import lyapunov_values, point_diagnostics
 from vrsweep.jit import kernel_jit
 from vrsweep.model import INITIAL_STATE_KEYS, kernel_coefficients
 from vrsweep.results import Status
@@ -189,8 +189,26 @@ def run_lines_dop853(coefficients, initial_states, settings, lines, period_recor
                   period_records[line], summaries[line], statuses[line])
 
 
-# integration.method -> the parallel loop; each is compiled (or loaded) only when a run uses it.
-RUN_LINES = {"rk45": run_lines_rk45, "dop853": run_lines_dop853}
+@kernel_jit(parallel=True)
+def run_lines_rk45_lyapunov(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+    """run_lines_rk45 with the tangent vectors (integration.lyapunov)."""
+    for line in prange(lines.shape[0]):
+        _run_line(kernel.integrate_rk45_lyapunov, coefficients, initial_states[line], settings, lines[line],
+                  period_records[line], summaries[line], statuses[line])
+
+
+@kernel_jit(parallel=True)
+def run_lines_dop853_lyapunov(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+    """run_lines_dop853 with the tangent vectors (integration.lyapunov)."""
+    for line in prange(lines.shape[0]):
+        _run_line(kernel.integrate_dop853_lyapunov, coefficients, initial_states[line], settings, lines[line],
+                  period_records[line], summaries[line], statuses[line])
+
+
+# (integration.method, integration.lyapunov) -> the parallel loop; each is compiled (or loaded)
+# only when a run uses it.
+RUN_LINES = {("rk45", False): run_lines_rk45, ("dop853", False): run_lines_dop853,
+             ("rk45", True): run_lines_rk45_lyapunov, ("dop853", True): run_lines_dop853_lyapunov}
 
 
 # A chunk is the unit of checkpointing and of progress: long enough that writing it is a small
@@ -213,6 +231,7 @@ class LineRunner:
         self.grid = Grid.from_config(config)
         self.settings = integration_settings(config.integration)
         self.method = config.integration.method
+        self.lyapunov = bool(getattr(config.integration, "lyapunov", False))
         self.n_periods = config.integration.transient_periods + config.integration.measure_periods
 
     def run(self, lines, threads=None):
@@ -231,7 +250,7 @@ class LineRunner:
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
         with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-            RUN_LINES[self.method](coefficients, initial_states, self.settings, local_lines, records,
+            RUN_LINES[self.method, self.lyapunov](coefficients, initial_states, self.settings, local_lines, records,
                                    summaries, statuses)
         values = point_values(
             records.reshape(-1, self.n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
@@ -291,4 +310,6 @@ def point_values(records, summaries, statuses, coefficients, integration):
         "v_final": summaries[:, kernel.SUM_V_FINAL],
     }
     values.update(point_diagnostics(records, statuses, coefficients, integration))
+    if getattr(integration, "lyapunov", False):
+        values.update(lyapunov_values(records, summaries, statuses, coefficients, integration, values["period"]))
     return values
