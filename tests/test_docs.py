@@ -95,6 +95,9 @@ def test_design_documents_every_config_key_with_its_default():
         row = _table_row(text, key)
         if row is None:
             problems.append(f"{key}: no row in the config table")
+        elif isinstance(default, bool):
+            if row[1] != str(default).lower():
+                problems.append(f"{key}: documented default {row[1]}, code has {default}")
         elif (row[1] != default) if isinstance(default, str) else (float(row[1]) != default):
             problems.append(f"{key}: documented default {row[1]}, code has {default}")
     row = _table_row(text, "initial.x`, `initial.v")

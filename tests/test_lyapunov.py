@@ -235,3 +235,58 @@ def test_tangent_vectors_change_nothing_else(changes, method):
     assert np.all(np.isnan(plain.period_records[:, kernel.REC_LOG_STRETCH]))
     assert np.isnan(plain.summary[kernel.SUM_LYAPUNOV])
     assert np.isfinite(with_tangents.summary[kernel.SUM_LYAPUNOV])
+
+
+# --- the sweep: integration.lyapunov, the file's variables, the config key ------------------------
+
+def _cli(*args):
+    from click.testing import CliRunner
+
+    from vrsweep.cli import main
+
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert "Traceback" not in result.output, result.output
+    return result
+
+
+SWEEP = """\
+sweep:
+  g: [5.0, 25.0, 40.0]
+integration: {method: dop853, rtol: 1.0e-9, atol: 1.0e-11, transient_periods: 20, measure_periods: 20,
+              strobe_periods: 8}
+"""
+
+
+def test_a_sweep_stores_the_kernels_exponent_and_its_error(tmp_path):
+    import vrsweep
+
+    config = tmp_path / "sweep.yaml"
+    config.write_text(SWEEP + "output: on.h5\n")
+    result = _cli("run", config, "--set", "lyapunov=true", "-o", tmp_path / "on.h5", "--quiet")
+    assert result.exit_code == 0, result.output
+    off = _cli("run", config, "-o", tmp_path / "off.h5", "--quiet")
+    assert off.exit_code == 0, off.output
+    with vrsweep.open_results(tmp_path / "on.h5") as on, vrsweep.open_results(tmp_path / "off.h5") as plain:
+        assert "lyapunov" not in plain and "lyapunov_err" not in plain
+        np.testing.assert_array_equal(on["R"].values, plain["R"].values)  # the same steps
+        assert "lyapunov: true" in on.attrs["config"]
+        assert on["lyapunov"].attrs["units"] == "1" and "Lyapunov" in on["lyapunov"].attrs["long_name"]
+        settings = settings_vector(rtol=1e-9, atol=1e-11, transient_periods=20, measure_periods=20)
+        for g in (5.0, 25.0, 40.0):
+            run = simulate(_paper_coefficients(g=g), [0.99, 0.5], settings, method="dop853", lyapunov=True)
+            point = on.sel(g=g)
+            assert float(point["lyapunov"]) == run.summary[kernel.SUM_LYAPUNOV]
+            expected_error = lyapunov_error(run.period_records[20:, kernel.REC_LOG_STRETCH],
+                                            4 * math.pi, int(point["period"]))
+            assert float(point["lyapunov_err"]) == pytest.approx(expected_error, rel=1e-12)
+        chaotic, periodic = on.sel(g=5.0), on.sel(g=40.0)
+        assert float(chaotic["lyapunov"]) > 3 * float(chaotic["lyapunov_err"])
+        assert float(periodic["lyapunov_err"]) < 1e-6
+
+
+def test_lyapunov_must_be_a_boolean(tmp_path):
+    config = tmp_path / "bad.yaml"
+    config.write_text("integration:\n  lyapunov: maybe\n")
+    result = _cli("validate", config)
+    assert result.exit_code == 2
+    assert "bad.yaml:2" in result.output and "integration.lyapunov" in result.output

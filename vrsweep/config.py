@@ -138,6 +138,7 @@ INTEGRATION_DEFAULTS = {
     "method": "rk45", "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
     "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1.0e6,
     "stick_velocity": 1.0e-7, "strobe_periods": 16, "max_period": 8, "period_tolerance": 1.0e-6,
+    "lyapunov": False,
 }
 INTEGRATION_DOMAINS = {
     "rtol": Domain(low=0.0, high=1.0),
@@ -212,6 +213,7 @@ class Integration:
     strobe_periods: int
     max_period: int
     period_tolerance: float
+    lyapunov: bool = False
 
 
 @dataclass(frozen=True)
@@ -312,6 +314,10 @@ class Config:
                 if value != INTEGRATION_DEFAULTS["method"]:
                     lines.append(f"  method: {value}")
                 continue
+            if key == "lyapunov":  # the same: only when on
+                if value:
+                    lines.append("  lyapunov: true")
+                continue
             lines.append(f"  {key}: {value if isinstance(value, int) else _yaml_float(value)}")
         lines.append(f"output: {'null' if self.output is None else _yaml_string(self.output)}")
         return "\n".join(lines) + "\n"
@@ -405,7 +411,8 @@ _ParametersModel = _section_model("Parameters", PARAMETER_DOMAINS, DEFAULT_PARAM
 _InitialModel = _section_model("Initial", INITIAL_DOMAINS, INITIAL_DEFAULTS)
 _IntegrationModel = create_model(
     "Integration", __base__=_section_model("NumericIntegration", INTEGRATION_DOMAINS, INTEGRATION_DEFAULTS),
-    method=(Literal[METHODS], INTEGRATION_DEFAULTS["method"]))
+    method=(Literal[METHODS], INTEGRATION_DEFAULTS["method"]),
+    lyapunov=(bool, INTEGRATION_DEFAULTS["lyapunov"]))
 
 
 class _Document(BaseModel):

@@ -45,4 +45,16 @@ def point_variables(integration):
         ("v_final", np.float64, (), {"units": "1", "long_name": "velocity at the end of the run"}),
         ("n_steps", np.int64, (), {"units": "1", "long_name": "Dormand-Prince step attempts"}),
         ("n_rhs", np.int64, (), {"units": "1", "long_name": "right-hand-side evaluations"}),
-    ]
+    ] + (LYAPUNOV_VARIABLES if getattr(integration, "lyapunov", False) else [])
+
+
+# With integration.lyapunov (vrsweep.tangent). Time t is dimensionless, so a rate is too.
+LYAPUNOV_VARIABLES = [
+    ("lyapunov", np.float64, (), {
+        "units": "1",
+        "long_name": ("largest Lyapunov exponent per unit time over the measurement window (tangent vector "
+                      "through impacts by the saltation matrix; -inf: the mass stuck on the barrier)")}),
+    ("lyapunov_err", np.float64, (), {
+        "units": "1",
+        "long_name": "95% half-width of lyapunov from 10 batches of whole periods (vrsweep.diagnostics)"}),
+]

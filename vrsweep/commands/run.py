@@ -75,7 +75,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         if quiet:
             return None
         if already_done < total and (not dask_address or parse_local(dask_address)):
-            _say_if_compiling(config.integration.method)  # a remote cluster's workers have caches of their own
+            _say_if_compiling(config.integration.method, config.integration.lyapunov)  # a remote cluster's workers have caches of their own
         if not sys.stderr.isatty():  # a batch log: lines, not a bar's redraws
             from vrsweep.progress import ProgressLog
 
@@ -127,9 +127,9 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
 COMPILE_SECONDS = "about 30 s"
 
 
-def _say_if_compiling(method):
+def _say_if_compiling(method, lyapunov):
     from vrsweep.numba_cache import cache_dir, kernel_is_cached
 
-    if not kernel_is_cached(method):
+    if not kernel_is_cached(method, lyapunov):
         click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, once: later runs load it from "
                    f"{cache_dir()})", err=True)
