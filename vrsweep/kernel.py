@@ -46,6 +46,9 @@ from vrsweep.tangent import (
 RTOL, ATOL, TRANSIENT_PERIODS, MEASURE_PERIODS, MAX_STEPS, MAX_IMPACTS_PER_PERIOD, \
     DIVERGENCE_BOUND, STICK_VELOCITY = range(8)
 N_SETTINGS = 8
+# Their config names (config.py's integration section), in index order.
+SETTING_NAMES = ("rtol", "atol", "transient_periods", "measure_periods", "max_steps", "max_impacts_per_period",
+                 "divergence_bound", "stick_velocity")
 
 # --- per-slow-period record, one row per period, transient included ---
 REC_IMPACTS = 0     # impacts in the period
@@ -607,30 +610,18 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
 
             # --- the impact: restitution (eq2.2), or the start of sticking ---
             if impact:
-                v_before = max(y[V], 0.0)
-                acceleration_before = f[V]
-                y[X] = delta
+                y[X] = delta  # the exact step left it within IMPACT_POSITION_TOLERANCE
                 n_impacts += 1
                 record[REC_IMPACTS] += 1.0
                 record[REC_X_MAX] = delta
                 if record[REC_IMPACTS] > max_impacts_per_period:
                     status = Status.CHATTER_LIMIT
                     break
-                v_after = -restitution * v_before  # eq2.2
-                if -v_after < stick_velocity and force_at_barrier(t, coefficients) > 0.0:
-                    # Chatter has died out and the force holds the mass on the barrier.
-                    v_after = 0.0
-                    stuck = True
-                    if n_sticks < stick_log.shape[0]:
-                        stick_log[n_sticks, 0] = t
-                        stick_log[n_sticks, 1] = np.nan
-                    n_sticks += 1
-                y[V] = v_after
-                if n_impacts - 1 < impact_log.shape[0]:
-                    impact_log[n_impacts - 1, 0] = t
-                    impact_log[n_impacts - 1, 1] = v_before
-                    impact_log[n_impacts - 1, 2] = v_after
+                acceleration_before = f[V]
+                v_before, v_after, stuck = _restitution(y, t, coefficients, stick_velocity)
+                _log_impact(impact_log, n_impacts, t, v_before, v_after)
                 if stuck:
+                    n_sticks = _log_stick_start(stick_log, n_sticks, t)
                     if tangents:
                         collapse_tangents(y)
                 else:
@@ -639,11 +630,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     if tangents:
                         apply_saltation(y, v_before, acceleration_before, f[V], restitution)
                         tangent_derivative(y, coefficients, f)  # f of the jumped tangent vectors
-                    # A slow rebound against a force pushing back returns after about
-                    # 2 |v| / a: step well inside that flight, so its return is seen.
-                    push = force_at_barrier(t, coefficients)
-                    if push > 0.0:
-                        h = min(h, REBOUND_STEP_FRACTION * 2.0 * -v_after / push)
+                    h = _rebound_step(h, t, v_after, coefficients)
                 err_previous = 1.0
 
             if not (math.isfinite(y[X]) and math.isfinite(y[V])):
@@ -654,19 +641,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 break
 
         if t >= t_boundary:
-            # --- close the period: record it, reset the quadratures, renormalise the tangents ---
-            record[REC_QS] = y[QS_INTEGRAL]
-            record[REC_QC] = y[QC_INTEGRAL]
-            record[REC_X] = y[X]
-            record[REC_V] = y[V]
-            y[QS_INTEGRAL] = 0.0
-            y[QC_INTEGRAL] = 0.0
-            if tangents:
-                record[REC_LOG_STRETCH], record[REC_LOG_AREA] = renormalise_tangents(y)
-                if stuck:
-                    collapse_tangents(y)  # still on the barrier: the next period starts from zero
-                else:
-                    tangent_derivative(y, coefficients, f)  # f of the renormalised vectors
+            _close_period(record, y, f, coefficients, tangents, stuck)
             period += 1
             if period == n_periods:
                 break
@@ -716,6 +691,68 @@ def _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynam
     prepare_step(t, h_taken, coefficients, scratch)
     n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch, n_dynamic)
     return h_taken, n_rhs
+
+
+@kernel_jit(inline="always")
+def _restitution(y, t, coefficients, stick_velocity):
+    """The impact law at x = Delta: v -> -e v (eq2.2), or sticking. Returns (v_before, v_after, stuck).
+
+    The mass sticks when chatter has died out (the rebound is slower than stick_velocity) and the
+    force at rest on the barrier presses it there.
+    """
+    v_before = max(y[V], 0.0)
+    v_after = -coefficients[E] * v_before  # eq2.2
+    stuck = -v_after < stick_velocity and force_at_barrier(t, coefficients) > 0.0
+    if stuck:
+        v_after = 0.0
+    y[V] = v_after
+    return v_before, v_after, stuck
+
+
+@kernel_jit(inline="always")
+def _rebound_step(h, t, v_after, coefficients):
+    """The next step size after a rebound: a slow rebound against a force pushing back returns
+    after about 2 |v| / a, so the step stays well inside that flight and its return is seen."""
+    push = force_at_barrier(t, coefficients)
+    if push > 0.0:
+        return min(h, REBOUND_STEP_FRACTION * 2.0 * -v_after / push)
+    return h
+
+
+@kernel_jit(inline="always")
+def _log_impact(impact_log, n_impacts, t, v_before, v_after):
+    """The n_impacts-th impact into the log, while it has room."""
+    if n_impacts - 1 < impact_log.shape[0]:
+        impact_log[n_impacts - 1, 0] = t
+        impact_log[n_impacts - 1, 1] = v_before
+        impact_log[n_impacts - 1, 2] = v_after
+
+
+@kernel_jit(inline="always")
+def _log_stick_start(stick_log, n_sticks, t):
+    """A sticking interval starting at t into the log (its end is written at release). Returns the count."""
+    if n_sticks < stick_log.shape[0]:
+        stick_log[n_sticks, 0] = t
+        stick_log[n_sticks, 1] = np.nan
+    return n_sticks + 1
+
+
+@kernel_jit(inline="always")
+def _close_period(record, y, f, coefficients, tangents, stuck):
+    """At t = nT: record the period's quadratures and stroboscopic state, reset the quadratures,
+    and renormalise the tangent vectors (tangent.py), recording their growth."""
+    record[REC_QS] = y[QS_INTEGRAL]
+    record[REC_QC] = y[QC_INTEGRAL]
+    record[REC_X] = y[X]
+    record[REC_V] = y[V]
+    y[QS_INTEGRAL] = 0.0
+    y[QC_INTEGRAL] = 0.0
+    if tangents:
+        record[REC_LOG_STRETCH], record[REC_LOG_AREA] = renormalise_tangents(y)
+        if stuck:
+            collapse_tangents(y)  # still on the barrier: the next period starts from zero
+        else:
+            tangent_derivative(y, coefficients, f)  # f of the renormalised vectors
 
 
 @kernel_jit

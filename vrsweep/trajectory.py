@@ -15,12 +15,7 @@ DEFAULT_SETTINGS = {
     "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1e6,
     "stick_velocity": 1e-7,
 }
-_SETTING_INDEX = {
-    "rtol": kernel.RTOL, "atol": kernel.ATOL, "transient_periods": kernel.TRANSIENT_PERIODS,
-    "measure_periods": kernel.MEASURE_PERIODS, "max_steps": kernel.MAX_STEPS,
-    "max_impacts_per_period": kernel.MAX_IMPACTS_PER_PERIOD,
-    "divergence_bound": kernel.DIVERGENCE_BOUND, "stick_velocity": kernel.STICK_VELOCITY,
-}
+_SETTING_INDEX = {name: index for index, name in enumerate(kernel.SETTING_NAMES)}
 
 
 def settings_vector(**settings):
