@@ -64,6 +64,11 @@ Stroboscopic (Poincare) samples
     multipliers are a complex pair the per-period stretch oscillates with the pair's rotation and
     the window's mean carries an O(1/m) bias, which the batches see as spread. A point that stuck
     in the window has lyapunov = -inf exactly (tangent.py) and lyapunov_err = 0.
+    Measured as for R_err (24 runs per point: rtol 1e-8 ... 1e-11 times six x(0) moved by up to
+    5e-9, paper parameters, Omega = 4, 100 + 100 periods): the fraction of runs within
+    lyapunov_err of the ensemble mean was 0.92 / 0.96 / 0.92 / 0.96 at g = 1 / 3 / 5 / 20 (means
+    0.151, 0.223, 0.250, 0.034); at g = 22, where a chaotic transient ends on a period-4 orbit at a
+    random time, 0.71: the same blind spot as R_err's.
 """
 
 import numpy as np
