@@ -9,7 +9,9 @@ the PNGs to docs/figures/ (committed, shown in the README).
 
 Figures: quickstart (the README's first figure: configs/quickstart.yaml, effective model, R
 against g with the analytic response), fig1, fig2 (R against g, Omega = 4 and 5, with the
-analytic response), their bifurcation diagrams (stroboscopic x against g: which R is trustworthy), fig_impact_no
+analytic response), their bifurcation diagrams (stroboscopic x against g: which R is trustworthy),
+fig1_lyapunov (Fig. 1's sweep on a finer grid with the largest Lyapunov exponent under its
+bifurcation diagram), fig_impact_no
 (impacts per slow period, g = 5 and 20), fig3-fig5 (original above effective trajectories),
 fig6 (effective system against the slow-flow reconstruction); and, not in the paper, the
 hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down) and the basins of
@@ -40,6 +42,11 @@ COMMANDS = {
         ["run", "configs/fig1.yaml", "--overwrite"],
         ["plot", "results/fig1.h5", "--log", "-o", "docs/figures/fig1.png"],
         ["plot", "results/fig1.h5", "--kind", "bifurcation", "-o", "docs/figures/fig1_bifurcation.png"],
+    ],
+    "fig1_lyapunov": [
+        ["run", "configs/fig1_lyapunov.yaml", "--overwrite"],
+        ["plot", "results/fig1_lyapunov.h5", "--kind", "bifurcation+lyapunov",
+         "-o", "docs/figures/fig1_lyapunov.png"],
     ],
     "fig2": [
         ["run", "configs/fig2.yaml", "--overwrite"],
