@@ -87,12 +87,33 @@ def test_simulate_ends_every_point_with_a_known_status_and_no_nan_ok(point):
     if run.status == Status.OK:
         bad = {name: run.summary[k] for name, k in OK_SUMMARY.items() if not math.isfinite(run.summary[k])}
         assert not bad, f"ok point with non-finite {bad}"
-        assert np.all(np.isfinite(run.period_records)), "ok point with a non-finite per-period record"
+        # (the tangent vectors' columns are NaN by definition in a run without them)
+        assert np.all(np.isfinite(run.period_records[:, :kernel.REC_LOG_STRETCH])), \
+            "ok point with a non-finite per-period record"
         # The impact law keeps the mass at or below the barrier.
         assert run.period_records[:, kernel.REC_X_MAX].max() <= parameters["Delta"] * (1 + 1e-9)
     else:
         for name in ("R", "Qs", "Qc"):
             assert math.isnan(run.summary[OK_SUMMARY[name]]), f"{run.status.name} point with a {name}"
+
+
+@FAST
+@given(points())
+def test_an_ok_point_has_a_lyapunov_exponent_never_nan(point):
+    # The tangent vectors meet every impact, graze and stick the state does: an ok point must end
+    # with a number, or -inf where the mass stuck in the window (tangent.py), never NaN.
+    model, parameters, initial, run_settings = point
+    run = simulate(kernel_coefficients(parameters, model), list(initial), settings_vector(**run_settings),
+                   lyapunov=True)
+    if run.status == Status.OK:
+        exponent = run.summary[kernel.SUM_LYAPUNOV]
+        assert not math.isnan(exponent) and exponent != math.inf, exponent
+        assert not np.any(np.isnan(run.period_records[:, kernel.REC_LOG_STRETCH]))
+        if exponent == -math.inf:  # only a stick collapses the tangent vectors
+            assert len(run.sticks) > 0
+    else:
+        assert math.isnan(run.summary[kernel.SUM_LYAPUNOV])
+
 
 
 @st.composite
