@@ -8,19 +8,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrsweep import kernel
+from vrsweep.config.schema import INTEGRATION_DEFAULTS
 from vrsweep.results import Status
 
-DEFAULT_SETTINGS = {
-    "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
-    "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1e6,
-    "stick_velocity": 1e-7,
-}
 _SETTING_INDEX = {
     "rtol": kernel.RTOL, "atol": kernel.ATOL, "transient_periods": kernel.TRANSIENT_PERIODS,
     "measure_periods": kernel.MEASURE_PERIODS, "max_steps": kernel.MAX_STEPS,
     "max_impacts_per_period": kernel.MAX_IMPACTS_PER_PERIOD,
     "divergence_bound": kernel.DIVERGENCE_BOUND, "stick_velocity": kernel.STICK_VELOCITY,
 }
+# The kernel's settings a config leaves out: the config schema's defaults, never written twice.
+DEFAULT_SETTINGS = {name: INTEGRATION_DEFAULTS[name] for name in _SETTING_INDEX}
 
 
 def settings_vector(**settings):
