@@ -223,7 +223,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     path = shard_output_path(config.output_path(output), shard)
     owned = owned_mask(grid, shard) if shard[1] > 1 else None
     if resume and path.exists():
-        writer = ResultWriter.open_for_resume(path, config.to_yaml(),
+        writer = ResultWriter.open_for_resume(path, _expected_config_text(path, config),
                                               expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None)
     else:
         writer = ResultWriter.create(path, _axes(grid), _variable_specs(config),
@@ -256,4 +256,34 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     writer.finish(extra=extras, coords=coords)
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
 
+
+def _expected_config_text(path, config):
+    """The config text the writer must find in ``path`` to resume it: the stored text itself when it
+    parses to the same config (however an earlier version wrote it out), else today's text (and the
+    writer's message then says where the two differ).
+
+    The comparison is of parsed configs, not of text: a checkpoint written before a change in how
+    the config is written out still resumes, and one from a different config never does.
+    """
+    from vrsweep.config import same_config
+
+    stored = _stored_config_text(path)
+    if stored is not None and same_config(stored, config):
+        return stored
+    return config.to_yaml()
+
+
+def _stored_config_text(path):
+    """The ``config`` attribute of the result file at ``path``, or None if it cannot be read (the
+    writer then reports what is wrong with the file)."""
+    from vrsweep.fileio import open_hdf5
+
+    try:
+        with open_hdf5(path, "r") as h5file:
+            value = h5file.attrs.get("config")
+    except Exception:  # noqa: BLE001 -- any failure here is reported by open_for_resume itself
+        return None
+    if isinstance(value, bytes):
+        value = value.decode("utf-8", errors="replace")
+    return value if isinstance(value, str) else None
 
