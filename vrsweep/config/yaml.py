@@ -7,11 +7,13 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
+import io
 import warnings
 
 import numpy as np
 from ruamel.yaml import YAML
-from ruamel.yaml.comments import TaggedScalar
+from ruamel.yaml.comments import CommentedMap, CommentedSeq, TaggedScalar
+from ruamel.yaml.scalarstring import DoubleQuotedScalarString
 from ruamel.yaml.reader import ReaderError
 
 from vrsweep.config.schema import INTEGRATION_DEFAULTS, Axis
@@ -120,68 +122,82 @@ def _error_line(error, text) -> int:
     return 1
 
 
-def dump_config(self) -> str:
-    """Canonical YAML of this config, fully resolved (defaults filled, overrides applied).
+def dump_config(config) -> str:
+    """Canonical YAML of ``config``, fully resolved (defaults filled, overrides applied).
 
     Canonical: fixed key order, floats as ``repr`` (exact round trip), a linear axis written as
     ``{start, stop, num}`` whenever its values are exactly ``np.linspace`` of those (however
     the user wrote it), so two equal configs give the same text. Stored in results files.
+
+    Written by ruamel.yaml from a tree built here; the text is the one the hand-written emitter
+    of earlier versions wrote (same layout, comments and number spellings), so that shard files
+    written by two versions still show the same text. Resuming does not depend on it: --resume
+    compares configs parsed (vrsweep.config.same_config).
     """
-    swept = set(self.axis_names)
-    lines = ["# vrsweep config, fully resolved: every default filled in, every --set applied.",
-             f"model: {self.model}", "parameters:"]
-    for name in PARAMETER_NAMES:
-        note = f"  # swept: see sweep.{name}" if name in swept else ""
-        lines.append(f"  {name}: {_yaml_float(self.parameters[name])}{note}")
-    lines.append("initial:")
-    for axis, key in INITIAL_STATE_KEYS.items():
-        note = f"  # swept: see sweep.{axis}" if axis in swept else ""
-        lines.append(f"  {key}: {_yaml_float(self.initial[key])}{note}")
-    lines.append("sweep:" if self.axes else "sweep: {}")
-    lines += [f"  {axis.name}: {_yaml_axis(axis)}" for axis in self.axes]
-    lines.append("integration:")
-    for key, value in dataclasses.asdict(self.integration).items():
-        if key == "method":
-            # Written only when not the default: files written before the key existed store
-            # the same text for the same run, so they still resume (the check compares text).
-            if value != INTEGRATION_DEFAULTS["method"]:
-                lines.append(f"  method: {value}")
-            continue
-        lines.append(f"  {key}: {value if isinstance(value, int) else _yaml_float(value)}")
-    lines.append(f"output: {'null' if self.output is None else _yaml_string(self.output)}")
-    return "\n".join(lines) + "\n"
+    swept = set(config.axis_names)
+    document = CommentedMap()
+    document.yaml_set_start_comment("vrsweep config, fully resolved: every default filled in, every --set applied.")
+    document["model"] = config.model
+    document["parameters"] = _block({name: float(config.parameters[name]) for name in PARAMETER_NAMES},
+                                    {name: f"sweep.{name}" for name in PARAMETER_NAMES if name in swept})
+    document["initial"] = _block({key: float(config.initial[key]) for key in INITIAL_STATE_KEYS.values()},
+                                 {key: f"sweep.{axis}" for axis, key in INITIAL_STATE_KEYS.items() if axis in swept})
+    document["sweep"] = CommentedMap((axis.name, _axis_node(axis)) for axis in config.axes)
+    if not config.axes:
+        document["sweep"].fa.set_flow_style()  # "sweep: {}"
+    integration = dataclasses.asdict(config.integration)
+    if integration["method"] == INTEGRATION_DEFAULTS["method"]:
+        # The default is left out, as in files written before the key existed: the same run
+        # keeps the same text.
+        del integration["method"]
+    document["integration"] = _block(integration, {})
+    document["output"] = None if config.output is None else DoubleQuotedScalarString(config.output)
+    stream = io.StringIO()
+    _dumper().dump(document, stream)
+    return stream.getvalue()
 
 
-def _yaml_float(value) -> str:
-    return repr(float(value))  # repr round-trips exactly and YAML 1.2 reads 1e-09 as a float
+def _block(values, swept):
+    """A block mapping of ``values``; a key in ``swept`` gets the comment ``# swept: see sweep.g``."""
+    node = CommentedMap(values)
+    for key, where in swept.items():
+        # Two spaces after "  key: value", as PEP 8 has it (ruamel would align the comments).
+        column = len(f"  {key}: {repr(values[key])}  ")
+        node.yaml_add_eol_comment(f"swept: see {where}", key, column=column)
+    return node
 
 
-def _yaml_string(value: str) -> str:
-    """A YAML double-quoted scalar, escaping anything not printable."""
-    out = []
-    for char in value:
-        if char in '"\\':
-            out.append("\\" + char)
-        elif char.isprintable():
-            out.append(char)
-        elif ord(char) <= 0xFF:
-            out.append(f"\\x{ord(char):02x}")
-        elif ord(char) <= 0xFFFF:
-            out.append(f"\\u{ord(char):04x}")
-        else:
-            out.append(f"\\U{ord(char):08x}")
-    return '"' + "".join(out) + '"'
-
-
-def _yaml_axis(axis: Axis) -> str:
+def _axis_node(axis: Axis):
+    """``{start, stop, num}`` for exactly np.linspace values, else the list (``{values: [...]}``
+    with a continuation), in flow style: one line per axis."""
     values = axis.values
     n = len(values)
     if n >= 3 and values[-1] > values[0] and np.array_equal(values, np.linspace(values[0], values[-1], n)):
-        text = f"start: {_yaml_float(values[0])}, stop: {_yaml_float(values[-1])}, num: {n}"
+        node = CommentedMap([("start", float(values[0])), ("stop", float(values[-1])), ("num", n)])
     else:
-        text = "values: [" + ", ".join(_yaml_float(value) for value in values) + "]"
+        items = CommentedSeq(float(value) for value in values)
+        items.fa.set_flow_style()
+        if not axis.continuation:
+            return items
+        node = CommentedMap([("values", items)])
     if axis.continuation:
-        text += f", continuation: {axis.continuation}"
-    elif text.startswith("values"):
-        return text[len("values: "):]
-    return "{" + text + "}"
+        node["continuation"] = axis.continuation
+    node.fa.set_flow_style()
+    return node
+
+
+def _represent_null(representer, _):
+    return representer.represent_scalar("tag:yaml.org,2002:null", "null")  # not ruamel's empty value
+
+
+def _represent_float(representer, value):
+    # repr round-trips exactly, and YAML 1.2 reads 1e-09 as a float (ruamel would write 1.0e-09)
+    return representer.represent_scalar("tag:yaml.org,2002:float", repr(float(value)))
+
+
+def _dumper() -> YAML:
+    yaml = YAML(typ="rt")
+    yaml.width = 1 << 30  # one axis on one line, however many values it lists
+    yaml.representer.add_representer(type(None), _represent_null)
+    yaml.representer.add_representer(float, _represent_float)
+    return yaml
