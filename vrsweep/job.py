@@ -18,7 +18,8 @@ from vrsweep.results import Status
 from vrsweep.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
 from vrsweep.model import AXIS_LONG_NAMES, AXIS_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
-from vrsweep.sweep import Grid, run_sweep
+from vrsweep.config.grid import Grid
+from vrsweep.sweep import run_sweep
 from vrsweep.variables import point_variables
 
 
@@ -151,7 +152,7 @@ def root_attributes(config, shard=(0, 1)):
 
 
 def owned_mask(grid, shard):
-    from vrsweep.sweep import shuffled_lines
+    from vrsweep.chunks import shuffled_lines
 
     mask = np.zeros(grid.n_points, dtype=bool)
     mask[shuffled_lines(grid, *shard).reshape(-1)] = True

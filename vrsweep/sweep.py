@@ -20,37 +20,21 @@ from numba import prange
 from vrsweep import kernel
 from vrsweep.diagnostics import point_diagnostics
 from vrsweep.jit import kernel_jit
-from vrsweep.config.grid import DIRECTION_VALUES, Grid  # noqa: F401 - re-exported: callers import them from here
+# Grid, the planner's names: imported from here by callers written before they moved.
+from vrsweep.chunks import (  # noqa: F401
+    GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses, default_chunk_lines, plan_lines,
+    shard_of_points, shuffled_lines,
+)
+from vrsweep.config.grid import DIRECTION_VALUES, Grid  # noqa: F401
 from vrsweep.model import kernel_coefficients
 from vrsweep.results import Status
 from vrsweep.trajectory import settings_vector
 
-SHUFFLE_SEED = 20240607  # fixed: the same grid always gives the same chunks and shards
 
 
 def integration_settings(integration):
     """The kernel's settings vector from a config's integration section."""
     return settings_vector(**vars(integration))
-
-
-def shuffled_lines(grid, shard_index=0, shard_count=1):
-    """The lines this process runs, in run order: shuffled, then every shard_count-th."""
-    lines = grid.lines()
-    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
-    return lines[order[shard_index::shard_count]]
-
-
-def shard_of_points(grid, shard_count):
-    """For every grid point (over grid.shape), the shard 0..shard_count-1 that runs it.
-
-    The inverse of shuffled_lines: the line at place p of the shuffled order goes to shard
-    p mod shard_count. Used to say which shard file a missing point belongs to.
-    """
-    lines = grid.lines()
-    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
-    shard = np.empty(grid.n_points, dtype=np.int64)
-    shard[lines[order]] = (np.arange(len(lines)) % shard_count)[:, None]
-    return shard.reshape(grid.shape)
 
 
 @kernel_jit(inline="always")
@@ -107,18 +91,6 @@ def run_lines_dop853(coefficients, initial_states, settings, lines, period_recor
 RUN_LINES = {"rk45": run_lines_rk45, "dop853": run_lines_dop853}
 
 
-# A chunk is the unit of checkpointing and of progress: long enough that writing it is a small
-# part of computing it, short enough that a kill loses little. Chunks of cheap points (short
-# windows, the effective model) double while they last less than this.
-GROW_CHUNK_BELOW_SECONDS = 0.25
-MAX_CHUNK_LINES = 8192
-
-
-def default_chunk_lines(threads, line_length):
-    """Enough lines per chunk to keep every thread busy and the progress bar moving."""
-    return max(threads, (16 * threads) // max(1, line_length))
-
-
 class LineRunner:
     """Runs given lines of a config's grid: the one code path of local and Dask sweeps alike."""
 
@@ -164,16 +136,11 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     """
     runner = LineRunner(config)
     threads = threads or numba.config.NUMBA_NUM_THREADS
-    lines = shuffled_lines(runner.grid, *shard)
-    # A continuation line is the unit of work: its points depend on each other, so a line with
-    # any point missing is run again from its start (the points already done come out the same).
-    not_done = np.ones(runner.grid.n_points, dtype=bool) if done is None else ~done.reshape(-1)
-    lines = lines[np.any(not_done[lines], axis=1)]
-    line_length = lines.shape[1] if lines.size else 1
+    plan = plan_lines(runner.grid, shard, done)
+    lines = plan.lines
     adaptive = chunk_lines is None
-    chunk_lines = chunk_lines or default_chunk_lines(threads, line_length)
+    chunk_lines = chunk_lines or default_chunk_lines(threads, plan.line_length)
     counts = {}
-    total = int(np.count_nonzero(not_done[lines]))  # progress counts points newly done, not redone
     start = 0
     while start < len(lines):
         began = time.perf_counter()
@@ -181,12 +148,11 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
         start += chunk_lines
         if adaptive and time.perf_counter() - began < GROW_CHUNK_BELOW_SECONDS:
             chunk_lines = min(2 * chunk_lines, MAX_CHUNK_LINES)
-        for code, n in zip(*np.unique(values["status"], return_counts=True)):
-            counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
+        count_statuses(counts, values["status"])
         if on_chunk is not None:
             on_chunk(flat, values)
         if progress is not None:
-            progress(int(np.count_nonzero(not_done[flat])), total)
+            progress(plan.newly_done(flat), plan.total)
     return counts
 
 
