@@ -27,7 +27,7 @@ import threading
 
 import numpy as np
 
-from vrsweep.errors import UsageError, VrsweepError
+from vrsweep.errors import InvalidArgument, RunFailed, VrsweepError
 from vrsweep.chunks import count_statuses, default_chunk_lines, plan_lines
 from vrsweep.config.grid import Grid
 
@@ -42,14 +42,16 @@ def dask_executor(address, threads=None):
 
     address: a scheduler address (``tcp://host:8786``, a scheduler file is not supported) or
     ``local:N`` for a LocalCluster of N worker processes with ``threads`` (default 1) threads each.
-    Checks the address and that dask.distributed is installed now, so a bad ``--dask`` fails
-    before any file is created; connects only when called.
+    Checks the address and that dask.distributed is installed now, so a bad address fails
+    before any file is created (InvalidArgument; the run command words it as ``--dask ADDRESS``);
+    connects only when called.
     """
     n_local = parse_local(address)
     try:
         import dask.distributed  # noqa: F401
     except ModuleNotFoundError:
-        raise UsageError(f"--dask needs dask.distributed, which is not installed: {INSTALL_HINT}") from None
+        raise InvalidArgument("Dask address", address,
+                              f"needs dask.distributed, which is not installed: {INSTALL_HINT}") from None
     return DaskExecutor(address, threads, n_local)
 
 
@@ -63,7 +65,7 @@ def parse_local(address):
     except ValueError:
         n = 0
     if n < 1:
-        raise UsageError(f"--dask {address}: expected local:N with N >= 1 workers (e.g. local:4)")
+        raise InvalidArgument("Dask address", address, "expected local:N with N >= 1 workers (e.g. local:4)")
     return n
 
 
@@ -165,9 +167,7 @@ class DaskExecutor:
                     try:
                         flat, values = future.result()
                     except Exception as error:
-                        raise VrsweepError(
-                            f"a Dask task failed: {type(error).__name__}: {error} (finished chunks "
-                            "are saved; --resume continues)") from error
+                        raise RunFailed(f"a Dask task failed: {type(error).__name__}: {error}") from error
                     if on_chunk is not None:
                         on_chunk(flat, values)
                     count_statuses(counts, values["status"])
