@@ -14,11 +14,11 @@ from ruamel.yaml.nodes import MappingNode, SequenceNode
 from ruamel.yaml.reader import ReaderError
 
 from vrsweep.config.schema import (
-    _ALLOWED_KEYS, _ANY, _AXIS_FORMS, _KEY_HOME, _LINEAR_KEYS, _NUM, _VALUES_KEYS, CONTINUATIONS,
+    ALLOWED_KEYS, ANY, AXIS_FORMS, KEY_HOME, LINEAR_KEYS, NUM_DOMAIN, VALUES_KEYS, CONTINUATIONS,
     INITIAL_DOMAINS, INTEGRATION_DOMAINS, METHODS, PARAMETER_DOMAINS,
 )
-from vrsweep.config.wording import _and, _did_you_mean, _dotted, _show
-from vrsweep.config.yaml import _key, _position, compose
+from vrsweep.config.wording import and_list, did_you_mean, dotted, show
+from vrsweep.config.yaml import key_text, line_and_column, compose
 from vrsweep.errors import ConfigError
 from vrsweep.model import MODELS
 
@@ -37,7 +37,7 @@ class Report:
     def report(self, path, message, allowed=None):
         """Record one problem at ``path`` (a tuple of keys and list indices)."""
         path = tuple(path)
-        text = f"{_dotted(path)}: {message}" if path else message
+        text = f"{dotted(path)}: {message}" if path else message
         if allowed:
             text += f" (allowed: {allowed})"
         for length in range(len(path), 0, -1):
@@ -61,7 +61,7 @@ class Report:
         for key in path:
             try:
                 if isinstance(node, CommentedMap):
-                    real_key = next(k for k in node if _key(k) == key)
+                    real_key = next(k for k in node if key_text(k) == key)
                     line = node.lc.key(real_key)[0] + 1
                     node = node[real_key]
                 elif isinstance(node, CommentedSeq) and isinstance(key, int) and 0 <= key < len(node):
@@ -101,8 +101,8 @@ class Report:
                             what, hint = "parameter", "; sweep each parameter on one axis only"
                         else:
                             what, hint = "key", ""
-                        self.report_raw((0, where[1], ""), f"{self.source}:{where[1]}: {_dotted(path + (key,))}: "
-                                                           f"{what} given {times} (lines {_and(where)}){hint}")
+                        self.report_raw((0, where[1], ""), f"{self.source}:{where[1]}: {dotted(path + (key,))}: "
+                                                           f"{what} given {times} (lines {and_list(where)}){hint}")
             elif isinstance(node, SequenceNode):
                 for index, item in enumerate(node.value):
                     walk(item, path + (index,))
@@ -112,7 +112,7 @@ class Report:
     def yaml_error_text(self, error) -> str:
         """``FILE:LINE:COLUMN: YAML syntax error: <the parser's problem>``."""
         if isinstance(error, ReaderError):
-            line, column = _position(self.text, error.position)
+            line, column = line_and_column(self.text, error.position)
             character = error.character
             if isinstance(character, int):
                 character = f"#x{character:04x}"
@@ -131,7 +131,7 @@ class Report:
     # -- pydantic's errors in this project's words ---------------------------------------
 
     def report_pydantic(self, item, prefix):
-        """Turn one pydantic error into a problem in this module's words."""
+        """Turn one pydantic error into a problem in this project's words."""
         path = prefix + tuple(item["loc"])
         kind, value = item["type"], item.get("input")
         if kind == "extra_forbidden":
@@ -140,47 +140,47 @@ class Report:
             allowed = self.allowed_keys(parent)
             self.report(path, f"unknown key{self.key_hint(key, parent, allowed)}", allowed=", ".join(allowed))
         elif kind == "missing":
-            self.report(path, "missing", allowed=_AXIS_FORMS if path[:1] == ("sweep",) else None)
+            self.report(path, "missing", allowed=AXIS_FORMS if path[:1] == ("sweep",) else None)
         elif kind in ("out_of_range", "bad_path"):
             self.report(path, item["msg"])
         elif kind == "literal_error":
             choices = {("model",): MODELS, ("method",): METHODS}.get(path[-1:], CONTINUATIONS)
-            hint = _did_you_mean(value, choices) if isinstance(value, str) else ""
-            self.report(path, f"must be one of {', '.join(choices)}, got {_show(value)}{hint}")
+            hint = did_you_mean(value, choices) if isinstance(value, str) else ""
+            self.report(path, f"must be one of {', '.join(choices)}, got {show(value)}{hint}")
         elif kind in ("model_type", "dict_type"):
-            self.report(path, f"must be a mapping, got {_show(value)}",
+            self.report(path, f"must be a mapping, got {show(value)}",
                         allowed=", ".join(self.allowed_keys(path)) or None)
         elif kind == "list_type":
-            self.report(path, f"must be a list of numbers, got {_show(value)}")
+            self.report(path, f"must be a list of numbers, got {show(value)}")
         elif kind == "too_short":
             self.report(path, "must not be empty", allowed="a list of one or more numbers")
         elif kind == "finite_number":
-            self.report(path, f"must be a finite number, got {_show(value)}", allowed=self.describe(path))
+            self.report(path, f"must be a finite number, got {show(value)}", allowed=self.describe(path))
         elif kind in ("float_type", "float_parsing"):
-            self.report(path, f"must be a number, got {_show(value)}", allowed=self.describe(path))
+            self.report(path, f"must be a number, got {show(value)}", allowed=self.describe(path))
         elif kind in ("int_type", "int_parsing", "int_from_float"):
-            self.report(path, f"must be an integer, got {_show(value)}", allowed=self.describe(path))
+            self.report(path, f"must be an integer, got {show(value)}", allowed=self.describe(path))
         elif kind == "string_type":
-            self.report(path, f"must be a string, got {_show(value)}", allowed="a file path")
-        else:  # something pydantic says that this module does not rephrase
+            self.report(path, f"must be a string, got {show(value)}", allowed="a file path")
+        else:  # something pydantic says that is not rephrased here
             self.report(path, item["msg"])
 
     def allowed_keys(self, parent):
-        if parent in _ALLOWED_KEYS:
-            return _ALLOWED_KEYS[parent]
+        if parent in ALLOWED_KEYS:
+            return ALLOWED_KEYS[parent]
         if len(parent) == 2 and parent[0] == "sweep":
-            return _LINEAR_KEYS[:3] + _VALUES_KEYS
+            return LINEAR_KEYS[:3] + VALUES_KEYS
         return ()
 
     def key_hint(self, key, parent, allowed):
         """`` (did you mean 'e'?)``, or where the key belongs if it is in the wrong section."""
         if len(parent) == 2 and parent[0] == "sweep":
-            if key in _LINEAR_KEYS or key in _VALUES_KEYS:
+            if key in LINEAR_KEYS or key in VALUES_KEYS:
                 return "; use either {start, stop, num} or {values: [...]}, not both"
-        home = _KEY_HOME.get(str(key))
-        if home is not None and home != _dotted(parent + (key,)):
+        home = KEY_HOME.get(str(key))
+        if home is not None and home != dotted(parent + (key,)):
             return f" (did you mean {home}?)"
-        return _did_you_mean(str(key), allowed)
+        return did_you_mean(str(key), allowed)
 
     def describe(self, path) -> str | None:
         """What is allowed at ``path``, in words, for type errors."""
@@ -188,21 +188,21 @@ class Report:
             section, key = path
             table = {"parameters": PARAMETER_DOMAINS, "initial": INITIAL_DOMAINS,
                      "integration": INTEGRATION_DOMAINS}.get(section, {})
-            if key in table and table[key] != _ANY:
+            if key in table and table[key] != ANY:
                 return table[key].describe()
         if path[:1] == ("sweep",):
             if path[-1:] == ("num",):
-                return _NUM.describe()
+                return NUM_DOMAIN.describe()
         return None
 
 
-def _without_missing_typos(errors):
+def without_missing_typos(errors):
     """Drop "missing start" when "strat: unknown key (did you mean 'start'?)" already says it."""
     suggested = set()
     for item in errors:
         if item["type"] == "extra_forbidden":
             parent, key = tuple(item["loc"][:-1]), str(item["loc"][-1])
-            for choice in _LINEAR_KEYS + _VALUES_KEYS:
-                if _did_you_mean(key, [choice]):
+            for choice in LINEAR_KEYS + VALUES_KEYS:
+                if did_you_mean(key, [choice]):
                     suggested.add(parent + (choice,))
     return [item for item in errors if not (item["type"] == "missing" and tuple(item["loc"]) in suggested)]

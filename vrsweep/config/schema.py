@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, create_model
 from pydantic_core import PydanticCustomError
 
-from vrsweep.config.wording import _number, _show
+from vrsweep.config.wording import show_number, show
 from vrsweep.model import (
     DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
 )
@@ -42,7 +42,7 @@ class Domain:
 
     def describe(self) -> str:
         """The interval in words, e.g. ``(0, 1]``, ``> 0``, ``an integer >= 1``."""
-        low, high = _number(self.low), _number(self.high)
+        low, high = show_number(self.low), show_number(self.high)
         has_low, has_high = self.low > -math.inf, self.high < math.inf and self.high != _INT64_MAX
         if has_low and has_high:
             text = f"in {'(' if self.low_open else '['}{low}, {high}{')' if self.high_open else ']'}"
@@ -65,25 +65,25 @@ class Domain:
         allowed = self.describe().replace("an integer ", "").replace("a number ", "")
         if self.integer:
             allowed = "an integer " + allowed
-        return f"must be {allowed}, got {_show(value)}"
+        return f"must be {allowed}, got {show(value)}"
 
 
-_ANY = Domain()
+ANY = Domain()
 _POSITIVE = Domain(low=0.0)
 _COUNT = Domain(low=1, low_open=False, high=_INT64_MAX, high_open=False, integer=True)
 
 PARAMETER_DOMAINS = {
-    "gamma": _ANY, "alpha": _ANY, "omega0": _ANY,
+    "gamma": ANY, "alpha": ANY, "omega0": ANY,
     "c": _POSITIVE,  # R = |Q|/c (eq3.3) is a gain: undefined without a drive; -c is c half a period on
     "omega": _POSITIVE,                                  # the slow period 2 pi/omega sets the time unit
-    "Delta": _ANY,                                       # must lie above initial.x: checked across fields
+    "Delta": ANY,                                       # must lie above initial.x: checked across fields
     "e": Domain(low=0.0, high=1.0, high_open=False),     # eq2.2: 0 < e <= 1
-    "g": _ANY,
+    "g": ANY,
     "Omega": _POSITIVE,
 }
 
 INITIAL_DEFAULTS = {"x": 0.99, "v": 0.5}  # the paper's Fig. 6 caption
-INITIAL_DOMAINS = {"x": _ANY, "v": _ANY}
+INITIAL_DOMAINS = {"x": ANY, "v": ANY}
 # What a sweep axis may be named: a parameter, or x0 / v0 (the initial state, basins of attraction).
 AXIS_NAMES = PARAMETER_NAMES + INITIAL_STATE_AXES
 AXIS_DOMAINS = {**PARAMETER_DOMAINS, **{axis: INITIAL_DOMAINS[key] for axis, key in INITIAL_STATE_KEYS.items()}}
@@ -115,11 +115,11 @@ CONTINUATIONS = ("up", "down", "both")
 # One axis is materialised as an array when the config is read, so its length must stay sane;
 # the size of the whole grid is judged later by vrsweep.estimate with the run's thread count.
 MAX_AXIS_POINTS = 10_000_000
-_NUM = Domain(low=1, low_open=False, high=MAX_AXIS_POINTS, high_open=False, integer=True)
+NUM_DOMAIN = Domain(low=1, low_open=False, high=MAX_AXIS_POINTS, high_open=False, integer=True)
 
-_SECTIONS = ("model", "parameters", "initial", "sweep", "integration", "output")
-_LINEAR_KEYS = ("start", "stop", "num", "continuation")
-_VALUES_KEYS = ("values", "continuation")
+SECTIONS = ("model", "parameters", "initial", "sweep", "integration", "output")
+LINEAR_KEYS = ("start", "stop", "num", "continuation")
+VALUES_KEYS = ("values", "continuation")
 
 
 # --------------------------------------------------------------------------------------------
@@ -266,7 +266,7 @@ def _check_range(domain: Domain):
     return check
 
 
-def _integral_float_to_int(value):
+def integral_float_to_int(value):
     # YAML 1.2 reads 2e7 as a float; a count written that way is still meant as a count.
     if isinstance(value, float) and value.is_integer() and abs(value) <= _INT64_MAX:
         return int(value)
@@ -275,7 +275,7 @@ def _integral_float_to_int(value):
 
 def _number_type(domain: Domain):
     if domain.integer:
-        return Annotated[int, BeforeValidator(_integral_float_to_int), AfterValidator(_check_range(domain))]
+        return Annotated[int, BeforeValidator(integral_float_to_int), AfterValidator(_check_range(domain))]
     return Annotated[float, AfterValidator(_check_range(domain))]
 
 
@@ -305,7 +305,7 @@ _IntegrationModel = create_model(
     method=(Literal[METHODS], INTEGRATION_DEFAULTS["method"]))
 
 
-class _Document(BaseModel):
+class Document(BaseModel):
     model_config = _STRICT
 
     model: Literal[MODELS] = "original"
@@ -319,23 +319,23 @@ class _Document(BaseModel):
 _Continuation = Literal[CONTINUATIONS] | None
 
 
-class _LinearAxis(BaseModel):
+class LinearAxis(BaseModel):
     model_config = _STRICT
 
     start: float
     stop: float
-    num: _number_type(_NUM)
+    num: _number_type(NUM_DOMAIN)
     continuation: _Continuation = None
 
 
-class _ValuesAxis(BaseModel):
+class ValuesAxis(BaseModel):
     model_config = _STRICT
 
     values: Annotated[list[float], Field(min_length=1)]
     continuation: _Continuation = None
 
 
-class _ListAxis(BaseModel):  # a bare list, wrapped so that it is validated like the others
+class ListAxis(BaseModel):  # a bare list, wrapped so that it is validated like the others
     model_config = _STRICT
 
     values: Annotated[list[float], Field(min_length=1)]
@@ -343,17 +343,17 @@ class _ListAxis(BaseModel):  # a bare list, wrapped so that it is validated like
 
 # What a key can be, for "(allowed: ...)" and "did you mean" (and "did you mean parameters.g?"
 # when a key sits in the wrong section).
-_ALLOWED_KEYS = {
-    (): _SECTIONS,
+ALLOWED_KEYS = {
+    (): SECTIONS,
     ("parameters",): PARAMETER_NAMES,
     ("initial",): tuple(INITIAL_DEFAULTS),
     ("integration",): tuple(INTEGRATION_DEFAULTS),
 }
-_KEY_HOME = {
+KEY_HOME = {
     **{name: f"parameters.{name}" for name in PARAMETER_NAMES},
     **{key: f"integration.{key}" for key in INTEGRATION_DEFAULTS},
     "x": "initial.x", "v": "initial.v", "x0": "initial.x", "v0": "initial.v",
-    **{key: key for key in _SECTIONS},
+    **{key: key for key in SECTIONS},
 }
 
-_AXIS_FORMS = "{start, stop, num}, a list of values, or {values: [...]}; optional continuation: up|down|both"
+AXIS_FORMS = "{start, stop, num}, a list of values, or {values: [...]}; optional continuation: up|down|both"

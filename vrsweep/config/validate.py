@@ -20,14 +20,14 @@ from pydantic import ValidationError
 from ruamel.yaml.constructor import DuplicateKeyError
 from ruamel.yaml.error import YAMLError
 
-from vrsweep.config.report import Report, _without_missing_typos
+from vrsweep.config.report import Report, without_missing_typos
 from vrsweep.config.schema import (
-    _AXIS_FORMS, _KEY_HOME, _SECTIONS, AXIS_DOMAINS, AXIS_NAMES, INITIAL_DEFAULTS, INITIAL_DOMAINS,
-    INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS, PARAMETER_DOMAINS, Axis, Config, Integration, _Document,
-    _integral_float_to_int, _LinearAxis, _ListAxis, _ValuesAxis,
+    AXIS_FORMS, KEY_HOME, SECTIONS, AXIS_DOMAINS, AXIS_NAMES, INITIAL_DEFAULTS, INITIAL_DOMAINS,
+    INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS, PARAMETER_DOMAINS, Axis, Config, Integration, Document,
+    integral_float_to_int, LinearAxis, ListAxis, ValuesAxis,
 )
-from vrsweep.config.wording import _did_you_mean, _number, _show
-from vrsweep.config.yaml import _CyclicAlias, _error_line, _parse_scalar, _plain, load_round_trip
+from vrsweep.config.wording import did_you_mean, show_number, show
+from vrsweep.config.yaml import CyclicAlias, error_line, parse_scalar, plain_data, load_round_trip
 from vrsweep.errors import ConfigError
 from vrsweep.model import DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, PARAMETER_NAMES
 
@@ -116,7 +116,7 @@ class _Validator(Report):
                 self.report_duplicates()
                 self.root = load_round_trip(self.text, allow_duplicate_keys=True)
         except YAMLError as error:
-            self.report_raw((0, _error_line(error, self.text), ""), self.yaml_error_text(error))
+            self.report_raw((0, error_line(error, self.text), ""), self.yaml_error_text(error))
             return None
         except RecursionError:
             self.report_raw((0, 1, ""), f"{self.source}:1: YAML nested too deeply to read")
@@ -127,16 +127,16 @@ class _Validator(Report):
         if self.root is None:
             return {}
         try:
-            data = _plain(self.root)
-        except _CyclicAlias:
+            data = plain_data(self.root)
+        except CyclicAlias:
             self.report_raw((0, 1, ""), f"{self.source}:1: the YAML refers to itself through an alias")
             return None
         except RecursionError:
             self.report_raw((0, 1, ""), f"{self.source}:1: YAML nested too deeply to read")
             return None
         if not isinstance(data, dict):
-            self.report((), f"the config must be a mapping of sections, got {_show(data)}",
-                        allowed=", ".join(_SECTIONS))
+            self.report((), f"the config must be a mapping of sections, got {show(data)}",
+                        allowed=", ".join(SECTIONS))
             return None
         return data
 
@@ -155,12 +155,12 @@ class _Validator(Report):
                 self.report_raw(self.setting_order(setting), f"--set {setting}: expected NAME=VALUE, e.g. --set g=5")
                 continue
             if name not in targets:
-                home = _KEY_HOME.get(name)  # e.g. x -> initial.x
-                hint = f" (did you mean {home}?)" if home in targets else _did_you_mean(name, list(targets))
+                home = KEY_HOME.get(name)  # e.g. x -> initial.x
+                hint = f" (did you mean {home}?)" if home in targets else did_you_mean(name, list(targets))
                 self.report_raw(self.setting_order(setting), f"--set {setting}: unknown name {name!r}{hint} (allowed: {allowed})")
                 continue
             try:
-                value = _parse_scalar(value_text)
+                value = parse_scalar(value_text)
             except ValueError as error:
                 self.report_raw(self.setting_order(setting), f"--set {setting}: {error}")
                 continue
@@ -196,12 +196,12 @@ class _Validator(Report):
         data = {key: ({} if value is None and key in ("parameters", "initial", "sweep", "integration")
                       else value) for key, value in data.items()}
         try:
-            return _Document.model_validate(data)
+            return Document.model_validate(data)
         except ValidationError as error:
             for item in error.errors(include_url=False):
                 if item["loc"][:1] == ("sweep",) and item["type"] == "dict_type":
                     self.report(("sweep",), f"must be a mapping of parameter name -> values, got "
-                                            f"{_show(item['input'])}", allowed=_AXIS_FORMS)
+                                            f"{show(item['input'])}", allowed=AXIS_FORMS)
                 else:
                     self.report_pydantic(item, ())
             return None
@@ -216,23 +216,23 @@ class _Validator(Report):
         for name, spec in sweep.items():
             path = ("sweep", name)
             if name not in AXIS_NAMES:
-                self.report(path, f"not a parameter{_did_you_mean(name, AXIS_NAMES)}",
+                self.report(path, f"not a parameter{did_you_mean(name, AXIS_NAMES)}",
                             allowed=", ".join(AXIS_NAMES))
                 continue
             if isinstance(spec, list):
-                model, data, kind = _ListAxis, {"values": spec}, "list"
+                model, data, kind = ListAxis, {"values": spec}, "list"
             elif isinstance(spec, dict):
-                model, data, kind = ((_ValuesAxis, spec, "values") if "values" in spec
-                                     else (_LinearAxis, spec, "linear"))
+                model, data, kind = ((ValuesAxis, spec, "values") if "values" in spec
+                                     else (LinearAxis, spec, "linear"))
             else:
                 self.report(path, f"must be {{start, stop, num}}, a list or {{values: [...]}}, got "
-                                  f"{_show(spec)} (to fix {name} at one value, set {_home(name)})",
-                            allowed=_AXIS_FORMS)
+                                  f"{show(spec)} (to fix {name} at one value, set {_home(name)})",
+                            allowed=AXIS_FORMS)
                 continue
             try:
                 axis = model.model_validate(data)
             except ValidationError as error:
-                for item in _without_missing_typos(error.errors(include_url=False)):
+                for item in without_missing_typos(error.errors(include_url=False)):
                     loc = tuple(item["loc"])
                     if kind == "list":
                         loc = loc[1:]  # the wrapper's "values" is not in the YAML
@@ -260,27 +260,27 @@ class _Validator(Report):
         name = path[1]
         if kind == "linear":
             if axis.stop < axis.start:
-                self.report(path + ("stop",), f"must be >= start = {_show(axis.start)}, got {_show(axis.stop)}; "
+                self.report(path + ("stop",), f"must be >= start = {show(axis.start)}, got {show(axis.stop)}; "
                                               "use an explicit list or swap start and stop; "
                                               "continuation: down sweeps downwards")
                 return None
             if axis.num == 1 and axis.start != axis.stop:
-                self.report(path + ("num",), f"num = 1 needs start == stop, got start = {_show(axis.start)}, "
-                                             f"stop = {_show(axis.stop)}; use num >= 2 or a one-element list")
+                self.report(path + ("num",), f"num = 1 needs start == stop, got start = {show(axis.start)}, "
+                                             f"stop = {show(axis.stop)}; use num >= 2 or a one-element list")
                 return None
             with np.errstate(all="ignore"):
                 values = np.linspace(axis.start, axis.stop, axis.num, dtype=np.float64)
             if not np.all(np.isfinite(values)):  # start and stop so far apart that stop - start overflows
-                self.report(path, f"{_show(axis.start)} .. {_show(axis.stop)} cannot be divided into "
+                self.report(path, f"{show(axis.start)} .. {show(axis.stop)} cannot be divided into "
                                   f"{axis.num} finite values")
                 return None
             if axis.num > 1 and axis.stop == axis.start:  # every point the same: like a repeated value
-                self.report(path + ("stop",), f"must be > start = {_show(axis.start)} when num = {axis.num}, "
-                                              f"got {_show(axis.stop)} (the same point {axis.num} times); "
+                self.report(path + ("stop",), f"must be > start = {show(axis.start)} when num = {axis.num}, "
+                                              f"got {show(axis.stop)} (the same point {axis.num} times); "
                                               f"to fix {name} at one value, set {_home(name)}")
                 return None
             if not np.all(np.diff(values) > 0):  # so close together that float64 rounding repeats values
-                self.report(path, f"{_show(axis.start)} .. {_show(axis.stop)} cannot be divided into "
+                self.report(path, f"{show(axis.start)} .. {show(axis.stop)} cannot be divided into "
                                   f"{axis.num} distinct float64 values")
                 return None
             # The domains are intervals, so the ends decide for the whole linspace.
@@ -312,7 +312,7 @@ class _Validator(Report):
                 first_line, line = self.line_of(path + (first,)), self.line_of(path + (index,))
                 if first_line != line:
                     where += f", line {first_line}"
-                self.report(path + (index,), f"{_number(value)} is listed twice (also {where}): axis values "
+                self.report(path + (index,), f"{show_number(value)} is listed twice (also {where}): axis values "
                                              "must be strictly increasing or strictly decreasing")
                 repeated = True
             else:
@@ -324,7 +324,7 @@ class _Validator(Report):
         if len(breaks):
             index = int(breaks[0]) + 1
             order = "increasing" if steps[0] > 0 else "decreasing"
-            self.report(path + (index,), f"{_number(values[index])} after {_number(values[index - 1])} breaks "
+            self.report(path + (index,), f"{show_number(values[index])} after {show_number(values[index - 1])} breaks "
                                          f"the order of the list ({order} up to item {index - 1}): axis values "
                                          "must be strictly increasing or strictly decreasing")
             return False
@@ -364,12 +364,12 @@ class _Validator(Report):
                 if delta is not None and not delta > x:
                     if self.blame(("parameters", "Delta"), ("initial", "x"), "Delta" in parameters, "x" in initial):
                         self.report(("parameters", "Delta"),
-                                    f"must be above initial.x = {_show(x)} (the mass starts below the barrier), "
-                                    f"got {_show(delta)}")
+                                    f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
+                                    f"got {show(delta)}")
                     else:
                         self.report(("initial", "x"),
-                                    f"must be below parameters.Delta = {_show(delta)} (the mass starts below "
-                                    f"the barrier), got {_show(x)}")
+                                    f"must be below parameters.Delta = {show(delta)} (the mass starts below "
+                                    f"the barrier), got {show(x)}")
 
         strobe = _valid(integration, "strobe_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
         measure = _valid(integration, "measure_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
@@ -401,26 +401,26 @@ class _Validator(Report):
             lowest = float(np.min(delta_values))
             if not lowest > highest:
                 self.report(("sweep", "x0"), f"every x0 must be below every swept Delta (the mass starts below "
-                                             f"the barrier), got x0 up to {_show(highest)} and Delta from "
-                                             f"{_show(lowest)}")
+                                             f"the barrier), got x0 up to {show(highest)} and Delta from "
+                                             f"{show(lowest)}")
         elif delta is not None and not delta > highest:
-            self.report(("sweep", "x0"), f"every x0 must be below parameters.Delta = {_show(delta)} (the mass "
-                                         f"starts below the barrier), got {_show(highest)}")
+            self.report(("sweep", "x0"), f"every x0 must be below parameters.Delta = {show(delta)} (the mass "
+                                         f"starts below the barrier), got {show(highest)}")
 
     def check_delta_axis(self, axis, spec, x):
         values, _, kind = axis
         if kind == "linear":
             if not values[0] > x:  # start is the lowest value
                 self.report(("sweep", "Delta", "start"),
-                            f"must be above initial.x = {_show(x)} (the mass starts below the barrier), "
-                            f"got {_show(float(values[0]))}")
+                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
+                            f"got {show(float(values[0]))}")
             return
         item_path = ("sweep", "Delta") if kind == "list" else ("sweep", "Delta", "values")
         for index, value in enumerate(values):
             if not value > x:
                 self.report(item_path + (index,),
-                            f"must be above initial.x = {_show(x)} (the mass starts below the barrier), "
-                            f"got {_show(float(value))}")
+                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
+                            f"got {show(float(value))}")
 
 
 def _override_targets():
@@ -452,7 +452,7 @@ def _valid(section, key, defaults, domains):
     if isinstance(value, bool):
         return None
     if domain.integer:
-        value = _integral_float_to_int(value)
+        value = integral_float_to_int(value)
         good_type = isinstance(value, int)
     else:
         try:

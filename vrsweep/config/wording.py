@@ -3,7 +3,7 @@
 import difflib
 
 
-def _did_you_mean(word, choices) -> str:
+def did_you_mean(word, choices) -> str:
     """`` (did you mean 'Delta'?)`` for a near miss, case-insensitively first; else ''."""
     word = str(word)
     by_case = [choice for choice in choices if choice.lower() == word.lower()]
@@ -11,7 +11,7 @@ def _did_you_mean(word, choices) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def _dotted(path) -> str:
+def dotted(path) -> str:
     """('sweep', 'g', 'values', 3) -> 'sweep.g.values[3]'."""
     text = ""
     for key in path:
@@ -19,7 +19,7 @@ def _dotted(path) -> str:
     return text
 
 
-def _show(value) -> str:
+def show(value) -> str:
     """A value as the user wrote it, kept short."""
     if isinstance(value, bool):
         text = "true" if value else "false"
@@ -30,14 +30,14 @@ def _show(value) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _number(value) -> str:
+def show_number(value) -> str:
     """0.0 -> '0', 1.0 -> '1', 1e-9 -> '1e-09' (for intervals in messages)."""
     if isinstance(value, float) and value.is_integer() and abs(value) < 1e15:
         return str(int(value))
     return repr(value)
 
 
-def _and(items) -> str:
+def and_list(items) -> str:
     """[2, 5, 7] -> '2, 5 and 7'."""
     items = [str(item) for item in items]
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]

@@ -17,7 +17,7 @@ from ruamel.yaml.scalarstring import DoubleQuotedScalarString
 from ruamel.yaml.reader import ReaderError
 
 from vrsweep.config.schema import INTEGRATION_DEFAULTS, Axis
-from vrsweep.config.wording import _show
+from vrsweep.config.wording import show
 from vrsweep.model import INITIAL_STATE_KEYS, PARAMETER_NAMES
 
 
@@ -35,21 +35,21 @@ def compose(text):
     return YAML(typ="rt").compose(text)
 
 
-class _CyclicAlias(Exception):
+class CyclicAlias(Exception):
     pass
 
 
-def _plain(node, _active=None):
+def plain_data(node, _active=None):
     """ruamel's tree as plain dict/list/float/int/str/bool (keys as str), keeping order."""
     active = set() if _active is None else _active
     if isinstance(node, (dict, list)):
         if id(node) in active:
-            raise _CyclicAlias
+            raise CyclicAlias
         active.add(id(node))
         try:
             if isinstance(node, dict):
-                return {_key(key): _plain(value, active) for key, value in node.items()}
-            return [_plain(item, active) for item in node]
+                return {key_text(key): plain_data(value, active) for key, value in node.items()}
+            return [plain_data(item, active) for item in node]
         finally:
             active.discard(id(node))
     if isinstance(node, bool):
@@ -87,38 +87,38 @@ def _join_surrogates(text: str) -> str:
         return text  # an unpaired surrogate: rejected where it matters (output)
 
 
-def _key(key):
+def key_text(key):
     return key if type(key) is str else str(key)
 
 
-def _parse_scalar(text):
+def parse_scalar(text):
     """A --set VALUE read as a YAML scalar: 5 -> int, 1e-9 -> float, effective -> str."""
     if not text.strip():
         raise ValueError("missing VALUE after '='")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            value = _plain(YAML(typ="rt").load(text))
+            value = plain_data(YAML(typ="rt").load(text))
     except Exception as error:  # noqa: BLE001 -- any ruamel failure means "not a YAML scalar"
         problem = getattr(error, "problem", None) or str(error).splitlines()[0]
         raise ValueError(f"VALUE is not a YAML scalar ({problem})") from None
     if isinstance(value, (dict, list)) or value is None:
-        raise ValueError(f"VALUE must be a single number or word, got {_show(value)}")
+        raise ValueError(f"VALUE must be a single number or word, got {show(value)}")
     return value
 
 
-def _position(text, index):
+def line_and_column(text, index):
     """1-based (line, column) of character ``index``."""
     before = text[:index]
     return before.count("\n") + 1, index - (before.rfind("\n") + 1) + 1
 
 
-def _error_line(error, text) -> int:
+def error_line(error, text) -> int:
     mark = getattr(error, "problem_mark", None) or getattr(error, "context_mark", None)
     if mark is not None:
         return mark.line + 1
     if isinstance(error, ReaderError):
-        return _position(text, error.position)[0]
+        return line_and_column(text, error.position)[0]
     return 1
 
 
