@@ -29,6 +29,7 @@ The package, one module per concern:
   models generated from them, and the result types Config, Axis, Integration;
 - ``validate``: one validation run (text + overrides -> Config) and the entry points
   load_config, parse_config, with_overrides;
+- ``axes``: each sweep axis checked on its own; ``rules``: the rules across fields;
 - ``report``: problems worded and located (file, line, field path), pydantic's and ruamel's
   errors in this project's words;
 - ``yaml``: reading and writing YAML through ruamel (the canonical text of a resolved config);

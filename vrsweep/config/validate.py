@@ -7,29 +7,31 @@ pydantic (strict: no ``"abc"`` -> float, ints accepted for floats) checks types,
 ranges, and a few cross-field rules (Delta above the initial x, strobe_periods <= measure_periods,
 sweep values in their parameter's range) are checked by hand. Each pydantic error location is
 mapped back to a line through the ruamel tree.
+
+The run is one object, :class:`_Validator`, whose methods are kept by what they check: reading
+and overrides here, each sweep axis in ``axes.py``, rules across fields in ``rules.py``, and the
+wording and location of problems in ``report.py``.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 
-import numpy as np
 from pydantic import ValidationError
 from ruamel.yaml.constructor import DuplicateKeyError
 from ruamel.yaml.error import YAMLError
 
-from vrsweep.config.report import Report, without_missing_typos
+from vrsweep.config.axes import SweepAxes
+from vrsweep.config.report import Report
+from vrsweep.config.rules import CrossFieldRules
 from vrsweep.config.schema import (
-    AXIS_FORMS, KEY_HOME, SECTIONS, AXIS_DOMAINS, AXIS_NAMES, INITIAL_DEFAULTS, INITIAL_DOMAINS,
-    INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS, PARAMETER_DOMAINS, Axis, Config, Integration, Document,
-    integral_float_to_int, LinearAxis, ListAxis, ValuesAxis,
+    AXIS_FORMS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config, Document, Integration,
 )
-from vrsweep.config.wording import did_you_mean, show_number, show
-from vrsweep.config.yaml import CyclicAlias, error_line, parse_scalar, plain_data, load_round_trip
+from vrsweep.config.wording import did_you_mean, show
+from vrsweep.config.yaml import CyclicAlias, error_line, load_round_trip, parse_scalar, plain_data
 from vrsweep.errors import ConfigError
-from vrsweep.model import DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, PARAMETER_NAMES
+from vrsweep.model import PARAMETER_NAMES
 
 
 def load_config(path, overrides=()) -> Config:
@@ -77,7 +79,7 @@ def same_config(stored_text: str, config: Config) -> bool:
     return stored == config
 
 
-class _Validator(Report):
+class _Validator(Report, SweepAxes, CrossFieldRules):
     """One validation run: reads the YAML, applies overrides, collects problems, builds the Config."""
 
     # -- the run -----------------------------------------------------------------------------
@@ -206,222 +208,6 @@ class _Validator(Report):
                     self.report_pydantic(item, ())
             return None
 
-    # -- sweep -------------------------------------------------------------------------------
-
-    def validate_sweep(self, sweep):
-        """{name: (values, continuation, spec_kind)} for the axes that are valid."""
-        axes = {}
-        if not isinstance(sweep, dict):
-            return axes  # None: no sweep; anything else was reported by validate_document
-        for name, spec in sweep.items():
-            path = ("sweep", name)
-            if name not in AXIS_NAMES:
-                self.report(path, f"not a parameter{did_you_mean(name, AXIS_NAMES)}",
-                            allowed=", ".join(AXIS_NAMES))
-                continue
-            if isinstance(spec, list):
-                model, data, kind = ListAxis, {"values": spec}, "list"
-            elif isinstance(spec, dict):
-                model, data, kind = ((ValuesAxis, spec, "values") if "values" in spec
-                                     else (LinearAxis, spec, "linear"))
-            else:
-                self.report(path, f"must be {{start, stop, num}}, a list or {{values: [...]}}, got "
-                                  f"{show(spec)} (to fix {name} at one value, set {_home(name)})",
-                            allowed=AXIS_FORMS)
-                continue
-            try:
-                axis = model.model_validate(data)
-            except ValidationError as error:
-                for item in without_missing_typos(error.errors(include_url=False)):
-                    loc = tuple(item["loc"])
-                    if kind == "list":
-                        loc = loc[1:]  # the wrapper's "values" is not in the YAML
-                    self.report_pydantic({**item, "loc": loc}, path)
-                continue
-            continuation = getattr(axis, "continuation", None)
-            if continuation and name in INITIAL_STATE_AXES:
-                # A continuation line starts each point from the previous one's final state, which
-                # is exactly what an initial-state axis overrides: the two contradict each other.
-                key = INITIAL_STATE_KEYS[name]
-                self.report(path + ("continuation",),
-                            f"{name} is the initial state, not a parameter: there is nothing to continue "
-                            f"along it (each point starts from its own {name}); remove continuation, or "
-                            f"put it on a parameter axis (each line then starts from its {name})",
-                            allowed=f"continuation on a parameter axis; initial.{key} or sweep.{name} "
-                                    "without continuation")
-                continue
-            values = self.axis_values(path, axis, kind)
-            if values is not None:
-                axes[name] = (values, continuation, kind)
-        return axes
-
-    def axis_values(self, path, axis, kind):
-        """The axis's values after the per-axis rules, or None (reported)."""
-        name = path[1]
-        if kind == "linear":
-            if axis.stop < axis.start:
-                self.report(path + ("stop",), f"must be >= start = {show(axis.start)}, got {show(axis.stop)}; "
-                                              "use an explicit list or swap start and stop; "
-                                              "continuation: down sweeps downwards")
-                return None
-            if axis.num == 1 and axis.start != axis.stop:
-                self.report(path + ("num",), f"num = 1 needs start == stop, got start = {show(axis.start)}, "
-                                             f"stop = {show(axis.stop)}; use num >= 2 or a one-element list")
-                return None
-            with np.errstate(all="ignore"):
-                values = np.linspace(axis.start, axis.stop, axis.num, dtype=np.float64)
-            if not np.all(np.isfinite(values)):  # start and stop so far apart that stop - start overflows
-                self.report(path, f"{show(axis.start)} .. {show(axis.stop)} cannot be divided into "
-                                  f"{axis.num} finite values")
-                return None
-            if axis.num > 1 and axis.stop == axis.start:  # every point the same: like a repeated value
-                self.report(path + ("stop",), f"must be > start = {show(axis.start)} when num = {axis.num}, "
-                                              f"got {show(axis.stop)} (the same point {axis.num} times); "
-                                              f"to fix {name} at one value, set {_home(name)}")
-                return None
-            if not np.all(np.diff(values) > 0):  # so close together that float64 rounding repeats values
-                self.report(path, f"{show(axis.start)} .. {show(axis.stop)} cannot be divided into "
-                                  f"{axis.num} distinct float64 values")
-                return None
-            # The domains are intervals, so the ends decide for the whole linspace.
-            ok = self.check_values(name, path + ("start",), [axis.start])
-            ok &= self.check_values(name, path + ("stop",), [axis.stop])
-        else:
-            values = np.array(axis.values, dtype=np.float64)
-            item_path = path if kind == "list" else path + ("values",)
-            ok = self.check_values(name, item_path, axis.values, indexed=True)
-            ok = ok and self.check_monotonic(item_path, axis.values)
-        if not ok:
-            return None
-        values.flags.writeable = False  # Axis is frozen; so are its values
-        return values
-
-    def check_monotonic(self, path, values) -> bool:
-        """An explicit list must be strictly increasing or strictly decreasing.
-
-        A repeated value would compute and store the same grid point twice (and make the axis
-        useless for selecting by value); an unordered one draws a zigzag. Decreasing lists are
-        allowed: the stored axis keeps the config's order.
-        """
-        first_index = {}
-        repeated = False
-        for index, value in enumerate(values):
-            if value in first_index:
-                first = first_index[value]
-                where = f"item {first}"
-                first_line, line = self.line_of(path + (first,)), self.line_of(path + (index,))
-                if first_line != line:
-                    where += f", line {first_line}"
-                self.report(path + (index,), f"{show_number(value)} is listed twice (also {where}): axis values "
-                                             "must be strictly increasing or strictly decreasing")
-                repeated = True
-            else:
-                first_index[value] = index
-        if repeated:
-            return False
-        steps = np.sign(np.diff(values))
-        breaks = np.flatnonzero(steps != steps[0]) if len(steps) else []
-        if len(breaks):
-            index = int(breaks[0]) + 1
-            order = "increasing" if steps[0] > 0 else "decreasing"
-            self.report(path + (index,), f"{show_number(values[index])} after {show_number(values[index - 1])} breaks "
-                                         f"the order of the list ({order} up to item {index - 1}): axis values "
-                                         "must be strictly increasing or strictly decreasing")
-            return False
-        return True
-
-    def check_values(self, name, path, values, indexed=False) -> bool:
-        """Each swept value must obey its parameter's domain."""
-        domain = AXIS_DOMAINS[name]
-        ok = True
-        for index, value in enumerate(values):
-            if not domain.contains(value):
-                self.report(path + ((index,) if indexed else ()), domain.range_message(value))
-                ok = False
-        return ok
-
-    # -- rules across fields -----------------------------------------------------------------
-
-    def check_across_fields(self, data, axes):
-        """Rules that tie fields together; each runs when the fields it reads are valid."""
-        parameters = _section(data, "parameters")
-        initial = _section(data, "initial")
-        integration = _section(data, "integration")
-
-        sweep = data.get("sweep") if isinstance(data.get("sweep"), dict) else {}
-        x = _valid(initial, "x", INITIAL_DEFAULTS, INITIAL_DOMAINS)
-        if "x0" in sweep:
-            if "x0" in axes:
-                self.check_x0_axis(axes["x0"][0], axes["Delta"][0] if "Delta" in axes else None,
-                                   None if "Delta" in sweep else
-                                   _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS))
-        elif x is not None:
-            if "Delta" in sweep:
-                if "Delta" in axes:
-                    self.check_delta_axis(axes["Delta"], sweep["Delta"], x)
-            else:
-                delta = _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS)
-                if delta is not None and not delta > x:
-                    if self.blame(("parameters", "Delta"), ("initial", "x"), "Delta" in parameters, "x" in initial):
-                        self.report(("parameters", "Delta"),
-                                    f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
-                                    f"got {show(delta)}")
-                    else:
-                        self.report(("initial", "x"),
-                                    f"must be below parameters.Delta = {show(delta)} (the mass starts below "
-                                    f"the barrier), got {show(x)}")
-
-        strobe = _valid(integration, "strobe_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
-        measure = _valid(integration, "measure_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
-        if strobe is not None and measure is not None and strobe > measure:
-            if self.blame(("integration", "strobe_periods"), ("integration", "measure_periods"),
-                          "strobe_periods" in integration, "measure_periods" in integration):
-                self.report(("integration", "strobe_periods"),
-                            f"must be <= integration.measure_periods = {measure}, got {strobe}")
-            else:
-                self.report(("integration", "measure_periods"),
-                            f"must be >= integration.strobe_periods = {strobe}, got {measure}")
-
-        with_continuation = [name for name, (_, continuation, _) in axes.items() if continuation]
-        for name in with_continuation[1:]:
-            self.report(("sweep", name, "continuation"),
-                        f"only one axis may have continuation, and sweep.{with_continuation[0]} has it")
-
-    def blame(self, first, second, first_given, second_given) -> bool:
-        """Whether a broken rule between two fields is reported at ``first`` (else at ``second``):
-        at a --set one if either is, else at one written in the file, ``first`` if both are."""
-        if first in self.overridden or second in self.overridden:
-            return first in self.overridden
-        return first_given or not second_given
-
-    def check_x0_axis(self, x0_values, delta_values, delta):
-        """Every x0 must lie below the barrier: below parameters.Delta, or below every swept Delta."""
-        highest = float(np.max(x0_values))
-        if delta_values is not None:
-            lowest = float(np.min(delta_values))
-            if not lowest > highest:
-                self.report(("sweep", "x0"), f"every x0 must be below every swept Delta (the mass starts below "
-                                             f"the barrier), got x0 up to {show(highest)} and Delta from "
-                                             f"{show(lowest)}")
-        elif delta is not None and not delta > highest:
-            self.report(("sweep", "x0"), f"every x0 must be below parameters.Delta = {show(delta)} (the mass "
-                                         f"starts below the barrier), got {show(highest)}")
-
-    def check_delta_axis(self, axis, spec, x):
-        values, _, kind = axis
-        if kind == "linear":
-            if not values[0] > x:  # start is the lowest value
-                self.report(("sweep", "Delta", "start"),
-                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
-                            f"got {show(float(values[0]))}")
-            return
-        item_path = ("sweep", "Delta") if kind == "list" else ("sweep", "Delta", "values")
-        for index, value in enumerate(values):
-            if not value > x:
-                self.report(item_path + (index,),
-                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
-                            f"got {show(float(value))}")
-
 
 def _override_targets():
     """--set NAME -> path in the document; both 'g' and 'parameters.g' spellings."""
@@ -432,31 +218,3 @@ def _override_targets():
     for key in INTEGRATION_DEFAULTS:
         targets[key] = targets[f"integration.{key}"] = ("integration", key)
     return targets
-
-
-def _home(axis_name) -> str:
-    """Where a sweep axis's fixed value lives: parameters.g, initial.x (for x0)."""
-    key = INITIAL_STATE_KEYS.get(axis_name)
-    return f"initial.{key}" if key else f"parameters.{axis_name}"
-
-
-def _section(data, name) -> dict:
-    value = data.get(name)
-    return value if isinstance(value, dict) else {}
-
-
-def _valid(section, key, defaults, domains):
-    """The section's value for ``key`` (or its default) if it passes its own checks, else None."""
-    value = section.get(key, defaults[key])
-    domain = domains[key]
-    if isinstance(value, bool):
-        return None
-    if domain.integer:
-        value = integral_float_to_int(value)
-        good_type = isinstance(value, int)
-    else:
-        try:
-            good_type = isinstance(value, (int, float)) and math.isfinite(float(value))
-        except OverflowError:  # an int too large for a float
-            good_type = False
-    return value if good_type and domain.contains(value) else None
