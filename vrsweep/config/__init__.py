@@ -28,7 +28,7 @@ The package, one module per concern:
 - ``schema``: allowed values and defaults as data (the one source of defaults), the pydantic
   models generated from them, and the result types Config, Axis, Integration;
 - ``validate``: one validation run (text + overrides -> Config) and the entry points
-  load_config, parse_config, with_overrides;
+  load_config, parse_config, with_overrides, and same_config (what --resume compares);
 - ``axes``: each sweep axis checked on its own; ``rules``: the rules across fields;
 - ``report``: problems worded and located (file, line, field path), pydantic's and ruamel's
   errors in this project's words;
