@@ -6,7 +6,7 @@ kernel now runs with numba's numpy error model (vrsweep/jit.py: a division by ze
 nan) and turns a step estimate of zero or NaN into ``step_too_small`` / ``non_finite``.
 
 test_faults.py draws parameters in the paper's range; here every parameter may instead be drawn
-from 1e-300 .. 1e300 in magnitude, with either sign where its domain allows (config.py:
+from 1e-300 .. 1e300 in magnitude, with either sign where its domain allows (config/schema.py:
 c, omega, Omega > 0, 0 < e <= 1, Delta above x0). Runs are short and capped so that hypothesis
 can try many points: what is checked is the contract, not the physics.
 """

@@ -27,9 +27,9 @@ import threading
 
 import numpy as np
 
-from vrsweep.errors import UsageError, VrsweepError
-from vrsweep.results import Status
-from vrsweep.sweep import Grid, default_chunk_lines, shuffled_lines
+from vrsweep.errors import InvalidArgument, RunFailed, VrsweepError
+from vrsweep.chunks import count_statuses, default_chunk_lines, plan_lines
+from vrsweep.config.grid import Grid
 
 LOCAL_PREFIX = "local:"
 CONNECT_TIMEOUT = "30s"
@@ -42,14 +42,16 @@ def dask_executor(address, threads=None):
 
     address: a scheduler address (``tcp://host:8786``, a scheduler file is not supported) or
     ``local:N`` for a LocalCluster of N worker processes with ``threads`` (default 1) threads each.
-    Checks the address and that dask.distributed is installed now, so a bad ``--dask`` fails
-    before any file is created; connects only when called.
+    Checks the address and that dask.distributed is installed now, so a bad address fails
+    before any file is created (InvalidArgument; the run command words it as ``--dask ADDRESS``);
+    connects only when called.
     """
     n_local = parse_local(address)
     try:
         import dask.distributed  # noqa: F401
     except ModuleNotFoundError:
-        raise UsageError(f"--dask needs dask.distributed, which is not installed: {INSTALL_HINT}") from None
+        raise InvalidArgument("Dask address", address,
+                              f"needs dask.distributed, which is not installed: {INSTALL_HINT}") from None
     return DaskExecutor(address, threads, n_local)
 
 
@@ -63,7 +65,7 @@ def parse_local(address):
     except ValueError:
         n = 0
     if n < 1:
-        raise UsageError(f"--dask {address}: expected local:N with N >= 1 workers (e.g. local:4)")
+        raise InvalidArgument("Dask address", address, "expected local:N with N >= 1 workers (e.g. local:4)")
     return n
 
 
@@ -138,13 +140,11 @@ class DaskExecutor:
     def __call__(self, config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
                  progress=None, chunk_lines=None):
         threads = threads or self.threads
-        lines = shuffled_lines(Grid.from_config(config), *shard)
-        if done is not None:
-            lines = lines[~np.all(done.reshape(-1)[lines], axis=1)]
+        plan = plan_lines(Grid.from_config(config), shard, done)
+        lines = plan.lines
         counts = {}
         if len(lines) == 0:
             return counts
-        total = lines.size
         config_text = config.to_yaml()
         with self._client() as client:
             from dask.distributed import as_completed
@@ -152,7 +152,7 @@ class DaskExecutor:
             if chunk_lines is None:
                 if not threads:  # chunks sized for the workers' threads: wait for one to know them
                     client.wait_for_workers(1)
-                chunk_lines = default_chunk_lines(threads or _largest_worker(client), lines.shape[1])
+                chunk_lines = default_chunk_lines(threads or _largest_worker(client), plan.line_length)
             # All chunks are submitted at once and Dask balances them over the workers. Each result
             # is fetched and written as soon as it is ready, then dropped (the future is no longer
             # referenced), so results do not pile up on either side.
@@ -167,15 +167,12 @@ class DaskExecutor:
                     try:
                         flat, values = future.result()
                     except Exception as error:
-                        raise VrsweepError(
-                            f"a Dask task failed: {type(error).__name__}: {error} (finished chunks "
-                            "are saved; --resume continues)") from error
+                        raise RunFailed(f"a Dask task failed: {type(error).__name__}: {error}") from error
                     if on_chunk is not None:
                         on_chunk(flat, values)
-                    for code, n in zip(*np.unique(values["status"], return_counts=True)):
-                        counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
+                    count_statuses(counts, values["status"])
                     if progress is not None:
-                        progress(flat.size, total)
+                        progress(plan.newly_done(flat), plan.total)
             finally:
                 # Interrupted or failed: do not leave a shared cluster computing for nobody (a
                 # LocalCluster is about to be shut down anyway).

@@ -41,3 +41,23 @@ class OutputError(VrsweepError):
     was removed or replaced by another process, an I/O error. Exit 1, unlike bad input (exit 2)."""
 
     exit_code = 1
+
+
+class InvalidArgument(UsageError):
+    """A library function was given a value it cannot use (a shard ``x``, a Dask address
+    ``local:0``). Worded without command-line flags: ``argument`` names what was given, ``value``
+    is the value, ``problem`` says what is wrong. A command that took the value from an option
+    rewords it with :meth:`as_option` (``--shard x: expected I/N ...``). Exit 2, as bad input."""
+
+    def __init__(self, argument, value, problem):
+        self.argument, self.value, self.problem = argument, value, problem
+        super().__init__(f"{argument} {value}: {problem}")
+
+    def as_option(self, option) -> UsageError:
+        """The same problem, worded for the command-line ``option`` the value came from."""
+        return UsageError(f"{option} {self.value}: {self.problem}")
+
+
+class RunFailed(VrsweepError):
+    """A run stopped by a failure after the chunks finished so far were saved: resuming the run
+    computes the rest. Exit 1, like any failure at run time."""

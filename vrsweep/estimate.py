@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vrsweep.config.schema import INTEGRATION_DEFAULTS
 from vrsweep.errors import ConfigError
 from vrsweep.threads import available_threads
 
@@ -58,7 +59,7 @@ def estimate(config, threads=None) -> Estimate:
     output_bytes = stored_bytes(config)
     periods = integration.transient_periods + integration.measure_periods
     # A method of order p takes about rtol^(-1/p) steps per unit time: DP5 (1e-9/rtol)^(1/5).
-    method = getattr(integration, "method", "rk45")
+    method = getattr(integration, "method", INTEGRATION_DEFAULTS["method"])
     steps_factor = METHOD_COST[method] * (REFERENCE_RTOL / integration.rtol) ** (1.0 / METHOD_ORDER[method])
     seconds = n_points * periods * SECONDS_PER_POINT_PERIOD[config.model] * steps_factor / threads
     return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds)

@@ -13,12 +13,13 @@ import numpy as np
 
 from vrsweep import __version__
 from vrsweep.provenance import cf_attributes
-from vrsweep.errors import UsageError
+from vrsweep.errors import InvalidArgument
 from vrsweep.results import Status
 from vrsweep.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
 from vrsweep.model import AXIS_LONG_NAMES, AXIS_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
-from vrsweep.sweep import Grid, run_sweep
+from vrsweep.config.grid import Grid
+from vrsweep.sweep import run_sweep
 from vrsweep.variables import point_variables
 
 
@@ -27,18 +28,31 @@ FAILURE_ADVICE_FRACTION = 0.03
 
 
 def _remedy(status, run):
-    """The setting to change when many points end with ``status`` (run: the config's integration)."""
+    """What to change when many points end with ``status`` (run: the config's integration):
+    (the advice, a setting ``NAME=VALUE`` to try or None)."""
     if status == Status.MAX_STEPS:
-        return (f"raise integration.max_steps (now {run.max_steps}), e.g. --set max_steps={run.max_steps * 10}")
+        return f"raise integration.max_steps (now {run.max_steps})", f"max_steps={run.max_steps * 10}"
     if status == Status.CHATTER_LIMIT:
         return (f"raise integration.max_impacts_per_period (now {run.max_impacts_per_period}), or "
-                f"integration.stick_velocity (now {run.stick_velocity:g}) so that a chattering mass sticks sooner")
+                f"integration.stick_velocity (now {run.stick_velocity:g}) so that a chattering mass sticks sooner",
+                None)
     if status == Status.DIVERGED:
         return (f"if the motion is bounded, raise integration.divergence_bound (now {run.divergence_bound:g}); "
-                "otherwise these parameters blow up")
+                "otherwise these parameters blow up", None)
     if status == Status.STEP_TOO_SMALL:
-        return f"loosen integration.rtol/atol (now {run.rtol:g}/{run.atol:g})"
-    return "check the parameters of those points (vrsweep info FILE lists them)"
+        return f"loosen integration.rtol/atol (now {run.rtol:g}/{run.atol:g})", None
+    return "check the parameters of those points (vrsweep info FILE lists them)", None
+
+
+@dataclass(frozen=True)
+class FailureAdvice:
+    """Many points of a run ended with ``status``: what to change before running it again."""
+
+    status: Status
+    n: int          # points that ended with status
+    n_run: int      # points computed in this run
+    remedy: str     # e.g. "raise integration.max_steps (now 500)"
+    setting: str | None = None  # a NAME=VALUE override to try, e.g. "max_steps=5000"
 
 
 @dataclass
@@ -54,26 +68,25 @@ class JobReport:
         detail = ", ".join(parts) if parts else "nothing left to compute"
         return f"{self.n_run} of {self.n_points} points computed ({detail}) -> {self.output}"
 
-    def advice(self):
-        """One line per kind of failure that hit more than FAILURE_ADVICE_FRACTION of the points."""
+    def advice(self) -> list[FailureAdvice]:
+        """One item per kind of failure that hit more than FAILURE_ADVICE_FRACTION of the points."""
         if not self.n_run or self.integration is None:
             return []
-        lines = []
+        items = []
         for status, n in sorted(self.counts.items()):
             if status in (Status.OK, Status.NOT_COMPUTED) or n <= FAILURE_ADVICE_FRACTION * self.n_run:
                 continue
-            lines.append(f"Warning: {n} of {self.n_run} points ({n / self.n_run:.0%}) ended with "
-                         f"{status.name.lower()}: {_remedy(status, self.integration)}, and run again "
-                         "with --overwrite")
-        return lines
+            items.append(FailureAdvice(status, n, self.n_run, *_remedy(status, self.integration)))
+        return items
 
 
 def parse_shard(text, environ=None):
-    """'I/N' (0-based I) or 'auto': the shard of this task of a SLURM job array.
+    """'I/N' (0-based I) or 'auto': the shard of this task of a SLURM job array; None: the whole run.
 
     A job array need not start at 0 (``--array=1-8``) nor step by 1 (``--array=0-30:10``), so
     the index is (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN) / SLURM_ARRAY_TASK_STEP, and N is
     SLURM_ARRAY_TASK_COUNT. An array given as a list (``--array=1,4,7``) cannot be mapped.
+    Raises InvalidArgument (``shard x: expected I/N ...``; the run command says ``--shard x``).
     """
     environ = os.environ if environ is None else environ
     if text is None:
@@ -85,25 +98,25 @@ def parse_shard(text, environ=None):
             first = int(environ.get("SLURM_ARRAY_TASK_MIN", 0))
             step = int(environ.get("SLURM_ARRAY_TASK_STEP", 1) or 1)
         except (KeyError, ValueError):
-            raise UsageError("--shard auto needs SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT "
-                             "(run it inside a SLURM job array, or give --shard I/N)") from None
+            raise InvalidArgument("shard", text, "needs SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT "
+                                                 "(run it inside a SLURM job array, or give the shard as I/N)") from None
         offset = task - first
         if step < 1 or offset % step:
-            raise UsageError(
-                f"--shard auto: array task {task} is not on the range {first}, {first + step}, ...; "
-                "use a range --array=A-B (or A-B:STEP), not a list")
+            raise InvalidArgument(
+                "shard", text, f"array task {task} is not on the range {first}, {first + step}, ...; "
+                               "use a range --array=A-B (or A-B:STEP), not a list")
         index = offset // step
-        where = f"SLURM array task {task} (first {first}, {count} tasks)"
+        where = f"SLURM array task {task} (first {first}, {count} tasks): "
     else:
         try:
             index_text, count_text = text.split("/")
             index, count = int(index_text), int(count_text)
         except ValueError:
-            raise UsageError(f"--shard {text}: expected I/N (e.g. 0/8) or 'auto'") from None
-        where = f"--shard {text}"
+            raise InvalidArgument("shard", text, "expected I/N (e.g. 0/8) or 'auto'") from None
+        where = ""
     if not (count >= 1 and 0 <= index < count):
         hint = "; use --array=A-B (or A-B:STEP), not a list" if text == "auto" else ""
-        raise UsageError(f"{where}: shard index {index} is not in 0..{count - 1}{hint}")
+        raise InvalidArgument("shard", text, f"{where}shard index {index} is not in 0..{count - 1}{hint}")
     return (index, count)
 
 
@@ -151,7 +164,7 @@ def root_attributes(config, shard=(0, 1)):
 
 
 def owned_mask(grid, shard):
-    from vrsweep.sweep import shuffled_lines
+    from vrsweep.chunks import shuffled_lines
 
     mask = np.zeros(grid.n_points, dtype=bool)
     mask[shuffled_lines(grid, *shard).reshape(-1)] = True
@@ -223,7 +236,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     path = shard_output_path(config.output_path(output), shard)
     owned = owned_mask(grid, shard) if shard[1] > 1 else None
     if resume and path.exists():
-        writer = ResultWriter.open_for_resume(path, config.to_yaml(),
+        writer = ResultWriter.open_for_resume(path, _expected_config_text(path, config),
                                               expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None)
     else:
         writer = ResultWriter.create(path, _axes(grid), _variable_specs(config),
@@ -256,4 +269,34 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     writer.finish(extra=extras, coords=coords)
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
 
+
+def _expected_config_text(path, config):
+    """The config text the writer must find in ``path`` to resume it: the stored text itself when it
+    parses to the same config (however an earlier version wrote it out), else today's text (and the
+    writer's message then says where the two differ).
+
+    The comparison is of parsed configs, not of text: a checkpoint written before a change in how
+    the config is written out still resumes, and one from a different config never does.
+    """
+    from vrsweep.config import same_config
+
+    stored = _stored_config_text(path)
+    if stored is not None and same_config(stored, config):
+        return stored
+    return config.to_yaml()
+
+
+def _stored_config_text(path):
+    """The ``config`` attribute of the result file at ``path``, or None if it cannot be read (the
+    writer then reports what is wrong with the file)."""
+    from vrsweep.fileio import open_hdf5
+
+    try:
+        with open_hdf5(path, "r") as h5file:
+            value = h5file.attrs.get("config")
+    except Exception:  # noqa: BLE001 -- any failure here is reported by open_for_resume itself
+        return None
+    if isinstance(value, bytes):
+        value = value.decode("utf-8", errors="replace")
+    return value if isinstance(value, str) else None
 

@@ -12,7 +12,6 @@ This module knows nothing of files: finished chunks are handed to a callback.
 """
 
 import time
-from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -21,122 +20,21 @@ from numba import prange
 from vrsweep import kernel
 from vrsweep.diagnostics import lyapunov_values, point_diagnostics
 from vrsweep.jit import kernel_jit
-from vrsweep.model import INITIAL_STATE_KEYS, kernel_coefficients
+# Grid, the planner's names: imported from here by callers written before they moved.
+from vrsweep.chunks import (  # noqa: F401
+    GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses, default_chunk_lines, plan_lines,
+    shard_of_points, shuffled_lines,
+)
+from vrsweep.config.grid import DIRECTION_VALUES, Grid  # noqa: F401
+from vrsweep.model import kernel_coefficients
 from vrsweep.results import Status
 from vrsweep.trajectory import settings_vector
 
-SHUFFLE_SEED = 20240607  # fixed: the same grid always gives the same chunks and shards
-DIRECTION_VALUES = {"up": 1, "down": -1}
 
 
 def integration_settings(integration):
     """The kernel's settings vector from a config's integration section."""
     return settings_vector(**vars(integration))
-
-
-@dataclass(frozen=True)
-class Grid:
-    """The output grid of a config: its axes (plus `direction` for two-way continuation)."""
-
-    axis_names: tuple
-    axis_values: tuple
-    continuation_axis: int | None
-    directions: tuple
-
-    @classmethod
-    def from_config(cls, config):
-        names = [axis.name for axis in config.axes]
-        values = [np.asarray(axis.values, dtype=np.float64) for axis in config.axes]
-        continuation_axis = None
-        directions = ("up",)
-        for index, axis in enumerate(config.axes):
-            if axis.continuation:
-                continuation_axis = index
-                directions = ("up", "down") if axis.continuation == "both" else (axis.continuation,)
-        if len(directions) == 2:
-            names.append("direction")
-            values.append(np.array([DIRECTION_VALUES[d] for d in directions], dtype=np.float64))
-        return cls(tuple(names), tuple(values), continuation_axis, directions)
-
-    @property
-    def shape(self):
-        return tuple(len(v) for v in self.axis_values)
-
-    @property
-    def n_points(self):
-        return int(np.prod(self.shape, dtype=np.int64))
-
-    def lines(self):
-        """(n_lines, line_length) flat indices into the output grid, each row in run order.
-
-        Without continuation every point is its own line. With it, a line runs along the
-        continuation axis at one setting of the other axes: `up` in increasing parameter value,
-        `down` in decreasing value (whatever order the config lists the values in; the stored
-        axis keeps the config's order). With `both`, the up lines fill direction index 0
-        (+1) and the down lines index 1 (-1).
-        """
-        flat = np.arange(self.n_points, dtype=np.int64).reshape(self.shape)
-        if self.continuation_axis is None:
-            return flat.reshape(-1, 1)
-        # A stable sort, so equal values keep their config order (and up is exactly down reversed).
-        ascending = np.argsort(self.axis_values[self.continuation_axis], kind="stable")
-        rows = []
-        for direction_index, direction in enumerate(self.directions):
-            block = flat[..., direction_index] if len(self.directions) == 2 else flat
-            block = np.moveaxis(block, self.continuation_axis, -1)[..., ascending]
-            if direction == "down":
-                block = block[..., ::-1]
-            rows.append(block.reshape(-1, block.shape[-1]))
-        return np.concatenate(rows)
-
-    def parameters_at(self, config, flat_indices):
-        """Every parameter at the given flat grid indices: name -> (n,) float64.
-
-        Built from the axes alone, so a chunk never needs a whole-grid table (memory stays flat
-        as the grid grows).
-        """
-        flat_indices = np.asarray(flat_indices, dtype=np.int64).reshape(-1)
-        table = {name: np.full(flat_indices.size, float(value)) for name, value in config.parameters.items()}
-        if self.shape:  # a single point (no axes) is just the fixed parameters
-            position = np.unravel_index(flat_indices, self.shape)
-            for axis, (name, values) in enumerate(zip(self.axis_names, self.axis_values)):
-                if name in table:  # not direction, x0, v0
-                    table[name] = values[position[axis]]
-        return table
-
-    def initial_states_at(self, config, flat_indices):
-        """(n, 2) starting state (x, v) at the given flat grid indices: ``initial``, or the point's
-        own x0 / v0 where those are axes (basins of attraction)."""
-        flat_indices = np.asarray(flat_indices, dtype=np.int64).reshape(-1)
-        states = np.empty((flat_indices.size, 2), dtype=np.float64)
-        states[:, 0] = config.initial["x"]
-        states[:, 1] = config.initial["v"]
-        if self.shape:
-            position = np.unravel_index(flat_indices, self.shape)
-            for axis, (name, values) in enumerate(zip(self.axis_names, self.axis_values)):
-                if name in INITIAL_STATE_KEYS:
-                    states[:, "xv".index(INITIAL_STATE_KEYS[name])] = values[position[axis]]
-        return states
-
-
-def shuffled_lines(grid, shard_index=0, shard_count=1):
-    """The lines this process runs, in run order: shuffled, then every shard_count-th."""
-    lines = grid.lines()
-    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
-    return lines[order[shard_index::shard_count]]
-
-
-def shard_of_points(grid, shard_count):
-    """For every grid point (over grid.shape), the shard 0..shard_count-1 that runs it.
-
-    The inverse of shuffled_lines: the line at place p of the shuffled order goes to shard
-    p mod shard_count. Used to say which shard file a missing point belongs to.
-    """
-    lines = grid.lines()
-    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
-    shard = np.empty(grid.n_points, dtype=np.int64)
-    shard[lines[order]] = (np.arange(len(lines)) % shard_count)[:, None]
-    return shard.reshape(grid.shape)
 
 
 @kernel_jit(inline="always")
@@ -211,18 +109,6 @@ RUN_LINES = {("rk45", False): run_lines_rk45, ("dop853", False): run_lines_dop85
              ("rk45", True): run_lines_rk45_lyapunov, ("dop853", True): run_lines_dop853_lyapunov}
 
 
-# A chunk is the unit of checkpointing and of progress: long enough that writing it is a small
-# part of computing it, short enough that a kill loses little. Chunks of cheap points (short
-# windows, the effective model) double while they last less than this.
-GROW_CHUNK_BELOW_SECONDS = 0.25
-MAX_CHUNK_LINES = 8192
-
-
-def default_chunk_lines(threads, line_length):
-    """Enough lines per chunk to keep every thread busy and the progress bar moving."""
-    return max(threads, (16 * threads) // max(1, line_length))
-
-
 class LineRunner:
     """Runs given lines of a config's grid: the one code path of local and Dask sweeps alike."""
 
@@ -231,7 +117,7 @@ class LineRunner:
         self.grid = Grid.from_config(config)
         self.settings = integration_settings(config.integration)
         self.method = config.integration.method
-        self.lyapunov = bool(getattr(config.integration, "lyapunov", False))
+        self.lyapunov = config.integration.lyapunov
         self.n_periods = config.integration.transient_periods + config.integration.measure_periods
 
     def run(self, lines, threads=None):
@@ -269,16 +155,11 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     """
     runner = LineRunner(config)
     threads = threads or numba.config.NUMBA_NUM_THREADS
-    lines = shuffled_lines(runner.grid, *shard)
-    # A continuation line is the unit of work: its points depend on each other, so a line with
-    # any point missing is run again from its start (the points already done come out the same).
-    not_done = np.ones(runner.grid.n_points, dtype=bool) if done is None else ~done.reshape(-1)
-    lines = lines[np.any(not_done[lines], axis=1)]
-    line_length = lines.shape[1] if lines.size else 1
+    plan = plan_lines(runner.grid, shard, done)
+    lines = plan.lines
     adaptive = chunk_lines is None
-    chunk_lines = chunk_lines or default_chunk_lines(threads, line_length)
+    chunk_lines = chunk_lines or default_chunk_lines(threads, plan.line_length)
     counts = {}
-    total = int(np.count_nonzero(not_done[lines]))  # progress counts points newly done, not redone
     start = 0
     while start < len(lines):
         began = time.perf_counter()
@@ -286,12 +167,11 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
         start += chunk_lines
         if adaptive and time.perf_counter() - began < GROW_CHUNK_BELOW_SECONDS:
             chunk_lines = min(2 * chunk_lines, MAX_CHUNK_LINES)
-        for code, n in zip(*np.unique(values["status"], return_counts=True)):
-            counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
+        count_statuses(counts, values["status"])
         if on_chunk is not None:
             on_chunk(flat, values)
         if progress is not None:
-            progress(int(np.count_nonzero(not_done[flat])), total)
+            progress(plan.newly_done(flat), plan.total)
     return counts
 
 
@@ -310,6 +190,6 @@ def point_values(records, summaries, statuses, coefficients, integration):
         "v_final": summaries[:, kernel.SUM_V_FINAL],
     }
     values.update(point_diagnostics(records, statuses, coefficients, integration))
-    if getattr(integration, "lyapunov", False):
+    if integration.lyapunov:
         values.update(lyapunov_values(records, summaries, statuses, coefficients, integration, values["period"]))
     return values

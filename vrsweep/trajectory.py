@@ -8,14 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrsweep import kernel
+from vrsweep.config.schema import INTEGRATION_DEFAULTS
 from vrsweep.results import Status
 
-DEFAULT_SETTINGS = {
-    "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
-    "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1e6,
-    "stick_velocity": 1e-7,
-}
 _SETTING_INDEX = {name: index for index, name in enumerate(kernel.SETTING_NAMES)}
+# The kernel's settings a config leaves out: the config schema's defaults, never written twice.
+DEFAULT_SETTINGS = {name: INTEGRATION_DEFAULTS[name] for name in _SETTING_INDEX}
 
 
 def settings_vector(**settings):

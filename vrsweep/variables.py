@@ -45,7 +45,7 @@ def point_variables(integration):
         ("v_final", np.float64, (), {"units": "1", "long_name": "velocity at the end of the run"}),
         ("n_steps", np.int64, (), {"units": "1", "long_name": "Dormand-Prince step attempts"}),
         ("n_rhs", np.int64, (), {"units": "1", "long_name": "right-hand-side evaluations"}),
-    ] + (LYAPUNOV_VARIABLES if getattr(integration, "lyapunov", False) else [])
+    ] + (LYAPUNOV_VARIABLES if integration.lyapunov else [])
 
 
 # With integration.lyapunov (vrsweep.tangent). Time t is dimensionless, so a rate is too.

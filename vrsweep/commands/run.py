@@ -55,15 +55,22 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         threads = capped_threads(threads)
 
     from vrsweep.distributed import parse_local
+    from vrsweep.errors import InvalidArgument, RunFailed
     from vrsweep.job import GracefulStop, parse_shard, run_job
 
-    shard_pair = parse_shard(shard)
+    try:
+        shard_pair = parse_shard(shard)
+    except InvalidArgument as error:
+        raise error.as_option("--shard") from None
     executor = None
     workers = 1
     if dask_address:
         from vrsweep.distributed import dask_executor
 
-        executor = dask_executor(dask_address, threads)
+        try:
+            executor = dask_executor(dask_address, threads)
+        except InvalidArgument as error:
+            raise error.as_option("--dask") from None
         workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
     # The size check is per process: a shard or a local Dask cluster shares the grid's time, while
     # a shard's file is still the whole grid's size (see store.py).
@@ -92,6 +99,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
             report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
                              shard=shard_pair, progress_factory=progress_factory, executor=executor,
                              stop=stop)
+    except RunFailed as error:
+        raise RunFailed(f"{error} (finished chunks are saved; --resume continues)") from error
     except KeyboardInterrupt as interrupt:
         for bar in bars:
             bar.close()
@@ -118,8 +127,10 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
             bar.close()
     if not quiet:
         click.echo(report.summary_line(), err=True)
-    for line in report.advice():  # even with --quiet: the file holds mostly failures
-        click.echo(line, err=True)
+    for item in report.advice():  # even with --quiet: the file holds mostly failures
+        example = f", e.g. --set {item.setting}" if item.setting else ""
+        click.echo(f"Warning: {item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "
+                   f"{item.status.name.lower()}: {item.remedy}{example}, and run again with --overwrite", err=True)
 
 
 # Measured with an empty cache on a loaded 2-core machine: rk45 29 s wall (11 s of CPU); dop853

@@ -1,0 +1,88 @@
+"""Which lines a sweep runs, in which order and in which chunks: the one planner of the local
+executor (vrsweep.sweep.run_sweep) and the Dask executor (vrsweep.distributed), and the one
+count of the statuses they report.
+
+A *line* is a sequence of grid points run one after the other (one point, or a continuation
+line; see vrsweep.config.grid). Lines are shuffled with a fixed seed, so costly regions of the
+grid spread evenly over threads, chunks and shards, and the same grid always gives the same
+chunks and shards. Pure numpy: no kernel, no files.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vrsweep.results import Status
+
+SHUFFLE_SEED = 20240607  # fixed: the same grid always gives the same chunks and shards
+
+
+def shuffled_lines(grid, shard_index=0, shard_count=1):
+    """The lines this process runs, in run order: shuffled, then every shard_count-th."""
+    lines = grid.lines()
+    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
+    return lines[order[shard_index::shard_count]]
+
+
+def shard_of_points(grid, shard_count):
+    """For every grid point (over grid.shape), the shard 0..shard_count-1 that runs it.
+
+    The inverse of shuffled_lines: the line at place p of the shuffled order goes to shard
+    p mod shard_count. Used to say which shard file a missing point belongs to.
+    """
+    lines = grid.lines()
+    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
+    shard = np.empty(grid.n_points, dtype=np.int64)
+    shard[lines[order]] = (np.arange(len(lines)) % shard_count)[:, None]
+    return shard.reshape(grid.shape)
+
+
+# A chunk is the unit of checkpointing and of progress: long enough that writing it is a small
+# part of computing it, short enough that a kill loses little. Chunks of cheap points (short
+# windows, the effective model) double while they last less than this.
+GROW_CHUNK_BELOW_SECONDS = 0.25
+MAX_CHUNK_LINES = 8192
+
+
+def default_chunk_lines(threads, line_length):
+    """Enough lines per chunk to keep every thread busy and the progress bar moving."""
+    return max(threads, (16 * threads) // max(1, line_length))
+
+
+@dataclass(frozen=True)
+class LinePlan:
+    """The lines one process runs (its shard's, less those already done) and how much is new."""
+
+    lines: np.ndarray     # (n_lines, line_length) flat grid indices, each row in run order
+    not_done: np.ndarray  # (n_points,) bool over the whole grid: points not yet in the file
+
+    @property
+    def line_length(self) -> int:
+        return self.lines.shape[1] if self.lines.size else 1
+
+    @property
+    def total(self) -> int:
+        """Points newly done once every line has run (a point redone on its line is not new)."""
+        return int(np.count_nonzero(self.not_done[self.lines]))
+
+    def newly_done(self, flat_indices) -> int:
+        """Of the points of a finished chunk, those not done before: what progress counts."""
+        return int(np.count_nonzero(self.not_done[flat_indices]))
+
+
+def plan_lines(grid, shard=(0, 1), done=None) -> LinePlan:
+    """The shard's shuffled lines with any point not done (``done``: optional flat bool mask).
+
+    A continuation line is the unit of work: its points depend on each other, so a line with any
+    point missing is run again from its start (the points already done come out the same).
+    """
+    lines = shuffled_lines(grid, *shard)
+    not_done = np.ones(grid.n_points, dtype=bool) if done is None else ~np.asarray(done, dtype=bool).reshape(-1)
+    return LinePlan(lines[np.any(not_done[lines], axis=1)], not_done)
+
+
+def count_statuses(counts, statuses) -> dict:
+    """Add a chunk's point statuses to ``counts`` ({Status: n}, changed in place and returned)."""
+    for code, n in zip(*np.unique(statuses, return_counts=True)):
+        counts[Status(int(code))] = counts.get(Status(int(code)), 0) + int(n)
+    return counts

@@ -1,0 +1,126 @@
+"""Rules that tie fields together: Delta above the initial x (or every x0), strobe_periods at most
+measure_periods, one continuation axis. Each rule runs only when the fields it reads are valid on
+their own, and a broken rule is reported at the field the user is likeliest to have got wrong
+(``blame``).
+
+Methods of one validation run (vrsweep.config.validate._Validator), kept here by what they check.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vrsweep.config.schema import (
+    INITIAL_DEFAULTS, INITIAL_DOMAINS, INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS, PARAMETER_DOMAINS,
+    integral_float_to_int,
+)
+from vrsweep.config.wording import show
+from vrsweep.model import DEFAULT_PARAMETERS
+
+
+class CrossFieldRules:
+    """Rules across fields: mixed into the validation run, which provides ``report`` and ``overridden``."""
+
+    def check_across_fields(self, data, axes):
+        """Rules that tie fields together; each runs when the fields it reads are valid."""
+        parameters = _section(data, "parameters")
+        initial = _section(data, "initial")
+        integration = _section(data, "integration")
+
+        sweep = data.get("sweep") if isinstance(data.get("sweep"), dict) else {}
+        x = _valid(initial, "x", INITIAL_DEFAULTS, INITIAL_DOMAINS)
+        if "x0" in sweep:
+            if "x0" in axes:
+                self.check_x0_axis(axes["x0"][0], axes["Delta"][0] if "Delta" in axes else None,
+                                   None if "Delta" in sweep else
+                                   _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS))
+        elif x is not None:
+            if "Delta" in sweep:
+                if "Delta" in axes:
+                    self.check_delta_axis(axes["Delta"], sweep["Delta"], x)
+            else:
+                delta = _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS)
+                if delta is not None and not delta > x:
+                    if self.blame(("parameters", "Delta"), ("initial", "x"), "Delta" in parameters, "x" in initial):
+                        self.report(("parameters", "Delta"),
+                                    f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
+                                    f"got {show(delta)}")
+                    else:
+                        self.report(("initial", "x"),
+                                    f"must be below parameters.Delta = {show(delta)} (the mass starts below "
+                                    f"the barrier), got {show(x)}")
+
+        strobe = _valid(integration, "strobe_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
+        measure = _valid(integration, "measure_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
+        if strobe is not None and measure is not None and strobe > measure:
+            if self.blame(("integration", "strobe_periods"), ("integration", "measure_periods"),
+                          "strobe_periods" in integration, "measure_periods" in integration):
+                self.report(("integration", "strobe_periods"),
+                            f"must be <= integration.measure_periods = {measure}, got {strobe}")
+            else:
+                self.report(("integration", "measure_periods"),
+                            f"must be >= integration.strobe_periods = {strobe}, got {measure}")
+
+        with_continuation = [name for name, (_, continuation, _) in axes.items() if continuation]
+        for name in with_continuation[1:]:
+            self.report(("sweep", name, "continuation"),
+                        f"only one axis may have continuation, and sweep.{with_continuation[0]} has it")
+
+    def blame(self, first, second, first_given, second_given) -> bool:
+        """Whether a broken rule between two fields is reported at ``first`` (else at ``second``):
+        at a --set one if either is, else at one written in the file, ``first`` if both are."""
+        if first in self.overridden or second in self.overridden:
+            return first in self.overridden
+        return first_given or not second_given
+
+    def check_x0_axis(self, x0_values, delta_values, delta):
+        """Every x0 must lie below the barrier: below parameters.Delta, or below every swept Delta."""
+        highest = float(np.max(x0_values))
+        if delta_values is not None:
+            lowest = float(np.min(delta_values))
+            if not lowest > highest:
+                self.report(("sweep", "x0"), f"every x0 must be below every swept Delta (the mass starts below "
+                                             f"the barrier), got x0 up to {show(highest)} and Delta from "
+                                             f"{show(lowest)}")
+        elif delta is not None and not delta > highest:
+            self.report(("sweep", "x0"), f"every x0 must be below parameters.Delta = {show(delta)} (the mass "
+                                         f"starts below the barrier), got {show(highest)}")
+
+    def check_delta_axis(self, axis, spec, x):
+        values, _, kind = axis
+        if kind == "linear":
+            if not values[0] > x:  # start is the lowest value
+                self.report(("sweep", "Delta", "start"),
+                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
+                            f"got {show(float(values[0]))}")
+            return
+        item_path = ("sweep", "Delta") if kind == "list" else ("sweep", "Delta", "values")
+        for index, value in enumerate(values):
+            if not value > x:
+                self.report(item_path + (index,),
+                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
+                            f"got {show(float(value))}")
+
+
+def _section(data, name) -> dict:
+    value = data.get(name)
+    return value if isinstance(value, dict) else {}
+
+
+def _valid(section, key, defaults, domains):
+    """The section's value for ``key`` (or its default) if it passes its own checks, else None."""
+    value = section.get(key, defaults[key])
+    domain = domains[key]
+    if isinstance(value, bool):
+        return None
+    if domain.integer:
+        value = integral_float_to_int(value)
+        good_type = isinstance(value, int)
+    else:
+        try:
+            good_type = isinstance(value, (int, float)) and math.isfinite(float(value))
+        except OverflowError:  # an int too large for a float
+            good_type = False
+    return value if good_type and domain.contains(value) else None

@@ -1,0 +1,362 @@
+"""The config's schema: allowed values and defaults as data, the pydantic models generated from them,
+and the validated result (:class:`Config`).
+
+This module is the ONE source of defaults: the integration defaults here are the kernel's
+(``trajectory.DEFAULT_SETTINGS`` is derived from them), the parameter defaults are the paper's
+(``model.DEFAULT_PARAMETERS``), and the error messages and docs/design.md read the same tables.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, create_model
+from pydantic_core import PydanticCustomError
+
+from vrsweep.config.wording import show_number, show
+from vrsweep.model import (
+    DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
+)
+
+
+# --------------------------------------------------------------------------------------------
+# Allowed values, as data: the pydantic schema, the error messages and the docs all read these.
+# --------------------------------------------------------------------------------------------
+
+_INT64_MAX = 2**63 - 1  # the kernel counts in int64; a larger count would overflow silently
+
+
+@dataclass(frozen=True)
+class Domain:
+    """An interval of allowed values, open or closed at either end; ``integer`` for counts."""
+
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = True
+    high_open: bool = True
+    integer: bool = False
+
+    def describe(self) -> str:
+        """The interval in words, e.g. ``(0, 1]``, ``> 0``, ``an integer >= 1``."""
+        low, high = show_number(self.low), show_number(self.high)
+        has_low, has_high = self.low > -math.inf, self.high < math.inf and self.high != _INT64_MAX
+        if has_low and has_high:
+            text = f"in {'(' if self.low_open else '['}{low}, {high}{')' if self.high_open else ']'}"
+        elif has_low:
+            text = f"{'>' if self.low_open else '>='} {low}"
+        elif has_high:
+            text = f"{'<' if self.high_open else '<='} {high}"
+        else:
+            text = ""
+        kind = "an integer" if self.integer else "a number"
+        return f"{kind} {text}".rstrip()
+
+    def contains(self, value: float) -> bool:
+        above = value > self.low if self.low_open else value >= self.low
+        below = value < self.high if self.high_open else value <= self.high
+        return above and below
+
+    def range_message(self, value) -> str:
+        """``must be in (0, 1], got 1.5`` -- the message for a value of the right type outside."""
+        allowed = self.describe().replace("an integer ", "").replace("a number ", "")
+        if self.integer:
+            allowed = "an integer " + allowed
+        return f"must be {allowed}, got {show(value)}"
+
+
+ANY = Domain()
+_POSITIVE = Domain(low=0.0)
+_COUNT = Domain(low=1, low_open=False, high=_INT64_MAX, high_open=False, integer=True)
+
+PARAMETER_DOMAINS = {
+    "gamma": ANY, "alpha": ANY, "omega0": ANY,
+    "c": _POSITIVE,  # R = |Q|/c (eq3.3) is a gain: undefined without a drive; -c is c half a period on
+    "omega": _POSITIVE,                                  # the slow period 2 pi/omega sets the time unit
+    "Delta": ANY,                                       # must lie above initial.x: checked across fields
+    "e": Domain(low=0.0, high=1.0, high_open=False),     # eq2.2: 0 < e <= 1
+    "g": ANY,
+    "Omega": _POSITIVE,
+}
+
+INITIAL_DEFAULTS = {"x": 0.99, "v": 0.5}  # the paper's Fig. 6 caption
+INITIAL_DOMAINS = {"x": ANY, "v": ANY}
+# What a sweep axis may be named: a parameter, or x0 / v0 (the initial state, basins of attraction).
+AXIS_NAMES = PARAMETER_NAMES + INITIAL_STATE_AXES
+AXIS_DOMAINS = {**PARAMETER_DOMAINS, **{axis: INITIAL_DOMAINS[key] for axis, key in INITIAL_STATE_KEYS.items()}}
+
+# The integration methods (kernel.INTEGRATORS): rk45 is Dormand-Prince 5(4), dop853 Hairer's 8(5,3).
+METHODS = ("rk45", "dop853")
+
+INTEGRATION_DEFAULTS = {
+    "method": "rk45", "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
+    "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1.0e6,
+    "stick_velocity": 1.0e-7, "strobe_periods": 16, "max_period": 8, "period_tolerance": 1.0e-6,
+    "lyapunov": False,
+}
+INTEGRATION_DOMAINS = {
+    "rtol": Domain(low=0.0, high=1.0),
+    "atol": _POSITIVE,
+    "transient_periods": Domain(low=0, low_open=False, high=_INT64_MAX, high_open=False, integer=True),
+    "measure_periods": _COUNT,
+    "max_steps": _COUNT,
+    "max_impacts_per_period": _COUNT,
+    "divergence_bound": _POSITIVE,
+    "stick_velocity": _POSITIVE,
+    "strobe_periods": _COUNT,       # must also be <= measure_periods: checked across fields
+    "max_period": _COUNT,
+    "period_tolerance": _POSITIVE,
+}
+
+CONTINUATIONS = ("up", "down", "both")
+
+# One axis is materialised as an array when the config is read, so its length must stay sane;
+# the size of the whole grid is judged later by vrsweep.estimate with the run's thread count.
+MAX_AXIS_POINTS = 10_000_000
+NUM_DOMAIN = Domain(low=1, low_open=False, high=MAX_AXIS_POINTS, high_open=False, integer=True)
+
+SECTIONS = ("model", "parameters", "initial", "sweep", "integration", "output")
+LINEAR_KEYS = ("start", "stop", "num", "continuation")
+VALUES_KEYS = ("values", "continuation")
+
+
+# --------------------------------------------------------------------------------------------
+# The validated result
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Axis:
+    """One sweep axis: a parameter name (or x0 / v0, the initial state) and its values (float64,
+    1-D, read-only, in config order).
+
+    ``continuation`` (``up``, ``down``, ``both`` or None) asks the sweep to run this axis in order,
+    each point starting from the previous point's final state; the values themselves stay as given.
+    """
+
+    name: str
+    values: np.ndarray
+    continuation: str | None = None
+
+    def __eq__(self, other):
+        if not isinstance(other, Axis):
+            return NotImplemented
+        return (self.name, self.continuation) == (other.name, other.continuation) and np.array_equal(
+            self.values, other.values)
+
+    def __hash__(self):
+        return hash((self.name, self.continuation, self.values.tobytes()))
+
+    def __len__(self):
+        return len(self.values)
+
+
+@dataclass(frozen=True)
+class Integration:
+    """Solver settings (see INTEGRATION_DEFAULTS for the defaults and INTEGRATION_DOMAINS for ranges)."""
+
+    method: str
+    rtol: float
+    atol: float
+    transient_periods: int
+    measure_periods: int
+    max_steps: int
+    max_impacts_per_period: int
+    divergence_bound: float
+    stick_velocity: float
+    strobe_periods: int
+    max_period: int
+    period_tolerance: float
+    lyapunov: bool = False
+
+
+@dataclass(frozen=True)
+class Config:
+    """A validated config with every default filled in and every override applied.
+
+    Equality compares content only (not the file name, text or overrides it came from), so
+    ``parse_config(c.to_yaml()) == c``. ``parameters`` holds all nine parameters; a swept one keeps
+    its fixed value there, which the sweep ignores (so does ``initial`` for a swept x0 or v0).
+    """
+
+    model: str
+    parameters: dict[str, float]
+    initial: dict[str, float]
+    axes: tuple[Axis, ...]
+    integration: Integration
+    output: str | None = None
+    source_name: str = field(default="<string>", compare=False)
+    source_text: str = field(default="", compare=False, repr=False)
+    overrides: tuple[str, ...] = field(default=(), compare=False)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Grid shape, one dimension per axis in config order; () for a single point."""
+        return tuple(len(axis.values) for axis in self.axes)
+
+    @property
+    def axis_names(self) -> tuple[str, ...]:
+        return tuple(axis.name for axis in self.axes)
+
+    @property
+    def n_points(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def n_runs(self) -> int:
+        """Integrations the grid takes: twice the points for ``continuation: both``."""
+        both = any(axis.continuation == "both" for axis in self.axes)
+        return self.n_points * (2 if both else 1)
+
+    def grid_parameters(self) -> dict[str, np.ndarray]:
+        """Every parameter as a float64 array of shape ``self.shape`` (writable, C-contiguous).
+
+        Axis k's values vary along dimension k; fixed parameters are constant arrays. An x0 or v0
+        axis is a dimension of every array but not a parameter: it is not in the result.
+        """
+        from vrsweep.config.grid import Grid
+
+        grid = Grid.from_config(self)
+        flat = np.arange(grid.n_points, dtype=np.int64).reshape(grid.shape)
+        if len(grid.directions) == 2:  # the direction axis repeats the grid: one copy is enough
+            flat = flat[..., 0]
+        table = grid.parameters_at(self, flat.reshape(-1))
+        return {name: table[name].reshape(self.shape) for name in PARAMETER_NAMES}
+
+    def output_path(self, override=None) -> Path:
+        """Where results go: ``override`` (the -o option) beats the config's ``output``, which beats
+        the config file's name with ``.h5``.
+
+        Relative paths are taken relative to the current directory, like any command-line path --
+        never relative to the config file -- and the default file is written in the current
+        directory too (``vrsweep run configs/fig1.yaml`` writes ``./fig1.h5``). A config read from
+        a string (no file name) defaults to ``vrsweep.h5``.
+        """
+        if override is not None:
+            return Path(override)
+        if self.output is not None:
+            return Path(self.output)
+        if self.source_name.startswith("<"):
+            return Path("vrsweep.h5")
+        return Path(Path(self.source_name).stem + ".h5")
+
+    def to_yaml(self) -> str:
+        """Canonical YAML of this config, fully resolved (defaults filled, overrides applied).
+
+        Canonical: fixed key order, floats as ``repr`` (exact round trip), a linear axis written as
+        ``{start, stop, num}`` whenever its values are exactly ``np.linspace`` of those (however
+        the user wrote it), so two equal configs give the same text. Stored in results files.
+        """
+        from vrsweep.config.yaml import dump_config
+
+        return dump_config(self)
+
+
+# --------------------------------------------------------------------------------------------
+# The pydantic schema, generated from the tables above
+# --------------------------------------------------------------------------------------------
+
+
+def _check_range(domain: Domain):
+    def check(value):
+        if not domain.contains(value):
+            raise PydanticCustomError("out_of_range", "{message}", {"message": domain.range_message(value)})
+        return value
+    return check
+
+
+def integral_float_to_int(value):
+    # YAML 1.2 reads 2e7 as a float; a count written that way is still meant as a count.
+    if isinstance(value, float) and value.is_integer() and abs(value) <= _INT64_MAX:
+        return int(value)
+    return value
+
+
+def _number_type(domain: Domain):
+    if domain.integer:
+        return Annotated[int, BeforeValidator(integral_float_to_int), AfterValidator(_check_range(domain))]
+    return Annotated[float, AfterValidator(_check_range(domain))]
+
+
+def _check_path(value: str) -> str:
+    if not value.strip():
+        raise PydanticCustomError("bad_path", "must be a file path, got an empty string")
+    if "\0" in value:
+        raise PydanticCustomError("bad_path", "must be a file path, got a string containing a NUL character")
+    if any("\ud800" <= char <= "\udfff" for char in value):
+        raise PydanticCustomError("bad_path", "must be a file path, got a string with an unpaired surrogate")
+    return value
+
+
+# strict: "1.5" stays a string and fails as a number; ints are still accepted for floats.
+_STRICT = ConfigDict(strict=True, extra="forbid", allow_inf_nan=False)
+
+
+def _section_model(name, domains, defaults):
+    fields = {key: (_number_type(domain), defaults[key]) for key, domain in domains.items()}
+    return create_model(name, __config__=_STRICT, **fields)
+
+
+_ParametersModel = _section_model("Parameters", PARAMETER_DOMAINS, DEFAULT_PARAMETERS)
+_InitialModel = _section_model("Initial", INITIAL_DOMAINS, INITIAL_DEFAULTS)
+_IntegrationModel = create_model(
+    "Integration", __base__=_section_model("NumericIntegration", INTEGRATION_DOMAINS, INTEGRATION_DEFAULTS),
+    method=(Literal[METHODS], INTEGRATION_DEFAULTS["method"]),
+    lyapunov=(bool, INTEGRATION_DEFAULTS["lyapunov"]))
+
+
+class Document(BaseModel):
+    model_config = _STRICT
+
+    model: Literal[MODELS] = "original"
+    parameters: _ParametersModel = Field(default_factory=_ParametersModel)
+    initial: _InitialModel = Field(default_factory=_InitialModel)
+    sweep: dict[str, Any] = Field(default_factory=dict)  # each axis validated by the models below
+    integration: _IntegrationModel = Field(default_factory=_IntegrationModel)
+    output: Annotated[str, AfterValidator(_check_path)] | None = None
+
+
+_Continuation = Literal[CONTINUATIONS] | None
+
+
+class LinearAxis(BaseModel):
+    model_config = _STRICT
+
+    start: float
+    stop: float
+    num: _number_type(NUM_DOMAIN)
+    continuation: _Continuation = None
+
+
+class ValuesAxis(BaseModel):
+    model_config = _STRICT
+
+    values: Annotated[list[float], Field(min_length=1)]
+    continuation: _Continuation = None
+
+
+class ListAxis(BaseModel):  # a bare list, wrapped so that it is validated like the others
+    model_config = _STRICT
+
+    values: Annotated[list[float], Field(min_length=1)]
+
+
+# What a key can be, for "(allowed: ...)" and "did you mean" (and "did you mean parameters.g?"
+# when a key sits in the wrong section).
+ALLOWED_KEYS = {
+    (): SECTIONS,
+    ("parameters",): PARAMETER_NAMES,
+    ("initial",): tuple(INITIAL_DEFAULTS),
+    ("integration",): tuple(INTEGRATION_DEFAULTS),
+}
+KEY_HOME = {
+    **{name: f"parameters.{name}" for name in PARAMETER_NAMES},
+    **{key: f"integration.{key}" for key in INTEGRATION_DEFAULTS},
+    "x": "initial.x", "v": "initial.v", "x0": "initial.x", "v0": "initial.v",
+    **{key: key for key in SECTIONS},
+}
+
+AXIS_FORMS = "{start, stop, num}, a list of values, or {values: [...]}; optional continuation: up|down|both"

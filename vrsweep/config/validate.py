@@ -1,0 +1,220 @@
+"""One validation run: YAML text (+ ``--set`` overrides) -> :class:`Config`, or a ConfigError listing
+every problem found, each with its file, line and field (vrsweep.config.report words them).
+
+How: ruamel.yaml's round-trip loader reads the text (YAML 1.2, so ``1e-9`` is a float, and every
+key and item keeps its line in ``.lc``); the data is copied to plain Python, overrides are applied,
+pydantic (strict: no ``"abc"`` -> float, ints accepted for floats) checks types, unknown keys and
+ranges, and a few cross-field rules (Delta above the initial x, strobe_periods <= measure_periods,
+sweep values in their parameter's range) are checked by hand. Each pydantic error location is
+mapped back to a line through the ruamel tree.
+
+The run is one object, :class:`_Validator`, whose methods are kept by what they check: reading
+and overrides here, each sweep axis in ``axes.py``, rules across fields in ``rules.py``, and the
+wording and location of problems in ``report.py``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from pydantic import ValidationError
+from ruamel.yaml.constructor import DuplicateKeyError
+from ruamel.yaml.error import YAMLError
+
+from vrsweep.config.axes import SweepAxes
+from vrsweep.config.report import Report
+from vrsweep.config.rules import CrossFieldRules
+from vrsweep.config.schema import (
+    AXIS_FORMS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config, Document, Integration,
+)
+from vrsweep.config.wording import did_you_mean, show
+from vrsweep.config.yaml import CyclicAlias, error_line, load_round_trip, parse_scalar, plain_data
+from vrsweep.errors import ConfigError
+from vrsweep.model import PARAMETER_NAMES
+
+
+def load_config(path, overrides=()) -> Config:
+    """Read and validate the config file at ``path``; messages name the file as given."""
+    name = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError([f"{name}: no such config file"], source=name) from None
+    except IsADirectoryError:
+        raise ConfigError([f"{name}: is a directory, not a config file"], source=name) from None
+    except UnicodeDecodeError as error:
+        raise ConfigError([f"{name}: not a text (UTF-8) file: {error.reason} at byte {error.start}"],
+                          source=name) from None
+    except OSError as error:
+        raise ConfigError([f"{name}: cannot read: {error.strerror or error}"], source=name) from None
+    return parse_config(text, source_name=name, overrides=overrides)
+
+
+def parse_config(text: str, source_name: str = "<string>", overrides=()) -> Config:
+    """Validate config ``text``; raise ConfigError listing every problem found."""
+    return _Validator(text, source_name, tuple(overrides)).run()
+
+
+def with_overrides(config: Config, overrides) -> Config:
+    """``config`` with more ``NAME=VALUE`` overrides applied on top of it.
+
+    Works from ``config.to_yaml()`` (so a Config changed with dataclasses.replace keeps its
+    changes); that text is valid, so any problem is one of the new overrides and says so.
+    """
+    overrides = tuple(overrides)
+    changed = parse_config(config.to_yaml(), f"{config.source_name} (resolved)", overrides)
+    return dataclasses.replace(changed, source_name=config.source_name, source_text=config.source_text,
+                               overrides=config.overrides + overrides)
+
+
+def same_config(stored_text: str, config: Config) -> bool:
+    """Whether ``stored_text`` (a config as a result file stores it, written by this version or an
+    earlier one) describes the same run as ``config``: compared parsed, not as text, so that a
+    change in how the text is written never makes an old checkpoint refuse to resume."""
+    try:
+        stored = parse_config(stored_text, "<the stored config>")
+    except ConfigError:
+        return False
+    return stored == config
+
+
+class _Validator(Report, SweepAxes, CrossFieldRules):
+    """One validation run: reads the YAML, applies overrides, collects problems, builds the Config."""
+
+    # -- the run -----------------------------------------------------------------------------
+
+    def run(self) -> Config:
+        settings = self.parse_overrides()
+        data = self.read_yaml()
+        if data is None:
+            self.fail_if_problems()  # YAML syntax error: nothing more can be checked
+        data = self.apply_overrides(data, settings)
+        document = self.validate_document(data)
+        axes = self.validate_sweep(data.get("sweep"))
+        self.check_across_fields(data, axes)
+        self.fail_if_problems()
+        return Config(
+            model=document.model,
+            parameters={name: float(getattr(document.parameters, name)) for name in PARAMETER_NAMES},
+            initial={key: float(getattr(document.initial, key)) for key in INITIAL_DEFAULTS},
+            axes=tuple(Axis(name, values, continuation) for name, (values, continuation, _) in axes.items()),
+            integration=Integration(**document.integration.model_dump()),
+            output=document.output,
+            source_name=self.source,
+            source_text=self.text,
+            overrides=self.overrides,
+        )
+
+    # -- YAML --------------------------------------------------------------------------------
+
+    def read_yaml(self):
+        """The document as plain dicts/lists/scalars ({} if empty), or None after a syntax error."""
+        try:
+            try:
+                self.root = load_round_trip(self.text, allow_duplicate_keys=False)
+            except DuplicateKeyError:
+                # ruamel stops at the first duplicate; find them all, then read on for the rest.
+                self.report_duplicates()
+                self.root = load_round_trip(self.text, allow_duplicate_keys=True)
+        except YAMLError as error:
+            self.report_raw((0, error_line(error, self.text), ""), self.yaml_error_text(error))
+            return None
+        except RecursionError:
+            self.report_raw((0, 1, ""), f"{self.source}:1: YAML nested too deeply to read")
+            return None
+        except Exception as error:  # noqa: BLE001 -- ruamel raises e.g. ValueError for "!!float abc"
+            self.report_raw((0, 1, ""), f"{self.source}: cannot read YAML: {error}")
+            return None
+        if self.root is None:
+            return {}
+        try:
+            data = plain_data(self.root)
+        except CyclicAlias:
+            self.report_raw((0, 1, ""), f"{self.source}:1: the YAML refers to itself through an alias")
+            return None
+        except RecursionError:
+            self.report_raw((0, 1, ""), f"{self.source}:1: YAML nested too deeply to read")
+            return None
+        if not isinstance(data, dict):
+            self.report((), f"the config must be a mapping of sections, got {show(data)}",
+                        allowed=", ".join(SECTIONS))
+            return None
+        return data
+
+    # -- overrides ---------------------------------------------------------------------------
+
+    def parse_overrides(self):
+        """[(path, value, "NAME=VALUE")] for the good overrides; bad ones are reported."""
+        targets = _override_targets()
+        settings = []
+        for setting in self.overrides:
+            setting = str(setting)
+            name, sep, value_text = setting.partition("=")
+            name = name.strip()
+            allowed = "a parameter, an integration key, initial.x (or x0), initial.v (or v0) or model"
+            if not sep or not name:
+                self.report_raw(self.setting_order(setting), f"--set {setting}: expected NAME=VALUE, e.g. --set g=5")
+                continue
+            if name not in targets:
+                home = KEY_HOME.get(name)  # e.g. x -> initial.x
+                hint = f" (did you mean {home}?)" if home in targets else did_you_mean(name, list(targets))
+                self.report_raw(self.setting_order(setting), f"--set {setting}: unknown name {name!r}{hint} (allowed: {allowed})")
+                continue
+            try:
+                value = parse_scalar(value_text)
+            except ValueError as error:
+                self.report_raw(self.setting_order(setting), f"--set {setting}: {error}")
+                continue
+            settings.append((targets[name], value, setting))
+        return settings
+
+    def apply_overrides(self, data, settings):
+        data = dict(data)
+        for path, value, setting in settings:
+            if len(path) == 1:
+                data[path[0]] = value
+            else:
+                section, key = path
+                if data.get(section) is None:
+                    data[section] = {}
+                if not isinstance(data[section], dict):
+                    continue  # the section itself is reported as not being a mapping
+                data[section] = {**data[section], key: value}
+                sweep = data.get("sweep")
+                axis = {"x": "x0", "v": "v0"}.get(key) if section == "initial" else key
+                if section in ("parameters", "initial") and isinstance(sweep, dict) and axis in sweep:
+                    # Fixing a swept parameter removes its axis: `simulate fig1.yaml --set g=5`;
+                    # so does fixing a swept initial state: `--set x0=0.5` (or initial.x=0.5).
+                    data["sweep"] = {name: spec for name, spec in sweep.items() if name != axis}
+            self.overridden[path] = setting
+        return data
+
+    # -- sections ----------------------------------------------------------------------------
+
+    def validate_document(self, data):
+        """Validate every section but the sweep's axes; returns the model, or None on problems."""
+        # An empty section ("parameters:" with nothing under it) reads as null: treat it as {}.
+        data = {key: ({} if value is None and key in ("parameters", "initial", "sweep", "integration")
+                      else value) for key, value in data.items()}
+        try:
+            return Document.model_validate(data)
+        except ValidationError as error:
+            for item in error.errors(include_url=False):
+                if item["loc"][:1] == ("sweep",) and item["type"] == "dict_type":
+                    self.report(("sweep",), f"must be a mapping of parameter name -> values, got "
+                                            f"{show(item['input'])}", allowed=AXIS_FORMS)
+                else:
+                    self.report_pydantic(item, ())
+            return None
+
+
+def _override_targets():
+    """--set NAME -> path in the document; both 'g' and 'parameters.g' spellings."""
+    targets = {"model": ("model",), "initial.x": ("initial", "x"), "initial.v": ("initial", "v"),
+               "x0": ("initial", "x"), "v0": ("initial", "v")}  # x0, v0: the names of the sweep axes
+    for name in PARAMETER_NAMES:
+        targets[name] = targets[f"parameters.{name}"] = ("parameters", name)
+    for key in INTEGRATION_DEFAULTS:
+        targets[key] = targets[f"integration.{key}"] = ("integration", key)
+    return targets
