@@ -11,7 +11,7 @@ from click.testing import CliRunner
 from vrsweep.cli import main
 from vrsweep.config import parse_config
 from vrsweep.errors import ConfigError
-from vrsweep.estimate import SECONDS_PER_POINT_PERIOD, check_size, estimate
+from vrsweep.estimate import LYAPUNOV_COST, SECONDS_PER_POINT_PERIOD, check_size, estimate
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 
@@ -143,6 +143,9 @@ def test_estimate_scales_with_points_periods_threads_and_rtol():
     assert estimate(tighter, 2).seconds == pytest.approx(guess.seconds * 10)  # (1e5)^(1/5)
     effective = parse_config(config.to_yaml(), overrides=["model=effective"])
     assert estimate(effective, 2).seconds < guess.seconds
+    with_tangents = parse_config(config.to_yaml(), overrides=["lyapunov=true"])
+    assert estimate(with_tangents, 2).seconds == pytest.approx(guess.seconds * LYAPUNOV_COST["rk45"])
+    assert estimate(with_tangents, 2).output_bytes > guess.output_bytes + 10 * 2 * 8  # lyapunov, lyapunov_err
 
 
 def test_check_size_refuses_a_huge_grid_unless_allowed():
@@ -193,13 +196,16 @@ def test_a_decreasing_list_is_an_axis_in_the_given_order():
     assert [list(axis.values) for axis in config.axes] == [[40.0, 30.5, 0.0], [5.0, 4.0]]
 
 
-@pytest.mark.parametrize("sweep", ["g: {start: 0, stop: 40, num: 12}",
-                                   "g: {start: 20, stop: 30, num: 5, continuation: both}\n  Omega: [4.0, 5.0]"])
-def test_the_size_estimate_is_the_size_of_the_file(tmp_path, sweep):
+@pytest.mark.parametrize("sweep, lyapunov", [("g: {start: 0, stop: 40, num: 12}", "false"),
+                                             ("g: {start: 20, stop: 30, num: 5, continuation: both}\n  Omega: [4.0, 5.0]",
+                                              "false"),
+                                             ("g: {start: 0, stop: 40, num: 12}", "true")])
+def test_the_size_estimate_is_the_size_of_the_file(tmp_path, sweep, lyapunov):
     """validate estimated 3.2 kB for a 77 kB quickstart file (issue 15): HDF5's per-dataset bytes
     dominate small files. The estimate counts every array the run stores, and that overhead."""
     path = tmp_path / "small.yaml"
-    path.write_text(f"model: effective\nsweep:\n  {sweep}\nintegration: {{transient_periods: 2, measure_periods: 16}}\n")
+    path.write_text(f"model: effective\nsweep:\n  {sweep}\n"
+                    f"integration: {{transient_periods: 2, measure_periods: 16, lyapunov: {lyapunov}}}\n")
     result, output = invoke("run", str(path), "-o", str(tmp_path / "small.h5"), "-q")
     assert result.exit_code == 0, output
     size = (tmp_path / "small.h5").stat().st_size

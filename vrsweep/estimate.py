@@ -28,6 +28,9 @@ REFERENCE_RTOL = 1e-9
 # rtol 1e-9 on the original model and 0.2x on the effective one (paper points, one thread).
 METHOD_COST = {"rk45": 1.0, "dop853": 0.35}
 METHOD_ORDER = {"rk45": 5, "dop853": 8}
+# integration.lyapunov: cost of the tangent vectors relative to a plain run of the same method
+# (benchmarks/README.md, "Lyapunov exponents": geometric means over five points, one thread).
+LYAPUNOV_COST = {"rk45": 1.15, "dop853": 1.85}
 
 # HDF5's own bytes, measured on vrsweep's files (h5py 3, HDF5 1.14): each dataset's object header
 # and attributes take ~2.5 kB whatever its size, plus ~0.45 kB per grid dimension for the
@@ -61,6 +64,8 @@ def estimate(config, threads=None) -> Estimate:
     # A method of order p takes about rtol^(-1/p) steps per unit time: DP5 (1e-9/rtol)^(1/5).
     method = getattr(integration, "method", INTEGRATION_DEFAULTS["method"])
     steps_factor = METHOD_COST[method] * (REFERENCE_RTOL / integration.rtol) ** (1.0 / METHOD_ORDER[method])
+    if integration.lyapunov:
+        steps_factor *= LYAPUNOV_COST[method]
     seconds = n_points * periods * SECONDS_PER_POINT_PERIOD[config.model] * steps_factor / threads
     return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds)
 
