@@ -25,7 +25,8 @@ from vrsweep.attractors import (
 from vrsweep.config import load_config, parse_config
 from vrsweep.errors import ConfigError
 from vrsweep.results import Status
-from vrsweep.store import merge_results, read_results
+from vrsweep.reading import derived_variables, load_results
+from vrsweep.store import merge_results
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 HYSTERESIS = CONFIGS / "hysteresis_effective.yaml"
@@ -364,21 +365,21 @@ def test_labels_of_merged_shards_equal_the_single_runs(small_sweep, tmp_path):
     for index in range(2):
         run_ok("run", path, "--shard", f"{index}/2", "-o", tmp_path / "sweep.h5", "--quiet")
         shards.append(tmp_path / f"sweep.shard{index}of2.h5")
-        assert "attractor" not in read_results(shards[-1]).variables  # a shard sees part of a slice
+        assert "attractor" not in load_results(shards[-1])  # a shard sees part of a slice
     merged = tmp_path / "merged.h5"
     merge_results(shards, merged)
     assert_same_result(merged, whole)  # the labels and the table included
-    results = read_results(merged)
+    results = load_results(merged)
     # The merge's labelling, from the file, is the single run's, from the point variables.
     tolerance = load_config(path).integration.period_tolerance
     with h5py.File(merged, "r") as f:
         from_file = attractor_extras_from_file(f, tolerance)
     for extra, coords in (attractor_extras(results.axes, results.variables, tolerance), from_file):
-        single = read_results(whole)
+        single = load_results(whole)
         for name, (array, dims, _) in extra.items():
-            assert np.array_equal(array, single.variables[name], equal_nan=True), name
-            assert dims == single.dims[name]
-        assert set(extra) == set(single.derived_variables) - {"A_theory", "A_theory_stable",
+            assert np.array_equal(array, single[name].values, equal_nan=True), name
+            assert dims == single[name].dims
+        assert set(extra) == set(derived_variables(single)) - {"A_theory", "A_theory_stable",
                                                               "A_theory_max_stable", "g_res"}
         assert np.array_equal(coords["attractor_label"][0], single.coords["attractor_label"])
 
@@ -395,6 +396,6 @@ def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp
     result = invoke("plot", merged, "--kind", "basin", "-o", tmp_path / "x.png")
     assert result.exit_code == 2 and "--resume" in result.output
     run_ok("run", path, "--resume", "-o", merged, "--quiet")
-    labelled, single = read_results(merged), read_results(whole)
-    for name in single.derived_variables:
-        assert np.array_equal(labelled.variables[name], single.variables[name], equal_nan=True), name
+    labelled, single = load_results(merged), load_results(whole)
+    for name in derived_variables(single):
+        assert np.array_equal(labelled[name].values, single[name].values, equal_nan=True), name

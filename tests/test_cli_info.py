@@ -15,7 +15,8 @@ import pytest
 
 from vrsweep import __version__
 from vrsweep.cli import main
-from vrsweep.store import FORMAT_VERSION, read_results
+from vrsweep.reading import load_results, stored_variables
+from vrsweep.store import FORMAT_VERSION
 
 from result_files import invoke
 
@@ -44,15 +45,15 @@ def test_text_summary_of_a_finished_run(finished):
     result = invoke("info", finished)
     assert result.exit_code == 0, result.output
     text = result.stdout
-    stored = read_results(finished)
-    n_ok = int(np.sum(stored.variables["status"] == 0))
+    stored = load_results(finished)
+    n_ok = int(np.sum(stored["status"].values == 0))
     for words in (f"format {FORMAT_VERSION}, complete", "9 of 9 points done", "model:       original",
                   "g: 9 values from 0 to 40", "fast forcing amplitude g", "Omega=4",
                   "transient_periods=2 measure_periods=2", f"by vrsweep {__version__}", "numba ", "numpy "):
         assert words in text, (words, text)
     assert re.search(rf"status:\s+{n_ok} ok\b", text), text
     # Every stored variable is listed with its units and meaning.
-    for name in stored.variables:
+    for name in stored_variables(stored):
         assert re.search(rf"^  {re.escape(name)}\s", text, re.MULTILINE), (name, text)
     assert re.search(r"^  R\s+\(g: 9\)\s+\[1\]\s+gain \|Q\|/c", text, re.MULTILINE), text
     assert "config:" not in text
@@ -61,19 +62,19 @@ def test_text_summary_of_a_finished_run(finished):
 
 def test_json_matches_the_file(finished):
     summary = info_json(finished)
-    stored = read_results(finished)
+    stored = load_results(finished)
     assert summary["format_version"] == FORMAT_VERSION
     assert summary["complete"] is True and summary["kind"] == "sweep" and summary["shard"] is None
     assert summary["points_done"] == summary["points_total"] == summary["grid_points"] == 9
     assert summary["model"] == "original"
     [axis] = summary["axes"]
     assert (axis["name"], axis["size"], axis["min"], axis["max"], axis["units"]) == ("g", 9, 0.0, 40.0, "1")
-    codes, counts = np.unique(stored.variables["status"], return_counts=True)
+    codes, counts = np.unique(stored["status"].values, return_counts=True)
     assert {row["code"]: row["points"] for row in summary["status_counts"]} == dict(
         zip(codes.tolist(), counts.tolist()))
     assert sum(row["points"] for row in summary["status_counts"]) == 9
     variables = {v["name"]: v for v in summary["variables"]}
-    assert list(variables) == list(stored.variables)
+    assert list(variables) == list(stored_variables(stored))
     assert variables["R"]["units"] == "1" and variables["R"]["dims"] == ["g"]
     assert variables["strobe_x"]["shape"] == [9, 2]
     assert variables["g_res"]["derived"] and not variables["R"]["derived"]
@@ -107,7 +108,7 @@ def test_a_shard_counts_its_own_points(tmp_path):
     run_quickstart(tmp_path / "sharded.h5", "--shard", "1/2")
     [shard] = tmp_path.glob("sharded.shard*.h5")
     summary = info_json(shard)
-    owned = int(read_results(shard).owned.sum())
+    owned = int(load_results(shard).owned.sum())
     assert summary["kind"] == "shard" and summary["shard"] == "1/2"
     assert summary["grid_points"] == 9 and summary["points_total"] == summary["points_done"] == owned < 9
     assert sum(row["points"] for row in summary["status_counts"]) == owned

@@ -9,7 +9,7 @@ import pytest
 from vrsweep import kernel
 from vrsweep.config import load_config
 from vrsweep.model import kernel_coefficients
-from vrsweep.store import read_results
+from vrsweep.reading import load_results
 from vrsweep.trajectory import settings_vector, simulate
 from vrsweep.trajectory_file import read_trajectory
 
@@ -97,14 +97,14 @@ def test_impacts_match_the_sweep_of_the_same_point(tmp_path):
     """simulate --set g=20 and the sweep over g = 5, 20 integrate the same trajectory."""
     config = write(tmp_path, SWEPT)
     assert invoke("run", config, "-o", tmp_path / "sweep.h5", "--quiet").exit_code == 0
-    sweep = read_results(tmp_path / "sweep.h5")
+    sweep = load_results(tmp_path / "sweep.h5")
     for index, g in enumerate((5, 20)):
         out = tmp_path / f"g{g}.h5"
         assert invoke("simulate", config, "--set", f"g={g}", "-o", out, "-q").exit_code == 0
         counts = read_trajectory(out).runs["original"].impacts_per_period
-        assert counts[5:].mean() == sweep.variables["impacts_per_period"][index]
+        assert counts[5:].mean() == sweep["impacts_per_period"].values[index]
         np.testing.assert_array_equal(read_trajectory(out).runs["original"].strobe_x[-5:],
-                                      sweep.variables["strobe_x"][index])
+                                      sweep["strobe_x"].values[index])
 
 
 def test_the_slow_flow_starts_from_the_initial_state(compared):

@@ -19,7 +19,7 @@ import h5py
 import pytest
 from result_files import assert_same_result, done_count, invoke, write_config
 
-from vrsweep.store import read_results
+from vrsweep.reading import load_results
 
 # ~750 cheap points, a ~420 kB file: small enough to fill a tmpfs of a few hundred kB.
 SMALL_DISK_SWEEP = """\
@@ -94,8 +94,8 @@ def small_disk(tmp_path):
 
 # The CLI without reserving the file's space first (as on a file system that cannot allocate
 # ahead), so that HDF5 itself meets the full disk.
-WITHOUT_RESERVING = ("-c", "import sys, vrsweep.store as store; "
-                     "store.reserve_space = lambda *args, **kwargs: None; "
+WITHOUT_RESERVING = ("-c", "import sys, vrsweep.store.writer as writer; "
+                     "writer.reserve_space = lambda *args, **kwargs: None; "
                      "from vrsweep.cli import main; sys.exit(main(sys.argv[1:], prog_name='vrsweep'))")
 
 
@@ -127,8 +127,8 @@ def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_di
     line = one_error_line(proc.stderr)
     assert f"cannot finish {out}: No space left on device" in line and "needs about" in line
     assert small_disk.entries() == ["sweep.h5"]
-    checkpoint = read_results(out)
-    assert checkpoint.done.all() and not checkpoint.complete
+    checkpoint = load_results(out)
+    assert checkpoint.done.all() and checkpoint.attrs["vrsweep_complete"] == 0
 
     # Space freed: --resume only finishes, and the file is the uninterrupted run's.
     small_disk.resize("4m")
@@ -219,8 +219,8 @@ def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp
     assert resumed.returncode == 2, resumed.stderr
     assert f"cannot resume {out}: it is being written by another process" in one_error_line(resumed.stderr)
     assert writer.returncode == 0, stderr
-    written = read_results(out)
-    assert written.complete and written.done.all() and "num: 160" in written.attrs["config"]
+    written = load_results(out)
+    assert written.attrs["vrsweep_complete"] == 1 and written.done.all() and "num: 160" in written.attrs["config"]
 
 
 def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path):
@@ -271,8 +271,8 @@ def test_an_output_folder_removed_under_a_running_sweep_stops_it(slow_config, tm
 # and waits there to be killed.
 STUCK_IN_CREATION = ("-c", """
 import sys, time
-import vrsweep.store as store
-original = store._create_point_variable
+import vrsweep.store.layout as layout
+original = layout._create_point_variable
 made = []
 def slow(*args, **kwargs):
     made.append(1)
@@ -281,7 +281,7 @@ def slow(*args, **kwargs):
         print("creating", flush=True)
         time.sleep(120)
     return original(*args, **kwargs)
-store._create_point_variable = slow
+layout._create_point_variable = slow
 from vrsweep.cli import main
 sys.exit(main(sys.argv[1:], prog_name="vrsweep"))
 """)
@@ -307,7 +307,7 @@ def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes
     assert result.exit_code == 0, result.output
     assert f"Removed {left[0]}, left by an interrupted vrsweep (process {child.pid})" in result.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5", "sweep.yaml"]
-    assert read_results(out).complete
+    assert load_results(out).attrs["vrsweep_complete"] == 1
 
 
 def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path):
@@ -341,7 +341,7 @@ def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path):
         result = invoke("run", slow_config, "-o", out, "-q", "--overwrite", "--set", "transient_periods=1",
                         "--set", "measure_periods=2", "--set", "strobe_periods=1")
     assert result.exit_code == 0, result.output
-    assert "measure_periods: 2" in read_results(out).attrs["config"]
+    assert "measure_periods: 2" in load_results(out).attrs["config"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -369,9 +369,9 @@ def test_closing_without_writing_keeps_the_checkpoint_of_the_last_flush(tmp_path
     del done
 
     assert h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE) == []
-    checkpoint = read_results(path)
-    assert checkpoint.done.tolist() == [True, True, False, False, False]
-    assert checkpoint.variables["R"][:2].tolist() == [1.0, 2.0] and "unsaved" not in checkpoint.attrs
+    checkpoint = load_results(path)
+    assert checkpoint.done.values.tolist() == [1, 1, 0, 0, 0]
+    assert checkpoint["R"].values[:2].tolist() == [1.0, 2.0] and "unsaved" not in checkpoint.attrs
     writer._file = None  # closed above
 
 
@@ -387,7 +387,7 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     before HDF5 writes: creation_reserve must bound the new file, layout_bytes from below, and
     finish_reserve what finishing adds. Checked on real files from 1 to 10^5 points."""
     import vrsweep.fileio
-    import vrsweep.store
+    import vrsweep.store.writer
     from vrsweep.config import parse_config
     from vrsweep.job import _axes, _variable_specs, analytic_extras, root_attributes
     from vrsweep.store import ResultWriter, creation_reserve, finish_reserve, layout_bytes
@@ -405,7 +405,7 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     extras = analytic_extras(config, grid)
     plain = tmp_path / "plain.h5"  # made and finished without reserving: the sizes to end with
     with monkeypatch.context() as patch:
-        for module in (vrsweep.fileio, vrsweep.store):
+        for module in (vrsweep.fileio, vrsweep.store.writer):
             patch.setattr(module, "reserve_space", lambda *args, **kwargs: None)
         plain_writer = ResultWriter.create(plain, axes, specs, root_attributes(config))
         assert plain.stat().st_size == created  # what was reserved and not used is given back
@@ -413,4 +413,4 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     writer.finish(extra=extras)
     assert path.stat().st_size == plain.stat().st_size
     assert 0 < path.stat().st_size - created <= finish_reserve(extras)
-    assert read_results(path).complete
+    assert load_results(path).attrs["vrsweep_complete"] == 1

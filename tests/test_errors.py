@@ -24,7 +24,8 @@ from click.testing import CliRunner
 
 from vrsweep.cli import main
 from vrsweep.results import Status
-from vrsweep.store import FORMAT_VERSION, read_results
+from vrsweep.reading import load_results
+from vrsweep.store import FORMAT_VERSION
 
 from result_files import assert_same_result, invoke
 
@@ -75,7 +76,7 @@ def test_an_output_folder_that_does_not_exist_is_created_and_named(tmp_path):
     result = invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT)
     assert result.exit_code == 0, result.output
     assert result.stderr.strip().splitlines() == [f"Created the output folder {out.parent}"]
-    assert read_results(out).complete
+    assert load_results(out).attrs["vrsweep_complete"] == 1
 
 
 @pytest.mark.parametrize("command", ["simulate", "plot"])
@@ -222,12 +223,10 @@ def test_a_missing_results_file(command, tmp_path):
 
 def _same_content(a, b):
     """Every variable, coordinate and attribute of two result files equal, bit for bit."""
-    from vrsweep.store import read_results
-
-    first, second = read_results(a), read_results(b)
+    first, second = load_results(a), load_results(b)
     if first.attrs != second.attrs or list(first.variables) != list(second.variables):
         return False
-    return all(np.array_equal(first.variables[n], second.variables[n], equal_nan=True) for n in first.variables)
+    return all(np.array_equal(first[n].values, second[n].values, equal_nan=True) for n in first.variables)
 
 
 @pytest.mark.parametrize("command", READERS)
@@ -365,32 +364,32 @@ def test_disk_full_midway_keeps_finished_points_and_resumes(finished, tmp_path, 
     line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
     assert "No space left on device" in line and "full.h5" in line
 
-    checkpoint = read_results(out)
-    assert not checkpoint.complete and int(checkpoint.done.sum()) == 4
+    checkpoint = load_results(out)
+    assert checkpoint.attrs["vrsweep_complete"] == 0 and int(checkpoint.done.sum()) == 4
     monkeypatch.setattr(ResultWriter, "write_points", original)
     result = invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT)
     assert result.exit_code == 0, result.output
-    resumed = read_results(out)
-    assert resumed.complete and resumed.done.all()
-    np.testing.assert_array_equal(resumed.variables["R"], read_results(finished).variables["R"])
+    resumed = load_results(out)
+    assert resumed.attrs["vrsweep_complete"] == 1 and resumed.done.all()
+    np.testing.assert_array_equal(resumed["R"].values, load_results(finished)["R"].values)
 
 
 def test_a_crash_while_finishing_leaves_the_checkpoint(tmp_path, monkeypatch):
     """The last step (derived variables, vrsweep_complete = 1) works on a copy: if it fails, the
     file at the output path is still the unfinished checkpoint and no temporary file is left."""
-    import vrsweep.store
+    import vrsweep.store.writer
 
     def fail(*args, **kwargs):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(vrsweep.store, "_add_extras", fail)
+    monkeypatch.setattr(vrsweep.store.writer, "add_extras", fail)
     out = tmp_path / "finishing.h5"
     line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
     assert f"cannot finish {out}: No space left on device (the file needs about" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["finishing.h5"]
     assert open_hdf5_files() == []
-    checkpoint = read_results(out)
-    assert not checkpoint.complete and checkpoint.done.all()  # every point kept
+    checkpoint = load_results(out)
+    assert checkpoint.attrs["vrsweep_complete"] == 0 and checkpoint.done.all()  # every point kept
 
 
 # --------------------------------------------------------------------------------------------
@@ -427,10 +426,10 @@ def fail_on_call(number, error):
 def test_disk_full_while_creating_the_result_file(tmp_path, monkeypatch):
     """HDF5 fails half-way through the skeleton: one line with the space the file needs, no
     temporary file, no HDF5 file left open, and the next run starts afresh."""
-    import vrsweep.store
+    import vrsweep.store.layout
 
-    monkeypatch.setattr(vrsweep.store, "_create_point_variable",
-                        fail_on_call(3, HDF5_DISK_FULL)(vrsweep.store._create_point_variable))
+    monkeypatch.setattr(vrsweep.store.layout, "_create_point_variable",
+                        fail_on_call(3, HDF5_DISK_FULL)(vrsweep.store.layout._create_point_variable))
     out = tmp_path / "new.h5"
     line = one_message(invoke("run", QUICKSTART, "-o", out, *SHORT), 1)
     assert line.startswith(f"Error: cannot create {out}: No space left on device (the file needs about ")
@@ -438,15 +437,15 @@ def test_disk_full_while_creating_the_result_file(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == [] and open_hdf5_files() == []
     monkeypatch.undo()
     assert invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT).exit_code == 0
-    assert read_results(out).complete
+    assert load_results(out).attrs["vrsweep_complete"] == 1
 
 
 def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_chunks):
     """ENOSPC inside the store's write of the third chunk: one line, the two chunks before it
     stay saved, the file is closed without a second error, and --resume completes it."""
-    import vrsweep.store
+    import vrsweep.store.writer
 
-    original = vrsweep.store._write_selection
+    original = vrsweep.store.writer._write_selection
     chunks_saved = []
 
     def write_selection(ds, *args):
@@ -456,13 +455,13 @@ def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_c
         if ds.name == "/done":  # written last, once a chunk's values are on disk
             chunks_saved.append(1)
 
-    monkeypatch.setattr(vrsweep.store, "_write_selection", write_selection)
+    monkeypatch.setattr(vrsweep.store.writer, "_write_selection", write_selection)
     out = tmp_path / "full.h5"
     line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
     assert line.startswith(f"Error: cannot save points to {out}: No space left on device (the file needs")
     assert open_hdf5_files() == [] and sorted(p.name for p in tmp_path.iterdir()) == ["full.h5"]
-    checkpoint = read_results(out)
-    assert not checkpoint.complete and int(checkpoint.done.sum()) == 4
+    checkpoint = load_results(out)
+    assert checkpoint.attrs["vrsweep_complete"] == 0 and int(checkpoint.done.sum()) == 4
     monkeypatch.undo()
     result = invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT)
     assert result.exit_code == 0, result.output
@@ -544,8 +543,8 @@ def test_failed_points_are_counted_in_the_summary_and_stored(tmp_path):
     assert match[1] == match[2] == "9" and match[4].endswith("mixed.h5")
     reported = {name: int(n) for n, name in re.findall(r"(\d+) (\w+)", match[3])}
 
-    stored = read_results(out)
-    status = stored.variables["status"]
+    stored = load_results(out)
+    status = stored["status"].values
     names, counts = np.unique(status, return_counts=True)
     assert reported == {Status(int(code)).name.lower(): int(n) for code, n in zip(names, counts)}
     assert "ok" in reported and len(reported) >= 3, reported  # ok and at least two kinds of failure

@@ -22,7 +22,7 @@ from vrsweep import kernel
 from vrsweep.config import parse_config
 from vrsweep.model import kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.store import read_results
+from vrsweep.reading import load_results
 from vrsweep.sweep import run_sweep
 from vrsweep.trajectory import settings_vector, simulate
 
@@ -127,9 +127,9 @@ def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g):
     assert result.exit_code == 0, result.output
     assert "Traceback" not in result.output and "Error" not in result.output
     assert "1 step_too_small" in result.output or "1 non_finite" in result.output, result.output
-    stored = read_results(out)
-    assert Status(int(stored.variables["status"])) in {Status.STEP_TOO_SMALL, Status.NON_FINITE}
-    assert np.isnan(stored.variables["R"])
+    stored = load_results(out)
+    assert Status(int(stored["status"])) in {Status.STEP_TOO_SMALL, Status.NON_FINITE}
+    assert np.isnan(stored["R"].values)
 
 
 def test_sticking_under_a_very_fast_forcing_ends():

@@ -308,12 +308,12 @@ def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, si
 def test_a_write_failure_during_merge_is_one_line_and_leaves_nothing(runs, tmp_path, monkeypatch):
     """A runtime failure while writing (here a full disk): exit 1, one line naming the output, and
     no temporary file."""
-    import vrsweep.merge
+    import vrsweep.store.merge
 
     def full_disk(out, *args):
         raise OSError(errno.ENOSPC, "No space left on device", out.file.filename)
 
-    monkeypatch.setattr(vrsweep.merge, "_merge_variable", full_disk)
+    monkeypatch.setattr(vrsweep.store.merge, "_merge_variable", full_disk)
     _, _, shards = runs
     out = tmp_path / "merged.h5"
     result = invoke("merge", *shards, "-o", out)

@@ -21,14 +21,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.merge import merge_results
+from vrsweep.reading import load_results, open_results
 from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES, Status
 from vrsweep.store import (
     FORMAT_VERSION,
     ResultWriter,
     VariableSpec,
+    StoredLayout,
     atomic_write,
-    read_results,
+    merge_results,
 )
 
 from result_files import describe
@@ -210,7 +211,7 @@ def test_single_point_file_has_0d_variables(tmp_path):
         assert ds["R"].values == values_for([0])["R"][0]
         np.testing.assert_array_equal(ds["roots"].values, values_for([0])["roots"][0])
         assert ds["status"].values == 0 and ds["done"].values == 1
-    result = read_results(tmp_path / "one.h5")
+    result = StoredLayout.read(tmp_path / "one.h5")
     assert result.axes == {} and result.shape == () and result.complete
 
 
@@ -224,7 +225,7 @@ def test_finish_adds_derived_variables_over_new_dims(tmp_path):
     with xr.open_dataset(tmp_path / "r.h5", engine="h5netcdf") as ds:
         assert ds["g_res"].dims == ("Omega",) and ds["branch_R"].dims == ("g", "branch")
         assert list(ds["branch"].values) == [1, 2]
-    result = read_results(tmp_path / "r.h5")
+    result = StoredLayout.read(tmp_path / "r.h5")
     assert result.derived_variables == ("g_res", "branch_R") and result.complete
 
 
@@ -232,7 +233,7 @@ def test_a_long_config_text_fits_in_an_attribute(tmp_path):
     config = "sweep:\n  g: [" + ", ".join(f"{x:.6f}" for x in np.linspace(0, 1, 20000)) + "]\n"
     assert len(config) > 64 * 1024  # past HDF5's compact attribute limit
     ResultWriter.create(tmp_path / "r.h5", AXES_1D, specs(), {**ATTRS, "config": config}).close()
-    assert read_results(tmp_path / "r.h5").attrs["config"] == config
+    assert StoredLayout.read(tmp_path / "r.h5").attrs["config"] == config
 
 
 def test_write_points_validates_its_input(tmp_path):
@@ -264,13 +265,13 @@ def test_create_refuses_an_existing_path(tmp_path):
     assert str(path) in message and "--overwrite" in message and "--resume" in message
     assert describe(path) == before
     ResultWriter.create(path, AXES_1D, specs(), ATTRS, overwrite=True).close()
-    assert not read_results(path).done.any()
+    assert not load_results(path).done.any()
 
 
 def test_create_in_a_missing_directory_creates_it(tmp_path, capsys):
     ResultWriter.create(tmp_path / "no" / "r.h5", AXES_1D, specs(), ATTRS).close()
     assert capsys.readouterr().err == f"Created the output folder {tmp_path / 'no'}\n"
-    assert not read_results(tmp_path / "no" / "r.h5").done.any()
+    assert not load_results(tmp_path / "no" / "r.h5").done.any()
 
 
 def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path):
@@ -316,7 +317,7 @@ def one_line_error(path, *, resume=False):
         if resume:
             ResultWriter.open_for_resume(path, CONFIG)
         else:
-            read_results(path)
+            open_results(path)
     message = str(info.value)
     assert "\n" not in message and str(path) in message
     return message
@@ -377,7 +378,7 @@ def test_a_file_being_written_is_reported_as_locked(tmp_path):
     try:
         assert holder.stdout.readline().strip() == "open"
         try:
-            read_results(path)
+            open_results(path)
         except ResultFileError as error:
             assert "locked" in str(error) and "HDF5_USE_FILE_LOCKING" in str(error)
         else:
@@ -429,16 +430,16 @@ def check_resumed(path, reported):
     for chunk in chunks_of_child(reported):
         assert done[chunk].all()
     assert done.sum() <= (reported + 1) * CHUNK  # at most the chunk in flight beyond them
-    result = read_results(path)
+    result = load_results(path)
     points = np.flatnonzero(done)
     expected = values_for(points)
     for name, values in expected.items():
-        stored = result.variables[name].reshape((3000,) + values.shape[1:])
+        stored = result[name].values.reshape((3000,) + values.shape[1:])
         np.testing.assert_array_equal(stored[points], values)
     untouched = ~done
     untouched[chunks_of_child(reported + 1)[-1]] = False
-    assert np.isnan(result.variables["R"].reshape(-1)[untouched]).all()
-    assert (result.variables["status"].reshape(-1)[untouched] == Status.NOT_COMPUTED).all()
+    assert np.isnan(result["R"].values.reshape(-1)[untouched]).all()
+    assert (result["status"].values.reshape(-1)[untouched] == Status.NOT_COMPUTED).all()
     return done
 
 
@@ -517,9 +518,9 @@ def write_shards(tmp_path, n_shards=3, axes=AXES_2D, skip=()):
 
 
 def test_merge_of_three_shards_equals_a_single_run(tmp_path):
-    import vrsweep.store
+    import vrsweep.store.merge
 
-    assert vrsweep.store.merge_results is merge_results  # where it was before vrsweep/merge.py
+    assert vrsweep.store.merge.merge_results is merge_results  # the package re-exports it
     single = write_file(tmp_path / "single.h5", AXES_2D)
     shards = write_shards(tmp_path)
     report = merge_results(shards, tmp_path / "merged.h5")
@@ -561,8 +562,8 @@ def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(
 
     report = merge_results(shards, tmp_path / "merged.h5", allow_missing=True)
     assert not report.complete and report.n_missing == 2 and "2 point(s) missing" in str(report)
-    result = read_results(tmp_path / "merged.h5")
-    assert not result.complete and result.done.sum() == 13
+    result = load_results(tmp_path / "merged.h5")
+    assert result.attrs["vrsweep_complete"] == 0 and result.done.sum() == 13
     writer = ResultWriter.open_for_resume(tmp_path / "merged.h5", CONFIG)
     writer.write_points([4, 7], values_for([4, 7]))
     writer.finish({"g_res": (np.array([1.0, 2.0, 3.0]), ("Omega",),
@@ -628,7 +629,7 @@ def test_merge_keeps_the_first_derived_variables_and_says_if_others_differ(tmp_p
     report = merge_results(shards, tmp_path / "merged3.h5")
     assert report.warnings == [f"derived variables of {shards[2]} differ from {shards[0]}; "
                                f"kept those of {shards[0]}"]
-    assert list(read_results(tmp_path / "merged3.h5").variables["g_res"]) == [1.0, 2.0, 3.0]
+    assert list(load_results(tmp_path / "merged3.h5")["g_res"].values) == [1.0, 2.0, 3.0]
 
 
 def test_merge_stops_when_asked_and_leaves_nothing(tmp_path):
@@ -690,11 +691,11 @@ AXES_3D = [("g", np.linspace(0.0, 6.0, 7)), ("Omega", np.array([4.0, 4.5, 5.0]))
 def small_blocks(monkeypatch):
     """HDF5 chunks of 64 bytes and merge blocks of 160: an 84-point grid then takes many blocks,
     chunks cut axes, and blocks fix leading axes, as a large grid would."""
-    import vrsweep.merge
-    import vrsweep.store
+    import vrsweep.store.layout
+    import vrsweep.store.merge
 
-    monkeypatch.setattr(vrsweep.store._chunk_shape, "__defaults__", (64,))
-    monkeypatch.setattr(vrsweep.merge, "BLOCK_BYTES", 160)
+    monkeypatch.setattr(vrsweep.store.layout._chunk_shape, "__defaults__", (64,))
+    monkeypatch.setattr(vrsweep.store.merge, "BLOCK_BYTES", 160)
 
 
 def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks):
@@ -735,8 +736,8 @@ def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks):
        chunk_bytes=st.sampled_from([8, 64, 512, 4096]), max_points=st.integers(1, 400))
 def test_merge_blocks_cover_the_grid_once_in_order_without_cutting_chunks(shape, extra, chunk_bytes,
                                                                           max_points):
-    from vrsweep.merge import _blocks
-    from vrsweep.store import _chunk_shape
+    from vrsweep.store.layout import _chunk_shape
+    from vrsweep.store.merge import _blocks
 
     shape = tuple(shape)
     chunks = _chunk_shape(shape, (extra,), 8, chunk_bytes)[:len(shape)]

@@ -54,7 +54,7 @@ from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.results import MESSAGES, Status
 from vrsweep.fileio import open_hdf5, write_bytes
-from vrsweep.store import FORMAT_VERSION
+from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "trajectory"
 DEFAULT_SAMPLES_PER_PERIOD = 200

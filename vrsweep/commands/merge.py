@@ -27,7 +27,7 @@ def command(shards, output, overwrite, allow_missing, quiet):
     under a temporary name and renamed at the end: Ctrl-C (exit 130), SIGTERM (143) or an error
     leave OUT.h5 as it was and no temporary file.
     """
-    from vrsweep.merge import merge_results
+    from vrsweep.store.merge import merge_results
     from vrsweep.signals import GracefulStop
 
     before = _identity(output)
