@@ -25,7 +25,7 @@ from vrsweep.attractors import (
 from vrsweep.config import load_config, parse_config
 from vrsweep.errors import ConfigError
 from vrsweep.results import Status
-from vrsweep.reading import derived_variables, load_results
+from vrsweep.reading import derived_variables, load_results, point_variables
 from vrsweep.store import merge_results
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
@@ -374,14 +374,16 @@ def test_labels_of_merged_shards_equal_the_single_runs(small_sweep, tmp_path):
     tolerance = load_config(path).integration.period_tolerance
     with h5py.File(merged, "r") as f:
         from_file = attractor_extras_from_file(f, tolerance)
-    for extra, coords in (attractor_extras(results.axes, results.variables, tolerance), from_file):
+    for extra, coords in (attractor_extras({name: results[name].values for name in results.done.dims},
+                                                    {name: results[name].values for name in point_variables(results)},
+                                                    tolerance), from_file):
         single = load_results(whole)
         for name, (array, dims, _) in extra.items():
             assert np.array_equal(array, single[name].values, equal_nan=True), name
             assert dims == single[name].dims
         assert set(extra) == set(derived_variables(single)) - {"A_theory", "A_theory_stable",
                                                               "A_theory_max_stable", "g_res"}
-        assert np.array_equal(coords["attractor_label"][0], single.coords["attractor_label"])
+        assert np.array_equal(coords["attractor_label"][0], single["attractor_label"].values)
 
 
 def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp_path):
