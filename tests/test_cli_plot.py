@@ -161,3 +161,84 @@ def test_periods_beyond_the_run_are_clipped_with_a_word(trajectory, tmp_path):
 def test_at_messages(sweep, tmp_path):
     result = invoke("plot", sweep, "--at", "g=12", "-o", tmp_path / "f.png")
     assert result.exit_code == 2 and "the nearest are 10 and 20" in result.output, result.output
+
+
+@pytest.fixture(scope="module")
+def plane(tmp_path_factory):
+    """A sweep over two axes, for maps."""
+    directory = tmp_path_factory.mktemp("cli_plot_map")
+    config = directory / "plane.yaml"
+    config.write_text(textwrap.dedent("""\
+        sweep:
+          g: {start: 0.0, stop: 30.0, num: 4}
+          Omega: [4.0, 5.0, 6.0]
+        integration: {transient_periods: 3, measure_periods: 6, strobe_periods: 3}
+        """))
+    out = directory / "plane.h5"
+    assert invoke("run", config, "-o", out, "-q").exit_code == 0
+    return out
+
+
+@pytest.mark.parametrize("name", ["R_err", "period", "impacts_per_period", "x_min", "status"])
+def test_a_map_of_any_stored_variable(plane, tmp_path, name):
+    from matplotlib.collections import QuadMesh
+
+    from vrsweep import plot
+    from vrsweep.reading import load_results
+
+    out = tmp_path / f"{name}.png"
+    result = invoke("plot", plane, "--kind", "map", "--var", name, "-o", out)
+    assert result.exit_code == 0, result.output
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # What the map draws is the stored variable, cell by cell ([x, y] = [g, Omega]).
+    fig = plot.plot(plane, kind="map", var=name)
+    (mesh,) = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)]
+    stored = load_results(plane)[name].values
+    np.testing.assert_array_equal(np.asarray(mesh.get_array()).reshape(3, 4), stored.T.astype(float))
+    assert fig.axes[1].get_ylabel().startswith(name) or name == "impacts_per_period"
+
+
+def test_a_map_is_labelled_with_the_units_the_file_gives(plane, tmp_path):
+    """Units come from the file's attributes, not from what vrsweep writes today."""
+    from vrsweep import plot
+
+    copy = tmp_path / "units.h5"
+    shutil.copy(plane, copy)
+    with h5py.File(copy, "r+") as f:
+        f["x_min"].attrs["units"] = "mm"
+        f["Omega"].attrs["units"] = "rad/s"
+    fig = plot.plot(copy, var="x_min")  # a variable to map asks for a map
+    x_label, y_label, bar_label = fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel(), fig.axes[1].get_ylabel()
+    assert x_label.endswith("$g$ [1]") and y_label.endswith("$\\Omega$ [rad/s]"), (x_label, y_label)
+    assert bar_label == "x_min: smallest x over the measurement window [mm]"
+
+
+def test_an_unknown_map_variable_lists_the_ones_the_file_has(plane, tmp_path):
+    result = invoke("plot", plane, "--kind", "map", "--var", "nope", "-o", tmp_path / "f.png")
+    assert result.exit_code == 2, result.output
+    line = result.output.strip().splitlines()[-1]
+    assert line.startswith(f"Error: --var nope: {plane} has no such variable with one value per grid point; "
+                           "it has R, Qs, Qc, Q_amplitude, R_err, impacts_per_period, status, period, "), line
+    assert "x_min" in line and "strobe_x" not in line  # strobe_x has a value per sample, not per point
+    # --var is for maps only, and names the variable itself.
+    for args, words in ((("--kind", "status"), "--var is for --kind map, not --kind status"),
+                        (("--amplitude",), "--amplitude maps Q_amplitude and --var names the variable itself")):
+        result = invoke("plot", plane, "--var", "R_err", *args, "-o", tmp_path / "f.png")
+        assert result.exit_code == 2 and words in result.output, result.output
+
+
+def test_cli_messages_name_the_flags_the_library_names_arguments(sweep, trajectory, tmp_path):
+    """The library's message names its arguments; the command's names its flags, word for word."""
+    from vrsweep import plot
+    from vrsweep.errors import UsageError
+
+    result = invoke("plot", sweep, "--x", "Omega", "-o", tmp_path / "f.png")
+    assert result.output.strip().splitlines()[-1] == (
+        f"Error: --x Omega: not a swept axis of {sweep} (axes: g)")
+    with pytest.raises(UsageError) as info:
+        plot.plot(sweep, x_axis="Omega")
+    assert str(info.value) == f"x_axis Omega: not a swept axis of {sweep} (axes: g)"
+    with pytest.raises(UsageError, match="^at, x_axis, amplitude and log/linear are for sweep results"):
+        plot.plot(trajectory, at={"g": "1"})
+    result = invoke("plot", trajectory, "--at", "g=1", "-o", tmp_path / "f.png")
+    assert "Error: --at, --x, --amplitude and --log/--linear are for sweep results" in result.output

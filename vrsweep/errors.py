@@ -14,15 +14,15 @@ class VrsweepError(Exception):
     template = None  # set by naming(): the message with its arguments as {placeholders}
 
     @classmethod
-    def naming(cls, template: str, names=None, **values):
+    def naming(cls, template: str, /, argument_words=None, **values):
         """The error ``template.format(**values)``, where a ``{placeholder}`` that is not in
-        ``values`` is an argument, worded as ``names`` says (default: its own name).
+        ``values`` is an argument, worded as ``argument_words`` says (default: its own name).
 
         Values (paths, numbers) go in ``values``, never into the template, so that their braces
         are never read as placeholders.
         """
-        error = cls(template.format_map(_Wording(names or {}, values)))
-        error.template, error.names, error.values = template, dict(names or {}), values
+        error = cls(template.format_map(_Wording(argument_words or {}, values)))
+        error.template, error.argument_words, error.values = template, dict(argument_words or {}), values
         return error
 
     def reworded(self, flags: dict):
@@ -30,16 +30,16 @@ class VrsweepError(Exception):
         that took them from the command line; the error itself if it names no argument."""
         if self.template is None:
             return self
-        return type(self).naming(self.template, {**self.names, **flags}, **self.values)
+        return type(self).naming(self.template, {**self.argument_words, **flags}, **self.values)
 
 
 class _Wording(dict):
-    def __init__(self, names, values):
+    def __init__(self, words, values):
         super().__init__(values)
-        self.names = names
+        self.words = words
 
     def __missing__(self, key):
-        return self.names.get(key, key)
+        return self.words.get(key, key)
 
 
 class ConfigError(VrsweepError):

@@ -791,19 +791,20 @@ def _variable_label(ds, name):
     return f"{words} {_units_text(attrs)}".rstrip()
 
 
-def _map_norm(values, log):
+def _map_norm(values, log, counts=False):
     """Colours from 0 (or the smallest value, if negative) to the 99th percentile of a float
-    variable (one wild point must not wash out the map), to the largest of a count or a label."""
+    variable (one wild point must not wash out the map), to the largest of a count or a label
+    (``counts``: an integer variable, its points not computed NaN here)."""
     from matplotlib.colors import LogNorm, Normalize
 
     finite = values[np.isfinite(values)]
     low = min(0.0, float(finite.min())) if finite.size else 0.0
     if not finite.size:
         high = 1.0
-    elif values.dtype.kind == "f":
-        high = float(np.percentile(finite, 99))
-    else:
+    elif counts:
         high = float(finite.max())
+    else:
+        high = float(np.percentile(finite, 99))
     if high <= low:
         high = low + 1.0
     positive = finite[finite > 0]
@@ -832,9 +833,10 @@ def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
     axes = np.atleast_1d(fig.subplots(1, len(panels), squeeze=False)[0])
     label = _variable_label(ds, name)
     values = view.variables[name]
-    if values.dtype.kind != "f":  # a count or a label: points not computed hold a fill value
+    counts = values.dtype.kind != "f"
+    if counts:  # a count or a label: points not computed hold a fill value
         values = np.where(np.asarray(ds["done"].values, dtype=bool), values, np.nan)
-    norm, finite = _map_norm(values, log)
+    norm, finite = _map_norm(values, log, counts)
     handles = {}
     for ax, (where, panel_title) in zip(axes, panels):
         z = _as_x_y(view, name, x_axis, y_axis, where)
@@ -843,8 +845,13 @@ def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
         ax.set_facecolor("0.8")  # NaN cells (not computed, or failed) show the background
         mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap="viridis",
                              norm=norm)
-        fig.colorbar(mesh, ax=ax, label=label + (" (log scale)" if log else ""),
-                     extend="max" if finite.size and finite.max() > norm.vmax else "neither")
+        bar = fig.colorbar(mesh, ax=ax, label=label + (" (log scale)" if log else ""),
+                           extend="max" if finite.size and finite.max() > norm.vmax else "neither")
+        if counts and not log:
+            from matplotlib.ticker import MaxNLocator
+
+            bar.locator = MaxNLocator(integer=True)  # a period or a label has no value between integers
+            bar.update_ticks()
         resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
         if resonance is not None:
             handles["resonance"] = resonance
