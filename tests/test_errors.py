@@ -550,10 +550,10 @@ def test_failed_points_are_counted_in_the_summary_and_stored(tmp_path):
     assert "ok" in reported and len(reported) >= 3, reported  # ok and at least two kinds of failure
     assert set(reported) <= {s.name.lower() for s in Status if s != Status.NOT_COMPUTED}
 
-    R = stored.variables["R"]
+    R = stored["R"].values
     ok = status == Status.OK
     assert np.all(np.isfinite(R[ok])) and np.all(np.isnan(R[~ok]))  # no NaN passed off as a result
-    assert stored.complete and stored.done.all()
+    assert stored.attrs["vrsweep_complete"] == 1 and stored.done.all()
 
     info = invoke("info", out, "--json")
     assert {row["status"]: row["points"] for row in json.loads(info.stdout)["status_counts"]} == reported

@@ -20,6 +20,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from vrsweep.commands.options import OUTPUT_FLAGS
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.reading import load_results, open_results
 from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES, Status
@@ -262,7 +263,9 @@ def test_create_refuses_an_existing_path(tmp_path):
     with pytest.raises(UsageError) as info:
         ResultWriter.create(path, AXES_1D, specs(), ATTRS)
     message = str(info.value)
-    assert str(path) in message and "--overwrite" in message and "--resume" in message
+    assert str(path) in message and "overwrite=True" in message and "ResultWriter.open_for_resume" in message
+    cli = str(info.value.reworded(OUTPUT_FLAGS))  # what vrsweep run says
+    assert cli == f"output {path} already exists: pass --overwrite to replace it, or --resume to continue the run that wrote it"
     assert describe(path) == before
     ResultWriter.create(path, AXES_1D, specs(), ATTRS, overwrite=True).close()
     assert not load_results(path).done.any()
@@ -293,7 +296,8 @@ def test_resume_refuses_a_foreign_config(tmp_path):
     with pytest.raises(ResultFileError) as info:
         ResultWriter.open_for_resume(path, other)
     message = str(info.value)
-    assert "different config" in message and "--overwrite" in message and str(path) in message
+    assert "different config" in message and "pass overwrite=True" in message and str(path) in message
+    assert "; pass --overwrite to replace it" in str(info.value.reworded(OUTPUT_FLAGS))
     assert "line 2" in message and "0.95" in message and "\n" not in message
 
 
@@ -558,7 +562,9 @@ def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(
     message = str(info.value)
     assert "2 of 15 points are missing" in message
     assert f"2 (g=1, Omega=4.5; g=2, Omega=4.5) owned by shard 2/3 ({shards[1]}, which finished 3 of its 5 points" in message
-    assert "--resume" in message
+    assert "resume it with ResultWriter.open_for_resume" in message and "pass allow_missing=True" in message
+    worded = str(info.value.reworded(OUTPUT_FLAGS))  # what vrsweep merge says
+    assert "resume it with --resume" in worded and "pass --allow-missing to write" in worded
 
     report = merge_results(shards, tmp_path / "merged.h5", allow_missing=True)
     assert not report.complete and report.n_missing == 2 and "2 point(s) missing" in str(report)
@@ -672,7 +678,7 @@ def test_merge_refuses_a_shard_replaced_while_it_is_merged(tmp_path):
 def test_merge_refuses_to_overwrite_and_reports_bad_shards(tmp_path):
     shards = write_shards(tmp_path)
     (tmp_path / "merged.h5").write_text("precious")
-    with pytest.raises(UsageError, match="--overwrite"):
+    with pytest.raises(UsageError, match="pass overwrite=True to replace it"):
         merge_results(shards, tmp_path / "merged.h5")
     assert (tmp_path / "merged.h5").read_text() == "precious"
     merge_results(shards, tmp_path / "merged.h5", overwrite=True)

@@ -61,7 +61,13 @@ def describe(path) -> dict:
             raise error from None
         return other
     if kind == "trajectory":
-        return _describe_groups(path, kind)
+        described = _describe_groups(path, kind)
+        if described is None:  # the trajectory reader says what is wrong (a newer format...)
+            from vrsweep.trajectory_file import read_trajectory
+
+            read_trajectory(path)
+            raise ResultFileError(f"{path} is a vrsweep trajectory this vrsweep cannot describe")
+        return described
     return _describe_sweep(path, load_results(path))
 
 

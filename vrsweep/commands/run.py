@@ -6,7 +6,7 @@ import sys
 import click
 
 from vrsweep.commands.options import (
-    announce_fixed_axes, capped_threads, config_argument, output_option, overwrite_option, quiet_option,
+    announce_fixed_axes, capped_threads, config_argument, flag_wording, output_option, overwrite_option, quiet_option,
     set_option, threads_option,
 )
 
@@ -88,7 +88,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         return bar.update
 
     try:
-        with GracefulStop() as stop:
+        with GracefulStop() as stop, flag_wording():
             report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
                              shard=shard_pair, progress_factory=progress_factory, executor=executor,
                              stop=stop)

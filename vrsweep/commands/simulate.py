@@ -2,7 +2,9 @@
 
 import click
 
-from vrsweep.commands.options import config_argument, output_option, overwrite_option, set_option
+from vrsweep.commands.options import (
+    OUTPUT_FLAGS, config_argument, flag_wording, output_option, overwrite_option, set_option,
+)
 from vrsweep.trajectory_file import DEFAULT_SAMPLES_PER_PERIOD
 
 
@@ -39,8 +41,11 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     from vrsweep.fileio import prepare_output_directory
 
     prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
-    data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
-    write_trajectory(path, data, config, overwrite=overwrite)
+    with flag_wording({**OUTPUT_FLAGS, "samples_per_period": "--samples-per-period",
+                       "compare_effective": "--compare effective", "compare": "--compare",
+                       "model_original": "--set model=original"}):
+        data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
+        write_trajectory(path, data, config, overwrite=overwrite)
     if not quiet:
         for run in data.runs.values():
             counts = run.impacts_per_period

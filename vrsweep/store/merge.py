@@ -35,7 +35,11 @@ from vrsweep.fileio import atomic_write, open_hdf5, prepare_output_directory, wr
 from vrsweep.provenance import cf_attributes
 from vrsweep.store.layout import RESERVED_ROOT_ATTRS, add_extras, build_skeleton, creation_reserve
 from vrsweep.store.reader import StoredLayout, corrupt_error, open_checked
+from vrsweep.store.writer import ARGUMENT_WORDS as _WRITER_WORDS
 from vrsweep.store.writer import first_difference
+
+# How messages name what the caller may do; `vrsweep merge` names its flags (commands/options.py).
+ARGUMENT_WORDS = {**_WRITER_WORDS, "allow_missing": "allow_missing=True"}
 
 # Bytes of one variable per block: large enough that HDF5 calls are few, small enough that a few
 # blocks are nothing beside the start-up of Python, numpy and h5py.
@@ -238,7 +242,8 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
         if any(os.path.exists(p) and os.path.samefile(p, out_path) for p in paths):
             raise UsageError(f"output {out_path} is one of the shards being merged")
         if not overwrite:
-            raise UsageError(f"output {out_path} already exists: pass --overwrite to replace it")
+            raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
+                                    ARGUMENT_WORDS, path=out_path)
     prepare_output_directory(out_path)
 
     stop = stop or (lambda: None)
@@ -264,7 +269,7 @@ def _merge(shards, out_path, allow_missing):
     missing = np.flatnonzero(~merged_done.reshape(-1))
     examples = [ref.point_label(i) for i in missing[:_EXAMPLES]]
     if missing.size and not allow_missing:
-        raise ResultFileError(_missing_points_message(shards, ref, missing, n_done_by_shard))
+        raise ResultFileError.naming(_missing_points_message(shards, ref, missing, n_done_by_shard), ARGUMENT_WORDS)
     complete = missing.size == 0
 
     point_dims = {d for n in ref.point_variables for d in ref.dims[n][len(ref.axes):]}
@@ -469,19 +474,22 @@ def _copy_derived_variables(out, shards, ref, warnings):
 
 def _missing_points_message(shards, ref, missing, n_done_by_shard):
     """'N of M points are missing from the shards: n (g=..; ..) owned by shard i/N (file, not
-    given); ...', from the run's own assignment of points to shards when it can be recomputed."""
+    given); ...', from the run's own assignment of points to shards when it can be recomputed.
+
+    A template for ResultFileError.naming: {allow_missing} and {resume} are what the caller may
+    do, everything else is literal (braces doubled)."""
     n_points = math.prod(ref.shape)
     head = f"{missing.size} of {n_points} points are missing from the shards: "
-    tail = ("; run or resume those shards, then merge again (or pass --allow-missing to write an "
+    tail = ("; run or resume those shards, then merge again (or pass {allow_missing} to write an "
             "incomplete file that 'vrsweep run CONFIG --resume -o OUT.h5' completes)")
 
     def examples(points):
         more = "; ..." if points.size > _EXAMPLES else ""
-        return "; ".join(ref.point_label(i) for i in points[:_EXAMPLES]) + more
+        return _literal("; ".join(ref.point_label(i) for i in points[:_EXAMPLES]) + more)
 
     def given_shard(s, n_owned):
         n_done = n_done_by_shard[shards.index(s)]
-        return f"{s.path}, which finished {n_done} of its {n_owned} points: resume it with --resume"
+        return f"{_literal(s.path)}, which finished {n_done} of its {n_owned} points: resume it with {{resume}}"
 
     ownership = _run_ownership(shards, ref)
     groups = []
@@ -493,7 +501,7 @@ def _missing_points_message(shards, ref, missing, n_done_by_shard):
             points = missing[missing_owner == index]
             s = by_index.get(int(index))
             where = (given_shard(s, int((owner == index).sum())) if s is not None
-                     else f"{_sibling_path(shards, int(index), count) or 'its file'}, not given")
+                     else f"{_literal(_sibling_path(shards, int(index), count) or 'its file')}, not given")
             groups.append((points.size, f"{points.size} ({examples(points)}) owned by shard "
                                         f"{index}/{count} ({where})"))
     else:  # the files do not say how the run assigned points: what their 'owned' masks say
@@ -507,11 +515,11 @@ def _missing_points_message(shards, ref, missing, n_done_by_shard):
             if mine.any():
                 points = missing[mine]
                 groups.append((points.size, f"{points.size} ({examples(points)}) owned by shard "
-                                            f"{s.shard} ({given_shard(s, int(owned.sum()))})"))
+                                            f"{_literal(s.shard)} ({given_shard(s, int(owned.sum()))})"))
         if not claimed.all():
             points = missing[~claimed]
             if any(s.has_owned for s in shards):
-                labels = ", ".join(str(s.shard) for s in shards if s.shard) or "none"
+                labels = _literal(", ".join(str(s.shard) for s in shards if s.shard) or "none")
                 whose = (f"belong to no shard given (shards given: {labels}); is a shard file "
                          "missing from the list?")
             else:
@@ -522,6 +530,11 @@ def _missing_points_message(shards, ref, missing, n_done_by_shard):
         rest = sum(n for n, _ in groups[_GROUPS:])
         shown.append(f"{rest} more in {len(groups) - _GROUPS} more shard(s)")
     return head + "; ".join(shown) + tail
+
+
+def _literal(text):
+    """``text`` as literal text of a message template (ResultFileError.naming)."""
+    return str(text).replace("{", "{{").replace("}", "}}")
 
 
 def _shard_index(s):

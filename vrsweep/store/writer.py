@@ -38,6 +38,12 @@ from vrsweep.store.layout import VariableSpec, add_extras, build_skeleton, creat
 from vrsweep.store.reader import RDCC_NBYTES, RDCC_NSLOTS, corrupt_error, open_checked, open_store_file
 
 
+# How the writer's messages name what the caller can do; a command names its flags instead
+# (commands.options.OUTPUT_FLAGS), through VrsweepError.reworded.
+ARGUMENT_WORDS = {"overwrite": "overwrite=True", "resume": "ResultWriter.open_for_resume",
+                  "start_afresh": "create it with ResultWriter.create"}
+
+
 def _copy_open_file(fd, destination, size, block=1 << 20):
     """Copy the first ``size`` bytes of the open file ``fd`` (positioned reads: HDF5 shares it)."""
     with open(destination, "wb") as out:
@@ -139,8 +145,8 @@ class ResultWriter:
             raise UsageError(f"output {path} is a directory")
         if os.path.lexists(path):
             if not overwrite:
-                raise UsageError(f"output {path} already exists: pass --overwrite to replace it, "
-                                 "or --resume to continue the run that wrote it")
+                raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it, or "
+                                        "{resume} to continue the run that wrote it", ARGUMENT_WORDS, path=path)
             refuse_if_being_written(path)
         specs = [v if isinstance(v, VariableSpec) else VariableSpec(**v) for v in variables]
         reserve = creation_reserve(axes, specs, shard=owned_mask is not None)
@@ -173,22 +179,24 @@ class ResultWriter:
         """
         path = os.fspath(path)
         if not os.path.exists(path):
-            raise ResultFileError(f"cannot resume: {path} does not exist (run without --resume)")
+            raise ResultFileError.naming("cannot resume: {path} does not exist ({start_afresh})", ARGUMENT_WORDS,
+                                         path=path)
         refuse_if_being_written(path, "resume")  # also where HDF5's own locking is switched off
         f = open_checked(path, "r+")
         try:
             stored = decode(f.attrs.get("config", ""))
             if stored != expected_config_text:
-                raise ResultFileError(
-                    f"cannot resume: {path} was written from a different config "
-                    f"({first_difference(stored, expected_config_text)}); "
-                    "pass --overwrite to replace it")
+                raise ResultFileError.naming(
+                    "cannot resume: {path} was written from a different config ({difference}); "
+                    "pass {overwrite} to replace it", ARGUMENT_WORDS, path=path,
+                    difference=first_difference(stored, expected_config_text))
             shard = decode(f.attrs.get("shard")) if "shard" in f.attrs else None
             if expected_shard is not None or shard is not None:
                 if shard != expected_shard:
-                    raise ResultFileError(
-                        f"cannot resume: {path} holds shard {shard or 'none (a whole run)'}, "
-                        f"not {expected_shard or 'a whole run'}; pass --overwrite to replace it")
+                    raise ResultFileError.naming(
+                        "cannot resume: {path} holds shard {found}, not {expected}; pass {overwrite} to replace it",
+                        ARGUMENT_WORDS, path=path, found=shard or "none (a whole run)",
+                        expected=expected_shard or "a whole run")
             return cls(path, f)
         except ResultFileError:
             f.close()
