@@ -18,30 +18,37 @@ from vrsweep.cli import main
 from vrsweep.reading import load_results, stored_variables
 from vrsweep.store import FORMAT_VERSION
 
-from result_files import invoke
 
 QUICKSTART = Path(__file__).resolve().parent / "data" / "quickstart_original.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
 
 
-def run_quickstart(path, *extra):
-    result = invoke("run", QUICKSTART, "-o", path, "--quiet", *SHORT, *extra)
-    assert result.exit_code == 0, result.output
-    return path
+@pytest.fixture(scope="session")
+def run_quickstart(invoke):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def run_quickstart(path, *extra):
+        result = invoke("run", QUICKSTART, "-o", path, "--quiet", *SHORT, *extra)
+        assert result.exit_code == 0, result.output
+        return path
+    return run_quickstart
 
 
 @pytest.fixture(scope="module")
-def finished(tmp_path_factory):
+def finished(tmp_path_factory, run_quickstart):
     return run_quickstart(tmp_path_factory.mktemp("info") / "quickstart.h5")
 
 
-def info_json(path):
-    result = invoke("info", path, "--json")
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
+@pytest.fixture(scope="session")
+def info_json(invoke):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def info_json(path):
+        result = invoke("info", path, "--json")
+        assert result.exit_code == 0, result.output
+        return json.loads(result.stdout)
+    return info_json
 
 
-def test_text_summary_of_a_finished_run(finished):
+def test_text_summary_of_a_finished_run(finished, invoke):
     result = invoke("info", finished)
     assert result.exit_code == 0, result.output
     text = result.stdout
@@ -60,7 +67,7 @@ def test_text_summary_of_a_finished_run(finished):
     assert "sweep:" in invoke("info", finished, "--config").stdout  # the config as run, on request
 
 
-def test_json_matches_the_file(finished):
+def test_json_matches_the_file(finished, info_json):
     summary = info_json(finished)
     stored = load_results(finished)
     assert summary["format_version"] == FORMAT_VERSION
@@ -86,7 +93,7 @@ def test_json_matches_the_file(finished):
     assert summary["config"] == stored.attrs["config"]
 
 
-def test_an_unfinished_checkpoint_says_so(finished, tmp_path):
+def test_an_unfinished_checkpoint_says_so(finished, tmp_path, info_json, invoke):
     """A checkpoint (points missing, vrsweep_complete = 0) is reported as not complete, with the
     missing points counted as not_computed."""
     partial = tmp_path / "partial.h5"
@@ -104,7 +111,7 @@ def test_an_unfinished_checkpoint_says_so(finished, tmp_path):
     assert summary["complete"] is False and summary["points_done"] == 5
 
 
-def test_a_shard_counts_its_own_points(tmp_path):
+def test_a_shard_counts_its_own_points(tmp_path, info_json, invoke, run_quickstart):
     run_quickstart(tmp_path / "sharded.h5", "--shard", "1/2")
     [shard] = tmp_path.glob("sharded.shard*.h5")
     summary = info_json(shard)
@@ -115,7 +122,7 @@ def test_a_shard_counts_its_own_points(tmp_path):
     assert f"{owned} of {owned} points done (shard 1/2 of a 9-point grid)" in invoke("info", shard).stdout
 
 
-def test_a_single_point_run(tmp_path):
+def test_a_single_point_run(tmp_path, info_json, invoke, run_quickstart):
     path = run_quickstart(tmp_path / "point.h5", "--set", "g=5")
     text = invoke("info", path).stdout
     assert "axes:        none (a single point)" in text and "1 of 1 points done" in text
@@ -123,7 +130,7 @@ def test_a_single_point_run(tmp_path):
     assert info_json(path)["axes"] == []
 
 
-def test_a_vrsweep_file_without_a_grid_is_described(tmp_path):
+def test_a_vrsweep_file_without_a_grid_is_described(tmp_path, info_json, invoke):
     """A trajectory (from ``simulate``) has no grid: info lists its attributes and datasets."""
     path = tmp_path / "trajectory.h5"
     with h5py.File(path, "w") as f:
@@ -143,7 +150,7 @@ def test_a_vrsweep_file_without_a_grid_is_described(tmp_path):
     assert summary["variables"][0]["shape"] == [50]
 
 
-def test_a_simulate_output_is_described(tmp_path):
+def test_a_simulate_output_is_described(tmp_path, info_json, invoke):
     if "simulate" not in main.commands:
         pytest.skip("vrsweep simulate is not built yet")
     path = tmp_path / "traj.h5"

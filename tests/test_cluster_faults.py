@@ -17,7 +17,6 @@ import uuid
 
 import h5py
 import pytest
-from result_files import assert_same_result, done_count, invoke, write_config
 
 from vrsweep.reading import load_results
 
@@ -99,7 +98,7 @@ WITHOUT_RESERVING = ("-c", "import sys, vrsweep.store.writer as writer; "
                      "from vrsweep.cli import main; sys.exit(main(sys.argv[1:], prog_name='vrsweep'))")
 
 
-def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_disk, tmp_path):
+def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_disk, tmp_path, assert_same_result, invoke, write_config):
     config = write_config(tmp_path, SMALL_DISK_SWEEP)
     reference = tmp_path / "reference.h5"
     assert invoke("run", config, "-o", reference, "-q").exit_code == 0
@@ -137,7 +136,7 @@ def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_di
     assert_same_result(out, reference)
 
 
-def test_a_full_disk_during_merge_is_one_line_then_a_merge_with_room_is_identical(small_disk, tmp_path):
+def test_a_full_disk_during_merge_is_one_line_then_a_merge_with_room_is_identical(small_disk, tmp_path, assert_same_result, invoke, write_config):
     config = write_config(tmp_path, SMALL_DISK_SWEEP)
     reference = tmp_path / "reference.h5"
     assert invoke("run", config, "-o", reference, "-q").exit_code == 0
@@ -166,7 +165,7 @@ def test_a_full_disk_during_merge_is_one_line_then_a_merge_with_room_is_identica
 
 
 @pytest.fixture(scope="module")
-def slow_config(tmp_path_factory):
+def slow_config(tmp_path_factory, invoke, write_config):
     directory = tmp_path_factory.mktemp("slow")
     config = write_config(directory, SLOW)
     # Compile the kernel (if the cache is cold) before any timing-sensitive subprocess.
@@ -175,19 +174,23 @@ def slow_config(tmp_path_factory):
     return config
 
 
-def start_writer(config, out, env=None):
-    """A real ``vrsweep run`` on one thread, returned once its first chunk is on disk."""
-    environment = dict(os.environ, **(env or {}))
-    child = subprocess.Popen([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(out),
-                              "--threads", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True, env=environment)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and child.poll() is None:
-        if (done_count(out) or 0) >= CHUNK:
-            return child
-        time.sleep(0.02)
-    child.kill()
-    pytest.fail(f"no chunk written in time: {child.communicate()}")
+@pytest.fixture(scope="session")
+def start_writer(done_count):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def start_writer(config, out, env=None):
+        """A real ``vrsweep run`` on one thread, returned once its first chunk is on disk."""
+        environment = dict(os.environ, **(env or {}))
+        child = subprocess.Popen([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(out),
+                                  "--threads", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 text=True, env=environment)
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and child.poll() is None:
+            if (done_count(out) or 0) >= CHUNK:
+                return child
+            time.sleep(0.02)
+        child.kill()
+        pytest.fail(f"no chunk written in time: {child.communicate()}")
+    return start_writer
 
 
 def still_running(child):
@@ -195,7 +198,7 @@ def still_running(child):
 
 
 @pytest.mark.parametrize("locking", ["default", "FALSE"], ids=["hdf5-locks", "HDF5_USE_FILE_LOCKING=FALSE"])
-def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp_path, locking):
+def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp_path, locking, start_writer, write_config):
     """Run A writes ab.h5; run B, another config, asks --overwrite: refused (exit 2), and A
     finishes its file. Also when A runs with HDF5's own locking switched off."""
     out = tmp_path / "ab.h5"
@@ -223,7 +226,7 @@ def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp
     assert written.attrs["vrsweep_complete"] == 1 and written.done.all() and "num: 160" in written.attrs["config"]
 
 
-def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path):
+def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path, start_writer):
     """What --overwrite did before (or any other process can do): the path now names another
     file. The writer stops at its next chunk with one line, and never writes to the new file."""
     out = tmp_path / "ab.h5"
@@ -244,7 +247,7 @@ def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ab.h5"]  # no temporary file either
 
 
-def test_an_output_folder_removed_under_a_running_sweep_stops_it(slow_config, tmp_path):
+def test_an_output_folder_removed_under_a_running_sweep_stops_it(slow_config, tmp_path, start_writer):
     """A scratch purge takes the folder while the sweep runs: one line, exit 1."""
     folder = tmp_path / "scratch"
     folder.mkdir()
@@ -287,7 +290,7 @@ sys.exit(main(sys.argv[1:], prog_name="vrsweep"))
 """)
 
 
-def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes(tmp_path):
+def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes(tmp_path, invoke, write_config):
     config = write_config(tmp_path, "sweep:\n  g: {start: 0.0, stop: 40.0, num: 3}\n" + SHORT_WINDOWS)
     out = tmp_path / "out.h5"
     child = subprocess.Popen([sys.executable, *STUCK_IN_CREATION, "run", str(config), "-o", str(out)],
@@ -310,7 +313,7 @@ def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes
     assert load_results(out).attrs["vrsweep_complete"] == 1
 
 
-def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path):
+def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path, invoke, write_config):
     """A temporary file written on another node of a shared file system, or by a vrsweep of
     unknown host: its writer's state cannot be told from here."""
     config = write_config(tmp_path, SHORT_WINDOWS)
@@ -332,7 +335,7 @@ def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path):
     assert foreign.exists() and older.exists() and unrelated.exists()
 
 
-def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path):
+def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path, invoke):
     """Only a writer's lock refuses --overwrite: a file held open for reading is replaced."""
     out = tmp_path / "read.h5"
     assert invoke("run", slow_config, "-o", out, "-q", "--set", "transient_periods=1",

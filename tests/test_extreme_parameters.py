@@ -26,7 +26,6 @@ from vrsweep.reading import load_results
 from vrsweep.sweep import run_sweep
 from vrsweep.trajectory import settings_vector, simulate
 
-from result_files import invoke
 
 KNOWN_FAILURES = {Status.MAX_STEPS, Status.DIVERGED, Status.CHATTER_LIMIT, Status.STEP_TOO_SMALL,
                   Status.NON_FINITE}
@@ -118,7 +117,7 @@ def test_extreme_values_in_a_parallel_sweep(method):
 
 
 @pytest.mark.parametrize("g", ["1.0e+200", "1.0e+300"])
-def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g):
+def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g, invoke):
     config = tmp_path / "huge.yaml"
     config.write_text(f"parameters: {{g: {g}}}\n"
                       "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")

@@ -201,8 +201,7 @@ def test_method_key_in_config():
     assert "did you mean 'dop853'" in str(error.value)
 
 
-def test_a_dop853_run_stores_its_method_and_resumes(tmp_path):
-    from result_files import invoke
+def test_a_dop853_run_stores_its_method_and_resumes(tmp_path, invoke):
 
     from vrsweep.reading import load_results
 

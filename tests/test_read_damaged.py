@@ -10,13 +10,12 @@ import shutil
 
 import h5py
 import pytest
-from result_files import invoke
 
 from vrsweep.errors import ResultFileError
 from vrsweep.reading import open_results
 
 
-def test_a_damaged_object_header_is_an_error(tmp_path):
+def test_a_damaged_object_header_is_an_error(tmp_path, invoke):
     config = tmp_path / "small.yaml"
     config.write_text("model: effective\nsweep:\n  g: {start: 0, stop: 40, num: 5}\n"
                       "integration: {transient_periods: 2, measure_periods: 16}\n")

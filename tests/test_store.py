@@ -33,7 +33,6 @@ from vrsweep.store import (
     merge_results,
 )
 
-from result_files import describe
 
 xr = pytest.importorskip("xarray")
 pytest.importorskip("h5netcdf")
@@ -91,11 +90,15 @@ def write_file(path, axes, *, points=None, finish=True, **kwargs):
     return path
 
 
-def assert_identical(a, b):
-    da, db = describe(a), describe(b)
-    assert list(da) == list(db)
-    for key in da:
-        assert da[key] == db[key], key
+@pytest.fixture(scope="session")
+def assert_identical(describe):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def assert_identical(a, b):
+        da, db = describe(a), describe(b)
+        assert list(da) == list(db)
+        for key in da:
+            assert da[key] == db[key], key
+    return assert_identical
 
 
 # ---------------------------------------------------------------------------------------------
@@ -257,7 +260,7 @@ def test_write_points_validates_its_input(tmp_path):
 # ---------------------------------------------------------------------------------------------
 
 
-def test_create_refuses_an_existing_path(tmp_path):
+def test_create_refuses_an_existing_path(tmp_path, describe):
     path = write_file(tmp_path / "r.h5", AXES_1D)
     before = describe(path)
     with pytest.raises(UsageError) as info:
@@ -277,7 +280,7 @@ def test_create_in_a_missing_directory_creates_it(tmp_path, capsys):
     assert not load_results(tmp_path / "no" / "r.h5").done.any()
 
 
-def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path):
+def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path, assert_identical):
     full = write_file(tmp_path / "full.h5", AXES_2D)
     partial = write_file(tmp_path / "part.h5", AXES_2D, points=[1, 2, 3, 9], finish=False)
     writer = ResultWriter.open_for_resume(partial, CONFIG)
@@ -447,7 +450,7 @@ def check_resumed(path, reported):
     return done
 
 
-def test_kill_9_between_chunks_then_resume(tmp_path):
+def test_kill_9_between_chunks_then_resume(tmp_path, assert_identical):
     path = tmp_path / "ckpt.h5"
     ResultWriter.create(path, GRID, specs(), ATTRS).close()
     child = subprocess.Popen([sys.executable, "-c", CHILD, str(path), "pause"],
@@ -521,7 +524,7 @@ def write_shards(tmp_path, n_shards=3, axes=AXES_2D, skip=()):
     return paths
 
 
-def test_merge_of_three_shards_equals_a_single_run(tmp_path):
+def test_merge_of_three_shards_equals_a_single_run(tmp_path, assert_identical):
     import vrsweep.store.merge
 
     assert vrsweep.store.merge.merge_results is merge_results  # the package re-exports it
@@ -535,7 +538,7 @@ def test_merge_of_three_shards_equals_a_single_run(tmp_path):
         assert "shard" not in ds.attrs and "owned" not in ds and ds.attrs["vrsweep_complete"] == 1
 
 
-def test_merge_of_single_point_shards(tmp_path):
+def test_merge_of_single_point_shards(tmp_path, assert_identical):
     single = tmp_path / "single.h5"
     w = ResultWriter.create(single, [], specs(), ATTRS)
     w.write_points([0], values_for([0]))
@@ -555,7 +558,7 @@ def test_merge_refuses_missing_points(tmp_path):
     assert not (tmp_path / "merged.h5").exists()
 
 
-def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(tmp_path):
+def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(tmp_path, assert_identical):
     shards = write_shards(tmp_path, skip=(4, 7))  # shard 2/3 was killed before two of its points
     with pytest.raises(ResultFileError) as info:
         merge_results(shards, tmp_path / "merged.h5")
@@ -598,7 +601,7 @@ def test_merge_names_a_foreign_shard(tmp_path):
     assert str(shards[0]) in message.split("than", 1)[1]  # the reference is a good shard
 
 
-def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path):
+def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path, assert_identical):
     shards = write_shards(tmp_path)
     single = write_file(tmp_path / "single.h5", AXES_2D)  # every point, identical values
     report = merge_results(shards + [single], tmp_path / "merged.h5")
@@ -704,7 +707,7 @@ def small_blocks(monkeypatch):
     monkeypatch.setattr(vrsweep.store.merge, "BLOCK_BYTES", 160)
 
 
-def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks):
+def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks, assert_identical):
     single = write_file(tmp_path / "single.h5", AXES_3D)
     with h5py.File(single, "r") as f:
         assert f["R"].chunks == (1, 2, 4) and f["roots"].chunks == (1, 1, 4, 2)
@@ -727,7 +730,7 @@ def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks):
     assert not (tmp_path / "conflict.h5").exists()
 
 
-def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks):
+def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks, assert_identical):
     lost = (5, 40, 41, 83)
     partial = write_file(tmp_path / "partial.h5", AXES_3D,
                          points=[p for p in range(84) if p not in lost], finish=False)
