@@ -114,10 +114,10 @@ def open_groups(path) -> dict:
     A dataset without dimension scales (not written by vrsweep's store) gets h5netcdf's
     ``phony_dim_N`` dimensions.
     """
-    import h5netcdf
     import h5py
     import xarray as xr
 
+    from vrsweep.fileio import open_hdf5
     from vrsweep.store.reader import corrupt_error
 
     path = os.fspath(path)
@@ -126,14 +126,14 @@ def open_groups(path) -> dict:
     try:
         if not h5py.is_hdf5(path):
             raise ResultFileError(f"{path} is not an HDF5 file (so not a vrsweep file)")
-        with h5netcdf.File(path, "r", phony_dims="access", **_locking_kwargs()) as f:
-            names = [""]
-            pending = [f]
-            while pending:
-                group = pending.pop(0)
-                for child in group.groups.values():
-                    names.append(child.name.lstrip("/"))
-                    pending.append(child)
+        names = [""]
+        with open_hdf5(path, "r") as f:  # only the names of the groups
+
+            def visit(name, obj):
+                if isinstance(obj, h5py.Group):
+                    names.append(name)
+
+            f.visititems(visit)
         return {name: xr.open_dataset(path, engine="h5netcdf", group=name or None, phony_dims="access",
                                       driver_kwds=_locking_kwargs())
                 for name in names}

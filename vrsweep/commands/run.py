@@ -66,7 +66,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         executor = dask_executor(dask_address, threads)
         workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
     # The size check is per process: a shard or a local Dask cluster shares the grid's time, while
-    # a shard's file is still the whole grid's size (see store.py).
+    # a shard's file is still the whole grid's size (see store/layout.py).
     check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large)
     bars = []
 
