@@ -68,9 +68,11 @@ def main():
         labelling = math.inf
         for _ in range(args.repeat):
             began = time.perf_counter()
-            attractors.label_grid({name: results[name].values for name in results.done.dims}, {name: results[name].values for name in point_variables(results)}, basin.integration.period_tolerance)
+            attractors.label_grid({name: results[name].values for name in results.done.dims},
+                                  {name: results[name].values for name in point_variables(results)},
+                                  basin.integration.period_tolerance)
             labelling = min(labelling, time.perf_counter() - began)
-        count = int(results.variables["attractor_count"])
+        count = int(results["attractor_count"])
     print(f"{n} points, {args.threads} thread(s), 300 + 100 slow periods, effective model")
     print(f"| sweep | seconds | ms per point |\n|---|---:|---:|")
     print(f"| g axis ({n} values) | {best['parameter']:.2f} | {1e3 * best['parameter'] / n:.2f} |")

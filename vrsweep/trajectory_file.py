@@ -155,10 +155,12 @@ def check_single_point(config):
     """simulate integrates one point: a config that still sweeps something is a usage error."""
     if config.axes:
         swept = ", ".join(f"{axis.name} ({len(axis)} values)" for axis in config.axes)
-        example = " ".join(f"--set {axis.name}={axis.values[0]:g}" for axis in config.axes)
-        raise UsageError(
-            f"{config.source_name} sweeps {swept}; simulate integrates a single point: "
-            f"fix every swept parameter, e.g. {example}")
+        # {set} before each override: nothing in Python (with_overrides takes "g=5"), --set at the CLI
+        example = " ".join("{set}" + f"{axis.name}={axis.values[0]:g}".replace("{", "{{").replace("}", "}}")
+                           for axis in config.axes)
+        raise UsageError.naming(
+            "{source} sweeps {swept}; simulate integrates a single point: fix every swept parameter, e.g. "
+            + example, {"set": ""}, source=config.source_name, swept=swept)
 
 
 def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare_effective=False):

@@ -32,7 +32,10 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     from vrsweep.trajectory_file import check_single_point, simulate_point, write_trajectory
 
     config = load_config(config_path, overrides)
-    check_single_point(config)  # before compiling anything
+    flags = {**OUTPUT_FLAGS, "samples_per_period": "--samples-per-period", "compare_effective": "--compare effective",
+             "compare": "--compare", "model_original": "--set model=original", "set": "--set "}
+    with flag_wording(flags):
+        check_single_point(config)  # before compiling anything
     path = config.output_path(output)
     if path.exists() and not overwrite:  # say so before integrating, not after
         from vrsweep.errors import UsageError
@@ -41,9 +44,7 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     from vrsweep.fileio import prepare_output_directory
 
     prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
-    with flag_wording({**OUTPUT_FLAGS, "samples_per_period": "--samples-per-period",
-                       "compare_effective": "--compare effective", "compare": "--compare",
-                       "model_original": "--set model=original"}):
+    with flag_wording(flags):
         data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
         write_trajectory(path, data, config, overwrite=overwrite)
     if not quiet:
