@@ -34,7 +34,9 @@ from vrsweep.fileio import (
     lock_for_writing, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
     writing_hdf5,
 )
-from vrsweep.store.layout import VariableSpec, add_extras, build_skeleton, creation_reserve, decode, finish_reserve, point_variables_of, scale_names
+from vrsweep.store.layout import (
+    VariableSpec, add_extras, build_skeleton, creation_reserve, decode, finish_reserve, point_variables_of, scale_names,
+)
 from vrsweep.store.reader import RDCC_NBYTES, RDCC_NSLOTS, corrupt_error, open_checked, open_store_file
 
 
