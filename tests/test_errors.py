@@ -493,12 +493,11 @@ def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch, a
     opens its files without it, with no traceback and no message."""
     import vrsweep.fileio
 
-    real_file = h5py.File
-
-    def old_h5py(*args, **kwargs):
-        if "locking" in kwargs:
-            raise ValueError("HDF5 version >= 1.12.1 or 1.10.x >= 1.10.7 required for file locking.")
-        return real_file(*args, **kwargs)
+    class old_h5py(h5py.File):  # still an h5py.File to whoever checks (xarray's h5netcdf backend)
+        def __init__(self, *args, **kwargs):
+            if "locking" in kwargs:
+                raise ValueError("HDF5 version >= 1.12.1 or 1.10.x >= 1.10.7 required for file locking.")
+            super().__init__(*args, **kwargs)
 
     monkeypatch.delenv("HDF5_USE_FILE_LOCKING", raising=False)
     monkeypatch.setattr(vrsweep.fileio, "_locking_argument_supported", True)

@@ -26,10 +26,23 @@ from vrsweep.errors import ResultFileError
 __all__ = ["open_results", "load_results", "status_names", "file_kind", "grid_axes", "point_variables", "derived_variables", "stored_variables", "open_groups"]
 
 
-def _locking_kwargs():
-    from vrsweep.fileio import hdf5_locking_kwargs
+def _open_dataset(path, group=None, **kwargs):
+    """xarray's h5netcdf backend on the file as ``fileio.open_hdf5`` opens it (the one place of the
+    locking policy, with its fallback for an HDF5 too old to be asked); closing the Dataset closes
+    the file."""
+    import xarray as xr
 
-    return hdf5_locking_kwargs()
+    from vrsweep.fileio import open_hdf5
+
+    h5file = open_hdf5(path, "r")
+    try:
+        ds = xr.open_dataset(h5file, engine="h5netcdf", group=group, **kwargs)
+    except BaseException:
+        h5file.close()
+        raise
+    ds.set_close(h5file.close)  # xarray closes only its own wrapper of a file it was handed
+    ds.encoding["source"] = os.fspath(path)
+    return ds
 
 
 def file_kind(path) -> str:
@@ -80,7 +93,6 @@ def open_results(path, group: str | None = None):
         attributes in ``ds.attrs``. A trajectory group's Dataset carries the file's root
         attributes too, its own (``status``, ``model``...) taking precedence.
     """
-    import xarray as xr
 
     path = os.fspath(path)
     kind = file_kind(path)
@@ -96,7 +108,7 @@ def open_results(path, group: str | None = None):
         raise ResultFileError(f"{path} is a {kind} file, which has no groups (group={group!r})")
 
     try:
-        ds = xr.open_dataset(path, engine="h5netcdf", group=group, driver_kwds=_locking_kwargs())
+        ds = _open_dataset(path, group)
     except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
         from vrsweep.store.reader import corrupt_error
 
@@ -115,7 +127,6 @@ def open_groups(path) -> dict:
     ``phony_dim_N`` dimensions.
     """
     import h5py
-    import xarray as xr
 
     from vrsweep.fileio import open_hdf5
     from vrsweep.store.reader import corrupt_error
@@ -134,9 +145,15 @@ def open_groups(path) -> dict:
                     names.append(name)
 
             f.visititems(visit)
-        return {name: xr.open_dataset(path, engine="h5netcdf", group=name or None, phony_dims="access",
-                                      driver_kwds=_locking_kwargs())
-                for name in names}
+        datasets = {}
+        try:
+            for name in names:
+                datasets[name] = _open_dataset(path, name or None, phony_dims="access")
+        except BaseException:
+            for ds in datasets.values():
+                ds.close()
+            raise
+        return datasets
     except ResultFileError:
         raise
     except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
