@@ -23,7 +23,7 @@ import numba
 from vrsweep import attractors
 from vrsweep.config import parse_config
 from vrsweep.job import run_job
-from vrsweep.store import read_results
+from vrsweep.reading import load_results, point_variables
 
 COMMON = """\
 model: effective
@@ -64,13 +64,15 @@ def main():
         for _ in range(args.repeat):
             best["parameter"] = min(best["parameter"], timed_run(parameter, folder / "p.h5", args.threads))
             best["basin"] = min(best["basin"], timed_run(basin, folder / "b.h5", args.threads))
-        results = read_results(folder / "b.h5")
+        results = load_results(folder / "b.h5")
         labelling = math.inf
         for _ in range(args.repeat):
             began = time.perf_counter()
-            attractors.label_grid(results.axes, results.variables, basin.integration.period_tolerance)
+            attractors.label_grid({name: results[name].values for name in results.done.dims},
+                                  {name: results[name].values for name in point_variables(results)},
+                                  basin.integration.period_tolerance)
             labelling = min(labelling, time.perf_counter() - began)
-        count = int(results.variables["attractor_count"])
+        count = int(results["attractor_count"])
     print(f"{n} points, {args.threads} thread(s), 300 + 100 slow periods, effective model")
     print(f"| sweep | seconds | ms per point |\n|---|---:|---:|")
     print(f"| g axis ({n} values) | {best['parameter']:.2f} | {1e3 * best['parameter'] / n:.2f} |")

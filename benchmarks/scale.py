@@ -66,7 +66,7 @@ def _measure_once(directory, name, text, threads, chunk_bytes):
     config.write_text(text)
     launcher = ["-m", "vrsweep"]
     if chunk_bytes:
-        launcher = ["-c", "import sys, vrsweep.store as s; "
+        launcher = ["-c", "import sys, vrsweep.store.layout as s; "
                     f"s._chunk_shape.__defaults__ = ({chunk_bytes},); "
                     "from vrsweep.cli import main; sys.argv[0] = 'vrsweep'; main()"]
     command = [sys.executable, *launcher, "run", str(config), "-o", str(out), "--overwrite",

@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from result_files import assert_same_result, invoke, write_config
 from vrsweep import attractors
 from vrsweep.attractors import (
     SAME_ORBIT_FACTOR, attractor_extras, attractor_extras_from_file, label_grid, label_slice,
@@ -25,7 +24,8 @@ from vrsweep.attractors import (
 from vrsweep.config import load_config, parse_config
 from vrsweep.errors import ConfigError
 from vrsweep.results import Status
-from vrsweep.store import merge_results, read_results
+from vrsweep.reading import derived_variables, load_results, point_variables
+from vrsweep.store import merge_results
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 HYSTERESIS = CONFIGS / "hysteresis_effective.yaml"
@@ -37,10 +37,14 @@ SHORT = textwrap.dedent("""\
     """)
 
 
-def run_ok(*args):
-    result = invoke(*args)
-    assert result.exit_code == 0, result.output
-    return result.output
+@pytest.fixture(scope="session")
+def run_ok(invoke):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def run_ok(*args):
+        result = invoke(*args)
+        assert result.exit_code == 0, result.output
+        return result.output
+    return run_ok
 
 
 # --- config -------------------------------------------------------------------------------------
@@ -62,7 +66,7 @@ def test_set_x0_fixes_the_initial_state_and_removes_its_axis():
     assert config.axis_names == ("x0",) and config.initial["v"] == -0.5
 
 
-def test_continuation_along_x0_is_refused_with_file_and_line(tmp_path):
+def test_continuation_along_x0_is_refused_with_file_and_line(tmp_path, invoke, write_config):
     path = write_config(tmp_path, SHORT + textwrap.dedent("""\
         sweep:
           g: [22, 23]
@@ -99,7 +103,7 @@ def test_an_unknown_axis_name_lists_x0_and_v0():
 # --- the initial state as axes reproduces single runs --------------------------------------------
 
 @pytest.fixture(scope="module")
-def small_sweep(tmp_path_factory):
+def small_sweep(tmp_path_factory, run_ok, write_config):
     folder = tmp_path_factory.mktemp("basins")
     path = write_config(folder, SHORT + "sweep: {g: [22.5, 23.0], x0: [-2.0, 0.5], v0: [0.0, -1.5]}\n")
     out = folder / "sweep.h5"
@@ -107,7 +111,7 @@ def small_sweep(tmp_path_factory):
     return path, out
 
 
-def test_initial_state_axes_reproduce_single_runs_bit_for_bit(small_sweep, tmp_path):
+def test_initial_state_axes_reproduce_single_runs_bit_for_bit(small_sweep, tmp_path, run_ok):
     path, out = small_sweep
     data = xr.open_dataset(out, engine="h5netcdf")
     for g, x0, v0 in [(22.5, -2.0, 0.0), (23.0, 0.5, -1.5), (23.0, -2.0, -1.5)]:
@@ -255,7 +259,7 @@ def test_a_grid_without_initial_state_axes_gets_no_labels():
 # --- the bistable hysteresis example at g = 23 ----------------------------------------------------
 
 @pytest.fixture(scope="module")
-def bistable(tmp_path_factory):
+def bistable(tmp_path_factory, run_ok, write_config):
     """configs/hysteresis_effective.yaml's parameters at g = 23, started from rest and from the
     three impacting starts of the issue (12 points, about a second)."""
     config = load_config(HYSTERESIS)
@@ -292,7 +296,7 @@ def test_the_bistable_example_has_exactly_its_two_attractors(bistable):
         assert np.allclose(R, float(data.attractor_R.sel(attractor_label=label)), rtol=1e-6, atol=0)
 
 
-def test_the_tolerance_picks_one_of_four_coexisting_orbits_of_the_original_model(tmp_path):
+def test_the_tolerance_picks_one_of_four_coexisting_orbits_of_the_original_model(tmp_path, run_ok):
     """gamma = 0.1, alpha = 0.2, g = 5, Omega = 4: runs from (0.99, 0.5) at three tolerances end on
     different period-1 orbits; a 6 x 6 basin sweep finds four, and each single run is one of them."""
     path = CONFIGS / "basins_g5_original.yaml"
@@ -318,7 +322,7 @@ def test_the_tolerance_picks_one_of_four_coexisting_orbits_of_the_original_model
     assert len(reached) >= 2  # the tolerance changes which orbit a run from one start reaches
 
 
-def test_info_prints_the_attractor_table(bistable):
+def test_info_prints_the_attractor_table(bistable, run_ok):
     text = run_ok("info", bistable)
     assert "attractors:  2 found" in text
     assert "period 1, R = 24.28" in text and "period 1, R = 10.11" in text
@@ -328,13 +332,13 @@ def test_info_prints_the_attractor_table(bistable):
     assert sum(row["points"] for row in rows) == 12
 
 
-def test_basin_plot(bistable, tmp_path):
+def test_basin_plot(bistable, tmp_path, run_ok):
     out = tmp_path / "basin.png"
     run_ok("plot", bistable, "--kind", "basin", "-o", out)
     assert out.stat().st_size > 10_000
 
 
-def test_basin_plot_along_one_initial_state_axis_is_a_strip(tmp_path):
+def test_basin_plot_along_one_initial_state_axis_is_a_strip(tmp_path, run_ok, write_config):
     path = write_config(tmp_path, SHORT + "sweep: {v0: [-1.0, 0.0, 1.0]}\n")
     out = tmp_path / "v0.h5"
     run_ok("run", path, "-o", out, "--quiet")
@@ -342,7 +346,7 @@ def test_basin_plot_along_one_initial_state_axis_is_a_strip(tmp_path):
     assert (tmp_path / "v0.png").stat().st_size > 5_000
 
 
-def test_basin_plot_of_a_sweep_without_initial_state_axes_is_a_usage_error(tmp_path):
+def test_basin_plot_of_a_sweep_without_initial_state_axes_is_a_usage_error(tmp_path, invoke, run_ok, write_config):
     path = write_config(tmp_path, SHORT + "sweep: {g: [22.5, 23.0]}\n")
     out = tmp_path / "g.h5"
     run_ok("run", path, "-o", out, "--quiet")
@@ -350,7 +354,7 @@ def test_basin_plot_of_a_sweep_without_initial_state_axes_is_a_usage_error(tmp_p
     assert result.exit_code == 2 and "no x0 or v0 axis" in result.output
 
 
-def test_basin_plot_asks_for_a_slice_and_takes_at(small_sweep, tmp_path):
+def test_basin_plot_asks_for_a_slice_and_takes_at(small_sweep, tmp_path, invoke, run_ok):
     result = invoke("plot", small_sweep[1], "--kind", "basin", "-o", tmp_path / "x.png")
     assert result.exit_code == 2 and "--at g=22.5" in result.output
     run_ok("plot", small_sweep[1], "--kind", "basin", "--at", "g=23", "-o", tmp_path / "x.png")
@@ -358,32 +362,34 @@ def test_basin_plot_asks_for_a_slice_and_takes_at(small_sweep, tmp_path):
 
 # --- shards: labels come from the merged point values alone -----------------------------------------
 
-def test_labels_of_merged_shards_equal_the_single_runs(small_sweep, tmp_path):
+def test_labels_of_merged_shards_equal_the_single_runs(small_sweep, tmp_path, assert_same_result, run_ok):
     path, whole = small_sweep
     shards = []
     for index in range(2):
         run_ok("run", path, "--shard", f"{index}/2", "-o", tmp_path / "sweep.h5", "--quiet")
         shards.append(tmp_path / f"sweep.shard{index}of2.h5")
-        assert "attractor" not in read_results(shards[-1]).variables  # a shard sees part of a slice
+        assert "attractor" not in load_results(shards[-1])  # a shard sees part of a slice
     merged = tmp_path / "merged.h5"
     merge_results(shards, merged)
     assert_same_result(merged, whole)  # the labels and the table included
-    results = read_results(merged)
+    results = load_results(merged)
     # The merge's labelling, from the file, is the single run's, from the point variables.
     tolerance = load_config(path).integration.period_tolerance
     with h5py.File(merged, "r") as f:
         from_file = attractor_extras_from_file(f, tolerance)
-    for extra, coords in (attractor_extras(results.axes, results.variables, tolerance), from_file):
-        single = read_results(whole)
+    for extra, coords in (attractor_extras({name: results[name].values for name in results.done.dims},
+                                                    {name: results[name].values for name in point_variables(results)},
+                                                    tolerance), from_file):
+        single = load_results(whole)
         for name, (array, dims, _) in extra.items():
-            assert np.array_equal(array, single.variables[name], equal_nan=True), name
-            assert dims == single.dims[name]
-        assert set(extra) == set(single.derived_variables) - {"A_theory", "A_theory_stable",
+            assert np.array_equal(array, single[name].values, equal_nan=True), name
+            assert dims == single[name].dims
+        assert set(extra) == set(derived_variables(single)) - {"A_theory", "A_theory_stable",
                                                               "A_theory_max_stable", "g_res"}
-        assert np.array_equal(coords["attractor_label"][0], single.coords["attractor_label"])
+        assert np.array_equal(coords["attractor_label"][0], single["attractor_label"].values)
 
 
-def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp_path):
+def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp_path, invoke, run_ok):
     path, whole = small_sweep
     for index in range(2):
         run_ok("run", path, "--shard", f"{index}/2", "-o", tmp_path / "sweep.h5", "--quiet")
@@ -395,6 +401,6 @@ def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp
     result = invoke("plot", merged, "--kind", "basin", "-o", tmp_path / "x.png")
     assert result.exit_code == 2 and "--resume" in result.output
     run_ok("run", path, "--resume", "-o", merged, "--quiet")
-    labelled, single = read_results(merged), read_results(whole)
-    for name in single.derived_variables:
-        assert np.array_equal(labelled.variables[name], single.variables[name], equal_nan=True), name
+    labelled, single = load_results(merged), load_results(whole)
+    for name in derived_variables(single):
+        assert np.array_equal(labelled[name].values, single[name].values, equal_nan=True), name

@@ -15,65 +15,73 @@ import pytest
 
 from vrsweep import __version__
 from vrsweep.cli import main
-from vrsweep.store import FORMAT_VERSION, read_results
+from vrsweep.reading import load_results, stored_variables
+from vrsweep.store import FORMAT_VERSION
 
-from result_files import invoke
 
 QUICKSTART = Path(__file__).resolve().parent / "data" / "quickstart_original.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
 
 
-def run_quickstart(path, *extra):
-    result = invoke("run", QUICKSTART, "-o", path, "--quiet", *SHORT, *extra)
-    assert result.exit_code == 0, result.output
-    return path
+@pytest.fixture(scope="session")
+def run_quickstart(invoke):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def run_quickstart(path, *extra):
+        result = invoke("run", QUICKSTART, "-o", path, "--quiet", *SHORT, *extra)
+        assert result.exit_code == 0, result.output
+        return path
+    return run_quickstart
 
 
 @pytest.fixture(scope="module")
-def finished(tmp_path_factory):
+def finished(tmp_path_factory, run_quickstart):
     return run_quickstart(tmp_path_factory.mktemp("info") / "quickstart.h5")
 
 
-def info_json(path):
-    result = invoke("info", path, "--json")
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
+@pytest.fixture(scope="session")
+def info_json(invoke):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def info_json(path):
+        result = invoke("info", path, "--json")
+        assert result.exit_code == 0, result.output
+        return json.loads(result.stdout)
+    return info_json
 
 
-def test_text_summary_of_a_finished_run(finished):
+def test_text_summary_of_a_finished_run(finished, invoke):
     result = invoke("info", finished)
     assert result.exit_code == 0, result.output
     text = result.stdout
-    stored = read_results(finished)
-    n_ok = int(np.sum(stored.variables["status"] == 0))
+    stored = load_results(finished)
+    n_ok = int(np.sum(stored["status"].values == 0))
     for words in (f"format {FORMAT_VERSION}, complete", "9 of 9 points done", "model:       original",
                   "g: 9 values from 0 to 40", "fast forcing amplitude g", "Omega=4",
                   "transient_periods=2 measure_periods=2", f"by vrsweep {__version__}", "numba ", "numpy "):
         assert words in text, (words, text)
     assert re.search(rf"status:\s+{n_ok} ok\b", text), text
     # Every stored variable is listed with its units and meaning.
-    for name in stored.variables:
+    for name in stored_variables(stored):
         assert re.search(rf"^  {re.escape(name)}\s", text, re.MULTILINE), (name, text)
     assert re.search(r"^  R\s+\(g: 9\)\s+\[1\]\s+gain \|Q\|/c", text, re.MULTILINE), text
     assert "config:" not in text
     assert "sweep:" in invoke("info", finished, "--config").stdout  # the config as run, on request
 
 
-def test_json_matches_the_file(finished):
+def test_json_matches_the_file(finished, info_json):
     summary = info_json(finished)
-    stored = read_results(finished)
+    stored = load_results(finished)
     assert summary["format_version"] == FORMAT_VERSION
     assert summary["complete"] is True and summary["kind"] == "sweep" and summary["shard"] is None
     assert summary["points_done"] == summary["points_total"] == summary["grid_points"] == 9
     assert summary["model"] == "original"
     [axis] = summary["axes"]
     assert (axis["name"], axis["size"], axis["min"], axis["max"], axis["units"]) == ("g", 9, 0.0, 40.0, "1")
-    codes, counts = np.unique(stored.variables["status"], return_counts=True)
+    codes, counts = np.unique(stored["status"].values, return_counts=True)
     assert {row["code"]: row["points"] for row in summary["status_counts"]} == dict(
         zip(codes.tolist(), counts.tolist()))
     assert sum(row["points"] for row in summary["status_counts"]) == 9
     variables = {v["name"]: v for v in summary["variables"]}
-    assert list(variables) == list(stored.variables)
+    assert list(variables) == list(stored_variables(stored))
     assert variables["R"]["units"] == "1" and variables["R"]["dims"] == ["g"]
     assert variables["strobe_x"]["shape"] == [9, 2]
     assert variables["g_res"]["derived"] and not variables["R"]["derived"]
@@ -85,7 +93,7 @@ def test_json_matches_the_file(finished):
     assert summary["config"] == stored.attrs["config"]
 
 
-def test_an_unfinished_checkpoint_says_so(finished, tmp_path):
+def test_an_unfinished_checkpoint_says_so(finished, tmp_path, info_json, invoke):
     """A checkpoint (points missing, vrsweep_complete = 0) is reported as not complete, with the
     missing points counted as not_computed."""
     partial = tmp_path / "partial.h5"
@@ -103,18 +111,18 @@ def test_an_unfinished_checkpoint_says_so(finished, tmp_path):
     assert summary["complete"] is False and summary["points_done"] == 5
 
 
-def test_a_shard_counts_its_own_points(tmp_path):
+def test_a_shard_counts_its_own_points(tmp_path, info_json, invoke, run_quickstart):
     run_quickstart(tmp_path / "sharded.h5", "--shard", "1/2")
     [shard] = tmp_path.glob("sharded.shard*.h5")
     summary = info_json(shard)
-    owned = int(read_results(shard).owned.sum())
+    owned = int(load_results(shard).owned.sum())
     assert summary["kind"] == "shard" and summary["shard"] == "1/2"
     assert summary["grid_points"] == 9 and summary["points_total"] == summary["points_done"] == owned < 9
     assert sum(row["points"] for row in summary["status_counts"]) == owned
     assert f"{owned} of {owned} points done (shard 1/2 of a 9-point grid)" in invoke("info", shard).stdout
 
 
-def test_a_single_point_run(tmp_path):
+def test_a_single_point_run(tmp_path, info_json, invoke, run_quickstart):
     path = run_quickstart(tmp_path / "point.h5", "--set", "g=5")
     text = invoke("info", path).stdout
     assert "axes:        none (a single point)" in text and "1 of 1 points done" in text
@@ -122,7 +130,7 @@ def test_a_single_point_run(tmp_path):
     assert info_json(path)["axes"] == []
 
 
-def test_a_vrsweep_file_without_a_grid_is_described(tmp_path):
+def test_a_vrsweep_file_without_a_grid_is_described(tmp_path, info_json, invoke):
     """A trajectory (from ``simulate``) has no grid: info lists its attributes and datasets."""
     path = tmp_path / "trajectory.h5"
     with h5py.File(path, "w") as f:
@@ -142,7 +150,7 @@ def test_a_vrsweep_file_without_a_grid_is_described(tmp_path):
     assert summary["variables"][0]["shape"] == [50]
 
 
-def test_a_simulate_output_is_described(tmp_path):
+def test_a_simulate_output_is_described(tmp_path, info_json, invoke):
     if "simulate" not in main.commands:
         pytest.skip("vrsweep simulate is not built yet")
     path = tmp_path / "traj.h5"

@@ -3,7 +3,6 @@
 from pathlib import Path
 
 import pytest
-from result_files import invoke
 
 from vrsweep.commands.init import description, shipped_examples
 from vrsweep.config import load_config
@@ -18,7 +17,7 @@ def test_configs_is_the_package_folder_so_there_is_one_copy():
     assert names == set(shipped_examples()) and "quickstart" in names
 
 
-def test_list_names_every_example_with_its_first_sentence():
+def test_list_names_every_example_with_its_first_sentence(invoke):
     result = invoke("init", "--list")
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()[1:]
@@ -37,7 +36,7 @@ def test_description_is_the_first_sentence_cut_at_a_word():
     assert description(text, width=19) == "Paper Fig. 7..."
 
 
-def test_default_is_the_quickstart_and_it_validates_and_runs(tmp_path, monkeypatch):
+def test_default_is_the_quickstart_and_it_validates_and_runs(tmp_path, monkeypatch, invoke):
     monkeypatch.chdir(tmp_path)
     result = invoke("init")
     assert result.exit_code == 0, result.output
@@ -57,7 +56,7 @@ def test_default_is_the_quickstart_and_it_validates_and_runs(tmp_path, monkeypat
 
 
 @pytest.mark.parametrize("name", list(shipped_examples()))
-def test_every_example_written_by_init_validates(name, tmp_path, monkeypatch):
+def test_every_example_written_by_init_validates(name, tmp_path, monkeypatch, invoke):
     monkeypatch.chdir(tmp_path)
     result = invoke("init", "--example", name, "mine.yaml")
     assert result.exit_code == 0, result.output
@@ -68,7 +67,7 @@ def test_every_example_written_by_init_validates(name, tmp_path, monkeypatch):
     assert output.parent.is_dir()  # e.g. results/: run can write there
 
 
-def test_never_overwrites_without_the_flag(tmp_path, monkeypatch):
+def test_never_overwrites_without_the_flag(tmp_path, monkeypatch, invoke):
     monkeypatch.chdir(tmp_path)
     target = tmp_path / "quickstart.yaml"
     target.write_text("# mine\n")
@@ -78,7 +77,7 @@ def test_never_overwrites_without_the_flag(tmp_path, monkeypatch):
     assert invoke("init", "--overwrite").exit_code == 0 and target.read_text() != "# mine\n"
 
 
-def test_path_options_and_unknown_example(tmp_path):
+def test_path_options_and_unknown_example(tmp_path, invoke):
     (tmp_path / "dir").mkdir()
     assert invoke("init", "-e", "fig2.yaml", tmp_path / "dir").exit_code == 0
     assert (tmp_path / "dir" / "fig2.yaml").exists()  # a directory gets NAME.yaml

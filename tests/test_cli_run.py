@@ -4,7 +4,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from result_files import assert_same_result, invoke, write_config
 
 from vrsweep.results import FLAG_MEANINGS, Status
 
@@ -21,7 +20,7 @@ TINY = """\
 
 
 @pytest.fixture(scope="module")
-def quickstart(tmp_path_factory):
+def quickstart(tmp_path_factory, invoke):
     out = tmp_path_factory.mktemp("quickstart") / "quickstart.h5"
     result = invoke("run", CONFIGS / "quickstart.yaml", "-o", out)
     return out, result
@@ -72,13 +71,13 @@ def test_the_quickstart_shows_the_resonance(quickstart):
         np.testing.assert_allclose(R[after], gain[after], rtol=5e-3)
 
 
-def test_quiet_prints_nothing(tmp_path):
+def test_quiet_prints_nothing(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--quiet")
     assert result.exit_code == 0 and result.output == ""
 
 
-def test_set_overrides_the_config(tmp_path):
+def test_set_overrides_the_config(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--set", "Omega=5", "--set", "g=10", "-q")
     assert result.exit_code == 0, result.output
@@ -88,7 +87,7 @@ def test_set_overrides_the_config(tmp_path):
         assert "Omega: 5.0" in ds.attrs["config"] and "g: 10.0" in ds.attrs["config"]
 
 
-def test_refuses_to_overwrite_and_names_the_ways_out(tmp_path):
+def test_refuses_to_overwrite_and_names_the_ways_out(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     out = tmp_path / "out.h5"
     assert invoke("run", config, "-o", out, "-q").exit_code == 0
@@ -101,13 +100,13 @@ def test_refuses_to_overwrite_and_names_the_ways_out(tmp_path):
     assert invoke("run", config, "-o", out, "--overwrite", "-q").exit_code == 0
 
 
-def test_resume_and_overwrite_exclude_each_other(tmp_path):
+def test_resume_and_overwrite_exclude_each_other(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--resume", "--overwrite")
     assert result.exit_code == 2 and "exclude" in result.output
 
 
-def test_threads_do_not_change_a_bit(tmp_path):
+def test_threads_do_not_change_a_bit(tmp_path, assert_same_result, invoke, write_config):
     config = write_config(tmp_path, TINY)
     for threads in (1, 2):
         result = invoke("run", config, "-o", tmp_path / f"t{threads}.h5", "--threads", threads, "-q")
@@ -115,7 +114,7 @@ def test_threads_do_not_change_a_bit(tmp_path):
     assert_same_result(tmp_path / "t1.h5", tmp_path / "t2.h5")
 
 
-def test_bad_shard_and_dask_options_are_usage_errors(tmp_path):
+def test_bad_shard_and_dask_options_are_usage_errors(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     for args, words in ((("--shard", "3/3"), "not in 0..2"), (("--shard", "x"), "expected I/N"),
                         (("--shard", "auto"), "SLURM_ARRAY_TASK_ID"),
@@ -132,7 +131,7 @@ def test_bad_shard_and_dask_options_are_usage_errors(tmp_path):
 PROGRESS_LINE = r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d vrsweep: (\d+) of (\d+) points \((\d+\.\d)%\)(, .*)?"
 
 
-def test_progress_lines_every_interval_in_a_batch_log(tmp_path):
+def test_progress_lines_every_interval_in_a_batch_log(tmp_path, invoke, write_config):
     import re
 
     config = write_config(tmp_path, """\
@@ -153,7 +152,7 @@ def test_progress_lines_every_interval_in_a_batch_log(tmp_path):
     assert "points/s, ETA" in lines[0] and "ETA" not in lines[-2]  # nothing left: no ETA
 
 
-def test_no_progress_line_before_the_interval(tmp_path):
+def test_no_progress_line_before_the_interval(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     result = invoke("run", config, "-o", tmp_path / "out.h5")  # default: every 60 s
     assert result.exit_code == 0, result.output
@@ -190,7 +189,7 @@ def empty_cache(tmp_path, monkeypatch):
     return tmp_path / "empty-cache"
 
 
-def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache):
+def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache, invoke, write_config):
     from vrsweep.numba_cache import kernel_is_cached
 
     assert not kernel_is_cached()
@@ -205,7 +204,7 @@ def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache):
     assert invoke("run", config, "-o", tmp_path / "out2.h5", "--quiet").output == ""
 
 
-def test_a_filled_cache_says_nothing(tmp_path, monkeypatch):
+def test_a_filled_cache_says_nothing(tmp_path, monkeypatch, invoke, write_config):
     import numba
 
     from vrsweep.numba_cache import cache_dir, kernel_is_cached
@@ -223,7 +222,7 @@ def test_a_filled_cache_says_nothing(tmp_path, monkeypatch):
 # --- adjustments and advice on stderr (issue 15) ----------------------------------------------------
 
 
-def test_more_threads_than_numba_has_are_capped_with_a_word(tmp_path):
+def test_more_threads_than_numba_has_are_capped_with_a_word(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--threads", 64, "-q",
                     env={"NUMBA_NUM_THREADS": "1"})
@@ -233,7 +232,7 @@ def test_more_threads_than_numba_has_are_capped_with_a_word(tmp_path):
     assert quiet.output == ""
 
 
-def test_fixing_a_swept_axis_says_so(tmp_path):
+def test_fixing_a_swept_axis_says_so(tmp_path, invoke, write_config):
     config = write_config(tmp_path, TINY)
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--set", "g=10", "--set", "Omega=5", "-q")
     assert result.exit_code == 0, result.output
@@ -243,7 +242,7 @@ def test_fixing_a_swept_axis_says_so(tmp_path):
     assert "--set g=10: g was swept" in validate.output
 
 
-def test_many_failed_points_name_the_setting_to_change(tmp_path):
+def test_many_failed_points_name_the_setting_to_change(tmp_path, invoke, write_config):
     """54 of 63 points at max_steps and a silent exit 0 (issue 15): now the summary says what to raise."""
     config = write_config(tmp_path, TINY)
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--set", "max_steps=500", "-q")

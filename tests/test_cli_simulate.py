@@ -9,11 +9,10 @@ import pytest
 from vrsweep import kernel
 from vrsweep.config import load_config
 from vrsweep.model import kernel_coefficients
-from vrsweep.store import read_results
+from vrsweep.reading import load_results
 from vrsweep.trajectory import settings_vector, simulate
 from vrsweep.trajectory_file import read_trajectory
 
-from result_files import invoke
 
 # The paper's parameters at Omega = 5 (Fig. impact_no), short runs: 5 transient + 10 measured periods.
 POINT = """\
@@ -36,7 +35,7 @@ def write(tmp_path, text, name="point.yaml"):
 
 
 @pytest.fixture(scope="module")
-def compared(tmp_path_factory):
+def compared(tmp_path_factory, invoke):
     """One point with --compare effective: (config path, trajectory path)."""
     directory = tmp_path_factory.mktemp("simulate")
     config = write(directory, POINT)
@@ -93,18 +92,18 @@ def test_samples_do_not_change_the_trajectory(compared):
     np.testing.assert_array_equal(again.period_records[:, kernel.REC_X], run.strobe_x)
 
 
-def test_impacts_match_the_sweep_of_the_same_point(tmp_path):
+def test_impacts_match_the_sweep_of_the_same_point(tmp_path, invoke):
     """simulate --set g=20 and the sweep over g = 5, 20 integrate the same trajectory."""
     config = write(tmp_path, SWEPT)
     assert invoke("run", config, "-o", tmp_path / "sweep.h5", "--quiet").exit_code == 0
-    sweep = read_results(tmp_path / "sweep.h5")
+    sweep = load_results(tmp_path / "sweep.h5")
     for index, g in enumerate((5, 20)):
         out = tmp_path / f"g{g}.h5"
         assert invoke("simulate", config, "--set", f"g={g}", "-o", out, "-q").exit_code == 0
         counts = read_trajectory(out).runs["original"].impacts_per_period
-        assert counts[5:].mean() == sweep.variables["impacts_per_period"][index]
+        assert counts[5:].mean() == sweep["impacts_per_period"].values[index]
         np.testing.assert_array_equal(read_trajectory(out).runs["original"].strobe_x[-5:],
-                                      sweep.variables["strobe_x"][index])
+                                      sweep["strobe_x"].values[index])
 
 
 def test_the_slow_flow_starts_from_the_initial_state(compared):
@@ -127,14 +126,14 @@ def test_each_group_opens_in_xarray(compared):
         assert {"x", "v", "R", "theta"} <= set(ds.data_vars)
 
 
-def test_a_swept_config_needs_set(tmp_path):
+def test_a_swept_config_needs_set(tmp_path, invoke):
     result = invoke("simulate", write(tmp_path, SWEPT), "-o", tmp_path / "t.h5")
     assert result.exit_code == 2
     assert "sweeps g (2 values)" in result.output and "--set g=" in result.output
     assert not (tmp_path / "t.h5").exists()
 
 
-def test_refuses_to_overwrite_without_the_option(tmp_path):
+def test_refuses_to_overwrite_without_the_option(tmp_path, invoke):
     config = write(tmp_path, POINT.replace("measure_periods: 10", "measure_periods: 5"))
     out = tmp_path / "t.h5"
     out.write_text("precious")
@@ -145,20 +144,20 @@ def test_refuses_to_overwrite_without_the_option(tmp_path):
     assert h5py.is_hdf5(out)
 
 
-def test_compare_effective_needs_the_original_model(tmp_path):
+def test_compare_effective_needs_the_original_model(tmp_path, invoke):
     config = write(tmp_path, "model: effective\n" + textwrap.dedent(POINT))
     result = invoke("simulate", config, "-o", tmp_path / "t.h5", "--compare", "effective")
     assert result.exit_code == 2 and "already effective" in result.output
 
 
-def test_an_effective_config_stores_its_slow_flow(tmp_path):
+def test_an_effective_config_stores_its_slow_flow(tmp_path, invoke):
     config = write(tmp_path, "model: effective\n" + textwrap.dedent(POINT))
     assert invoke("simulate", config, "-o", tmp_path / "t.h5", "-q", "--samples-per-period", 20).exit_code == 0
     data = read_trajectory(tmp_path / "t.h5")
     assert list(data.runs) == ["effective"] and "state" in data.slow_flow
 
 
-def test_bad_config_and_bad_set_exit_2(tmp_path):
+def test_bad_config_and_bad_set_exit_2(tmp_path, invoke):
     result = invoke("simulate", write(tmp_path, "parameters: {e: 1.5}\n"), "-o", tmp_path / "t.h5")
     assert result.exit_code == 2 and "parameters.e" in result.output
     result = invoke("simulate", write(tmp_path, POINT), "--set", "gg=3", "-o", tmp_path / "t.h5")

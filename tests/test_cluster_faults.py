@@ -17,9 +17,8 @@ import uuid
 
 import h5py
 import pytest
-from result_files import assert_same_result, done_count, invoke, write_config
 
-from vrsweep.store import read_results
+from vrsweep.reading import load_results
 
 # ~750 cheap points, a ~420 kB file: small enough to fill a tmpfs of a few hundred kB.
 SMALL_DISK_SWEEP = """\
@@ -94,12 +93,12 @@ def small_disk(tmp_path):
 
 # The CLI without reserving the file's space first (as on a file system that cannot allocate
 # ahead), so that HDF5 itself meets the full disk.
-WITHOUT_RESERVING = ("-c", "import sys, vrsweep.store as store; "
-                     "store.reserve_space = lambda *args, **kwargs: None; "
+WITHOUT_RESERVING = ("-c", "import sys, vrsweep.store.writer as writer; "
+                     "writer.reserve_space = lambda *args, **kwargs: None; "
                      "from vrsweep.cli import main; sys.exit(main(sys.argv[1:], prog_name='vrsweep'))")
 
 
-def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_disk, tmp_path):
+def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_disk, tmp_path, assert_same_result, invoke, write_config):
     config = write_config(tmp_path, SMALL_DISK_SWEEP)
     reference = tmp_path / "reference.h5"
     assert invoke("run", config, "-o", reference, "-q").exit_code == 0
@@ -127,8 +126,8 @@ def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_di
     line = one_error_line(proc.stderr)
     assert f"cannot finish {out}: No space left on device" in line and "needs about" in line
     assert small_disk.entries() == ["sweep.h5"]
-    checkpoint = read_results(out)
-    assert checkpoint.done.all() and not checkpoint.complete
+    checkpoint = load_results(out)
+    assert checkpoint.done.all() and checkpoint.attrs["vrsweep_complete"] == 0
 
     # Space freed: --resume only finishes, and the file is the uninterrupted run's.
     small_disk.resize("4m")
@@ -137,7 +136,7 @@ def test_a_full_disk_at_creation_and_at_finish_then_resume_is_identical(small_di
     assert_same_result(out, reference)
 
 
-def test_a_full_disk_during_merge_is_one_line_then_a_merge_with_room_is_identical(small_disk, tmp_path):
+def test_a_full_disk_during_merge_is_one_line_then_a_merge_with_room_is_identical(small_disk, tmp_path, assert_same_result, invoke, write_config):
     config = write_config(tmp_path, SMALL_DISK_SWEEP)
     reference = tmp_path / "reference.h5"
     assert invoke("run", config, "-o", reference, "-q").exit_code == 0
@@ -166,7 +165,7 @@ def test_a_full_disk_during_merge_is_one_line_then_a_merge_with_room_is_identica
 
 
 @pytest.fixture(scope="module")
-def slow_config(tmp_path_factory):
+def slow_config(tmp_path_factory, invoke, write_config):
     directory = tmp_path_factory.mktemp("slow")
     config = write_config(directory, SLOW)
     # Compile the kernel (if the cache is cold) before any timing-sensitive subprocess.
@@ -175,19 +174,23 @@ def slow_config(tmp_path_factory):
     return config
 
 
-def start_writer(config, out, env=None):
-    """A real ``vrsweep run`` on one thread, returned once its first chunk is on disk."""
-    environment = dict(os.environ, **(env or {}))
-    child = subprocess.Popen([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(out),
-                              "--threads", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True, env=environment)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and child.poll() is None:
-        if (done_count(out) or 0) >= CHUNK:
-            return child
-        time.sleep(0.02)
-    child.kill()
-    pytest.fail(f"no chunk written in time: {child.communicate()}")
+@pytest.fixture(scope="session")
+def start_writer(done_count):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def start_writer(config, out, env=None):
+        """A real ``vrsweep run`` on one thread, returned once its first chunk is on disk."""
+        environment = dict(os.environ, **(env or {}))
+        child = subprocess.Popen([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(out),
+                                  "--threads", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 text=True, env=environment)
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and child.poll() is None:
+            if (done_count(out) or 0) >= CHUNK:
+                return child
+            time.sleep(0.02)
+        child.kill()
+        pytest.fail(f"no chunk written in time: {child.communicate()}")
+    return start_writer
 
 
 def still_running(child):
@@ -195,7 +198,7 @@ def still_running(child):
 
 
 @pytest.mark.parametrize("locking", ["default", "FALSE"], ids=["hdf5-locks", "HDF5_USE_FILE_LOCKING=FALSE"])
-def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp_path, locking):
+def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp_path, locking, start_writer, write_config):
     """Run A writes ab.h5; run B, another config, asks --overwrite: refused (exit 2), and A
     finishes its file. Also when A runs with HDF5's own locking switched off."""
     out = tmp_path / "ab.h5"
@@ -219,11 +222,11 @@ def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp
     assert resumed.returncode == 2, resumed.stderr
     assert f"cannot resume {out}: it is being written by another process" in one_error_line(resumed.stderr)
     assert writer.returncode == 0, stderr
-    written = read_results(out)
-    assert written.complete and written.done.all() and "num: 160" in written.attrs["config"]
+    written = load_results(out)
+    assert written.attrs["vrsweep_complete"] == 1 and written.done.all() and "num: 160" in written.attrs["config"]
 
 
-def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path):
+def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path, start_writer):
     """What --overwrite did before (or any other process can do): the path now names another
     file. The writer stops at its next chunk with one line, and never writes to the new file."""
     out = tmp_path / "ab.h5"
@@ -244,7 +247,7 @@ def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ab.h5"]  # no temporary file either
 
 
-def test_an_output_folder_removed_under_a_running_sweep_stops_it(slow_config, tmp_path):
+def test_an_output_folder_removed_under_a_running_sweep_stops_it(slow_config, tmp_path, start_writer):
     """A scratch purge takes the folder while the sweep runs: one line, exit 1."""
     folder = tmp_path / "scratch"
     folder.mkdir()
@@ -271,8 +274,8 @@ def test_an_output_folder_removed_under_a_running_sweep_stops_it(slow_config, tm
 # and waits there to be killed.
 STUCK_IN_CREATION = ("-c", """
 import sys, time
-import vrsweep.store as store
-original = store._create_point_variable
+import vrsweep.store.layout as layout
+original = layout._create_point_variable
 made = []
 def slow(*args, **kwargs):
     made.append(1)
@@ -281,13 +284,13 @@ def slow(*args, **kwargs):
         print("creating", flush=True)
         time.sleep(120)
     return original(*args, **kwargs)
-store._create_point_variable = slow
+layout._create_point_variable = slow
 from vrsweep.cli import main
 sys.exit(main(sys.argv[1:], prog_name="vrsweep"))
 """)
 
 
-def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes(tmp_path):
+def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes(tmp_path, invoke, write_config):
     config = write_config(tmp_path, "sweep:\n  g: {start: 0.0, stop: 40.0, num: 3}\n" + SHORT_WINDOWS)
     out = tmp_path / "out.h5"
     child = subprocess.Popen([sys.executable, *STUCK_IN_CREATION, "run", str(config), "-o", str(out)],
@@ -307,10 +310,10 @@ def test_kill_9_while_creating_leaves_a_temporary_file_that_the_next_run_removes
     assert result.exit_code == 0, result.output
     assert f"Removed {left[0]}, left by an interrupted vrsweep (process {child.pid})" in result.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5", "sweep.yaml"]
-    assert read_results(out).complete
+    assert load_results(out).attrs["vrsweep_complete"] == 1
 
 
-def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path):
+def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path, invoke, write_config):
     """A temporary file written on another node of a shared file system, or by a vrsweep of
     unknown host: its writer's state cannot be told from here."""
     config = write_config(tmp_path, SHORT_WINDOWS)
@@ -332,7 +335,7 @@ def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path):
     assert foreign.exists() and older.exists() and unrelated.exists()
 
 
-def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path):
+def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path, invoke):
     """Only a writer's lock refuses --overwrite: a file held open for reading is replaced."""
     out = tmp_path / "read.h5"
     assert invoke("run", slow_config, "-o", out, "-q", "--set", "transient_periods=1",
@@ -341,7 +344,7 @@ def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path):
         result = invoke("run", slow_config, "-o", out, "-q", "--overwrite", "--set", "transient_periods=1",
                         "--set", "measure_periods=2", "--set", "strobe_periods=1")
     assert result.exit_code == 0, result.output
-    assert "measure_periods: 2" in read_results(out).attrs["config"]
+    assert "measure_periods: 2" in load_results(out).attrs["config"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -369,9 +372,9 @@ def test_closing_without_writing_keeps_the_checkpoint_of_the_last_flush(tmp_path
     del done
 
     assert h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE) == []
-    checkpoint = read_results(path)
-    assert checkpoint.done.tolist() == [True, True, False, False, False]
-    assert checkpoint.variables["R"][:2].tolist() == [1.0, 2.0] and "unsaved" not in checkpoint.attrs
+    checkpoint = load_results(path)
+    assert checkpoint.done.values.tolist() == [1, 1, 0, 0, 0]
+    assert checkpoint["R"].values[:2].tolist() == [1.0, 2.0] and "unsaved" not in checkpoint.attrs
     writer._file = None  # closed above
 
 
@@ -387,7 +390,7 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     before HDF5 writes: creation_reserve must bound the new file, layout_bytes from below, and
     finish_reserve what finishing adds. Checked on real files from 1 to 10^5 points."""
     import vrsweep.fileio
-    import vrsweep.store
+    import vrsweep.store.writer
     from vrsweep.config import parse_config
     from vrsweep.job import _axes, _variable_specs, analytic_extras, root_attributes
     from vrsweep.store import ResultWriter, creation_reserve, finish_reserve, layout_bytes
@@ -405,7 +408,7 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     extras = analytic_extras(config, grid)
     plain = tmp_path / "plain.h5"  # made and finished without reserving: the sizes to end with
     with monkeypatch.context() as patch:
-        for module in (vrsweep.fileio, vrsweep.store):
+        for module in (vrsweep.fileio, vrsweep.store.writer):
             patch.setattr(module, "reserve_space", lambda *args, **kwargs: None)
         plain_writer = ResultWriter.create(plain, axes, specs, root_attributes(config))
         assert plain.stat().st_size == created  # what was reserved and not used is given back
@@ -413,4 +416,4 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     writer.finish(extra=extras)
     assert path.stat().st_size == plain.stat().st_size
     assert 0 < path.stat().st_size - created <= finish_reserve(extras)
-    assert read_results(path).complete
+    assert load_results(path).attrs["vrsweep_complete"] == 1

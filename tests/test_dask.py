@@ -8,7 +8,6 @@ import textwrap
 import time
 
 import pytest
-from result_files import assert_same_result, done_count, invoke, vrsweep_process, write_config
 
 pytest.importorskip("dask.distributed")
 
@@ -21,7 +20,7 @@ TINY = """\
 
 
 @pytest.fixture(scope="module")
-def single(tmp_path_factory):
+def single(tmp_path_factory, invoke, write_config):
     directory = tmp_path_factory.mktemp("dask")
     config = write_config(directory, TINY)
     out = directory / "single.h5"
@@ -29,7 +28,7 @@ def single(tmp_path_factory):
     return config, out
 
 
-def test_a_local_cluster_of_two_workers_equals_a_single_run(single, tmp_path):
+def test_a_local_cluster_of_two_workers_equals_a_single_run(single, tmp_path, assert_same_result, invoke):
     config, expected = single
     out = tmp_path / "dask.h5"
     result = invoke("run", config, "-o", out, "--dask", "local:2", "--threads", 1)
@@ -38,7 +37,7 @@ def test_a_local_cluster_of_two_workers_equals_a_single_run(single, tmp_path):
     assert_same_result(out, expected)
 
 
-def test_dask_resumes_a_local_run_through_a_scheduler_address(single, tmp_path):
+def test_dask_resumes_a_local_run_through_a_scheduler_address(single, tmp_path, assert_same_result, done_count, invoke):
     """Resumable as a local run: the client writes; a partial file is completed on a cluster."""
     from dask.distributed import LocalCluster
 
@@ -78,7 +77,7 @@ def test_run_without_dask_never_imports_it(single, tmp_path):
     assert output.stdout.strip() == "[]", output
 
 
-def test_ctrl_c_in_a_terminal_stops_a_local_cluster_run_cleanly(tmp_path):
+def test_ctrl_c_in_a_terminal_stops_a_local_cluster_run_cleanly(tmp_path, assert_same_result, done_count, invoke, vrsweep_process, write_config):
     """A terminal's Ctrl-C goes to the whole process group, local workers included: the workers
     must leave it to the client, which saves the chunk in flight, shuts the cluster down and
     prints the resume command (a worker killed by it used to leave the client waiting forever)."""
@@ -111,7 +110,7 @@ def test_ctrl_c_in_a_terminal_stops_a_local_cluster_run_cleanly(tmp_path):
     assert_same_result(out, tmp_path / "single.h5")
 
 
-def test_without_dask_installed_dask_is_a_usage_error(single, tmp_path, monkeypatch):
+def test_without_dask_installed_dask_is_a_usage_error(single, tmp_path, monkeypatch, invoke):
     config, _ = single
     monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import now fails as if absent
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--dask", "local:2")

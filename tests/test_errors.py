@@ -24,9 +24,9 @@ from click.testing import CliRunner
 
 from vrsweep.cli import main
 from vrsweep.results import Status
-from vrsweep.store import FORMAT_VERSION, read_results
+from vrsweep.reading import load_results
+from vrsweep.store import FORMAT_VERSION
 
-from result_files import assert_same_result, invoke
 
 QUICKSTART = Path(__file__).resolve().parent / "data" / "quickstart_original.yaml"
 SHORT = ["--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2"]
@@ -48,7 +48,7 @@ def cli_subprocess(*args, env=None, prefix=()):
 
 
 @pytest.fixture(scope="module")
-def finished(tmp_path_factory):
+def finished(tmp_path_factory, invoke):
     """A real, finished result file of the quickstart config (short windows)."""
     path = tmp_path_factory.mktemp("finished") / "quickstart.h5"
     result = invoke("run", QUICKSTART, "-o", path, "--quiet", *SHORT)
@@ -69,17 +69,17 @@ def reader_args(command, path, tmp_path):
 # --------------------------------------------------------------------------------------------
 
 
-def test_an_output_folder_that_does_not_exist_is_created_and_named(tmp_path):
+def test_an_output_folder_that_does_not_exist_is_created_and_named(tmp_path, invoke):
     """Shipped configs write to results/ relative to the current directory (issue 15)."""
     out = tmp_path / "no" / "such" / "dir" / "out.h5"
     result = invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT)
     assert result.exit_code == 0, result.output
     assert result.stderr.strip().splitlines() == [f"Created the output folder {out.parent}"]
-    assert read_results(out).complete
+    assert load_results(out).attrs["vrsweep_complete"] == 1
 
 
 @pytest.mark.parametrize("command", ["simulate", "plot"])
-def test_other_commands_create_a_missing_output_folder_too(command, finished, tmp_path):
+def test_other_commands_create_a_missing_output_folder_too(command, finished, tmp_path, invoke):
     if command == "simulate":
         out = tmp_path / "new" / "trajectory.h5"
         args = ["simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", out, "--quiet"]
@@ -92,7 +92,7 @@ def test_other_commands_create_a_missing_output_folder_too(command, finished, tm
     assert out.stat().st_size > 0
 
 
-def test_output_directory_that_is_a_file(tmp_path):
+def test_output_directory_that_is_a_file(tmp_path, invoke):
     """The output's parent is a regular file: no directory to write in, as root too."""
     parent = tmp_path / "notes.txt"
     parent.write_text("a file, not a directory\n")
@@ -135,7 +135,7 @@ def test_output_directory_not_writable(tmp_path):
     assert list(locked.iterdir()) == []
 
 
-def test_output_that_exists_is_not_replaced(finished, tmp_path):
+def test_output_that_exists_is_not_replaced(finished, tmp_path, invoke):
     out = tmp_path / "taken.h5"
     shutil.copy(finished, out)
     before = out.read_bytes()
@@ -145,7 +145,7 @@ def test_output_that_exists_is_not_replaced(finished, tmp_path):
 
 
 @pytest.mark.parametrize("command", ["merge", "simulate"])
-def test_other_commands_refuse_an_existing_output(command, finished, tmp_path):
+def test_other_commands_refuse_an_existing_output(command, finished, tmp_path, invoke):
     if command not in main.commands:
         pytest.skip(f"vrsweep {command} is not built yet")
     out = tmp_path / "taken.h5"
@@ -199,7 +199,7 @@ BAD_FILES = {  # how to make it -> words the message must hold
 
 @pytest.mark.parametrize("kind", list(BAD_FILES))
 @pytest.mark.parametrize("command", READERS)
-def test_a_bad_results_file_is_named_with_the_reason(command, kind, finished, tmp_path):
+def test_a_bad_results_file_is_named_with_the_reason(command, kind, finished, tmp_path, invoke):
     if command not in main.commands:
         pytest.fail(f"vrsweep {command} does not exist")
     make, words = BAD_FILES[kind]
@@ -214,7 +214,7 @@ def test_a_bad_results_file_is_named_with_the_reason(command, kind, finished, tm
 
 
 @pytest.mark.parametrize("command", READERS)
-def test_a_missing_results_file(command, tmp_path):
+def test_a_missing_results_file(command, tmp_path, invoke):
     args, out = reader_args(command, tmp_path / "nothere.h5", tmp_path)
     line = one_message(invoke(*args), 2)
     assert "not found" in line and "nothere.h5" in line
@@ -222,12 +222,10 @@ def test_a_missing_results_file(command, tmp_path):
 
 def _same_content(a, b):
     """Every variable, coordinate and attribute of two result files equal, bit for bit."""
-    from vrsweep.store import read_results
-
-    first, second = read_results(a), read_results(b)
+    first, second = load_results(a), load_results(b)
     if first.attrs != second.attrs or list(first.variables) != list(second.variables):
         return False
-    return all(np.array_equal(first.variables[n], second.variables[n], equal_nan=True) for n in first.variables)
+    return all(np.array_equal(first[n].values, second[n].values, equal_nan=True) for n in first.variables)
 
 
 @pytest.mark.parametrize("command", READERS)
@@ -263,7 +261,7 @@ def test_a_corrupt_results_file(command, finished, tmp_path):
     assert harmless < (size - 512) // 4500  # most offsets hold data or metadata, and are caught
 
 
-def test_trajectory_files_that_cannot_be_read(finished, tmp_path):
+def test_trajectory_files_that_cannot_be_read(finished, tmp_path, invoke):
     """A trajectory (simulate's output) cut short or from a newer format: the same messages."""
     if "simulate" not in main.commands:
         pytest.skip("vrsweep simulate is not built yet")
@@ -305,7 +303,7 @@ def _claims_finished(path):
         return False  # unreadable: certainly not a finished result
 
 
-def test_a_run_killed_midway_leaves_an_unfinished_checkpoint(tmp_path):
+def test_a_run_killed_midway_leaves_an_unfinished_checkpoint(tmp_path, invoke):
     """kill -9 during the sweep: the file at the output path says it is not finished, ``info``
     says so too, and no other file in the directory claims to be finished."""
     config = tmp_path / "long.yaml"
@@ -346,7 +344,7 @@ def small_chunks(monkeypatch):
     monkeypatch.setattr(vrsweep.sweep, "GROW_CHUNK_BELOW_SECONDS", 0.0)  # and they stay that small
 
 
-def test_disk_full_midway_keeps_finished_points_and_resumes(finished, tmp_path, monkeypatch, small_chunks):
+def test_disk_full_midway_keeps_finished_points_and_resumes(finished, tmp_path, monkeypatch, small_chunks, invoke):
     """ENOSPC while writing the third chunk: exit 1 with the system's message, the file holds
     the first two chunks and says it is unfinished, and --resume completes it."""
     from vrsweep.store import ResultWriter
@@ -365,32 +363,32 @@ def test_disk_full_midway_keeps_finished_points_and_resumes(finished, tmp_path, 
     line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
     assert "No space left on device" in line and "full.h5" in line
 
-    checkpoint = read_results(out)
-    assert not checkpoint.complete and int(checkpoint.done.sum()) == 4
+    checkpoint = load_results(out)
+    assert checkpoint.attrs["vrsweep_complete"] == 0 and int(checkpoint.done.sum()) == 4
     monkeypatch.setattr(ResultWriter, "write_points", original)
     result = invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT)
     assert result.exit_code == 0, result.output
-    resumed = read_results(out)
-    assert resumed.complete and resumed.done.all()
-    np.testing.assert_array_equal(resumed.variables["R"], read_results(finished).variables["R"])
+    resumed = load_results(out)
+    assert resumed.attrs["vrsweep_complete"] == 1 and resumed.done.all()
+    np.testing.assert_array_equal(resumed["R"].values, load_results(finished)["R"].values)
 
 
-def test_a_crash_while_finishing_leaves_the_checkpoint(tmp_path, monkeypatch):
+def test_a_crash_while_finishing_leaves_the_checkpoint(tmp_path, monkeypatch, invoke):
     """The last step (derived variables, vrsweep_complete = 1) works on a copy: if it fails, the
     file at the output path is still the unfinished checkpoint and no temporary file is left."""
-    import vrsweep.store
+    import vrsweep.store.writer
 
     def fail(*args, **kwargs):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(vrsweep.store, "_add_extras", fail)
+    monkeypatch.setattr(vrsweep.store.writer, "add_extras", fail)
     out = tmp_path / "finishing.h5"
     line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
     assert f"cannot finish {out}: No space left on device (the file needs about" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["finishing.h5"]
     assert open_hdf5_files() == []
-    checkpoint = read_results(out)
-    assert not checkpoint.complete and checkpoint.done.all()  # every point kept
+    checkpoint = load_results(out)
+    assert checkpoint.attrs["vrsweep_complete"] == 0 and checkpoint.done.all()  # every point kept
 
 
 # --------------------------------------------------------------------------------------------
@@ -424,13 +422,13 @@ def fail_on_call(number, error):
     return wrap
 
 
-def test_disk_full_while_creating_the_result_file(tmp_path, monkeypatch):
+def test_disk_full_while_creating_the_result_file(tmp_path, monkeypatch, invoke):
     """HDF5 fails half-way through the skeleton: one line with the space the file needs, no
     temporary file, no HDF5 file left open, and the next run starts afresh."""
-    import vrsweep.store
+    import vrsweep.store.layout
 
-    monkeypatch.setattr(vrsweep.store, "_create_point_variable",
-                        fail_on_call(3, HDF5_DISK_FULL)(vrsweep.store._create_point_variable))
+    monkeypatch.setattr(vrsweep.store.layout, "_create_point_variable",
+                        fail_on_call(3, HDF5_DISK_FULL)(vrsweep.store.layout._create_point_variable))
     out = tmp_path / "new.h5"
     line = one_message(invoke("run", QUICKSTART, "-o", out, *SHORT), 1)
     assert line.startswith(f"Error: cannot create {out}: No space left on device (the file needs about ")
@@ -438,15 +436,15 @@ def test_disk_full_while_creating_the_result_file(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == [] and open_hdf5_files() == []
     monkeypatch.undo()
     assert invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT).exit_code == 0
-    assert read_results(out).complete
+    assert load_results(out).attrs["vrsweep_complete"] == 1
 
 
-def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_chunks):
+def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_chunks, assert_same_result, invoke):
     """ENOSPC inside the store's write of the third chunk: one line, the two chunks before it
     stay saved, the file is closed without a second error, and --resume completes it."""
-    import vrsweep.store
+    import vrsweep.store.writer
 
-    original = vrsweep.store._write_selection
+    original = vrsweep.store.writer._write_selection
     chunks_saved = []
 
     def write_selection(ds, *args):
@@ -456,13 +454,13 @@ def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_c
         if ds.name == "/done":  # written last, once a chunk's values are on disk
             chunks_saved.append(1)
 
-    monkeypatch.setattr(vrsweep.store, "_write_selection", write_selection)
+    monkeypatch.setattr(vrsweep.store.writer, "_write_selection", write_selection)
     out = tmp_path / "full.h5"
     line = one_message(invoke("run", QUICKSTART, "-o", out, "--quiet", *SHORT), 1)
     assert line.startswith(f"Error: cannot save points to {out}: No space left on device (the file needs")
     assert open_hdf5_files() == [] and sorted(p.name for p in tmp_path.iterdir()) == ["full.h5"]
-    checkpoint = read_results(out)
-    assert not checkpoint.complete and int(checkpoint.done.sum()) == 4
+    checkpoint = load_results(out)
+    assert checkpoint.attrs["vrsweep_complete"] == 0 and int(checkpoint.done.sum()) == 4
     monkeypatch.undo()
     result = invoke("run", QUICKSTART, "-o", out, "--quiet", "--resume", *SHORT)
     assert result.exit_code == 0, result.output
@@ -470,7 +468,7 @@ def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_c
 
 
 @pytest.mark.parametrize("command", ["simulate", "plot", "merge"])
-def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monkeypatch):
+def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monkeypatch, invoke):
     """Trajectories, figures and merged files are written whole: the same one line, nothing left
     (the disk fills after HDF5 is done: merge still writes with HDF5 straight to the disk)."""
     import vrsweep.fileio
@@ -490,17 +488,16 @@ def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monk
     assert list(tmp_path.iterdir()) == [] and open_hdf5_files() == []
 
 
-def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch):
+def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch, assert_same_result, invoke):
     """h5py built on HDF5 < 1.10.7 refuses the locking= argument (ValueError): every command
     opens its files without it, with no traceback and no message."""
     import vrsweep.fileio
 
-    real_file = h5py.File
-
-    def old_h5py(*args, **kwargs):
-        if "locking" in kwargs:
-            raise ValueError("HDF5 version >= 1.12.1 or 1.10.x >= 1.10.7 required for file locking.")
-        return real_file(*args, **kwargs)
+    class old_h5py(h5py.File):  # still an h5py.File to whoever checks (xarray's h5netcdf backend)
+        def __init__(self, *args, **kwargs):
+            if "locking" in kwargs:
+                raise ValueError("HDF5 version >= 1.12.1 or 1.10.x >= 1.10.7 required for file locking.")
+            super().__init__(*args, **kwargs)
 
     monkeypatch.delenv("HDF5_USE_FILE_LOCKING", raising=False)
     monkeypatch.setattr(vrsweep.fileio, "_locking_argument_supported", True)
@@ -532,7 +529,7 @@ def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch):
 MIXED = ["--set", "max_steps=2300", "--set", "divergence_bound=13", "--set", "max_impacts_per_period=6"]
 
 
-def test_failed_points_are_counted_in_the_summary_and_stored(tmp_path):
+def test_failed_points_are_counted_in_the_summary_and_stored(tmp_path, invoke):
     out = tmp_path / "mixed.h5"
     result = invoke("run", QUICKSTART, "-o", out, *SHORT, *MIXED)
     assert result.exit_code == 0, result.output  # failed points never fail the run
@@ -544,23 +541,23 @@ def test_failed_points_are_counted_in_the_summary_and_stored(tmp_path):
     assert match[1] == match[2] == "9" and match[4].endswith("mixed.h5")
     reported = {name: int(n) for n, name in re.findall(r"(\d+) (\w+)", match[3])}
 
-    stored = read_results(out)
-    status = stored.variables["status"]
+    stored = load_results(out)
+    status = stored["status"].values
     names, counts = np.unique(status, return_counts=True)
     assert reported == {Status(int(code)).name.lower(): int(n) for code, n in zip(names, counts)}
     assert "ok" in reported and len(reported) >= 3, reported  # ok and at least two kinds of failure
     assert set(reported) <= {s.name.lower() for s in Status if s != Status.NOT_COMPUTED}
 
-    R = stored.variables["R"]
+    R = stored["R"].values
     ok = status == Status.OK
     assert np.all(np.isfinite(R[ok])) and np.all(np.isnan(R[~ok]))  # no NaN passed off as a result
-    assert stored.complete and stored.done.all()
+    assert stored.attrs["vrsweep_complete"] == 1 and stored.done.all()
 
     info = invoke("info", out, "--json")
     assert {row["status"]: row["points"] for row in json.loads(info.stdout)["status_counts"]} == reported
 
 
-def test_a_file_a_run_is_writing_is_reported_as_locked(finished, tmp_path):
+def test_a_file_a_run_is_writing_is_reported_as_locked(finished, tmp_path, invoke):
     """``info`` on the output of a run in progress: say it is locked and how to read it anyway."""
     if os.environ.get("HDF5_USE_FILE_LOCKING", "").upper() == "FALSE":
         pytest.skip("file locking is switched off in this environment")

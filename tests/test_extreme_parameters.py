@@ -22,11 +22,10 @@ from vrsweep import kernel
 from vrsweep.config import parse_config
 from vrsweep.model import kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.store import read_results
+from vrsweep.reading import load_results
 from vrsweep.sweep import run_sweep
 from vrsweep.trajectory import settings_vector, simulate
 
-from result_files import invoke
 
 KNOWN_FAILURES = {Status.MAX_STEPS, Status.DIVERGED, Status.CHATTER_LIMIT, Status.STEP_TOO_SMALL,
                   Status.NON_FINITE}
@@ -118,7 +117,7 @@ def test_extreme_values_in_a_parallel_sweep(method):
 
 
 @pytest.mark.parametrize("g", ["1.0e+200", "1.0e+300"])
-def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g):
+def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g, invoke):
     config = tmp_path / "huge.yaml"
     config.write_text(f"parameters: {{g: {g}}}\n"
                       "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")
@@ -127,9 +126,9 @@ def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g):
     assert result.exit_code == 0, result.output
     assert "Traceback" not in result.output and "Error" not in result.output
     assert "1 step_too_small" in result.output or "1 non_finite" in result.output, result.output
-    stored = read_results(out)
-    assert Status(int(stored.variables["status"])) in {Status.STEP_TOO_SMALL, Status.NON_FINITE}
-    assert np.isnan(stored.variables["R"])
+    stored = load_results(out)
+    assert Status(int(stored["status"])) in {Status.STEP_TOO_SMALL, Status.NON_FINITE}
+    assert np.isnan(stored["R"].values)
 
 
 def test_sticking_under_a_very_fast_forcing_ends():

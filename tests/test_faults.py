@@ -179,8 +179,8 @@ def test_vanishing_drive_is_not_a_nan_ok(tmp_path, c):
         assert "parameters.c" in result.output
         return
     assert result.exit_code == 0, result.output
-    from vrsweep.store import read_results
+    from vrsweep.reading import load_results
 
-    stored = read_results(out)
-    ok = stored.variables["status"] == Status.OK
-    assert np.all(np.isfinite(stored.variables["R"][ok]))
+    stored = load_results(out)
+    ok = stored["status"].values == Status.OK
+    assert np.all(np.isfinite(stored["R"].values[ok]))

@@ -201,10 +201,9 @@ def test_method_key_in_config():
     assert "did you mean 'dop853'" in str(error.value)
 
 
-def test_a_dop853_run_stores_its_method_and_resumes(tmp_path):
-    from result_files import invoke
+def test_a_dop853_run_stores_its_method_and_resumes(tmp_path, invoke):
 
-    from vrsweep.store import read_results
+    from vrsweep.reading import load_results
 
     config = tmp_path / "m.yaml"
     config.write_text("sweep:\n  g: [5.0, 10.0, 30.0]\n"
@@ -212,13 +211,13 @@ def test_a_dop853_run_stores_its_method_and_resumes(tmp_path):
     out = tmp_path / "m.h5"
     result = invoke("run", config, "-o", out, "--quiet")
     assert result.exit_code == 0, result.output
-    stored = read_results(out)
+    stored = load_results(out)
     assert "method: dop853" in stored.attrs["config"]
     assert invoke("run", config, "-o", out, "--resume", "--quiet").exit_code == 0
     # Same points as simulate with the same method: the sweep ran dop853.
     vector = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0), "original")
     run = simulate(vector, [0.99, 0.5], settings_vector(transient_periods=3, measure_periods=3), method="dop853")
-    assert stored.variables["R"][1] == run.summary[kernel.SUM_R]
+    assert stored["R"].values[1] == run.summary[kernel.SUM_R]
 
 
 # --- the dop853 kernel's rotated phases -------------------------------------------------------

@@ -5,7 +5,6 @@ import re
 import h5py
 import numpy as np
 import pytest
-from result_files import invoke, write_config
 
 import vrsweep
 from vrsweep.errors import ResultFileError
@@ -25,7 +24,7 @@ CF_KEYS = ("Conventions", "title", "history", "source", "references", "date_crea
 
 
 @pytest.fixture(scope="module")
-def files(tmp_path_factory):
+def files(tmp_path_factory, invoke, write_config):
     tmp = tmp_path_factory.mktemp("open_results")
     config = write_config(tmp, GRID)
     sweep = tmp / "sweep.h5"

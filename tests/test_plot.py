@@ -14,7 +14,8 @@ from vrsweep import plot, theory
 from vrsweep.cli import main
 from vrsweep.errors import UsageError
 from vrsweep.model import DEFAULT_PARAMETERS
-from vrsweep.store import read_results
+from vrsweep.commands.plot import FLAGS
+from vrsweep.reading import load_results
 from vrsweep.trajectory_file import read_trajectory
 
 SHORT = "integration: {transient_periods: 5, measure_periods: 16, strobe_periods: 8}\n"
@@ -101,8 +102,8 @@ def _classes(R, R_err, period):
 
 def test_response_markers_follow_the_readme_rule(files):
     """Trust by R_err (filled or hollow), kind of motion by period (circle or square), colour by curve."""
-    results = read_results(files["g"])
-    R, period, R_err = (results.variables[n] for n in ("R", "period", "R_err"))
+    results = load_results(files["g"])
+    R, period, R_err = (results[n].values for n in ("R", "period", "R_err"))
     fig = plot.plot(files["g"], log=False)
     drawn = markers(fig.axes[0])
     classes = _classes(R, R_err, period)
@@ -124,9 +125,9 @@ def test_response_markers_follow_the_readme_rule(files):
 def test_a_converged_point_without_a_period_is_not_called_chaos(files):
     """Issue 15: period 0 with a tiny R_err (a slowly settling or long-period motion) is a
     trusted R -- drawn filled, as a square -- not 'no period found (chaos?)'."""
-    results = read_results(files["g"])
-    results.variables["period"] = np.zeros_like(results.variables["period"])
-    results.variables["R_err"] = 1e-6 * results.variables["R"]
+    results = load_results(files["g"])
+    results["period"][:] = 0
+    results["R_err"][:] = 1e-6 * results["R"]
     drawn = markers(plot.plot([results], log=False).axes[0])
     assert list(drawn) == ["trusted aperiodic"]
     assert drawn["trusted aperiodic"].get_markerfacecolor() == "tab:blue"
@@ -134,8 +135,8 @@ def test_a_converged_point_without_a_period_is_not_called_chaos(files):
 
 
 def test_hollow_points_keep_their_curves_colour(files):
-    results = read_results(files["g_Omega_short"])
-    results.variables["R_err"] = results.variables["R"].copy()  # every point untrusted
+    results = load_results(files["g_Omega_short"])
+    results["R_err"][:] = results["R"]  # every point untrusted
     fig = plot.plot([results], log=False)
     hollow = [line for line in fig.axes[0].get_lines() if (line.get_gid() or "").startswith("untrusted")]
     assert {line.get_markeredgecolor() for line in hollow} == {"tab:blue", "tab:orange"}
@@ -160,12 +161,12 @@ def test_response_marks_g_res_and_draws_the_analytic_gain(files):
 
 
 def test_amplitude_draws_Q_and_A_unscaled(files):
-    results = read_results(files["g"])
+    results = load_results(files["g"])
     fig = plot.plot(files["g"], amplitude=True, log=False)
     ax = fig.axes[0]
     assert "|Q|" in ax.get_ylabel() and "A/c" not in ax.get_ylabel()
     drawn = np.concatenate([line.get_ydata() for line in markers(ax).values()])
-    np.testing.assert_allclose(np.sort(drawn), np.sort(results.variables["Q_amplitude"]))
+    np.testing.assert_allclose(np.sort(drawn), np.sort(results["Q_amplitude"].values))
     texts = legend_texts(fig)
     assert any("|Q|" in t and "filled" in t for t in texts)
     assert not any(" of R" in t or "R =" in t for t in texts), texts  # the legend speaks of |Q|
@@ -223,13 +224,13 @@ def test_continuation_both_draws_up_and_down(files):
 
 
 def test_two_long_axes_make_a_map_with_g_res_over_it(files):
-    results = read_results(files["map"])
+    results = load_results(files["map"])
     fig = plot.plot(files["map"])
     ax = fig.axes[0]
     meshes = [c for c in ax.collections if isinstance(c, QuadMesh)]
     assert len(meshes) == 1
     np.testing.assert_array_equal(np.ma.filled(meshes[0].get_array(), np.nan).reshape(6, 7),
-                                  results.variables["R"].T)
+                                  results["R"].values.T)
     assert "$g$" in ax.get_xlabel() and "$\\Omega$" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
     colorbar = fig.axes[1]
     assert "R = |Q|/c" in colorbar.get_ylabel()
@@ -242,10 +243,10 @@ def test_two_long_axes_make_a_map_with_g_res_over_it(files):
 
 
 def test_map_of_impacts_and_status(files):
-    results = read_results(files["map"])
+    results = load_results(files["map"])
     fig = plot.plot(files["map"], kind="impacts")
     mesh = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)][0]
-    np.testing.assert_array_equal(mesh.get_array().reshape(6, 7), results.variables["impacts_per_period"].T)
+    np.testing.assert_array_equal(mesh.get_array().reshape(6, 7), results["impacts_per_period"].values.T)
     fig = plot.plot(files["map"], kind="status")
     labels = [t.get_text() for t in fig.axes[1].get_yticklabels()]
     assert "ok" in labels and "chatter_limit" in labels
@@ -255,10 +256,10 @@ def test_map_of_impacts_and_status(files):
 
 
 def test_impacts_against_the_axis(files):
-    results = read_results(files["g"])
+    results = load_results(files["g"])
     fig = plot.plot(files["g"], kind="impacts")
     (line,) = fig.axes[0].get_lines()
-    np.testing.assert_array_equal(line.get_ydata(), results.variables["impacts_per_period"])
+    np.testing.assert_array_equal(line.get_ydata(), results["impacts_per_period"].values)
     assert "impacts per slow period" in fig.axes[0].get_ylabel() and "[1]" in fig.axes[0].get_ylabel()
 
 
@@ -272,19 +273,20 @@ def test_status_strip(files):
 
 
 def test_bifurcation_draws_every_strobe_sample(files):
-    results = read_results(files["g"])
+    results = load_results(files["g"])
     fig = plot.plot(files["g"], kind="bifurcation")
     ax = fig.axes[0]
     (dots,) = lines_with_label(fig, "x(nT)")
     assert len(dots.get_xdata()) == 9 * 8
-    np.testing.assert_array_equal(dots.get_ydata(), results.variables["strobe_x"].reshape(-1))
-    np.testing.assert_array_equal(dots.get_xdata(), np.repeat(results.axes["g"], 8))
+    np.testing.assert_array_equal(dots.get_ydata(), results["strobe_x"].values.reshape(-1))
+    np.testing.assert_array_equal(dots.get_xdata(), np.repeat(results["g"].values, 8))
     assert "x(nT)" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
 
 
 def test_bifurcation_of_two_axes_needs_at(files):
-    with pytest.raises(UsageError, match="--at"):
+    with pytest.raises(UsageError, match="fix the others with at, e.g. at Omega=4") as info:
         plot.plot(files["g_Omega_short"], kind="bifurcation")
+    assert "fix the others with --at, e.g. --at Omega=4" in str(info.value.reworded(FLAGS))
     fig = plot.plot(files["g_Omega_short"], kind="bifurcation", at={"Omega": "4"})
     assert len(lines_with_label(fig, "x(nT)")[0].get_xdata()) == 5 * 8
 
@@ -380,13 +382,13 @@ def failed_marks(ax):
 def test_failed_points_sit_on_the_bottom_edge_on_any_axis(files, log):
     """Failed points have R = NaN: drawn at R = 0 they vanished on a log axis. Now they are x marks
     in axes coordinates just above the bottom edge, and the title counts them."""
-    results = read_results(files["failed"])
-    failed = results.variables["status"] > 0
+    results = load_results(files["failed"])
+    failed = results["status"].values > 0
     assert 0 < failed.sum() < 5
     fig = plot.plot(files["failed"], log=log)
     ax = fig.axes[0]
     (marks,) = failed_marks(ax)
-    np.testing.assert_array_equal(marks.get_xdata(), results.axes["g"][failed])
+    np.testing.assert_array_equal(marks.get_xdata(), results["g"].values[failed])
     assert marks.get_transform() == ax.get_xaxis_transform()  # y in axes fraction
     assert all(0.0 < y < 0.1 for y in marks.get_ydata())
     assert ax.get_yscale() == ("log" if log else "linear")
@@ -401,16 +403,16 @@ def test_a_bifurcation_diagram_spans_the_grid_and_marks_failed_points(files):
     ax = fig.axes[0]
     low, high = ax.get_xlim()
     assert low < 0.0 and high > 40.0
-    results = read_results(files["failed"])
+    results = load_results(files["failed"])
     (marks,) = failed_marks(ax)
-    np.testing.assert_array_equal(marks.get_xdata(), results.axes["g"][results.variables["status"] > 0])
+    np.testing.assert_array_equal(marks.get_xdata(), results["g"].values[results["status"].values > 0])
     assert "points failed" in fig._suptitle.get_text()
 
 
 def test_the_response_axis_turns_logarithmic_when_the_values_span_decades(files):
     """Paper parameters: A/c ~ 48 at g = 0 and ~1.4 at g = 40, numerical R down to ~0.1."""
-    results = read_results(files["g"])
-    values = np.concatenate([results.variables["R"], [48.2]])
+    results = load_results(files["g"])
+    values = np.concatenate([results["R"].values, [48.2]])
     assert values.max() / values.min() > plot.LOG_SPAN
     fig = plot.plot(files["g"])
     assert fig.axes[0].get_yscale() == "log" and "log axis" in fig._suptitle.get_text()
@@ -422,12 +424,13 @@ def test_log_on_a_map_is_a_logarithmic_colour_scale(files):
     fig = plot.plot(files["map"], log=True)
     mesh = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)][0]
     assert isinstance(mesh.norm, LogNorm)
-    R = read_results(files["map"]).variables["R"]
+    R = load_results(files["map"])["R"].values
     assert mesh.norm.vmin == pytest.approx(R[np.isfinite(R) & (R > 0)].min())
     assert not isinstance([c for c in plot.plot(files["map"]).axes[0].collections
                            if isinstance(c, QuadMesh)][0].norm, LogNorm)
-    with pytest.raises(UsageError, match="--log is for"):
+    with pytest.raises(UsageError, match="^log is for") as info:
         plot.plot(files["g"], kind="status", log=True)
+    assert str(info.value.reworded(FLAGS)) == "--log is for response, map and impacts plots, not --kind status"
 
 
 def test_the_map_legend_hides_no_cell(files):
@@ -446,7 +449,7 @@ def test_a_shard_says_it_is_a_shard(files, tmp_path):
     result = CliRunner().invoke(main, ["run", str(config), "-o", str(tmp_path / "s.h5"), "--shard", "1/3", "-q"])
     assert result.exit_code == 0, result.output
     path = tmp_path / "s.shard1of3.h5"
-    done = int(read_results(path).done.sum())
+    done = int(load_results(path).done.sum())
     assert 0 < done < 9
     assert f"shard 1/3, {done} of 9 points" in plot.plot(path)._suptitle.get_text()
 

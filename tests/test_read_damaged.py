@@ -1,7 +1,7 @@
 """A result file whose derived dataset cannot be opened is corrupt, not a file without it.
 
 h5py's ``Group.items()`` yields None for an object whose header fails its checksum (its
-``get`` swallows the KeyError), so read_results used to skip the damaged dataset and
+``get`` swallows the KeyError), so the reader used to skip the damaged dataset and
 ``vrsweep info`` succeeded on a file that had lost A_theory_stable (found with the issue-15
 quickstart layout by tests/test_errors.py's byte-overwrite scan).
 """
@@ -10,13 +10,12 @@ import shutil
 
 import h5py
 import pytest
-from result_files import invoke
 
 from vrsweep.errors import ResultFileError
-from vrsweep.store import read_results
+from vrsweep.reading import open_results
 
 
-def test_a_damaged_object_header_is_an_error(tmp_path):
+def test_a_damaged_object_header_is_an_error(tmp_path, invoke):
     config = tmp_path / "small.yaml"
     config.write_text("model: effective\nsweep:\n  g: {start: 0, stop: 40, num: 5}\n"
                       "integration: {transient_periods: 2, measure_periods: 16}\n")
@@ -30,6 +29,6 @@ def test_a_damaged_object_header_is_an_error(tmp_path):
         handle.seek(header + 16)
         handle.write(b"\xff" * 32)
     with pytest.raises(ResultFileError, match="corrupt"):
-        read_results(bad)
+        open_results(bad)
     result = invoke("info", bad)
     assert result.exit_code == 2 and "corrupt" in result.output

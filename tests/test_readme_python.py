@@ -6,7 +6,6 @@ import re
 from pathlib import Path
 
 import pytest
-from result_files import invoke, write_config
 
 pytest.importorskip("xarray")
 
@@ -26,7 +25,7 @@ def test_the_section_has_a_snippet_for_each_way_in():
         assert needle in joined, needle
 
 
-def test_every_snippet_runs(tmp_path, monkeypatch):
+def test_every_snippet_runs(tmp_path, monkeypatch, invoke, write_config):
     monkeypatch.chdir(tmp_path)
     assert invoke("run", ROOT / "configs" / "quickstart.yaml", "-o", "quickstart.h5", "--quiet", *SHORT).exit_code == 0
     small_map = write_config(tmp_path, """\

@@ -9,7 +9,6 @@ import time
 
 import h5py
 import pytest
-from result_files import assert_same_result, done_count, invoke, vrsweep_process, write_config
 
 # Big enough to be caught mid-run: 96 points in chunks of 16 (one thread), ~0.5 s per chunk.
 SLOW = """\
@@ -22,7 +21,7 @@ CHUNK = 16  # run_sweep's chunk on one thread
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
+def reference(tmp_path_factory, invoke, write_config):
     """The uninterrupted run (also compiles the kernel before any subprocess needs it)."""
     directory = tmp_path_factory.mktemp("reference")
     config = write_config(directory, SLOW)
@@ -32,30 +31,38 @@ def reference(tmp_path_factory):
     return config, out
 
 
-def start_and_wait_for_progress(tmp_path, config, out):
-    """Start ``vrsweep run`` on one thread; return it once at least one chunk is on disk."""
-    child = vrsweep_process("run", config, "-o", out, "--threads", 1, cwd=tmp_path)
-    deadline = time.monotonic() + 120  # a cold numba cache compiles for ~30 s first
-    while time.monotonic() < deadline and child.poll() is None:
-        n = done_count(out)
-        if n is not None and n >= CHUNK:
-            return child, n
-        time.sleep(0.02)
-    child.kill()
-    pytest.fail(f"no chunk written in time: {child.communicate()}")
+@pytest.fixture(scope="session")
+def start_and_wait_for_progress(done_count, vrsweep_process):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def start_and_wait_for_progress(tmp_path, config, out):
+        """Start ``vrsweep run`` on one thread; return it once at least one chunk is on disk."""
+        child = vrsweep_process("run", config, "-o", out, "--threads", 1, cwd=tmp_path)
+        deadline = time.monotonic() + 120  # a cold numba cache compiles for ~30 s first
+        while time.monotonic() < deadline and child.poll() is None:
+            n = done_count(out)
+            if n is not None and n >= CHUNK:
+                return child, n
+            time.sleep(0.02)
+        child.kill()
+        pytest.fail(f"no chunk written in time: {child.communicate()}")
+    return start_and_wait_for_progress
 
 
-def resume(config, out):
-    result = invoke("run", config, "-o", out, "--resume")
-    assert result.exit_code == 0, result.output
-    return result
+@pytest.fixture(scope="session")
+def resume(invoke):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def resume(config, out):
+        result = invoke("run", config, "-o", out, "--resume")
+        assert result.exit_code == 0, result.output
+        return result
+    return resume
 
 
 def n_computed(result):
     return int(re.search(r"(\d+) of (\d+) points computed", result.output).group(1))
 
 
-def test_kill_9_mid_run_then_resume_is_identical_to_an_uninterrupted_run(tmp_path, reference):
+def test_kill_9_mid_run_then_resume_is_identical_to_an_uninterrupted_run(tmp_path, reference, assert_same_result, done_count, resume, start_and_wait_for_progress):
     config, expected = reference
     out = tmp_path / "killed.h5"
     child, _ = start_and_wait_for_progress(tmp_path, config, out)
@@ -73,7 +80,7 @@ def test_kill_9_mid_run_then_resume_is_identical_to_an_uninterrupted_run(tmp_pat
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_a_signal_stops_cleanly_and_prints_the_resume_command(tmp_path, reference, signum):
+def test_a_signal_stops_cleanly_and_prints_the_resume_command(tmp_path, reference, signum, assert_same_result, done_count, invoke, start_and_wait_for_progress):
     config, expected = reference
     out = tmp_path / "stopped.h5"
     child, seen = start_and_wait_for_progress(tmp_path, config, out)
@@ -96,7 +103,7 @@ def test_a_signal_stops_cleanly_and_prints_the_resume_command(tmp_path, referenc
     assert_same_result(out, expected)
 
 
-def test_resume_of_a_finished_file_computes_nothing(tmp_path, reference):
+def test_resume_of_a_finished_file_computes_nothing(tmp_path, reference, assert_same_result, resume):
     config, expected = reference
     out = tmp_path / "copy.h5"
     out.write_bytes(expected.read_bytes())
@@ -105,13 +112,13 @@ def test_resume_of_a_finished_file_computes_nothing(tmp_path, reference):
     assert_same_result(out, expected)
 
 
-def test_resume_without_a_file_starts_one(tmp_path):
+def test_resume_without_a_file_starts_one(tmp_path, resume, write_config):
     config = write_config(tmp_path, "integration: {transient_periods: 3, measure_periods: 3, strobe_periods: 2}\n")
     result = resume(config, tmp_path / "new.h5")
     assert "1 of 1 points computed" in result.output
 
 
-def test_output_of_another_config_is_never_overwritten_nor_mixed(tmp_path):
+def test_output_of_another_config_is_never_overwritten_nor_mixed(tmp_path, invoke, write_config):
     config = write_config(tmp_path, """\
         sweep:
           g: {start: 0.0, stop: 30.0, num: 4}
@@ -137,7 +144,7 @@ def test_output_of_another_config_is_never_overwritten_nor_mixed(tmp_path):
         assert f["done"][()].all()
 
 
-def test_an_interrupted_run_can_be_resumed_in_process(tmp_path, monkeypatch):
+def test_an_interrupted_run_can_be_resumed_in_process(tmp_path, monkeypatch, assert_same_result, done_count, write_config):
     """The library path: a stop asked for during a chunk raises after that chunk is written."""
     from vrsweep.config import load_config
     from vrsweep.job import GracefulStop, Interrupted, run_job

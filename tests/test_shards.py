@@ -8,7 +8,6 @@ import time
 import h5py
 import numpy as np
 import pytest
-from result_files import assert_same_result, invoke, vrsweep_process, write_config
 
 from vrsweep.config import parse_config
 from vrsweep.errors import UsageError
@@ -86,7 +85,7 @@ def test_bad_shards_are_usage_errors(text, env, words):
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory):
+def runs(tmp_path_factory, invoke, write_config):
     """A single run and the N shards of the same config, as a 1-based SLURM array would run them."""
     directory = tmp_path_factory.mktemp("shards")
     config = write_config(directory, TINY)
@@ -114,7 +113,7 @@ def test_shards_partition_the_grid_evenly(runs):
     assert max(sizes) - min(sizes) <= 1, sizes
 
 
-def test_merged_shards_equal_a_single_run(runs, tmp_path):
+def test_merged_shards_equal_a_single_run(runs, tmp_path, assert_same_result, invoke):
     _, single, shards = runs
     merged = tmp_path / "merged.h5"
     result = invoke("merge", *shards[::-1], "-o", merged)  # the order of the shards does not matter
@@ -135,7 +134,7 @@ def _owned(path):
         return f["owned"][()].astype(bool)
 
 
-def test_merge_with_a_missing_shard_names_the_shard_and_its_file(runs, tmp_path):
+def test_merge_with_a_missing_shard_names_the_shard_and_its_file(runs, tmp_path, invoke):
     """Issue 15: the points missing are those of shard 1/3, whose file was not given."""
     _, _, shards = runs
     merged = tmp_path / "merged.h5"
@@ -152,7 +151,7 @@ def test_merge_with_a_missing_shard_names_the_shard_and_its_file(runs, tmp_path)
     assert not merged.exists()
 
 
-def test_merge_names_each_shard_that_points_are_missing_from(runs, tmp_path):
+def test_merge_names_each_shard_that_points_are_missing_from(runs, tmp_path, invoke):
     """A shard not given and a shard given but unfinished (killed before its last points): each
     named with its own missing points, the unfinished one with how far it got."""
     _, _, shards = runs
@@ -192,7 +191,7 @@ def test_shard_of_points_is_the_ownership_of_run_shard(sweep, count):
         assert np.array_equal(owner == index, owned_mask(grid, (index, count)))
 
 
-def test_merge_with_a_foreign_shard_fails_and_names_it(runs, tmp_path):
+def test_merge_with_a_foreign_shard_fails_and_names_it(runs, tmp_path, invoke):
     config, _, shards = runs
     foreign = tmp_path / "other.h5"
     result = invoke("run", config, "-o", foreign, "--set", "e=0.9", "--shard", f"1/{N_SHARDS}", "-q")
@@ -204,7 +203,7 @@ def test_merge_with_a_foreign_shard_fails_and_names_it(runs, tmp_path):
     assert "e: 0.9" in result.output
 
 
-def test_merge_refuses_to_overwrite(runs, tmp_path):
+def test_merge_refuses_to_overwrite(runs, tmp_path, invoke):
     _, _, shards = runs
     merged = tmp_path / "merged.h5"
     merged.write_bytes(b"precious")
@@ -214,7 +213,7 @@ def test_merge_refuses_to_overwrite(runs, tmp_path):
     assert invoke("merge", *shards, "-o", merged, "--overwrite", "-q").exit_code == 0
 
 
-def test_a_partial_merge_is_completed_by_resume(runs, tmp_path):
+def test_a_partial_merge_is_completed_by_resume(runs, tmp_path, assert_same_result, invoke):
     """--allow-missing writes what there is; run --resume on the merged file computes the rest."""
     config, single, shards = runs
     merged = tmp_path / "merged.h5"
@@ -230,7 +229,7 @@ def test_a_partial_merge_is_completed_by_resume(runs, tmp_path):
     assert_same_result(merged, single)
 
 
-def test_a_shard_resumes_only_as_itself(runs, tmp_path):
+def test_a_shard_resumes_only_as_itself(runs, tmp_path, invoke):
     config, _, shards = runs
     copy = tmp_path / f"map.shard1of{N_SHARDS}.h5"
     copy.write_bytes(shards[1].read_bytes())
@@ -273,7 +272,7 @@ def big_shards(tmp_path_factory):
     (signal.SIGTERM, 143, None, 0.3),
     (signal.SIGINT, 130, b"precious", 0.1),    # Ctrl-C while --overwrite replaces an older file
 ])
-def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, signum, code, existing, delay):
+def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, signum, code, existing, delay, vrsweep_process):
     """Issue 14: a real `python -m vrsweep merge` stopped while it writes (as its temporary file
     appears, or ``delay`` seconds later): exit 128 + signal, one line, OUT as it was, and no
     temporary file."""
@@ -305,15 +304,15 @@ def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, si
     assert existing is None or out.read_bytes() == existing
 
 
-def test_a_write_failure_during_merge_is_one_line_and_leaves_nothing(runs, tmp_path, monkeypatch):
+def test_a_write_failure_during_merge_is_one_line_and_leaves_nothing(runs, tmp_path, monkeypatch, invoke):
     """A runtime failure while writing (here a full disk): exit 1, one line naming the output, and
     no temporary file."""
-    import vrsweep.merge
+    import vrsweep.store.merge
 
     def full_disk(out, *args):
         raise OSError(errno.ENOSPC, "No space left on device", out.file.filename)
 
-    monkeypatch.setattr(vrsweep.merge, "_merge_variable", full_disk)
+    monkeypatch.setattr(vrsweep.store.merge, "_merge_variable", full_disk)
     _, _, shards = runs
     out = tmp_path / "merged.h5"
     result = invoke("merge", *shards, "-o", out)

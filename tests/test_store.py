@@ -20,18 +20,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from vrsweep.commands.options import OUTPUT_FLAGS
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.merge import merge_results
+from vrsweep.reading import load_results, open_results
 from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES, Status
 from vrsweep.store import (
     FORMAT_VERSION,
     ResultWriter,
     VariableSpec,
+    StoredLayout,
     atomic_write,
-    read_results,
+    merge_results,
 )
 
-from result_files import describe
 
 xr = pytest.importorskip("xarray")
 pytest.importorskip("h5netcdf")
@@ -89,11 +90,15 @@ def write_file(path, axes, *, points=None, finish=True, **kwargs):
     return path
 
 
-def assert_identical(a, b):
-    da, db = describe(a), describe(b)
-    assert list(da) == list(db)
-    for key in da:
-        assert da[key] == db[key], key
+@pytest.fixture(scope="session")
+def assert_identical(describe):
+    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
+    def assert_identical(a, b):
+        da, db = describe(a), describe(b)
+        assert list(da) == list(db)
+        for key in da:
+            assert da[key] == db[key], key
+    return assert_identical
 
 
 # ---------------------------------------------------------------------------------------------
@@ -210,7 +215,7 @@ def test_single_point_file_has_0d_variables(tmp_path):
         assert ds["R"].values == values_for([0])["R"][0]
         np.testing.assert_array_equal(ds["roots"].values, values_for([0])["roots"][0])
         assert ds["status"].values == 0 and ds["done"].values == 1
-    result = read_results(tmp_path / "one.h5")
+    result = StoredLayout.read(tmp_path / "one.h5")
     assert result.axes == {} and result.shape == () and result.complete
 
 
@@ -224,7 +229,7 @@ def test_finish_adds_derived_variables_over_new_dims(tmp_path):
     with xr.open_dataset(tmp_path / "r.h5", engine="h5netcdf") as ds:
         assert ds["g_res"].dims == ("Omega",) and ds["branch_R"].dims == ("g", "branch")
         assert list(ds["branch"].values) == [1, 2]
-    result = read_results(tmp_path / "r.h5")
+    result = StoredLayout.read(tmp_path / "r.h5")
     assert result.derived_variables == ("g_res", "branch_R") and result.complete
 
 
@@ -232,7 +237,7 @@ def test_a_long_config_text_fits_in_an_attribute(tmp_path):
     config = "sweep:\n  g: [" + ", ".join(f"{x:.6f}" for x in np.linspace(0, 1, 20000)) + "]\n"
     assert len(config) > 64 * 1024  # past HDF5's compact attribute limit
     ResultWriter.create(tmp_path / "r.h5", AXES_1D, specs(), {**ATTRS, "config": config}).close()
-    assert read_results(tmp_path / "r.h5").attrs["config"] == config
+    assert StoredLayout.read(tmp_path / "r.h5").attrs["config"] == config
 
 
 def test_write_points_validates_its_input(tmp_path):
@@ -255,25 +260,27 @@ def test_write_points_validates_its_input(tmp_path):
 # ---------------------------------------------------------------------------------------------
 
 
-def test_create_refuses_an_existing_path(tmp_path):
+def test_create_refuses_an_existing_path(tmp_path, describe):
     path = write_file(tmp_path / "r.h5", AXES_1D)
     before = describe(path)
     with pytest.raises(UsageError) as info:
         ResultWriter.create(path, AXES_1D, specs(), ATTRS)
     message = str(info.value)
-    assert str(path) in message and "--overwrite" in message and "--resume" in message
+    assert str(path) in message and "overwrite=True" in message and "ResultWriter.open_for_resume" in message
+    cli = str(info.value.reworded(OUTPUT_FLAGS))  # what vrsweep run says
+    assert cli == f"output {path} already exists: pass --overwrite to replace it, or --resume to continue the run that wrote it"
     assert describe(path) == before
     ResultWriter.create(path, AXES_1D, specs(), ATTRS, overwrite=True).close()
-    assert not read_results(path).done.any()
+    assert not load_results(path).done.any()
 
 
 def test_create_in_a_missing_directory_creates_it(tmp_path, capsys):
     ResultWriter.create(tmp_path / "no" / "r.h5", AXES_1D, specs(), ATTRS).close()
     assert capsys.readouterr().err == f"Created the output folder {tmp_path / 'no'}\n"
-    assert not read_results(tmp_path / "no" / "r.h5").done.any()
+    assert not load_results(tmp_path / "no" / "r.h5").done.any()
 
 
-def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path):
+def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path, assert_identical):
     full = write_file(tmp_path / "full.h5", AXES_2D)
     partial = write_file(tmp_path / "part.h5", AXES_2D, points=[1, 2, 3, 9], finish=False)
     writer = ResultWriter.open_for_resume(partial, CONFIG)
@@ -292,7 +299,8 @@ def test_resume_refuses_a_foreign_config(tmp_path):
     with pytest.raises(ResultFileError) as info:
         ResultWriter.open_for_resume(path, other)
     message = str(info.value)
-    assert "different config" in message and "--overwrite" in message and str(path) in message
+    assert "different config" in message and "pass overwrite=True" in message and str(path) in message
+    assert "; pass --overwrite to replace it" in str(info.value.reworded(OUTPUT_FLAGS))
     assert "line 2" in message and "0.95" in message and "\n" not in message
 
 
@@ -316,7 +324,7 @@ def one_line_error(path, *, resume=False):
         if resume:
             ResultWriter.open_for_resume(path, CONFIG)
         else:
-            read_results(path)
+            open_results(path)
     message = str(info.value)
     assert "\n" not in message and str(path) in message
     return message
@@ -377,7 +385,7 @@ def test_a_file_being_written_is_reported_as_locked(tmp_path):
     try:
         assert holder.stdout.readline().strip() == "open"
         try:
-            read_results(path)
+            open_results(path)
         except ResultFileError as error:
             assert "locked" in str(error) and "HDF5_USE_FILE_LOCKING" in str(error)
         else:
@@ -429,20 +437,20 @@ def check_resumed(path, reported):
     for chunk in chunks_of_child(reported):
         assert done[chunk].all()
     assert done.sum() <= (reported + 1) * CHUNK  # at most the chunk in flight beyond them
-    result = read_results(path)
+    result = load_results(path)
     points = np.flatnonzero(done)
     expected = values_for(points)
     for name, values in expected.items():
-        stored = result.variables[name].reshape((3000,) + values.shape[1:])
+        stored = result[name].values.reshape((3000,) + values.shape[1:])
         np.testing.assert_array_equal(stored[points], values)
     untouched = ~done
     untouched[chunks_of_child(reported + 1)[-1]] = False
-    assert np.isnan(result.variables["R"].reshape(-1)[untouched]).all()
-    assert (result.variables["status"].reshape(-1)[untouched] == Status.NOT_COMPUTED).all()
+    assert np.isnan(result["R"].values.reshape(-1)[untouched]).all()
+    assert (result["status"].values.reshape(-1)[untouched] == Status.NOT_COMPUTED).all()
     return done
 
 
-def test_kill_9_between_chunks_then_resume(tmp_path):
+def test_kill_9_between_chunks_then_resume(tmp_path, assert_identical):
     path = tmp_path / "ckpt.h5"
     ResultWriter.create(path, GRID, specs(), ATTRS).close()
     child = subprocess.Popen([sys.executable, "-c", CHILD, str(path), "pause"],
@@ -516,10 +524,10 @@ def write_shards(tmp_path, n_shards=3, axes=AXES_2D, skip=()):
     return paths
 
 
-def test_merge_of_three_shards_equals_a_single_run(tmp_path):
-    import vrsweep.store
+def test_merge_of_three_shards_equals_a_single_run(tmp_path, assert_identical):
+    import vrsweep.store.merge
 
-    assert vrsweep.store.merge_results is merge_results  # where it was before vrsweep/merge.py
+    assert vrsweep.store.merge.merge_results is merge_results  # the package re-exports it
     single = write_file(tmp_path / "single.h5", AXES_2D)
     shards = write_shards(tmp_path)
     report = merge_results(shards, tmp_path / "merged.h5")
@@ -530,7 +538,7 @@ def test_merge_of_three_shards_equals_a_single_run(tmp_path):
         assert "shard" not in ds.attrs and "owned" not in ds and ds.attrs["vrsweep_complete"] == 1
 
 
-def test_merge_of_single_point_shards(tmp_path):
+def test_merge_of_single_point_shards(tmp_path, assert_identical):
     single = tmp_path / "single.h5"
     w = ResultWriter.create(single, [], specs(), ATTRS)
     w.write_points([0], values_for([0]))
@@ -550,19 +558,21 @@ def test_merge_refuses_missing_points(tmp_path):
     assert not (tmp_path / "merged.h5").exists()
 
 
-def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(tmp_path):
+def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(tmp_path, assert_identical):
     shards = write_shards(tmp_path, skip=(4, 7))  # shard 2/3 was killed before two of its points
     with pytest.raises(ResultFileError) as info:
         merge_results(shards, tmp_path / "merged.h5")
     message = str(info.value)
     assert "2 of 15 points are missing" in message
     assert f"2 (g=1, Omega=4.5; g=2, Omega=4.5) owned by shard 2/3 ({shards[1]}, which finished 3 of its 5 points" in message
-    assert "--resume" in message
+    assert "resume it with ResultWriter.open_for_resume" in message and "pass allow_missing=True" in message
+    worded = str(info.value.reworded(OUTPUT_FLAGS))  # what vrsweep merge says
+    assert "resume it with --resume" in worded and "pass --allow-missing to write" in worded
 
     report = merge_results(shards, tmp_path / "merged.h5", allow_missing=True)
     assert not report.complete and report.n_missing == 2 and "2 point(s) missing" in str(report)
-    result = read_results(tmp_path / "merged.h5")
-    assert not result.complete and result.done.sum() == 13
+    result = load_results(tmp_path / "merged.h5")
+    assert result.attrs["vrsweep_complete"] == 0 and result.done.sum() == 13
     writer = ResultWriter.open_for_resume(tmp_path / "merged.h5", CONFIG)
     writer.write_points([4, 7], values_for([4, 7]))
     writer.finish({"g_res": (np.array([1.0, 2.0, 3.0]), ("Omega",),
@@ -591,7 +601,7 @@ def test_merge_names_a_foreign_shard(tmp_path):
     assert str(shards[0]) in message.split("than", 1)[1]  # the reference is a good shard
 
 
-def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path):
+def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path, assert_identical):
     shards = write_shards(tmp_path)
     single = write_file(tmp_path / "single.h5", AXES_2D)  # every point, identical values
     report = merge_results(shards + [single], tmp_path / "merged.h5")
@@ -628,7 +638,7 @@ def test_merge_keeps_the_first_derived_variables_and_says_if_others_differ(tmp_p
     report = merge_results(shards, tmp_path / "merged3.h5")
     assert report.warnings == [f"derived variables of {shards[2]} differ from {shards[0]}; "
                                f"kept those of {shards[0]}"]
-    assert list(read_results(tmp_path / "merged3.h5").variables["g_res"]) == [1.0, 2.0, 3.0]
+    assert list(load_results(tmp_path / "merged3.h5")["g_res"].values) == [1.0, 2.0, 3.0]
 
 
 def test_merge_stops_when_asked_and_leaves_nothing(tmp_path):
@@ -671,7 +681,7 @@ def test_merge_refuses_a_shard_replaced_while_it_is_merged(tmp_path):
 def test_merge_refuses_to_overwrite_and_reports_bad_shards(tmp_path):
     shards = write_shards(tmp_path)
     (tmp_path / "merged.h5").write_text("precious")
-    with pytest.raises(UsageError, match="--overwrite"):
+    with pytest.raises(UsageError, match="pass overwrite=True to replace it"):
         merge_results(shards, tmp_path / "merged.h5")
     assert (tmp_path / "merged.h5").read_text() == "precious"
     merge_results(shards, tmp_path / "merged.h5", overwrite=True)
@@ -690,14 +700,14 @@ AXES_3D = [("g", np.linspace(0.0, 6.0, 7)), ("Omega", np.array([4.0, 4.5, 5.0]))
 def small_blocks(monkeypatch):
     """HDF5 chunks of 64 bytes and merge blocks of 160: an 84-point grid then takes many blocks,
     chunks cut axes, and blocks fix leading axes, as a large grid would."""
-    import vrsweep.merge
-    import vrsweep.store
+    import vrsweep.store.layout
+    import vrsweep.store.merge
 
-    monkeypatch.setattr(vrsweep.store._chunk_shape, "__defaults__", (64,))
-    monkeypatch.setattr(vrsweep.merge, "BLOCK_BYTES", 160)
+    monkeypatch.setattr(vrsweep.store.layout._chunk_shape, "__defaults__", (64,))
+    monkeypatch.setattr(vrsweep.store.merge, "BLOCK_BYTES", 160)
 
 
-def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks):
+def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks, assert_identical):
     single = write_file(tmp_path / "single.h5", AXES_3D)
     with h5py.File(single, "r") as f:
         assert f["R"].chunks == (1, 2, 4) and f["roots"].chunks == (1, 1, 4, 2)
@@ -720,7 +730,7 @@ def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks):
     assert not (tmp_path / "conflict.h5").exists()
 
 
-def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks):
+def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks, assert_identical):
     lost = (5, 40, 41, 83)
     partial = write_file(tmp_path / "partial.h5", AXES_3D,
                          points=[p for p in range(84) if p not in lost], finish=False)
@@ -735,8 +745,8 @@ def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks):
        chunk_bytes=st.sampled_from([8, 64, 512, 4096]), max_points=st.integers(1, 400))
 def test_merge_blocks_cover_the_grid_once_in_order_without_cutting_chunks(shape, extra, chunk_bytes,
                                                                           max_points):
-    from vrsweep.merge import _blocks
-    from vrsweep.store import _chunk_shape
+    from vrsweep.store.layout import _chunk_shape
+    from vrsweep.store.merge import _blocks
 
     shape = tuple(shape)
     chunks = _chunk_shape(shape, (extra,), 8, chunk_bytes)[:len(shape)]

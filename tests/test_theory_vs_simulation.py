@@ -13,7 +13,6 @@ met to 1.1 %: tests/test_theory.py.)
 import numpy as np
 import pytest
 
-from result_files import invoke, write_config
 
 xr = pytest.importorskip("xarray")
 
@@ -27,7 +26,7 @@ CONFIG = """
 
 
 @pytest.mark.slow
-def test_stored_amplitude_matches_the_stored_analytic_amplitude(tmp_path):
+def test_stored_amplitude_matches_the_stored_analytic_amplitude(tmp_path, invoke, write_config):
     out = tmp_path / "theory.h5"
     result = invoke("run", write_config(tmp_path, CONFIG), "-o", out, "--quiet")
     assert result.exit_code == 0, result.output

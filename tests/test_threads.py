@@ -5,7 +5,6 @@ import subprocess
 import sys
 
 import pytest
-from result_files import write_config
 
 from vrsweep.threads import available_threads
 
@@ -33,7 +32,7 @@ def test_it_is_numbas_own_count_in_a_fresh_process(tmp_path):
         assert numba_count == ours, (value, done.stdout)
 
 
-def test_an_unreadable_numba_num_threads_is_no_traceback(tmp_path):
+def test_an_unreadable_numba_num_threads_is_no_traceback(tmp_path, write_config):
     config = write_config(tmp_path, """\
         model: effective
         integration: {transient_periods: 1, measure_periods: 1, strobe_periods: 1}

@@ -264,7 +264,7 @@ def attractor_extras_from_file(f, period_tolerance):
     """attractor_extras for an open h5py File whose point variables are all written (a merge's
     output before its derived variables are added): the grid's axes are the dimension scales of
     ``done``. Reads only the variables in NEEDED. A merge then adds the result with
-    ``store._add_extras(f, *attractor_extras_from_file(f, period_tolerance))``."""
+    ``store.layout.add_extras(f, *attractor_extras_from_file(f, period_tolerance))``."""
     names = [dim[0].name.rsplit("/", 1)[-1] for dim in f["done"].dims] if f["done"].ndim else []
     if not has_initial_state_axes(names):
         return {}, {}
@@ -275,23 +275,24 @@ def attractor_extras_from_file(f, period_tolerance):
 def attractor_rows(results, at=None):
     """The table of a result file, as a list of (slice description, [row dicts]) for printing.
 
-    results: a store.ResultSet. at: optional {axis: index} restricting the slices.
+    results: an xarray Dataset (vrsweep.open_results). at: optional {axis: index} restricting the
+    slices.
     """
-    if "attractor_count" not in results.variables:
+    if "attractor_count" not in results:
         return []
-    slice_dims = tuple(results.dims["attractor_count"])
-    counts = np.asarray(results.variables["attractor_count"])
+    slice_dims = tuple(results["attractor_count"].dims)
+    counts = np.asarray(results["attractor_count"].values)
     out = []
     for where in np.ndindex(*counts.shape):
         if at and any(where[slice_dims.index(name)] != index for name, index in at.items() if name in slice_dims):
             continue
-        described = ", ".join(f"{name}={results.axes[name][i]:g}" for name, i in zip(slice_dims, where))
+        described = ", ".join(f"{name}={results[name].values[i]:g}" for name, i in zip(slice_dims, where))
         rows = []
         for label in range(int(counts[where])):
             row = {"label": label}
             for key, (name, _) in _TABLE_ATTRS.items():
-                if name in results.variables:
-                    value = np.asarray(results.variables[name])[where + (label,)]
+                if name in results:
+                    value = np.asarray(results[name].values)[where + (label,)]
                     row[key] = value.item()
             rows.append(row)
         out.append((described, rows))

@@ -2,9 +2,44 @@
 
 
 class VrsweepError(Exception):
-    """Base class. ``exit_code`` is what the CLI exits with."""
+    """Base class. ``exit_code`` is what the CLI exits with.
+
+    The library words its messages without command-line flags: an error about a function's
+    arguments is made with :meth:`naming`, its message a template where ``{argument}`` names an
+    argument; a command re-words it for its own flags with :meth:`reworded` (``{x_axis}`` is
+    ``x_axis`` in Python, ``--x`` at the command line).
+    """
 
     exit_code = 1
+    template = None  # set by naming(): the message with its arguments as {placeholders}
+
+    @classmethod
+    def naming(cls, template: str, /, argument_words=None, **values):
+        """The error ``template.format(**values)``, where a ``{placeholder}`` that is not in
+        ``values`` is an argument, worded as ``argument_words`` says (default: its own name).
+
+        Values (paths, numbers) go in ``values``, never into the template, so that their braces
+        are never read as placeholders.
+        """
+        error = cls(template.format_map(_Wording(argument_words or {}, values)))
+        error.template, error.argument_words, error.values = template, dict(argument_words or {}), values
+        return error
+
+    def reworded(self, flags: dict):
+        """This error with its arguments worded by ``flags`` ({argument: "--flag"}), for a command
+        that took them from the command line; the error itself if it names no argument."""
+        if self.template is None:
+            return self
+        return type(self).naming(self.template, {**self.argument_words, **flags}, **self.values)
+
+
+class _Wording(dict):
+    def __init__(self, words, values):
+        super().__init__(values)
+        self.words = words
+
+    def __missing__(self, key):
+        return self.words.get(key, key)
 
 
 class ConfigError(VrsweepError):
@@ -25,7 +60,8 @@ class ConfigError(VrsweepError):
 
 
 class UsageError(VrsweepError):
-    """Bad command-line usage that click itself cannot see (e.g. output exists without --overwrite)."""
+    """Bad usage that click itself cannot see: of a command (the output exists and overwriting was
+    not asked for) or of a library function (an axis the file does not have)."""
 
     exit_code = 2
 

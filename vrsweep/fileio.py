@@ -132,8 +132,9 @@ def refuse_if_being_written(path, action="replace") -> None:
     """UsageError (exit 2) if another process is writing ``path``: never pull a file from under
     it (``--overwrite``), nor write it twice (``--resume``)."""
     if being_written(path):
-        raise UsageError(f"cannot {action} {path}: it is being written by another process (a run in "
-                         "progress?); wait for that run to end, stop it, or choose another -o")
+        raise UsageError.naming("cannot {action} {path}: it is being written by another process (a run in "
+                                "progress?); wait for that run to end, stop it, or choose another {output}",
+                                {"output": "output path"}, action=action, path=path)
 
 
 def identity(fd):

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import itertools
 import os
-from dataclasses import dataclass, field
 
 import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap
@@ -73,17 +72,24 @@ LOG_SPAN = 100.0  # drawn values spanning this ratio (two decades) or more get a
 # --------------------------------------------------------------------------------------------
 
 
-def parameter_label(name: str) -> str:
-    """'fast forcing amplitude $g$ [1]' for a parameter, with its symbol and units."""
+def parameter_label(name: str, units=None) -> str:
+    """'fast forcing amplitude $g$ [1]' for a parameter, with its symbol and units (``units``: as
+    a file's coordinate says; default: the model's, dimensionless)."""
+    units = f"[{units}]" if units is not None else UNITS
     if name == "direction":
         return "continuation direction"
     if name in INITIAL_STATE_LONG_NAMES:  # x0, v0: 'initial position $x(0)$ [1]'
         words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
-        return f"{words} {INITIAL_STATE_SYMBOLS[name]} {UNITS}"
+        return f"{words} {INITIAL_STATE_SYMBOLS[name]} {units}"
     words = PARAMETER_LONG_NAMES.get(name, name)
     if words.endswith(" " + name):
         words = words[: -len(name) - 1]
-    return f"{words} {PARAMETER_SYMBOLS.get(name, name)} {UNITS}"
+    return f"{words} {PARAMETER_SYMBOLS.get(name, name)} {units}"
+
+
+def _symbol(name: str) -> str:
+    """$g$ for a parameter, $x(0)$ for an initial state, the name itself otherwise."""
+    return PARAMETER_SYMBOLS.get(name) or INITIAL_STATE_SYMBOLS.get(name, name)
 
 
 def _number(value) -> str:
@@ -146,13 +152,16 @@ def _width(fig):
 
 
 def load(path):
-    """A trajectory (TrajectoryData) or sweep result (ResultSet); ResultFileError otherwise."""
-    from vrsweep.store import read_results
+    """A trajectory (TrajectoryData) or a sweep result (an xarray Dataset, loaded and its file
+    closed); ResultFileError otherwise."""
+    from vrsweep.reading import load_results
     from vrsweep.trajectory_file import is_trajectory_file, read_trajectory
 
     if is_trajectory_file(path):
         return read_trajectory(path)
-    return read_results(path)  # says what is wrong with anything that is not a results file
+    ds = load_results(path)  # says what is wrong with anything that is not a results file
+    ds.encoding["source"] = os.fspath(path)  # messages name the file as the user did
+    return ds
 
 
 def default_kind(data) -> str:
@@ -161,7 +170,13 @@ def default_kind(data) -> str:
 
     if isinstance(data, TrajectoryData):
         return "trajectory"
-    return _sweep_default(data.axes)
+    return _sweep_default(_grid_axes(data))
+
+
+def _grid_axes(ds):
+    """The sweep axes still to draw along, {name: values} in sweep order: the dimensions of
+    ``done`` (an axis fixed by ``at`` is a scalar coordinate, no longer one of them)."""
+    return {name: ds[name].values for name in ds["done"].dims}
 
 
 def _sweep_default(axes):
@@ -172,58 +187,66 @@ def _sweep_default(axes):
     return "response"
 
 
-def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None) -> Figure:
+def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None, var=None) -> Figure:
     """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
 
-    sources: a path, or a list of paths or of what ``load`` returned. at: {axis: value} fixing
+    sources: a path, or a list of paths or of what ``load`` returned (a sweep's Dataset, from
+    ``load`` or ``vrsweep.open_results``; a trajectory's TrajectoryData). at: {axis: value} fixing
     sweep axes; x_axis: the swept parameter to draw against; log: True for a logarithmic response
     axis (or colour scale of a map), False for a linear one, None to choose (response plots: log
     when the values span two decades or more; maps: linear); periods: (first, last) slow periods
-    of a trajectory to show.
+    of a trajectory to show; var: the stored variable a map shows (default R, or Q_amplitude with
+    ``amplitude``).
     """
     from vrsweep.trajectory_file import TrajectoryData
 
     if isinstance(sources, (str, os.PathLike)):
         sources = [sources]
     if not sources:
-        raise UsageError("no file to plot")
+        raise UsageError.naming("no file to plot")
     data = [load(s) if isinstance(s, (str, os.PathLike)) else s for s in sources]
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
-        raise UsageError("plot sweep results and trajectory files separately")
+        raise UsageError.naming("plot sweep results and trajectory files separately")
     if len(data) > 1 and not (all(trajectories) and kind == "impacts"):
-        raise UsageError("several files go on one figure only with --kind impacts of trajectory files "
-                         "(Fig. impact_no); plot the others one at a time")
+        raise UsageError.naming("several files go on one figure only with {kind} impacts of trajectory files "
+                                "(Fig. impact_no); plot the others one at a time")
     if all(trajectories):
         kind = kind or "trajectory"
         if kind not in TRAJECTORY_KINDS:
-            raise UsageError(f"--kind {kind} is for sweep results; a trajectory file takes "
-                             f"{', '.join(TRAJECTORY_KINDS)}")
+            raise UsageError.naming("{kind} {value} is for sweep results; a trajectory file takes {kinds}",
+                                    value=kind, kinds=", ".join(TRAJECTORY_KINDS))
         if at or x_axis or amplitude or log is not None:
-            raise UsageError("--at, --x, --amplitude and --log/--linear are for sweep results, not trajectory files")
+            raise UsageError.naming("{at}, {x_axis}, {amplitude} and {log}/{linear} are for sweep results, "
+                                    "not trajectory files")
         if kind == "impacts":
             return impacts_per_period_figure(data)
         if kind == "slowflow":
             return slow_flow_figure(data[0], periods=periods)
         return trajectory_figure(data[0], periods=periods)
     if periods is not None:
-        raise UsageError("--periods is for trajectory files (vrsweep simulate), not sweep results")
-    view = SweepView.from_results(data[0], at or {})
-    kind = kind or _sweep_default(view.axes)  # after --at: a fixed axis no longer counts
+        raise UsageError.naming("{periods} is for trajectory files (vrsweep simulate), not sweep results")
+    ds = select(data[0], at or {})
+    # After at, a fixed axis no longer counts; a variable to map asks for a map.
+    kind = kind or ("map" if var is not None else _sweep_default(_grid_axes(ds)))
     if kind not in SWEEP_KINDS:
-        raise UsageError(f"--kind {kind} is for trajectory files (vrsweep simulate); a sweep result takes "
-                         f"{', '.join(SWEEP_KINDS)}")
+        raise UsageError.naming("{kind} {value} is for trajectory files (vrsweep simulate); a sweep result "
+                                "takes {kinds}", value=kind, kinds=", ".join(SWEEP_KINDS))
+    if var is not None and kind != "map":
+        raise UsageError.naming("{var} is for {kind} map, not {kind} {value}", value=kind)
+    if var is not None and amplitude:  # never ignored quietly
+        raise UsageError.naming("{amplitude} maps Q_amplitude and {var} names the variable itself: give one of them")
     if kind == "response":
-        return response_figure(view, amplitude=amplitude, x_axis=x_axis, log=log)
+        return response_figure(ds, amplitude=amplitude, x_axis=x_axis, log=log)
     if kind == "map":
-        return map_figure(view, "Q_amplitude" if amplitude else "R", x_axis=x_axis, log=bool(log))
+        return map_figure(ds, var or ("Q_amplitude" if amplitude else "R"), x_axis=x_axis, log=bool(log))
     if kind == "impacts":
-        return impacts_figure(view, x_axis=x_axis, log=bool(log))
+        return impacts_figure(ds, x_axis=x_axis, log=bool(log))
     if log:  # never ignored quietly
-        raise UsageError(f"--log is for response, map and impacts plots, not --kind {kind}")
+        raise UsageError.naming("{log} is for response, map and impacts plots, not {kind} {value}", value=kind)
     if kind == "status":
-        return status_figure(view, x_axis=x_axis)
-    return bifurcation_figure(view, x_axis=x_axis)
+        return status_figure(ds, x_axis=x_axis)
+    return bifurcation_figure(ds, x_axis=x_axis)
 
 
 # --------------------------------------------------------------------------------------------
@@ -231,52 +254,58 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
 # --------------------------------------------------------------------------------------------
 
 
-@dataclass
-class SweepView:
-    """A sweep result with some axes fixed by --at: what the sweep figures draw from."""
+def select(ds, at: dict):
+    """``ds`` with the axes named in ``at`` fixed at one of their values ({axis: value}; a value may
+    be text, and 'up'/'down' for direction): xarray's labelled selection, after a check that each
+    value is on the grid (never the nearest value quietly)."""
+    axes = _grid_axes(ds)
+    where = {}
+    for name, wanted in at.items():
+        if name not in axes:
+            raise UsageError.naming("{at} {name}=...: {name} is not an axis of {path} (axes: {axes})",
+                                    name=name, path=_path(ds), axes=", ".join(axes) or "none")
+        where[name] = _axis_index(name, np.asarray(axes[name], dtype=np.float64), wanted)
+    return ds.isel(where)
 
-    path: str
-    axes: dict              # remaining axes, name -> values ("direction" included if present)
-    variables: dict         # name -> array over the remaining axes (+ extra dims last)
-    dims: dict              # name -> dimension names
-    config: object          # vrsweep.config.Config or None
-    model: str
-    selected: dict = field(default_factory=dict)   # parameter -> value fixed by --at
-    complete: bool = True
-    n_done: int = 0
-    n_points: int = 0
-    shard: str | None = None  # "I/N" for a shard file (vrsweep run --shard)
 
-    @classmethod
-    def from_results(cls, results, at: dict):
-        axes = dict(results.axes)
-        variables = dict(results.variables)
-        dims = {name: tuple(d) for name, d in results.dims.items()}
-        selected = {}
-        done = np.asarray(results.done)
-        done_dims = tuple(results.axes)
-        for name, wanted in at.items():
-            if name not in axes:
-                raise UsageError(f"--at {name}=...: {name} is not an axis of {results.path} "
-                                 f"(axes: {', '.join(axes) or 'none'})")
-            values = np.asarray(axes[name], dtype=np.float64)
-            index = _axis_index(name, values, wanted)
-            for variable, array in variables.items():
-                if name in dims[variable]:
-                    position = dims[variable].index(name)
-                    variables[variable] = np.take(array, index, axis=position)
-                    dims[variable] = dims[variable][:position] + dims[variable][position + 1:]
-            done = np.take(done, index, axis=done_dims.index(name))
-            done_dims = tuple(d for d in done_dims if d != name)
-            if name != "direction":
-                selected[name] = float(values[index])
-            del axes[name]
-        config = _parse_config(results.attrs.get("config", ""))
-        return cls(path=results.path, axes=axes, variables=variables, dims=dims, config=config,
-                   model=str(results.attrs.get("model", config.model if config else "original")),
-                   selected=selected, complete=results.complete,
-                   n_done=int(np.sum(done)), n_points=int(np.size(done)),
-                   shard=_text_attr(results.attrs.get("shard")))
+def _path(ds):
+    return ds.encoding.get("source", "the Dataset")
+
+
+class _Values:
+    """A Dataset's variables as plain arrays, by name: what the figures draw."""
+
+    def __init__(self, ds):
+        self._ds = ds
+
+    def __contains__(self, name):
+        return name in self._ds.data_vars
+
+    def __getitem__(self, name):
+        return self._ds[name].values
+
+    def get(self, name, default=None):
+        return self[name] if name in self else default
+
+
+class _Sweep:
+    """What the sweep figures draw from: a Dataset (axes fixed by ``select`` already) and what its
+    attributes say (path, parsed config, model, progress)."""
+
+    def __init__(self, ds):
+        self.ds = ds
+        self.path = _path(ds)
+        self.axes = _grid_axes(ds)
+        self.variables = _Values(ds)
+        # Axes fixed by select() stay as scalar coordinates: the parameters they fix.
+        self.selected = {str(name): float(coord.values) for name, coord in ds.coords.items()
+                         if coord.ndim == 0 and name != "direction"}
+        self.config = _parse_config(ds.attrs.get("config", ""))
+        self.model = str(ds.attrs.get("model", self.config.model if self.config else "original"))
+        self.complete = bool(ds.attrs.get("vrsweep_complete", 0))
+        done = np.asarray(ds["done"].values)
+        self.n_done, self.n_points = int(np.sum(done)), int(np.size(done))
+        self.shard = _text_attr(ds.attrs.get("shard"))
 
     @property
     def parameter_axes(self):
@@ -285,7 +314,8 @@ class SweepView:
     def parameters(self, **coordinates):
         """The nine parameters at this view's fixed values and the given axis coordinates."""
         if self.config is None:
-            raise UsageError(f"{self.path} holds no readable config: cannot compute the analytic side")
+            raise UsageError.naming("{path} holds no readable config: cannot compute the analytic side",
+                                    path=self.path)
         return dict(self.config.parameters, **self.selected, **coordinates)
 
     def require(self, *names):
@@ -294,17 +324,12 @@ class SweepView:
             raise ResultFileError(f"{self.path} has no {', '.join(missing)} (written by an older vrsweep?)")
 
     def along(self, name, x_axis, **coordinates):
-        """``name`` along ``x_axis`` at the given coordinates of the other axes (extra dims kept)."""
-        array = self.variables[name]
-        dims = list(self.dims[name])
-        for axis, index in coordinates.items():
-            if axis in dims:
-                position = dims.index(axis)
-                array = np.take(array, index, axis=position)
-                dims.pop(position)
-        if x_axis in dims:
-            array = np.moveaxis(array, dims.index(x_axis), 0)
-        return array
+        """``name`` along ``x_axis`` at the given indices of the other axes (extra dims kept, last)."""
+        array = self.ds[name]
+        array = array.isel({axis: index for axis, index in coordinates.items() if axis in array.dims})
+        if x_axis in array.dims:
+            array = array.transpose(x_axis, ...)
+        return array.values
 
     def curve_coordinates(self, x_axis):
         """Every combination of the axes other than ``x_axis``: list of ({axis: index}, label)."""
@@ -329,16 +354,18 @@ def _axis_index(name, values, wanted):
         words = {"up": 1.0, "down": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
         key = str(wanted).strip().lower()
         if key not in words:
-            raise UsageError(f"--at direction={wanted}: the direction is up or down (+1 or -1)")
+            raise UsageError.naming("{at} direction={value}: the direction is up or down (+1 or -1)", value=wanted)
         wanted = words[key]
     try:
         wanted = float(wanted)
     except ValueError:
-        raise UsageError(f"--at {name}={wanted}: not a number; {name} takes values {_axis_span(values)}") from None
+        raise UsageError.naming("{at} {name}={value}: not a number; {name} takes values {span}",
+                                name=name, value=wanted, span=_axis_span(values)) from None
     index = int(np.argmin(np.abs(values - wanted)))
     if abs(values[index] - wanted) > 1e-9 * max(1.0, abs(wanted)):
-        raise UsageError(f"--at {name}={_number(wanted)}: not a value of the axis {name}; "
-                         f"{_nearest_text(values, wanted)} (axis: {_axis_span(values)})")
+        raise UsageError.naming("{at} {name}={value}: not a value of the axis {name}; {nearest} (axis: {span})",
+                                name=name, value=_number(wanted), nearest=_nearest_text(values, wanted),
+                                span=_axis_span(values))
     return index
 
 
@@ -361,16 +388,19 @@ def _axis_span(values):
 def _choose_x_axis(view, x_axis, need_axes=None):
     axes = view.parameter_axes
     if not axes:
-        raise UsageError(f"{view.path} is a single point{' after --at' if view.selected else ''}: nothing "
-                         "to plot against (vrsweep simulate draws one point's trajectory)")
+        raise UsageError.naming("{path} is a single point" + (" after {at}" if view.selected else "")
+                                + ": nothing to plot against (vrsweep simulate draws one point's trajectory)",
+                                path=view.path)
     if x_axis is not None:
         if x_axis not in axes:
-            raise UsageError(f"--x {x_axis}: not a swept axis of {view.path} (axes: {', '.join(axes)})")
+            raise UsageError.naming("{x_axis} {value}: not a swept axis of {path} (axes: {axes})",
+                                    value=x_axis, path=view.path, axes=", ".join(axes))
         return x_axis
     if need_axes is not None and len(axes) != need_axes:
-        raise UsageError(
-            f"{view.path} sweeps {', '.join(axes)}: this plot needs {need_axes} axis(es); fix the others "
-            f"with --at, e.g. --at {axes[-1]}={_number(view.axes[axes[-1]][0])}")
+        raise UsageError.naming(
+            "{path} sweeps {axes}: this plot needs {need} axis(es); fix the others with {at}, e.g. {at} {example}",
+            path=view.path, axes=", ".join(axes), need=need_axes,
+            example=f"{axes[-1]}={_number(view.axes[axes[-1]][0])}")
     return "g" if "g" in axes else axes[0]
 
 
@@ -541,7 +571,7 @@ def _resonance_label(axis, position):
 # --------------------------------------------------------------------------------------------
 
 
-def response_figure(view: SweepView, amplitude=False, x_axis=None, log=None) -> Figure:
+def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     """R (or |Q|) against one axis with the analytic branches and the resonance (Fig. 1, Fig. 2).
 
     Markers follow the README ("Can R be trusted?"): filled where R_err <= 10% of R (R can be
@@ -553,14 +583,15 @@ def response_figure(view: SweepView, amplitude=False, x_axis=None, log=None) -> 
     drawn values (numerical and analytic) span LOG_SPAN or more -- the analytic gain A/c reaches
     ~50 with the paper's parameters while the numerical R may go down to 0.01.
     """
+    view = _Sweep(ds)
     x_axis = _choose_x_axis(view, x_axis)
     name = "Q_amplitude" if amplitude else "R"
     view.require(name, "status")
     curves = view.curve_coordinates(x_axis)
     if len(curves) > MAX_CURVES:
         others = [n for n in view.parameter_axes if n != x_axis]
-        raise UsageError(f"{len(curves)} curves of {name} against {x_axis} on one plot: fix "
-                         f"{', '.join(others)} with --at, or draw --kind map")
+        raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
+                                "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 6.0)
     ax = fig.subplots()
@@ -690,11 +721,12 @@ def _text_attr(value):
 def _map_axes(view, x_axis):
     axes = view.parameter_axes
     if len(axes) != 2:
-        raise UsageError(f"a map needs two swept axes; {view.path} has {', '.join(axes) or 'none'}"
-                         f"{' left after --at' if view.selected else ''}")
+        raise UsageError.naming("a map needs two swept axes; {path} has {axes}" + (" left after {at}" if view.selected else ""),
+                                path=view.path, axes=", ".join(axes) or "none")
     x_axis = x_axis or ("g" if "g" in axes else axes[0])
     if x_axis not in axes:
-        raise UsageError(f"--x {x_axis}: not a swept axis of {view.path} (axes: {', '.join(axes)})")
+        raise UsageError.naming("{x_axis} {value}: not a swept axis of {path} (axes: {axes})",
+                                value=x_axis, path=view.path, axes=", ".join(axes))
     return x_axis, next(name for name in axes if name != x_axis)
 
 
@@ -730,37 +762,96 @@ def _limits(values):
     return float(values.min()), float(values.max())
 
 
-def map_figure(view: SweepView, name="R", x_axis=None, log=False) -> Figure:
-    """A heat map of ``name`` over two axes with the resonance curve; untrusted R dotted, failed x.
+MAP_LABELS = {"R": "gain $R = |Q|/c$", "Q_amplitude": "amplitude $|Q|$",
+              "impacts_per_period": "mean impacts per slow period $2\\pi/\\omega$"}
+LONG_NAME_IN_LABEL = 45  # characters of a variable's long_name that fit beside a colour bar
 
-    log: a logarithmic colour scale (from the smallest positive value up). The legend goes below
-    the maps, where it hides no cell.
-    """
+
+def mappable_variables(ds) -> list:
+    """The variables of ``ds`` that a map can show: one value per grid point (dimensions exactly
+    the sweep axes left after ``select``), numbers, in the file's order."""
+    axes = set(_grid_axes(ds))
+    return [str(name) for name, variable in ds.data_vars.items()
+            if name not in ("done", "owned") and set(variable.dims) == axes and variable.dtype.kind in "iuf"]
+
+
+def _units_text(attrs):
+    """'[1]' from a variable's ``units`` attribute ('' for a flag variable, which has none)."""
+    units = attrs.get("units")
+    return f"[{units}]" if units is not None else ""
+
+
+def _variable_label(ds, name):
+    """The colour bar's label: what the variable is and its units, from the file's attributes."""
+    attrs = ds[name].attrs
+    words = MAP_LABELS.get(name)
+    if words is None:
+        long_name = str(attrs.get("long_name", ""))
+        words = name if not long_name or len(long_name) > LONG_NAME_IN_LABEL else f"{name}: {long_name}"
+    return f"{words} {_units_text(attrs)}".rstrip()
+
+
+def _map_norm(values, log, counts=False):
+    """Colours from 0 (or the smallest value, if negative) to the 99th percentile of a float
+    variable (one wild point must not wash out the map), to the largest of a count or a label
+    (``counts``: an integer variable, its points not computed NaN here)."""
     from matplotlib.colors import LogNorm, Normalize
 
+    finite = values[np.isfinite(values)]
+    low = min(0.0, float(finite.min())) if finite.size else 0.0
+    if not finite.size:
+        high = 1.0
+    elif counts:
+        high = float(finite.max())
+    else:
+        high = float(np.percentile(finite, 99))
+    if high <= low:
+        high = low + 1.0
+    positive = finite[finite > 0]
+    if log and positive.size:
+        return LogNorm(vmin=float(positive.min()), vmax=max(high, float(positive.min()) * 10)), finite
+    return Normalize(vmin=low, vmax=high), finite
+
+
+def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
+    """A heat map of ``name`` over two axes with the resonance curve; untrusted R dotted, failed x.
+
+    name: R, Q_amplitude, impacts_per_period or any other variable with one value per grid point
+    (``mappable_variables``); points not computed are grey. log: a logarithmic colour scale (from
+    the smallest positive value up). The legend goes below the maps, where it hides no cell.
+    """
+    view = _Sweep(ds)
     x_axis, y_axis = _map_axes(view, x_axis)
-    view.require(name)
+    if name in MAP_LABELS:
+        view.require(name)  # the usual maps: a file without them is from an older vrsweep
+    mappable = mappable_variables(ds)
+    if name not in mappable:
+        raise UsageError.naming("{var} {value}: {path} has no such variable with one value per grid point; "
+                                "it has {names}", value=name, path=view.path, names=", ".join(mappable))
     panels = _map_panels(view)
     fig = _new_figure(7.5 * len(panels), 5.6)
     axes = np.atleast_1d(fig.subplots(1, len(panels), squeeze=False)[0])
-    label = {"R": f"gain $R = |Q|/c$ {UNITS}", "Q_amplitude": f"amplitude $|Q|$ {UNITS}",
-             "impacts_per_period": f"mean impacts per slow period $2\\pi/\\omega$ {UNITS}"}[name]
+    label = _variable_label(ds, name)
     values = view.variables[name]
-    finite = values[np.isfinite(values)]
-    vmax = float(np.percentile(finite, 99)) if finite.size else 1.0  # one wild point must not wash out the map
-    positive = finite[finite > 0]
-    if log and positive.size:
-        norm = LogNorm(vmin=float(positive.min()), vmax=max(vmax, float(positive.min()) * 10))
-    else:
-        norm = Normalize(vmin=0.0, vmax=vmax)
+    counts = values.dtype.kind != "f"
+    if counts:  # a count or a label: points not computed hold a fill value
+        values = np.where(np.asarray(ds["done"].values, dtype=bool), values, np.nan)
+    norm, finite = _map_norm(values, log, counts)
     handles = {}
     for ax, (where, panel_title) in zip(axes, panels):
         z = _as_x_y(view, name, x_axis, y_axis, where)
+        if ds[name].dtype.kind != "f":
+            z = np.where(_as_x_y(view, "done", x_axis, y_axis, where) > 0, z, np.nan)
         ax.set_facecolor("0.8")  # NaN cells (not computed, or failed) show the background
         mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap="viridis",
                              norm=norm)
-        fig.colorbar(mesh, ax=ax, label=label + (" (log scale)" if log else ""),
-                     extend="max" if finite.size and finite.max() > norm.vmax else "neither")
+        bar = fig.colorbar(mesh, ax=ax, label=label + (" (log scale)" if log else ""),
+                           extend="max" if finite.size and finite.max() > norm.vmax else "neither")
+        if counts and not log:
+            from matplotlib.ticker import MaxNLocator
+
+            bar.locator = MaxNLocator(integer=True)  # a period or a label has no value between integers
+            bar.update_ticks()
         resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
         if resonance is not None:
             handles["resonance"] = resonance
@@ -781,8 +872,8 @@ def map_figure(view: SweepView, name="R", x_axis=None, log=False) -> Figure:
                 ax.plot(X[failed], Y[failed], "x", color=FAILED_COLOUR, ms=4, gid="failed")
                 handles["failed"] = Line2D([], [], ls="none", marker="x", color=FAILED_COLOUR,
                                            label="integration failed (status ≠ ok)")
-        ax.set_xlabel(parameter_label(x_axis))
-        ax.set_ylabel(parameter_label(y_axis))
+        ax.set_xlabel(parameter_label(x_axis, ds[x_axis].attrs.get("units")))
+        ax.set_ylabel(parameter_label(y_axis, ds[y_axis].attrs.get("units")))
         if panel_title:
             ax.set_title(panel_title, fontsize=9)
     if handles:
@@ -793,35 +884,30 @@ def map_figure(view: SweepView, name="R", x_axis=None, log=False) -> Figure:
     notes = "; ".join(note for note in (_progress_note(view), _failure_note(view, "on its cell")
                                         if name in ("R", "Q_amplitude") and "status" in view.variables else "")
                       if note)
-    _title(fig, f"{label.split(' [')[0]} over {PARAMETER_SYMBOLS[x_axis]} and {PARAMETER_SYMBOLS[y_axis]} "
-                "(grey: no value: not computed or failed)",
+    grey = "not computed or failed" if ds[name].dtype.kind == "f" else "not computed"
+    _title(fig, f"{label.split(' [')[0]} over {_symbol(x_axis)} and {_symbol(y_axis)} (grey: no value: {grey})",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
 
 def _as_x_y(view, name, x_axis, y_axis, where):
     """``name`` as a 2-D array indexed [x, y] at ``where`` (other dims already fixed)."""
-    array = view.variables[name]
-    dims = list(view.dims[name])
-    for axis, index in where.items():
-        position = dims.index(axis)
-        array = np.take(array, index, axis=position)
-        dims.pop(position)
-    return np.moveaxis(array, [dims.index(x_axis), dims.index(y_axis)], [0, 1]).astype(np.float64)
+    return view.ds[name].isel(where).transpose(x_axis, y_axis).values.astype(np.float64)
 
 
-def impacts_figure(view: SweepView, x_axis=None, log=False) -> Figure:
+def impacts_figure(ds, x_axis=None, log=False) -> Figure:
     """Mean impacts per slow period over the measurement window: a curve (1 axis) or a map (2).
 
     log: a logarithmic count axis (symmetric-log, so that zero counts stay on it) or colour scale.
     """
+    view = _Sweep(ds)
     view.require("impacts_per_period")
     if len(view.parameter_axes) == 2 and x_axis is None and _sweep_default(view.axes) == "map":
-        return map_figure(view, "impacts_per_period", log=log)
+        return map_figure(ds, "impacts_per_period", log=log)
     x_axis = _choose_x_axis(view, x_axis)
     curves = view.curve_coordinates(x_axis)
     if len(curves) > MAX_CURVES:
-        raise UsageError(f"{len(curves)} curves on one plot: fix the other axes with --at")
+        raise UsageError.naming("{n} curves on one plot: fix the other axes with {at}", n=len(curves))
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 4.5)
     ax = fig.subplots()
@@ -856,8 +942,9 @@ def impacts_figure(view: SweepView, x_axis=None, log=False) -> Figure:
     return fig
 
 
-def status_figure(view: SweepView, x_axis=None) -> Figure:
+def status_figure(ds, x_axis=None) -> Figure:
     """How each point ended (ok, max_steps, diverged, ...): a strip (1 axis) or a map (2 axes)."""
+    view = _Sweep(ds)
     view.require("status")
     codes = [int(s) for s in Status]
     names = [s.name.lower() for s in Status]
@@ -918,8 +1005,9 @@ def _row_name(k, n):
     return f"row {k + 1} of {n} from below"
 
 
-def bifurcation_figure(view: SweepView, x_axis=None) -> Figure:
+def bifurcation_figure(ds, x_axis=None) -> Figure:
     """Stroboscopic x(nT) against one swept parameter, every sample a dot (issue 5)."""
+    view = _Sweep(ds)
     view.require("strobe_x")
     x_axis = _choose_x_axis(view, x_axis, need_axes=1)
     fig = _new_figure(8.0, 5.0)
@@ -988,7 +1076,8 @@ def parse_periods(text):
     except ValueError:
         window = None
     if not colon or window is None or window[0] < 1 or (window[1] is not None and window[1] < window[0]):
-        raise UsageError(f"--periods {text}: expected FIRST:LAST slow periods, e.g. 1:20 or 81:100")
+        raise UsageError.naming("{periods} {value}: expected FIRST:LAST slow periods, e.g. 1:20 or 81:100",
+                                value=text)
     return window
 
 
@@ -1011,7 +1100,8 @@ def _time_window(data, periods):
     n_periods = slow_periods_in(data)
     last = n_periods if last is None else last
     if first > n_periods:
-        raise UsageError(f"--periods {first}:{last}: the run has {n_periods} slow periods")
+        raise UsageError.naming("{periods} {value}: the run has {n} slow periods", value=f"{first}:{last}",
+                                n=n_periods)
     return (first - 1) * slow_period, min(last, n_periods) * slow_period
 
 
@@ -1147,8 +1237,9 @@ SLOW_FLOW_STYLES = {
 def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_literal")) -> Figure:
     """The effective system (numerical) against the first-order reconstruction eq2.21 (Fig. 6)."""
     if "effective" not in data.runs or not data.slow_flow:
-        raise UsageError(f"{data.path} holds no effective trajectory and slow flow: make it with "
-                         "vrsweep simulate --compare effective (or a config with model: effective)")
+        raise UsageError.naming("{path} holds no effective trajectory and slow flow: make it with "
+                                "vrsweep simulate --compare effective (or a config with model: effective)",
+                                path=data.path)
     config = _parse_config(data.config_text)
     delta = config.parameters["Delta"] if config is not None else None
     window = _time_window(data, periods)
@@ -1195,7 +1286,7 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
 
 __all__ = [
     "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "load", "default_kind", "plot",
-    "SweepView", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
+    "select", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
 ]
@@ -1214,45 +1305,51 @@ BASIN_NOT_COMPUTED = "white"  # an unfinished file's missing points
 def basin_plot(results, at=None) -> Figure:
     """``vrsweep plot FILE --kind basin``: the x0-v0 plane of one slice coloured by attractor.
 
-    results: a path or a store.ResultSet of a sweep with x0 and/or v0 axes; at: {axis: value}
-    fixing every other axis with more than one value (a slice's parameters).
+    results: a path, or the Dataset of a sweep with x0 and/or v0 axes (``load``,
+    ``vrsweep.open_results``); at: {axis: value} fixing every other axis with more than one value
+    (a slice's parameters).
     """
     from vrsweep.trajectory_file import TrajectoryData
 
     data = load(results) if isinstance(results, (str, os.PathLike)) else results
     if isinstance(data, TrajectoryData):
-        raise UsageError("--kind basin is for sweep results with x0 / v0 axes, not trajectory files")
-    if "attractor" not in data.variables:
-        if data.shard:
-            raise UsageError(f"{data.path} is a shard: attractors are labelled over whole slices, after "
-                             "vrsweep merge; plot the merged file")
-        if not data.complete:
-            raise UsageError(f"{data.path} is unfinished: attractors are labelled when the sweep ends "
-                             "(vrsweep run CONFIG --resume finishes it)")
-        if not any(name in data.axes for name in ("x0", "v0")):
-            raise UsageError(f"{data.path} has no x0 or v0 axis: a basin plot needs a sweep over the "
-                             "initial state (sweep: {x0: ..., v0: ...})")
-        raise ResultFileError(f"{data.path} has x0 / v0 axes but no attractor labels (merged or written by a "
+        raise UsageError.naming("{kind} basin is for sweep results with x0 / v0 axes, not trajectory files")
+    axes = _grid_axes(data)
+    if "attractor" not in data.data_vars:
+        path = _path(data)
+        if data.attrs.get("shard"):
+            raise UsageError.naming("{path} is a shard: attractors are labelled over whole slices, after "
+                                    "vrsweep merge; plot the merged file", path=path)
+        if not data.attrs.get("vrsweep_complete", 0):
+            raise UsageError.naming("{path} is unfinished: attractors are labelled when the sweep ends "
+                                    "(vrsweep run CONFIG --resume finishes it)", path=path)
+        if not any(name in axes for name in ("x0", "v0")):
+            raise UsageError.naming("{path} has no x0 or v0 axis: a basin plot needs a sweep over the "
+                                    "initial state (sweep: {{x0: ..., v0: ...}})", path=path)
+        raise ResultFileError(f"{path} has x0 / v0 axes but no attractor labels (merged or written by a "
                               "vrsweep that does not label them): 'vrsweep run CONFIG --resume -o "
-                              f"{data.path}' adds them without computing any point again")
+                              f"{path}' adds them without computing any point again")
     at = dict(at or {})
-    for name, values in data.axes.items():  # a one-value axis needs no --at
+    for name, values in axes.items():  # a one-value axis needs no at
         if name not in at and name not in ("x0", "v0") and len(values) == 1:
             at[name] = str(values[0])
-    view = SweepView.from_results(data, at)
-    return basin_figure(view)
+    return basin_figure(select(data, at))
 
 
-def basin_figure(view: SweepView) -> Figure:
-    """Attractor labels over the x0-v0 plane (or along x0 or v0), legend from the attractor table."""
+def basin_figure(ds) -> Figure:
+    """Attractor labels over the x0-v0 plane (or along x0 or v0), legend from the attractor table;
+    ``ds``: one slice of a sweep over the initial state (other axes fixed with ``select``)."""
+    view = _Sweep(ds)
     state_axes = [name for name in ("x0", "v0") if name in view.axes]
     if not state_axes:
-        raise UsageError(f"{view.path} has no x0 or v0 axis: a basin plot needs a sweep over the initial "
-                         "state (sweep: {x0: ..., v0: ...})")
+        raise UsageError.naming("{path} has no x0 or v0 axis: a basin plot needs a sweep over the initial "
+                                "state (sweep: {{x0: ..., v0: ...}})", path=view.path)
     others = [name for name in view.axes if name not in state_axes]
     if others:
-        example = " ".join(f"--at {name}={_number(view.axes[name][0])}" for name in others)
-        raise UsageError(f"{view.path} also sweeps {', '.join(others)}: pick one slice, e.g. {example}")
+        raise UsageError.naming("{path} also sweeps {others}: pick one slice, e.g. " +
+                                " ".join("{at} " + f"{{example{k}}}" for k in range(len(others))),
+                                path=view.path, others=", ".join(others),
+                                **{f"example{k}": f"{name}={_number(view.axes[name][0])}" for k, name in enumerate(others)})
     view.require("attractor", "attractor_count", "attractor_period", "attractor_R", "attractor_fraction")
     labels = np.asarray(view.variables["attractor"])
     status = np.asarray(view.variables["status"])
@@ -1266,7 +1363,7 @@ def basin_figure(view: SweepView) -> Figure:
     ax = fig.subplots()
     if len(state_axes) == 2:
         x_axis, y_axis = state_axes
-        z = index if view.dims["attractor"].index(x_axis) == 0 else index.T
+        z = index if ds["attractor"].dims.index(x_axis) == 0 else index.T
         ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap, norm=norm)
         ax.set_ylabel(_state_label(y_axis))
     else:

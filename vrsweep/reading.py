@@ -23,22 +23,36 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError
 
-__all__ = ["open_results", "status_names", "file_kind"]
+__all__ = ["open_results", "load_results", "status_names", "file_kind", "grid_axes", "point_variables", "derived_variables", "stored_variables", "open_groups"]
 
 
-def _locking_kwargs():
-    from vrsweep.fileio import hdf5_locking_kwargs
+def _open_dataset(path, group=None, **kwargs):
+    """xarray's h5netcdf backend on the file as ``fileio.open_hdf5`` opens it (the one place of the
+    locking policy, with its fallback for an HDF5 too old to be asked); closing the Dataset closes
+    the file."""
+    import xarray as xr
 
-    return hdf5_locking_kwargs()
+    from vrsweep.fileio import open_hdf5
+
+    h5file = open_hdf5(path, "r")
+    try:
+        ds = xr.open_dataset(h5file, engine="h5netcdf", group=group, **kwargs)
+    except BaseException:
+        h5file.close()
+        raise
+    ds.set_close(h5file.close)  # xarray closes only its own wrapper of a file it was handed
+    ds.encoding["source"] = os.fspath(path)
+    return ds
 
 
 def file_kind(path) -> str:
     """``"sweep"``, ``"shard"`` or ``"trajectory"``; ResultFileError for anything else."""
-    from vrsweep import store, trajectory_file
+    from vrsweep import trajectory_file
+    from vrsweep.store.reader import open_checked
 
     if trajectory_file.is_trajectory_file(path):
         return "trajectory"
-    with store._open_checked(path) as f:  # raises a ResultFileError that says what is wrong
+    with open_checked(path) as f:  # raises a ResultFileError that says what is wrong
         return "shard" if "shard" in f.attrs else "sweep"
 
 
@@ -79,7 +93,6 @@ def open_results(path, group: str | None = None):
         attributes in ``ds.attrs``. A trajectory group's Dataset carries the file's root
         attributes too, its own (``status``, ``model``...) taking precedence.
     """
-    import xarray as xr
 
     path = os.fspath(path)
     kind = file_kind(path)
@@ -95,15 +108,93 @@ def open_results(path, group: str | None = None):
         raise ResultFileError(f"{path} is a {kind} file, which has no groups (group={group!r})")
 
     try:
-        ds = xr.open_dataset(path, engine="h5netcdf", group=group, driver_kwds=_locking_kwargs())
-    except OSError as error:
-        from vrsweep.store import _corrupt_error
+        ds = _open_dataset(path, group)
+    except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
+        from vrsweep.store.reader import corrupt_error
 
-        raise _corrupt_error(path, error) from None
+        raise corrupt_error(path, error) from None
     if kind == "trajectory":
         ds.attrs = {**root_attrs, **ds.attrs, "vrsweep_group": group}
     ds.attrs.setdefault("vrsweep_file", kind)
     return ds
+
+
+def open_groups(path) -> dict:
+    """Every group of a vrsweep file as a lazily read Dataset, by its path ("" for the root): for
+    describing a file whatever it holds (``vrsweep info``). Close each Dataset when done.
+
+    A dataset without dimension scales (not written by vrsweep's store) gets h5netcdf's
+    ``phony_dim_N`` dimensions.
+    """
+    import h5py
+
+    from vrsweep.fileio import open_hdf5
+    from vrsweep.store.reader import corrupt_error
+
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ResultFileError(f"results file not found: {path}")
+    try:
+        if not h5py.is_hdf5(path):
+            raise ResultFileError(f"{path} is not an HDF5 file (so not a vrsweep file)")
+        names = [""]
+        with open_hdf5(path, "r") as f:  # only the names of the groups
+
+            def visit(name, obj):
+                if isinstance(obj, h5py.Group):
+                    names.append(name)
+
+            f.visititems(visit)
+        datasets = {}
+        try:
+            for name in names:
+                datasets[name] = _open_dataset(path, name or None, phony_dims="access")
+        except BaseException:
+            for ds in datasets.values():
+                ds.close()
+            raise
+        return datasets
+    except ResultFileError:
+        raise
+    except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
+        raise corrupt_error(path, error) from None
+
+
+def load_results(path, group: str | None = None):
+    """:func:`open_results`, loaded into memory and the file closed (as ``xarray.load_dataset``):
+    for a file that is about to be written again, or read once whole."""
+    with open_results(path, group) as ds:
+        try:
+            return ds.load()
+        except Exception as error:  # noqa: BLE001 - a chunk failing its checksum, or worse
+            from vrsweep.store.reader import corrupt_error
+
+            raise corrupt_error(os.fspath(path), error) from None
+
+
+def grid_axes(ds) -> tuple:
+    """The sweep axes of a sweep or shard Dataset, in sweep order (the dimensions of ``done``)."""
+    return tuple(ds["done"].dims)
+
+
+def point_variables(ds) -> tuple:
+    """The variables filled point by point, in creation order (derived ones, e.g. theory columns,
+    are the Dataset's other data variables); see store.layout."""
+    return tuple(str(ds["done"].attrs["point_variables"]).split())
+
+
+def derived_variables(ds) -> tuple:
+    """The variables added when the sweep finished (theory columns, attractor labels)."""
+    points = set(point_variables(ds))
+    return tuple(name for name in stored_variables(ds) if name not in points)
+
+
+def stored_variables(ds) -> tuple:
+    """Every data variable but the bookkeeping masks (``done``, ``owned``): point variables first,
+    then derived ones, in the file's order."""
+    from vrsweep.store.layout import BOOKKEEPING
+
+    return tuple(str(name) for name in ds.data_vars if name not in BOOKKEEPING)
 
 
 def status_names(status) -> np.ndarray:

@@ -54,7 +54,7 @@ from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.results import MESSAGES, Status
 from vrsweep.fileio import open_hdf5, write_bytes
-from vrsweep.store import FORMAT_VERSION
+from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "trajectory"
 DEFAULT_SAMPLES_PER_PERIOD = 200
@@ -139,13 +139,14 @@ class TrajectoryData:
 def sample_times(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD):
     """Evenly spaced times over the whole run, ``samples_per_period`` per slow period, ends included."""
     if samples_per_period < 1:
-        raise UsageError(f"--samples-per-period must be at least 1, got {samples_per_period}")
+        raise UsageError.naming("{samples_per_period} must be at least 1, got {value}", value=samples_per_period)
     n_periods = config.integration.transient_periods + config.integration.measure_periods
     n_samples = n_periods * samples_per_period + 1
     if n_samples > MAX_SAMPLES:
-        raise UsageError(
-            f"{n_periods} slow periods x {samples_per_period} samples per period = {n_samples} samples "
-            f"(more than {MAX_SAMPLES}): lower --samples-per-period or the run length")
+        raise UsageError.naming(
+            "{n_periods} slow periods x {samples} samples per period = {n_samples} samples (more than {most}): "
+            "lower {samples_per_period} or the run length", n_periods=n_periods, samples=samples_per_period,
+            n_samples=n_samples, most=MAX_SAMPLES)
     slow_period = 2.0 * np.pi / config.parameters["omega"]
     return np.linspace(0.0, n_periods * slow_period, n_samples)
 
@@ -154,10 +155,12 @@ def check_single_point(config):
     """simulate integrates one point: a config that still sweeps something is a usage error."""
     if config.axes:
         swept = ", ".join(f"{axis.name} ({len(axis)} values)" for axis in config.axes)
-        example = " ".join(f"--set {axis.name}={axis.values[0]:g}" for axis in config.axes)
-        raise UsageError(
-            f"{config.source_name} sweeps {swept}; simulate integrates a single point: "
-            f"fix every swept parameter, e.g. {example}")
+        # {set} before each override: nothing in Python (with_overrides takes "g=5"), --set at the CLI
+        example = " ".join("{set}" + f"{axis.name}={axis.values[0]:g}".replace("{", "{{").replace("}", "}}")
+                           for axis in config.axes)
+        raise UsageError.naming(
+            "{source} sweeps {swept}; simulate integrates a single point: fix every swept parameter, e.g. "
+            + example, {"set": ""}, source=config.source_name, swept=swept)
 
 
 def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare_effective=False):
@@ -167,8 +170,9 @@ def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compar
 
     check_single_point(config)
     if compare_effective and config.model == "effective":
-        raise UsageError("--compare effective compares the original model with the effective one, but "
-                         "the config's model is already effective: drop --compare, or --set model=original")
+        raise UsageError.naming("{compare_effective} compares the original model with the effective one, but "
+                                "the config's model is already effective: drop {compare}, or {model_original}",
+                                {"compare": "compare_effective", "model_original": "use model: original"})
     times = sample_times(config, samples_per_period)
     settings = trajectory.settings_vector(**vars(config.integration))
     initial_state = np.array([config.initial["x"], config.initial["v"]])
@@ -238,7 +242,8 @@ def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
     if os.path.isdir(path):
         raise UsageError(f"output {path} is a directory")
     if os.path.lexists(path) and not overwrite:
-        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
+        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
+                                {"overwrite": "overwrite=True"}, path=path)
     attrs = {"vrsweep_file": FILE_KIND, "vrsweep_format_version": np.int32(FORMAT_VERSION),
              "vrsweep_complete": np.int32(1),
              "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),

@@ -5,10 +5,11 @@ total), the model, the axes, the fixed parameters, every variable with its units
 status, and when and with which versions it was written. ``--json`` prints the same as one object
 for scripts.
 
-Reading goes through ``store.read_results``, which turns every bad file (missing, not HDF5, not
-vrsweep, truncated, newer format, locked) into a ResultFileError: the CLI group prints that one
-line and exits 2. Other vrsweep files (a ``simulate`` trajectory has no grid and no ``done``
-mask) are described from their attributes and datasets instead.
+Reading goes through ``vrsweep.reading`` (xarray and h5netcdf, as ``vrsweep.open_results``),
+which turns every bad file (missing, not HDF5, not vrsweep, truncated, newer format, locked) into
+a ResultFileError: the CLI group prints that one line and exits 2. Other vrsweep files (a
+``simulate`` trajectory has no grid and no ``done`` mask) are described group by group. The
+stored config is read by ``vrsweep.config``, as a run reads it.
 """
 
 from __future__ import annotations
@@ -47,76 +48,92 @@ def command(path, as_json, show_config):
 
 def describe(path) -> dict:
     """The summary of a vrsweep file as a JSON-ready dict; ResultFileError for a bad file."""
-    from vrsweep.store import read_results
+    from vrsweep.reading import file_kind, load_results
 
     try:
-        results = read_results(path)
+        kind = file_kind(path)
     except ResultFileError as error:
-        # read_results wants a sweep grid; a trajectory is a valid vrsweep file without one.
-        # Anything else keeps read_results' own message, which says what is wrong.
-        other = _describe_non_sweep(path)
+        # A sweep needs its grid; another vrsweep file of this format (hand-made, or from a
+        # later kind of output) is described from its groups. Anything else keeps the reader's
+        # own message, which says what is wrong.
+        other = _describe_groups(path, None)
         if other is None:
             raise error from None
         return other
-    return _describe_sweep(results)
+    if kind == "trajectory":
+        described = _describe_groups(path, kind)
+        if described is None:  # the trajectory reader says what is wrong (a newer format...)
+            from vrsweep.trajectory_file import read_trajectory
+
+            read_trajectory(path)
+            raise ResultFileError(f"{path} is a vrsweep trajectory this vrsweep cannot describe")
+        return described
+    # Every variable is read, not only what the summary shows: each chunk's checksum is checked,
+    # so a damaged file is reported as such instead of described (tests/test_errors.py).
+    return _describe_sweep(path, load_results(path))
 
 
-def _describe_sweep(results) -> dict:
-    attrs = results.attrs
-    owned = results.owned if results.owned is not None else np.ones(results.shape, dtype=bool)
+def _describe_sweep(path, ds) -> dict:
+    from vrsweep.reading import grid_axes, point_variables, stored_variables
+
+    attrs = {key: value for key, value in ds.attrs.items() if key != "vrsweep_file"}  # open_results' own
+    done = np.asarray(ds["done"].values, dtype=bool)
+    owned = np.asarray(ds["owned"].values, dtype=bool) if "owned" in ds else np.ones(done.shape, dtype=bool)
     n_total = int(owned.sum())
-    n_done = int((results.done & owned).sum())
+    n_done = int((done & owned).sum())
+    axis_names = grid_axes(ds)
     axes = []
-    for name, values in results.axes.items():
-        values = np.asarray(values)
-        axis_attrs = results.coord_attrs.get(name, {})
+    for name in axis_names:
+        values = np.asarray(ds[name].values)
         axes.append({
             "name": name, "size": int(values.size),
             "min": _number(values.min()), "max": _number(values.max()),
             "first": _number(values[0]), "last": _number(values[-1]),
-            "units": axis_attrs.get("units"), "long_name": axis_attrs.get("long_name"),
+            "units": ds[name].attrs.get("units"), "long_name": ds[name].attrs.get("long_name"),
         })
+    points = set(point_variables(ds))
     variables = []
-    for name, array in results.variables.items():
-        var_attrs = results.var_attrs[name]
+    for name in stored_variables(ds):
+        variable = ds[name]
         variables.append({
-            "name": name, "dims": list(results.dims[name]), "shape": list(np.shape(array)),
-            "dtype": str(np.asarray(array).dtype), "units": var_attrs.get("units"),
-            "long_name": var_attrs.get("long_name"),
-            "derived": name not in results.point_variables,
+            "name": name, "dims": list(variable.dims), "shape": list(variable.shape),
+            "dtype": str(variable.dtype), "units": variable.attrs.get("units"),
+            "long_name": variable.attrs.get("long_name"), "derived": name not in points,
         })
-    config_text = attrs.get("config")
+    config = _stored_config(attrs.get("config"))
+    shard = attrs.get("shard")
+    complete = bool(attrs.get("vrsweep_complete", 0))
     return {
-        "path": os.fspath(results.path),
-        "kind": "shard" if results.shard else "sweep",
-        "format_version": attrs.get("vrsweep_format_version"),
-        "complete": results.complete,
-        "shard": results.shard,
+        "path": os.fspath(path),
+        "kind": "shard" if shard else "sweep",
+        "format_version": _plain(attrs.get("vrsweep_format_version")),
+        "complete": complete,
+        "shard": shard,
         "points_done": n_done,
         "points_total": n_total,
-        "grid_points": int(math.prod(results.shape)),
-        "model": attrs.get("model") or _config_value(config_text, "model"),
+        "grid_points": int(math.prod(done.shape)),
+        "model": attrs.get("model") or _model(config),
         "axes": axes,
-        "fixed_parameters": _fixed_parameters(config_text, [a["name"] for a in axes]),
-        "integration": _integration(config_text),
-        "status_counts": _status_counts(results, owned),
-        "attractors": _attractors(results),
+        "fixed_parameters": _fixed_parameters(config, axis_names),
+        "integration": _integration(config),
+        "status_counts": _status_counts(ds, owned),
+        "attractors": _attractors(ds),
         "variables": variables,
         "created": attrs.get("created"),
         "versions": _versions(attrs),
         "attributes": _other_attributes(attrs),
-        "config": config_text,
+        "config": attrs.get("config"),
     }
 
 
-def _status_counts(results, owned) -> list[dict]:
+def _status_counts(ds, owned) -> list[dict]:
     """Points per status over the points this file owns, named by the file's own flag_meanings."""
-    if "status" not in results.variables:
+    if "status" not in ds:
         return []
     from vrsweep.results import MESSAGES, Status
 
-    status = np.asarray(results.variables["status"])[owned]
-    status_attrs = results.var_attrs.get("status", {})
+    status = np.asarray(ds["status"].values)[owned]
+    status_attrs = ds["status"].attrs
     flag_values = [int(v) for v in np.atleast_1d(status_attrs.get("flag_values", []))]
     flag_meanings = str(status_attrs.get("flag_meanings", "")).split()
     names = dict(zip(flag_values, flag_meanings))
@@ -132,77 +149,76 @@ def _status_counts(results, owned) -> list[dict]:
     return counts
 
 
-def _attractors(results) -> list[dict]:
+def _attractors(ds) -> list[dict]:
     """The attractor table of a basin sweep (x0 / v0 axes), one entry per slice; [] otherwise."""
     from vrsweep.attractors import attractor_rows
 
     return [{"slice": where, "attractors": [{key: _plain(value) for key, value in row.items()} for row in rows]}
-            for where, rows in attractor_rows(results)]
+            for where, rows in attractor_rows(ds)]
 
 
-def _describe_non_sweep(path) -> dict | None:
-    """A vrsweep file of this format without a sweep grid (a trajectory), or None.
-
-    None whenever the file is not exactly that, so the caller reports read_results' error.
-    """
-    import h5py
-
-    from vrsweep.fileio import open_hdf5
+def _describe_groups(path, kind) -> dict | None:
+    """A vrsweep file of this format without a sweep grid (a trajectory), from its groups as
+    xarray reads them; None whenever the file is not exactly that, so the caller reports the
+    reader's error."""
+    from vrsweep.reading import open_groups
     from vrsweep.store import FORMAT_VERSION
 
     try:
-        with open_hdf5(path, "r") as f:
-            version = f.attrs.get("vrsweep_format_version")
-            if version is None or int(version) != FORMAT_VERSION or "done" in f:
-                return None
-            attrs = {key: _plain(value) for key, value in f.attrs.items()}
-            variables, statuses = [], []
-
-            def visit(name, obj):
-                if isinstance(obj, h5py.Group) and "status_name" in obj.attrs:
-                    # A model run of a trajectory: one point, one status.
-                    statuses.append({
-                        "status": str(_plain(obj.attrs["status_name"])), "code": _plain(obj.attrs.get("status")),
-                        "points": 1, "meaning": _plain(obj.attrs.get("status_message")), "group": name,
-                    })
-                if isinstance(obj, h5py.Dataset):
-                    variables.append({
-                        "name": name, "dims": [_dimension_name(d) for d in obj.dims] if not obj.is_scale else [],
-                        "shape": list(obj.shape), "dtype": str(obj.dtype),
-                        "units": _plain(obj.attrs.get("units")),
-                        "long_name": _plain(obj.attrs.get("long_name")), "derived": False,
-                    })
-
-            f.visititems(visit)
-    except (OSError, ValueError, TypeError, KeyError, RuntimeError):
+        groups = open_groups(path)
+    except ResultFileError:
         return None
-    config_text = attrs.get("config")
+    try:
+        attrs = {key: _plain(value) for key, value in groups[""].attrs.items()}
+        version = attrs.get("vrsweep_format_version")
+        if version is None or int(version) != FORMAT_VERSION or "done" in groups[""]:
+            return None
+        variables, statuses = [], []
+        for group, ds in groups.items():
+            if group and "status_name" in ds.attrs:
+                # A model run of a trajectory: one point, one status.
+                statuses.append({
+                    "status": str(_plain(ds.attrs["status_name"])), "code": _plain(ds.attrs.get("status")),
+                    "points": 1, "meaning": _plain(ds.attrs.get("status_message")), "group": group,
+                })
+            for name, variable in ds.variables.items():
+                # A dimension without a scale has no name in the file: h5netcdf calls it phony_dim_N.
+                dims = ["" if str(dim).startswith("phony_dim") else str(dim) for dim in variable.dims]
+                variables.append({
+                    "name": f"{group}/{name}" if group else str(name),
+                    "dims": [] if name in ds.dims else dims,
+                    "shape": list(variable.shape), "dtype": str(variable.dtype),
+                    "units": _plain(variable.attrs.get("units")),
+                    "long_name": _plain(variable.attrs.get("long_name")), "derived": False,
+                })
+    finally:
+        for ds in groups.values():
+            ds.close()
+    # In the file's name order, group by group (as HDF5 lists them), not in creation order.
+    statuses.sort(key=lambda row: row["group"].split("/"))
+    variables.sort(key=lambda variable: variable["name"].split("/"))
+    config = _stored_config(attrs.get("config"))
     complete = attrs.get("vrsweep_complete")
     return {
         "path": os.fspath(path),
-        "kind": str(attrs.get("vrsweep_file", "trajectory")),
+        "kind": str(attrs.get("vrsweep_file", kind or "trajectory")),
         "format_version": int(version),
         "complete": None if complete is None else bool(complete),
         "shard": None,
         "points_done": None,
         "points_total": None,
         "grid_points": None,
-        "model": attrs.get("model") or _config_value(config_text, "model"),
+        "model": attrs.get("model") or _model(config),
         "axes": [],
-        "fixed_parameters": _fixed_parameters(config_text, []),
-        "integration": _integration(config_text),
+        "fixed_parameters": _fixed_parameters(config, []),
+        "integration": _integration(config),
         "status_counts": statuses,
         "variables": variables,
         "created": attrs.get("created"),
         "versions": _versions(attrs),
         "attributes": _other_attributes(attrs),
-        "config": config_text,
+        "config": attrs.get("config"),
     }
-
-
-def _dimension_name(dim) -> str:
-    """The name of the scale attached to one dimension of a dataset ('' if none)."""
-    return dim[0].name.rsplit("/", 1)[-1] if len(dim) else ""
 
 
 def _versions(attrs) -> dict:
@@ -214,38 +230,42 @@ def _other_attributes(attrs) -> dict:
     return {key: _plain(value) for key, value in attrs.items() if key not in _KNOWN_ROOT_ATTRS}
 
 
-def _parsed_config(config_text):
-    """The stored config as a dict, or {}: info describes the file even if the text is odd."""
+def _stored_config(config_text):
+    """The config a file was run from, read by vrsweep.config, or None: info describes the file
+    even if its config is one this version cannot read."""
     if not config_text:
-        return {}
-    # ruamel (YAML 1.2, the project's parser): "1e-09" is a float, as config.py reads it.
-    from ruamel.yaml import YAML
-    from ruamel.yaml.error import YAMLError
+        return None
+    from vrsweep.config import parse_config
+    from vrsweep.errors import ConfigError
 
     try:
-        parsed = YAML(typ="safe", pure=True).load(config_text)
-    except YAMLError:
+        return parse_config(str(config_text), "<stored config>")
+    except ConfigError:
+        return None
+
+
+def _model(config):
+    return None if config is None else config.model
+
+
+def _fixed_parameters(config, axis_names) -> dict:
+    if config is None:
         return {}
-    return parsed if isinstance(parsed, dict) else {}
+    return {name: _plain(value) for name, value in config.parameters.items() if name not in axis_names}
 
 
-def _config_value(config_text, key):
-    value = _parsed_config(config_text).get(key)
-    return None if value is None else str(value)
-
-
-def _fixed_parameters(config_text, axis_names) -> dict:
-    parameters = _parsed_config(config_text).get("parameters") or {}
-    if not isinstance(parameters, dict):
+def _integration(config) -> dict:
+    """The solver settings as stored: ``method`` only when not the default (as the config's YAML)."""
+    if config is None:
         return {}
-    return {str(name): _plain(value) for name, value in parameters.items() if name not in axis_names}
+    import dataclasses
 
+    from vrsweep.config import INTEGRATION_DEFAULTS
 
-def _integration(config_text) -> dict:
-    integration = _parsed_config(config_text).get("integration") or {}
-    if not isinstance(integration, dict):
-        return {}
-    return {str(name): _plain(value) for name, value in integration.items()}
+    settings = dataclasses.asdict(config.integration)
+    if settings.get("method") == INTEGRATION_DEFAULTS["method"]:
+        del settings["method"]
+    return {name: _plain(value) for name, value in settings.items()}
 
 
 def _number(value):

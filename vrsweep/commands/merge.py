@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from vrsweep.commands.options import overwrite_option, quiet_option
+from vrsweep.commands.options import flag_wording, overwrite_option, quiet_option
 
 
 @click.command("merge")
@@ -27,7 +27,7 @@ def command(shards, output, overwrite, allow_missing, quiet):
     under a temporary name and renamed at the end: Ctrl-C (exit 130), SIGTERM (143) or an error
     leave OUT.h5 as it was and no temporary file.
     """
-    from vrsweep.merge import merge_results
+    from vrsweep.store.merge import merge_results
     from vrsweep.signals import GracefulStop
 
     before = _identity(output)
@@ -35,7 +35,7 @@ def command(shards, output, overwrite, allow_missing, quiet):
         # A signal only takes note; the merge stops at its next read of a shard (stop.check,
         # within milliseconds) and unwinds, removing its temporary file (an exception raised from
         # the handler itself could land in a finalizer, where Python drops it).
-        with GracefulStop(announce=False) as stop:
+        with GracefulStop(announce=False) as stop, flag_wording():
             report = merge_results(shards, output, overwrite=overwrite, allow_missing=allow_missing,
                                    stop=stop.check)
             stop.check()  # a signal during the final rename: the output is complete

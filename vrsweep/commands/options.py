@@ -1,6 +1,25 @@
 """Options shared by several commands, defined once (after rasterio's ``rio/options.py``)."""
 
+from contextlib import contextmanager
+
 import click
+
+# The library's messages name what a caller can do in its own terms (vrsweep.errors,
+# VrsweepError.naming); at the command line they name these flags.
+OUTPUT_FLAGS = {"overwrite": "--overwrite", "resume": "--resume", "start_afresh": "run without --resume",
+                "output": "-o", "allow_missing": "--allow-missing"}
+
+
+@contextmanager
+def flag_wording(flags=OUTPUT_FLAGS):
+    """Re-word the library's errors raised in the block for the command line (``flags``:
+    {argument: "--flag"}), as rasterio's ``rio`` commands add their flags to the library's errors."""
+    from vrsweep.errors import VrsweepError
+
+    try:
+        yield
+    except VrsweepError as error:
+        raise error.reworded(flags) from None
 
 set_option = click.option(
     "--set", "overrides", multiple=True, metavar="NAME=VALUE",

@@ -5,6 +5,9 @@ from pathlib import Path
 import click
 
 FORMATS = (".png", ".pdf", ".svg")
+# The library names its arguments (vrsweep.plot); messages at the command line name these flags.
+FLAGS = {"at": "--at", "x_axis": "--x", "kind": "--kind", "amplitude": "--amplitude", "log": "--log",
+         "linear": "--linear", "periods": "--periods", "var": "--var"}
 
 
 def _parse_at(items):
@@ -40,6 +43,9 @@ def default_output(path, kind):
               help="Fix a swept axis at one of its values, e.g. --at Omega=4 (repeatable; "
                    "direction=up|down for a two-way continuation).")
 @click.option("--x", "x_axis", default=None, metavar="NAME", help="The swept parameter on the horizontal axis.")
+@click.option("--var", default=None, metavar="NAME",
+              help="--kind map: the stored variable to map, any one per grid point (e.g. R_err, period, "
+                   "impacts_per_period, x_min, attractor); default R (|Q| with --amplitude).")
 @click.option("--log/--linear", "log", default=None,
               help="Logarithmic (or linear) response axis; on maps, colour scale. Default: response "
                    "plots choose log when the values span two decades or more, maps are linear.")
@@ -47,7 +53,7 @@ def default_output(path, kind):
               help="Trajectory files: show slow periods FIRST to LAST only (1-based), e.g. 1:20.")
 @click.option("--dpi", type=click.IntRange(min=20, max=1200), default=150, show_default=True,
               help="Resolution of a .png.")
-def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi):
+def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, dpi):
     """Draw a figure from a vrsweep file.
 
     \b
@@ -55,7 +61,8 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
       response     R (or |Q| with --amplitude) against the axis, with the analytic
                    branches (stable solid, unstable dashed) and g_res -- default for
                    one axis, or two axes when one has at most 5 values (one curve each)
-      map          heat map over two axes with g_res(Omega) drawn on it -- default for two axes
+      map          heat map over two axes with g_res(Omega) drawn on it -- default for two axes;
+                   --var NAME maps any stored variable (R_err, period, x_min...)
       impacts      mean impacts per slow period
       status       how each point's integration ended
       bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
@@ -72,39 +79,12 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
     square one without (period 0). Failed points are x marks along the bottom edge. The response
     axis turns logarithmic by itself when the values span two decades (--log/--linear to choose).
     """
-    from vrsweep import plot
-    from vrsweep.errors import UsageError
+    from vrsweep.errors import VrsweepError
 
-    path = Path(output) if output else default_output(paths[0], kind)
-    if path.suffix.lower() not in FORMATS:
-        raise UsageError(f"-o {path}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
-    data = [plot.load(p) for p in paths]
-    for path_in, loaded in zip(paths, data):
-        shard = getattr(loaded, "shard", None)
-        if shard:
-            click.echo(f"Note: {path_in} is shard {shard}: plotting its points only "
-                       "(vrsweep merge joins the shards into the whole grid)", err=True)
-        elif not loaded.complete:
-            click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
-                       "(finish it with vrsweep run CONFIG --resume)", err=True)
-    window = plot.parse_periods(periods) if periods else None
-    if window is not None and window[1] is not None:
-        for path_in, loaded in zip(paths, data):
-            n_periods = plot.slow_periods_in(loaded) if hasattr(loaded, "runs") else None
-            if n_periods is not None and window[0] <= n_periods < window[1]:
-                click.echo(f"--periods {periods}: {path_in} has {n_periods} slow periods; showing "
-                           f"{window[0]}-{n_periods}", err=True)
-    if kind is None and len(data) == 1 and "attractor" in getattr(data[0], "variables", {}):
-        kind = "basin"  # a sweep over the initial state: its basins are what it is for
-    if kind == "basin":
-        if len(data) > 1:
-            raise UsageError("--kind basin draws one file; plot the others one at a time")
-        if x_axis or amplitude or log or periods:
-            raise UsageError("--x, --amplitude, --log and --periods do not apply to --kind basin")
-        figure = plot.basin_plot(data[0], at=_parse_at(at_items))
-    else:
-        figure = plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis,
-                           log=log, periods=window)
+    try:
+        figure, path = _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var)
+    except VrsweepError as error:
+        raise error.reworded(FLAGS) from None
     # Rendered in memory, then written whole: a full disk leaves no half figure, and the
     # message can say how many bytes the figure needs.
     import io
@@ -115,3 +95,43 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, dpi)
     figure.savefig(image, format=path.suffix.lower()[1:], dpi=dpi)
     write_bytes(path, image.getvalue())
     click.echo(f"-> {path}", err=True)
+
+
+def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var):
+    from vrsweep import plot
+    from vrsweep.errors import UsageError
+    from vrsweep.trajectory_file import TrajectoryData
+
+    path = Path(output) if output else default_output(paths[0], kind)
+    if path.suffix.lower() not in FORMATS:
+        raise UsageError(f"-o {path}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
+    data = [plot.load(p) for p in paths]
+    for path_in, loaded in zip(paths, data):
+        if isinstance(loaded, TrajectoryData):
+            shard, complete = None, loaded.complete
+        else:  # a sweep's Dataset
+            shard, complete = loaded.attrs.get("shard"), bool(loaded.attrs.get("vrsweep_complete", 0))
+        if shard:
+            click.echo(f"Note: {path_in} is shard {shard}: plotting its points only "
+                       "(vrsweep merge joins the shards into the whole grid)", err=True)
+        elif not complete:
+            click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
+                       "(finish it with vrsweep run CONFIG --resume)", err=True)
+    window = plot.parse_periods(periods) if periods else None
+    if window is not None and window[1] is not None:
+        for path_in, loaded in zip(paths, data):
+            n_periods = plot.slow_periods_in(loaded) if isinstance(loaded, TrajectoryData) else None
+            if n_periods is not None and window[0] <= n_periods < window[1]:
+                click.echo(f"--periods {periods}: {path_in} has {n_periods} slow periods; showing "
+                           f"{window[0]}-{n_periods}", err=True)
+    if kind is None and var is None and len(data) == 1 and not isinstance(data[0], TrajectoryData) \
+            and "attractor" in data[0].data_vars:
+        kind = "basin"  # a sweep over the initial state: its basins are what it is for
+    if kind == "basin":
+        if len(data) > 1:
+            raise UsageError("--kind basin draws one file; plot the others one at a time")
+        if x_axis or amplitude or log or periods or var:
+            raise UsageError("--x, --amplitude, --log, --periods and --var do not apply to --kind basin")
+        return plot.basin_plot(data[0], at=_parse_at(at_items)), path
+    return plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis,
+                     log=log, periods=window, var=var), path

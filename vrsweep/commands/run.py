@@ -6,7 +6,7 @@ import sys
 import click
 
 from vrsweep.commands.options import (
-    announce_fixed_axes, capped_threads, config_argument, output_option, overwrite_option, quiet_option,
+    announce_fixed_axes, capped_threads, config_argument, flag_wording, output_option, overwrite_option, quiet_option,
     set_option, threads_option,
 )
 
@@ -73,7 +73,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
             raise error.as_option("--dask") from None
         workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
     # The size check is per process: a shard or a local Dask cluster shares the grid's time, while
-    # a shard's file is still the whole grid's size (see store.py).
+    # a shard's file is still the whole grid's size (see store/layout.py).
     check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large)
     bars = []
 
@@ -95,7 +95,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         return bar.update
 
     try:
-        with GracefulStop() as stop:
+        with GracefulStop() as stop, flag_wording():
             report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
                              shard=shard_pair, progress_factory=progress_factory, executor=executor,
                              stop=stop)

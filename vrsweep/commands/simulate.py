@@ -2,7 +2,9 @@
 
 import click
 
-from vrsweep.commands.options import config_argument, output_option, overwrite_option, set_option
+from vrsweep.commands.options import (
+    OUTPUT_FLAGS, config_argument, flag_wording, output_option, overwrite_option, set_option,
+)
 from vrsweep.trajectory_file import DEFAULT_SAMPLES_PER_PERIOD
 
 
@@ -30,7 +32,10 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     from vrsweep.trajectory_file import check_single_point, simulate_point, write_trajectory
 
     config = load_config(config_path, overrides)
-    check_single_point(config)  # before compiling anything
+    flags = {**OUTPUT_FLAGS, "samples_per_period": "--samples-per-period", "compare_effective": "--compare effective",
+             "compare": "--compare", "model_original": "--set model=original", "set": "--set "}
+    with flag_wording(flags):
+        check_single_point(config)  # before compiling anything
     path = config.output_path(output)
     if path.exists() and not overwrite:  # say so before integrating, not after
         from vrsweep.errors import UsageError
@@ -39,8 +44,9 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     from vrsweep.fileio import prepare_output_directory
 
     prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
-    data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
-    write_trajectory(path, data, config, overwrite=overwrite)
+    with flag_wording(flags):
+        data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
+        write_trajectory(path, data, config, overwrite=overwrite)
     if not quiet:
         for run in data.runs.values():
             counts = run.impacts_per_period

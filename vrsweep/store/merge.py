@@ -15,7 +15,7 @@ A merge never holds a shard, or the result, in memory:
 Peak memory is therefore start-up, a few blocks, a few bytes per grid point (which shard supplies
 it) and the largest derived variable (a theory column, stored as one chunk), whatever the number of
 shards; benchmarks/bench_merge.py measures it (benchmarks/README.md, "Merge"). The output is
-written under a temporary name and renamed into place (``store.atomic_write``), so an error or a
+written under a temporary name and renamed into place (``fileio.atomic_write``), so an error or a
 signal leaves no partial file.
 """
 
@@ -28,17 +28,18 @@ import re
 from dataclasses import dataclass, field
 from typing import Iterable
 
-import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
-from vrsweep.fileio import open_hdf5, prepare_output_directory
+from vrsweep.fileio import atomic_write, open_hdf5, prepare_output_directory, writing_hdf5
 from vrsweep.provenance import cf_attributes
-from vrsweep.store import (
-    _BOOKKEEPING, _RESERVED_ROOT_ATTRS, VariableSpec, _add_extras, _build_skeleton,
-    _clean_attrs, _corrupt_error, _first_difference,
-    _open_checked, _point_variables, _scale_names, atomic_write, point_label, creation_reserve, writing_hdf5,
-)
+from vrsweep.store.layout import RESERVED_ROOT_ATTRS, add_extras, build_skeleton, creation_reserve
+from vrsweep.store.reader import StoredLayout, corrupt_error, open_checked
+from vrsweep.store.writer import ARGUMENT_WORDS as _WRITER_WORDS
+from vrsweep.store.writer import first_difference
+
+# How messages name what the caller may do; `vrsweep merge` names its flags (commands/options.py).
+ARGUMENT_WORDS = {**_WRITER_WORDS, "allow_missing": "allow_missing=True"}
 
 # Bytes of one variable per block: large enough that HDF5 calls are few, small enough that a few
 # blocks are nothing beside the start-up of Python, numpy and h5py.
@@ -88,9 +89,9 @@ class MergeReport:
 # --------------------------------------------------------------------------------------------
 
 
-class _Shard:
-    """A shard file: its metadata in memory, its data read on demand. Any damage found while
-    reading is a ResultFileError naming the file (HDF5 chunks carry checksums).
+class _Shard(StoredLayout):
+    """A shard file: its layout in memory (StoredLayout), its data read on demand. Any damage found
+    while reading is a ResultFileError naming the file (HDF5 chunks carry checksums).
 
     The file is open only while a block is read: HDF5 keeps a few hundred bytes for every chunk
     read from a file until the file is closed (about a tenth of the data read), so shards held
@@ -99,52 +100,17 @@ class _Shard:
 
     def __init__(self, path, stop):
         stop()
-        self.path = path
         self._stop = stop
-        f = _open_checked(path, "r")
+        f = open_checked(path, "r")
         try:
-            self._read_metadata(f)
+            super().__init__(path, f)
             self._identity = _identity(path)
         except ResultFileError:
             raise
         except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
-            raise _corrupt_error(path, error) from None
+            raise corrupt_error(path, error) from None
         finally:
             f.close()
-
-    def _read_metadata(self, f):
-        done = f["done"]
-        self.axis_names = _scale_names(done) if done.ndim else ()
-        self.shape = tuple(done.shape)
-        self.point_variables = _point_variables(f)
-        axes, self.coords, self.coord_attrs = {}, {}, {}
-        self.dtypes, self.shapes, self.dims, self.var_attrs, self.fill_values = {}, {}, {}, {}, {}
-        for name, obj in f.items():
-            if not isinstance(obj, h5py.Dataset):
-                continue
-            if obj.is_scale:  # coordinates: small, read whole
-                (axes if name in self.axis_names else self.coords)[name] = obj[()]
-                self.coord_attrs[name] = _clean_attrs(obj.attrs)
-                continue
-            if name in _BOOKKEEPING:
-                continue
-            self.dtypes[name] = obj.dtype
-            self.shapes[name] = tuple(obj.shape)
-            self.dims[name] = _scale_names(obj) if obj.ndim else ()
-            self.var_attrs[name] = _clean_attrs(obj.attrs)
-            self.fill_values[name] = obj.fillvalue
-        self.axes = {name: axes[name] for name in self.axis_names}
-        missing = [n for n in self.point_variables if n not in self.dtypes]
-        if missing:
-            raise ResultFileError(f"{self.path} is corrupt: variables {missing} are missing")
-        self.derived_variables = tuple(n for n in self.dtypes if n not in self.point_variables)
-        self.attrs = _clean_attrs(f.attrs)
-        self.has_owned = "owned" in f
-
-    @property
-    def shard(self):
-        """The shard label "I/N", or None for a whole run."""
-        return self.attrs.get("shard")
 
     def read(self, name, selection=()):
         """``name[selection]`` as an array (the file opened for this read, with no chunk cache:
@@ -155,7 +121,7 @@ class _Shard:
         except ResultFileError:
             raise
         except Exception as error:  # noqa: BLE001 - a failed checksum is an OSError, others vary
-            raise _corrupt_error(self.path, error) from None
+            raise corrupt_error(self.path, error) from None
 
     def _open(self):
         """The file, opened for one read, if it is still the file whose metadata was read (and the
@@ -183,25 +149,11 @@ class _Shard:
         except ResultFileError:
             raise
         except Exception as error:  # noqa: BLE001 - as in read()
-            raise _corrupt_error(self.path, error) from None
+            raise corrupt_error(self.path, error) from None
         return digest.hexdigest()
 
     def read_mask(self, name):
         return np.asarray(self.read(name), dtype=bool).reshape(self.shape)
-
-    def variable_specs(self):
-        """The VariableSpec list that created this file's point variables."""
-        n_axes = len(self.axes)
-        specs = []
-        for name in self.point_variables:
-            attrs = {k: v for k, v in self.var_attrs[name].items() if k != "_FillValue"}
-            extra = tuple((d, len(self.coords[d])) for d in self.dims[name][n_axes:])
-            specs.append(VariableSpec(name, self.dtypes[name], extra, attrs, self.fill_values[name]))
-        return specs
-
-    def point_label(self, flat_index) -> str:
-        """``g=1.5, Omega=4`` for a flat grid index (for messages)."""
-        return point_label(self.axes, flat_index)
 
 
 def _identity(path):
@@ -290,7 +242,8 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
         if any(os.path.exists(p) and os.path.samefile(p, out_path) for p in paths):
             raise UsageError(f"output {out_path} is one of the shards being merged")
         if not overwrite:
-            raise UsageError(f"output {out_path} already exists: pass --overwrite to replace it")
+            raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
+                                    ARGUMENT_WORDS, path=out_path)
     prepare_output_directory(out_path)
 
     stop = stop or (lambda: None)
@@ -316,7 +269,7 @@ def _merge(shards, out_path, allow_missing):
     missing = np.flatnonzero(~merged_done.reshape(-1))
     examples = [ref.point_label(i) for i in missing[:_EXAMPLES]]
     if missing.size and not allow_missing:
-        raise ResultFileError(_missing_points_message(shards, ref, missing, n_done_by_shard))
+        raise ResultFileError.naming(_missing_points_message(shards, ref, missing, n_done_by_shard), ARGUMENT_WORDS)
     complete = missing.size == 0
 
     point_dims = {d for n in ref.point_variables for d in ref.dims[n][len(ref.axes):]}
@@ -333,7 +286,7 @@ def _merge(shards, out_path, allow_missing):
         # HDF5 writes (writing_hdf5), so a full disk is one clean error, never a crash in HDF5.
         with writing_hdf5(tmp, "w", reserve=creation_reserve(axes, specs), track_order=True,
                           libver=("v108", "latest")) as out:
-            _build_skeleton(out, axes, specs, root_attrs, extra_coords, None)
+            build_skeleton(out, axes, specs, root_attrs, extra_coords, None)
         for name in ref.point_variables:  # reopened for each: see _Shard on HDF5's memory per chunk
             # Space allocated at creation: point values overwrite it in place.
             with writing_hdf5(tmp, "r+", rdcc_nbytes=_WRITE_CACHE_BYTES) as out:
@@ -360,7 +313,7 @@ def _merge(shards, out_path, allow_missing):
 def _root_attributes(ref):
     """The merged file's root attributes: the reference shard's, but for those the store sets
     (``created``: the merge time) and the shard label; ``history`` gains the merge's line."""
-    attrs = {k: v for k, v in ref.attrs.items() if k not in _RESERVED_ROOT_ATTRS and k != "shard"}
+    attrs = {k: v for k, v in ref.attrs.items() if k not in RESERVED_ROOT_ATTRS and k != "shard"}
     if "history" in attrs:  # CF: the merge adds its own line to the first shard's history
         attrs.update(cf_attributes(str(attrs.get("title", "")), history=str(attrs["history"])))
     return attrs
@@ -381,7 +334,7 @@ def _check_one_run(shards):
         s = foreign[0]
         raise ResultFileError(
             f"{s.path} was written from a different config than {ref.path} "
-            f"({_first_difference(s.attrs.get('config', ''), reference_config)}); "
+            f"({first_difference(s.attrs.get('config', ''), reference_config)}); "
             f"{len(foreign)} of {len(shards)} shard(s) do not belong to this run")
     for s in shards:
         problem = _layout_difference(ref, s) if s is not ref else None
@@ -484,7 +437,7 @@ def _add_attractor_labels(out, ref):
     if not attractors.has_initial_state_axes(tuple(ref.axes)):
         return
     tolerance = parse_config(str(ref.attrs["config"])).integration.period_tolerance
-    _add_extras(out, *attractors.attractor_extras_from_file(out, tolerance))
+    add_extras(out, *attractors.attractor_extras_from_file(out, tolerance))
 
 
 def _copy_derived_variables(out, shards, ref, warnings):
@@ -506,7 +459,7 @@ def _copy_derived_variables(out, shards, ref, warnings):
                 differing.add(other.path)  # stored differently (another version?) and different
         coords = {d: (source.coords[d], source.coord_attrs[d])
                   for d in source.dims[name] if d not in point_dims}
-        _add_extras(out, {name: (array, source.dims[name], source.var_attrs[name])}, coords)
+        add_extras(out, {name: (array, source.dims[name], source.var_attrs[name])}, coords)
         del array
     for other in with_extras[1:]:
         if other.path in differing or set(other.derived_variables) != set(source.derived_variables):
@@ -521,19 +474,22 @@ def _copy_derived_variables(out, shards, ref, warnings):
 
 def _missing_points_message(shards, ref, missing, n_done_by_shard):
     """'N of M points are missing from the shards: n (g=..; ..) owned by shard i/N (file, not
-    given); ...', from the run's own assignment of points to shards when it can be recomputed."""
+    given); ...', from the run's own assignment of points to shards when it can be recomputed.
+
+    A template for ResultFileError.naming: {allow_missing} and {resume} are what the caller may
+    do, everything else is literal (braces doubled)."""
     n_points = math.prod(ref.shape)
     head = f"{missing.size} of {n_points} points are missing from the shards: "
-    tail = ("; run or resume those shards, then merge again (or pass --allow-missing to write an "
+    tail = ("; run or resume those shards, then merge again (or pass {allow_missing} to write an "
             "incomplete file that 'vrsweep run CONFIG --resume -o OUT.h5' completes)")
 
     def examples(points):
         more = "; ..." if points.size > _EXAMPLES else ""
-        return "; ".join(ref.point_label(i) for i in points[:_EXAMPLES]) + more
+        return _literal("; ".join(ref.point_label(i) for i in points[:_EXAMPLES]) + more)
 
     def given_shard(s, n_owned):
         n_done = n_done_by_shard[shards.index(s)]
-        return f"{s.path}, which finished {n_done} of its {n_owned} points: resume it with --resume"
+        return f"{_literal(s.path)}, which finished {n_done} of its {n_owned} points: resume it with {{resume}}"
 
     ownership = _run_ownership(shards, ref)
     groups = []
@@ -545,7 +501,7 @@ def _missing_points_message(shards, ref, missing, n_done_by_shard):
             points = missing[missing_owner == index]
             s = by_index.get(int(index))
             where = (given_shard(s, int((owner == index).sum())) if s is not None
-                     else f"{_sibling_path(shards, int(index), count) or 'its file'}, not given")
+                     else f"{_literal(_sibling_path(shards, int(index), count) or 'its file')}, not given")
             groups.append((points.size, f"{points.size} ({examples(points)}) owned by shard "
                                         f"{index}/{count} ({where})"))
     else:  # the files do not say how the run assigned points: what their 'owned' masks say
@@ -559,11 +515,11 @@ def _missing_points_message(shards, ref, missing, n_done_by_shard):
             if mine.any():
                 points = missing[mine]
                 groups.append((points.size, f"{points.size} ({examples(points)}) owned by shard "
-                                            f"{s.shard} ({given_shard(s, int(owned.sum()))})"))
+                                            f"{_literal(s.shard)} ({given_shard(s, int(owned.sum()))})"))
         if not claimed.all():
             points = missing[~claimed]
             if any(s.has_owned for s in shards):
-                labels = ", ".join(str(s.shard) for s in shards if s.shard) or "none"
+                labels = _literal(", ".join(str(s.shard) for s in shards if s.shard) or "none")
                 whose = (f"belong to no shard given (shards given: {labels}); is a shard file "
                          "missing from the list?")
             else:
@@ -574,6 +530,11 @@ def _missing_points_message(shards, ref, missing, n_done_by_shard):
         rest = sum(n for n, _ in groups[_GROUPS:])
         shown.append(f"{rest} more in {len(groups) - _GROUPS} more shard(s)")
     return head + "; ".join(shown) + tail
+
+
+def _literal(text):
+    """``text`` as literal text of a message template (ResultFileError.naming)."""
+    return str(text).replace("{", "{{").replace("}", "}}")
 
 
 def _shard_index(s):

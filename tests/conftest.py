@@ -1,4 +1,6 @@
-"""Helpers for the run/resume/shard/Dask tests: tiny configs, running the CLI, comparing files."""
+"""Shared fixtures: running the CLI in this process or as a real process, tiny configs, and
+comparing result files bit for bit. Each is a session fixture that hands out a plain function
+(``def test_x(invoke): invoke("run", ...)``), so module-scoped fixtures can use them too."""
 
 import os
 import subprocess
@@ -7,18 +9,19 @@ import textwrap
 
 import h5py
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from vrsweep.cli import main
 
 
-def write_config(tmp_path, text, name="sweep.yaml"):
+def _write_config(tmp_path, text, name="sweep.yaml"):
     path = tmp_path / name
     path.write_text(textwrap.dedent(text))
     return path
 
 
-def invoke(*args, env=None):
+def _invoke(*args, env=None):
     """Run the CLI in this process; returns click's Result (output = stdout + stderr)."""
     result = CliRunner().invoke(main, [str(a) for a in args], env=env)
     assert "Traceback" not in result.output, result.output
@@ -27,14 +30,14 @@ def invoke(*args, env=None):
     return result
 
 
-def vrsweep_process(*args, **kwargs):
+def _vrsweep_process(*args, **kwargs):
     """``vrsweep ARGS`` as a real subprocess (for kill -9 and signals), stderr piped."""
     command = [sys.executable, "-m", "vrsweep", *[str(a) for a in args]]
     return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=dict(os.environ), **kwargs)
 
 
-def done_count(path):
+def _done_count(path):
     """Points marked done in a file another process may be writing (None if not readable yet)."""
     try:
         with h5py.File(path, "r", locking=False) as f:
@@ -43,7 +46,7 @@ def done_count(path):
         return None
 
 
-def describe(path):
+def _describe(path):
     """Everything in a result file but its creation time and command: every dataset (bytes, type, shape,
     chunks, fill, dimension scales) and every attribute, in order."""
 
@@ -66,12 +69,49 @@ def describe(path):
         return result
 
 
-def assert_same_result(a, b):
+def _assert_same_result(a, b):
     """Files a and b are identical bit for bit, apart from when and by which command they were
     written (``created``, ``date_created``, ``history``)."""
-    da, db = describe(a), describe(b)
+    da, db = _describe(a), _describe(b)
     assert list(da) == list(db), "different datasets"
     for key in da:
         if da[key] != db[key]:
             differing = [k for k in da[key] if da[key][k] != db[key][k]] if key != "/" else "attributes"
             raise AssertionError(f"{a} and {b} differ in {key!r}: {differing}")
+
+
+@pytest.fixture(scope="session")
+def write_config():
+    """write_config(tmp_path, text, name="sweep.yaml") -> the path of a config with ``text`` (dedented)."""
+    return _write_config
+
+
+@pytest.fixture(scope="session")
+def invoke():
+    """invoke(*args, env=None) -> click's Result of ``vrsweep ARGS`` run in this process."""
+    return _invoke
+
+
+@pytest.fixture(scope="session")
+def vrsweep_process():
+    """vrsweep_process(*args) -> a Popen of ``python -m vrsweep ARGS`` (for kill -9 and signals)."""
+    return _vrsweep_process
+
+
+@pytest.fixture(scope="session")
+def done_count():
+    """done_count(path) -> points marked done in a file another process may be writing, or None."""
+    return _done_count
+
+
+@pytest.fixture(scope="session")
+def describe():
+    """describe(path) -> everything in a result file but when and by which command it was written."""
+    return _describe
+
+
+@pytest.fixture(scope="session")
+def assert_same_result():
+    """assert_same_result(a, b): the two files are identical bit for bit but for when and how
+    they were written."""
+    return _assert_same_result
