@@ -34,8 +34,9 @@ def default_output(path, kind):
                 type=click.Path(dir_okay=True))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Figure file, .png, .pdf or .svg (default: FILE.png, or FILE.KIND.png with --kind).")
-@click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "bifurcation",
-                                           "trajectory", "slowflow", "basin"]), default=None,
+@click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "bifurcation", "lyapunov",
+                                           "bifurcation+lyapunov", "trajectory", "slowflow", "basin"]),
+              default=None,
               help="What to draw (default: chosen from the file, see above).")
 @click.option("--amplitude", is_flag=True,
               help="Plot the amplitude |Q| and the analytic A instead of the gain R = |Q|/c and A/c.")
@@ -66,6 +67,11 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
       impacts      mean impacts per slow period
       status       how each point's integration ended
       bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
+      lyapunov     largest Lyapunov exponent against the axis, with its 95% band and the
+                   zero line (sweeps run with integration.lyapunov: true); -inf (stuck on
+                   the barrier) as triangles along the bottom edge
+      bifurcation+lyapunov
+                   both, the exponent aligned under the bifurcation diagram
       basin        the x0-v0 plane coloured by the attractor each start reached
                    (sweeps with x0 / v0 axes, their default; other axes: pick a slice
                    with --at)
