@@ -842,16 +842,36 @@ def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
     if counts:  # a count or a label: points not computed hold a fill value
         values = np.where(np.asarray(ds["done"].values, dtype=bool), values, np.nan)
     norm, finite = _map_norm(values, log, counts)
+    cmap = "viridis"
+    if name == "lyapunov" and not log and finite.size:
+        # The sign is the message (chaos above zero, periodic below): a diverging map centred on 0.
+        from matplotlib.colors import TwoSlopeNorm
+
+        span = max(float(np.abs(finite).max()), 1e-12)
+        norm = TwoSlopeNorm(vcenter=0.0, vmin=min(float(finite.min()), -1e-3 * span),
+                            vmax=max(float(finite.max()), 1e-3 * span))
+        cmap = "RdBu_r"
     handles = {}
     for ax, (where, panel_title) in zip(axes, panels):
         z = _as_x_y(view, name, x_axis, y_axis, where)
         if ds[name].dtype.kind != "f":
             z = np.where(_as_x_y(view, "done", x_axis, y_axis, where) > 0, z, np.nan)
         ax.set_facecolor("0.8")  # NaN cells (not computed, or failed) show the background
-        mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap="viridis",
+        minus_infinity = np.isneginf(z)  # lyapunov where the mass stuck: no colour can say -inf
+        z = np.where(minus_infinity, np.nan, z)
+        mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap,
                              norm=norm)
+        if minus_infinity.any():
+            X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
+            ax.plot(X[minus_infinity], Y[minus_infinity], "v", color="k", mec="w", mew=0.5, ms=4.5, ls="none",
+                    gid="minus_infinity")
+            handles["minus_infinity"] = Line2D([], [], ls="none", marker="v", color="k", mec="w", mew=0.5,
+                                               label="−∞ (lyapunov: stuck on the barrier)")
         bar = fig.colorbar(mesh, ax=ax, label=label + (" (log scale)" if log else ""),
                            extend="max" if finite.size and finite.max() > norm.vmax else "neither")
+        if cmap == "RdBu_r":  # each half of the diverging scale gets its own ticks
+            ticks = np.unique(np.concatenate([np.linspace(norm.vmin, 0.0, 5), np.linspace(0.0, norm.vmax, 5)]))
+            bar.set_ticks(ticks, labels=[f"{tick:.3g}" for tick in ticks])
         if counts and not log:
             from matplotlib.ticker import MaxNLocator
 
@@ -1123,11 +1143,11 @@ def _draw_lyapunov(ax, view, x_axis):
         band = np.where(finite, error, np.nan)
         ax.fill_between(x, exponent - band, exponent + band, where=finite, color=colour, alpha=0.2, lw=0,
                         label=None if k else "95 % band (lyapunov_err)")
-        ax.plot(x, np.where(finite, exponent, np.nan), "-", color=colour, lw=0.8, label=label or None)
-        ax.plot(x[chaotic], exponent[chaotic], "o", ms=3.5, color=colour, ls="none",
+        ax.plot(x, np.where(finite, exponent, np.nan), "-", color=colour, lw=0.8, label=label or None, gid="lyapunov")
+        ax.plot(x[chaotic], exponent[chaotic], "o", ms=3.5, color=colour, ls="none", gid="chaotic",
                 label=None if k else f"{LYAPUNOV_SYMBOL} > 0 beyond its band: chaotic")
         calm = finite & ~chaotic
-        ax.plot(x[calm], exponent[calm], "o", ms=3.5, mfc="none", color=colour, ls="none",
+        ax.plot(x[calm], exponent[calm], "o", ms=3.5, mfc="none", color=colour, ls="none", gid="not_chaotic",
                 label=None if k else "not chaotic: periodic (< 0) or quasi-periodic (= 0)")
         stuck = np.isneginf(exponent)
         n_stuck += int(np.sum(stuck))

@@ -1,0 +1,101 @@
+"""``vrsweep plot --kind lyapunov`` and ``bifurcation+lyapunov``, and maps of the exponent (issue 13):
+what is drawn is the file's numbers, -inf is shown and counted, the panels share one axis."""
+
+import math
+
+import numpy as np
+import pytest
+from matplotlib.collections import QuadMesh
+
+from vrsweep import plot
+from vrsweep.reading import load_results
+
+LINE = """\
+sweep:
+  g: [3.0, 5.0, 10.0, 25.0, 40.0]
+integration: {method: dop853, transient_periods: 20, measure_periods: 20, strobe_periods: 8, lyapunov: true}
+"""
+PLANE = """\
+sweep:
+  g: [5.0, 25.0, 40.0]
+  Omega: [4.0, 5.0]
+integration: {method: dop853, transient_periods: 10, measure_periods: 10, strobe_periods: 4, lyapunov: true}
+"""
+
+
+@pytest.fixture(scope="module")
+def line(tmp_path_factory, invoke, write_config):
+    folder = tmp_path_factory.mktemp("lyapunov_line")
+    out = folder / "line.h5"
+    result = invoke("run", write_config(folder, LINE), "-o", out, "--quiet")
+    assert result.exit_code == 0, result.output
+    return out
+
+
+def _lines(fig, gid):
+    return [line for ax in fig.axes for line in ax.get_lines() if line.get_gid() == gid]
+
+
+def test_the_panel_draws_the_files_exponent_and_calls_chaos_by_its_band(line):
+    ds = load_results(line)
+    exponent, error, g = ds["lyapunov"].values, ds["lyapunov_err"].values, ds["g"].values
+    fig = plot.plot(line, kind="lyapunov")
+    (curve,) = _lines(fig, "lyapunov")
+    np.testing.assert_array_equal(curve.get_xdata(), g)
+    np.testing.assert_array_equal(curve.get_ydata(), exponent)
+    chaotic = exponent - error > 0
+    assert chaotic.any() and not chaotic.all()  # g = 3, 5 chaotic; 10, 25, 40 periodic
+    (filled,) = _lines(fig, "chaotic")
+    np.testing.assert_array_equal(filled.get_xdata(), g[chaotic])
+    (hollow,) = _lines(fig, "not_chaotic")
+    np.testing.assert_array_equal(hollow.get_xdata(), g[~chaotic])
+    assert any(list(l.get_ydata()) == [0.0, 0.0] for l in fig.axes[0].get_lines())  # the zero line
+
+
+def test_minus_infinity_is_drawn_at_the_bottom_and_counted(line):
+    ds = load_results(line)
+    ds["lyapunov"].values[1] = -math.inf  # as a point that stuck on the barrier stores it
+    fig = plot.lyapunov_figure(ds)
+    (stuck,) = _lines(fig, "stuck")
+    np.testing.assert_array_equal(stuck.get_xdata(), [5.0])
+    assert "1 point stuck on the barrier" in fig._suptitle.get_text()
+    (curve,) = _lines(fig, "lyapunov")
+    assert np.isnan(curve.get_ydata()[1])  # not drawn as a number
+
+
+def test_under_the_bifurcation_diagram_on_one_axis(line):
+    fig = plot.plot(line, kind="bifurcation+lyapunov")
+    top, bottom = fig.axes[:2]
+    assert top.get_shared_x_axes().joined(top, bottom)
+    dots = [l for l in top.get_lines() if l.get_marker() == "."]
+    assert sum(len(l.get_xdata()) for l in dots) == 5 * 8  # every strobe sample of every point
+    assert _lines(fig, "lyapunov")[0].axes is bottom
+
+
+def test_the_cli_names_the_figure_and_refuses_a_file_without_exponents(line, tmp_path, invoke, write_config):
+    result = invoke("plot", line, "--kind", "bifurcation+lyapunov")
+    assert result.exit_code == 0, result.output
+    assert line.with_name("line.bifurcation+lyapunov.png").is_file()
+    plain = tmp_path / "plain.h5"
+    config = write_config(tmp_path, LINE.replace(", lyapunov: true", ""))
+    assert invoke("run", config, "-o", plain, "--quiet").exit_code == 0
+    refused = invoke("plot", plain, "--kind", "lyapunov", "-o", tmp_path / "f.png")
+    assert refused.exit_code == 2
+    assert "has no lyapunov: run the sweep with integration.lyapunov: true" in refused.output
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_a_map_of_the_exponent_is_centred_on_zero_and_shows_minus_infinity(tmp_path, invoke, write_config):
+    out = tmp_path / "plane.h5"
+    assert invoke("run", write_config(tmp_path, PLANE), "-o", out, "--quiet").exit_code == 0
+    ds = load_results(out)
+    ds["lyapunov"].values[0, 1] = -math.inf
+    fig = plot.map_figure(ds, "lyapunov")
+    (mesh,) = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)]
+    assert mesh.norm.vcenter == 0.0 and mesh.norm.vmin < 0.0 < mesh.norm.vmax
+    cells = np.ma.filled(mesh.get_array(), np.nan).astype(float).reshape(2, 3)  # (Omega, g)
+    assert np.isnan(cells[1, 0])  # the -inf cell has no colour ...
+    (marks,) = _lines(fig, "minus_infinity")  # ... but a mark
+    assert (marks.get_xdata()[0], marks.get_ydata()[0]) == (5.0, 5.0)
+    finite = np.delete(ds["lyapunov"].values.T.ravel(), 3)
+    np.testing.assert_array_equal(np.delete(cells.ravel(), 3), finite)
