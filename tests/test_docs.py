@@ -114,8 +114,9 @@ def test_design_documents_every_status_and_stored_variable():
                 if [str(int(status)), f"`{status.name.lower()}`"] not in
                 [[row[0].replace("\u2212", "-"), row[1]] for row in rows if len(row) > 1]]
 
-    class Integration:
+    class Integration:  # every optional variable on: lyapunov, lyapunov_err
         strobe_periods = 16
+        lyapunov = True
 
     stored = [name for name, *_ in point_variables(Integration)]
     stored += ["done", "owned", "A_theory", "A_theory_stable", "A_theory_max_stable", "g_res"]

@@ -40,6 +40,7 @@ from vrsweep.results import Status
 from vrsweep.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.tangent import (
     apply_saltation, collapse_tangents, renormalise_tangents, seed_tangents, tangent_derivative,
+    tangents_out_of_range,
 )
 
 # --- settings vector layout (float64), filled by sweep.integration_settings ---
@@ -324,7 +325,7 @@ def _update_extremes(record, dense, y, y_new, h, theta_turn):
 
 
 @kernel_jit
-def _start_period(record, x):
+def _start_period(record, x, tangents):
     record[REC_IMPACTS] = 0.0
     record[REC_QS] = 0.0
     record[REC_QC] = 0.0
@@ -333,8 +334,9 @@ def _start_period(record, x):
     record[REC_X_MIN] = x
     record[REC_X_MAX] = x
     record[REC_STUCK_TIME] = 0.0
-    record[REC_LOG_STRETCH] = np.nan
-    record[REC_LOG_AREA] = np.nan
+    # Summed over the period's renormalisations (tangent.py); NaN in a run without tangent vectors.
+    record[REC_LOG_STRETCH] = 0.0 if tangents else np.nan
+    record[REC_LOG_AREA] = 0.0 if tangents else np.nan
 
 
 @kernel_jit
@@ -497,7 +499,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
 
     period = 0
     t_boundary = slow_period
-    _start_period(period_records[0], y[X])
+    _start_period(period_records[0], y[X], tangents)
     next_sample = _emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
 
     while True:
@@ -633,6 +635,12 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     h = _rebound_step(h, t, v_after, coefficients)
                 err_previous = 1.0
 
+            if tangents and tangents_out_of_range(y):
+                # A strongly damped or stretched period would underflow or overflow them before
+                # its end: renormalise now, the period's record sums the logs.
+                _add_tangent_growth(record, y)
+                tangent_derivative(y, coefficients, f)
+
             if not (math.isfinite(y[X]) and math.isfinite(y[V])):
                 status = Status.NON_FINITE
                 break
@@ -646,7 +654,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             if period == n_periods:
                 break
             t_boundary = (period + 1) * slow_period
-            _start_period(period_records[period], y[X])
+            _start_period(period_records[period], y[X], tangents)
 
     if stuck and n_sticks - 1 < stick_log.shape[0]:
         stick_log[n_sticks - 1, 1] = t
@@ -748,11 +756,19 @@ def _close_period(record, y, f, coefficients, tangents, stuck):
     y[QS_INTEGRAL] = 0.0
     y[QC_INTEGRAL] = 0.0
     if tangents:
-        record[REC_LOG_STRETCH], record[REC_LOG_AREA] = renormalise_tangents(y)
+        _add_tangent_growth(record, y)
         if stuck:
             collapse_tangents(y)  # still on the barrier: the next period starts from zero
         else:
             tangent_derivative(y, coefficients, f)  # f of the renormalised vectors
+
+
+@kernel_jit(inline="always")
+def _add_tangent_growth(record, y):
+    """Renormalise the tangent vectors and add their log growth to the period's record."""
+    log_stretch, log_area = renormalise_tangents(y)
+    record[REC_LOG_STRETCH] += log_stretch
+    record[REC_LOG_AREA] += log_area
 
 
 @kernel_jit

@@ -14,7 +14,8 @@ carried along the trajectory (docs/design.md, "Lyapunov exponents", derives ever
   point that sticks in the measurement window is -inf, exactly);
 - every slow period the two tangent vectors are orthonormalised (Gram-Schmidt): the log of the
   first one's length is that period's stretch, the log of the parallelogram's area the sum of
-  both exponents' contributions (Benettin et al. 1980).
+  both exponents' contributions (Benettin et al. 1980); earlier within a period when a vector
+  leaves [1/TANGENT_RANGE, TANGENT_RANGE], the logs then summed over the period.
 
 State layout: state.py (TANGENT); per-period records: kernel.REC_LOG_STRETCH, REC_LOG_AREA.
 """
@@ -71,6 +72,21 @@ def apply_saltation(y, v_before, acceleration_before, acceleration_after, restit
         dv = y[TANGENT + 2 * i + 1]
         y[TANGENT + 2 * i] = -restitution * dx
         y[TANGENT + 2 * i + 1] = coupling * dx - restitution * dv
+
+
+# Within a period the tangent vectors are renormalised early once a component leaves this range
+# (a damping of 30 over a slow period of 57 shrinks them by e^-1700, far below the smallest double).
+TANGENT_RANGE = 1e30
+
+
+@kernel_jit(inline="always")
+def tangents_out_of_range(y):
+    """Whether a tangent vector has grown beyond TANGENT_RANGE or shrunk below its inverse."""
+    for i in range(N_TANGENT_VECTORS):
+        size = max(abs(y[TANGENT + 2 * i]), abs(y[TANGENT + 2 * i + 1]))
+        if size > TANGENT_RANGE or 0.0 < size < 1.0 / TANGENT_RANGE:
+            return True
+    return False
 
 
 @kernel_jit(inline="always")
