@@ -1,0 +1,138 @@
+"""Figures from vrsweep files: every function returns a matplotlib Figure (no pyplot, no display).
+
+Sweep results (``vrsweep run``)
+    ``response``     R = |Q|/c (or the amplitude |Q|) against one swept parameter, one curve per
+                     value of the other axes, with the analytic branches of the corrected theory
+                     (stable solid, unstable dashed) in the same units and the resonance g_res
+                     (eq3.4) marked. Fig. 1 and Fig. 2 of the paper.
+    ``map``          a heat map over two swept parameters with the resonance curve drawn over it.
+    ``impacts``      mean impacts per slow period against the axis (or as a map).
+    ``status``       how each point's integration ended.
+    ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
+    ``lyapunov``     the largest Lyapunov exponent against the swept parameter, with the zero line;
+                     ``bifurcation+lyapunov`` draws it under the bifurcation diagram, one x axis.
+Trajectories (``vrsweep simulate``)
+    ``trajectory``   position, velocity and phase portrait, original above effective (Fig. 3-5).
+    ``impacts``      impacts in each slow period against the period number (Fig. impact_no).
+    ``slowflow``     the effective system against the slow-flow reconstruction (Fig. 6).
+
+Units: the paper's model is dimensionless, so every axis says ``[1]``. The gain R = |Q|/c of eq3.3
+and the analytic amplitude A of eq2.21 are different quantities (ERRATA 6): on a gain plot the
+analytic curves are A/c, on an amplitude plot (``amplitude=True``) the numbers are |Q| and A.
+
+Which R can be trusted (issue 5, README "Can R be trusted?"): trust is judged by R_err alone --
+a point is drawn filled where R_err <= RELATIVE_ERROR_LIMIT of R and hollow where not -- and the
+kind of motion by ``period``: a circle where a period was found, a square where none was (chaos,
+quasi-periodic, a period above max_period, or a motion still settling; with a tiny R_err the last
+two are common and harmless). Points keep their curve's colour. Failed points (status not ok)
+have no value: they are x marks along the bottom edge, in axes coordinates, so that a log axis
+shows them too, and the title counts them (issue 15).
+
+One module per concern: ``labels`` (constants, axis labels, captions), ``selection`` (loading a
+file, ``select``: fixing axes through xarray, which points to trust), ``analytic`` (the theory's
+branches and the resonance), ``sweeps`` (the sweep figures, ``map_figure`` for any variable with
+one value per grid point), ``lyapunov``, ``trajectories`` and ``basins``. This module dispatches: ``plot``
+draws what ``vrsweep plot`` draws.
+"""
+
+from __future__ import annotations
+
+import os
+
+from matplotlib.figure import Figure
+
+from vrsweep.errors import UsageError
+from vrsweep.plot.analytic import analytic_branches, resonance_positions
+from vrsweep.plot.basins import basin_figure, basin_plot
+from vrsweep.plot.labels import (
+    KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, parameter_label,
+)
+from vrsweep.plot.lyapunov import lyapunov_figure
+from vrsweep.plot.selection import _grid_axes, _sweep_default, load, select
+from vrsweep.plot.sweeps import (
+    bifurcation_figure, impacts_figure, map_figure, mappable_variables, response_figure, status_figure,
+)
+from vrsweep.plot.trajectories import (
+    impacts_per_period_figure, parse_periods, slow_flow_figure, slow_periods_in, trajectory_figure, with_impacts,
+)
+
+
+def default_kind(data) -> str:
+    """What ``vrsweep plot FILE`` draws when no --kind is given."""
+    from vrsweep.trajectory_file import TrajectoryData
+
+    if isinstance(data, TrajectoryData):
+        return "trajectory"
+    return _sweep_default(_grid_axes(data))
+
+
+def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None, var=None) -> Figure:
+    """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
+
+    sources: a path, or a list of paths or of what ``load`` returned (a sweep's Dataset, from
+    ``load`` or ``vrsweep.open_results``; a trajectory's TrajectoryData). at: {axis: value} fixing
+    sweep axes; x_axis: the swept parameter to draw against; log: True for a logarithmic response
+    axis (or colour scale of a map), False for a linear one, None to choose (response plots: log
+    when the values span two decades or more; maps: linear); periods: (first, last) slow periods
+    of a trajectory to show; var: the stored variable a map shows (default R, or Q_amplitude with
+    ``amplitude``).
+    """
+    from vrsweep.trajectory_file import TrajectoryData
+
+    if isinstance(sources, (str, os.PathLike)):
+        sources = [sources]
+    if not sources:
+        raise UsageError.naming("no file to plot")
+    data = [load(s) if isinstance(s, (str, os.PathLike)) else s for s in sources]
+    trajectories = [isinstance(d, TrajectoryData) for d in data]
+    if any(trajectories) and not all(trajectories):
+        raise UsageError.naming("plot sweep results and trajectory files separately")
+    if len(data) > 1 and not (all(trajectories) and kind == "impacts"):
+        raise UsageError.naming("several files go on one figure only with {kind} impacts of trajectory files "
+                                "(Fig. impact_no); plot the others one at a time")
+    if all(trajectories):
+        kind = kind or "trajectory"
+        if kind not in TRAJECTORY_KINDS:
+            raise UsageError.naming("{kind} {value} is for sweep results; a trajectory file takes {kinds}",
+                                    value=kind, kinds=", ".join(TRAJECTORY_KINDS))
+        if at or x_axis or amplitude or log is not None:
+            raise UsageError.naming("{at}, {x_axis}, {amplitude} and {log}/{linear} are for sweep results, "
+                                    "not trajectory files")
+        if kind == "impacts":
+            return impacts_per_period_figure(data)
+        if kind == "slowflow":
+            return slow_flow_figure(data[0], periods=periods)
+        return trajectory_figure(data[0], periods=periods)
+    if periods is not None:
+        raise UsageError.naming("{periods} is for trajectory files (vrsweep simulate), not sweep results")
+    ds = select(data[0], at or {})
+    # After at, a fixed axis no longer counts; a variable to map asks for a map.
+    kind = kind or ("map" if var is not None else _sweep_default(_grid_axes(ds)))
+    if kind not in SWEEP_KINDS:
+        raise UsageError.naming("{kind} {value} is for trajectory files (vrsweep simulate); a sweep result "
+                                "takes {kinds}", value=kind, kinds=", ".join(SWEEP_KINDS))
+    if var is not None and kind != "map":
+        raise UsageError.naming("{var} is for {kind} map, not {kind} {value}", value=kind)
+    if var is not None and amplitude:  # never ignored quietly
+        raise UsageError.naming("{amplitude} maps Q_amplitude and {var} names the variable itself: give one of them")
+    if kind == "response":
+        return response_figure(ds, amplitude=amplitude, x_axis=x_axis, log=log)
+    if kind == "map":
+        return map_figure(ds, var or ("Q_amplitude" if amplitude else "R"), x_axis=x_axis, log=bool(log))
+    if kind == "impacts":
+        return impacts_figure(ds, x_axis=x_axis, log=bool(log))
+    if log:  # never ignored quietly
+        raise UsageError.naming("{log} is for response, map and impacts plots, not {kind} {value}", value=kind)
+    if kind == "status":
+        return status_figure(ds, x_axis=x_axis)
+    if kind in ("lyapunov", "bifurcation+lyapunov"):
+        return lyapunov_figure(ds, x_axis=x_axis, bifurcation=kind == "bifurcation+lyapunov")
+    return bifurcation_figure(ds, x_axis=x_axis)
+
+
+__all__ = [
+    "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "LOG_SPAN", "load", "default_kind", "plot",
+    "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
+    "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
+    "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
+]

@@ -1,0 +1,128 @@
+"""The analytic side drawn over the numbers: the branches of the corrected first-order theory
+(ERRATA 1-3) on a fine grid, and where the resonance wt2 = omega^2 (eq3.4) lies."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.lines import Line2D
+
+from vrsweep.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
+from vrsweep.plot.selection import _limits
+
+
+# --------------------------------------------------------------------------------------------
+# Analytic side on a fine grid: branches and resonance positions
+# --------------------------------------------------------------------------------------------
+
+
+def _fine_parameters(parameters, axis, values):
+    """Every parameter as an array over ``values`` of ``axis`` (others constant)."""
+    fine = {name: np.full(values.shape, float(parameters[name])) for name in PARAMETER_NAMES}
+    fine[axis] = values
+    return fine
+
+
+def analytic_branches(parameters, axis, values, gain=True):
+    """Branches of the analytic response along ``axis``: list of (x, y, stable) polylines.
+
+    The roots of the fixed-point cubic (theory.analytic_columns: corrected eq2.24/eq2.27, ERRATA
+    1-3) come sorted by size, so a root's slot changes where roots appear or vanish in pairs at a
+    fold; each branch is followed by continuity instead. y is A/c with ``gain`` (ERRATA 6), else A.
+    """
+    from vrsweep import theory
+
+    fine = _fine_parameters(parameters, axis, values)
+    columns = theory.analytic_columns(fine)
+    roots = columns["A_theory"][0]
+    stable = columns["A_theory_stable"][0].astype(bool)
+    if gain:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            roots = roots / fine["c"][:, None]
+    return _follow_branches(values, roots, stable)
+
+
+def _follow_branches(x, roots, stable):
+    """Join roots at neighbouring x into polylines, nearest to nearest (greedy by distance)."""
+    finite = roots[np.isfinite(roots)]
+    if finite.size == 0:
+        return []
+    jump_limit = 0.05 * (finite.max() - finite.min() + abs(finite).max())  # a fold, not a continuation
+    active, finished = [], []
+    for i in range(len(x)):
+        present = [j for j in range(roots.shape[1]) if np.isfinite(roots[i, j])]
+        pairs = sorted((abs(branch["y"][-1] - roots[i, j]), b, j)
+                       for b, branch in enumerate(active) for j in present)
+        matched_branches, matched_roots = set(), set()
+        for distance, b, j in pairs:
+            if b in matched_branches or j in matched_roots or distance > jump_limit:
+                continue
+            matched_branches.add(b)
+            matched_roots.add(j)
+            active[b]["x"].append(x[i])
+            active[b]["y"].append(roots[i, j])
+            active[b]["stable"].append(stable[i, j])
+        still = [branch for b, branch in enumerate(active) if b in matched_branches]
+        finished += [branch for b, branch in enumerate(active) if b not in matched_branches]
+        still += [{"x": [x[i]], "y": [roots[i, j]], "stable": [stable[i, j]]}
+                  for j in present if j not in matched_roots]
+        active = still
+    finished += active
+    return [(np.array(b["x"]), np.array(b["y"]), np.array(b["stable"], dtype=bool)) for b in finished]
+
+
+def _draw_branches(ax, branches, colour):
+    """Stable runs solid, unstable runs dashed; each run shares its end point with the next."""
+    for x, y, stable in branches:
+        start = 0
+        for end in range(1, len(x) + 1):
+            if end == len(x) or stable[end] != stable[start]:
+                stop = min(end + 1, len(x))
+                ax.plot(x[start:stop], y[start:stop], color=colour, lw=1.3,
+                        ls="-" if stable[start] else "--", zorder=2)
+                start = end
+
+
+def resonance_positions(parameters, axis, values):
+    """Where along ``axis`` the effective frequency meets the slow one, wt2 = omega^2 (eq3.4).
+
+    For the g axis these are +-g_res; for other axes the root is found on the fine grid ``values``
+    (linear interpolation between sign changes). Empty where the axis leaves wt2 - omega^2 one-signed.
+    """
+    from vrsweep import theory
+
+    if axis == "g":
+        g_res = float(theory.g_res(parameters["alpha"], parameters["omega0"], parameters["omega"],
+                                   parameters["Omega"]))
+        return [g for g in (-g_res, g_res) if values.min() <= g <= values.max()]
+    fine = _fine_parameters(parameters, axis, values)
+    detuning = theory.effective_frequency_squared(fine) - np.square(fine["omega"])
+    positions = []
+    for i in np.flatnonzero(np.sign(detuning[:-1]) * np.sign(detuning[1:]) < 0):
+        fraction = detuning[i] / (detuning[i] - detuning[i + 1])
+        positions.append(float(values[i] + fraction * (values[i + 1] - values[i])))
+    return positions
+
+
+def _resonance_label(axis, position):
+    if axis == "g":
+        return f"$g_{{res}}$ = {position:.3f} (eq3.4)"
+    return f"$\\tilde\\omega^2 = \\omega^2$ (eq3.4) at {PARAMETER_SYMBOLS.get(axis, axis)} = {position:.4g}"
+
+
+def _draw_resonance_curve(ax, view, x_axis, y_axis):
+    """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega)."""
+    from vrsweep import theory
+
+    if view.config is None:
+        return None
+    xs = np.linspace(*_limits(view.axes[x_axis]), 400)
+    ys = np.linspace(*_limits(view.axes[y_axis]), 400)
+    X, Y = np.meshgrid(xs, ys)
+    mesh = {name: np.full(X.shape, float(value)) for name, value in view.parameters().items()}
+    mesh[x_axis], mesh[y_axis] = X, Y
+    detuning = theory.effective_frequency_squared(mesh) - np.square(mesh["omega"])
+    if not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
+        return None
+    ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
+    return Line2D([], [], color="white", ls="--", lw=1.6,
+                  label="$g_{res}(\\Omega)$: $\\tilde\\omega^2 = \\omega^2$ (eq3.4)")

@@ -1,0 +1,157 @@
+"""Basins of attraction (issue 13): the x0-v0 plane of a sweep over the initial state, coloured
+by the attractor each start reached."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
+from vrsweep.plot.labels import MODEL_EQUATIONS, UNITS, UNITS_NOTE, _new_figure, _number, _title, _width
+from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
+from vrsweep.results import Status
+
+
+# --------------------------------------------------------------------------------------------
+# Basins of attraction (issue 13): sweeps with x0 / v0 axes
+# --------------------------------------------------------------------------------------------
+
+BASIN_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
+                 "tab:pink", "tab:olive", "tab:cyan", "gold")
+BASIN_FAILED = "black"        # a point whose integration failed (label -1)
+BASIN_NOT_COMPUTED = "white"  # an unfinished file's missing points
+
+
+def basin_plot(results, at=None) -> Figure:
+    """``vrsweep plot FILE --kind basin``: the x0-v0 plane of one slice coloured by attractor.
+
+    results: a path, or the Dataset of a sweep with x0 and/or v0 axes (``load``,
+    ``vrsweep.open_results``); at: {axis: value} fixing every other axis with more than one value
+    (a slice's parameters).
+    """
+    from vrsweep.trajectory_file import TrajectoryData
+
+    data = load(results) if isinstance(results, (str, os.PathLike)) else results
+    if isinstance(data, TrajectoryData):
+        raise UsageError.naming("{kind} basin is for sweep results with x0 / v0 axes, not trajectory files")
+    axes = _grid_axes(data)
+    if "attractor" not in data.data_vars:
+        path = _path(data)
+        if data.attrs.get("shard"):
+            raise UsageError.naming("{path} is a shard: attractors are labelled over whole slices, after "
+                                    "vrsweep merge; plot the merged file", path=path)
+        if not data.attrs.get("vrsweep_complete", 0):
+            raise UsageError.naming("{path} is unfinished: attractors are labelled when the sweep ends "
+                                    "(vrsweep run CONFIG --resume finishes it)", path=path)
+        if not any(name in axes for name in ("x0", "v0")):
+            raise UsageError.naming("{path} has no x0 or v0 axis: a basin plot needs a sweep over the "
+                                    "initial state (sweep: {{x0: ..., v0: ...}})", path=path)
+        raise ResultFileError(f"{path} has x0 / v0 axes but no attractor labels (merged or written by a "
+                              "vrsweep that does not label them): 'vrsweep run CONFIG --resume -o "
+                              f"{path}' adds them without computing any point again")
+    at = dict(at or {})
+    for name, values in axes.items():  # a one-value axis needs no at
+        if name not in at and name not in ("x0", "v0") and len(values) == 1:
+            at[name] = str(values[0])
+    return basin_figure(select(data, at))
+
+
+def basin_figure(ds) -> Figure:
+    """Attractor labels over the x0-v0 plane (or along x0 or v0), legend from the attractor table;
+    ``ds``: one slice of a sweep over the initial state (other axes fixed with ``select``)."""
+    view = _Sweep(ds)
+    state_axes = [name for name in ("x0", "v0") if name in view.axes]
+    if not state_axes:
+        raise UsageError.naming("{path} has no x0 or v0 axis: a basin plot needs a sweep over the initial "
+                                "state (sweep: {{x0: ..., v0: ...}})", path=view.path)
+    others = [name for name in view.axes if name not in state_axes]
+    if others:
+        raise UsageError.naming("{path} also sweeps {others}: pick one slice, e.g. " +
+                                " ".join("{at} " + f"{{example{k}}}" for k in range(len(others))),
+                                path=view.path, others=", ".join(others),
+                                **{f"example{k}": f"{name}={_number(view.axes[name][0])}" for k, name in enumerate(others)})
+    view.require("attractor", "attractor_count", "attractor_period", "attractor_R", "attractor_fraction")
+    labels = np.asarray(view.variables["attractor"])
+    status = np.asarray(view.variables["status"])
+    count = int(np.asarray(view.variables["attractor_count"]))
+    colours = [BASIN_COLOURS[k % len(BASIN_COLOURS)] for k in range(count)]
+    # Colour index: 0 not computed, 1 failed, 2 + label.
+    index = np.where(status == Status.NOT_COMPUTED, 0, np.where(labels < 0, 1, labels + 2))
+    cmap = ListedColormap([BASIN_NOT_COMPUTED, BASIN_FAILED] + colours)
+    norm = BoundaryNorm(np.arange(-0.5, count + 2.5), cmap.N)
+    fig = _new_figure(7.8, 5.6 if len(state_axes) == 2 else 3.2)
+    ax = fig.subplots()
+    if len(state_axes) == 2:
+        x_axis, y_axis = state_axes
+        z = index if ds["attractor"].dims.index(x_axis) == 0 else index.T
+        ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap, norm=norm)
+        ax.set_ylabel(_state_label(y_axis))
+    else:
+        x_axis = state_axes[0]
+        ax.pcolormesh(view.axes[x_axis], [0.0, 1.0], np.vstack([index, index]), shading="nearest",
+                      cmap=cmap, norm=norm)
+        ax.set_yticks([])
+    ax.set_xlabel(_state_label(x_axis))
+    handles = [_basin_handle(view, label, colours[label]) for label in range(count)]
+    n_failed = int(np.sum((labels < 0) & (status != Status.NOT_COMPUTED)))
+    if n_failed:
+        handles.append(Line2D([], [], marker="s", ls="", color=BASIN_FAILED, markersize=9,
+                              label=f"failed ({n_failed} points, see --kind status)"))
+    n_missing = int(np.sum(status == Status.NOT_COMPUTED))
+    if n_missing:
+        handles.append(Line2D([], [], marker="s", ls="", color=BASIN_NOT_COMPUTED, markeredgecolor="0.5",
+                              markersize=9, label=f"not computed ({n_missing} points)"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=1 if count <= 3 else 2, fontsize=8,
+               title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane", title_fontsize=8)
+    found = f"{count} attractor{'s' if count != 1 else ''}"
+    _title(fig, f"Basins of attraction in the plane of initial states: {found}",
+           _basin_caption(view, _width(fig)))
+    return fig
+
+
+def _state_label(name):
+    from vrsweep.model import INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS
+
+    words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
+    return f"{words} {INITIAL_STATE_SYMBOLS[name]} {UNITS}"
+
+
+def _basin_handle(view, label, colour):
+    period = int(np.asarray(view.variables["attractor_period"])[label])
+    R = float(np.asarray(view.variables["attractor_R"])[label])
+    fraction = float(np.asarray(view.variables["attractor_fraction"])[label])
+    impacts = "attractor_impacts_per_cycle" in view.variables and int(
+        np.asarray(view.variables["attractor_impacts_per_cycle"])[label])
+    if period > 0:
+        kind = f"period {period}"
+        hits = f"{impacts} impact{'s' if impacts != 1 else ''} per cycle"
+    else:
+        kind = "no period (chaotic, quasi-periodic or unsettled)"
+        per_period = float(np.asarray(view.variables.get("attractor_impacts_per_period", [np.nan] * (label + 1)))[label])
+        hits = f"{per_period:.3g} impacts per slow period"
+    text = f"{label}: {kind}, R = {R:.4g}, {hits}, {100 * fraction:.1f}%"
+    return Line2D([], [], marker="s", ls="", color=colour, markersize=9, label=text)
+
+
+def _basin_caption(view, width):
+    """The caption of a basin plot: the slice's parameters (not the config's unused initial state)."""
+    items = [os.path.basename(view.path), MODEL_EQUATIONS.get(view.model, view.model)]
+    if view.config is not None:
+        parameters = view.parameters()
+        items += [f"{PARAMETER_SYMBOLS[name]} = {_number(parameters[name])}" for name in PARAMETER_NAMES]
+        run = view.config.integration
+        items.append(f"{run.transient_periods} transient + {run.measure_periods} measured slow periods")
+    items += [UNITS_NOTE] + ([_progress_note(view)] if not view.complete else [])
+    lines, line = [], ""
+    for item in items:
+        visible = len(item.replace("$", "").replace("\\", ""))
+        if line and len(line.replace("$", "").replace("\\", "")) + visible + 2 > width:
+            lines.append(line)
+            line = ""
+        line = f"{line},  {item}" if line else item
+    return "\n".join(lines + [line])

@@ -1,0 +1,103 @@
+"""The largest Lyapunov exponent against a swept parameter, alone or under the bifurcation
+diagram (issue 13); maps of it are map_figure's (sweeps.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from vrsweep.errors import ResultFileError
+from vrsweep.model import PARAMETER_SYMBOLS
+from vrsweep.plot.labels import (
+    FAILED_COLOUR, FAILED_ROW_HEIGHT, RELIABLE_COLOURS, UNITS, _caption, _new_figure, _title, _width, parameter_label,
+)
+from vrsweep.plot.selection import (
+    _choose_x_axis, _draw_failed_rug, _failure_note, _point_classes, _progress_note, _span_grid, _Sweep,
+)
+from vrsweep.plot.sweeps import _draw_bifurcation, _draw_resonance_lines
+
+
+
+LYAPUNOV_SYMBOL = "$\\lambda_1$"
+STUCK_COLOUR = "tab:cyan"
+
+
+def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
+    """The largest Lyapunov exponent against one swept parameter, with the zero line (issue 13).
+
+    Each point is drawn with its 95 % band (lyapunov_err), filled where lambda_1 exceeds its band
+    above zero (chaos), hollow where not (periodic, or quasi-periodic when it stays within its band
+    of zero). -inf (the mass stuck on the barrier in the window: tangent.py) cannot sit on a data
+    axis: such points are triangles along the bottom edge, counted in the title, as failed points
+    are x marks. ``bifurcation``: the bifurcation diagram above, on the same parameter axis.
+    """
+    view = _Sweep(ds)
+    if "lyapunov" not in view.variables:
+        raise ResultFileError(f"{view.path} has no lyapunov: run the sweep with integration.lyapunov: true")
+    if bifurcation:
+        view.require("strobe_x")
+    x_axis = _choose_x_axis(view, x_axis, need_axes=1)
+    if bifurcation:
+        fig = _new_figure(8.0, 7.5)
+        top, ax = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
+        failure_note = _draw_bifurcation(top, view, x_axis)
+    else:
+        fig = _new_figure(8.0, 4.5)
+        ax = fig.subplots()
+    note = _draw_lyapunov(ax, view, x_axis)
+    if not bifurcation:
+        failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
+    ax.set_xlabel(parameter_label(x_axis))
+    notes = "; ".join(n for n in (_progress_note(view), failure_note, note) if n)
+    what = (f"Bifurcation diagram (top) and largest Lyapunov exponent {LYAPUNOV_SYMBOL} (bottom)" if bifurcation
+            else f"Largest Lyapunov exponent {LYAPUNOV_SYMBOL}")
+    _title(fig, f"{what} against {PARAMETER_SYMBOLS.get(x_axis, x_axis)}: "
+                f"{LYAPUNOV_SYMBOL} > 0 chaos, = 0 quasi-periodic, < 0 periodic",
+           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
+    return fig
+
+
+def _draw_lyapunov(ax, view, x_axis):
+    """lambda_1 with its band, the zero line, -inf and failed points; returns the -inf note."""
+    x = np.asarray(view.axes[x_axis], dtype=np.float64)
+    curves = view.curve_coordinates(x_axis)
+    n_stuck = 0
+    for k, (where, label) in enumerate(curves):
+        colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
+        exponent = view.along("lyapunov", x_axis, **where)
+        error = view.along("lyapunov_err", x_axis, **where) if "lyapunov_err" in view.variables \
+            else np.zeros_like(exponent)
+        finite = np.isfinite(exponent)
+        with np.errstate(invalid="ignore"):
+            chaotic = finite & (exponent - error > 0.0)
+        band = np.where(finite, error, np.nan)
+        ax.fill_between(x, exponent - band, exponent + band, where=finite, color=colour, alpha=0.2, lw=0,
+                        label=None if k else "95 % band (lyapunov_err)")
+        ax.plot(x, np.where(finite, exponent, np.nan), "-", color=colour, lw=0.8, label=label or None, gid="lyapunov")
+        ax.plot(x[chaotic], exponent[chaotic], "o", ms=3.5, color=colour, ls="none", gid="chaotic",
+                label=None if k else f"{LYAPUNOV_SYMBOL} > 0 beyond its band: chaotic")
+        calm = finite & ~chaotic
+        ax.plot(x[calm], exponent[calm], "o", ms=3.5, mfc="none", color=colour, ls="none", gid="not_chaotic",
+                label=None if k else "not chaotic: periodic (< 0) or quasi-periodic (= 0)")
+        stuck = np.isneginf(exponent)
+        n_stuck += int(np.sum(stuck))
+        if np.any(stuck):
+            ax.plot(x[stuck], np.full(int(np.sum(stuck)), FAILED_ROW_HEIGHT * (len(curves) + k + 0.7)), "v",
+                    color=STUCK_COLOUR if len(curves) == 1 else colour, ms=6, zorder=6, clip_on=False,
+                    transform=ax.get_xaxis_transform(), gid="stuck", ls="none",
+                    label=None if k else f"{LYAPUNOV_SYMBOL} = $-\\infty$: stuck on the barrier")
+        if "status" in view.variables:
+            failed = _point_classes(view, x_axis, where)[2]
+            _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
+    ax.axhline(0.0, color="k", lw=0.9, label=f"{LYAPUNOV_SYMBOL} = 0")
+    _draw_resonance_lines(ax, view, x_axis, x)
+    _span_grid(ax, x)
+    ax.set_ylabel(f"{LYAPUNOV_SYMBOL}, per unit time {UNITS}")
+    ax.grid(alpha=0.3)
+    # Below the axes: a legend inside would cover points (the exponent fills its whole range).
+    handles, labels = ax.get_legend_handles_labels()
+    ax.figure.legend(handles, labels, fontsize=7.5, loc="outside lower center", ncol=3)
+    if not n_stuck:
+        return ""
+    points = "1 point" if n_stuck == 1 else f"{n_stuck} points"
+    return f"{points} stuck on the barrier in the window ({LYAPUNOV_SYMBOL} = -inf): ▼ along the bottom edge"

@@ -1,0 +1,325 @@
+"""What the sweep figures draw from: a Dataset with axes fixed by ``select`` (xarray's labelled
+selection, after a check that each value is on the grid), the curves to draw, which points to
+trust (README "Can R be trusted?") and which failed, and what part of the grid the file holds."""
+
+from __future__ import annotations
+
+import itertools
+import os
+
+import numpy as np
+from matplotlib.lines import Line2D
+
+from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.model import PARAMETER_SYMBOLS
+from vrsweep.plot.labels import (
+    CURVES_NOT_MAP, DIRECTION_NAMES, FAILED_COLOUR, FAILED_ROW_HEIGHT, RELATIVE_ERROR_LIMIT, _number, _parse_config,
+)
+from vrsweep.results import Status
+
+
+def load(path):
+    """A trajectory (TrajectoryData) or a sweep result (an xarray Dataset, loaded and its file
+    closed); ResultFileError otherwise."""
+    from vrsweep.reading import load_results
+    from vrsweep.trajectory_file import is_trajectory_file, read_trajectory
+
+    if is_trajectory_file(path):
+        return read_trajectory(path)
+    ds = load_results(path)  # says what is wrong with anything that is not a results file
+    ds.encoding["source"] = os.fspath(path)  # messages name the file as the user did
+    return ds
+
+
+def _grid_axes(ds):
+    """The sweep axes still to draw along, {name: values} in sweep order: the dimensions of
+    ``done`` (an axis fixed by ``at`` is a scalar coordinate, no longer one of them)."""
+    return {name: ds[name].values for name in ds["done"].dims}
+
+
+def _sweep_default(axes):
+    """Two long axes make a map; one axis, or a short second one (e.g. Omega: [4, 5]), curves."""
+    parameter_axes = [name for name in axes if name != "direction"]
+    if len(parameter_axes) == 2 and min(len(axes[name]) for name in parameter_axes) > CURVES_NOT_MAP:
+        return "map"
+    return "response"
+
+
+# --------------------------------------------------------------------------------------------
+# Sweeps: selecting what to draw
+# --------------------------------------------------------------------------------------------
+
+
+def select(ds, at: dict):
+    """``ds`` with the axes named in ``at`` fixed at one of their values ({axis: value}; a value may
+    be text, and 'up'/'down' for direction): xarray's labelled selection, after a check that each
+    value is on the grid (never the nearest value quietly)."""
+    axes = _grid_axes(ds)
+    where = {}
+    for name, wanted in at.items():
+        if name not in axes:
+            raise UsageError.naming("{at} {name}=...: {name} is not an axis of {path} (axes: {axes})",
+                                    name=name, path=_path(ds), axes=", ".join(axes) or "none")
+        where[name] = _axis_index(name, np.asarray(axes[name], dtype=np.float64), wanted)
+    return ds.isel(where)
+
+
+def _path(ds):
+    return ds.encoding.get("source", "the Dataset")
+
+
+class _Values:
+    """A Dataset's variables as plain arrays, by name: what the figures draw."""
+
+    def __init__(self, ds):
+        self._ds = ds
+
+    def __contains__(self, name):
+        return name in self._ds.data_vars
+
+    def __getitem__(self, name):
+        return self._ds[name].values
+
+    def get(self, name, default=None):
+        return self[name] if name in self else default
+
+
+class _Sweep:
+    """What the sweep figures draw from: a Dataset (axes fixed by ``select`` already) and what its
+    attributes say (path, parsed config, model, progress)."""
+
+    def __init__(self, ds):
+        self.ds = ds
+        self.path = _path(ds)
+        self.axes = _grid_axes(ds)
+        self.variables = _Values(ds)
+        # Axes fixed by select() stay as scalar coordinates: the parameters they fix.
+        self.selected = {str(name): float(coord.values) for name, coord in ds.coords.items()
+                         if coord.ndim == 0 and name != "direction"}
+        self.config = _parse_config(ds.attrs.get("config", ""))
+        self.model = str(ds.attrs.get("model", self.config.model if self.config else "original"))
+        self.complete = bool(ds.attrs.get("vrsweep_complete", 0))
+        done = np.asarray(ds["done"].values)
+        self.n_done, self.n_points = int(np.sum(done)), int(np.size(done))
+        self.shard = _text_attr(ds.attrs.get("shard"))
+
+    @property
+    def parameter_axes(self):
+        return [name for name in self.axes if name != "direction"]
+
+    def parameters(self, **coordinates):
+        """The nine parameters at this view's fixed values and the given axis coordinates."""
+        if self.config is None:
+            raise UsageError.naming("{path} holds no readable config: cannot compute the analytic side",
+                                    path=self.path)
+        return dict(self.config.parameters, **self.selected, **coordinates)
+
+    def require(self, *names):
+        missing = [name for name in names if name not in self.variables]
+        if missing:
+            raise ResultFileError(f"{self.path} has no {', '.join(missing)} (written by an older vrsweep?)")
+
+    def along(self, name, x_axis, **coordinates):
+        """``name`` along ``x_axis`` at the given indices of the other axes (extra dims kept, last)."""
+        array = self.ds[name]
+        array = array.isel({axis: index for axis, index in coordinates.items() if axis in array.dims})
+        if x_axis in array.dims:
+            array = array.transpose(x_axis, ...)
+        return array.values
+
+    def curve_coordinates(self, x_axis):
+        """Every combination of the axes other than ``x_axis``: list of ({axis: index}, label)."""
+        others = [name for name in self.axes if name != x_axis]
+        combos = []
+        for indices in itertools.product(*(range(len(self.axes[name])) for name in others)):
+            where = dict(zip(others, indices))
+            label = ", ".join(_coordinate_text(name, self.axes[name][i]) for name, i in where.items())
+            combos.append((where, label))
+        return combos
+
+
+def _coordinate_text(name, value):
+    if name == "direction":
+        return f"sweep {DIRECTION_NAMES.get(int(value), value)}"
+    return f"{PARAMETER_SYMBOLS.get(name, name)} = {_number(value)}"
+
+
+def _axis_index(name, values, wanted):
+    """Index of ``wanted`` on an axis; 'up'/'down' allowed for direction. Must match a grid value."""
+    if name == "direction":
+        words = {"up": 1.0, "down": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
+        key = str(wanted).strip().lower()
+        if key not in words:
+            raise UsageError.naming("{at} direction={value}: the direction is up or down (+1 or -1)", value=wanted)
+        wanted = words[key]
+    try:
+        wanted = float(wanted)
+    except ValueError:
+        raise UsageError.naming("{at} {name}={value}: not a number; {name} takes values {span}",
+                                name=name, value=wanted, span=_axis_span(values)) from None
+    index = int(np.argmin(np.abs(values - wanted)))
+    if abs(values[index] - wanted) > 1e-9 * max(1.0, abs(wanted)):
+        raise UsageError.naming("{at} {name}={value}: not a value of the axis {name}; {nearest} (axis: {span})",
+                                name=name, value=_number(wanted), nearest=_nearest_text(values, wanted),
+                                span=_axis_span(values))
+    return index
+
+
+def _nearest_text(values, wanted):
+    """'the nearest are 19.5 and 21' -- the grid values on either side of ``wanted``."""
+    below, above = values[values < wanted], values[values > wanted]
+    sides = ([_number(below.max())] if below.size else []) + ([_number(above.min())] if above.size else [])
+    if len(sides) == 2:
+        return f"the nearest are {sides[0]} and {sides[1]}"
+    return f"the nearest is {sides[0]}"
+
+
+def _axis_span(values):
+    """'81 values from 0 to 40', or the values themselves when there are few."""
+    if len(values) <= 6:
+        return ", ".join(_number(v) for v in values)
+    return f"{len(values)} values from {_number(np.min(values))} to {_number(np.max(values))}"
+
+
+def _choose_x_axis(view, x_axis, need_axes=None):
+    axes = view.parameter_axes
+    if not axes:
+        raise UsageError.naming("{path} is a single point" + (" after {at}" if view.selected else "")
+                                + ": nothing to plot against (vrsweep simulate draws one point's trajectory)",
+                                path=view.path)
+    if x_axis is not None:
+        if x_axis not in axes:
+            raise UsageError.naming("{x_axis} {value}: not a swept axis of {path} (axes: {axes})",
+                                    value=x_axis, path=view.path, axes=", ".join(axes))
+        return x_axis
+    if need_axes is not None and len(axes) != need_axes:
+        raise UsageError.naming(
+            "{path} sweeps {axes}: this plot needs {need} axis(es); fix the others with {at}, e.g. {at} {example}",
+            path=view.path, axes=", ".join(axes), need=need_axes,
+            example=f"{axes[-1]}={_number(view.axes[axes[-1]][0])}")
+    return "g" if "g" in axes else axes[0]
+
+
+def _point_classes(view, x_axis, where):
+    """Masks along x_axis: (trusted, aperiodic, failed), the README's rule ("Can R be trusted?").
+
+    Trust is judged by R_err alone: R is trusted where R_err <= RELATIVE_ERROR_LIMIT of R. The
+    kind of motion is what ``period`` says: period 0 (no period up to max_period) with a tiny
+    R_err is a converged R of a motion that is long-periodic or still settling, not chaos.
+    Failed points (status not ok) are neither; points not yet computed are in no mask.
+    """
+    status = view.along("status", x_axis, **where)
+    failed = (status != Status.OK) & (status != Status.NOT_COMPUTED)
+    ok = status == Status.OK
+    aperiodic = np.zeros(status.shape, dtype=bool)
+    if "period" in view.variables:
+        aperiodic = (view.along("period", x_axis, **where) == 0) & ok
+    if "R_err" in view.variables and "R" in view.variables:
+        R = view.along("R", x_axis, **where)
+        R_err = view.along("R_err", x_axis, **where)
+        with np.errstate(invalid="ignore"):
+            trusted = (R_err <= RELATIVE_ERROR_LIMIT * np.abs(R)) & ok
+    else:  # a file from before R_err: only the period can say anything
+        trusted = ok & ~aperiodic
+    return trusted, aperiodic, failed
+
+
+def _failure_counts(view):
+    """{'max_steps': 7, ...} over the view's points (failed statuses only)."""
+    status = np.asarray(view.variables["status"])
+    return {s.name.lower(): int(np.sum(status == s)) for s in Status
+            if s not in (Status.OK, Status.NOT_COMPUTED) and np.any(status == s)}
+
+
+def _failure_note(view, where_drawn):
+    """'7 of 9 points failed (7 max_steps): red x along the bottom edge', or ''."""
+    counts = _failure_counts(view)
+    if not counts:
+        return ""
+    n_failed = sum(counts.values())
+    detail = ", ".join(f"{n} {name}" for name, n in counts.items())
+    return (f"{n_failed} of {np.size(view.variables['status'])} points failed ({detail}): "
+            f"× {where_drawn}; see vrsweep info")
+
+
+def _draw_failed_rug(ax, x, failed, row=0, colour=FAILED_COLOUR):
+    """Failed points as x marks in a row just above the bottom edge of the axes.
+
+    Their value is NaN, so no data coordinate can show them; axes coordinates can, on a linear
+    or a log axis alike, and they do not move the data limits.
+    """
+    if not np.any(failed):
+        return None
+    (line,) = ax.plot(np.asarray(x)[failed], np.full(int(np.sum(failed)), FAILED_ROW_HEIGHT * (row + 0.7)),
+                      "x", color=colour, ms=6, mew=1.5, zorder=6, clip_on=False,
+                      transform=ax.get_xaxis_transform(), gid="failed")
+    return line
+
+
+def _span_grid(ax, values):
+    """The x limits of the whole grid (plus a margin), whatever could be drawn."""
+    low, high = _limits(values)
+    margin = 0.03 * (high - low) if high > low else 0.5 * max(1.0, abs(low))
+    ax.set_xlim(low - margin, high + margin)
+
+
+def _progress_note(view):
+    """What part of the grid the file holds: '' for a whole finished sweep."""
+    if view.shard:
+        # A shard's gaps belong to the other shards, not to a run that stopped.
+        unfinished = "" if view.complete else ", UNFINISHED"
+        return (f"shard {view.shard}, {view.n_done} of {view.n_points} points{unfinished} "
+                "(vrsweep merge joins the shards)")
+    if view.complete:
+        return ""
+    return f"UNFINISHED: {view.n_done} of {view.n_points} points done"
+
+
+def _text_attr(value):
+    if value is None:
+        return None
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def _map_axes(view, x_axis):
+    axes = view.parameter_axes
+    if len(axes) != 2:
+        raise UsageError.naming("a map needs two swept axes; {path} has {axes}" + (" left after {at}" if view.selected else ""),
+                                path=view.path, axes=", ".join(axes) or "none")
+    x_axis = x_axis or ("g" if "g" in axes else axes[0])
+    if x_axis not in axes:
+        raise UsageError.naming("{x_axis} {value}: not a swept axis of {path} (axes: {axes})",
+                                value=x_axis, path=view.path, axes=", ".join(axes))
+    return x_axis, next(name for name in axes if name != x_axis)
+
+
+def _map_panels(view):
+    """One panel per continuation direction (one panel without continuation)."""
+    if "direction" not in view.axes:
+        return [({}, "")]
+    return [({"direction": i}, f"sweep {DIRECTION_NAMES.get(int(v), v)}")
+            for i, v in enumerate(view.axes["direction"])]
+
+
+def _draw_resonance_curve(ax, view, x_axis, y_axis):
+    """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega)."""
+    from vrsweep import theory
+
+    if view.config is None:
+        return None
+    xs = np.linspace(*_limits(view.axes[x_axis]), 400)
+    ys = np.linspace(*_limits(view.axes[y_axis]), 400)
+    X, Y = np.meshgrid(xs, ys)
+    mesh = {name: np.full(X.shape, float(value)) for name, value in view.parameters().items()}
+    mesh[x_axis], mesh[y_axis] = X, Y
+    detuning = theory.effective_frequency_squared(mesh) - np.square(mesh["omega"])
+    if not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
+        return None
+    ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
+    return Line2D([], [], color="white", ls="--", lw=1.6,
+                  label="$g_{res}(\\Omega)$: $\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
+
+
+def _limits(values):
+    values = np.asarray(values, dtype=np.float64)
+    return float(values.min()), float(values.max())

@@ -1,0 +1,252 @@
+"""The trajectory figures of ``vrsweep simulate`` files: position, velocity and phase portrait
+(Fig. 3-5), impacts per slow period (Fig. impact_no), the slow flow (Fig. 6)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from vrsweep.errors import UsageError
+from vrsweep.model import PARAMETER_NAMES
+from vrsweep.plot.labels import UNITS, _caption, _new_figure, _number, _parse_config, _title, _width
+from vrsweep.results import Status
+
+
+# --------------------------------------------------------------------------------------------
+# Trajectory figures
+# --------------------------------------------------------------------------------------------
+
+
+def with_impacts(t, x, v, impacts, delta):
+    """The samples with each impact inserted twice, (Delta, v before) then (Delta, v after).
+
+    Sampled on a fixed grid, a rebound would be drawn as a chord between the samples on either
+    side of it; with the impact points in place, lines reach the barrier and jump there.
+    """
+    if len(impacts) == 0 or delta is None:
+        return t, x, v
+    impact_t = impacts[:, 0]
+    all_t = np.concatenate([t, impact_t, impact_t])
+    all_x = np.concatenate([x, np.full(len(impacts), delta), np.full(len(impacts), delta)])
+    all_v = np.concatenate([v, impacts[:, 1], impacts[:, 2]])
+    rank = np.concatenate([np.ones(len(t)), np.zeros(len(impacts)), np.full(len(impacts), 2.0)])
+    order = np.lexsort((rank, all_t))
+    return all_t[order], all_x[order], all_v[order]
+
+
+def parse_periods(text):
+    """'FIRST:LAST' (slow periods, 1-based, inclusive; either may be empty) -> (first, last)."""
+    first, colon, last = str(text).partition(":")
+    try:
+        window = (int(first) if first.strip() else 1, int(last) if last.strip() else None)
+    except ValueError:
+        window = None
+    if not colon or window is None or window[0] < 1 or (window[1] is not None and window[1] < window[0]):
+        raise UsageError.naming("{periods} {value}: expected FIRST:LAST slow periods, e.g. 1:20 or 81:100",
+                                value=text)
+    return window
+
+
+def slow_periods_in(data):
+    """How many slow periods a trajectory file spans (None if it does not say its slow period)."""
+    slow_period = float(data.attrs.get("slow_period", 0.0)) or None
+    if slow_period is None:
+        return None
+    run = next(iter(data.runs.values()))
+    return int(round((run.t[-1] - run.t[0]) / slow_period))
+
+
+def _time_window(data, periods):
+    """(t_start, t_end) of slow periods FIRST..LAST; the whole run for None."""
+    slow_period = float(data.attrs.get("slow_period", 0.0)) or None
+    run = next(iter(data.runs.values()))
+    if periods is None or slow_period is None:
+        return run.t[0], run.t[-1]
+    first, last = periods
+    n_periods = slow_periods_in(data)
+    last = n_periods if last is None else last
+    if first > n_periods:
+        raise UsageError.naming("{periods} {value}: the run has {n} slow periods", value=f"{first}:{last}",
+                                n=n_periods)
+    return (first - 1) * slow_period, min(last, n_periods) * slow_period
+
+
+def _in_window(t, window, *arrays):
+    keep = (t >= window[0] - 1e-9) & (t <= window[1] + 1e-9)
+    return (t[keep],) + tuple(a[keep] for a in arrays)
+
+
+def _point_text(config):
+    if config is None:
+        return ""
+    return f"g = {_number(config.parameters['g'])}, Ω = {_number(config.parameters['Omega'])}"
+
+
+def _window_text(window, data):
+    slow_period = float(data.attrs.get("slow_period", 0.0))
+    if not slow_period:
+        return f"t in [{window[0]:.4g}, {window[1]:.4g}]"
+    return f"slow periods {round(window[0] / slow_period) + 1}-{round(window[1] / slow_period)} of T = 2π/ω"
+
+
+ROW_TITLES = {"original": "original system (eq2.1-eq2.2)", "effective": "effective system (eq2.10)"}
+TRANSIENT_COLOUR = "0.65"
+STEADY_COLOUR = "tab:blue"
+
+
+def trajectory_figure(data, periods=None) -> Figure:
+    """Position, velocity and phase portrait; original above effective (Fig. 3-5).
+
+    periods: (first, last) slow periods to show (1-based, inclusive), default the whole run. The
+    transient (the config's transient_periods) is drawn grey, the rest blue.
+    """
+    config = _parse_config(data.config_text)
+    delta = config.parameters["Delta"] if config is not None else None
+    window = _time_window(data, periods)
+    slow_period = float(data.attrs.get("slow_period", 0.0))
+    t_transient = config.integration.transient_periods * slow_period if config is not None else 0.0
+    runs = list(data.runs.values())
+    fig = _new_figure(13.0, 3.3 * len(runs) + 0.9)
+    grid = fig.subplots(len(runs), 3, squeeze=False)
+    letters = iter("abcdef")
+    for row, run in zip(grid, runs):
+        t, x, v = with_impacts(run.t, run.x, run.v, run.impacts, delta)
+        t, x, v = _in_window(t, window, x, v)
+        ax_x, ax_v, ax_phase = row
+        for part, colour, label in ((t <= t_transient, TRANSIENT_COLOUR, "transient"),
+                                    (t >= t_transient, STEADY_COLOUR, "after the transient")):
+            if np.count_nonzero(part) < 2:
+                continue
+            ax_x.plot(t[part], x[part], lw=0.4, color=colour)
+            ax_v.plot(t[part], v[part], lw=0.4, color=colour)
+            ax_phase.plot(x[part], v[part], lw=0.3, color=colour, label=label)
+        if delta is not None:
+            ax_x.axhline(delta, color="k", lw=0.8, ls="--")
+            ax_phase.axvline(delta, color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
+        ax_phase.legend(fontsize=7, loc="lower left")
+        status = "" if run.status == Status.OK else f" (stopped: {run.status.name.lower()})"
+        for ax, what in ((ax_x, "position"), (ax_v, "velocity"), (ax_phase, "phase portrait")):
+            ax.set_title(f"({next(letters)}) {ROW_TITLES.get(run.model, run.model)}: {what}{status}", fontsize=9)
+            ax.grid(alpha=0.3)
+        for ax in (ax_x, ax_v):
+            ax.set_xlabel(f"time $t$ {UNITS}")
+            ax.set_xlim(*window)
+        ax_x.set_ylabel(f"position $x$ {UNITS}")
+        ax_v.set_ylabel(f"velocity $\\dot{{x}}$ {UNITS}")
+        ax_phase.set_xlabel(f"position $x$ {UNITS}")
+        ax_phase.set_ylabel(f"velocity $\\dot{{x}}$ {UNITS}")
+    samples = data.attrs.get("samples_per_period", "?")
+    _title(fig, f"Trajectory at {_point_text(config)}, {_window_text(window, data)}: position, velocity, "
+                f"phase portrait ({samples} dense-output samples per slow period, impacts exact; dashed: barrier)",
+           _caption(data.path or "", config, " and ".join(ROW_TITLES.get(m, m) for m in data.runs),
+                    width=_width(fig)))
+    return fig
+
+
+def impacts_per_period_figure(datasets) -> Figure:
+    """Impacts in each slow period against the period number, transient included (Fig. impact_no).
+
+    One panel per file (e.g. g = 5 and g = 20), each with its own count axis: a shared one would
+    take its limits from one panel and clip the others. The measurement window's mean -- what
+    ``vrsweep run`` stores as impacts_per_period -- is drawn over it.
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    fig = _new_figure(8.0, 2.7 * len(datasets) + 1.0)
+    axes = fig.subplots(len(datasets), 1, squeeze=False, sharex=len(datasets) > 1)[:, 0]
+    configs = [_parse_config(data.config_text) for data in datasets]
+    for k, (ax, data, config) in enumerate(zip(axes, datasets, configs)):
+        run = data.runs.get(data.model) or next(iter(data.runs.values()))
+        counts = np.asarray(run.impacts_per_period)
+        periods = np.arange(1, len(counts) + 1)
+        ax.plot(periods, counts, "o-", color="tab:blue", lw=0.7, ms=2.5, label=ROW_TITLES.get(run.model, run.model))
+        if config is not None:
+            n_transient = config.integration.transient_periods
+            if 0 < n_transient < len(counts):
+                mean = counts[n_transient:].mean()
+                ax.axvline(n_transient + 0.5, color="0.4", ls=":", lw=1.0, label="end of the transient")
+                ax.hlines(mean, n_transient + 0.5, len(counts) + 0.5, color="tab:red", lw=1.4,
+                          label=f"mean over the measured periods: {mean:.2f}")
+        letter = f"({'abcdefgh'[k]}) " if len(datasets) > 1 else ""
+        ax.set_title(f"{letter}{_point_text(config)}  ·  {os.path.basename(data.path or '')}  ·  "
+                     f"{int(counts.sum())} impacts in {len(counts)} slow periods", fontsize=9)
+        ax.set_ylabel(f"impacts per slow period {UNITS}")
+        top = max(1.0, float(counts.max(initial=0)))
+        ax.set_ylim(-0.06 * top, 1.08 * top)  # room for the markers of 0 and of the largest count
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_xlim(0.5, len(counts) + 0.5)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7.5, loc="upper right")
+    axes[-1].set_xlabel(f"slow period number $n$ (period $T = 2\\pi/\\omega$) {UNITS}")
+    config = configs[0]
+    varying = {}
+    if config is not None and len(datasets) > 1:
+        varying = {name: config.parameters[name] for name in PARAMETER_NAMES
+                   if any(c is not None and c.parameters[name] != config.parameters[name] for c in configs)}
+    names = ", ".join(os.path.basename(data.path or "") for data in datasets)
+    _title(fig, "Impacts in each slow period $2\\pi/\\omega$, transient included"
+                + (f" (the panels differ in {', '.join(varying)})" if varying else ""),
+           _caption(names, config, datasets[0].model, omit=varying, width=_width(fig)))
+    return fig
+
+
+SLOW_FLOW_STYLES = {
+    "state": dict(color="tab:blue", ls="-", lw=1.1,
+                  label="slow flow (corrected eq2.24) from $R_0, \\theta_0$ of x(0), $\\dot{x}(0)$ (ERRATA 9)"),
+    "paper": dict(color="tab:green", ls="--", lw=1.1,
+                  label="slow flow (corrected eq2.24) from the paper's $R_0 = \\Delta$, $\\theta_0 = 0$ (eq2.22)"),
+    "paper_literal": dict(color="0.35", ls=":", lw=1.1,
+                          label="slow flow as printed in the paper (sin/cos swapped, ERRATA 1), paper's start"),
+}
+
+
+def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_literal")) -> Figure:
+    """The effective system (numerical) against the first-order reconstruction eq2.21 (Fig. 6)."""
+    if "effective" not in data.runs or not data.slow_flow:
+        raise UsageError.naming("{path} holds no effective trajectory and slow flow: make it with "
+                                "vrsweep simulate --compare effective (or a config with model: effective)",
+                                path=data.path)
+    config = _parse_config(data.config_text)
+    delta = config.parameters["Delta"] if config is not None else None
+    window = _time_window(data, periods)
+    run = data.runs["effective"]
+    t, x, v = with_impacts(run.t, run.x, run.v, run.impacts, delta)
+    t, x, v = _in_window(t, window, x, v)
+    fig = _new_figure(13.0, 4.8)
+    ax_x, ax_v, ax_phase = fig.subplots(1, 3)
+    numerical = dict(color="tab:red", lw=1.6, alpha=0.8, label="effective system eq2.10, numerical (with impacts)")
+    ax_x.plot(t, x, **numerical)
+    ax_v.plot(t, v, **numerical)
+    ax_phase.plot(x, v, **numerical)
+    for start in starts:
+        if start not in data.slow_flow:
+            continue
+        flow = data.slow_flow[start]
+        flow_t, flow_x, flow_v = _in_window(flow.t, window, flow.x, flow.v)
+        style = dict(SLOW_FLOW_STYLES.get(start, dict(label=start)))
+        if not np.isfinite(flow_x).any():  # say so rather than list a curve that draws nothing
+            style["label"] += ": no finite value (not drawn)"
+        ax_x.plot(flow_t, flow_x, **style)
+        ax_v.plot(flow_t, flow_v, **style)
+        ax_phase.plot(flow_x, flow_v, **style)
+    if delta is not None:
+        ax_x.axhline(delta, color="k", lw=0.8, ls="-.", label="barrier $x = \\Delta$")
+        ax_phase.axvline(delta, color="k", lw=0.8, ls="-.")
+    for ax, what, letter in ((ax_x, "position", "a"), (ax_v, "velocity", "b"), (ax_phase, "phase portrait", "c")):
+        ax.set_title(f"({letter}) {what}", fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in (ax_x, ax_v):
+        ax.set_xlabel(f"time $t$ {UNITS}")
+        ax.set_xlim(*window)
+    ax_x.set_ylabel(f"position $x$, $X$ {UNITS}")
+    ax_v.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$ {UNITS}")
+    ax_phase.set_xlabel(f"position $x$, $X$ {UNITS}")
+    ax_phase.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$ {UNITS}")
+    handles, labels = ax_x.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=7.5)
+    _title(fig, f"Effective system against the slow-flow reconstruction X = R cos(ωt + θ) (eq2.21) at "
+                f"{_point_text(config)}, {_window_text(window, data)}; the first-order theory ignores the barrier",
+           _caption(data.path or "", config, "effective system eq2.10 and its slow flow", width=_width(fig)))
+    return fig
