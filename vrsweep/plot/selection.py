@@ -8,7 +8,6 @@ import itertools
 import os
 
 import numpy as np
-from matplotlib.lines import Line2D
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.model import PARAMETER_SYMBOLS
@@ -299,25 +298,6 @@ def _map_panels(view):
         return [({}, "")]
     return [({"direction": i}, f"sweep {DIRECTION_NAMES.get(int(v), v)}")
             for i, v in enumerate(view.axes["direction"])]
-
-
-def _draw_resonance_curve(ax, view, x_axis, y_axis):
-    """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega)."""
-    from vrsweep import theory
-
-    if view.config is None:
-        return None
-    xs = np.linspace(*_limits(view.axes[x_axis]), 400)
-    ys = np.linspace(*_limits(view.axes[y_axis]), 400)
-    X, Y = np.meshgrid(xs, ys)
-    mesh = {name: np.full(X.shape, float(value)) for name, value in view.parameters().items()}
-    mesh[x_axis], mesh[y_axis] = X, Y
-    detuning = theory.effective_frequency_squared(mesh) - np.square(mesh["omega"])
-    if not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
-        return None
-    ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
-    return Line2D([], [], color="white", ls="--", lw=1.6,
-                  label="$g_{res}(\\Omega)$: $\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
 
 
 def _limits(values):
