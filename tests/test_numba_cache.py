@@ -6,6 +6,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+import pytest
+
 import vrsweep
 from vrsweep.numba_cache import folder_name
 
@@ -81,3 +84,96 @@ def test_an_edit_of_any_module_gives_a_new_folder(tmp_path):
         kernel.write("\n# an edit\n")
     after = _run(code, {}, tmp_path)
     assert after.stdout.split()[1] != folder_name()
+
+
+# Class 1 of the hostile-environment faults: numba, refused the folder vrsweep names, falls back to
+# __pycache__ beside the sources, keyed by each file's own timestamp, and a later edit of the kernel
+# left a parallel loop compiled from the old one in use. vrsweep tests the folder first.
+
+def _blocked(tmp_path):
+    """A path no one, root included, can create a folder under: its parent is a regular file."""
+    blocker = tmp_path / "a-file-not-a-folder"
+    blocker.write_text("")
+    return blocker
+
+
+def test_an_unwritable_cache_folder_gives_vrsweeps_own_fallback_and_a_notice(tmp_path):
+    (tmp_path / "tmp").mkdir()
+    code = ("import vrsweep.numba_cache as n, os; print(n.cache_dir()); print(n.enabled()); "
+            "print(os.environ['NUMBA_CACHE_DIR']); print(n.notice())")
+    done = _run(code, {"XDG_CACHE_HOME": str(_blocked(tmp_path)), "TMPDIR": str(tmp_path / "tmp")}, tmp_path)
+    assert done.returncode == 0, done.stderr
+    folder, enabled, variable, notice = done.stdout.splitlines()
+    expected = tmp_path / "tmp" / f"vrsweep-cache-{os.getuid()}" / folder_name()
+    assert folder == variable == str(expected)
+    assert enabled == "True"
+    assert str(_blocked(tmp_path)) in notice and str(expected) in notice and "not writable" in notice
+    assert (expected.parent.stat().st_mode & 0o777) == 0o700
+
+
+def test_a_fallback_folder_another_user_could_write_is_refused(tmp_path, monkeypatch):
+    from vrsweep import numba_cache
+
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    monkeypatch.setattr(numba_cache, "_choice", None)
+    monkeypatch.setattr(numba_cache, "preferred_dir", lambda: _blocked(tmp_path) / "x")
+    monkeypatch.setattr(numba_cache, "fallback_dir", lambda: shared / numba_cache.folder_name())
+    assert not numba_cache.enabled()
+    assert "writable by other users" in str(numba_cache._choose().unusable)
+
+
+def test_no_writable_folder_compiles_without_caching_and_says_so(tmp_path, monkeypatch):
+    from vrsweep import jit, numba_cache
+
+    monkeypatch.setattr(numba_cache, "_choice", None)
+    monkeypatch.setattr(numba_cache, "preferred_dir", lambda: _blocked(tmp_path) / "a")
+    monkeypatch.setattr(numba_cache, "fallback_dir", lambda: _blocked(tmp_path) / "b" / "c")
+    assert not numba_cache.enabled()
+    assert "compiled on every run" in numba_cache.notice()
+    assert not numba_cache.kernel_is_cached() and numba_cache.is_empty()
+
+    def twice(x):
+        return 2.0 * x
+
+    kernel = jit.kernel_jit(twice)
+    assert kernel(1.5) == 3.0
+    assert type(kernel._cache).__name__ == "NullCache"  # numba's "no cache": nothing written anywhere
+
+
+@pytest.mark.slow
+def test_an_edited_kernel_is_never_loaded_stale_with_the_cache_folder_unwritable(tmp_path):
+    """The fault as reported: read-only cache folder, run, edit the kernel, run again. The second
+    run must compute with the edited code, and nothing may be cached inside the package."""
+    import shutil
+
+    import h5py
+
+    site = tmp_path / "site"
+    copy = site / "vrsweep"
+    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    (tmp_path / "tmp").mkdir()
+    env = {**{k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"},
+           "XDG_CACHE_HOME": str(_blocked(tmp_path)), "TMPDIR": str(tmp_path / "tmp"),
+           "PYTHONPATH": str(site)}
+    config = tmp_path / "one.yaml"
+    config.write_text("parameters: {g: 0.5}\n"
+                      "integration: {transient_periods: 5, measure_periods: 5, strobe_periods: 1}\n")
+
+    def response(name):
+        done = subprocess.run([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(tmp_path / name)],
+                              capture_output=True, text=True, cwd=tmp_path, env=env, timeout=600)
+        assert done.returncode == 0, done.stderr
+        assert "not writable" in done.stderr  # the notice, once
+        with h5py.File(tmp_path / name) as file:
+            return float(file["R"][()].ravel()[0])
+
+    before = response("before.h5")
+    cubic = "coefficients[ALPHA] * x * x * x"
+    source = next(p for p in copy.rglob("*.py") if cubic in p.read_text())
+    source.write_text(source.read_text().replace(cubic, "3.0 * " + cubic))
+    after = response("after.h5")
+    assert np.isfinite(before) and np.isfinite(after)
+    assert abs(after - before) > 1e-6 * abs(before), "the edited kernel was not the one that ran"
+    assert not list(copy.rglob("*.nbi")), "numba cached kernels inside the package"

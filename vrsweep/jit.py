@@ -1,4 +1,5 @@
-"""The numba decorator of the numerical kernel: cached, with numpy's floating-point error model.
+"""The numba decorator of the numerical kernel: cached (where vrsweep can key the cache by its
+sources), with numpy's floating-point error model.
 
 ``error_model="numpy"``: a float division by zero gives inf or nan, as in numpy, instead of
 raising ZeroDivisionError. Inside a ``prange`` loop such an exception cannot be raised cleanly
@@ -9,10 +10,17 @@ by the kernel. It also drops the zero test before every division from the hot lo
 
 from numba import njit
 
+from vrsweep import numba_cache
+
 
 def kernel_jit(function=None, **options):
-    """``njit(cache=True, error_model="numpy", **options)``, usable with or without arguments."""
-    options = {"cache": True, "error_model": "numpy", **options}
+    """``njit(cache=True, error_model="numpy", **options)``, usable with or without arguments.
+
+    ``cache`` is False when vrsweep found no cache folder it can key by its sources
+    (``numba_cache.enabled``): numba's own fallback, the package's ``__pycache__``, could load a
+    kernel older than the installed code.
+    """
+    options = {"cache": numba_cache.enabled(), "error_model": "numpy", **options}
     if function is None:
         return njit(**options)
     return njit(**options)(function)

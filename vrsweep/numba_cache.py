@@ -20,6 +20,16 @@ and may be deleted.
 :func:`configure` must run before numba compiles anything: ``vrsweep/__init__.py`` calls it
 first thing, so every entry point (the CLI, the library, Dask workers) gets the same folder, and
 it is idempotent: a subprocess that inherits the variable keeps the folder.
+
+Why the folder is tested before numba sees it: when numba cannot write to ``NUMBA_CACHE_DIR`` it
+does not fail, it falls back to ``__pycache__`` beside the sources, a cache keyed by each file's
+own timestamp only, i.e. exactly the stale-loop case above (seen: a read-only ``XDG_CACHE_HOME``,
+an edit of ``kernel.py``, and the next run returned the old kernel's R). So :func:`configure`
+writes a probe file into the folder it chose. If that fails it takes a fallback folder of its own
+under the system's temporary folder (``vrsweep-cache-<uid>``, mode 0700, refused unless owned by
+this user), and if that fails too, caching is switched off: :func:`enabled` is False, every
+kernel compiles with ``cache=False`` (``vrsweep/jit.py``), and :func:`notice` says so once.
+Compiling every run is slow; computing with code that is not the installed code is wrong.
 """
 
 from __future__ import annotations
@@ -27,7 +37,10 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import stat
 import sys
+import tempfile
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from vrsweep._version import __version__
@@ -35,10 +48,13 @@ from vrsweep._version import __version__
 
 @functools.lru_cache(maxsize=None)
 def sources_digest() -> str:
-    """12 hex digits of SHA-1 over the package's own modules (names and bytes): ~1 ms."""
+    """12 hex digits of SHA-1 over every module of the package, sub-packages included (relative
+    paths and bytes): ~2 ms. Every folder, because a kernel compiled into a loop may come from any
+    of them."""
+    package = Path(__file__).resolve().parent
     digest = hashlib.sha1()
-    for path in sorted(Path(__file__).resolve().parent.glob("*.py")):
-        digest.update(path.name.encode())
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.relative_to(package).as_posix().encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
 
@@ -47,8 +63,9 @@ def folder_name() -> str:
     return f"vrsweep-{__version__}-{sources_digest()}"
 
 
-def cache_dir() -> Path:
-    """The folder that holds (or will hold) the compiled kernels of these vrsweep sources."""
+def preferred_dir() -> Path:
+    """The folder the user asked for: ``NUMBA_CACHE_DIR`` or the per-user cache, plus
+    :func:`folder_name` (unless the path already ends in it, as in a worker that inherited it)."""
     explicit = os.environ.get("NUMBA_CACHE_DIR")
     if explicit:
         base = Path(explicit)
@@ -59,11 +76,107 @@ def cache_dir() -> Path:
     return base if base.name == folder_name() else base / folder_name()
 
 
+def fallback_dir() -> Path:
+    """vrsweep's own folder under the system's temporary folder, for when the preferred one is
+    not writable."""
+    owner = os.getuid() if hasattr(os, "getuid") else "user"
+    return Path(tempfile.gettempdir()) / f"vrsweep-cache-{owner}" / folder_name()
+
+
+@dataclass
+class _Choice:
+    asked: str | None  # NUMBA_CACHE_DIR when the choice was made, or as configure() left it
+    folder: Path | None = None  # None: caching is off
+    unusable: list = field(default_factory=list)  # (folder, why) of every folder refused
+
+
+_choice: _Choice | None = None
+
+
+def _writable(folder: Path) -> str | None:
+    """None if numba can cache in ``folder`` (created if need be), else why not, in a few words."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):  # the same probe as numba's own locators
+            pass
+    except OSError as error:
+        return error.strerror or type(error).__name__
+    return None
+
+
+def _private(root: Path) -> str | None:
+    """None if ``root`` is a real folder of this user's that nobody else may write to: a cache
+    folder in a shared /tmp that another user prepared would let them choose the code we run."""
+    try:
+        root.mkdir(mode=0o700, exist_ok=True)
+        info = os.lstat(root)
+    except OSError as error:
+        return error.strerror or type(error).__name__
+    if not stat.S_ISDIR(info.st_mode):
+        return "not a folder"
+    if hasattr(os, "getuid") and info.st_uid != os.getuid():
+        return "owned by another user"
+    if info.st_mode & 0o022:
+        return "writable by other users"
+    return None
+
+
+def _choose() -> _Choice:
+    """The folder for this process, chosen once (again only if NUMBA_CACHE_DIR is changed)."""
+    global _choice
+    asked = os.environ.get("NUMBA_CACHE_DIR")
+    if _choice is not None and _choice.asked == asked:
+        return _choice
+    choice = _Choice(asked)
+    preferred = preferred_dir()
+    why = _writable(preferred)
+    if why is None:
+        choice.folder = preferred
+    else:
+        choice.unusable.append((preferred, why))
+        fallback = fallback_dir()
+        why = _private(fallback.parent) or _writable(fallback)
+        if why is None:
+            choice.folder = fallback
+        else:
+            choice.unusable.append((fallback, why))
+    _choice = choice
+    return choice
+
+
+def cache_dir() -> Path:
+    """The folder that holds (or will hold) the compiled kernels of these vrsweep sources; when
+    caching is off (:func:`enabled` False), the folder that was asked for and refused."""
+    choice = _choose()
+    return choice.folder if choice.folder is not None else choice.unusable[0][0]
+
+
+def enabled() -> bool:
+    """Whether kernels are cached at all: False when no folder vrsweep can key by its sources is
+    writable. Read by ``vrsweep/jit.py`` when each kernel is decorated."""
+    return _choose().folder is not None
+
+
+def notice() -> str | None:
+    """One sentence for the user when the cache is not where they asked for it, else None."""
+    choice = _choose()
+    if not choice.unusable:
+        return None
+    asked, why = choice.unusable[0]
+    if choice.folder is not None:
+        return (f"the numba cache folder {asked} is not writable ({why}); compiled kernels are "
+                f"cached in {choice.folder} instead")
+    return (f"no numba cache folder is writable ({asked}: {why}); kernels are compiled on every "
+            f"run: set NUMBA_CACHE_DIR to a writable folder to cache them")
+
+
 def configure() -> Path:
     """Point numba's cache at :func:`cache_dir` (set before numba is imported; idempotent)."""
     folder = str(cache_dir())
-    # numba reads NUMBA_CACHE_DIR when it is imported; worker subprocesses inherit it.
+    # numba reads NUMBA_CACHE_DIR when it is imported; worker subprocesses inherit it. With
+    # caching off the variable still names the refused folder, so a worker tries it afresh.
     os.environ["NUMBA_CACHE_DIR"] = folder
+    _choice.asked = folder
     numba_config = sys.modules.get("numba.core.config")
     if numba_config is not None:  # numba imported before vrsweep (a notebook, say)
         numba_config.CACHE_DIR = folder
@@ -72,6 +185,8 @@ def configure() -> Path:
 
 def is_empty() -> bool:
     """True when no kernel of this version has been cached yet: the next run compiles."""
+    if not enabled():
+        return True
     folder = cache_dir()
     return not folder.is_dir() or not any(folder.rglob("*.nbi"))
 
@@ -92,6 +207,8 @@ def kernel_is_cached(method: str = "rk45", lyapunov: bool = False) -> bool:
 
     from vrsweep import sweep
 
+    if not enabled():
+        return False
     source = Path(os.path.abspath(sweep.__file__))  # abspath, not resolve(): as numba does
     subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
     function = sweep.RUN_LINES[method, lyapunov].py_func

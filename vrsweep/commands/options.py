@@ -21,6 +21,17 @@ def flag_wording(flags=OUTPUT_FLAGS):
     except VrsweepError as error:
         raise error.reworded(flags) from None
 
+def say_cache_notice():
+    """Say once per process where the numba cache went when it is not where the user asked
+    (vrsweep.numba_cache.notice), to standard error."""
+    from vrsweep import numba_cache
+
+    message = numba_cache.notice()
+    if message and not getattr(say_cache_notice, "said", False):
+        say_cache_notice.said = True
+        click.echo(f"Note: {message}", err=True)
+
+
 set_option = click.option(
     "--set", "overrides", multiple=True, metavar="NAME=VALUE",
     help="Override a parameter (fixing it if it is swept), an integration setting, "

@@ -139,8 +139,12 @@ COMPILE_SECONDS = "about 30 s"
 
 
 def _say_if_compiling(method, lyapunov):
-    from vrsweep.numba_cache import cache_dir, kernel_is_cached
+    from vrsweep.commands.options import say_cache_notice
+    from vrsweep.numba_cache import cache_dir, enabled, kernel_is_cached
 
-    if not kernel_is_cached(method, lyapunov):
+    say_cache_notice()
+    if not enabled():
+        click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, on every run: not cached)", err=True)
+    elif not kernel_is_cached(method, lyapunov):
         click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, once: later runs load it from "
                    f"{cache_dir()})", err=True)

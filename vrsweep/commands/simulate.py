@@ -44,6 +44,10 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     from vrsweep.fileio import prepare_output_directory
 
     prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
+    if not quiet:
+        from vrsweep.commands.options import say_cache_notice
+
+        say_cache_notice()
     with flag_wording(flags):
         data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
         write_trajectory(path, data, config, overwrite=overwrite)
