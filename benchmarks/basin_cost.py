@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numba
 
-from vrsweep import attractors
+from vrsweep.analysis import attractors
 from vrsweep.config import parse_config
-from vrsweep.job import run_job
-from vrsweep.reading import load_results, point_variables
+from vrsweep.execution.job import run_job
+from vrsweep.store.reading import load_results, point_variables
 
 COMMON = """\
 model: effective

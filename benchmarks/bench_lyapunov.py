@@ -24,9 +24,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from vrsweep import kernel  # noqa: E402
-from vrsweep.model import DEFAULT_PARAMETERS, kernel_coefficients  # noqa: E402
-from vrsweep.trajectory import settings_vector, simulate  # noqa: E402
+from vrsweep.numerics import kernel  # noqa: E402
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients  # noqa: E402
+from vrsweep.numerics.trajectory import settings_vector, simulate  # noqa: E402
 
 PAPER = dict(DEFAULT_PARAMETERS, Omega=4.0)
 POINTS = [
@@ -74,8 +74,8 @@ def per_point(periods, repeat):
 _FIRST_CALL = """
 import time, numpy as np
 start = time.perf_counter()
-from vrsweep.trajectory import simulate, settings_vector
-from vrsweep.model import kernel_coefficients, DEFAULT_PARAMETERS
+from vrsweep.numerics.trajectory import simulate, settings_vector
+from vrsweep.numerics.model import kernel_coefficients, DEFAULT_PARAMETERS
 p = dict(DEFAULT_PARAMETERS, Omega=4.0, g=10.0)
 c = kernel_coefficients({{k: np.array([v]) for k, v in p.items()}}, "original")[0]
 simulate(c, [0.99, 0.5], settings_vector(transient_periods=1, measure_periods=1), method="{method}",

@@ -4,7 +4,7 @@
                                      [--baseline REV] [--repeat 2]
 
 The shard files are made synthetically, with the library's own writer and the layout of a real run
-(vrsweep.job: axes, variables, root attributes, owned masks and the analytic columns of a real
+(vrsweep.execution.job: axes, variables, root attributes, owned masks and the analytic columns of a real
 config), filled with values that are a function of the point: a merge does not look at what the
 values mean, and computing 10^5 real points would take this machine many minutes. The default,
 10^5 points with 64 stroboscopic samples, gives the 116 MiB result of the issue that asked for a
@@ -52,10 +52,10 @@ def config_text(n_points, strobe):
 def make_shards(directory, text, n_shards, extras_cache):
     """Shard files of ``text`` for shards 0..n_shards-1, every owned point done, finished as a
     run finishes them. Returns their paths."""
-    from vrsweep import job
+    from vrsweep.execution import job
     from vrsweep.config import parse_config
     from vrsweep.store import ResultWriter
-    from vrsweep.sweep import Grid
+    from vrsweep.execution.sweep import Grid
 
     config = parse_config(text)
     grid = Grid.from_config(config)

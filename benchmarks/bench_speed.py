@@ -42,11 +42,11 @@ sys.path.insert(0, str(ROOT))
 
 from reference import reference_run  # noqa: E402  (the SciPy loop)
 
-from vrsweep import kernel  # noqa: E402
-from vrsweep.model import (  # noqa: E402
+from vrsweep.numerics import kernel  # noqa: E402
+from vrsweep.numerics.model import (  # noqa: E402
     ALPHA, BIG_OMEGA, C, DEFAULT_PARAMETERS, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS, kernel_coefficients,
 )
-from vrsweep.trajectory import settings_vector, simulate  # noqa: E402
+from vrsweep.numerics.trajectory import settings_vector, simulate  # noqa: E402
 
 METHODS = tuple(kernel.INTEGRATORS)
 PAPER = dict(DEFAULT_PARAMETERS, Omega=4.0)
@@ -239,7 +239,7 @@ class _Config:
     def __init__(self, periods, n_points, method="rk45"):
         from types import SimpleNamespace
 
-        from vrsweep.trajectory import DEFAULT_SETTINGS
+        from vrsweep.numerics.trajectory import DEFAULT_SETTINGS
 
         self.model = "original"
         self.parameters = dict(PAPER)
@@ -252,7 +252,7 @@ class _Config:
 
 def thread_scaling(periods, n_points=64, pairs=5):
     print(f"\n2. Points per second on a {n_points}-point grid ({periods} + {periods} periods, rtol 1e-9)")
-    from vrsweep.sweep import run_sweep
+    from vrsweep.execution.sweep import run_sweep
 
     for method in METHODS:
         config = _Config(periods, n_points, method)
@@ -277,7 +277,7 @@ def thread_scaling(periods, n_points=64, pairs=5):
 _FIRST_CALL = """
 import sys, time
 start = time.perf_counter()
-from vrsweep.sweep import run_sweep
+from vrsweep.execution.sweep import run_sweep
 import benchmarks.bench_speed as b
 run_sweep(b._Config(1, 2, sys.argv[1]), threads=2)
 print(time.perf_counter() - start)

@@ -1,12 +1,12 @@
 """SciPy reference solver for the vibro-impact oscillator, independent of vrsweep's kernel.
 
-The model family (vrsweep/model.py, docs/design.md), for x < Delta:
+The model family (vrsweep/numerics/model.py, docs/design.md), for x < Delta:
 
     x'' + gamma (x^2 - mu) x' + stiffness x + alpha x^3 = c cos(omega t) + g cos(Omega t)   # eq2.1
     x'(+) = -e x'(-)   when x reaches Delta from below                                      # eq2.2
 
 The original model is (mu = 1, stiffness = -omega0^2), the effective one (eq2.10-eq2.12) is
-(mu = K, stiffness = wt2, g = 0); `vrsweep.model.kernel_coefficients` builds either vector and is
+(mu = K, stiffness = wt2, g = 0); `vrsweep.numerics.model.kernel_coefficients` builds either vector and is
 the only thing shared with the code under test (it is a trivial mapping, tested separately).
 
 Why this is a trustworthy reference:
@@ -35,7 +35,7 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from vrsweep.model import (ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS,
+from vrsweep.numerics.model import (ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS,
                            kernel_coefficients)
 
 # Points where the reference's R is tolerance-independent: test_reference.py::test_converged_points
@@ -220,7 +220,7 @@ def reference_run(coefficients, x0, v0, transient_periods, measure_periods, rtol
                   atol=1e-13, method="DOP853", max_impacts=100000, min_rebound=1e-9):
     """One grid point by SciPy: the response measures of eq3.1-eq3.3 and the impact record.
 
-    coefficients: one vector from vrsweep.model.kernel_coefficients (original or effective).
+    coefficients: one vector from vrsweep.numerics.model.kernel_coefficients (original or effective).
     The run starts at t = 0 from (x0, v0), drops `transient_periods` slow periods T = 2 pi/omega
     and measures over the next `measure_periods` = m:
 

@@ -17,14 +17,14 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from vrsweep import attractors
-from vrsweep.attractors import (
+from vrsweep.analysis import attractors
+from vrsweep.analysis.attractors import (
     SAME_ORBIT_FACTOR, attractor_extras, attractor_extras_from_file, label_grid, label_slice,
 )
 from vrsweep.config import load_config, parse_config
 from vrsweep.errors import ConfigError
 from vrsweep.results import Status
-from vrsweep.reading import derived_variables, load_results, point_variables
+from vrsweep.store.reading import derived_variables, load_results, point_variables
 from vrsweep.store import merge_results
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"

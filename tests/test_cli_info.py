@@ -15,7 +15,7 @@ import pytest
 
 from vrsweep import __version__
 from vrsweep.cli import main
-from vrsweep.reading import load_results, stored_variables
+from vrsweep.store.reading import load_results, stored_variables
 from vrsweep.store import FORMAT_VERSION
 
 

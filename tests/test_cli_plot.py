@@ -183,7 +183,7 @@ def test_a_map_of_any_stored_variable(plane, tmp_path, name, invoke):
     from matplotlib.collections import QuadMesh
 
     from vrsweep import plot
-    from vrsweep.reading import load_results
+    from vrsweep.store.reading import load_results
 
     out = tmp_path / f"{name}.png"
     result = invoke("plot", plane, "--kind", "map", "--var", name, "-o", out)

@@ -164,7 +164,7 @@ def test_progress_log_arithmetic():
     import io
     import time
 
-    from vrsweep.progress import ProgressLog
+    from vrsweep.execution.progress import ProgressLog
 
     now = [100.0]
     stream = io.StringIO()
@@ -190,7 +190,7 @@ def empty_cache(tmp_path, monkeypatch):
 
 
 def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache, invoke, write_config):
-    from vrsweep.numba_cache import kernel_is_cached
+    from vrsweep.numerics.numba_cache import kernel_is_cached
 
     assert not kernel_is_cached()
     # numba read its cache folder at import: this run loads the real cache, but vrsweep cannot
@@ -207,10 +207,10 @@ def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache, inv
 def test_a_filled_cache_says_nothing(tmp_path, monkeypatch, invoke, write_config):
     import numba
 
-    from vrsweep.numba_cache import cache_dir, kernel_is_cached
+    from vrsweep.numerics.numba_cache import cache_dir, kernel_is_cached
 
     if not numba.config.CACHE_DIR:
-        pytest.skip("numba caches next to the sources here: vrsweep.numba_cache is not in use")
+        pytest.skip("numba caches next to the sources here: vrsweep.numerics.numba_cache is not in use")
     monkeypatch.setenv("NUMBA_CACHE_DIR", numba.config.CACHE_DIR)
     config = write_config(tmp_path, TINY)
     assert invoke("run", config, "-o", tmp_path / "out.h5", "-q").exit_code == 0  # fills it if need be

@@ -6,12 +6,12 @@ import h5py
 import numpy as np
 import pytest
 
-from vrsweep import kernel
+from vrsweep.numerics import kernel
 from vrsweep.config import load_config
-from vrsweep.model import kernel_coefficients
-from vrsweep.reading import load_results
-from vrsweep.trajectory import settings_vector, simulate
-from vrsweep.trajectory_file import read_trajectory
+from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.store.reading import load_results
+from vrsweep.numerics.trajectory import settings_vector, simulate
+from vrsweep.store.trajectory_file import read_trajectory
 
 
 # The paper's parameters at Omega = 5 (Fig. impact_no), short runs: 5 transient + 10 measured periods.

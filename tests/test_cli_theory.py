@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from vrsweep import theory
+from vrsweep.analysis import theory
 from vrsweep.cli import main
 
 

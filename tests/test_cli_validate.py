@@ -11,7 +11,7 @@ from click.testing import CliRunner
 from vrsweep.cli import main
 from vrsweep.config import parse_config
 from vrsweep.errors import ConfigError
-from vrsweep.estimate import LYAPUNOV_COST, SECONDS_PER_POINT_PERIOD, check_size, estimate
+from vrsweep.execution.estimate import LYAPUNOV_COST, SECONDS_PER_POINT_PERIOD, check_size, estimate
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 

@@ -18,7 +18,7 @@ import uuid
 import h5py
 import pytest
 
-from vrsweep.reading import load_results
+from vrsweep.store.reading import load_results
 
 # ~750 cheap points, a ~420 kB file: small enough to fill a tmpfs of a few hundred kB.
 SMALL_DISK_SWEEP = """\
@@ -358,7 +358,7 @@ def test_closing_without_writing_keeps_the_checkpoint_of_the_last_flush(tmp_path
     of its last flush: the points marked done then, and nothing of what came after."""
     import numpy as np
 
-    from vrsweep.fileio import close_without_writing
+    from vrsweep.store.fileio import close_without_writing
     from vrsweep.store import ResultWriter, VariableSpec
 
     path = tmp_path / "checkpoint.h5"
@@ -389,12 +389,12 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     """HDF5 must never meet a full disk (it cannot recover), so a file's space is allocated
     before HDF5 writes: creation_reserve must bound the new file, layout_bytes from below, and
     finish_reserve what finishing adds. Checked on real files from 1 to 10^5 points."""
-    import vrsweep.fileio
+    import vrsweep.store.fileio
     import vrsweep.store.writer
     from vrsweep.config import parse_config
-    from vrsweep.job import _axes, _variable_specs, analytic_extras, root_attributes
+    from vrsweep.execution.job import _axes, _variable_specs, analytic_extras, root_attributes
     from vrsweep.store import ResultWriter, creation_reserve, finish_reserve, layout_bytes
-    from vrsweep.sweep import Grid
+    from vrsweep.execution.sweep import Grid
 
     config = parse_config(sweep, "sizes.yaml")
     grid = Grid.from_config(config)
@@ -408,7 +408,7 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     extras = analytic_extras(config, grid)
     plain = tmp_path / "plain.h5"  # made and finished without reserving: the sizes to end with
     with monkeypatch.context() as patch:
-        for module in (vrsweep.fileio, vrsweep.store.writer):
+        for module in (vrsweep.store.fileio, vrsweep.store.writer):
             patch.setattr(module, "reserve_space", lambda *args, **kwargs: None)
         plain_writer = ResultWriter.create(plain, axes, specs, root_attributes(config))
         assert plain.stat().st_size == created  # what was reserved and not used is given back

@@ -15,7 +15,7 @@ from vrsweep.config import (
     INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, Axis, Config, load_config, parse_config, with_overrides,
 )
 from vrsweep.errors import ConfigError
-from vrsweep.model import DEFAULT_PARAMETERS, PARAMETER_NAMES
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, PARAMETER_NAMES
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 
@@ -410,7 +410,7 @@ def test_shipped_configs_are_what_they_say():
     grid = load_config(CONFIGS / "map_g_Omega.yaml")
     assert grid.axis_names == ("g", "Omega") and grid.n_points <= 500
     quick = load_config(CONFIGS / "quickstart.yaml")
-    from vrsweep.estimate import estimate
+    from vrsweep.execution.estimate import estimate
 
     assert estimate(quick, 1).seconds < 2.0  # "in a few seconds", compile time aside
     assert str(quick.output_path()) == "quickstart.h5"

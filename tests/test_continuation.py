@@ -16,11 +16,11 @@ import pytest
 import xarray as xr
 from click.testing import CliRunner
 
-from vrsweep import theory
+from vrsweep.analysis import theory
 from vrsweep.cli import main
 from vrsweep.config import load_config, parse_config
 from vrsweep.errors import ConfigError
-from vrsweep.sweep import Grid, shuffled_lines
+from vrsweep.execution.sweep import Grid, shuffled_lines
 
 CONFIGS = Path(__file__).resolve().parent.parent / "configs"
 HYSTERESIS = CONFIGS / "hysteresis_effective.yaml"

@@ -42,8 +42,8 @@ def test_dask_resumes_a_local_run_through_a_scheduler_address(single, tmp_path, 
     from dask.distributed import LocalCluster
 
     from vrsweep.config import load_config
-    from vrsweep.job import GracefulStop, Interrupted, run_job
-    from vrsweep.sweep import run_sweep
+    from vrsweep.execution.job import GracefulStop, Interrupted, run_job
+    from vrsweep.execution.sweep import run_sweep
 
     config, expected = single
     out = tmp_path / "partial.h5"
@@ -66,7 +66,7 @@ def test_run_without_dask_never_imports_it(single, tmp_path):
     script = textwrap.dedent(f"""
         import sys
         from vrsweep.cli import main
-        import vrsweep.distributed  # the module itself imports dask lazily too
+        import vrsweep.execution.distributed  # the module itself imports dask lazily too
         try:
             main(["run", {str(config)!r}, "-o", {str(tmp_path / "plain.h5")!r}, "-q"])
         except SystemExit as exit:

@@ -1,4 +1,4 @@
-"""Can R be trusted? The per-point diagnostics (vrsweep/diagnostics.py) on synthetic samples and
+"""Can R be trusted? The per-point diagnostics (vrsweep/analysis/diagnostics.py) on synthetic samples and
 on two points of the paper's system whose behaviour is known (issue 5):
 
 - g = 10, Omega = 4 (original model, paper parameters, x(0) = 0.99, v(0) = 0.5) settles on a
@@ -12,13 +12,13 @@ import textwrap
 import numpy as np
 import pytest
 
-from vrsweep import kernel
+from vrsweep.numerics import kernel
 from vrsweep.config import parse_config
-from vrsweep.diagnostics import N_BATCHES, detect_period, point_diagnostics, r_error
-from vrsweep.model import kernel_coefficients
+from vrsweep.analysis.diagnostics import N_BATCHES, detect_period, point_diagnostics, r_error
+from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.sweep import run_sweep
-from vrsweep.trajectory import settings_vector, simulate
+from vrsweep.execution.sweep import run_sweep
+from vrsweep.numerics.trajectory import settings_vector, simulate
 
 TOLERANCE = 1e-6  # the config's default period_tolerance
 

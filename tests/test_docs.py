@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 
 from vrsweep.config import INITIAL_DEFAULTS, INTEGRATION_DEFAULTS
-from vrsweep.model import DEFAULT_PARAMETERS
+from vrsweep.numerics.model import DEFAULT_PARAMETERS
 from vrsweep.results import Status
-from vrsweep.variables import point_variables
+from vrsweep.store.variables import point_variables
 
 ROOT = Path(__file__).resolve().parent.parent
 ERRATA = ROOT / "docs" / "errata.md"

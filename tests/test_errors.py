@@ -24,7 +24,7 @@ from click.testing import CliRunner
 
 from vrsweep.cli import main
 from vrsweep.results import Status
-from vrsweep.reading import load_results
+from vrsweep.store.reading import load_results
 from vrsweep.store import FORMAT_VERSION
 
 
@@ -338,10 +338,10 @@ def test_a_run_killed_midway_leaves_an_unfinished_checkpoint(tmp_path, invoke):
 @pytest.fixture
 def small_chunks(monkeypatch):
     """Two points per chunk, so that a run writes several chunks (several checkpoints)."""
-    import vrsweep.sweep
+    import vrsweep.execution.sweep
 
-    monkeypatch.setattr(vrsweep.sweep, "default_chunk_lines", lambda threads, line_length: 2)
-    monkeypatch.setattr(vrsweep.sweep, "GROW_CHUNK_BELOW_SECONDS", 0.0)  # and they stay that small
+    monkeypatch.setattr(vrsweep.execution.sweep, "default_chunk_lines", lambda threads, line_length: 2)
+    monkeypatch.setattr(vrsweep.execution.sweep, "GROW_CHUNK_BELOW_SECONDS", 0.0)  # and they stay that small
 
 
 def test_disk_full_midway_keeps_finished_points_and_resumes(finished, tmp_path, monkeypatch, small_chunks, invoke):
@@ -471,7 +471,7 @@ def test_disk_full_while_saving_a_chunk(finished, tmp_path, monkeypatch, small_c
 def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monkeypatch, invoke):
     """Trajectories, figures and merged files are written whole: the same one line, nothing left
     (the disk fills after HDF5 is done: merge still writes with HDF5 straight to the disk)."""
-    import vrsweep.fileio
+    import vrsweep.store.fileio
 
     out = tmp_path / {"simulate": "trajectory.h5", "plot": "figure.png", "merge": "merged.h5"}[command]
     args = {"simulate": ["simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", out],
@@ -481,7 +481,7 @@ def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monk
     def disk_full(path):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(vrsweep.fileio, "fsync_path", disk_full)
+    monkeypatch.setattr(vrsweep.store.fileio, "fsync_path", disk_full)
     line = one_message(invoke(*args), 1)
     assert line.startswith(f"Error: cannot write {out}: No space left on device (the file needs ")
     assert f"free in {tmp_path})" in line
@@ -491,7 +491,7 @@ def test_disk_full_while_writing_other_outputs(command, finished, tmp_path, monk
 def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch, assert_same_result, invoke):
     """h5py built on HDF5 < 1.10.7 refuses the locking= argument (ValueError): every command
     opens its files without it, with no traceback and no message."""
-    import vrsweep.fileio
+    import vrsweep.store.fileio
 
     class old_h5py(h5py.File):  # still an h5py.File to whoever checks (xarray's h5netcdf backend)
         def __init__(self, *args, **kwargs):
@@ -500,7 +500,7 @@ def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch, a
             super().__init__(*args, **kwargs)
 
     monkeypatch.delenv("HDF5_USE_FILE_LOCKING", raising=False)
-    monkeypatch.setattr(vrsweep.fileio, "_locking_argument_supported", True)
+    monkeypatch.setattr(vrsweep.store.fileio, "_locking_argument_supported", True)
     monkeypatch.setattr(h5py, "File", old_h5py)
     out = tmp_path / "run.h5"
     trajectory = tmp_path / "trajectory.h5"
@@ -515,7 +515,7 @@ def test_h5py_without_file_locking_falls_back(finished, tmp_path, monkeypatch, a
         result = invoke(*args)
         assert result.exit_code == 0, (args, result.output)
         assert "lock" not in result.stderr.replace(str(tmp_path), "").lower(), result.stderr
-    assert vrsweep.fileio._locking_argument_supported is False
+    assert vrsweep.store.fileio._locking_argument_supported is False
     monkeypatch.undo()
     assert_same_result(out, finished)
 

@@ -2,7 +2,7 @@
 
 Issue 14, item 3: g = 1e200 once ended in ``SystemError: CPUDispatcher(<function run_lines>)
 returned a result with an exception set`` (a ZeroDivisionError inside the parallel loop). The
-kernel now runs with numba's numpy error model (vrsweep/jit.py: a division by zero gives inf or
+kernel now runs with numba's numpy error model (vrsweep/numerics/jit.py: a division by zero gives inf or
 nan) and turns a step estimate of zero or NaN into ``step_too_small`` / ``non_finite``.
 
 test_faults.py draws parameters in the paper's range; here every parameter may instead be drawn
@@ -18,13 +18,13 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from vrsweep import kernel
+from vrsweep.numerics import kernel
 from vrsweep.config import parse_config
-from vrsweep.model import kernel_coefficients
+from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.reading import load_results
-from vrsweep.sweep import run_sweep
-from vrsweep.trajectory import settings_vector, simulate
+from vrsweep.store.reading import load_results
+from vrsweep.execution.sweep import run_sweep
+from vrsweep.numerics.trajectory import settings_vector, simulate
 
 
 KNOWN_FAILURES = {Status.MAX_STEPS, Status.DIVERGED, Status.CHATTER_LIMIT, Status.STEP_TOO_SMALL,

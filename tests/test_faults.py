@@ -21,13 +21,13 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from vrsweep import kernel
+from vrsweep.numerics import kernel
 from vrsweep.cli import main
 from vrsweep.config import parse_config
-from vrsweep.model import kernel_coefficients
+from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.sweep import run_sweep
-from vrsweep.trajectory import settings_vector, simulate
+from vrsweep.execution.sweep import run_sweep
+from vrsweep.numerics.trajectory import settings_vector, simulate
 
 KNOWN_FAILURES = {Status.MAX_STEPS, Status.DIVERGED, Status.CHATTER_LIMIT, Status.STEP_TOO_SMALL,
                   Status.NON_FINITE}
@@ -179,7 +179,7 @@ def test_vanishing_drive_is_not_a_nan_ok(tmp_path, c):
         assert "parameters.c" in result.output
         return
     assert result.exit_code == 0, result.output
-    from vrsweep.reading import load_results
+    from vrsweep.store.reading import load_results
 
     stored = load_results(out)
     ok = stored["status"].values == Status.OK

@@ -9,11 +9,11 @@ Coefficients are binary fractions, so "exactly at the barrier" is exact in float
 import numpy as np
 import pytest
 
-from vrsweep.impact import (
+from vrsweep.numerics.impact import (
     BARRIER_SCAN_POINTS, IMPACT, N_BRACKET, NO_IMPACT, THETA_TOLERANCE, TURNING_POINT, UNRESOLVED, V, X,
     find_crossing, locate_root,
 )
-from vrsweep.integrator import dense_value
+from vrsweep.numerics.rk45 import dense_value
 
 DELTA = 1.0
 DEGREE = 4  # dense outputs of DP5(4)'s shape (2, 4): x up to theta^4

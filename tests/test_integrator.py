@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from numba import njit
 
-from vrsweep import dop853, integrator
+from vrsweep.numerics import dop853
+from vrsweep.numerics import rk45 as integrator
 
 SLOPE_MARGIN = 0.3
 T_END = 4.0  # not a multiple of the period 2 pi: no error cancels by symmetry

@@ -9,12 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from vrsweep import kernel
-from vrsweep.model import (
+from vrsweep.numerics import kernel
+from vrsweep.numerics.model import (
     ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, N_COEFFICIENTS, OMEGA, STIFFNESS, kernel_coefficients,
 )
 from vrsweep.results import Status
-from vrsweep.trajectory import settings_vector, simulate
+from vrsweep.numerics.trajectory import settings_vector, simulate
 
 METHODS = tuple(kernel.INTEGRATORS)  # every test marked with @every_method runs for each
 every_method = pytest.mark.parametrize("method", METHODS)

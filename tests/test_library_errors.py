@@ -3,7 +3,7 @@
 import pytest
 
 from vrsweep.errors import InvalidArgument, UsageError
-from vrsweep.job import FailureAdvice, JobReport, parse_shard
+from vrsweep.execution.job import FailureAdvice, JobReport, parse_shard
 from vrsweep.results import Status
 
 
@@ -23,7 +23,7 @@ def test_a_bad_shard_is_worded_for_the_library_and_for_the_option(text, env, wor
 
 
 def test_a_bad_dask_address_is_worded_without_the_flag():
-    from vrsweep.distributed import parse_local
+    from vrsweep.execution.distributed import parse_local
 
     with pytest.raises(InvalidArgument) as caught:
         parse_local("local:0")

@@ -21,11 +21,11 @@ import numpy as np
 import pytest
 from scipy.integrate import simpson, solve_ivp
 
-from vrsweep import kernel
-from vrsweep.diagnostics import detect_period, lyapunov_error
-from vrsweep.model import DEFAULT_PARAMETERS, E, GAMMA, MU, kernel_coefficients
+from vrsweep.numerics import kernel
+from vrsweep.analysis.diagnostics import detect_period, lyapunov_error
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, E, GAMMA, MU, kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.trajectory import settings_vector, simulate
+from vrsweep.numerics.trajectory import settings_vector, simulate
 
 from reference import coefficient_vector, reference_trajectory
 

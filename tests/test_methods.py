@@ -16,16 +16,18 @@ import numpy as np
 import pytest
 from numba import njit
 
-from vrsweep import dop853, integrator, kernel
-from vrsweep.dop853 import dop853_dense, dop853_step
-from vrsweep.integrator import DP54_C, dense_value, dp54_dense, dp54_step
-from vrsweep.kernel import (
+from vrsweep.numerics import dop853
+from vrsweep.numerics import rk45 as integrator
+from vrsweep.numerics import kernel
+from vrsweep.numerics.dop853 import dop853_dense, dop853_step
+from vrsweep.numerics.rk45 import DP54_C, dense_value, dp54_dense, dp54_step
+from vrsweep.numerics.kernel import (
     N_STATE, no_preparation, no_scratch, oscillator_rhs, oscillator_rhs_rotated, prepare_rotations,
     rotation_scratch,
 )
-from vrsweep.model import DEFAULT_PARAMETERS, kernel_coefficients
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.trajectory import settings_vector, simulate
+from vrsweep.numerics.trajectory import settings_vector, simulate
 
 from closed_form import LinearOscillator
 from reference import coefficient_vector
@@ -203,7 +205,7 @@ def test_method_key_in_config():
 
 def test_a_dop853_run_stores_its_method_and_resumes(tmp_path, invoke):
 
-    from vrsweep.reading import load_results
+    from vrsweep.store.reading import load_results
 
     config = tmp_path / "m.yaml"
     config.write_text("sweep:\n  g: [5.0, 10.0, 30.0]\n"
@@ -239,7 +241,7 @@ def _stage_derivatives(coefficients, t, h, h_max):
 
 @pytest.mark.parametrize("on_grid", [True, False])
 def test_rotated_phases_equal_the_library(on_grid):
-    from vrsweep.kernel import grid_step
+    from vrsweep.numerics.kernel import grid_step
 
     coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0, Omega=4.0), "original")
     h_max = 2 * math.pi / 4.0 / 8
@@ -255,7 +257,7 @@ def test_rotated_phases_equal_the_library(on_grid):
 
 
 def test_grid_step_is_the_largest_grid_size_below():
-    from vrsweep.kernel import N_STEP_LEVELS, STEP_GRID, grid_step
+    from vrsweep.numerics.kernel import N_STEP_LEVELS, STEP_GRID, grid_step
 
     scratch = rotation_scratch(0.2, dop853.C_STAGES)
     grid = scratch[STEP_GRID:STEP_GRID + N_STEP_LEVELS]
@@ -283,7 +285,7 @@ def _phases_along_steps(coefficients, h, n_steps):
 def test_phases_rotated_from_step_to_step_stay_exact():
     """A step's start phases are the last step's rotated by its size, resynchronised with the
     library every RESYNC_STEPS steps: the drift stays at rounding level."""
-    from vrsweep.kernel import COS_SLOW, RESYNC_STEPS, SIN_FAST
+    from vrsweep.numerics.kernel import COS_SLOW, RESYNC_STEPS, SIN_FAST
 
     assert (COS_SLOW, SIN_FAST) == (2, 5)
     coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0, Omega=4.0), "original")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import vrsweep
-from vrsweep.numba_cache import folder_name
+from vrsweep.numerics.numba_cache import folder_name
 
 PACKAGE = Path(vrsweep.__file__).resolve().parent
 
@@ -24,7 +24,7 @@ def _run(code, env_changes, cwd):
 
 def test_default_is_a_per_user_folder_per_version_and_sources(tmp_path):
     code = ("import vrsweep, os, numba.core.config as c; "
-            "print(os.environ['NUMBA_CACHE_DIR']); print(c.CACHE_DIR); print(vrsweep.numba_cache.cache_dir())")
+            "print(os.environ['NUMBA_CACHE_DIR']); print(c.CACHE_DIR); print(vrsweep.numerics.numba_cache.cache_dir())")
     done = _run(code, {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path)
     assert done.returncode == 0, done.stderr
     expected = str(tmp_path / "xdg" / "vrsweep" / folder_name())
@@ -50,7 +50,7 @@ def test_numba_imported_first_still_gets_the_folder(tmp_path):
 
 def test_a_compiled_kernel_lands_in_the_user_folder_not_in_the_package(tmp_path):
     before = {p for p in PACKAGE.rglob("*.nbi")}
-    done = _run("import vrsweep.numba_cache as n; print(n.is_empty())",
+    done = _run("import vrsweep.numerics.numba_cache as n; print(n.is_empty())",
                 {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path)
     assert done.stdout.strip() == "True", done.stderr
     config = tmp_path / "one.yaml"
@@ -63,7 +63,7 @@ def test_a_compiled_kernel_lands_in_the_user_folder_not_in_the_package(tmp_path)
     folder = tmp_path / "xdg" / "vrsweep" / folder_name()
     assert any(folder.rglob("*.nbi")), "nothing was cached in the per-user folder"
     assert {p for p in PACKAGE.rglob("*.nbi")} == before, "a kernel was cached inside the package"
-    done = _run("import vrsweep.numba_cache as n; print(n.is_empty())",
+    done = _run("import vrsweep.numerics.numba_cache as n; print(n.is_empty())",
                 {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path)
     assert done.stdout.strip() == "False"
 
@@ -75,12 +75,12 @@ def test_an_edit_of_any_module_gives_a_new_folder(tmp_path):
 
     copy = tmp_path / "site" / "vrsweep"
     shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__", "examples"))
-    code = (f"import sys; sys.path.insert(0, {str(copy.parent)!r}); import vrsweep.numba_cache as n; "
+    code = (f"import sys; sys.path.insert(0, {str(copy.parent)!r}); import vrsweep.numerics.numba_cache as n; "
             "print(n.__file__); print(n.folder_name())")
     before = _run(code, {}, tmp_path)
     assert before.returncode == 0, before.stderr
-    assert before.stdout.split() == [str(copy / "numba_cache.py"), folder_name()]
-    with open(copy / "kernel.py", "a") as kernel:
+    assert before.stdout.split() == [str(copy / "numerics" / "numba_cache.py"), folder_name()]
+    with open(copy / "numerics" / "kernel.py", "a") as kernel:
         kernel.write("\n# an edit\n")
     after = _run(code, {}, tmp_path)
     assert after.stdout.split()[1] != folder_name()
@@ -99,7 +99,7 @@ def _blocked(tmp_path):
 
 def test_an_unwritable_cache_folder_gives_vrsweeps_own_fallback_and_a_notice(tmp_path):
     (tmp_path / "tmp").mkdir()
-    code = ("import vrsweep.numba_cache as n, os; print(n.cache_dir()); print(n.enabled()); "
+    code = ("import vrsweep.numerics.numba_cache as n, os; print(n.cache_dir()); print(n.enabled()); "
             "print(os.environ['NUMBA_CACHE_DIR']); print(n.notice())")
     done = _run(code, {"XDG_CACHE_HOME": str(_blocked(tmp_path)), "TMPDIR": str(tmp_path / "tmp")}, tmp_path)
     assert done.returncode == 0, done.stderr
@@ -112,7 +112,7 @@ def test_an_unwritable_cache_folder_gives_vrsweeps_own_fallback_and_a_notice(tmp
 
 
 def test_a_fallback_folder_another_user_could_write_is_refused(tmp_path, monkeypatch):
-    from vrsweep import numba_cache
+    from vrsweep.numerics import numba_cache
 
     shared = tmp_path / "shared"
     shared.mkdir()
@@ -125,7 +125,8 @@ def test_a_fallback_folder_another_user_could_write_is_refused(tmp_path, monkeyp
 
 
 def test_no_writable_folder_compiles_without_caching_and_says_so(tmp_path, monkeypatch):
-    from vrsweep import jit, numba_cache
+    from vrsweep.numerics import jit
+    from vrsweep.numerics import numba_cache
 
     monkeypatch.setattr(numba_cache, "_choice", None)
     monkeypatch.setattr(numba_cache, "preferred_dir", lambda: _blocked(tmp_path) / "a")

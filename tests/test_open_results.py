@@ -8,7 +8,7 @@ import pytest
 
 import vrsweep
 from vrsweep.errors import ResultFileError
-from vrsweep.reading import file_kind, status_names
+from vrsweep.store.reading import file_kind, status_names
 from vrsweep.results import FLAG_MEANINGS, Status
 
 xr = pytest.importorskip("xarray")

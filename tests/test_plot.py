@@ -10,13 +10,14 @@ from matplotlib.collections import QuadMesh
 from matplotlib.colors import LogNorm
 from matplotlib.figure import Figure
 
-from vrsweep import plot, theory
+from vrsweep import plot
+from vrsweep.analysis import theory
 from vrsweep.cli import main
 from vrsweep.errors import UsageError
-from vrsweep.model import DEFAULT_PARAMETERS
+from vrsweep.numerics.model import DEFAULT_PARAMETERS
 from vrsweep.commands.plot import FLAGS
-from vrsweep.reading import load_results
-from vrsweep.trajectory_file import read_trajectory
+from vrsweep.store.reading import load_results
+from vrsweep.store.trajectory_file import read_trajectory
 
 SHORT = "integration: {transient_periods: 5, measure_periods: 16, strobe_periods: 8}\n"
 G_RES_4 = float(theory.g_res(0.1, 0.1, 0.5, 4.0))   # 21.065 (ERRATA 7)

@@ -8,7 +8,7 @@ import pytest
 from matplotlib.collections import QuadMesh
 
 from vrsweep import plot
-from vrsweep.reading import load_results
+from vrsweep.store.reading import load_results
 
 LINE = """\
 sweep:

@@ -12,7 +12,7 @@ import h5py
 import pytest
 
 from vrsweep.errors import ResultFileError
-from vrsweep.reading import open_results
+from vrsweep.store.reading import open_results
 
 
 def test_a_damaged_object_header_is_an_error(tmp_path, invoke):

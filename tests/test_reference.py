@@ -23,7 +23,7 @@ from closed_form import (CLOSED_FORM_CASES, LinearOscillator, closed_form_impact
                          closed_form_state, linear_energy)
 from reference import (CONVERGED_POINTS, coefficient_vector, point_coefficients,
                        reference_point, reference_run, reference_trajectory)
-from vrsweep.model import PARAMETER_NAMES, kernel_coefficients
+from vrsweep.numerics.model import PARAMETER_NAMES, kernel_coefficients
 
 
 def _linear_vector(case):

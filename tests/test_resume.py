@@ -147,7 +147,7 @@ def test_output_of_another_config_is_never_overwritten_nor_mixed(tmp_path, invok
 def test_an_interrupted_run_can_be_resumed_in_process(tmp_path, monkeypatch, assert_same_result, done_count, write_config):
     """The library path: a stop asked for during a chunk raises after that chunk is written."""
     from vrsweep.config import load_config
-    from vrsweep.job import GracefulStop, Interrupted, run_job
+    from vrsweep.execution.job import GracefulStop, Interrupted, run_job
 
     config = load_config(write_config(tmp_path, """\
         sweep:
@@ -167,13 +167,13 @@ def test_an_interrupted_run_can_be_resumed_in_process(tmp_path, monkeypatch, ass
 
 
 def _small_chunks(config, **kwargs):
-    from vrsweep.sweep import run_sweep
+    from vrsweep.execution.sweep import run_sweep
 
     return run_sweep(config, chunk_lines=2, **kwargs)
 
 
 def _fresh(config, out):
-    from vrsweep.job import run_job
+    from vrsweep.execution.job import run_job
 
     run_job(config, out, threads=2)
     return out
@@ -182,7 +182,7 @@ def _fresh(config, out):
 def test_signals_outside_the_main_thread_are_left_alone():
     import threading
 
-    from vrsweep.job import GracefulStop
+    from vrsweep.execution.job import GracefulStop
 
     before = signal.getsignal(signal.SIGINT)
     seen = []

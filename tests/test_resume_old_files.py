@@ -65,8 +65,8 @@ def test_another_config_is_not_the_same():
 
 def _run_interrupted(config, out):
     """The first chunk of two lines written, then stopped as by Ctrl-C."""
-    from vrsweep.job import GracefulStop, Interrupted, run_job
-    from vrsweep.sweep import run_sweep
+    from vrsweep.execution.job import GracefulStop, Interrupted, run_job
+    from vrsweep.execution.sweep import run_sweep
 
     def small_chunks(config, **kwargs):
         return run_sweep(config, chunk_lines=2, **kwargs)
@@ -94,7 +94,7 @@ def _contents(path):
 
 
 def test_a_checkpoint_holding_the_old_text_resumes_bit_identical(tmp_path):
-    from vrsweep.job import run_job
+    from vrsweep.execution.job import run_job
 
     config = the_config()
     out = tmp_path / "old.h5"
@@ -112,7 +112,7 @@ def test_a_checkpoint_holding_the_old_text_resumes_bit_identical(tmp_path):
 
 
 def test_a_checkpoint_holding_the_old_text_of_another_config_refuses(tmp_path):
-    from vrsweep.job import run_job
+    from vrsweep.execution.job import run_job
 
     config = the_config()
     out = tmp_path / "old.h5"

@@ -11,9 +11,9 @@ import pytest
 
 from vrsweep.config import parse_config
 from vrsweep.errors import UsageError
-from vrsweep.job import owned_mask, parse_shard
+from vrsweep.execution.job import owned_mask, parse_shard
 from vrsweep.store import ResultWriter, VariableSpec
-from vrsweep.sweep import Grid, shard_of_points
+from vrsweep.execution.sweep import Grid, shard_of_points
 
 TINY = """\
     sweep:

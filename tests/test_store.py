@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 from vrsweep.commands.options import OUTPUT_FLAGS
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.reading import load_results, open_results
+from vrsweep.store.reading import load_results, open_results
 from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES, Status
 from vrsweep.store import (
     FORMAT_VERSION,

@@ -1,4 +1,4 @@
-"""The paper's analysis (vrsweep.theory), corrected per ERRATA 1-4, 9.
+"""The paper's analysis (vrsweep.analysis.theory), corrected per ERRATA 1-4, 9.
 
 Parameter sets used below:
 
@@ -17,8 +17,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vrsweep import theory
-from vrsweep.model import DEFAULT_PARAMETERS, effective_damping_level, effective_stiffness
+from vrsweep.analysis import theory
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, effective_damping_level, effective_stiffness
 
 PAPER = dict(DEFAULT_PARAMETERS)
 BISTABLE = dict(DEFAULT_PARAMETERS, gamma=0.05, alpha=0.05, g=23.6, Omega=4.0)

@@ -1,4 +1,4 @@
-"""One thread count for the whole program (vrsweep.threads), as numba computes its own."""
+"""One thread count for the whole program (vrsweep.execution.threads), as numba computes its own."""
 
 import os
 import subprocess
@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from vrsweep.threads import available_threads
+from vrsweep.execution.threads import available_threads
 
 
 def test_numba_num_threads_when_it_is_a_whole_number(monkeypatch):
@@ -23,7 +23,7 @@ def test_otherwise_the_cpus_this_process_may_run_on(monkeypatch, value):
 def test_it_is_numbas_own_count_in_a_fresh_process(tmp_path):
     for value in ("1", "abc"):
         code = ("import warnings; warnings.simplefilter('ignore'); import numba; "
-                "from vrsweep.threads import available_threads; "
+                "from vrsweep.execution.threads import available_threads; "
                 "print(numba.config.NUMBA_NUM_THREADS, available_threads())")
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                               env=dict(os.environ, NUMBA_NUM_THREADS=value), timeout=120)

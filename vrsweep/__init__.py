@@ -10,8 +10,8 @@ Results in Python::
 """
 
 from vrsweep._version import __version__
-from vrsweep import numba_cache as _numba_cache
-from vrsweep import threads as _threads
+from vrsweep.numerics import numba_cache as _numba_cache
+from vrsweep.execution import threads as _threads
 
 _numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
 _threads.drop_unreadable_setting()
@@ -20,10 +20,10 @@ _threads.drop_unreadable_setting()
 def open_results(path, **kwargs):
     """Open a vrsweep sweep, shard or trajectory file as a lazily read ``xarray.Dataset``.
 
-    See :func:`vrsweep.reading.open_results`; xarray is imported only when this is called, so the
+    See :func:`vrsweep.store.reading.open_results`; xarray is imported only when this is called, so the
     command line starts as fast as before.
     """
-    from vrsweep.reading import open_results as _open_results
+    from vrsweep.store.reading import open_results as _open_results
 
     return _open_results(path, **kwargs)
 

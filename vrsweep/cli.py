@@ -12,7 +12,7 @@ import click
 
 from vrsweep import __version__
 from vrsweep.errors import VrsweepError
-from vrsweep.provenance import record_command_line
+from vrsweep.store.provenance import record_command_line
 
 
 class _Group(click.Group):

@@ -5,7 +5,7 @@ total), the model, the axes, the fixed parameters, every variable with its units
 status, and when and with which versions it was written. ``--json`` prints the same as one object
 for scripts.
 
-Reading goes through ``vrsweep.reading`` (xarray and h5netcdf, as ``vrsweep.open_results``),
+Reading goes through ``vrsweep.store.reading`` (xarray and h5netcdf, as ``vrsweep.open_results``),
 which turns every bad file (missing, not HDF5, not vrsweep, truncated, newer format, locked) into
 a ResultFileError: the CLI group prints that one line and exits 2. Other vrsweep files (a
 ``simulate`` trajectory has no grid and no ``done`` mask) are described group by group. The
@@ -48,7 +48,7 @@ def command(path, as_json, show_config):
 
 def describe(path) -> dict:
     """The summary of a vrsweep file as a JSON-ready dict; ResultFileError for a bad file."""
-    from vrsweep.reading import file_kind, load_results
+    from vrsweep.store.reading import file_kind, load_results
 
     try:
         kind = file_kind(path)
@@ -63,7 +63,7 @@ def describe(path) -> dict:
     if kind == "trajectory":
         described = _describe_groups(path, kind)
         if described is None:  # the trajectory reader says what is wrong (a newer format...)
-            from vrsweep.trajectory_file import read_trajectory
+            from vrsweep.store.trajectory_file import read_trajectory
 
             read_trajectory(path)
             raise ResultFileError(f"{path} is a vrsweep trajectory this vrsweep cannot describe")
@@ -74,7 +74,7 @@ def describe(path) -> dict:
 
 
 def _describe_sweep(path, ds) -> dict:
-    from vrsweep.reading import grid_axes, point_variables, stored_variables
+    from vrsweep.store.reading import grid_axes, point_variables, stored_variables
 
     attrs = {key: value for key, value in ds.attrs.items() if key != "vrsweep_file"}  # open_results' own
     done = np.asarray(ds["done"].values, dtype=bool)
@@ -151,7 +151,7 @@ def _status_counts(ds, owned) -> list[dict]:
 
 def _attractors(ds) -> list[dict]:
     """The attractor table of a basin sweep (x0 / v0 axes), one entry per slice; [] otherwise."""
-    from vrsweep.attractors import attractor_rows
+    from vrsweep.analysis.attractors import attractor_rows
 
     return [{"slice": where, "attractors": [{key: _plain(value) for key, value in row.items()} for row in rows]}
             for where, rows in attractor_rows(ds)]
@@ -161,7 +161,7 @@ def _describe_groups(path, kind) -> dict | None:
     """A vrsweep file of this format without a sweep grid (a trajectory), from its groups as
     xarray reads them; None whenever the file is not exactly that, so the caller reports the
     reader's error."""
-    from vrsweep.reading import open_groups
+    from vrsweep.store.reading import open_groups
     from vrsweep.store import FORMAT_VERSION
 
     try:

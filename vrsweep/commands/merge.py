@@ -28,7 +28,7 @@ def command(shards, output, overwrite, allow_missing, quiet):
     leave OUT.h5 as it was and no temporary file.
     """
     from vrsweep.store.merge import merge_results
-    from vrsweep.signals import GracefulStop
+    from vrsweep.execution.signals import GracefulStop
 
     before = _identity(output)
     try:

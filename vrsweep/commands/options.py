@@ -23,8 +23,8 @@ def flag_wording(flags=OUTPUT_FLAGS):
 
 def say_cache_notice():
     """Say once per process where the numba cache went when it is not where the user asked
-    (vrsweep.numba_cache.notice), to standard error."""
-    from vrsweep import numba_cache
+    (vrsweep.numerics.numba_cache.notice), to standard error."""
+    from vrsweep.numerics import numba_cache
 
     message = numba_cache.notice()
     if message and not getattr(say_cache_notice, "said", False):
@@ -52,7 +52,7 @@ config_argument = click.argument("config_path", metavar="CONFIG.yaml", type=clic
 
 def capped_threads(threads):
     """--threads, lowered to what numba can run here, saying so on stderr (never silently)."""
-    from vrsweep.threads import available_threads
+    from vrsweep.execution.threads import available_threads
 
     available = available_threads()
     if threads is not None and threads > available:

@@ -95,7 +95,7 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     # message can say how many bytes the figure needs.
     import io
 
-    from vrsweep.fileio import write_bytes
+    from vrsweep.store.fileio import write_bytes
 
     image = io.BytesIO()
     figure.savefig(image, format=path.suffix.lower()[1:], dpi=dpi)
@@ -106,7 +106,7 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
 def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var):
     from vrsweep import plot
     from vrsweep.errors import UsageError
-    from vrsweep.trajectory_file import TrajectoryData
+    from vrsweep.store.trajectory_file import TrajectoryData
 
     path = Path(output) if output else default_output(paths[0], kind)
     if path.suffix.lower() not in FORMATS:

@@ -43,8 +43,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     """
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
-    from vrsweep.estimate import check_size
-    from vrsweep.threads import available_threads
+    from vrsweep.execution.estimate import check_size
+    from vrsweep.execution.threads import available_threads
 
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
@@ -54,9 +54,9 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     if not dask_address:  # a Dask worker's thread count is the worker's business
         threads = capped_threads(threads)
 
-    from vrsweep.distributed import parse_local
+    from vrsweep.execution.distributed import parse_local
     from vrsweep.errors import InvalidArgument, RunFailed
-    from vrsweep.job import GracefulStop, parse_shard, run_job
+    from vrsweep.execution.job import GracefulStop, parse_shard, run_job
 
     try:
         shard_pair = parse_shard(shard)
@@ -65,7 +65,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     executor = None
     workers = 1
     if dask_address:
-        from vrsweep.distributed import dask_executor
+        from vrsweep.execution.distributed import dask_executor
 
         try:
             executor = dask_executor(dask_address, threads)
@@ -84,7 +84,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         if already_done < total and (not dask_address or parse_local(dask_address)):
             _say_if_compiling(config.integration.method, config.integration.lyapunov)  # a remote cluster's workers have caches of their own
         if not sys.stderr.isatty():  # a batch log: lines, not a bar's redraws
-            from vrsweep.progress import ProgressLog
+            from vrsweep.execution.progress import ProgressLog
 
             return ProgressLog(total, already_done, progress_interval, sys.stderr).update
         from tqdm import tqdm
@@ -140,7 +140,7 @@ COMPILE_SECONDS = "about 30 s"
 
 def _say_if_compiling(method, lyapunov):
     from vrsweep.commands.options import say_cache_notice
-    from vrsweep.numba_cache import cache_dir, enabled, kernel_is_cached
+    from vrsweep.numerics.numba_cache import cache_dir, enabled, kernel_is_cached
 
     say_cache_notice()
     if not enabled():

@@ -5,7 +5,7 @@ import click
 from vrsweep.commands.options import (
     OUTPUT_FLAGS, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
-from vrsweep.trajectory_file import DEFAULT_SAMPLES_PER_PERIOD
+from vrsweep.store.trajectory_file import DEFAULT_SAMPLES_PER_PERIOD
 
 
 @click.command("simulate")
@@ -29,7 +29,7 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     interval, and impacts per slow period, transient included. Plot it with `vrsweep plot`.
     """
     from vrsweep.config import load_config
-    from vrsweep.trajectory_file import check_single_point, simulate_point, write_trajectory
+    from vrsweep.store.trajectory_file import check_single_point, simulate_point, write_trajectory
 
     config = load_config(config_path, overrides)
     flags = {**OUTPUT_FLAGS, "samples_per_period": "--samples-per-period", "compare_effective": "--compare effective",
@@ -41,7 +41,7 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
         from vrsweep.errors import UsageError
 
         raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
-    from vrsweep.fileio import prepare_output_directory
+    from vrsweep.store.fileio import prepare_output_directory
 
     prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
     if not quiet:

@@ -3,7 +3,7 @@
 One row per Omega of the config (and per value of any other swept parameter that enters the
 theory): g_res (eq3.4), wt2 and K (eq2.11, eq2.12) at the config's g or over its g axis, and the
 analytic peak -- the largest stable amplitude of X over the g axis, or over a default grid
-0..2 g_res when g is not swept. All numbers come from vrsweep.theory (corrected derivation,
+0..2 g_res when g is not swept. All numbers come from vrsweep.analysis.theory (corrected derivation,
 ERRATA 1-3); amplitudes are of X, the gain is A/c (ERRATA 6).
 """
 
@@ -15,7 +15,7 @@ import textwrap
 import click
 
 from vrsweep.commands.options import config_argument, set_option
-from vrsweep.theory import DEFAULT_G_POINTS, theory_rows
+from vrsweep.analysis.theory import DEFAULT_G_POINTS, theory_rows
 
 def _number(value, spec):
     return "-" if value is None else format(value, spec)

@@ -9,9 +9,9 @@ import click
 
 from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
 from vrsweep.config import load_config
-from vrsweep.estimate import estimate, format_bytes, format_duration, size_problem
-from vrsweep.threads import available_threads
-from vrsweep.model import PARAMETER_NAMES
+from vrsweep.execution.estimate import estimate, format_bytes, format_duration, size_problem
+from vrsweep.execution.threads import available_threads
+from vrsweep.numerics.model import PARAMETER_NAMES
 
 
 @click.command("validate")

@@ -13,7 +13,7 @@ from pydantic import ValidationError
 from vrsweep.config.report import without_missing_typos
 from vrsweep.config.schema import AXIS_DOMAINS, AXIS_FORMS, AXIS_NAMES, LinearAxis, ListAxis, ValuesAxis
 from vrsweep.config.wording import did_you_mean, show, show_number
-from vrsweep.model import INITIAL_STATE_AXES, INITIAL_STATE_KEYS
+from vrsweep.numerics.model import INITIAL_STATE_AXES, INITIAL_STATE_KEYS
 
 
 class SweepAxes:

@@ -1,7 +1,7 @@
 """The grid a config spans: its axes in config order (plus ``direction`` for two-way continuation),
 its continuation lines, and every parameter and initial state at given grid points.
 
-The one place the grid is expanded: the sweep runs it (vrsweep.sweep), the job lays out the
+The one place the grid is expanded: the sweep runs it (vrsweep.execution.sweep), the job lays out the
 file from it, and ``Config.grid_parameters`` reads it. Pure numpy: no kernel, no files.
 """
 
@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrsweep.model import INITIAL_STATE_KEYS
+from vrsweep.numerics.model import INITIAL_STATE_KEYS
 
 DIRECTION_VALUES = {"up": 1, "down": -1}
 

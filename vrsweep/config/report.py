@@ -20,7 +20,7 @@ from vrsweep.config.schema import (
 from vrsweep.config.wording import and_list, did_you_mean, dotted, show
 from vrsweep.config.yaml import key_text, line_and_column, compose
 from vrsweep.errors import ConfigError
-from vrsweep.model import MODELS
+from vrsweep.numerics.model import MODELS
 
 
 class Report:

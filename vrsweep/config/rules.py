@@ -17,7 +17,7 @@ from vrsweep.config.schema import (
     integral_float_to_int,
 )
 from vrsweep.config.wording import show
-from vrsweep.model import DEFAULT_PARAMETERS
+from vrsweep.numerics.model import DEFAULT_PARAMETERS
 
 
 class CrossFieldRules:

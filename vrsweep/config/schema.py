@@ -18,7 +18,7 @@ from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fie
 from pydantic_core import PydanticCustomError
 
 from vrsweep.config.wording import show_number, show
-from vrsweep.model import (
+from vrsweep.numerics.model import (
     DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
 )
 
@@ -114,7 +114,7 @@ INTEGRATION_DOMAINS = {
 CONTINUATIONS = ("up", "down", "both")
 
 # One axis is materialised as an array when the config is read, so its length must stay sane;
-# the size of the whole grid is judged later by vrsweep.estimate with the run's thread count.
+# the size of the whole grid is judged later by vrsweep.execution.estimate with the run's thread count.
 MAX_AXIS_POINTS = 10_000_000
 NUM_DOMAIN = Domain(low=1, low_open=False, high=MAX_AXIS_POINTS, high_open=False, integer=True)
 

@@ -31,7 +31,7 @@ from vrsweep.config.schema import (
 from vrsweep.config.wording import did_you_mean, show
 from vrsweep.config.yaml import CyclicAlias, error_line, load_round_trip, parse_scalar, plain_data
 from vrsweep.errors import ConfigError
-from vrsweep.model import PARAMETER_NAMES
+from vrsweep.numerics.model import PARAMETER_NAMES
 
 
 def load_config(path, overrides=()) -> Config:

@@ -18,7 +18,7 @@ from ruamel.yaml.reader import ReaderError
 
 from vrsweep.config.schema import INTEGRATION_DEFAULTS, Axis
 from vrsweep.config.wording import show
-from vrsweep.model import INITIAL_STATE_KEYS, PARAMETER_NAMES
+from vrsweep.numerics.model import INITIAL_STATE_KEYS, PARAMETER_NAMES
 
 
 def load_round_trip(text, allow_duplicate_keys=False):

@@ -59,7 +59,7 @@ from vrsweep.plot.trajectories import (
 
 def default_kind(data) -> str:
     """What ``vrsweep plot FILE`` draws when no --kind is given."""
-    from vrsweep.trajectory_file import TrajectoryData
+    from vrsweep.store.trajectory_file import TrajectoryData
 
     if isinstance(data, TrajectoryData):
         return "trajectory"
@@ -77,7 +77,7 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     of a trajectory to show; var: the stored variable a map shows (default R, or Q_amplitude with
     ``amplitude``).
     """
-    from vrsweep.trajectory_file import TrajectoryData
+    from vrsweep.store.trajectory_file import TrajectoryData
 
     if isinstance(sources, (str, os.PathLike)):
         sources = [sources]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.lines import Line2D
 
-from vrsweep.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
+from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
 from vrsweep.plot.selection import _limits
 
 
@@ -29,7 +29,7 @@ def analytic_branches(parameters, axis, values, gain=True):
     1-3) come sorted by size, so a root's slot changes where roots appear or vanish in pairs at a
     fold; each branch is followed by continuity instead. y is A/c with ``gain`` (ERRATA 6), else A.
     """
-    from vrsweep import theory
+    from vrsweep.analysis import theory
 
     fine = _fine_parameters(parameters, axis, values)
     columns = theory.analytic_columns(fine)
@@ -88,7 +88,7 @@ def resonance_positions(parameters, axis, values):
     For the g axis these are +-g_res; for other axes the root is found on the fine grid ``values``
     (linear interpolation between sign changes). Empty where the axis leaves wt2 - omega^2 one-signed.
     """
-    from vrsweep import theory
+    from vrsweep.analysis import theory
 
     if axis == "g":
         g_res = float(theory.g_res(parameters["alpha"], parameters["omega0"], parameters["omega"],
@@ -111,7 +111,7 @@ def _resonance_label(axis, position):
 
 def _draw_resonance_curve(ax, view, x_axis, y_axis):
     """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega)."""
-    from vrsweep import theory
+    from vrsweep.analysis import theory
 
     if view.config is None:
         return None

@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
+from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
 from vrsweep.plot.labels import MODEL_EQUATIONS, UNITS, UNITS_NOTE, _new_figure, _number, _title, _width
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
@@ -34,7 +34,7 @@ def basin_plot(results, at=None) -> Figure:
     ``vrsweep.open_results``); at: {axis: value} fixing every other axis with more than one value
     (a slice's parameters).
     """
-    from vrsweep.trajectory_file import TrajectoryData
+    from vrsweep.store.trajectory_file import TrajectoryData
 
     data = load(results) if isinstance(results, (str, os.PathLike)) else results
     if isinstance(data, TrajectoryData):
@@ -115,7 +115,7 @@ def basin_figure(ds) -> Figure:
 
 
 def _state_label(name):
-    from vrsweep.model import INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS
+    from vrsweep.numerics.model import INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS
 
     words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
     return f"{words} {INITIAL_STATE_SYMBOLS[name]} {UNITS}"

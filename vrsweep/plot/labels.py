@@ -7,7 +7,7 @@ import os
 
 from matplotlib.figure import Figure
 
-from vrsweep.model import (
+from vrsweep.numerics.model import (
     INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_SYMBOLS,
 )
 

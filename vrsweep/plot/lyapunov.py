@@ -7,7 +7,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from vrsweep.errors import ResultFileError
-from vrsweep.model import PARAMETER_SYMBOLS
+from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.labels import (
     FAILED_COLOUR, FAILED_ROW_HEIGHT, RELIABLE_COLOURS, UNITS, _caption, _new_figure, _title, _width, parameter_label,
 )

@@ -10,7 +10,7 @@ import os
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.model import PARAMETER_SYMBOLS
+from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.labels import (
     CURVES_NOT_MAP, DIRECTION_NAMES, FAILED_COLOUR, FAILED_ROW_HEIGHT, RELATIVE_ERROR_LIMIT, _number, _parse_config,
 )
@@ -20,8 +20,8 @@ from vrsweep.results import Status
 def load(path):
     """A trajectory (TrajectoryData) or a sweep result (an xarray Dataset, loaded and its file
     closed); ResultFileError otherwise."""
-    from vrsweep.reading import load_results
-    from vrsweep.trajectory_file import is_trajectory_file, read_trajectory
+    from vrsweep.store.reading import load_results
+    from vrsweep.store.trajectory_file import is_trajectory_file, read_trajectory
 
     if is_trajectory_file(path):
         return read_trajectory(path)

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from vrsweep.errors import UsageError
-from vrsweep.model import PARAMETER_SYMBOLS
+from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.analytic import (
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
 )

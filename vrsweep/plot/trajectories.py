@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
-from vrsweep.model import PARAMETER_NAMES
+from vrsweep.numerics.model import PARAMETER_NAMES
 from vrsweep.plot.labels import UNITS, _caption, _new_figure, _number, _parse_config, _title, _width
 from vrsweep.results import Status
 

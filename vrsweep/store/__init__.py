@@ -9,7 +9,7 @@ concern:
   finish), crash-safe and locked.
 - ``reader``: opening an existing file with its checks and one-line errors, and
   :class:`StoredLayout`, its metadata without its values. Values are read lazily through xarray
-  (``vrsweep.open_results``, ``vrsweep/reading.py``), which follows the same layout.
+  (``vrsweep.open_results``, ``vrsweep/store/reading.py``), which follows the same layout.
 - ``merge``: :func:`merge_results`, the shards of one run streamed into one file.
 
 Every HDF5 file is opened through ``fileio.open_hdf5`` (the locking policy).
@@ -32,7 +32,7 @@ A full disk at any of these steps ends in one line (``OutputError``, exit 1) say
 space the file needs, with HDF5 closed cleanly and no temporary file left (``fileio``).
 """
 
-from vrsweep.fileio import atomic_write
+from vrsweep.store.fileio import atomic_write
 from vrsweep.store.layout import (
     CHUNK_TARGET_BYTES, FORMAT_VERSION, VariableSpec, creation_reserve, finish_reserve, layout_bytes, point_label,
 )

@@ -38,7 +38,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError
-from vrsweep.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 
 FORMAT_VERSION = 1
 

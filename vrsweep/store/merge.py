@@ -7,7 +7,7 @@ A merge never holds a shard, or the result, in memory:
 2. The ``done`` masks are read one at a time to decide which shard supplies each point (the first
    one, in the order given, that has it done); a point done by several shards is a duplicate.
 3. Points that no shard has done are an error naming the shard each belongs to (shards own points
-   in a fixed shuffled order, ``vrsweep.sweep.shard_of_points``), unless ``allow_missing``.
+   in a fixed shuffled order, ``vrsweep.execution.sweep.shard_of_points``), unless ``allow_missing``.
 4. The output is written variable by variable, block by block: a block is a run of whole HDF5
    chunks of a few MiB; it is read from each shard that supplies points in it, those points are
    kept, duplicates are compared bit for bit with the supplier's values, and the block is written.
@@ -31,8 +31,8 @@ from typing import Iterable
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
-from vrsweep.fileio import atomic_write, open_hdf5, prepare_output_directory, writing_hdf5
-from vrsweep.provenance import cf_attributes
+from vrsweep.store.fileio import atomic_write, open_hdf5, prepare_output_directory, writing_hdf5
+from vrsweep.store.provenance import cf_attributes
 from vrsweep.store.layout import RESERVED_ROOT_ATTRS, add_extras, build_skeleton, creation_reserve
 from vrsweep.store.reader import StoredLayout, corrupt_error, open_checked
 from vrsweep.store.writer import ARGUMENT_WORDS as _WRITER_WORDS
@@ -431,7 +431,7 @@ def _derived_bytes(shards):
 def _add_attractor_labels(out, ref):
     """A sweep over the initial state gets its attractor labels from the whole grid, as a single
     run's finish does (a shard sees only part of each slice, so shards carry none)."""
-    from vrsweep import attractors
+    from vrsweep.analysis import attractors
     from vrsweep.config import parse_config
 
     if not attractors.has_initial_state_axes(tuple(ref.axes)):
@@ -548,7 +548,7 @@ def _shard_index(s):
 def _run_ownership(shards, ref):
     """(the shard of every point, flat; the number of shards) as the run assigned them, or None.
 
-    Recomputed from the config (the shuffled order of vrsweep.sweep.shard_of_points), so that
+    Recomputed from the config (the shuffled order of vrsweep.execution.sweep.shard_of_points), so that
     points of a shard that is not given can be attributed too; trusted only if it agrees with the
     ``owned`` mask of every shard given.
     """
@@ -559,7 +559,7 @@ def _run_ownership(shards, ref):
     try:
         count = int(counts.pop())
         from vrsweep.config import parse_config
-        from vrsweep.sweep import Grid, shard_of_points
+        from vrsweep.execution.sweep import Grid, shard_of_points
 
         grid = Grid.from_config(parse_config(ref.attrs.get("config", "")))
         if grid.shape != ref.shape:

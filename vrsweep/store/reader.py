@@ -15,7 +15,7 @@ import os
 import h5py
 
 from vrsweep.errors import ResultFileError
-from vrsweep.fileio import open_hdf5
+from vrsweep.store.fileio import open_hdf5
 from vrsweep.store.layout import (
     BOOKKEEPING, FORMAT_VERSION, VariableSpec, clean_attrs, decode, point_label, point_variables_of, scale_names,
 )

@@ -29,7 +29,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.fileio import (
+from vrsweep.store.fileio import (
     check_still_at_path, close_without_writing, closed_without_writing_on_failure, fsync_path, identity,
     lock_for_writing, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
     writing_hdf5,

@@ -42,7 +42,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from vrsweep.model import effective_damping_level, effective_stiffness
+from vrsweep.numerics.model import effective_damping_level, effective_stiffness
 
 THEORY_NOTE = (
     "analytic side: first-order multiple scales on the effective system eq2.10, following the "

@@ -53,7 +53,7 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.results import MESSAGES, Status
-from vrsweep.fileio import open_hdf5, write_bytes
+from vrsweep.store.fileio import open_hdf5, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "trajectory"
@@ -165,8 +165,8 @@ def check_single_point(config):
 
 def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare_effective=False):
     """Integrate the single point of ``config``; returns TrajectoryData (not yet written)."""
-    from vrsweep import trajectory
-    from vrsweep.model import kernel_coefficients
+    from vrsweep.numerics import trajectory
+    from vrsweep.numerics.model import kernel_coefficients
 
     check_single_point(config)
     if compare_effective and config.model == "effective":
@@ -193,7 +193,7 @@ def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compar
 
 
 def _model_run(model, result):
-    from vrsweep import kernel
+    from vrsweep.numerics import kernel
 
     records = result.period_records
     return ModelRun(
@@ -205,7 +205,7 @@ def _model_run(model, result):
 
 def slow_flow_runs(parameters, initial, times):
     """The reconstruction eq2.21 from each start of SLOW_FLOW_STARTS, sampled at ``times``."""
-    from vrsweep import theory
+    from vrsweep.analysis import theory
 
     omega = parameters["omega"]
     runs = {}
@@ -228,7 +228,7 @@ def slow_flow_runs(parameters, initial, times):
 def root_attributes(config):
     import numba
 
-    from vrsweep.provenance import cf_attributes
+    from vrsweep.store.provenance import cf_attributes
 
     at = ", ".join(f"{name} = {config.parameters[name]:g}" for name in ("g", "Omega"))
     return {"config": config.to_yaml(), "vrsweep_version": __version__,

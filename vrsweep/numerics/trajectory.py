@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrsweep import kernel
+from vrsweep.numerics import kernel
 from vrsweep.config.schema import INTEGRATION_DEFAULTS
 from vrsweep.results import Status
 

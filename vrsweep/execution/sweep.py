@@ -17,18 +17,18 @@ import numba
 import numpy as np
 from numba import prange
 
-from vrsweep import kernel
-from vrsweep.diagnostics import lyapunov_values, point_diagnostics
-from vrsweep.jit import kernel_jit
+from vrsweep.numerics import kernel
+from vrsweep.analysis.diagnostics import lyapunov_values, point_diagnostics
+from vrsweep.numerics.jit import kernel_jit
 # Grid, the planner's names: imported from here by callers written before they moved.
-from vrsweep.chunks import (  # noqa: F401
+from vrsweep.execution.chunks import (  # noqa: F401
     GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses, default_chunk_lines, plan_lines,
     shard_of_points, shuffled_lines,
 )
 from vrsweep.config.grid import DIRECTION_VALUES, Grid  # noqa: F401
-from vrsweep.model import kernel_coefficients
+from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.results import Status
-from vrsweep.trajectory import settings_vector
+from vrsweep.numerics.trajectory import settings_vector
 
 
 

@@ -10,7 +10,7 @@ by the kernel. It also drops the zero test before every division from the hot lo
 
 from numba import njit
 
-from vrsweep import numba_cache
+from vrsweep.numerics import numba_cache
 
 
 def kernel_jit(function=None, **options):

@@ -23,7 +23,7 @@ def point_variables(integration):
         ("R_err", np.float64, (), {
             "units": "1",
             "long_name": ("95% half-width of R: jackknife over 10 batches of whole periods (cycles) of the "
-                          "measurement window, plus R's offset from its whole-cycle value (vrsweep.diagnostics)")}),
+                          "measurement window, plus R's offset from its whole-cycle value (vrsweep.analysis.diagnostics)")}),
         ("impacts_per_period", np.float64, (), {
             "units": "1", "long_name": "mean number of impacts per slow period 2 pi/omega (measurement window)"}),
         ("status", np.int8, (), {
@@ -48,7 +48,7 @@ def point_variables(integration):
     ] + (LYAPUNOV_VARIABLES if integration.lyapunov else [])
 
 
-# With integration.lyapunov (vrsweep.tangent). Time t is dimensionless, so a rate is too.
+# With integration.lyapunov (vrsweep.numerics.tangent). Time t is dimensionless, so a rate is too.
 LYAPUNOV_VARIABLES = [
     ("lyapunov", np.float64, (), {
         "units": "1",
@@ -56,5 +56,5 @@ LYAPUNOV_VARIABLES = [
                       "through impacts by the saltation matrix; -inf: the mass stuck on the barrier)")}),
     ("lyapunov_err", np.float64, (), {
         "units": "1",
-        "long_name": "95% half-width of lyapunov from 10 batches of whole periods (vrsweep.diagnostics)"}),
+        "long_name": "95% half-width of lyapunov from 10 batches of whole periods (vrsweep.analysis.diagnostics)"}),
 ]

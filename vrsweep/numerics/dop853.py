@@ -17,11 +17,11 @@ Modelled on scipy/integrate/_ivp/rk.py (class DOP853); coefficients in dop853_co
 
 import numpy as np
 
-from vrsweep.dop853_coefficients import A, C, D, E3, E5, N_STAGES, N_STAGES_EXTENDED
-from vrsweep.integrator import (
+from vrsweep.numerics.dop853_coefficients import A, C, D, E3, E5, N_STAGES, N_STAGES_EXTENDED
+from vrsweep.numerics.rk45 import (
     ERR_PREVIOUS_FLOOR, MAX_FACTOR, MIN_FACTOR, N_CONTROLLED, N_DYNAMIC, N_INTERPOLATED, PI_BETA, SAFETY,
 )
-from vrsweep.jit import kernel_jit
+from vrsweep.numerics.jit import kernel_jit
 
 ORDER = 8
 ERROR_ESTIMATOR_ORDER = 7

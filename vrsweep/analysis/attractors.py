@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrsweep.model import INITIAL_STATE_KEYS
+from vrsweep.numerics.model import INITIAL_STATE_KEYS
 from vrsweep.results import Status
 
 SAME_ORBIT_FACTOR = 1000.0
@@ -246,7 +246,7 @@ def attractor_extras(axes, variables, period_tolerance):
             "comment": (f"same attractor: same period and stroboscopic cycles equal up to a cyclic shift to "
                         f"{tolerance:g} (= {SAME_ORBIT_FACTOR:g} * period_tolerance) relative to max(1, max |x|) "
                         "(resp. |v|); non-periodic points: |R_a - R_b| <= hypot(R_err_a, R_err_b) and "
-                        "overlapping [x_min, x_max]; labels by basin size, then R (vrsweep.attractors)"),
+                        "overlapping [x_min, x_max]; labels by basin size, then R (vrsweep.analysis.attractors)"),
         }),
         "attractor_count": (counts, slice_dims, {
             "units": "1", "long_name": "number of attractors found in the slice"}),

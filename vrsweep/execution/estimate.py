@@ -14,7 +14,7 @@ import numpy as np
 
 from vrsweep.config.schema import INTEGRATION_DEFAULTS
 from vrsweep.errors import ConfigError
-from vrsweep.threads import available_threads
+from vrsweep.execution.threads import available_threads
 
 # Wall time of one grid point over one slow period 2 pi/omega, on one thread, at rtol = 1e-9.
 # The original model resolves the fast forcing Omega, so it takes several times more steps.
@@ -72,10 +72,10 @@ def estimate(config, threads=None) -> Estimate:
 
 def stored_arrays(config):
     """(name, bytes per grid point, dimension names beyond the grid) of every array a run stores:
-    the point variables (vrsweep.variables), the done mask and the analytic columns
+    the point variables (vrsweep.store.variables), the done mask and the analytic columns
     (theory.analytic_columns, evaluated at one point to learn their shapes)."""
-    from vrsweep import theory
-    from vrsweep.variables import point_variables
+    from vrsweep.analysis import theory
+    from vrsweep.store.variables import point_variables
 
     arrays = [(name, np.dtype(dtype).itemsize * math.prod(n for _, n in extra), [dim for dim, _ in extra])
               for name, dtype, extra, _ in point_variables(config.integration)]

@@ -12,7 +12,7 @@ when a chunk finishes: at the first chunk end after each interval. The kernel kn
 import sys
 import time
 
-from vrsweep.estimate import format_duration
+from vrsweep.execution.estimate import format_duration
 
 
 class ProgressLog:

@@ -23,22 +23,22 @@ import math
 
 import numpy as np
 
-from vrsweep import dop853
-from vrsweep.dop853 import (
+from vrsweep.numerics import dop853
+from vrsweep.numerics.dop853 import (
     dop853_accepted_step_factor, dop853_dense, dop853_error_norm, dop853_rejected_step_factor, dop853_step,
 )
-from vrsweep.impact import (
+from vrsweep.numerics.impact import (
     IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, force_at_barrier, locate_root, release_time,
 )
-from vrsweep.integrator import (
+from vrsweep.numerics.rk45 import (
     DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, dense_value, dp54_dense, dp54_step,
     error_norm, initial_step, rejected_step_factor,
 )
-from vrsweep.jit import kernel_jit
-from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS
+from vrsweep.numerics.jit import kernel_jit
+from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS
 from vrsweep.results import Status
-from vrsweep.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
-from vrsweep.tangent import (
+from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
+from vrsweep.numerics.tangent import (
     apply_saltation, collapse_tangents, renormalise_tangents, seed_tangents, tangent_derivative,
     tangents_out_of_range,
 )

@@ -28,7 +28,7 @@ an edit of ``kernel.py``, and the next run returned the old kernel's R). So :fun
 writes a probe file into the folder it chose. If that fails it takes a fallback folder of its own
 under the system's temporary folder (``vrsweep-cache-<uid>``, mode 0700, refused unless owned by
 this user), and if that fails too, caching is switched off: :func:`enabled` is False, every
-kernel compiles with ``cache=False`` (``vrsweep/jit.py``), and :func:`notice` says so once.
+kernel compiles with ``cache=False`` (``vrsweep/numerics/jit.py``), and :func:`notice` says so once.
 Compiling every run is slow; computing with code that is not the installed code is wrong.
 """
 
@@ -51,7 +51,7 @@ def sources_digest() -> str:
     """12 hex digits of SHA-1 over every module of the package, sub-packages included (relative
     paths and bytes): ~2 ms. Every folder, because a kernel compiled into a loop may come from any
     of them."""
-    package = Path(__file__).resolve().parent
+    package = Path(__file__).resolve().parent.parent  # vrsweep/, not numerics/
     digest = hashlib.sha1()
     for path in sorted(package.rglob("*.py")):
         digest.update(path.relative_to(package).as_posix().encode())
@@ -153,7 +153,7 @@ def cache_dir() -> Path:
 
 def enabled() -> bool:
     """Whether kernels are cached at all: False when no folder vrsweep can key by its sources is
-    writable. Read by ``vrsweep/jit.py`` when each kernel is decorated."""
+    writable. Read by ``vrsweep/numerics/jit.py`` when each kernel is decorated."""
     return _choose().folder is not None
 
 
@@ -200,12 +200,12 @@ def kernel_is_cached(method: str = "rk45", lyapunov: bool = False) -> bool:
     named ``<module>.<function>-<first line>.py<XY>.nbi``, and not older than the source (numba
     discards an index whose source has changed since). An index written on another CPU model
     counts as cached although numba will compile again: the answer is a hint for the user, not a
-    promise. Imports numba (through vrsweep.sweep).
+    promise. Imports numba (through vrsweep.execution.sweep).
     """
     import hashlib
     import sys
 
-    from vrsweep import sweep
+    from vrsweep.execution import sweep
 
     if not enabled():
         return False

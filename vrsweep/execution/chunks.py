@@ -1,5 +1,5 @@
 """Which lines a sweep runs, in which order and in which chunks: the one planner of the local
-executor (vrsweep.sweep.run_sweep) and the Dask executor (vrsweep.distributed), and the one
+executor (vrsweep.execution.sweep.run_sweep) and the Dask executor (vrsweep.execution.distributed), and the one
 count of the statuses they report.
 
 A *line* is a sequence of grid points run one after the other (one point, or a continuation

@@ -6,10 +6,10 @@ fraction theta in [0, 1]; the kernel then reaches the impact state with an exact
 
 import numpy as np
 
-from vrsweep.integrator import dense_value
-from vrsweep.jit import kernel_jit
-from vrsweep.model import ALPHA, BIG_OMEGA, C, DELTA, G, OMEGA, STIFFNESS
-from vrsweep.state import V, X
+from vrsweep.numerics.rk45 import dense_value
+from vrsweep.numerics.jit import kernel_jit
+from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, G, OMEGA, STIFFNESS
+from vrsweep.numerics.state import V, X
 
 
 # Step fraction to which roots are located: the impact time is then known to ~1e-15 h.

@@ -38,7 +38,7 @@ from typing import Callable
 import h5py
 
 from vrsweep.errors import OutputError, UsageError
-from vrsweep.estimate import format_bytes
+from vrsweep.execution.estimate import format_bytes
 
 try:  # POSIX; elsewhere nothing is locked and nothing can be told about other writers
     import fcntl

@@ -28,7 +28,7 @@ import threading
 import numpy as np
 
 from vrsweep.errors import InvalidArgument, RunFailed, VrsweepError
-from vrsweep.chunks import count_statuses, default_chunk_lines, plan_lines
+from vrsweep.execution.chunks import count_statuses, default_chunk_lines, plan_lines
 from vrsweep.config.grid import Grid
 
 LOCAL_PREFIX = "local:"
@@ -80,7 +80,7 @@ _KERNEL_LOCK = threading.Lock()
 def _runner(config_text):
     # Parsed and tabulated once per worker process and config, not once per chunk.
     from vrsweep.config import parse_config
-    from vrsweep.sweep import LineRunner
+    from vrsweep.execution.sweep import LineRunner
 
     return LineRunner(parse_config(config_text, "<config sent by the vrsweep client>"))
 
@@ -94,7 +94,7 @@ def run_chunk(config_text, lines, threads=None):
 
 
 def dask_setup(worker):
-    """Preload hook of the LocalCluster's workers (``preload=["vrsweep.distributed"]``).
+    """Preload hook of the LocalCluster's workers (``preload=["vrsweep.execution.distributed"]``).
 
     Ctrl-C in a terminal sends SIGINT to the whole process group, local workers included; a
     worker killed by it would leave its chunk unfinished and the client waiting for a worker that

@@ -22,9 +22,9 @@ State layout: state.py (TANGENT); per-period records: kernel.REC_LOG_STRETCH, RE
 
 import math
 
-from vrsweep.jit import kernel_jit
-from vrsweep.model import ALPHA, GAMMA, MU, STIFFNESS
-from vrsweep.state import N_TANGENT_VECTORS, TANGENT, V, X
+from vrsweep.numerics.jit import kernel_jit
+from vrsweep.numerics.model import ALPHA, GAMMA, MU, STIFFNESS
+from vrsweep.numerics.state import N_TANGENT_VECTORS, TANGENT, V, X
 
 
 @kernel_jit(inline="always")

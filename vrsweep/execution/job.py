@@ -12,15 +12,15 @@ import numba
 import numpy as np
 
 from vrsweep import __version__
-from vrsweep.provenance import cf_attributes
+from vrsweep.store.provenance import cf_attributes
 from vrsweep.errors import InvalidArgument
 from vrsweep.results import Status
-from vrsweep.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
-from vrsweep.model import AXIS_LONG_NAMES, AXIS_UNITS
+from vrsweep.execution.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
+from vrsweep.numerics.model import AXIS_LONG_NAMES, AXIS_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.config.grid import Grid
-from vrsweep.sweep import run_sweep
-from vrsweep.variables import point_variables
+from vrsweep.execution.sweep import run_sweep
+from vrsweep.store.variables import point_variables
 
 
 FAILURE_ADVICE_FRACTION = 0.03
@@ -164,7 +164,7 @@ def root_attributes(config, shard=(0, 1)):
 
 
 def owned_mask(grid, shard):
-    from vrsweep.chunks import shuffled_lines
+    from vrsweep.execution.chunks import shuffled_lines
 
     mask = np.zeros(grid.n_points, dtype=bool)
     mask[shuffled_lines(grid, *shard).reshape(-1)] = True
@@ -181,7 +181,7 @@ ANALYTIC_BLOCK_POINTS = 8192
 
 def analytic_extras(config, grid):
     """The analytic side stored beside the numerical grid (issue 3): theory.analytic_columns."""
-    from vrsweep import theory
+    from vrsweep.analysis import theory
 
     blocks = {}
     for start in range(0, grid.n_points, ANALYTIC_BLOCK_POINTS):
@@ -201,9 +201,9 @@ def analytic_extras(config, grid):
 
 
 def basin_extras(config, writer):
-    """The attractor labels and table of a sweep with x0 / v0 axes (vrsweep.attractors); ({}, {})
+    """The attractor labels and table of a sweep with x0 / v0 axes (vrsweep.analysis.attractors); ({}, {})
     without. Reads the finished points back from the checkpoint the writer holds."""
-    from vrsweep import attractors
+    from vrsweep.analysis import attractors
 
     if not attractors.has_initial_state_axes(config.axis_names):
         return {}, {}
@@ -289,7 +289,7 @@ def _expected_config_text(path, config):
 def _stored_config_text(path):
     """The ``config`` attribute of the result file at ``path``, or None if it cannot be read (the
     writer then reports what is wrong with the file)."""
-    from vrsweep.fileio import open_hdf5
+    from vrsweep.store.fileio import open_hdf5
 
     try:
         with open_hdf5(path, "r") as h5file:

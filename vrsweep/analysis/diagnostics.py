@@ -73,8 +73,8 @@ Stroboscopic (Poincare) samples
 
 import numpy as np
 
-from vrsweep import kernel
-from vrsweep.model import C, OMEGA
+from vrsweep.numerics import kernel
+from vrsweep.numerics.model import C, OMEGA
 from vrsweep.results import Status
 
 N_BATCHES = 10

@@ -32,7 +32,7 @@ def _open_dataset(path, group=None, **kwargs):
     the file."""
     import xarray as xr
 
-    from vrsweep.fileio import open_hdf5
+    from vrsweep.store.fileio import open_hdf5
 
     h5file = open_hdf5(path, "r")
     try:
@@ -47,7 +47,7 @@ def _open_dataset(path, group=None, **kwargs):
 
 def file_kind(path) -> str:
     """``"sweep"``, ``"shard"`` or ``"trajectory"``; ResultFileError for anything else."""
-    from vrsweep import trajectory_file
+    from vrsweep.store import trajectory_file
     from vrsweep.store.reader import open_checked
 
     if trajectory_file.is_trajectory_file(path):
@@ -57,7 +57,7 @@ def file_kind(path) -> str:
 
 
 def _trajectory_groups(path):
-    from vrsweep.trajectory_file import _open
+    from vrsweep.store.trajectory_file import _open
 
     with _open(path, "r") as f:
         runs = [name for name in ("original", "effective") if name in f]
@@ -128,7 +128,7 @@ def open_groups(path) -> dict:
     """
     import h5py
 
-    from vrsweep.fileio import open_hdf5
+    from vrsweep.store.fileio import open_hdf5
     from vrsweep.store.reader import corrupt_error
 
     path = os.fspath(path)

@@ -21,7 +21,7 @@ those stage values are formed) and only x and v are interpolated):
 
 import numpy as np
 
-from vrsweep.jit import kernel_jit
+from vrsweep.numerics.jit import kernel_jit
 
 # --- Dormand & Prince (1980) RK5(4)7FM: c, A, b (5th order), e = b - b_hat (embedded 4th) ---
 N_STAGES = 6
