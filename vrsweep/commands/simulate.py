@@ -5,7 +5,7 @@ import click
 from vrsweep.commands.options import (
     OUTPUT_FLAGS, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
-from vrsweep.store.trajectory_file import DEFAULT_SAMPLES_PER_PERIOD
+from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
 
 
 @click.command("simulate")
@@ -29,7 +29,8 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
     interval, and impacts per slow period, transient included. Plot it with `vrsweep plot`.
     """
     from vrsweep.config import load_config
-    from vrsweep.store.trajectory_file import check_single_point, simulate_point, write_trajectory
+    from vrsweep.execution.simulate import check_single_point, simulate_point
+    from vrsweep.store.trajectory_file import write_trajectory
 
     config = load_config(config_path, overrides)
     flags = {**OUTPUT_FLAGS, "samples_per_period": "--samples-per-period", "compare_effective": "--compare effective",

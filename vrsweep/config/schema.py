@@ -2,7 +2,7 @@
 and the validated result (:class:`Config`).
 
 This module is the ONE source of defaults: the integration defaults here are the kernel's
-(``trajectory.DEFAULT_SETTINGS`` is derived from them), the parameter defaults are the paper's
+(the kernel's own settings take theirs from ``numerics.kernel.SETTING_DEFAULTS``), the parameter defaults are the paper's
 (``model.DEFAULT_PARAMETERS``), and the error messages and docs/design.md read the same tables.
 """
 
@@ -18,6 +18,7 @@ from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fie
 from pydantic_core import PydanticCustomError
 
 from vrsweep.config.wording import show_number, show
+from vrsweep.numerics.kernel import DEFAULT_METHOD, SETTING_DEFAULTS as KERNEL_SETTING_DEFAULTS
 from vrsweep.numerics.model import (
     DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
 )
@@ -91,11 +92,10 @@ AXIS_DOMAINS = {**PARAMETER_DOMAINS, **{axis: INITIAL_DOMAINS[key] for axis, key
 # The integration methods (kernel.INTEGRATORS): rk45 is Dormand-Prince 5(4), dop853 Hairer's 8(5,3).
 METHODS = ("rk45", "dop853")
 
+# The kernel's own settings (rtol ... stick_velocity) default to the kernel's values.
 INTEGRATION_DEFAULTS = {
-    "method": "rk45", "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
-    "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1.0e6,
-    "stick_velocity": 1.0e-7, "strobe_periods": 16, "max_period": 8, "period_tolerance": 1.0e-6,
-    "lyapunov": False,
+    "method": DEFAULT_METHOD, **KERNEL_SETTING_DEFAULTS, "strobe_periods": 16, "max_period": 8,
+    "period_tolerance": 1.0e-6, "lyapunov": False,
 }
 INTEGRATION_DOMAINS = {
     "rtol": Domain(low=0.0, high=1.0),
@@ -250,7 +250,7 @@ class Config:
         ``{start, stop, num}`` whenever its values are exactly ``np.linspace`` of those (however
         the user wrote it), so two equal configs give the same text. Stored in results files.
         """
-        from vrsweep.config.yaml import dump_config
+        from vrsweep.config.dump import dump_config
 
         return dump_config(self)
 

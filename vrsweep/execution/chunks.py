@@ -14,27 +14,9 @@ import numpy as np
 
 from vrsweep.results import Status
 
-SHUFFLE_SEED = 20240607  # fixed: the same grid always gives the same chunks and shards
-
-
-def shuffled_lines(grid, shard_index=0, shard_count=1):
-    """The lines this process runs, in run order: shuffled, then every shard_count-th."""
-    lines = grid.lines()
-    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
-    return lines[order[shard_index::shard_count]]
-
-
-def shard_of_points(grid, shard_count):
-    """For every grid point (over grid.shape), the shard 0..shard_count-1 that runs it.
-
-    The inverse of shuffled_lines: the line at place p of the shuffled order goes to shard
-    p mod shard_count. Used to say which shard file a missing point belongs to.
-    """
-    lines = grid.lines()
-    order = np.random.default_rng(SHUFFLE_SEED).permutation(len(lines))
-    shard = np.empty(grid.n_points, dtype=np.int64)
-    shard[lines[order]] = (np.arange(len(lines)) % shard_count)[:, None]
-    return shard.reshape(grid.shape)
+# The grid's division into shuffled lines and shards is the grid's (config/grid.py); imported
+# from here by the planner below and by callers written before it moved.
+from vrsweep.config.grid import SHUFFLE_SEED, shard_of_points, shuffled_lines  # noqa: E402,F401
 
 
 # A chunk is the unit of checkpointing and of progress: long enough that writing it is a small

@@ -15,6 +15,8 @@ import numpy as np
 from vrsweep.config.schema import INTEGRATION_DEFAULTS
 from vrsweep.errors import ConfigError
 from vrsweep.execution.threads import available_threads
+# format_bytes: the store's, imported from here by callers written before it moved.
+from vrsweep.store.fileio import format_bytes  # noqa: F401
 
 # Wall time of one grid point over one slow period 2 pi/omega, on one thread, at rtol = 1e-9.
 # The original model resolves the fast forcing Omega, so it takes several times more steps.
@@ -123,15 +125,6 @@ def check_size(config, threads=None, allow_large: bool = False) -> Estimate:
     if problem is not None and not allow_large:
         raise ConfigError([problem], source=config.source_name)
     return estimate(config, threads)
-
-
-def format_bytes(size: float) -> str:
-    """1234567 -> '1.2 MB' (decimal units, as disks are sold)."""
-    for unit in ("B", "kB", "MB", "GB", "TB"):
-        if size < 1000 or unit == "TB":
-            return f"{size:.0f} {unit}" if unit == "B" else f"{size:.1f} {unit}"
-        size /= 1000
-    raise AssertionError("unreachable")
 
 
 def format_duration(seconds: float) -> str:

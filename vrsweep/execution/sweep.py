@@ -8,18 +8,19 @@ chunks, so costly regions of the grid (many impacts) spread evenly over threads,
 shards; each line writes only its own output slots, so the result is independent of the
 order, the chunking and the thread count, bit for bit.
 
-This module knows nothing of files: finished chunks are handed to a callback.
+This module knows nothing of files: finished chunks are handed to a callback. The loops that
+numba compiles are in vrsweep/numerics/lines.py.
 """
 
 import time
 
 import numba
 import numpy as np
-from numba import prange
 
 from vrsweep.numerics import kernel
 from vrsweep.analysis.diagnostics import lyapunov_values, point_diagnostics
-from vrsweep.numerics.jit import kernel_jit
+# RUN_LINES: imported from here by callers written before the loops moved to numerics/lines.py.
+from vrsweep.numerics.lines import RUN_LINES  # noqa: F401
 # Grid, the planner's names: imported from here by callers written before they moved.
 from vrsweep.execution.chunks import (  # noqa: F401
     GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses, default_chunk_lines, plan_lines,
@@ -31,82 +32,9 @@ from vrsweep.results import Status
 from vrsweep.numerics.trajectory import settings_vector
 
 
-
 def integration_settings(integration):
     """The kernel's settings vector from a config's integration section."""
     return settings_vector(**vars(integration))
-
-
-@kernel_jit(inline="always")
-def _run_line(integrate, coefficients, initial_state, settings, line_points, records, summaries, statuses):
-    """One line's points in order, each starting from the previous point's final state
-    (the first from initial_state, (2,))."""
-    state = initial_state.copy()
-    no_samples = np.empty(0)
-    no_sample_out = np.empty((0, 2))
-    no_impacts = np.empty((0, 3))
-    no_sticks = np.empty((0, 2))
-    for slot in range(line_points.shape[0]):
-        status = integrate(coefficients[line_points[slot]], state, settings, records[slot], summaries[slot],
-                           no_samples, no_sample_out, no_impacts, no_sticks)
-        statuses[slot] = status
-        # The next point starts at its own t = 0 from this one's state at t = n T: in phase
-        # with the slow force (omega n T = 2 pi n), and with the fast one when n Omega / omega
-        # is a whole number (Omega = 4, omega = 0.5: 8 n); otherwise the fast phase restarts.
-        if status == Status.OK:
-            state[0] = summaries[slot, kernel.SUM_X_FINAL]
-            state[1] = summaries[slot, kernel.SUM_V_FINAL]
-        else:
-            # A failed point says nothing about where the next one starts: restart.
-            state[0] = initial_state[0]
-            state[1] = initial_state[1]
-
-
-@kernel_jit(parallel=True)
-def run_lines_rk45(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
-    """Run each line's points in order; lines in parallel.
-
-    coefficients    (n_points, N_COEFFICIENTS)         for every point the lines name
-    initial_states  (n_lines, 2)                        state of each line's first point
-    settings        (N_SETTINGS,)
-    lines           (n_lines, line_length)             indices into coefficients
-    period_records  (n_lines, line_length, n_periods, N_RECORD)   outputs, per line slot
-    summaries       (n_lines, line_length, N_SUMMARY)
-    statuses        (n_lines, line_length) int8
-    """
-    for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_rk45, coefficients, initial_states[line], settings, lines[line],
-                  period_records[line], summaries[line], statuses[line])
-
-
-@kernel_jit(parallel=True)
-def run_lines_dop853(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
-    """run_lines_rk45 with the DOP853 kernel."""
-    for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_dop853, coefficients, initial_states[line], settings, lines[line],
-                  period_records[line], summaries[line], statuses[line])
-
-
-@kernel_jit(parallel=True)
-def run_lines_rk45_lyapunov(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
-    """run_lines_rk45 with the tangent vectors (integration.lyapunov)."""
-    for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_rk45_lyapunov, coefficients, initial_states[line], settings, lines[line],
-                  period_records[line], summaries[line], statuses[line])
-
-
-@kernel_jit(parallel=True)
-def run_lines_dop853_lyapunov(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
-    """run_lines_dop853 with the tangent vectors (integration.lyapunov)."""
-    for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_dop853_lyapunov, coefficients, initial_states[line], settings, lines[line],
-                  period_records[line], summaries[line], statuses[line])
-
-
-# (integration.method, integration.lyapunov) -> the parallel loop; each is compiled (or loaded)
-# only when a run uses it.
-RUN_LINES = {("rk45", False): run_lines_rk45, ("dop853", False): run_lines_dop853,
-             ("rk45", True): run_lines_rk45_lyapunov, ("dop853", True): run_lines_dop853_lyapunov}
 
 
 class LineRunner:

@@ -47,9 +47,14 @@ from vrsweep.numerics.tangent import (
 RTOL, ATOL, TRANSIENT_PERIODS, MEASURE_PERIODS, MAX_STEPS, MAX_IMPACTS_PER_PERIOD, \
     DIVERGENCE_BOUND, STICK_VELOCITY = range(8)
 N_SETTINGS = 8
-# Their config names (config.py's integration section), in index order.
-SETTING_NAMES = ("rtol", "atol", "transient_periods", "measure_periods", "max_steps", "max_impacts_per_period",
-                 "divergence_bound", "stick_velocity")
+# Their config names (the config's integration section), in index order, and their defaults:
+# the config schema takes its defaults of these from here (config -> numerics, never back).
+SETTING_DEFAULTS = {
+    "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
+    "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1.0e6,
+    "stick_velocity": 1.0e-7,
+}
+SETTING_NAMES = tuple(SETTING_DEFAULTS)
 
 # --- per-slow-period record, one row per period, transient included ---
 REC_IMPACTS = 0     # impacts in the period
@@ -418,6 +423,7 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
 # so a run compiles only the method it uses.
 INTEGRATORS = {"rk45": integrate_rk45, "dop853": integrate_dop853}
 METHODS = tuple(INTEGRATORS)
+DEFAULT_METHOD = "rk45"  # the config schema's default of integration.method
 # The same with the tangent vectors (integration.lyapunov: true).
 LYAPUNOV_INTEGRATORS = {"rk45": integrate_rk45_lyapunov, "dop853": integrate_dop853_lyapunov}
 

@@ -205,7 +205,7 @@ def kernel_is_cached(method: str = "rk45", lyapunov: bool = False) -> bool:
     import hashlib
     import sys
 
-    from vrsweep.execution import sweep
+    from vrsweep.numerics import lines as sweep
 
     if not enabled():
         return False

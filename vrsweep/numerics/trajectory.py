@@ -8,12 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrsweep.numerics import kernel
-from vrsweep.config.schema import INTEGRATION_DEFAULTS
 from vrsweep.results import Status
 
 _SETTING_INDEX = {name: index for index, name in enumerate(kernel.SETTING_NAMES)}
-# The kernel's settings a config leaves out: the config schema's defaults, never written twice.
-DEFAULT_SETTINGS = {name: INTEGRATION_DEFAULTS[name] for name in _SETTING_INDEX}
+# The kernel's settings a caller leaves out (the config schema's defaults are these too).
+DEFAULT_SETTINGS = dict(kernel.SETTING_DEFAULTS)
 
 
 def settings_vector(**settings):

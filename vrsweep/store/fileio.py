@@ -38,7 +38,6 @@ from typing import Callable
 import h5py
 
 from vrsweep.errors import OutputError, UsageError
-from vrsweep.execution.estimate import format_bytes
 
 try:  # POSIX; elsewhere nothing is locked and nothing can be told about other writers
     import fcntl
@@ -250,6 +249,15 @@ def trim_to_contents(h5file) -> None:
 # --------------------------------------------------------------------------------------------
 # Space, and what a failed write tells the user
 # --------------------------------------------------------------------------------------------
+
+def format_bytes(size: float) -> str:
+    """1234567 -> '1.2 MB' (decimal units, as disks are sold)."""
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if size < 1000 or unit == "TB":
+            return f"{size:.0f} {unit}" if unit == "B" else f"{size:.1f} {unit}"
+        size /= 1000
+    raise AssertionError("unreachable")
+
 
 _SPACE_ERRNOS = (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC), errno.EFBIG)
 _HDF5_ERRNO = re.compile(r"errno = (\d+)")

@@ -559,7 +559,7 @@ def _run_ownership(shards, ref):
     try:
         count = int(counts.pop())
         from vrsweep.config import parse_config
-        from vrsweep.execution.sweep import Grid, shard_of_points
+        from vrsweep.config.grid import Grid, shard_of_points
 
         grid = Grid.from_config(parse_config(ref.attrs.get("config", "")))
         if grid.shape != ref.shape:

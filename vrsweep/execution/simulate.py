@@ -1,0 +1,114 @@
+"""One point of a config integrated for ``vrsweep simulate``: the samples, impacts and sticking
+of each model run, and the slow-flow reconstructions of the first-order theory.
+
+What is computed and how the result is stored: ``vrsweep/store/trajectory_file.py``. This module
+computes (numerics, analysis); that one writes and reads.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrsweep.errors import UsageError
+from vrsweep.results import Status
+from vrsweep.store.trajectory_file import ModelRun, SlowFlowRun, TrajectoryData
+
+DEFAULT_SAMPLES_PER_PERIOD = 200
+"""Samples per slow period T = 2 pi/omega. With the paper's omega = 0.5 and Omega = 4 or 5 a slow
+period holds 8 or 10 fast periods, so 200 samples give 20-25 per fast period: enough to draw the
+fast wiggle of Fig. 3-5. Impacts are stored exactly besides, and the plots insert them."""
+MAX_SAMPLES = 20_000_000  # per model: 320 MB of x and v; more is a typo, not a figure
+
+SLOW_FLOW_STARTS = {
+    "state": dict(rule="state", literal=False,
+                  description="corrected slow flow eq2.24 (ERRATA 1) from R0, theta0 of the initial state (ERRATA 9)"),
+    "paper": dict(rule="paper", literal=False,
+                  description="corrected slow flow eq2.24 (ERRATA 1) from the paper's R0, theta0 (eq2.20-eq2.22)"),
+    "paper_literal": dict(rule="paper", literal=True,
+                          description="the paper's printed eq2.24 (sin/cos swapped, ERRATA 1) from the paper's "
+                                      "R0, theta0: reproduces the paper's Fig. 6 only"),
+}
+
+
+def sample_times(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD):
+    """Evenly spaced times over the whole run, ``samples_per_period`` per slow period, ends included."""
+    if samples_per_period < 1:
+        raise UsageError.naming("{samples_per_period} must be at least 1, got {value}", value=samples_per_period)
+    n_periods = config.integration.transient_periods + config.integration.measure_periods
+    n_samples = n_periods * samples_per_period + 1
+    if n_samples > MAX_SAMPLES:
+        raise UsageError.naming(
+            "{n_periods} slow periods x {samples} samples per period = {n_samples} samples (more than {most}): "
+            "lower {samples_per_period} or the run length", n_periods=n_periods, samples=samples_per_period,
+            n_samples=n_samples, most=MAX_SAMPLES)
+    slow_period = 2.0 * np.pi / config.parameters["omega"]
+    return np.linspace(0.0, n_periods * slow_period, n_samples)
+
+
+def check_single_point(config):
+    """simulate integrates one point: a config that still sweeps something is a usage error."""
+    if config.axes:
+        swept = ", ".join(f"{axis.name} ({len(axis)} values)" for axis in config.axes)
+        # {set} before each override: nothing in Python (with_overrides takes "g=5"), --set at the CLI
+        example = " ".join("{set}" + f"{axis.name}={axis.values[0]:g}".replace("{", "{{").replace("}", "}}")
+                           for axis in config.axes)
+        raise UsageError.naming(
+            "{source} sweeps {swept}; simulate integrates a single point: fix every swept parameter, e.g. "
+            + example, {"set": ""}, source=config.source_name, swept=swept)
+
+
+def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare_effective=False):
+    """Integrate the single point of ``config``; returns TrajectoryData (not yet written)."""
+    from vrsweep.numerics import trajectory
+    from vrsweep.numerics.model import kernel_coefficients
+
+    check_single_point(config)
+    if compare_effective and config.model == "effective":
+        raise UsageError.naming("{compare_effective} compares the original model with the effective one, but "
+                                "the config's model is already effective: drop {compare}, or {model_original}",
+                                {"compare": "compare_effective", "model_original": "use model: original"})
+    times = sample_times(config, samples_per_period)
+    settings = trajectory.settings_vector(**vars(config.integration))
+    initial_state = np.array([config.initial["x"], config.initial["v"]])
+
+    models = [config.model] + (["effective"] if compare_effective else [])
+    runs = {}
+    for model in models:
+        result = trajectory.simulate(kernel_coefficients(config.parameters, model), initial_state, settings, times,
+                                     method=config.integration.method)
+        runs[model] = _model_run(model, result)
+
+    slow_flow = {}
+    if "effective" in runs:
+        slow_flow = slow_flow_runs(config.parameters, config.initial, times)
+    attrs = {"model": config.model, "samples_per_period": int(samples_per_period),
+             "slow_period": float(2.0 * np.pi / config.parameters["omega"])}
+    return TrajectoryData(runs=runs, slow_flow=slow_flow, attrs=attrs)
+
+
+def _model_run(model, result):
+    from vrsweep.numerics import kernel
+
+    records = result.period_records
+    return ModelRun(
+        model=model, status=Status(int(result.status)), t=result.sample_times,
+        x=result.samples[:, 0], v=result.samples[:, 1], impacts=result.impacts, sticks=result.sticks,
+        impacts_per_period=result.impacts_per_period,
+        strobe_x=records[:, kernel.REC_X], strobe_v=records[:, kernel.REC_V])
+
+
+def slow_flow_runs(parameters, initial, times):
+    """The reconstruction eq2.21 from each start of SLOW_FLOW_STARTS, sampled at ``times``."""
+    from vrsweep.analysis import theory
+
+    omega = parameters["omega"]
+    runs = {}
+    for start, how in SLOW_FLOW_STARTS.items():
+        R0, theta0 = theory.initial_slow_state(parameters, rule=how["rule"], x0=initial["x"], v0=initial["v"])
+        # times are evenly spaced from 0, so tau = omega t falls exactly on the slow flow's samples
+        tau, R, theta = theory.integrate_slow_flow(parameters, R0, theta0, omega * times[-1], len(times),
+                                                   literal=how["literal"])
+        x, v = theory.reconstruct(times, tau, R, theta, parameters)
+        runs[start] = SlowFlowRun(start=start, literal=how["literal"], R0=float(R0), theta0=float(theta0),
+                                  description=how["description"], t=times, x=x, v=v, R=R, theta=theta)
+    return runs
