@@ -100,7 +100,7 @@ def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
             return IMPACT
         if y[V] > 0.0 and y_new[V] < 0.0:
             # A maximum of x inside the step: an impact if it reaches Delta. Kept in the bracket,
-            # so the step's extremes (kernel._update_extremes) need not locate it again.
+            # so the step's extremes (records.update_extremes) need not locate it again.
             theta_turn = locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
             bracket[TURNING_POINT] = theta_turn
             if dense_value(dense, y, h, theta_turn, X) >= delta:

@@ -1,7 +1,7 @@
 """One grid point: the integration loop of the impact oscillator with its observers.
 
 The loop advances Runge-Kutta steps of the configured method (integration.method: rk45, the
-Dormand-Prince 5(4) pair of integrator.py, or dop853, Hairer's 8(5,3) of dop853.py), stops
+Dormand-Prince 5(4) pair of rk45.py, or dop853, Hairer's 8(5,3) of dop853.py), stops
 every step at the slow-period boundaries t = nT (T = 2 pi / omega) so that every period is
 measured exactly, locates
 impacts on the dense output (impact.py), applies the restitution law (eq2.2), and holds the
@@ -15,8 +15,14 @@ Fourier sums (eq3.1, eq3.2) are quadrature states integrated with the motion, so
 as accurate as x itself; while stuck they are added in closed form. With integration.lyapunov
 the state also carries two tangent vectors (tangent.py) and every period records their growth.
 
-Array layouts: the state vector is state.py's; the settings vector, the per-period record and
-the summary are this module's (below); the coefficient vector is model.py's.
+Array layouts: the state vector is state.py's; the settings vector is this module's (below);
+the per-period record, the summary and the logs are records.py's (re-exported here as
+kernel.REC_*, kernel.SUM_*); the coefficient vector is model.py's. The right-hand sides and the
+forcing-phase rotations are rhs.py's.
+
+``_integrate`` stays one function on purpose: it is the algorithm read top to bottom, and every
+piece it calls is inlined by numba; splitting its loop into functions that return several
+values would cost tuple packing in the hottest path for no gain in clarity.
 """
 
 import math
@@ -31,15 +37,29 @@ from vrsweep.numerics.impact import (
     IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, force_at_barrier, locate_root, release_time,
 )
 from vrsweep.numerics.rk45 import (
-    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, dense_value, dp54_dense, dp54_step,
+    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, dp54_dense, dp54_step,
     error_norm, initial_step, rejected_step_factor,
 )
 from vrsweep.numerics.jit import kernel_jit
-from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS
+from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS  # noqa: F401 - read as kernel.ALPHA ...
 from vrsweep.results import Status
+from vrsweep.numerics.records import (  # noqa: F401 - the layouts, read as kernel.REC_*, kernel.SUM_*
+    N_RECORD, N_SUMMARY, REC_IMPACTS, REC_LOG_AREA, REC_LOG_STRETCH, REC_QC, REC_QS, REC_STUCK_TIME,
+    REC_V, REC_X, REC_X_MAX, REC_X_MIN, SUM_IMPACTS, SUM_IMPACTS_PER_PERIOD, SUM_LYAPUNOV,
+    SUM_LYAPUNOV_SUM, SUM_QC, SUM_QS, SUM_Q_AMPLITUDE, SUM_R, SUM_REJECTED, SUM_RHS, SUM_STEPS,
+    SUM_STICKS, SUM_T_FINAL, SUM_V_FINAL, SUM_X_FINAL, add_tangent_growth, close_period, emit_samples,
+    emit_state, log_impact, log_stick_start, start_period, summarize, update_extremes,
+)
+from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as kernel.* by tests
+    COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
+    N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
+    ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
+    no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent_rhs,
+    oscillator_tangent_rhs_rotated, prepare_rotations, rotation_scratch,
+)
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import (
-    apply_saltation, collapse_tangents, renormalise_tangents, seed_tangents, tangent_derivative,
+    apply_saltation, collapse_tangents, seed_tangents, tangent_derivative,
     tangents_out_of_range,
 )
 
@@ -56,37 +76,6 @@ SETTING_DEFAULTS = {
 }
 SETTING_NAMES = tuple(SETTING_DEFAULTS)
 
-# --- per-slow-period record, one row per period, transient included ---
-REC_IMPACTS = 0     # impacts in the period
-REC_QS = 1          # integral of x sin(omega t) over the period
-REC_QC = 2          # integral of x cos(omega t) over the period
-REC_X = 3           # stroboscopic x at the period's end, t = (n + 1) T
-REC_V = 4           # stroboscopic v at the period's end
-REC_X_MIN = 5       # smallest x in the period
-REC_X_MAX = 6       # largest x in the period
-REC_STUCK_TIME = 7  # time spent stuck on the barrier in the period
-REC_LOG_STRETCH = 8  # log growth of the leading tangent vector over the period (NaN without tangents)
-REC_LOG_AREA = 9     # log growth of the tangent parallelogram's area (both exponents' sum)
-N_RECORD = 10
-
-# --- summary of a run ---
-SUM_R = 0                   # gain |Q| / c, eq3.3
-SUM_QS = 1                  # eq3.1
-SUM_QC = 2                  # eq3.2
-SUM_Q_AMPLITUDE = 3         # |Q| = sqrt(Qs^2 + Qc^2), the amplitude comparable with theory
-SUM_IMPACTS_PER_PERIOD = 4  # mean over the measurement window
-SUM_STEPS = 5               # step attempts
-SUM_REJECTED = 6
-SUM_RHS = 7                 # right-hand-side evaluations
-SUM_X_FINAL = 8
-SUM_V_FINAL = 9
-SUM_T_FINAL = 10
-SUM_IMPACTS = 11            # all impacts, transient included
-SUM_STICKS = 12             # sticking intervals
-SUM_LYAPUNOV = 13           # largest Lyapunov exponent over the window, per unit time (tangent.py)
-SUM_LYAPUNOV_SUM = 14       # sum of both exponents over the window, per unit time
-N_SUMMARY = 15
-
 # Largest step as a fraction of the shortest forcing period: a longer step could carry the
 # mass to the barrier and back between its ends with no sign change the event test can see.
 MAX_STEP_FRACTION = 1.0 / 8.0
@@ -102,246 +91,9 @@ UNRESOLVED_STEP_FACTOR = 0.125
 
 
 @kernel_jit
-def oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch):
-    """x'' + gamma (x^2 - mu) x' + k x + alpha x^3 = c cos(omega t) + g cos(Omega t), at t + c h.
-
-    eq2.1 (mu = 1, k = -omega0^2) and eq2.10 (mu = K, k = wt2, g = 0) alike; the last two
-    components accumulate the integrands of eq3.1 and eq3.2. The cosines are the library's at
-    every evaluation (``node`` and ``scratch`` are unused): the rk45 kernel's stages, and every
-    evaluation outside a step.
-    """
-    time = t + c * h
-    omega_t = coefficients[OMEGA] * time
-    # Without the fast forcing (the effective model) Omega may be anything, even overflow Omega t.
-    cos_fast = math.cos(coefficients[BIG_OMEGA] * time) if coefficients[G] != 0.0 else 0.0
-    _oscillator_derivative(y, coefficients, math.cos(omega_t), math.sin(omega_t), cos_fast, dydt)
-
-
-@kernel_jit(inline="always")
-def _oscillator_derivative(y, coefficients, cos_slow, sin_slow, cos_fast, dydt):
-    x = y[X]
-    v = y[V]
-    forcing = coefficients[C] * cos_slow + coefficients[G] * cos_fast
-    dydt[X] = v
-    dydt[V] = (forcing - coefficients[GAMMA] * (x * x - coefficients[MU]) * v
-               - coefficients[STIFFNESS] * x - coefficients[ALPHA] * x * x * x)
-    dydt[QS_INTEGRAL] = x * sin_slow
-    dydt[QC_INTEGRAL] = x * cos_slow
-
-
-@kernel_jit
-def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
-    """oscillator_rhs and the variational equations of the tangent vectors (tangent.py)."""
-    oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch)
-    tangent_derivative(y, coefficients, dydt)
-
-
-@kernel_jit
-def no_scratch(h_max, nodes):
-    return np.empty(0)
-
-
-@kernel_jit
-def no_preparation(t, h, coefficients, scratch):
-    return
-
-
-# --- the forcing's phases rotated to the stage times (the dop853 kernel) ------------------------
-# At a stage time t + c h, cos(a + d) = cos a cos d - sin a sin d and sin(a + d) = sin a cos d
-# + cos a sin d, with a = omega t (Omega t) at the step's start and d = omega c h (Omega c h).
-# prepare_rotations computes the phases at t (library calls once per step) and the rotations of
-# every node for the step size h; oscillator_rhs_rotated then costs a few multiplications where
-# oscillator_rhs makes three library calls. Step sizes are rounded down to the grid
-# h_max 2^(-k / STEP_LEVELS_PER_OCTAVE) (grid_step), whose rotations are tabulated once per point.
-STEP_LEVELS_PER_OCTAVE = 16
-N_STEP_LEVELS = 128
-MAX_NODES = 16
-ROTATION_VALUES = 4 * MAX_NODES  # cos, sin of omega c h and of Omega c h, per node
-# The phases at the next step's start are the last step's rotated by its full step (a node c = 1),
-# recomputed by the library every RESYNC_STEPS steps so that rounding cannot accumulate.
-RESYNC_STEPS = 16
-# scratch layout
-PHASE_TIME, PHASE_STEP, COS_SLOW, SIN_SLOW, COS_FAST, SIN_FAST, FULL_STEP_NODE, ROTATED_STEPS = range(8)
-ROTATION = 8                                         # the current step's rotations, per node
-NODES = ROTATION + ROTATION_VALUES                   # the method's nodes c
-STEP_GRID = NODES + MAX_NODES                        # the grid of step sizes
-LEVEL_READY = STEP_GRID + N_STEP_LEVELS              # 1 once a grid step's rotations are tabulated
-LEVEL_ROTATIONS = LEVEL_READY + N_STEP_LEVELS        # N_STEP_LEVELS x ROTATION_VALUES
-N_ROTATION_SCRATCH = LEVEL_ROTATIONS + N_STEP_LEVELS * ROTATION_VALUES
-
-
-@kernel_jit
-def rotation_scratch(h_max, nodes):
-    """oscillator_rhs_rotated's scratch for steps up to h_max of a method with these nodes."""
-    scratch = np.empty(N_ROTATION_SCRATCH)  # 68 kB: only what is read before it is written is set
-    scratch[:ROTATION] = 0.0
-    scratch[PHASE_TIME] = np.nan
-    scratch[PHASE_STEP] = np.nan
-    scratch[NODES:STEP_GRID] = 0.0
-    scratch[LEVEL_READY:LEVEL_ROTATIONS] = 0.0
-    scratch[FULL_STEP_NODE] = -1.0
-    for node in range(nodes.shape[0]):
-        scratch[NODES + node] = nodes[node]
-        if nodes[node] == 1.0 and scratch[FULL_STEP_NODE] < 0.0:
-            scratch[FULL_STEP_NODE] = node
-    for k in range(N_STEP_LEVELS):
-        scratch[STEP_GRID + k] = h_max * 2.0 ** (-k / STEP_LEVELS_PER_OCTAVE)
-    return scratch
-
-
-@kernel_jit
-def grid_step(h, scratch):
-    """The largest step size of the grid that is <= h; h itself below the grid (or if NaN)."""
-    if not (h >= scratch[STEP_GRID + N_STEP_LEVELS - 1]):
-        return h
-    k = int(math.ceil(STEP_LEVELS_PER_OCTAVE * math.log2(scratch[STEP_GRID] / h)))
-    k = min(max(k, 0), N_STEP_LEVELS - 1)
-    while k > 0 and scratch[STEP_GRID + k - 1] <= h:  # log2's rounding: take the largest <= h
-        k -= 1
-    while k < N_STEP_LEVELS - 1 and scratch[STEP_GRID + k] > h:
-        k += 1
-    return scratch[STEP_GRID + k]
-
-
-@kernel_jit
-def _grid_level(h, scratch):
-    """k with h equal to the grid's k-th step size, or -1."""
-    if not (scratch[STEP_GRID + N_STEP_LEVELS - 1] <= h <= scratch[STEP_GRID]):
-        return -1
-    k = int(round(STEP_LEVELS_PER_OCTAVE * math.log2(scratch[STEP_GRID] / h)))
-    for j in (k, k - 1, k + 1):
-        if 0 <= j < N_STEP_LEVELS and scratch[STEP_GRID + j] == h:
-            return j
-    return -1
-
-
-@kernel_jit
-def _rotations(h, coefficients, scratch, out):
-    """cos and sin of omega c h and Omega c h for every node c, into scratch[out:out + 64]."""
-    omega = coefficients[OMEGA]
-    big_omega = coefficients[BIG_OMEGA]
-    fast = coefficients[G] != 0.0  # without the fast forcing Omega may be anything: leave it out
-    for node in range(MAX_NODES):
-        dt = scratch[NODES + node] * h
-        scratch[out + 4 * node] = math.cos(omega * dt)
-        scratch[out + 4 * node + 1] = math.sin(omega * dt)
-        scratch[out + 4 * node + 2] = math.cos(big_omega * dt) if fast else 0.0
-        scratch[out + 4 * node + 3] = math.sin(big_omega * dt) if fast else 0.0
-
-
-@kernel_jit
-def prepare_rotations(t, h, coefficients, scratch):
-    """Make scratch hold the phases at t and the rotations for a step of size h."""
-    if t != scratch[PHASE_TIME]:
-        full = int(scratch[FULL_STEP_NODE])
-        if (t == scratch[PHASE_TIME] + scratch[PHASE_STEP] and full >= 0
-                and scratch[ROTATED_STEPS] < RESYNC_STEPS):
-            # The step just taken ended at t: rotate its start's phases by the whole step.
-            r = ROTATION + 4 * full
-            cos_slow = scratch[COS_SLOW] * scratch[r] - scratch[SIN_SLOW] * scratch[r + 1]
-            sin_slow = scratch[SIN_SLOW] * scratch[r] + scratch[COS_SLOW] * scratch[r + 1]
-            cos_fast = scratch[COS_FAST] * scratch[r + 2] - scratch[SIN_FAST] * scratch[r + 3]
-            sin_fast = scratch[SIN_FAST] * scratch[r + 2] + scratch[COS_FAST] * scratch[r + 3]
-            scratch[COS_SLOW] = cos_slow
-            scratch[SIN_SLOW] = sin_slow
-            scratch[COS_FAST] = cos_fast
-            scratch[SIN_FAST] = sin_fast
-            scratch[ROTATED_STEPS] += 1.0
-        else:
-            omega_t = coefficients[OMEGA] * t
-            scratch[COS_SLOW] = math.cos(omega_t)
-            scratch[SIN_SLOW] = math.sin(omega_t)
-            if coefficients[G] != 0.0:
-                scratch[COS_FAST] = math.cos(coefficients[BIG_OMEGA] * t)
-                scratch[SIN_FAST] = math.sin(coefficients[BIG_OMEGA] * t)
-            scratch[ROTATED_STEPS] = 0.0
-        scratch[PHASE_TIME] = t
-    if h != scratch[PHASE_STEP]:
-        level = _grid_level(h, scratch)
-        if level < 0:  # a step clipped to a period's end, or to an impact
-            _rotations(h, coefficients, scratch, ROTATION)
-        else:
-            table = LEVEL_ROTATIONS + level * ROTATION_VALUES
-            if scratch[LEVEL_READY + level] == 0.0:
-                _rotations(h, coefficients, scratch, table)
-                scratch[LEVEL_READY + level] = 1.0
-            scratch[ROTATION:ROTATION + ROTATION_VALUES] = scratch[table:table + ROTATION_VALUES]
-        scratch[PHASE_STEP] = h
-
-
-@kernel_jit
-def oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
-    """oscillator_rhs at a stage node of a step prepared by prepare_rotations (t and h unused).
-
-    No branch and no library call: with either, an evaluation cost as much as oscillator_rhs.
-    """
-    r = ROTATION + 4 * node
-    cos_d = scratch[r]
-    sin_d = scratch[r + 1]
-    _oscillator_derivative(y, coefficients,
-                           scratch[COS_SLOW] * cos_d - scratch[SIN_SLOW] * sin_d,
-                           scratch[SIN_SLOW] * cos_d + scratch[COS_SLOW] * sin_d,
-                           scratch[COS_FAST] * scratch[r + 2] - scratch[SIN_FAST] * scratch[r + 3],
-                           dydt)
-
-
-@kernel_jit
-def oscillator_tangent_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
-    """oscillator_rhs_rotated and the variational equations of the tangent vectors (tangent.py)."""
-    oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch)
-    tangent_derivative(y, coefficients, dydt)
-
-
-@kernel_jit
 def _smallest_step(t, slow_period):
     """A step this short no longer moves t by more than a few units of its last place."""
     return 4.0 * 2.2e-16 * max(abs(t), slow_period)
-
-
-@kernel_jit
-def _emit_samples(sample_times, samples, next_sample, t0, h, y, dense, t_end):
-    """Write the dense output at every sample time in (.., t_end] of the step [t0, t0 + h]."""
-    while next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_end:
-        theta = (sample_times[next_sample] - t0) / h if h > 0.0 else 1.0
-        samples[next_sample, 0] = dense_value(dense, y, h, theta, X)
-        samples[next_sample, 1] = dense_value(dense, y, h, theta, V)
-        next_sample += 1
-    return next_sample
-
-
-@kernel_jit
-def _update_extremes(record, dense, y, y_new, h, theta_turn):
-    """Fold the step's end and any turning point of x inside it into the period's min/max.
-
-    theta_turn: the turning point if find_crossing located it on this dense output, else NaN.
-    """
-    x_end = y_new[X]
-    if x_end < record[REC_X_MIN]:
-        record[REC_X_MIN] = x_end
-    if x_end > record[REC_X_MAX]:
-        record[REC_X_MAX] = x_end
-    if y[V] * y_new[V] < 0.0:
-        theta = theta_turn if theta_turn == theta_turn else locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
-        x_turn = dense_value(dense, y, h, theta, X)
-        if x_turn < record[REC_X_MIN]:
-            record[REC_X_MIN] = x_turn
-        if x_turn > record[REC_X_MAX]:
-            record[REC_X_MAX] = x_turn
-
-
-@kernel_jit
-def _start_period(record, x, tangents):
-    record[REC_IMPACTS] = 0.0
-    record[REC_QS] = 0.0
-    record[REC_QC] = 0.0
-    record[REC_X] = np.nan
-    record[REC_V] = np.nan
-    record[REC_X_MIN] = x
-    record[REC_X_MAX] = x
-    record[REC_STUCK_TIME] = 0.0
-    # Summed over the period's renormalisations (tangent.py); NaN in a run without tangent vectors.
-    record[REC_LOG_STRETCH] = 0.0 if tangents else np.nan
-    record[REC_LOG_AREA] = 0.0 if tangents else np.nan
 
 
 @kernel_jit
@@ -505,8 +257,8 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
 
     period = 0
     t_boundary = slow_period
-    _start_period(period_records[0], y[X], tangents)
-    next_sample = _emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
+    start_period(period_records[0], y[X], tangents)
+    next_sample = emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
 
     while True:
         record = period_records[period]
@@ -519,7 +271,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 break
             t_end = min(t_release, t_boundary)
             _add_stuck_quadratures(y, delta, coefficients[OMEGA], t, t_end)
-            next_sample = _emit_state(sample_times, samples, next_sample, t_end, delta, 0.0)
+            next_sample = emit_state(sample_times, samples, next_sample, t_end, delta, 0.0)
             record[REC_STUCK_TIME] += t_end - t
             t = t_end
             if t_release <= t_boundary:
@@ -603,12 +355,12 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                           n_dynamic)
                     dense_ready = True
-                next_sample = _emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
+                next_sample = emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
             if y[V] * y_new[V] < 0.0 and not dense_ready:
                 prepare_step(t, h_taken, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
-            _update_extremes(record, dense, y, y_new, h_taken, theta_turn)
+            update_extremes(record, dense, y, y_new, h_taken, theta_turn)
 
             # --- advance ---
             t = t_new
@@ -627,9 +379,9 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     break
                 acceleration_before = f[V]
                 v_before, v_after, stuck = _restitution(y, t, coefficients, stick_velocity)
-                _log_impact(impact_log, n_impacts, t, v_before, v_after)
+                log_impact(impact_log, n_impacts, t, v_before, v_after)
                 if stuck:
-                    n_sticks = _log_stick_start(stick_log, n_sticks, t)
+                    n_sticks = log_stick_start(stick_log, n_sticks, t)
                     if tangents:
                         collapse_tangents(y)
                 else:
@@ -644,7 +396,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             if tangents and tangents_out_of_range(y):
                 # A strongly damped or stretched period would underflow or overflow them before
                 # its end: renormalise now, the period's record sums the logs.
-                _add_tangent_growth(record, y)
+                add_tangent_growth(record, y)
                 tangent_derivative(y, coefficients, f)
 
             if not (math.isfinite(y[X]) and math.isfinite(y[V])):
@@ -655,16 +407,16 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 break
 
         if t >= t_boundary:
-            _close_period(record, y, f, coefficients, tangents, stuck)
+            close_period(record, y, f, coefficients, tangents, stuck)
             period += 1
             if period == n_periods:
                 break
             t_boundary = (period + 1) * slow_period
-            _start_period(period_records[period], y[X], tangents)
+            start_period(period_records[period], y[X], tangents)
 
     if stuck and n_sticks - 1 < stick_log.shape[0]:
         stick_log[n_sticks - 1, 1] = t
-    status = _summarize(period_records, n_transient, n_periods, slow_period, coefficients[C], status, summary)
+    status = summarize(period_records, n_transient, n_periods, slow_period, coefficients[C], status, summary)
     summary[SUM_STEPS] = n_steps
     summary[SUM_REJECTED] = n_rejected
     summary[SUM_RHS] = n_rhs
@@ -733,123 +485,8 @@ def _rebound_step(h, t, v_after, coefficients):
     return h
 
 
-@kernel_jit(inline="always")
-def _log_impact(impact_log, n_impacts, t, v_before, v_after):
-    """The n_impacts-th impact into the log, while it has room."""
-    if n_impacts - 1 < impact_log.shape[0]:
-        impact_log[n_impacts - 1, 0] = t
-        impact_log[n_impacts - 1, 1] = v_before
-        impact_log[n_impacts - 1, 2] = v_after
-
-
-@kernel_jit(inline="always")
-def _log_stick_start(stick_log, n_sticks, t):
-    """A sticking interval starting at t into the log (its end is written at release). Returns the count."""
-    if n_sticks < stick_log.shape[0]:
-        stick_log[n_sticks, 0] = t
-        stick_log[n_sticks, 1] = np.nan
-    return n_sticks + 1
-
-
-@kernel_jit(inline="always")
-def _close_period(record, y, f, coefficients, tangents, stuck):
-    """At t = nT: record the period's quadratures and stroboscopic state, reset the quadratures,
-    and renormalise the tangent vectors (tangent.py), recording their growth."""
-    record[REC_QS] = y[QS_INTEGRAL]
-    record[REC_QC] = y[QC_INTEGRAL]
-    record[REC_X] = y[X]
-    record[REC_V] = y[V]
-    y[QS_INTEGRAL] = 0.0
-    y[QC_INTEGRAL] = 0.0
-    if tangents:
-        _add_tangent_growth(record, y)
-        if stuck:
-            collapse_tangents(y)  # still on the barrier: the next period starts from zero
-        else:
-            tangent_derivative(y, coefficients, f)  # f of the renormalised vectors
-
-
-@kernel_jit(inline="always")
-def _add_tangent_growth(record, y):
-    """Renormalise the tangent vectors and add their log growth to the period's record."""
-    log_stretch, log_area = renormalise_tangents(y)
-    record[REC_LOG_STRETCH] += log_stretch
-    record[REC_LOG_AREA] += log_area
-
-
 @kernel_jit
 def _add_stuck_quadratures(y, delta, omega, t_start, t_end):
     """eq3.1, eq3.2 integrands over [t_start, t_end] with x = Delta held: in closed form."""
     y[QS_INTEGRAL] += delta * (math.cos(omega * t_start) - math.cos(omega * t_end)) / omega
     y[QC_INTEGRAL] += delta * (math.sin(omega * t_end) - math.sin(omega * t_start)) / omega
-
-
-@kernel_jit
-def _emit_state(sample_times, samples, next_sample, t_end, x, v):
-    """The state (x, v), constant up to t_end (a start, or a stick), at every sample time <= t_end."""
-    while next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_end:
-        samples[next_sample, 0] = x
-        samples[next_sample, 1] = v
-        next_sample += 1
-    return next_sample
-
-
-@kernel_jit
-def _summarize(period_records, n_transient, n_periods, slow_period, c, status, summary):
-    """eq3.1-eq3.3 over the measurement window, and the mean impacts per slow period.
-
-    Returns the status, turned into NON_FINITE if a result overflows (e.g. a subnormal c), so a
-    point marked ok holds finite numbers. Only c = 0 exactly (no drive, which configs refuse)
-    leaves the gain R undefined: NaN, with the trajectory itself ok.
-    """
-    if status == Status.OK:
-        status = _measure(period_records, n_transient, n_periods, slow_period, c, summary)
-    if status != Status.OK:
-        for k in (SUM_R, SUM_QS, SUM_QC, SUM_Q_AMPLITUDE, SUM_IMPACTS_PER_PERIOD, SUM_LYAPUNOV, SUM_LYAPUNOV_SUM):
-            summary[k] = np.nan
-    return status
-
-
-@kernel_jit
-def _measure(period_records, n_transient, n_periods, slow_period, c, summary):
-    n_measured = n_periods - n_transient
-    sin_integral = 0.0
-    cos_integral = 0.0
-    impacts = 0.0
-    for k in range(n_transient, n_periods):
-        sin_integral += period_records[k, REC_QS]
-        cos_integral += period_records[k, REC_QC]
-        impacts += period_records[k, REC_IMPACTS]
-    window = n_measured * slow_period
-    qs = 2.0 * sin_integral / window  # eq3.1
-    qc = 2.0 * cos_integral / window  # eq3.2
-    amplitude = math.sqrt(qs * qs + qc * qc)
-    summary[SUM_QS] = qs
-    summary[SUM_QC] = qc
-    summary[SUM_Q_AMPLITUDE] = amplitude
-    summary[SUM_IMPACTS_PER_PERIOD] = impacts / n_measured
-    _lyapunov_exponents(period_records, n_transient, n_periods, window, summary)
-    if c == 0.0:
-        summary[SUM_R] = np.nan  # eq3.3 is a gain: undefined without a drive
-        return Status.OK
-    summary[SUM_R] = amplitude / c  # eq3.3
-    for k in (SUM_R, SUM_QS, SUM_QC):
-        if not math.isfinite(summary[k]):
-            return Status.NON_FINITE
-    return Status.OK
-
-
-@kernel_jit
-def _lyapunov_exponents(period_records, n_transient, n_periods, window, summary):
-    """The largest exponent and the sum of both: the window's log growths per unit time.
-
-    NaN without tangent vectors (their records are NaN); -inf when the mass stuck in the window
-    (tangent.py: the tangent map of a sticking interval is zero).
-    """
-    stretch = 0.0
-    area = 0.0
-    for k in range(n_transient, n_periods):
-        stretch += period_records[k, REC_LOG_STRETCH]
-        area += period_records[k, REC_LOG_AREA]
-    summary[SUM_LYAPUNOV] = stretch / window
-    summary[SUM_LYAPUNOV_SUM] = area / window

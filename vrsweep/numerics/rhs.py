@@ -1,0 +1,210 @@
+"""The oscillator's right-hand sides, and the forcing's phases rotated to the stage times.
+
+    x'' + gamma (x^2 - mu) x' + stiffness x + alpha x^3 = c cos(omega t) + g cos(Omega t)    # eq2.1, eq2.10
+
+as a first-order system in the state vector of state.py (x, v, and the Fourier quadratures of
+eq3.1-eq3.2 integrated with the motion), with the tangent vectors' variational equations
+(tangent.py) when Lyapunov exponents are asked for. Every function has the signature the
+Runge-Kutta steps call, ``rhs(t, h, node, c, y, coefficients, dydt, scratch)``, so the kernel
+loop (kernel.py) takes them as arguments and numba inlines them.
+"""
+
+import math
+
+import numpy as np
+
+from vrsweep.numerics.jit import kernel_jit
+from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, G, GAMMA, MU, OMEGA, STIFFNESS
+from vrsweep.numerics.state import QC_INTEGRAL, QS_INTEGRAL, V, X
+from vrsweep.numerics.tangent import tangent_derivative
+
+
+@kernel_jit
+def oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch):
+    """x'' + gamma (x^2 - mu) x' + k x + alpha x^3 = c cos(omega t) + g cos(Omega t), at t + c h.
+
+    eq2.1 (mu = 1, k = -omega0^2) and eq2.10 (mu = K, k = wt2, g = 0) alike; the last two
+    components accumulate the integrands of eq3.1 and eq3.2. The cosines are the library's at
+    every evaluation (``node`` and ``scratch`` are unused): the rk45 kernel's stages, and every
+    evaluation outside a step.
+    """
+    time = t + c * h
+    omega_t = coefficients[OMEGA] * time
+    # Without the fast forcing (the effective model) Omega may be anything, even overflow Omega t.
+    cos_fast = math.cos(coefficients[BIG_OMEGA] * time) if coefficients[G] != 0.0 else 0.0
+    _oscillator_derivative(y, coefficients, math.cos(omega_t), math.sin(omega_t), cos_fast, dydt)
+
+
+@kernel_jit(inline="always")
+def _oscillator_derivative(y, coefficients, cos_slow, sin_slow, cos_fast, dydt):
+    x = y[X]
+    v = y[V]
+    forcing = coefficients[C] * cos_slow + coefficients[G] * cos_fast
+    dydt[X] = v
+    dydt[V] = (forcing - coefficients[GAMMA] * (x * x - coefficients[MU]) * v
+               - coefficients[STIFFNESS] * x - coefficients[ALPHA] * x * x * x)
+    dydt[QS_INTEGRAL] = x * sin_slow
+    dydt[QC_INTEGRAL] = x * cos_slow
+
+
+@kernel_jit
+def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
+    """oscillator_rhs and the variational equations of the tangent vectors (tangent.py)."""
+    oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch)
+    tangent_derivative(y, coefficients, dydt)
+
+
+@kernel_jit
+def no_scratch(h_max, nodes):
+    return np.empty(0)
+
+
+@kernel_jit
+def no_preparation(t, h, coefficients, scratch):
+    return
+
+
+# --- the forcing's phases rotated to the stage times (the dop853 kernel) ------------------------
+# At a stage time t + c h, cos(a + d) = cos a cos d - sin a sin d and sin(a + d) = sin a cos d
+# + cos a sin d, with a = omega t (Omega t) at the step's start and d = omega c h (Omega c h).
+# prepare_rotations computes the phases at t (library calls once per step) and the rotations of
+# every node for the step size h; oscillator_rhs_rotated then costs a few multiplications where
+# oscillator_rhs makes three library calls. Step sizes are rounded down to the grid
+# h_max 2^(-k / STEP_LEVELS_PER_OCTAVE) (grid_step), whose rotations are tabulated once per point.
+STEP_LEVELS_PER_OCTAVE = 16
+N_STEP_LEVELS = 128
+MAX_NODES = 16
+ROTATION_VALUES = 4 * MAX_NODES  # cos, sin of omega c h and of Omega c h, per node
+# The phases at the next step's start are the last step's rotated by its full step (a node c = 1),
+# recomputed by the library every RESYNC_STEPS steps so that rounding cannot accumulate.
+RESYNC_STEPS = 16
+# scratch layout
+PHASE_TIME, PHASE_STEP, COS_SLOW, SIN_SLOW, COS_FAST, SIN_FAST, FULL_STEP_NODE, ROTATED_STEPS = range(8)
+ROTATION = 8                                         # the current step's rotations, per node
+NODES = ROTATION + ROTATION_VALUES                   # the method's nodes c
+STEP_GRID = NODES + MAX_NODES                        # the grid of step sizes
+LEVEL_READY = STEP_GRID + N_STEP_LEVELS              # 1 once a grid step's rotations are tabulated
+LEVEL_ROTATIONS = LEVEL_READY + N_STEP_LEVELS        # N_STEP_LEVELS x ROTATION_VALUES
+N_ROTATION_SCRATCH = LEVEL_ROTATIONS + N_STEP_LEVELS * ROTATION_VALUES
+
+
+@kernel_jit
+def rotation_scratch(h_max, nodes):
+    """oscillator_rhs_rotated's scratch for steps up to h_max of a method with these nodes."""
+    scratch = np.empty(N_ROTATION_SCRATCH)  # 68 kB: only what is read before it is written is set
+    scratch[:ROTATION] = 0.0
+    scratch[PHASE_TIME] = np.nan
+    scratch[PHASE_STEP] = np.nan
+    scratch[NODES:STEP_GRID] = 0.0
+    scratch[LEVEL_READY:LEVEL_ROTATIONS] = 0.0
+    scratch[FULL_STEP_NODE] = -1.0
+    for node in range(nodes.shape[0]):
+        scratch[NODES + node] = nodes[node]
+        if nodes[node] == 1.0 and scratch[FULL_STEP_NODE] < 0.0:
+            scratch[FULL_STEP_NODE] = node
+    for k in range(N_STEP_LEVELS):
+        scratch[STEP_GRID + k] = h_max * 2.0 ** (-k / STEP_LEVELS_PER_OCTAVE)
+    return scratch
+
+
+@kernel_jit
+def grid_step(h, scratch):
+    """The largest step size of the grid that is <= h; h itself below the grid (or if NaN)."""
+    if not (h >= scratch[STEP_GRID + N_STEP_LEVELS - 1]):
+        return h
+    k = int(math.ceil(STEP_LEVELS_PER_OCTAVE * math.log2(scratch[STEP_GRID] / h)))
+    k = min(max(k, 0), N_STEP_LEVELS - 1)
+    while k > 0 and scratch[STEP_GRID + k - 1] <= h:  # log2's rounding: take the largest <= h
+        k -= 1
+    while k < N_STEP_LEVELS - 1 and scratch[STEP_GRID + k] > h:
+        k += 1
+    return scratch[STEP_GRID + k]
+
+
+@kernel_jit
+def _grid_level(h, scratch):
+    """k with h equal to the grid's k-th step size, or -1."""
+    if not (scratch[STEP_GRID + N_STEP_LEVELS - 1] <= h <= scratch[STEP_GRID]):
+        return -1
+    k = int(round(STEP_LEVELS_PER_OCTAVE * math.log2(scratch[STEP_GRID] / h)))
+    for j in (k, k - 1, k + 1):
+        if 0 <= j < N_STEP_LEVELS and scratch[STEP_GRID + j] == h:
+            return j
+    return -1
+
+
+@kernel_jit
+def _rotations(h, coefficients, scratch, out):
+    """cos and sin of omega c h and Omega c h for every node c, into scratch[out:out + 64]."""
+    omega = coefficients[OMEGA]
+    big_omega = coefficients[BIG_OMEGA]
+    fast = coefficients[G] != 0.0  # without the fast forcing Omega may be anything: leave it out
+    for node in range(MAX_NODES):
+        dt = scratch[NODES + node] * h
+        scratch[out + 4 * node] = math.cos(omega * dt)
+        scratch[out + 4 * node + 1] = math.sin(omega * dt)
+        scratch[out + 4 * node + 2] = math.cos(big_omega * dt) if fast else 0.0
+        scratch[out + 4 * node + 3] = math.sin(big_omega * dt) if fast else 0.0
+
+
+@kernel_jit
+def prepare_rotations(t, h, coefficients, scratch):
+    """Make scratch hold the phases at t and the rotations for a step of size h."""
+    if t != scratch[PHASE_TIME]:
+        full = int(scratch[FULL_STEP_NODE])
+        if (t == scratch[PHASE_TIME] + scratch[PHASE_STEP] and full >= 0
+                and scratch[ROTATED_STEPS] < RESYNC_STEPS):
+            # The step just taken ended at t: rotate its start's phases by the whole step.
+            r = ROTATION + 4 * full
+            cos_slow = scratch[COS_SLOW] * scratch[r] - scratch[SIN_SLOW] * scratch[r + 1]
+            sin_slow = scratch[SIN_SLOW] * scratch[r] + scratch[COS_SLOW] * scratch[r + 1]
+            cos_fast = scratch[COS_FAST] * scratch[r + 2] - scratch[SIN_FAST] * scratch[r + 3]
+            sin_fast = scratch[SIN_FAST] * scratch[r + 2] + scratch[COS_FAST] * scratch[r + 3]
+            scratch[COS_SLOW] = cos_slow
+            scratch[SIN_SLOW] = sin_slow
+            scratch[COS_FAST] = cos_fast
+            scratch[SIN_FAST] = sin_fast
+            scratch[ROTATED_STEPS] += 1.0
+        else:
+            omega_t = coefficients[OMEGA] * t
+            scratch[COS_SLOW] = math.cos(omega_t)
+            scratch[SIN_SLOW] = math.sin(omega_t)
+            if coefficients[G] != 0.0:
+                scratch[COS_FAST] = math.cos(coefficients[BIG_OMEGA] * t)
+                scratch[SIN_FAST] = math.sin(coefficients[BIG_OMEGA] * t)
+            scratch[ROTATED_STEPS] = 0.0
+        scratch[PHASE_TIME] = t
+    if h != scratch[PHASE_STEP]:
+        level = _grid_level(h, scratch)
+        if level < 0:  # a step clipped to a period's end, or to an impact
+            _rotations(h, coefficients, scratch, ROTATION)
+        else:
+            table = LEVEL_ROTATIONS + level * ROTATION_VALUES
+            if scratch[LEVEL_READY + level] == 0.0:
+                _rotations(h, coefficients, scratch, table)
+                scratch[LEVEL_READY + level] = 1.0
+            scratch[ROTATION:ROTATION + ROTATION_VALUES] = scratch[table:table + ROTATION_VALUES]
+        scratch[PHASE_STEP] = h
+
+
+@kernel_jit
+def oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
+    """oscillator_rhs at a stage node of a step prepared by prepare_rotations (t and h unused).
+
+    No branch and no library call: with either, an evaluation cost as much as oscillator_rhs.
+    """
+    r = ROTATION + 4 * node
+    cos_d = scratch[r]
+    sin_d = scratch[r + 1]
+    _oscillator_derivative(y, coefficients,
+                           scratch[COS_SLOW] * cos_d - scratch[SIN_SLOW] * sin_d,
+                           scratch[SIN_SLOW] * cos_d + scratch[COS_SLOW] * sin_d,
+                           scratch[COS_FAST] * scratch[r + 2] - scratch[SIN_FAST] * scratch[r + 3],
+                           dydt)
+
+
+@kernel_jit
+def oscillator_tangent_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
+    """oscillator_rhs_rotated and the variational equations of the tangent vectors (tangent.py)."""
+    oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch)
+    tangent_derivative(y, coefficients, dydt)
