@@ -190,7 +190,7 @@ def empty_cache(tmp_path, monkeypatch):
 
 
 def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache, invoke, write_config):
-    from vrsweep.numerics.numba_cache import kernel_is_cached
+    from vrsweep.numerics.lines import kernel_is_cached
 
     assert not kernel_is_cached()
     # numba read its cache folder at import: this run loads the real cache, but vrsweep cannot
@@ -207,7 +207,8 @@ def test_an_empty_cache_says_that_the_kernel_compiles(tmp_path, empty_cache, inv
 def test_a_filled_cache_says_nothing(tmp_path, monkeypatch, invoke, write_config):
     import numba
 
-    from vrsweep.numerics.numba_cache import cache_dir, kernel_is_cached
+    from vrsweep.numerics.lines import kernel_is_cached
+    from vrsweep.numerics.numba_cache import cache_dir
 
     if not numba.config.CACHE_DIR:
         pytest.skip("numba caches next to the sources here: vrsweep.numerics.numba_cache is not in use")

@@ -154,7 +154,7 @@ def test_check_size_refuses_a_huge_grid_unless_allowed():
     with pytest.raises(ConfigError) as info:
         check_size(config, 4, allow_large=False)
     problem = info.value.problems[0]
-    for words in ("huge.yaml", "grid of 100000000 points", "GB", "on 4 threads", "pass --allow-large"):
+    for words in ("huge.yaml", "grid of 100000000 points", "GB", "on 4 threads", "pass allow_large=True"):
         assert words in problem
     assert check_size(config, 4, allow_large=True).n_points == 100_000_000
     assert check_size(parse_config(""), 1, allow_large=False).n_points == 1

@@ -133,7 +133,9 @@ def test_no_writable_folder_compiles_without_caching_and_says_so(tmp_path, monke
     monkeypatch.setattr(numba_cache, "fallback_dir", lambda: _blocked(tmp_path) / "b" / "c")
     assert not numba_cache.enabled()
     assert "compiled on every run" in numba_cache.notice()
-    assert not numba_cache.kernel_is_cached() and numba_cache.is_empty()
+    from vrsweep.numerics.lines import kernel_is_cached
+
+    assert not kernel_is_cached() and numba_cache.is_empty()
 
     def twice(x):
         return 2.0 * x

@@ -359,7 +359,7 @@ def test_slowflow_draws_the_effective_system_and_three_reconstructions(files):
 
 
 def test_slowflow_needs_the_effective_run(files):
-    with pytest.raises(UsageError, match="--compare effective"):
+    with pytest.raises(UsageError, match="compare_effective"):
         plot.plot(files["traj20"], kind="slowflow")
 
 

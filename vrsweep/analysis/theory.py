@@ -691,7 +691,7 @@ def theory_rows(config) -> list[dict]:
             notes.append(f"the largest stable amplitude lies at the end g = {peak_g:g} of the g range: "
                          "no interior peak on the stable branch (while K > 0 small amplitudes are "
                          "self-excited and the stable branch is the large, Van der Pol-like one); "
-                         "see A(g_res), amplitude_at_g_res in --json")
+                         "see A(g_res), amplitude_at_g_res in the JSON output")
 
         amplitudes = [peak_A, *stable_at_resonance]
         if not g_swept:

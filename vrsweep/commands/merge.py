@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from vrsweep.commands.options import flag_wording, overwrite_option, quiet_option
+from vrsweep.commands.options import OUTPUT_FLAGS, flag_wording, overwrite_option, quiet_option
 
 
 @click.command("merge")
@@ -35,7 +35,8 @@ def command(shards, output, overwrite, allow_missing, quiet):
         # A signal only takes note; the merge stops at its next read of a shard (stop.check,
         # within milliseconds) and unwinds, removing its temporary file (an exception raised from
         # the handler itself could land in a finalizer, where Python drops it).
-        with GracefulStop(announce=False) as stop, flag_wording():
+        with GracefulStop(announce=False) as stop, flag_wording(
+                {**OUTPUT_FLAGS, "resume_into": "'vrsweep run CONFIG --resume -o OUT.h5'"}):
             report = merge_results(shards, output, overwrite=overwrite, allow_missing=allow_missing,
                                    stop=stop.check)
             stop.check()  # a signal during the final rename: the output is complete

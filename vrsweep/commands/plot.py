@@ -7,7 +7,8 @@ import click
 FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
 FLAGS = {"at": "--at", "x_axis": "--x", "kind": "--kind", "amplitude": "--amplitude", "log": "--log",
-         "linear": "--linear", "periods": "--periods", "var": "--var"}
+         "linear": "--linear", "periods": "--periods", "var": "--var",
+         "finish": "'vrsweep run CONFIG --resume -o FILE'", "simulate_compare": "vrsweep simulate --compare effective"}
 
 
 def _parse_at(items):

@@ -74,7 +74,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
     # The size check is per process: a shard or a local Dask cluster shares the grid's time, while
     # a shard's file is still the whole grid's size (see store/layout.py).
-    check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large)
+    check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large, allow="--allow-large")
     bars = []
 
     def progress_factory(total, already_done):
@@ -140,7 +140,8 @@ COMPILE_SECONDS = "about 30 s"
 
 def _say_if_compiling(method, lyapunov):
     from vrsweep.commands.options import say_cache_notice
-    from vrsweep.numerics.numba_cache import cache_dir, enabled, kernel_is_cached
+    from vrsweep.numerics.lines import kernel_is_cached
+    from vrsweep.numerics.numba_cache import cache_dir, enabled
 
     say_cache_notice()
     if not enabled():

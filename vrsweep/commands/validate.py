@@ -53,7 +53,7 @@ def command(config_path, overrides, threads):
     duration = format_duration(guess.seconds)
     click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
                f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)")
-    problem = size_problem(config, threads)
+    problem = size_problem(config, threads, allow="--allow-large")
     if problem is not None:
         # A valid config, just a big one: `run` will ask for --allow-large.
         click.echo(f"warning:     {problem}")

@@ -15,7 +15,7 @@ from ruamel.yaml import YAML
 from ruamel.yaml.comments import CommentedMap, CommentedSeq
 from ruamel.yaml.scalarstring import DoubleQuotedScalarString
 
-from vrsweep.numerics.kernel import DEFAULT_METHOD
+from vrsweep.numerics.settings import DEFAULT_METHOD
 from vrsweep.numerics.model import INITIAL_STATE_KEYS, PARAMETER_NAMES
 
 

@@ -18,7 +18,7 @@ from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fie
 from pydantic_core import PydanticCustomError
 
 from vrsweep.config.wording import show_number, show
-from vrsweep.numerics.kernel import DEFAULT_METHOD, SETTING_DEFAULTS as KERNEL_SETTING_DEFAULTS
+from vrsweep.numerics.settings import DEFAULT_METHOD, SETTING_DEFAULTS as KERNEL_SETTING_DEFAULTS
 from vrsweep.numerics.model import (
     DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
 )

@@ -108,20 +108,23 @@ def stored_bytes(config) -> int:
                + 2 * len(config.to_yaml()))  # the config is kept as text (root attribute and done's)
 
 
-def size_problem(config, threads=None) -> str | None:
-    """The message `check_size` would raise, or None when the run is of reasonable size."""
+def size_problem(config, threads=None, allow="allow_large=True") -> str | None:
+    """The message `check_size` would raise, or None when the run is of reasonable size.
+
+    ``allow``: how the caller allows a large run (the command line says --allow-large)."""
     threads = max(1, int(threads or available_threads()))
     guess = estimate(config, threads)
     if guess.output_bytes <= MAX_OUTPUT_BYTES and guess.seconds <= MAX_SECONDS:
         return None
     return (f"{config.source_name}: grid of {guess.n_points} points, estimated "
             f"{format_bytes(guess.output_bytes)} / {format_duration(guess.seconds)} on {threads} "
-            f"thread{'s' if threads != 1 else ''}; pass --allow-large to run it anyway")
+            f"thread{'s' if threads != 1 else ''}; pass {allow} to run it anyway")
 
 
-def check_size(config, threads=None, allow_large: bool = False) -> Estimate:
-    """Raise ConfigError if the run is out of proportion (> 2 GB or > 24 h) and not allowed."""
-    problem = size_problem(config, threads)
+def check_size(config, threads=None, allow_large: bool = False, allow="allow_large=True") -> Estimate:
+    """Raise ConfigError if the run is out of proportion (> 2 GB or > 24 h) and not allowed
+    (``allow``: how the caller allows it, as in size_problem)."""
+    problem = size_problem(config, threads, allow)
     if problem is not None and not allow_large:
         raise ConfigError([problem], source=config.source_name)
     return estimate(config, threads)

@@ -104,7 +104,7 @@ def parse_shard(text, environ=None):
         if step < 1 or offset % step:
             raise InvalidArgument(
                 "shard", text, f"array task {task} is not on the range {first}, {first + step}, ...; "
-                               "use a range --array=A-B (or A-B:STEP), not a list")
+                               "submit the array as a range A-B (or A-B:STEP), not a list")
         index = offset // step
         where = f"SLURM array task {task} (first {first}, {count} tasks): "
     else:
@@ -115,7 +115,7 @@ def parse_shard(text, environ=None):
             raise InvalidArgument("shard", text, "expected I/N (e.g. 0/8) or 'auto'") from None
         where = ""
     if not (count >= 1 and 0 <= index < count):
-        hint = "; use --array=A-B (or A-B:STEP), not a list" if text == "auto" else ""
+        hint = "; submit the array as a range A-B (or A-B:STEP), not a list" if text == "auto" else ""
         raise InvalidArgument("shard", text, f"{where}shard index {index} is not in 0..{count - 1}{hint}")
     return (index, count)
 

@@ -57,24 +57,15 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent_rhs,
     oscillator_tangent_rhs_rotated, prepare_rotations, rotation_scratch,
 )
+from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, read as kernel.*
+    ATOL, DEFAULT_METHOD, DIVERGENCE_BOUND, MAX_IMPACTS_PER_PERIOD, MAX_STEPS, MEASURE_PERIODS, N_SETTINGS,
+    RTOL, SETTING_DEFAULTS, SETTING_NAMES, STICK_VELOCITY, TRANSIENT_PERIODS,
+)
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import (
     apply_saltation, collapse_tangents, seed_tangents, tangent_derivative,
     tangents_out_of_range,
 )
-
-# --- settings vector layout (float64), filled by sweep.integration_settings ---
-RTOL, ATOL, TRANSIENT_PERIODS, MEASURE_PERIODS, MAX_STEPS, MAX_IMPACTS_PER_PERIOD, \
-    DIVERGENCE_BOUND, STICK_VELOCITY = range(8)
-N_SETTINGS = 8
-# Their config names (the config's integration section), in index order, and their defaults:
-# the config schema takes its defaults of these from here (config -> numerics, never back).
-SETTING_DEFAULTS = {
-    "rtol": 1e-9, "atol": 1e-11, "transient_periods": 100, "measure_periods": 100,
-    "max_steps": 20_000_000, "max_impacts_per_period": 100_000, "divergence_bound": 1.0e6,
-    "stick_velocity": 1.0e-7,
-}
-SETTING_NAMES = tuple(SETTING_DEFAULTS)
 
 # Largest step as a fraction of the shortest forcing period: a longer step could carry the
 # mass to the barrier and back between its ends with no sign change the event test can see.
@@ -175,7 +166,6 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
 # so a run compiles only the method it uses.
 INTEGRATORS = {"rk45": integrate_rk45, "dop853": integrate_dop853}
 METHODS = tuple(INTEGRATORS)
-DEFAULT_METHOD = "rk45"  # the config schema's default of integration.method
 # The same with the tangent vectors (integration.lyapunov: true).
 LYAPUNOV_INTEGRATORS = {"rk45": integrate_rk45_lyapunov, "dop853": integrate_dop853_lyapunov}
 

@@ -5,10 +5,15 @@ point's final state (vrsweep.execution.sweep plans them). Each line writes only 
 the output arrays, so the result does not depend on the thread count or the schedule.
 """
 
+import hashlib
+import os
+import sys
+from pathlib import Path
+
 import numpy as np
 from numba import prange
 
-from vrsweep.numerics import kernel
+from vrsweep.numerics import kernel, numba_cache
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.results import Status
 
@@ -83,3 +88,28 @@ def run_lines_dop853_lyapunov(coefficients, initial_states, settings, lines, per
 # only when a run uses it.
 RUN_LINES = {("rk45", False): run_lines_rk45, ("dop853", False): run_lines_dop853,
              ("rk45", True): run_lines_rk45_lyapunov, ("dop853", True): run_lines_dop853_lyapunov}
+
+
+def kernel_is_cached(method: str = "rk45", lyapunov: bool = False) -> bool:
+    """Whether the sweep kernel of ``method`` (RUN_LINES[method, lyapunov]) has been compiled
+    into the cache already.
+
+    Looks for numba's index file of that function where numba puts it: in
+    ``numba_cache.cache_dir()``, under a sub-folder named after the source folder (numba.core.caching's get_suitable_cache_subpath),
+    named ``<module>.<function>-<first line>.py<XY>.nbi``, and not older than the source (numba
+    discards an index whose source has changed since). An index written on another CPU model
+    counts as cached although numba will compile again: the answer is a hint for the user, not a
+    promise.
+    """
+    if not numba_cache.enabled():
+        return False
+    source = Path(os.path.abspath(__file__))  # abspath, not resolve(): as numba does
+    subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
+    function = RUN_LINES[method, lyapunov].py_func
+    index = (numba_cache.cache_dir() / subfolder /
+             f"{source.stem}.{function.__qualname__}-{function.__code__.co_firstlineno}"
+             f".py{sys.version_info.major}{sys.version_info.minor}.nbi")
+    try:
+        return index.stat().st_mtime >= source.stat().st_mtime
+    except OSError:
+        return False

@@ -189,33 +189,3 @@ def is_empty() -> bool:
         return True
     folder = cache_dir()
     return not folder.is_dir() or not any(folder.rglob("*.nbi"))
-
-
-def kernel_is_cached(method: str = "rk45", lyapunov: bool = False) -> bool:
-    """Whether the sweep kernel of ``method`` (sweep.RUN_LINES[method, lyapunov]) has been compiled
-    into the cache already.
-
-    Looks for numba's index file of that function where numba puts it: in ``cache_dir()``, under
-    a sub-folder named after the source folder (numba.core.caching's get_suitable_cache_subpath),
-    named ``<module>.<function>-<first line>.py<XY>.nbi``, and not older than the source (numba
-    discards an index whose source has changed since). An index written on another CPU model
-    counts as cached although numba will compile again: the answer is a hint for the user, not a
-    promise. Imports numba (through vrsweep.execution.sweep).
-    """
-    import hashlib
-    import sys
-
-    from vrsweep.numerics import lines as sweep
-
-    if not enabled():
-        return False
-    source = Path(os.path.abspath(sweep.__file__))  # abspath, not resolve(): as numba does
-    subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
-    function = sweep.RUN_LINES[method, lyapunov].py_func
-    index = (cache_dir() / subfolder /
-             f"{source.stem}.{function.__qualname__}-{function.__code__.co_firstlineno}"
-             f".py{sys.version_info.major}{sys.version_info.minor}.nbi")
-    try:
-        return index.stat().st_mtime >= source.stat().st_mtime
-    except OSError:
-        return False

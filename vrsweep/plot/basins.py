@@ -47,13 +47,13 @@ def basin_plot(results, at=None) -> Figure:
                                     "vrsweep merge; plot the merged file", path=path)
         if not data.attrs.get("vrsweep_complete", 0):
             raise UsageError.naming("{path} is unfinished: attractors are labelled when the sweep ends "
-                                    "(vrsweep run CONFIG --resume finishes it)", path=path)
+                                    "({finish} finishes it)", {"finish": "resuming the sweep"}, path=path)
         if not any(name in axes for name in ("x0", "v0")):
             raise UsageError.naming("{path} has no x0 or v0 axis: a basin plot needs a sweep over the "
                                     "initial state (sweep: {{x0: ..., v0: ...}})", path=path)
-        raise ResultFileError(f"{path} has x0 / v0 axes but no attractor labels (merged or written by a "
-                              "vrsweep that does not label them): 'vrsweep run CONFIG --resume -o "
-                              f"{path}' adds them without computing any point again")
+        raise ResultFileError.naming("{path} has x0 / v0 axes but no attractor labels (merged or written by a "
+                                     "vrsweep that does not label them): {finish} adds them without computing "
+                                     "any point again", {"finish": "resuming the sweep into it"}, path=path)
     at = dict(at or {})
     for name, values in axes.items():  # a one-value axis needs no at
         if name not in at and name not in ("x0", "v0") and len(values) == 1:
@@ -101,7 +101,7 @@ def basin_figure(ds) -> Figure:
     n_failed = int(np.sum((labels < 0) & (status != Status.NOT_COMPUTED)))
     if n_failed:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_FAILED, markersize=9,
-                              label=f"failed ({n_failed} points, see --kind status)"))
+                              label=f"failed ({n_failed} points, see the status map)"))
     n_missing = int(np.sum(status == Status.NOT_COMPUTED))
     if n_missing:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_NOT_COMPUTED, markeredgecolor="0.5",

@@ -133,7 +133,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     if log is None:
         log = span >= np.log10(LOG_SPAN)
         if log:
-            scale_note = f"log axis: the values span {span:.1f} decades (--linear for a linear one)"
+            scale_note = f"log axis: the values span {span:.1f} decades (a linear one on request)"
     if log:
         ax.set_yscale("log")
     else:

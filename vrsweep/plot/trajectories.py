@@ -206,8 +206,8 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
     """The effective system (numerical) against the first-order reconstruction eq2.21 (Fig. 6)."""
     if "effective" not in data.runs or not data.slow_flow:
         raise UsageError.naming("{path} holds no effective trajectory and slow flow: make it with "
-                                "vrsweep simulate --compare effective (or a config with model: effective)",
-                                path=data.path)
+                                "{simulate_compare} (or a config with model: effective)",
+                                {"simulate_compare": "a simulation with compare_effective"}, path=data.path)
     config = _parse_config(data.config_text)
     delta = config.parameters["Delta"] if config is not None else None
     window = _time_window(data, periods)

@@ -159,7 +159,7 @@ def check_still_at_path(path, expected_identity, doing="writing") -> None:
                           "points are lost: run again") from None
     if (stat.st_dev, stat.st_ino) != tuple(expected_identity):
         raise OutputError(f"{path} was replaced by another file while this run was {doing} it "
-                          "(another run with --overwrite?); stopping without touching the new file: "
+                          "(another run that replaced its output?); stopping without touching the new file: "
                           "this run's points are not in it") from None
 
 

@@ -39,7 +39,7 @@ from vrsweep.store.writer import ARGUMENT_WORDS as _WRITER_WORDS
 from vrsweep.store.writer import first_difference
 
 # How messages name what the caller may do; `vrsweep merge` names its flags (commands/options.py).
-ARGUMENT_WORDS = {**_WRITER_WORDS, "allow_missing": "allow_missing=True"}
+ARGUMENT_WORDS = {**_WRITER_WORDS, "allow_missing": "allow_missing=True", "resume_into": "a resumed run"}
 
 # Bytes of one variable per block: large enough that HDF5 calls are few, small enough that a few
 # blocks are nothing beside the start-up of Python, numpy and h5py.
@@ -481,7 +481,7 @@ def _missing_points_message(shards, ref, missing, n_done_by_shard):
     n_points = math.prod(ref.shape)
     head = f"{missing.size} of {n_points} points are missing from the shards: "
     tail = ("; run or resume those shards, then merge again (or pass {allow_missing} to write an "
-            "incomplete file that 'vrsweep run CONFIG --resume -o OUT.h5' completes)")
+            "incomplete file that {resume_into} completes)")
 
     def examples(points):
         more = "; ..." if points.size > _EXAMPLES else ""
