@@ -173,13 +173,21 @@ def test_every_config_key_is_documented_with_its_default(document):
     assert not problems, problems
 
 
-def test_design_documents_every_status_and_stored_variable():
-    text = DESIGN.read_text(encoding="utf-8")
+def _status_problems(text):
     rows = [[cell.strip() for cell in line.strip().strip("|").split("|")]
             for line in text.splitlines() if line.startswith("|")]
-    problems = [f"status {status.name.lower()} = {int(status)}" for status in Status
-                if [str(int(status)), f"`{status.name.lower()}`"] not in
-                [[row[0].replace("\u2212", "-"), row[1]] for row in rows if len(row) > 1]]
+    return [f"status {status.name.lower()} = {int(status)}" for status in Status
+            if [str(int(status)), f"`{status.name.lower()}`"] not in
+            [[row[0].replace("\u2212", "-"), row[1]] for row in rows if len(row) > 1]], rows
+
+
+def test_the_guide_documents_every_status():
+    problems, _ = _status_problems((ROOT / "docs" / "file-format.md").read_text(encoding="utf-8"))
+    assert not problems, f"docs/file-format.md lacks: {problems}"
+
+
+def test_design_documents_every_status_and_stored_variable():
+    problems, rows = _status_problems(DESIGN.read_text(encoding="utf-8"))
 
     class Integration:  # every optional variable on: lyapunov, lyapunov_err
         strobe_periods = 16
