@@ -225,3 +225,10 @@ def test_every_example_the_docs_name_is_shipped():
         named |= {name for name in re.findall(r"--example (\w+)", text) if not name.isupper()}
     assert named - shipped == set(), f"named in the docs, not in configs/: {sorted(named - shipped)}"
     assert os.path.isdir(ROOT / "configs")
+
+
+def test_the_paper_fig_configs_run_the_fig_configs_sweeps():
+    """docs/paper.md says configs/paper_figN.yaml and configs/figN.yaml differ only in their output."""
+    for number in (1, 2):
+        paper, ours = (load_config(ROOT / "configs" / f"{name}{number}.yaml") for name in ("paper_fig", "fig"))
+        assert replace(paper, output=None) == replace(ours, output=None), number
