@@ -10,12 +10,14 @@
   config's comments names a real
   command and only its real options (and ``--kind`` only its real kinds); every ```bash command that
   names a shipped config runs as ``vrsweep validate`` with the same ``--set``s (nothing is
-  computed), and ``scripts/make_figures.py NAME`` names a real figure.
+  computed), and ``scripts/make_figures.py NAME`` names a real figure; and (slow) every page's
+  ```bash commands run in order, as a reader would type them, on 2 + 2 slow periods.
 
 A stale option, a renamed config, a config key that no longer exists or a snippet that no longer
 runs fails here, naming the page and the block.
 """
 
+import glob
 import importlib.util
 from dataclasses import replace
 import os
@@ -199,6 +201,34 @@ def test_bash_commands_on_shipped_configs_validate(page, invoke, tmp_path, monke
         sets = [arg for i, arg in enumerate(words) if i > 0 and words[i - 1] == "--set"]
         result = invoke("validate", config, *[x for s in sets for x in ("--set", s)])
         assert result.exit_code == 0, f"{where}: {command}\n{result.output}"
+
+
+def bash_commands(path):
+    """The `vrsweep ...` commands of a page's ```bash blocks, in order, as word lists (a line's
+    `pip install . && vrsweep ...` gives its vrsweep part); none with a placeholder (CONFIG.yaml)."""
+    commands = []
+    for _, code, line in code_blocks(path, "bash"):
+        for body in code.splitlines():
+            for part in body.split("  #")[0].split("&&"):
+                words = shlex.split(part)
+                if words[:1] == ["vrsweep"] and not any(_placeholder(Path(w).stem) for w in words[1:]):
+                    commands.append((words[1:], f"{page_id(path)}:{line}"))
+    return commands
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [pytest.param(p, id=page_id(p)) for p in PAGES if bash_commands(p)])
+def test_bash_blocks_run(page, invoke, tmp_path, monkeypatch):
+    """A page's shell commands, run in order in one folder as a reader would type them, each sweep
+    on 2 + 2 slow periods: each must succeed (a file the next one reads, a plot, a merge...)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    (tmp_path / "configs").symlink_to(ROOT / "configs")
+    for words, where in bash_commands(page):
+        words = [match for w in words for match in (sorted(glob.glob(w)) if "*" in w else [w])]
+        extra = ["--quiet", *SHORT] if words[0] == "run" else []
+        result = invoke(*words, *extra)
+        assert result.exit_code == 0, f"{where}: vrsweep {shlex.join(words)}\n{result.output}"
 
 
 def test_make_figures_names_real_figures():
