@@ -135,6 +135,8 @@ def test_cited_sections_exist():
     for path in repository_text_files():
         for match in CITATION.finditer(path.read_text(encoding="utf-8", errors="replace")):
             document, section = match.groups()
+            if Path(document).stem.isupper() and document.startswith("docs/"):  # a placeholder: docs/PAGE.md
+                continue
             target = ROOT / (document if document.endswith(".md") else "README.md")
             headings = re.findall(r"^#+ (.+)$", _without_code(target.read_text(encoding="utf-8")), re.M) \
                 if target.exists() else []
