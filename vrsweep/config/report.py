@@ -26,9 +26,10 @@ from vrsweep.numerics.model import MODELS
 class Report:
     """The problems found in one config text (and its overrides), each with its file and line."""
 
-    def __init__(self, text, source_name, overrides):
+    def __init__(self, text, source_name, overrides, line_numbers=True):
         self.text = text if isinstance(text, str) else str(text)
         self.source = source_name
+        self.line_numbers = line_numbers  # False: the text was made from a dict, its lines mean nothing
         self.overrides = overrides
         self.root = None          # the ruamel tree (CommentedMap ...), for line numbers
         self.overridden = {}      # path tuple -> the "--set NAME=VALUE" that set it
@@ -46,7 +47,8 @@ class Report:
                 self.problems.append((self.setting_order(setting), f"--set {setting}: {text}"))
                 return
         line = self.line_of(path)
-        self.problems.append(((0, line, ""), f"{self.source}:{line}: {text}"))
+        where = f"{self.source}:{line}" if self.line_numbers else self.source
+        self.problems.append(((0, line, ""), f"{where}: {text}"))
 
     def setting_order(self, setting):
         """Problems with --set options come after the file's, in the order the options were given."""
