@@ -162,6 +162,8 @@ class Report:
             self.report(path, f"must be a number, got {show(value)}", allowed=self.describe(path))
         elif kind in ("int_type", "int_parsing", "int_from_float"):
             self.report(path, f"must be an integer, got {show(value)}", allowed=self.describe(path))
+        elif kind in ("bool_type", "bool_parsing"):  # strict: "yes", 1 or "on" is not taken for true
+            self.report(path, f"must be true or false, got {show(value)}")
         elif kind == "string_type":
             self.report(path, f"must be a string, got {show(value)}", allowed="a file path")
         else:  # something pydantic says that is not rephrased here
