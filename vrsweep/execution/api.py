@@ -36,7 +36,7 @@ __all__ = ["sweep", "simulate", "theory", "resolve_config", "setting_text"]
 
 # How the library's messages name what a caller of these functions can change.
 ARGUMENT_WORDS = {
-    "overwrite": "overwrite=True", "resume": "the command line's vrsweep run --resume",
+    "overwrite": "overwrite=True", "resume": "resume=True", "start_afresh": "run without resume=True",
     "output": "output", "samples_per_period": "samples_per_period",
     "compare_effective": "compare='effective'", "compare": "compare", "model_original": "model='original'",
     "set": "",
@@ -125,8 +125,8 @@ def resolve_config(config, overrides=None):
 # -- sweep -----------------------------------------------------------------------------------
 
 
-def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, allow_large=False,
-          **overrides):
+def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, resume=False,
+          allow_large=False, **overrides):
     """Sweep the response over the config's grid, as ``vrsweep run`` does; an ``xarray.Dataset``.
 
     Parameters
@@ -145,6 +145,9 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
         A progress bar (tqdm's notebook widget in Jupyter, text elsewhere, on stderr).
     overwrite : bool
         Replace an existing ``output``.
+    resume : bool
+        Continue an interrupted run into ``output`` (the file of ``vrsweep run``, written chunk
+        by chunk): compute only the points it lacks, as ``vrsweep run --resume``.
     allow_large : bool
         Run a grid whose estimated size or time is out of proportion (> 2 GB or > 24 h).
     **overrides
@@ -173,6 +176,10 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
     from vrsweep.store.reading import load_results
 
     resolved = resolve_config(config, overrides)
+    if resume and overwrite:
+        raise UsageError.naming("{resume} and {overwrite} exclude each other", ARGUMENT_WORDS)
+    if resume and output is None:
+        raise UsageError.naming("{resume} continues the run in a file: give its {output}", ARGUMENT_WORDS)
     threads = _capped_threads(threads)
     check_size(resolved, threads or available_threads(), allow_large)  # its message says allow_large=True
     bars = []
@@ -186,7 +193,7 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
                     dataset = load_results(report.output)
                 dataset.encoding.pop("source", None)  # the temporary file is gone
             else:
-                report = run_job(resolved, output, threads=threads, overwrite=overwrite,
+                report = run_job(resolved, output, threads=threads, overwrite=overwrite, resume=resume,
                                  progress_factory=factory)
                 dataset = load_results(report.output)
     finally:
