@@ -6,9 +6,11 @@ line are the same computation, which a short window shows as well as a long one.
 
 import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +32,7 @@ SWEEP_TEXT = textwrap.dedent("""\
 SWEEP_DICT = {"parameters": {"Omega": 4.0},
               "sweep": {"g": [5.0, 10.0], "Omega": [4.0, 5.0]},
               "integration": {"transient_periods": 2, "measure_periods": 3, "strobe_periods": 1}}
+CONFIGS = Path(__file__).resolve().parent.parent / "vrsweep" / "examples"
 POINT_TEXT = "parameters: {g: 5.0}\nintegration: {transient_periods: 2, measure_periods: 3, strobe_periods: 1}\n"
 
 # When and by which command a file was written: the only attributes that may differ.
@@ -260,3 +263,31 @@ def test_the_functions_are_in_the_package_and_imported_only_when_used():
                            env=dict(os.environ))
     assert child.returncode == 0, child.stderr
     assert child.stdout.splitlines() == ["", "True"], child.stdout
+
+
+# -- the guide -------------------------------------------------------------------------------
+
+GUIDE = Path(__file__).resolve().parent.parent / "docs" / "python-api.md"
+
+
+def guide_snippets():
+    return re.findall(r"```python\n(.*?)```", GUIDE.read_text(encoding="utf-8"), flags=re.S)
+
+
+def test_the_guide_shows_each_function_and_argument():
+    joined = "\n".join(guide_snippets())
+    for needle in ("vrsweep.sweep(", "vrsweep.simulate(", "vrsweep.theory(", "compare=\"effective\"", "output=",
+                   "except ConfigError", "progress=False", "Omega=5.0, rtol=1e-8"):
+        assert needle in joined, needle
+
+
+def test_every_snippet_of_the_guide_runs(tmp_path, monkeypatch):
+    """docs/python-api.md's python blocks, as written, in order, in one namespace (as a notebook
+    runs them), from a folder whose configs/ is the shipped examples'."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "configs").symlink_to(CONFIGS, target_is_directory=True)
+    namespace = {}
+    for number, code in enumerate(guide_snippets(), 1):
+        exec(compile(code, f"docs/python-api.md, snippet {number}", "exec"), namespace)
+    assert (tmp_path / "results" / "effective_map.h5").exists() and (tmp_path / "fig3_x.png").stat().st_size > 0
+    assert namespace["ds"].R.shape == (21, 2)
