@@ -154,6 +154,31 @@ def test_progress_false_prints_nothing_and_progress_true_draws_a_bar(sweep_yaml,
     assert out == "" and "4/4" in err and "vrsweep" in err  # tqdm.auto: text on stderr outside Jupyter
 
 
+def test_the_bar_is_tqdm_auto_the_notebook_form_in_jupyter(sweep_yaml, api_dataset, monkeypatch):
+    """tqdm.auto picks tqdm.notebook's widget in a Jupyter kernel: the bar must come from it."""
+    import tqdm.auto
+
+    made = []
+
+    class Recording(tqdm.auto.tqdm):
+        def __init__(self, *args, **kwargs):
+            made.append(kwargs)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(tqdm.auto, "tqdm", Recording)
+    vrsweep.sweep(sweep_yaml)
+    assert len(made) == 1 and made[0]["total"] == 4
+
+
+def test_threads_are_checked_and_capped(sweep_yaml, api_dataset):
+    with pytest.raises(UsageError, match=r"^threads must be a whole number of at least 1, got 0$"):
+        vrsweep.sweep(sweep_yaml, threads=0)
+    with pytest.warns(RuntimeWarning, match=r"^threads=100000: numba can run \d+ threads? here"):
+        capped = vrsweep.sweep(sweep_yaml, threads=100_000, progress=False)
+    assert_same_dataset(capped, api_dataset)
+    assert_same_dataset(vrsweep.sweep(sweep_yaml, threads=1, progress=False), api_dataset)
+
+
 # -- errors: the command line's messages -----------------------------------------------------
 
 
@@ -193,6 +218,9 @@ def test_a_bad_dict_names_the_field_without_a_line():
         vrsweep.theory({"sweep": {"g": {1.0, 2.0}}})
     with pytest.raises(ConfigError, match="^missing.yaml: no such config file$"):
         vrsweep.theory("missing.yaml")
+    with pytest.raises(ConfigError, match="^configs/missing: no such config file$"):
+        vrsweep.theory("configs/missing")  # one line without ':' is a path, not a YAML word
+    assert resolve_config("{sweep: {g: [5.0, 10.0]}}").axis_names == ("g",)  # one line of YAML
     with pytest.raises(UsageError, match="^config must be a path, YAML text, a dict or a vrsweep Config, got int$"):
         vrsweep.theory(3)
 

@@ -89,9 +89,12 @@ def setting_text(name: str, value) -> str:
 
 
 def _looks_like_path(text: str) -> bool:
+    """One line that ends in .yaml/.yml, names a file, or cannot be a YAML mapping (no ``:``):
+    a path, so that a misspelt one is reported as a missing file, not as odd YAML."""
     if "\n" in text or not text.strip():
         return False
-    return text.endswith((".yaml", ".yml")) or os.path.isfile(text)
+    return (text.endswith((".yaml", ".yml")) or os.path.isfile(text)
+            or (":" not in text and not text.lstrip().startswith("{")))
 
 
 def resolve_config(config, overrides=None):
@@ -99,8 +102,8 @@ def resolve_config(config, overrides=None):
     ({name: value}, as keyword arguments give them) applied, validated: a
     :class:`vrsweep.config.Config`.
 
-    A ``str`` is a path when it is one line that ends in ``.yaml``/``.yml`` or names an existing
-    file, and YAML text otherwise. Problems raise :class:`vrsweep.errors.ConfigError` with the
+    A ``str`` is a path when it is one line that ends in ``.yaml``/``.yml``, names an existing
+    file or holds no ``:`` (so cannot be a YAML mapping), and YAML text otherwise. Problems raise :class:`vrsweep.errors.ConfigError` with the
     messages the command line prints: ``FILE:LINE: field: ...`` for a file, ``<string>:LINE:
     ...`` for YAML text, ``<dict>: field: ...`` for a dict, ``--set NAME=VALUE: field: ...``
     for an override.
