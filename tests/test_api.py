@@ -179,6 +179,20 @@ def test_threads_are_checked_and_capped(sweep_yaml, api_dataset):
     assert_same_dataset(vrsweep.sweep(sweep_yaml, threads=1, progress=False), api_dataset)
 
 
+def test_many_failed_points_warn_with_the_setting_to_change(sweep_yaml, api_dataset):
+    with pytest.warns(RuntimeWarning, match=r"^4 of 4 points \(100%\) ended with max_steps: raise "
+                                            r"integration.max_steps \(now 10\), e.g. max_steps=100$"):
+        failed = vrsweep.sweep(sweep_yaml, max_steps=10, progress=False)
+    assert (failed.status.values != 0).all()
+
+
+def test_resume_needs_a_file_and_excludes_overwrite(sweep_yaml, tmp_path):
+    with pytest.raises(UsageError, match=r"^resume=True and overwrite=True exclude each other$"):
+        vrsweep.sweep(sweep_yaml, output=tmp_path / "x.h5", resume=True, overwrite=True)
+    with pytest.raises(UsageError, match=r"^resume=True continues the run in a file: give its output$"):
+        vrsweep.sweep(sweep_yaml, resume=True)
+
+
 # -- errors: the command line's messages -----------------------------------------------------
 
 
