@@ -1,6 +1,7 @@
 """Every code block of the user guide (docs/*.md) and the README runs, or is checked, here.
 
-- ```python blocks run as written, in order, page by page, each page in its own folder. A block
+- ```python blocks run as written, in order, page by page, each page in its own folder and
+  namespace (as a notebook runs its cells; docs/python-api.md is run by tests/test_api.py). A block
   names the files it reads in its first comment lines, as the commands that make them
   (``# vrsweep run configs/quickstart.yaml   (writes quickstart.h5)``); the test runs those
   commands first, on shorter windows (``SHORT``), once per page.
@@ -68,12 +69,24 @@ def commands_in_header(code):
     return commands
 
 
-@pytest.mark.parametrize("page", pages_with("python"))
+# Pages whose python blocks a test of their own runs (and checks the results of): that test must
+# name the page, so it cannot drift away unseen.
+RUN_ELSEWHERE = {"docs/python-api.md": "tests/test_api.py"}
+
+
+def test_pages_run_elsewhere_are_run_there():
+    for page, test_file in RUN_ELSEWHERE.items():
+        if (ROOT / page).exists():
+            assert page in (ROOT / test_file).read_text(encoding="utf-8"), f"{test_file} no longer runs {page}"
+
+
+@pytest.mark.parametrize("page", [p for p in pages_with("python") if p.id not in RUN_ELSEWHERE])
 def test_python_blocks_run(page, tmp_path, monkeypatch, invoke):
+    """A page's blocks run in order in one namespace, as a notebook runs its cells."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
     (tmp_path / "configs").symlink_to(ROOT / "configs")  # the blocks' commands name configs/...
-    done = set()
+    done, namespace = set(), {}
     for number, (_, code, line) in enumerate(code_blocks(page, "python"), 1):
         for words in commands_in_header(code):
             if tuple(words) in done:
@@ -82,7 +95,7 @@ def test_python_blocks_run(page, tmp_path, monkeypatch, invoke):
             extra = ["--quiet", "--overwrite", *SHORT] if words[0] == "run" else ["--overwrite"]
             result = invoke(*words, *extra)
             assert result.exit_code == 0, f"{page_id(page)}:{line}: vrsweep {shlex.join(words)}\n{result.output}"
-        exec(compile(code, f"{page_id(page)}:{line} (python block {number})", "exec"), {})
+        exec(compile(code, f"{page_id(page)}:{line} (python block {number})", "exec"), namespace)
 
 
 def test_the_python_pages_show_each_way_in():
@@ -256,9 +269,3 @@ def test_every_example_the_docs_name_is_shipped():
     assert named - shipped == set(), f"named in the docs, not in configs/: {sorted(named - shipped)}"
     assert os.path.isdir(ROOT / "configs")
 
-
-def test_the_paper_fig_configs_run_the_fig_configs_sweeps():
-    """docs/paper.md says configs/paper_figN.yaml and configs/figN.yaml differ only in their output."""
-    for number in (1, 2):
-        paper, ours = (load_config(ROOT / "configs" / f"{name}{number}.yaml") for name in ("paper_fig", "fig"))
-        assert replace(paper, output=None) == replace(ours, output=None), number
