@@ -20,7 +20,7 @@ Units: the paper's model is dimensionless, so every axis says ``[1]``. The gain 
 and the analytic amplitude A of eq2.21 are different quantities (ERRATA 6): on a gain plot the
 analytic curves are A/c, on an amplitude plot (``amplitude=True``) the numbers are |Q| and A.
 
-Which R can be trusted (issue 5, README "Can R be trusted?"): trust is judged by R_err alone --
+Which R can be trusted (issue 5, docs/trust.md, "Can R be trusted?"): trust is judged by R_err alone --
 a point is drawn filled where R_err <= RELATIVE_ERROR_LIMIT of R and hollow where not -- and the
 kind of motion by ``period``: a circle where a period was found, a square where none was (chaos,
 quasi-periodic, a period above max_period, or a motion still settling; with a tiny R_err the last

@@ -32,7 +32,7 @@ from vrsweep.results import Status
 def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     """R (or |Q|) against one axis with the analytic branches and the resonance (Fig. 1, Fig. 2).
 
-    Markers follow the README ("Can R be trusted?"): filled where R_err <= 10% of R (R can be
+    Markers follow docs/trust.md, "Can R be trusted?": filled where R_err <= 10% of R (R can be
     trusted), hollow where not; a circle where a period was found, a square where none was
     (period 0); always in the curve's colour. Failed points (status not ok, R = NaN) are x marks
     along the bottom edge, one row per curve, and counted in the title.
