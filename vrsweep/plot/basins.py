@@ -12,7 +12,7 @@ from matplotlib.lines import Line2D
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
-from vrsweep.plot.labels import MODEL_EQUATIONS, UNITS, UNITS_NOTE, _new_figure, _number, _title, _width
+from vrsweep.plot.labels import MODEL_EQUATIONS, _wrap, figure_options, _new_figure, _number, _title, _width
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
@@ -27,12 +27,12 @@ BASIN_FAILED = "black"        # a point whose integration failed (label -1)
 BASIN_NOT_COMPUTED = "white"  # an unfinished file's missing points
 
 
-def basin_plot(results, at=None) -> Figure:
+def basin_plot(results, at=None, **options) -> Figure:
     """``vrsweep plot FILE --kind basin``: the x0-v0 plane of one slice coloured by attractor.
 
     results: a path, or the Dataset of a sweep with x0 and/or v0 axes (``load``,
     ``vrsweep.open_results``); at: {axis: value} fixing every other axis with more than one value
-    (a slice's parameters).
+    (a slice's parameters); options: title, size, style (``figure_options``).
     """
     from vrsweep.store.trajectory_file import TrajectoryData
 
@@ -58,12 +58,17 @@ def basin_plot(results, at=None) -> Figure:
     for name, values in axes.items():  # a one-value axis needs no at
         if name not in at and name not in ("x0", "v0") and len(values) == 1:
             at[name] = str(values[0])
-    return basin_figure(select(data, at))
+    return basin_figure(select(data, at), **options)
 
 
+@figure_options
 def basin_figure(ds) -> Figure:
     """Attractor labels over the x0-v0 plane (or along x0 or v0), legend from the attractor table;
-    ``ds``: one slice of a sweep over the initial state (other axes fixed with ``select``)."""
+    ``ds``: one slice of a sweep over the initial state (other axes fixed with ``select``).
+
+    Each attractor's stroboscopic points x(nT), v(nT) -- of the first start in its basin, in grid
+    order -- are marked on the plane in its colour with a black edge: the orbit itself, in the
+    same section t = nT as the initial states (t = 0)."""
     view = _Sweep(ds)
     state_axes = [name for name in ("x0", "v0") if name in view.axes]
     if not state_axes:
@@ -97,7 +102,12 @@ def basin_figure(ds) -> Figure:
                       cmap=cmap, norm=norm)
         ax.set_yticks([])
     ax.set_xlabel(_state_label(x_axis))
+    outside = _mark_attractors(ax, ds, view, labels, colours, state_axes)
     handles = [_basin_handle(view, label, colours[label]) for label in range(count)]
+    if count and "strobe_x" in view.variables:
+        handles.append(Line2D([], [], marker="o", ls="", color="0.6", mec="k", mew=1.2, markersize=7,
+                              label="ringed dots: the attractor's stroboscopic points x(nT), v(nT)"
+                                    + (f" ({outside} outside the plane, not shown)" if outside else "")))
     n_failed = int(np.sum((labels < 0) & (status != Status.NOT_COMPUTED)))
     if n_failed:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_FAILED, markersize=9,
@@ -106,19 +116,49 @@ def basin_figure(ds) -> Figure:
     if n_missing:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_NOT_COMPUTED, markeredgecolor="0.5",
                               markersize=9, label=f"not computed ({n_missing} points)"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=1 if count <= 3 else 2, fontsize=8,
-               title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane", title_fontsize=8)
+    fig.legend(handles=handles, loc="outside lower center", ncols=1 if count <= 3 else 2, fontsize="small",
+               title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane",
+               title_fontsize="small")
     found = f"{count} attractor{'s' if count != 1 else ''}"
     _title(fig, f"Basins of attraction in the plane of initial states: {found}",
            _basin_caption(view, _width(fig)))
     return fig
 
 
+def _mark_attractors(ax, ds, view, labels, colours, state_axes):
+    """Mark each attractor's stroboscopic points on the plane (or the strip); returns how many
+    points fall outside the drawn plane (left out: the limits stay those of the grid)."""
+    if "strobe_x" not in view.variables or "strobe_v" not in view.variables:
+        return 0
+    dims = tuple(ds["attractor"].dims)
+    strobe = {"x0": ds["strobe_x"].transpose(*dims, ...).values, "v0": ds["strobe_v"].transpose(*dims, ...).values}
+    limits = {name: (float(np.min(view.axes[name])), float(np.max(view.axes[name]))) for name in state_axes}
+    outside = 0
+    flat_labels = np.asarray(labels).reshape(-1)
+    for label, colour in enumerate(colours):
+        members = np.flatnonzero(flat_labels == label)
+        if members.size == 0:
+            continue
+        first = np.unravel_index(members[0], np.shape(labels))  # attractor_x0/v0's start: first in grid order
+        points = {name: np.asarray(strobe[name][first], dtype=np.float64) for name in state_axes}
+        inside = np.ones(points[state_axes[0]].shape, dtype=bool)
+        for name in state_axes:
+            inside &= np.isfinite(points[name])
+            inside &= (points[name] >= limits[name][0]) & (points[name] <= limits[name][1])
+        outside += int(np.sum(~inside & np.isfinite(points[state_axes[0]])))
+        if not inside.any():
+            continue
+        xs = points[state_axes[0]][inside]
+        ys = points[state_axes[1]][inside] if len(state_axes) == 2 else np.full(xs.shape, 0.5)
+        ax.plot(xs, ys, "o", ls="", color=colour, mec="k", mew=1.2, ms=7, zorder=5, gid=f"attractor {label}")
+    return outside
+
+
 def _state_label(name):
     from vrsweep.numerics.model import INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS
 
     words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
-    return f"{words} {INITIAL_STATE_SYMBOLS[name]} {UNITS}"
+    return f"{words} {INITIAL_STATE_SYMBOLS[name]}"
 
 
 def _basin_handle(view, label, colour):
@@ -146,12 +186,5 @@ def _basin_caption(view, width):
         items += [f"{PARAMETER_SYMBOLS[name]} = {_number(parameters[name])}" for name in PARAMETER_NAMES]
         run = view.config.integration
         items.append(f"{run.transient_periods} transient + {run.measure_periods} measured slow periods")
-    items += [UNITS_NOTE] + ([_progress_note(view)] if not view.complete else [])
-    lines, line = [], ""
-    for item in items:
-        visible = len(item.replace("$", "").replace("\\", ""))
-        if line and len(line.replace("$", "").replace("\\", "")) + visible + 2 > width:
-            lines.append(line)
-            line = ""
-        line = f"{line},  {item}" if line else item
-    return "\n".join(lines + [line])
+    items += ["all quantities dimensionless"] + ([_progress_note(view)] if not view.complete else [])
+    return _wrap(items, width)
