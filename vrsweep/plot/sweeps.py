@@ -204,7 +204,8 @@ MAP_LABELS = {"R": "gain $R = |Q|/c$", "Q_amplitude": "amplitude $|Q|$",
               "impacts_per_period": "mean impacts per slow period $2\\pi/\\omega$",
               "lyapunov": f"{LYAPUNOV_SYMBOL}, per unit time"}
 LONG_NAME_IN_LABEL = 45  # characters of a variable's long_name that fit beside a colour bar
-CAP_PERCENTILE = 99      # a linear map's default top: one wild point must not wash out the map
+CAP_PERCENTILE = 99      # a linear map's default top: one wild point must not wash out the map ...
+CAP_MARGIN = 0.1         # ... if the largest value is more than 10 % of the scale above it (else no cap)
 NO_VALUE_COLOUR = "0.35"  # an integer map's 'no period' / 'failed' value: dark grey, set apart
 NOT_COMPUTED_COLOUR = "0.85"  # the axes' background, seen where a cell has no value
 # Integer variables whose special values mean 'none' rather than a number (store/variables.py,
@@ -318,8 +319,10 @@ def continuous_scale(name, values, log=False, vmin=None, vmax=None):
     else:
         low = min(0.0, float(finite.min())) if finite.size else 0.0
         high = float(np.percentile(finite, CAP_PERCENTILE)) if finite.size else 1.0
-        if finite.size and high < float(finite.max()):
+        if finite.size and float(finite.max()) > high + CAP_MARGIN * (high - low):
             note_top = f"the {CAP_PERCENTILE}th percentile"
+        elif finite.size:
+            high = float(finite.max())  # the top is no outlier: no cap needed
         if log:
             positive = finite[finite > 0]
             low = float(positive.min()) if positive.size else 1e-3
