@@ -17,8 +17,8 @@ from vrsweep.store.reading import load_results
 
 PLANE = """\
 sweep:
-  g: {start: 0.0, stop: 50.0, num: 5}
-  Omega: {start: 3.0, stop: 6.0, num: 4}
+  g: {start: 0.0, stop: 55.0, num: 12}
+  Omega: {start: 3.0, stop: 6.0, num: 10}
 integration: {transient_periods: 3, measure_periods: 4, strobe_periods: 2, lyapunov: true}
 """
 LINE = """\
@@ -30,7 +30,7 @@ integration: {transient_periods: 3, measure_periods: 4, strobe_periods: 2}
 BASINS = """\
 parameters: {g: 5.0, Omega: 5.0}
 sweep:
-  x0: {start: -1.0, stop: 1.0, num: 3}
+  x0: {start: -1.0, stop: 0.5, num: 3}
   v0: {start: -1.0, stop: 1.0, num: 2}
 integration: {transient_periods: 10, measure_periods: 6, strobe_periods: 3}
 """
@@ -55,7 +55,9 @@ def _mesh(ax):
 
 def _all_text(fig):
     """Every piece of text drawn on the figure: titles, labels, tick labels, legends, colour bars."""
-    return [t.get_text() for t in fig.findobj(lambda artist: hasattr(artist, "get_text"))]
+    from matplotlib.text import Text
+
+    return [t.get_text() for t in fig.findobj(Text)]
 
 
 # --- integer maps: one colour per value present -------------------------------------------------
@@ -63,7 +65,7 @@ def _all_text(fig):
 
 def test_an_integer_map_has_exactly_one_colour_per_value_present(files):
     ds = load_results(files["plane"])
-    pattern = np.array([0, 1, 2, 5, 1])  # along g; 0 = no period
+    pattern = np.resize([0, 1, 2, 5, 1], 12)  # along g; 0 = no period
     ds["period"].values[...] = pattern[:, None]
     fig = plot.map_figure(ds, "period")
     mesh = _mesh(fig.axes[0])
@@ -82,7 +84,7 @@ def test_an_integer_map_has_exactly_one_colour_per_value_present(files):
 
 def test_the_other_integer_variables_name_their_special_values(files):
     ds = load_results(files["plane"])
-    ds["impacts_per_cycle"].values[...] = np.array([-1, 3, 3, 4, -1])[:, None]
+    ds["impacts_per_cycle"].values[...] = np.resize([-1, 3, 3, 4, -1], 12)[:, None]
     fig = plot.map_figure(ds, "impacts_per_cycle")
     assert _mesh(fig.axes[0]).cmap.N == 3
     assert [t.get_text() for t in fig.axes[1].get_yticklabels()] == ["-1: no period", "3", "4"]
@@ -105,8 +107,8 @@ def test_an_integer_map_refuses_a_continuous_scale(files):
 
 def test_the_lyapunov_scale_is_symmetric_about_zero_and_marks_values_within_their_band(files):
     ds = load_results(files["plane"])
-    values = np.linspace(-0.5, 0.05, 20).reshape(5, 4)  # far from symmetric: 10 times more negative
-    errors = np.full((5, 4), 0.01)
+    values = np.linspace(-0.5, 0.05, 120).reshape(12, 10)  # far from symmetric: 10 times more negative
+    errors = np.full((12, 10), 0.01)
     values[2, 1], values[3, 3] = 0.004, -0.008  # within their band of zero
     ds["lyapunov"].values[...] = values
     ds["lyapunov_err"].values[...] = errors
@@ -131,8 +133,8 @@ def test_the_lyapunov_scale_is_symmetric_about_zero_and_marks_values_within_thei
 
 def test_a_capped_colour_scale_says_so_on_the_figure(files):
     ds = load_results(files["plane"])
-    R = np.linspace(1.0, 9.7, 20).reshape(5, 4)
-    R[4, 3] = 16.5  # one wild point
+    R = np.linspace(1.0, 9.7, 120).reshape(12, 10)
+    R[4, 3] = 16.5  # one wild point (of 120: above the 99th percentile)
     ds["R"].values[...] = R
     ds["R_err"].values[...] = 0.0
     fig = plot.map_figure(ds, "R")
@@ -149,7 +151,7 @@ def test_a_capped_colour_scale_says_so_on_the_figure(files):
     assert "capped at 5" in bar and "floored at 2" in bar
     assert any("capped at 5" in text for text in _all_text(fig))  # stated even without a title
     # No outlier, no cap: the scale reaches the largest value and says nothing.
-    ds["R"].values[...] = np.linspace(1.0, 9.7, 20).reshape(5, 4)
+    ds["R"].values[...] = np.linspace(1.0, 9.7, 120).reshape(12, 10)
     fig = plot.map_figure(ds, "R")
     assert _mesh(fig.axes[0]).norm.vmax == pytest.approx(9.7)
     assert "capped" not in fig.axes[1].get_ylabel()
@@ -170,11 +172,12 @@ def test_vmin_and_vmax_are_for_maps(files, tmp_path, invoke):
 @pytest.mark.parametrize("kind", ["response", "map", "status", "bifurcation", "lyapunov", "impacts"])
 def test_no_title_leaves_no_title_anywhere(files, kind):
     source = files["line"] if kind in ("response", "bifurcation", "status") else files["plane"]
-    fig = plot.plot(source, kind=kind, title=False)
+    at = {"Omega": "3"} if kind == "lyapunov" else None
+    fig = plot.plot(source, kind=kind, at=at, title=False)
     assert fig._suptitle is None
     assert all(ax.get_title(loc=loc) == "" for ax in fig.axes for loc in ("left", "center", "right"))
     assert plot.description(fig).count("\n") >= 1  # the description is kept for the metadata
-    with_title = plot.plot(source, kind=kind)
+    with_title = plot.plot(source, kind=kind, at=at)
     assert with_title._suptitle is not None and with_title._suptitle.get_text()
 
 
@@ -255,9 +258,9 @@ def test_many_curves_get_a_colour_scale_not_a_legend_entry_each(files):
     assert len(legend) <= 8
     (bar,) = [ax for ax in fig.axes if ax is not fig.axes[0]]
     assert "$\\Omega$" in bar.get_ylabel()
-    # Each curve's colour is the scale's colour of its Omega: four values, four colours.
+    # Each curve's colour is the scale's colour of its Omega: ten values, ten colours.
     joins = [line for line in fig.axes[0].get_lines() if line.get_linestyle() == ":"]
-    assert len({to_rgba(line.get_color()) for line in joins}) == 4
+    assert len({to_rgba(line.get_color()) for line in joins}) == 10
 
 
 def test_the_barrier_line_is_not_drawn_like_the_joins_of_a_sweep(files):

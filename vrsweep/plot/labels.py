@@ -6,6 +6,7 @@ from __future__ import annotations
 import functools
 import inspect
 import os
+import re
 from pathlib import Path
 
 from matplotlib.figure import Figure
@@ -263,3 +264,59 @@ def render(fig, file_format, dpi) -> bytes:
     with matplotlib.style.context(getattr(fig, "_vrsweep_style", None) or {}):
         fig.savefig(image, format=file_format, dpi=dpi, metadata=metadata(fig, file_format))
     return image.getvalue()
+
+
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def read_description(path) -> dict:
+    """{'Title': ..., 'Description': ...} that ``render`` wrote into a figure file (.png, .pdf,
+    .svg); empty strings where the file holds none (a figure not made by vrsweep)."""
+    suffix = Path(path).suffix.lower()
+    found = {"Title": "", "Description": ""}
+    if suffix == ".png":
+        from PIL import Image
+
+        with Image.open(path) as image:
+            text = dict(getattr(image, "text", {}) or {})
+        found.update({key: text.get(key, "") for key in found})
+    elif suffix == ".svg":
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+        for key, tag in (("Title", "title"), ("Description", "description")):
+            match = re.search(rf"<dc:{tag}>(.*?)</dc:{tag}>", text, re.S)
+            if match:
+                import html
+
+                found[key] = html.unescape(match.group(1))
+    elif suffix == ".pdf":
+        data = Path(path).read_bytes()
+        for key, field in (("Title", b"Title"), ("Description", b"Subject")):
+            match = re.search(rb"/" + field + rb" \((.*?)(?<!\\)\)", data, re.S)
+            if match:
+                found[key] = _pdf_string(match.group(1))
+    return found
+
+
+def _pdf_string(raw: bytes) -> str:
+    """A PDF literal string as text: backslash escapes undone (matplotlib writes plain ASCII or
+    a UTF-16 string with a byte-order mark)."""
+    out, i = bytearray(), 0
+    while i < len(raw):
+        if raw[i:i + 1] == b"\\" and i + 1 < len(raw):
+            nxt = raw[i + 1:i + 2]
+            mapping = {b"n": b"\n", b"r": b"\r", b"t": b"\t", b"(": b"(", b")": b")", b"\\": b"\\"}
+            if nxt in mapping:
+                out += mapping[nxt]
+                i += 2
+                continue
+            if nxt.isdigit():
+                digits = raw[i + 1:i + 4]
+                octal = re.match(rb"[0-7]{1,3}", digits).group(0)
+                out.append(int(octal, 8))
+                i += 1 + len(octal)
+                continue
+        out += raw[i:i + 1]
+        i += 1
+    if out.startswith(b"\xfe\xff"):
+        return out[2:].decode("utf-16-be", errors="replace")
+    return out.decode("latin-1")

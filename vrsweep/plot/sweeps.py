@@ -31,6 +31,7 @@ from vrsweep.results import Status
 
 
 LEGEND_CURVES = 3        # more curves over one other parameter than this: a colour scale, not a legend
+MAX_SCALED_CURVES = 16   # with a colour scale, curves stay apart up to this many
 CURVE_SCALE = "viridis"
 BARRIER_COLOUR = "0.35"
 BARRIER_DASHES = (0, (7, 2, 1.5, 2, 1.5, 2))  # dash-dot-dot: unlike the dotted joins, dashed unstable branches
@@ -55,17 +56,17 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     name = "Q_amplitude" if amplitude else "R"
     view.require(name, "status")
     curves = view.curve_coordinates(x_axis)
-    if len(curves) > MAX_CURVES:
+    # Many curves over one other parameter: colours from a scale of its value, named by a colour
+    # bar, instead of a legend entry (and a resonance entry) per curve.
+    others = [n for n in view.axes if n != x_axis]
+    scale_axis = others[0] if len(curves) > LEGEND_CURVES and len(others) == 1 and others[0] != "direction" else None
+    if len(curves) > (MAX_SCALED_CURVES if scale_axis else MAX_CURVES):
         others = [n for n in view.parameter_axes if n != x_axis]
         raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
                                 "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 6.0)
     ax = fig.subplots()
-    # Many curves over one other parameter: colours from a scale of its value, named by a colour
-    # bar, instead of a legend entry (and a resonance entry) per curve.
-    others = [n for n in view.axes if n != x_axis]
-    scale_axis = others[0] if len(curves) > LEGEND_CURVES and len(others) == 1 and others[0] != "direction" else None
     if scale_axis is not None:
         from matplotlib import colormaps
         from matplotlib.cm import ScalarMappable
