@@ -12,6 +12,7 @@ from matplotlib.colors import BoundaryNorm, to_rgba
 
 from vrsweep import plot
 from vrsweep.errors import UsageError
+from vrsweep.plot.basins import BASIN_COLOURS
 from vrsweep.plot.sweeps import NO_VALUE_COLOUR
 from vrsweep.store.reading import load_results
 
@@ -290,21 +291,18 @@ def test_basins_mark_each_attractors_stroboscopic_points(files):
     ax = fig.axes[0]
     count = int(ds["attractor_count"].values)
     labels = ds["attractor"].transpose("x0", "v0").values
-    x_range, v_range = (float(ds.x0.min()), float(ds.x0.max())), (float(ds.v0.min()), float(ds.v0.max()))
-    drawn = 0
+    assert count >= 1
+    x_limits, v_limits = ax.get_xlim(), ax.get_ylim()
     for label in range(count):
         i, j = np.argwhere(labels == label)[0]  # the first start of the basin, in grid order
         xs = ds["strobe_x"].transpose("x0", "v0", ...).values[i, j]
         vs = ds["strobe_v"].transpose("x0", "v0", ...).values[i, j]
-        inside = (xs >= x_range[0]) & (xs <= x_range[1]) & (vs >= v_range[0]) & (vs <= v_range[1])
-        marks = [line for line in ax.get_lines() if line.get_gid() == f"attractor {label}"]
-        if not inside.any():
-            assert not marks
-            continue
-        (mark,) = marks
-        np.testing.assert_array_equal(mark.get_xdata(), xs[inside])
-        np.testing.assert_array_equal(mark.get_ydata(), vs[inside])
-        drawn += 1
+        (mark,) = [line for line in ax.get_lines() if line.get_gid() == f"attractor {label}"]
+        np.testing.assert_array_equal(mark.get_xdata(), xs)
+        np.testing.assert_array_equal(mark.get_ydata(), vs)
+        assert to_rgba(mark.get_markerfacecolor()) == to_rgba(BASIN_COLOURS[label])  # the basin's colour
+        # Every point is in view, even one outside the swept plane.
+        assert x_limits[0] <= xs.min() and xs.max() <= x_limits[1]
+        assert v_limits[0] <= vs.min() and vs.max() <= v_limits[1]
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
-    assert any("stroboscopic points" in text for text in legend)
-    assert count >= 1
+    assert any("x(nT), v(nT)" in text for text in legend)

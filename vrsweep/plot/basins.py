@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
@@ -25,6 +26,7 @@ BASIN_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple",
                  "tab:pink", "tab:olive", "tab:cyan", "gold")
 BASIN_FAILED = "black"        # a point whose integration failed (label -1)
 BASIN_NOT_COMPUTED = "white"  # an unfinished file's missing points
+OUTSIDE_PLANE = "0.9"         # around the swept plane, where the view widens to show an orbit
 
 
 def basin_plot(results, at=None, **options) -> Figure:
@@ -68,7 +70,8 @@ def basin_figure(ds) -> Figure:
 
     Each attractor's stroboscopic points x(nT), v(nT) -- of the first start in its basin, in grid
     order -- are marked on the plane in its colour with a black edge: the orbit itself, in the
-    same section t = nT as the initial states (t = 0)."""
+    same section t = nT as the initial states (t = 0). Where they lie outside the swept plane the
+    view widens to show them and a dashed frame marks the plane."""
     view = _Sweep(ds)
     state_axes = [name for name in ("x0", "v0") if name in view.axes]
     if not state_axes:
@@ -106,8 +109,10 @@ def basin_figure(ds) -> Figure:
     handles = [_basin_handle(view, label, colours[label]) for label in range(count)]
     if count and "strobe_x" in view.variables:
         handles.append(Line2D([], [], marker="o", ls="", color="0.6", mec="k", mew=1.2, markersize=7,
-                              label="ringed dots: the attractor's stroboscopic points x(nT), v(nT)"
-                                    + (f" ({outside} outside the plane, not shown)" if outside else "")))
+                              label="ringed dot: an attractor's points x(nT), v(nT) in its colour"))
+    if outside:
+        handles.append(Patch(facecolor=OUTSIDE_PLANE, edgecolor="k", ls="--",
+                             label="dashed frame: the swept plane; outside it, no start was tried"))
     n_failed = int(np.sum((labels < 0) & (status != Status.NOT_COMPUTED)))
     if n_failed:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_FAILED, markersize=9,
@@ -116,7 +121,7 @@ def basin_figure(ds) -> Figure:
     if n_missing:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_NOT_COMPUTED, markeredgecolor="0.5",
                               markersize=9, label=f"not computed ({n_missing} points)"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=1 if count <= 3 else 2, fontsize="small",
+    fig.legend(handles=handles, loc="outside lower center", ncols=1 if count <= 4 else 2, fontsize="small",
                title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane",
                title_fontsize="small")
     found = f"{count} attractor{'s' if count != 1 else ''}"
@@ -126,14 +131,16 @@ def basin_figure(ds) -> Figure:
 
 
 def _mark_attractors(ax, ds, view, labels, colours, state_axes):
-    """Mark each attractor's stroboscopic points on the plane (or the strip); returns how many
-    points fall outside the drawn plane (left out: the limits stay those of the grid)."""
+    """Mark each attractor's stroboscopic points on the plane (or the strip); returns True when
+    some lie outside the swept plane, which then is framed and the view widened to show them."""
+    from matplotlib.patches import Rectangle
+
     if "strobe_x" not in view.variables or "strobe_v" not in view.variables:
-        return 0
+        return False
     dims = tuple(ds["attractor"].dims)
     strobe = {"x0": ds["strobe_x"].transpose(*dims, ...).values, "v0": ds["strobe_v"].transpose(*dims, ...).values}
     limits = {name: (float(np.min(view.axes[name])), float(np.max(view.axes[name]))) for name in state_axes}
-    outside = 0
+    drawn = {name: [] for name in state_axes}
     flat_labels = np.asarray(labels).reshape(-1)
     for label, colour in enumerate(colours):
         members = np.flatnonzero(flat_labels == label)
@@ -141,16 +148,41 @@ def _mark_attractors(ax, ds, view, labels, colours, state_axes):
             continue
         first = np.unravel_index(members[0], np.shape(labels))  # attractor_x0/v0's start: first in grid order
         points = {name: np.asarray(strobe[name][first], dtype=np.float64) for name in state_axes}
-        inside = np.ones(points[state_axes[0]].shape, dtype=bool)
-        for name in state_axes:
-            inside &= np.isfinite(points[name])
-            inside &= (points[name] >= limits[name][0]) & (points[name] <= limits[name][1])
-        outside += int(np.sum(~inside & np.isfinite(points[state_axes[0]])))
-        if not inside.any():
+        finite = np.logical_and.reduce([np.isfinite(points[name]) for name in state_axes])
+        if not finite.any():
             continue
-        xs = points[state_axes[0]][inside]
-        ys = points[state_axes[1]][inside] if len(state_axes) == 2 else np.full(xs.shape, 0.5)
+        xs = points[state_axes[0]][finite]
+        ys = points[state_axes[1]][finite] if len(state_axes) == 2 else np.full(xs.shape, 0.5)
         ax.plot(xs, ys, "o", ls="", color=colour, mec="k", mew=1.2, ms=7, zorder=5, gid=f"attractor {label}")
+        for name, values in zip(state_axes, (xs, ys)):
+            drawn[name].append(values)
+    outside = False
+    view_limits = []
+    for k, name in enumerate(state_axes):
+        values = np.concatenate(drawn[name]) if drawn[name] else np.array([])
+        low, high = limits[name]
+        cell = (high - low) / max(len(view.axes[name]) - 1, 1) / 2  # the plane reaches half a cell beyond
+        low, high = low - cell, high + cell
+        if values.size and (values.min() < low or values.max() > high):
+            outside = True
+            low, high = min(low, float(values.min())), max(high, float(values.max()))
+        view_limits.append((low, high))
+    if outside:  # widen the view to the orbits, and frame the plane the sweep covered
+        for (low, high), set_limits in zip(view_limits, (ax.set_xlim, ax.set_ylim)):
+            margin = 0.04 * (high - low)
+            set_limits(low - margin, high + margin)
+        name = state_axes[0]
+        (x_low, x_high) = limits[name]
+        x_cell = (x_high - x_low) / max(len(view.axes[name]) - 1, 1) / 2
+        if len(state_axes) == 2:
+            y_low, y_high = limits[state_axes[1]]
+            y_cell = (y_high - y_low) / max(len(view.axes[state_axes[1]]) - 1, 1) / 2
+        else:
+            y_low, y_high, y_cell = 0.0, 1.0, 0.5
+        ax.add_patch(Rectangle((x_low - x_cell, y_low - y_cell), x_high - x_low + 2 * x_cell,
+                               y_high - y_low + 2 * y_cell, fill=False, ec="k", lw=1.0, ls="--", zorder=4,
+                               gid="swept plane"))
+        ax.set_facecolor(OUTSIDE_PLANE)
     return outside
 
 
