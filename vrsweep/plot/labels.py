@@ -234,7 +234,14 @@ def description(fig) -> str:
     """The figure's full title and caption as plain text (mathtext's $ and \\ dropped)."""
     what, caption = getattr(fig, "_vrsweep_description", ("", ""))
     text = f"{what}\n{caption}".strip()
+    for markup, plain in MATHTEXT_PLAIN.items():
+        text = text.replace(markup, plain)
     return text.replace("$", "").replace("\\", "")
+
+
+MATHTEXT_PLAIN = {"\\dot{x}": "ẋ", "\\tilde\\omega": "ω̃", "\\gamma": "γ", "\\alpha": "α",
+                  "\\omega_0": "ω0", "\\omega": "ω", "\\Omega": "Ω", "\\Delta": "Δ", "\\lambda_1": "λ1",
+                  "\\pi": "π", "\\infty": "∞", "{": "", "}": ""}
 
 
 def metadata(fig, file_format) -> dict:

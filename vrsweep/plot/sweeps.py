@@ -81,8 +81,9 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
         fig.colorbar(ScalarMappable(norm=scale_norm, cmap=bar_cmap), ax=ax,
                      label=parameter_label(scale_axis, ds[scale_axis].attrs.get("units")),
                      ticks=scale_values if len(scale_values) <= 12 else None)
-    n_parameter_sets = len({tuple(sorted((a, i) for a, i in where.items() if a != "direction"))
-                            for where, _ in curves})
+    # The barrier level Delta (or Delta/c) is the same for every curve unless Delta or c is swept.
+    barrier_shared = not any(axis in ("Delta", "c") for axis in others)
+    barrier_drawn = False
     analytic_done = set()
     curve_handles, resonance_handles = [], []
     drawn = []  # every value on the response axis, to choose its scale
@@ -129,9 +130,11 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
         barrier = _fine_parameters(parameters, x_axis, fine)
         barrier_level = barrier["Delta"] if amplitude else barrier["Delta"] / barrier["c"]
         # Its own dash pattern (never the dotted line that joins a sweep's points) and, when every
-        # curve shares it (one parameter set, e.g. up and down), its own colour.
-        barrier_colour = BARRIER_COLOUR if n_parameter_sets == 1 else colour
-        ax.plot(fine, barrier_level, color=barrier_colour, lw=1.0, ls=BARRIER_DASHES, zorder=1, gid="barrier")
+        # curve shares it (Delta and c not swept), drawn once in its own colour.
+        if not (barrier_shared and barrier_drawn):
+            ax.plot(fine, barrier_level, color=BARRIER_COLOUR if barrier_shared else colour, lw=1.0,
+                    ls=BARRIER_DASHES, zorder=1, gid="barrier")
+            barrier_drawn = True
         for position in resonance_positions(parameters, x_axis, fine):
             ax.axvline(position, color=colour, ls="-.", lw=0.9, zorder=1)
             if scale_axis is None:
@@ -160,7 +163,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     if view.config is not None:
         handles.append(Line2D([], [], color="k", lw=1.3, label=f"analytic {analytic}, stable (corrected eq2.27)"))
         handles.append(Line2D([], [], color="k", lw=1.3, ls="--", label=f"analytic {analytic}, unstable"))
-        handles.append(Line2D([], [], color=BARRIER_COLOUR if n_parameter_sets == 1 else "k", lw=1.0,
+        handles.append(Line2D([], [], color=BARRIER_COLOUR if barrier_shared else "k", lw=1.0,
                               ls=BARRIER_DASHES,
                               label=f"{'A = Δ' if amplitude else 'A/c = Δ/c'}: above, the analytic motion "
                                     "crosses the barrier"))
@@ -251,8 +254,8 @@ def discrete_scale(name, values, attrs=None):
     'none' (period 0, impacts_per_cycle -1: no period; attractor -1: failed) in grey and named.
 
     values: the variable's values (any shape; NaN where not computed). Returns (cmap, norm, ticks,
-    tick_labels): a ListedColormap of exactly len(ticks) colours and a BoundaryNorm putting each
-    value present in its own colour.
+    tick_labels): a ListedColormap of exactly len(ticks) colours, a BoundaryNorm putting each
+    value present in its own colour, and where on a uniformly spaced colour bar to name each.
     """
     from matplotlib import colormaps
 
@@ -263,10 +266,13 @@ def discrete_scale(name, values, attrs=None):
     flags = _flag_names(attrs or {})
     special = SPECIAL_VALUES.get(name, {})
     ordinary = [v for v in present if v not in special and v not in flags]
-    if len(ordinary) <= 10:
-        palette = [colormaps["tab10"](k) for k in range(len(ordinary))]
-    elif len(ordinary) <= 20:
-        palette = [colormaps["tab20"](k) for k in range(len(ordinary))]
+    # Qualitative colours without their greys, which belong to 'no period' and 'not computed'.
+    tab10 = [colormaps["tab10"](k) for k in range(10) if k != 7]
+    tab20 = [colormaps["tab20"](k) for k in range(20) if k not in (14, 15)]
+    if len(ordinary) <= len(tab10):
+        palette = tab10[: len(ordinary)]
+    elif len(ordinary) <= len(tab20):
+        palette = tab20[: len(ordinary)]
     else:
         palette = list(colormaps["viridis"](np.linspace(0.0, 1.0, len(ordinary))))
     colours, labels = [], []
@@ -288,15 +294,17 @@ def discrete_scale(name, values, attrs=None):
         step = int(np.ceil(len(present) / MAX_TICK_LABELS))
         labels = [text if (k % step == 0 or present[k] in special or present[k] in flags) else ""
                   for k, text in enumerate(labels)]
-    return cmap, norm, [int(v) for v in present], labels
+    # Ticks in the middle of each block (equal blocks: the colour bar's spacing="uniform").
+    return cmap, norm, list((edges[:-1] + edges[1:]) / 2.0), labels
 
 
 def continuous_scale(name, values, log=False, vmin=None, vmax=None):
-    """The colour scale of a float variable: (norm, cmap, extend, note).
+    """The colour scale of a float variable: (norm, cmap, extend, (short_note, long_note)).
 
     Linear: from 0 (or the smallest value, if negative) to the CAP_PERCENTILE-th percentile, so one
-    wild point does not wash out the map; a cap is stated (``note``, e.g. 'capped at 9.74, the 99th
-    percentile; 3 cells above, up to 16.5') and shown by the colour bar's arrow (``extend``).
+    wild point does not wash out the map (unless the largest value is within CAP_MARGIN of the
+    scale above it); a cap is stated, on the colour bar ('capped at 9.74 = 99th pct.; max 16.5')
+    and in the caption (``long_note``), and shown by the colour bar's arrow (``extend``).
     lyapunov: a diverging scale symmetric about zero, -m..m with m the largest |lambda_1|.
     log: from the smallest positive value. vmin/vmax replace either end (for lyapunov one of
     them sets both, symmetric).
@@ -345,16 +353,19 @@ def continuous_scale(name, values, log=False, vmin=None, vmax=None):
     below = int(np.sum(finite < low))
     extend = {(False, False): "neither", (True, False): "max", (False, True): "min", (True, True): "both"}[
         (above > 0, below > 0)]
-    notes = []
+    long_notes, short_notes = [], []
     if above:
-        how = f"capped at {_number(high)}" + (f", {note_top}" if note_top == f"the {CAP_PERCENTILE}th percentile"
-                                              else "")
+        percentile = note_top == f"the {CAP_PERCENTILE}th percentile"
         cells = "1 cell" if above == 1 else f"{above} cells"
-        notes.append(f"{how}: {cells} above, up to {_number(float(finite.max()))}, in the top colour ▲")
+        long_notes.append(f"capped at {_number(high)}{', ' + note_top if percentile else ''}: {cells} above, "
+                          f"up to {_number(float(finite.max()))}, in the top colour ▲")
+        short_notes.append(f"capped at {high:.3g}{f' = {CAP_PERCENTILE}th pct.' if percentile else ''}; "
+                           f"max {float(finite.max()):.3g}")
     if below:
         cells = "1 cell" if below == 1 else f"{below} cells"
-        notes.append(f"floored at {_number(low)}: {cells} below, down to {_number(float(finite.min()))} ▼")
-    return norm, cmap, extend, "; ".join(notes)
+        long_notes.append(f"floored at {_number(low)}: {cells} below, down to {_number(float(finite.min()))} ▼")
+        short_notes.append(f"floored at {low:.3g}; min {float(finite.min()):.3g}")
+    return norm, cmap, extend, ("\n".join(short_notes), "; ".join(long_notes))
 
 
 def _cell_edges(centres):
@@ -415,10 +426,10 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
                                     "integers, drawn one colour per value", value=name)
         values = np.where(np.asarray(ds["done"].values, dtype=bool), values, np.nan)
         cmap, norm, ticks, tick_labels = discrete_scale(name, values, ds[name].attrs)
-        extend, cap_note = "neither", ""
+        extend, cap_note, cap_caption = "neither", "", ""
     else:
         shown = np.where(np.isneginf(values), np.nan, values)  # -inf (stuck) has its own mark
-        norm, cmap, extend, cap_note = continuous_scale(name, shown, log=log, vmin=vmin, vmax=vmax)
+        norm, cmap, extend, (cap_note, cap_caption) = continuous_scale(name, shown, log=log, vmin=vmin, vmax=vmax)
     handles = {}
     X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
     for ax, (where, panel_title) in zip(axes, panels):
@@ -445,7 +456,8 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             handles["minus_infinity"] = Line2D([], [], ls="none", marker="v", color="k", mec="w", mew=0.5,
                                                label=f"{LYAPUNOV_SYMBOL} = −∞: stuck on the barrier")
         bar_label = label + (" (log scale)" if log else "") + (f"\n{cap_note}" if cap_note else "")
-        bar = fig.colorbar(mesh, ax=ax, label=bar_label, extend=extend)
+        # An integer map's values get equal blocks on the colour bar, however far apart they are.
+        bar = fig.colorbar(mesh, ax=ax, label=bar_label, extend=extend, spacing="uniform" if integer else "auto")
         if integer:
             bar.set_ticks(ticks, labels=tick_labels)
             bar.minorticks_off()
@@ -483,7 +495,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             text.set_color("white")
     notes = "; ".join(note for note in (_progress_note(view), _failure_note(view, "on its cell")
                                         if name in ("R", "Q_amplitude") and "status" in view.variables else "",
-                                        f"colour scale {cap_note}" if cap_note else "")
+                                        f"colour scale {cap_caption}" if cap_caption else "")
                       if note)
     grey = "not computed or failed" if ds[name].dtype.kind == "f" else "not computed"
     _title(fig, f"{label.splitlines()[0]} over {_symbol(x_axis)} and {_symbol(y_axis)} (light grey: no value: {grey})",
