@@ -3,6 +3,7 @@ the caption of what is fixed, and the figure itself (matplotlib's Figure, no pyp
 
 from __future__ import annotations
 
+import contextvars
 import functools
 import inspect
 import os
@@ -123,8 +124,13 @@ def _parse_config(text):
         return None
 
 
+_REQUESTED_SIZE = contextvars.ContextVar("vrsweep_figure_size", default=None)
+
+
 def _new_figure(width, height):
-    return Figure(figsize=(width, height), layout="constrained")
+    """A figure of (width, height) inches, or of the size asked for through ``figure_options``
+    (made at that size from the start, so that captions wrap to it)."""
+    return Figure(figsize=_REQUESTED_SIZE.get() or (width, height), layout="constrained")
 
 
 def _title(fig, what, caption):
@@ -135,8 +141,12 @@ def _title(fig, what, caption):
 
 
 def _width(fig):
-    """Characters of caption text that fit across ``fig`` at the title's font size."""
-    return int(fig.get_figwidth() * 15)
+    """Characters of caption text that fit across ``fig`` at the title's font size (the style's
+    'small'; a character is about 0.56 of the font size wide)."""
+    from matplotlib.font_manager import FontProperties
+
+    points = FontProperties(size="small").get_size_in_points()
+    return max(20, int(fig.get_figwidth() * 72.0 / (0.56 * points)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -208,10 +218,15 @@ def figure_options(function):
             kwargs.update(vmin=vmin, vmax=vmax)
         elif vmin is not None or vmax is not None:
             raise UsageError.naming("{vmin} and {vmax} set the colour scale of a map; this figure has none")
-        with matplotlib.style.context(style or {}):
-            fig = function(*args, **kwargs)
-            if size is not None:
-                fig.set_size_inches(*size)
+        token = _REQUESTED_SIZE.set(size) if size is not None else None
+        try:
+            with matplotlib.style.context(style or {}):
+                fig = function(*args, **kwargs)
+        finally:
+            if token is not None:
+                _REQUESTED_SIZE.reset(token)
+        if size is not None:
+            fig.set_size_inches(*size)  # a figure not made by _new_figure gets the size too
         fig._vrsweep_style = style
         if not title:
             _drop_titles(fig)

@@ -456,8 +456,9 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             handles["minus_infinity"] = Line2D([], [], ls="none", marker="v", color="k", mec="w", mew=0.5,
                                                label=f"{LYAPUNOV_SYMBOL} = −∞: stuck on the barrier")
         bar_label = label + (" (log scale)" if log else "") + (f"\n{cap_note}" if cap_note else "")
-        # An integer map's values get equal blocks on the colour bar, however far apart they are.
-        bar = fig.colorbar(mesh, ax=ax, label=bar_label, extend=extend, spacing="uniform" if integer else "auto")
+        # spacing="uniform" (the default, said here because discrete_scale's ticks rely on it): an
+        # integer map's values get equal blocks on the colour bar, however far apart they are.
+        bar = fig.colorbar(mesh, ax=ax, label=bar_label, extend=extend, spacing="uniform")
         if integer:
             bar.set_ticks(ticks, labels=tick_labels)
             bar.minorticks_off()
