@@ -13,7 +13,7 @@ from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
-from vrsweep.plot.labels import MODEL_EQUATIONS, _wrap, figure_options, _new_figure, _number, _title, _width
+from vrsweep.plot.labels import MODEL_EQUATIONS, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
@@ -121,7 +121,7 @@ def basin_figure(ds) -> Figure:
     if n_missing:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_NOT_COMPUTED, markeredgecolor="0.5",
                               markersize=9, label=f"not computed ({n_missing} points)"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=1 if count <= 4 else 2, fontsize="small",
+    fig.legend(handles=handles, loc="outside lower center", ncols=_legend_columns(fig, 1 if count <= 4 else 2), fontsize="small",
                title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane",
                title_fontsize="small")
     found = f"{count} attractor{'s' if count != 1 else ''}"

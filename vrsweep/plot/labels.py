@@ -140,6 +140,15 @@ def _title(fig, what, caption):
     fig._vrsweep_description = (what, caption)
 
 
+LEGEND_COLUMN_WIDTH = 2.6  # inches a column of legend entries needs at the legends' font size
+
+
+def _legend_columns(fig, wanted):
+    """``wanted`` legend columns, fewer (down to one) on a narrow figure, e.g. a journal column
+    (--size 3.4,2.6): a legend below the axes must not be wider than the figure."""
+    return max(1, min(wanted, int(fig.get_figwidth() // LEGEND_COLUMN_WIDTH)))
+
+
 def _width(fig):
     """Characters of caption text that fit across ``fig`` at the title's font size (the style's
     'small'; a character is about 0.56 of the font size wide)."""

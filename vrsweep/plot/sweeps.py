@@ -16,7 +16,7 @@ from vrsweep.plot.analytic import (
 )
 from vrsweep.plot.labels import (
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
-    _caption, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
+    _caption, _legend_columns, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
@@ -150,10 +150,10 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     handles.append(Line2D([], [], ls="none", marker="o", color="k", ms=4,
                           label=f"filled: {error} ≤ {RELATIVE_ERROR_LIMIT:.0%} of {symbol} (trusted)"))
     if kinds_seen["untrusted"]:
-        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=4.5,
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=4.5, mew=1.0,
                               label=f"hollow: {error} > {RELATIVE_ERROR_LIMIT:.0%} of {symbol} (window-dependent)"))
     if kinds_seen["aperiodic"]:
-        handles.append(Line2D([], [], ls="none", marker="s", mfc="none", mec="k", ms=4.5,
+        handles.append(Line2D([], [], ls="none", marker="s", mfc="none", mec="k", ms=4.5, mew=1.0,
                               label="square: no period found (period 0)"))
     failure_note = _failure_note(view, "along the bottom edge")
     if failure_note:
@@ -168,7 +168,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
                               label=f"{'A = Δ' if amplitude else 'A/c = Δ/c'}: above, the analytic motion "
                                     "crosses the barrier"))
     handles += resonance_handles
-    fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=2)
+    fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
     ax.set_xlabel(parameter_label(x_axis))
     if amplitude:
         ax.set_ylabel(f"amplitude $|Q|$ of x at $\\omega$, analytic $A$")
@@ -491,7 +491,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             ax.set_title(panel_title, fontsize="medium")
     if handles:
         legend = fig.legend(handles=list(handles.values()), fontsize="x-small", loc="outside lower center",
-                            ncol=min(len(handles), 3), facecolor="0.3", framealpha=0.9)
+                            ncol=_legend_columns(fig, min(len(handles), 3)), facecolor="0.3", framealpha=0.9)
         for text in legend.get_texts():
             text.set_color("white")
     notes = "; ".join(note for note in (_progress_note(view), _failure_note(view, "on its cell")
@@ -605,7 +605,7 @@ def status_figure(ds, x_axis=None) -> Figure:
         ax.set_ylabel("status of the point")
         ax.grid(alpha=0.3)
         if len(curves) > 1:
-            fig.legend(fontsize="x-small", loc="outside lower center", ncol=min(len(curves), 4))
+            fig.legend(fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, min(len(curves), 4)))
     counts = {name: int(np.sum(view.variables["status"] == code)) for code, name in zip(codes, names)}
     summary = ", ".join(f"{n} {name}" for name, n in counts.items() if n)
     _title(fig, f"How each point's integration ended ({summary})",

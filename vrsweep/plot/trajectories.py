@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
 from vrsweep.numerics.model import PARAMETER_NAMES
-from vrsweep.plot.labels import figure_options, _caption, _new_figure, _number, _parse_config, _title, _width
+from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _title, _width
 from vrsweep.results import Status
 
 
@@ -248,7 +248,7 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
     ax_phase.set_xlabel(f"position $x$, $X$")
     ax_phase.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$")
     handles, labels = ax_x.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize="x-small")
+    fig.legend(handles, labels, loc="outside lower center", ncol=_legend_columns(fig, 2), fontsize="x-small")
     _title(fig, f"Effective system against the slow-flow reconstruction X = R cos(ωt + θ) (eq2.21) at "
                 f"{_point_text(config)}, {_window_text(window, data)}; the first-order theory ignores the barrier",
            _caption(data.path or "", config, "effective system eq2.10 and its slow flow", width=_width(fig)))
