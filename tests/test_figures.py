@@ -312,3 +312,27 @@ def test_basins_mark_each_attractors_stroboscopic_points(files):
         assert v_limits[0] <= vs.min() and vs.max() <= v_limits[1]
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert any("x(nT), v(nT)" in text for text in legend)
+
+
+def test_a_legend_below_the_axes_fits_a_journal_column(files):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    for source, kind in ((files["line"], "response"), (files["plane"], "map")):
+        fig = plot.plot(source, kind=kind, size=(3.4, 3.4), title=False, log=False if kind == "response" else None)
+        FigureCanvasAgg(fig).draw()
+        box = fig.legends[0].get_window_extent()
+        assert 0 <= box.x0 and box.x1 <= fig.bbox.width, (kind, box, fig.bbox.width)
+
+
+def test_the_svg_keeps_the_description(files, tmp_path, invoke):
+    out = tmp_path / "f.svg"
+    assert invoke("plot", files["plane"], "--var", "period", "--no-title", "-o", out).exit_code == 0
+    found = plot.read_description(out)
+    assert found["Title"].startswith("period over g and Ω") and "plane.h5" in found["Description"]
+
+
+def test_a_figure_too_small_for_its_texts_says_what_to_do(files, tmp_path, invoke):
+    result = invoke("plot", files["line"], "--size", "2,1.5", "-o", tmp_path / "f.png")
+    assert result.exit_code == 0, result.output
+    assert "Note: " in result.output and "too small for its title" in result.output
+    assert "--no-title, a larger --size" in result.output and "constrained_layout" not in result.output

@@ -113,6 +113,10 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     from vrsweep.store.fileio import write_bytes
 
     write_bytes(path, render(figure, path.suffix.lower()[1:], dpi))
+    from vrsweep.plot import layout_note
+
+    if layout_note(figure):
+        click.echo(f"Note: {path}: {layout_note(figure)} (--no-title, a larger --size)", err=True)
     click.echo(f"-> {path}", err=True)
 
 

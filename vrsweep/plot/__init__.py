@@ -51,7 +51,7 @@ from vrsweep.plot.analytic import analytic_branches, resonance_positions
 from vrsweep.plot.basins import basin_figure, basin_plot
 from vrsweep.plot.labels import (
     KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, description, figure_options, metadata,
-    parameter_label, parse_size, read_description, render, resolve_style,
+    layout_note, parameter_label, parse_size, read_description, render, resolve_style,
 )
 from vrsweep.plot.lyapunov import lyapunov_figure
 from vrsweep.plot.selection import _grid_axes, _sweep_default, load, select
@@ -148,5 +148,5 @@ __all__ = [
     "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
-    "figure_options", "description", "metadata", "render", "read_description", "resolve_style", "parse_size",
+    "figure_options", "description", "metadata", "render", "layout_note", "read_description", "resolve_style", "parse_size",
 ]

@@ -8,6 +8,7 @@ import functools
 import inspect
 import os
 import re
+import warnings
 from pathlib import Path
 
 from matplotlib.figure import Figure
@@ -292,9 +293,25 @@ def render(fig, file_format, dpi) -> bytes:
     import matplotlib.style
 
     image = io.BytesIO()
-    with matplotlib.style.context(getattr(fig, "_vrsweep_style", None) or {}):
+    with matplotlib.style.context(getattr(fig, "_vrsweep_style", None) or {}), \
+            warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         fig.savefig(image, format=file_format, dpi=dpi, metadata=metadata(fig, file_format))
+    # matplotlib's own warning names its internals; say what to do instead (layout_note).
+    fig._vrsweep_layout_note = TOO_SMALL if any("collapsed to zero" in str(w.message) for w in caught) else ""
+    for w in caught:
+        if "collapsed to zero" not in str(w.message):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return image.getvalue()
+
+
+TOO_SMALL = ("the figure is too small for its title, labels and legend, so they overlap the axes: "
+             "leave the title off or make the figure larger")
+
+
+def layout_note(fig) -> str:
+    """'' or why the last ``render`` of ``fig`` could not lay it out (too small for its texts)."""
+    return getattr(fig, "_vrsweep_layout_note", "")
 
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
