@@ -131,11 +131,14 @@ def main():
 def shrink_png(path):
     """Re-save a PNG with a 32-colour palette: 3-4 times smaller, no visible change for line plots
     (the dense trajectory figures would otherwise weigh ~600 kB each in the repository)."""
-    from PIL import Image
+    from PIL import Image, PngImagePlugin
 
     with Image.open(path) as image:
         palette = image.convert("RGB").quantize(colors=32, dither=Image.Dither.NONE)
-    palette.save(path, optimize=True)
+        text = PngImagePlugin.PngInfo()  # the figure's description (vrsweep info FIGURE.png) stays
+        for key, value in getattr(image, "text", {}).items():
+            text.add_text(key, value)
+    palette.save(path, optimize=True, pnginfo=text)
 
 
 if __name__ == "__main__":
