@@ -21,8 +21,13 @@ regula falsi, or by bisection for grazing, until the parameter is known to locat
     fold             det(M - I)  (a real multiplier through +1)
     period doubling  det(M + I)  (a real multiplier through -1)
     Neimark-Sacker   det(M) - 1  while the multipliers are a complex pair
-    grazing          the number of impacts per period changes (a non-impacting maximum reaches
-                     Delta, or the slowest impact's velocity reaches 0); the branch goes on.
+    grazing          the number of impacts per period changes between two points, or the
+                     corrector fails next to an orbit whose highest free maximum is within
+                     GRAZING_PROXIMITY of Delta (or whose slowest impact is that slow): the
+                     point is recorded, and the branch beyond it is searched for
+                     (switch_at_grazing); when none is found the branch ends with status
+                     "grazing" (the square-root term of the map beyond a graze defeats Newton
+                     from the smooth side; see docs/continuation.md).
 
 Nothing here raises on a numerical failure: a branch ends with a status and a one-line reason.
 Bad requests (a chaotic start, an incommensurate forcing) raise VrsweepError.
@@ -62,6 +67,7 @@ ENDED_MAX_POINTS = "max_points"
 ENDED_NEWTON = "newton_failed"
 ENDED_STICKING = "sticking"
 ENDED_INTEGRATION = "integration_failed"
+ENDED_GRAZING = "grazing"
 POINT_FIELDS = ("parameter", "x", "v", "R", "Q_amplitude", "impacts_per_period", "x_max",
                 "slowest_impact", "residual", "newton_iterations")
 
@@ -348,7 +354,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None):
         tangent = -tangent
     step = options["initial_step"]
     current = start
-    orbits, bifurcations = [], []
+    orbits, bifurcations, crossed = [], [], []
     while True:
         if len(orbits) >= max_points:
             return orbits, bifurcations, (ENDED_MAX_POINTS, f"{max_points} points reached")
@@ -356,6 +362,25 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None):
         orbit, failure = correct(problem, z_predicted, start.periods, tangent, z_predicted)
         if failure is not None or _turned_back(current, orbit, tangent, step):
             step *= 0.5
+            if step < options["min_step"] and _near_grazing(problem, current) and current.z.tolist() not in crossed:
+                # The square-root singularity of grazing: the branch goes on from here in another
+                # direction, on the other side of the barrier (module doc).
+                crossed.append(current.z.tolist())
+                bifurcations.append(("grazing", current))
+                switched = switch_at_grazing(problem, current, tangent)
+                if switched is None:
+                    side = "touches the barrier" if current.impacts_per_period == 0 else "impacts at zero speed"
+                    return orbits, bifurcations, (ENDED_GRAZING, f"the orbit {side} at {problem.parameter} = "
+                                                                 f"{current.parameter:.8g}; no branch beyond "
+                                                                 "the graze was found")
+                    orbit, tangent = switched
+                    if not lo <= orbit.parameter <= hi:
+                        return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
+                    orbits.append(orbit)
+                    if progress is not None:
+                        progress(orbit)
+                    current, step = orbit, options["initial_step"]
+                    continue
             if step < options["min_step"]:
                 status, reason = failure or (ENDED_NEWTON, "the corrector keeps jumping to another branch")
                 return orbits, bifurcations, (status, f"{reason} at {problem.parameter} = "
@@ -371,6 +396,57 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None):
         if orbit.newton_iterations <= EASY_NEWTON:
             step = min(step * STEP_GROWTH, options["max_step"])
         current, tangent = orbit, new_tangent
+
+
+# An orbit is near grazing when its highest free maximum is this close to Delta (relative), or
+# its slowest impact this slow (relative to the orbit's speed scale max(1, |v|)).
+GRAZING_PROXIMITY = 1e-3
+# Radii (in (x, v, parameter)) of the spheres of predictors searched for the branch beyond a graze.
+GRAZING_SEARCH_RADII = (1e-3, 4e-3, 1.6e-2)
+
+
+def _near_grazing(problem, orbit):
+    delta = problem.coefficients(orbit.parameter)[8]
+    scale = max(1.0, abs(delta))
+    if orbit.impacts_per_period == 0:
+        return delta - orbit.x_max < GRAZING_PROXIMITY * scale
+    # Reached with a speed v, an impact penetrates about v^2 / (2 a), a ~ 1: the same proximity.
+    return orbit.slowest_impact < np.sqrt(GRAZING_PROXIMITY * scale)
+
+
+def _search_directions():
+    """The 26 unit vectors towards the neighbours of a cube's centre (any direction is within 35
+    degrees of one of them)."""
+    directions = []
+    for i in (-1, 0, 1):
+        for j in (-1, 0, 1):
+            for k in (-1, 0, 1):
+                if (i, j, k) != (0, 0, 0):
+                    directions.append(np.array([i, j, k], dtype=float) / np.sqrt(i * i + j * j + k * k))
+    return directions
+
+
+def switch_at_grazing(problem, graze, tangent):
+    """The branch beyond a grazing orbit: (Orbit with another impact count, its tangent) or None.
+
+    Beyond a graze the map has a square-root term, F = A dz + C sqrt(sigma) (sigma the
+    penetration), so the continuing branch leaves the grazing point at a corner, in a direction
+    tangent to the grazing surface (docs/design.md). It is found by the arclength corrector on
+    planes at distance rho from the grazing point, normal to each of 26 directions. Best effort:
+    Newton started on the wrong side of the graze sees the smooth side's Jacobian only, and on
+    the hysteresis example's unstable orbit it finds nothing (docs/continuation.md); the branch
+    then ends with status "grazing".
+    """
+    for radius in GRAZING_SEARCH_RADII:
+        for direction in _search_directions():
+            if direction @ tangent < -0.9:
+                continue  # straight back along the branch we came on
+            z_predicted = graze.z + radius * direction
+            orbit, failure = correct(problem, z_predicted, graze.periods, direction, z_predicted)
+            if failure is None and orbit.impacts_per_period != graze.impacts_per_period:
+                chord = orbit.z - graze.z
+                return orbit, tangent_of(orbit, chord / np.linalg.norm(chord))
+    return None
 
 
 def _turned_back(previous, orbit, tangent, step):
