@@ -40,6 +40,16 @@ def hysteresis_branch():
     return problem, branch, bifurcations
 
 
+@pytest.fixture(scope="module")
+def impacting_branch():
+    """The large orbit the down-sweep stays on: one impact per slow period."""
+    problem = _problem()
+    run = simulate(_coefficients(27.0), [0.0, 0.0], settings_vector(transient_periods=100, measure_periods=5))
+    start = continuation.find_start(problem, run.summary[[8, 9]], 24.0, 100, 16)
+    branch, bifurcations = continuation.continue_branch(problem, start, 21.0, 27.0, 30)
+    return problem, branch, bifurcations
+
+
 def _coefficients(g):
     return kernel_coefficients(dict(HYSTERESIS, g=g), "effective")
 
@@ -66,9 +76,11 @@ def test_branch_has_stable_and_unstable_orbits_and_both_bifurcations(hysteresis_
 
 
 @pytest.mark.slow
-def test_every_sampled_point_is_a_fixed_point_of_scipys_map(hysteresis_branch):
+def test_every_sampled_point_is_a_fixed_point_of_scipys_map(hysteresis_branch, impacting_branch):
     _, branch, bifurcations = hysteresis_branch
-    for orbit in _sample(branch.orbits, 8) + [b.orbit for b in bifurcations]:
+    orbits = _sample(branch.orbits, 8) + [b.orbit for b in bifurcations] + _sample(impacting_branch[1].orbits, 3)
+    assert any(orbit.impacts_per_period > 0 for orbit in orbits)
+    for orbit in orbits:
         state = orbit.state
         for k in range(orbit.periods):
             state, _ = _one_period(_coefficients(orbit.parameter), state, k)
@@ -94,9 +106,9 @@ def _scipy_monodromy(orbit, step=1e-6):
 
 
 @pytest.mark.slow
-def test_multipliers_match_scipy_central_differences(hysteresis_branch):
-    _, branch, _ = hysteresis_branch
-    for orbit in _sample(branch.orbits, 4):
+def test_multipliers_match_scipy_central_differences(hysteresis_branch, impacting_branch):
+    # The impacting orbits check the saltation matrix too.
+    for orbit in _sample(hysteresis_branch[1].orbits, 4) + _sample(impacting_branch[1].orbits, 2):
         reference = np.sort_complex(np.linalg.eigvals(_scipy_monodromy(orbit)))
         computed = np.sort_complex(orbit.multipliers)
         assert np.max(np.abs(reference - computed)) < 1e-6, (orbit.parameter, reference, computed)
@@ -120,17 +132,16 @@ def _liouville_determinant(orbit):
 
 
 @pytest.mark.slow
-def test_product_of_multipliers_obeys_liouville(hysteresis_branch):
-    _, branch, _ = hysteresis_branch
-    for orbit in _sample(branch.orbits, 4):
+def test_product_of_multipliers_obeys_liouville(hysteresis_branch, impacting_branch):
+    for orbit in _sample(hysteresis_branch[1].orbits, 3) + _sample(impacting_branch[1].orbits, 2):
         product = np.prod(orbit.multipliers).real
         assert product == pytest.approx(_liouville_determinant(orbit), rel=1e-7), orbit.parameter
 
 
-def _sweep(values, state, transient=100, measure=100):
+def _sweep(values, state, transient=100, measure=100, rtol=1e-10, atol=1e-12):
     """What `vrsweep run` does along an axis with `continuation`: each point starts from the
     previous one's final state. Returns (R, impacts per period, final states)."""
-    settings = settings_vector(rtol=1e-10, atol=1e-12, transient_periods=transient, measure_periods=measure)
+    settings = settings_vector(rtol=rtol, atol=atol, transient_periods=transient, measure_periods=measure)
     gains, impacts, finals = [], [], []
     for g in values:
         run = simulate(_coefficients(g), state, settings)
@@ -152,27 +163,37 @@ def _orbit_at(problem, branch, g, stable=True):
 
 
 @pytest.mark.slow
-def test_stable_points_equal_long_simulations(hysteresis_branch):
-    problem, branch, _ = hysteresis_branch
-    for g in (23.5, 24.5):
+def test_stable_points_equal_long_simulations_on_both_sides_of_the_loop(hysteresis_branch, impacting_branch):
+    large_start = simulate(_coefficients(27.0), [0.0, 0.0], settings_vector(transient_periods=100,
+                                                                             measure_periods=5)).summary[[8, 9]]
+    # The up-sweep of configs/hysteresis_effective.yaml: from rest at g = 21, each point from the last.
+    small_start = _sweep(GRID[GRID < 24.5], [0.0, 0.0])[2][-1]
+    for (problem, branch, _), start, g in ((hysteresis_branch, small_start, 24.5),
+                                           (impacting_branch, large_start, 24.5),
+                                           (impacting_branch, large_start, 23.0)):
         orbit = _orbit_at(problem, branch, g)
         assert orbit.stable
-        # From rest, the up-sweep's side of the loop: transient long enough for |mu|^n < 1e-9.
+        # The up-sweep lands on the small orbit, the down-sweep from g = 27 on the impacting
+        # one; the last transient is long enough for |mu|^n < 1e-9.
         contraction = np.max(np.abs(orbit.multipliers))
         transient = int(math.log(1e-9) / math.log(contraction)) + 1
-        gains, _, _ = _sweep([g], [0.0, 0.0], transient=transient, measure=20)
+        gains, impacts, _ = _sweep([g], start, transient=transient, measure=20)
+        assert impacts[0] == orbit.impacts_per_period
         assert gains[0] == pytest.approx(orbit.R, rel=1e-6)
 
 
 @pytest.mark.slow
 def test_fold_lies_where_the_up_sweep_jumps(hysteresis_branch):
+    """The up-sweep of configs/hysteresis_effective.yaml (from rest at g = 21, each point from the
+    last, 100 + 100 periods) leaves the small orbit at the first grid point past its end: the
+    located fold is within one grid step of that jump."""
     _, _, bifurcations = hysteresis_branch
     folds = [b.orbit.parameter for b in bifurcations if b.kind == "fold"]
-    up = GRID[GRID >= 22.0]
-    gains, _, _ = _sweep(up, [0.0, 0.0], transient=300, measure=20)
-    jump = int(np.argmax(np.diff(gains) > 3.0))  # the small orbit's gain is < 20, the impacting one's ~24
-    assert np.diff(gains)[jump] > 3.0
-    assert any(up[jump] <= fold <= up[jump + 1] for fold in folds), (folds, up[jump])
+    gains, impacts, _ = _sweep(GRID, [0.0, 0.0])
+    jumped = int(np.argmax(impacts > 0))  # the small orbit never impacts, the large one does
+    assert impacts[jumped] > 0 and np.all(impacts[:jumped] == 0)
+    grid_step = GRID[1] - GRID[0]
+    assert any(abs(GRID[jumped] - fold) <= grid_step for fold in folds), (folds, GRID[jumped])
 
 
 def test_neimark_sacker_point_has_a_unit_complex_pair(hysteresis_branch):
@@ -191,19 +212,25 @@ def test_fold_has_a_unit_real_multiplier(hysteresis_branch):
 
 
 @pytest.mark.slow
-def test_grazing_separates_impacting_and_free_orbits(hysteresis_branch):
-    problem, branch, bifurcations = hysteresis_branch
+def test_grazing_point_touches_the_barrier(hysteresis_branch):
+    """The unstable orbit beyond the fold grows until its maximum reaches Delta: SciPy's orbit from
+    the located point reaches the barrier's height (its maximum within 1e-5 of Delta), and the
+    free orbits before it stay below."""
+    _, branch, bifurcations = hysteresis_branch
     grazings = [b.orbit for b in bifurcations if b.kind == "grazing"]
     assert grazings, branch.ends
     graze = grazings[0]
-    counts = []
-    for shift in (-1e-3, 1e-3):
-        nearest = min(branch.orbits, key=lambda o: abs(o.parameter - (graze.parameter + shift)))
-        counts.append(nearest.impacts_per_period)
-        # SciPy from the branch point: its impacts in one period are the orbit's.
-        _, run = _one_period(_coefficients(nearest.parameter), nearest.state, 0)
-        assert len(run["impact_times"]) == nearest.impacts_per_period * nearest.periods
-    assert min(counts) == 0 and max(counts) >= 1
+    delta = HYSTERESIS["Delta"]
+    _, run = _one_period(_coefficients(graze.parameter), graze.state, 0)
+    t = np.linspace(0.0, SLOW_PERIOD, 20001)
+    x_max = np.max(run["sol"](t)[0])
+    assert len(run["impact_times"]) == 0 and x_max == pytest.approx(delta, abs=1e-5)
+    nearby = [o for o in branch.orbits if 0.0 < abs(o.parameter - graze.parameter) < 0.05 and not o.stable]
+    assert nearby
+    for orbit in nearby:
+        _, run = _one_period(_coefficients(orbit.parameter), orbit.state, 0)
+        assert len(run["impact_times"]) == 0 and np.max(run["sol"](t)[0]) < delta
+    assert branch.ends["up"][0] in ("grazing", "left_range")
 
 
 @pytest.mark.slow
