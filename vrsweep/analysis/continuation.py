@@ -41,13 +41,13 @@ from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import VrsweepError
 from vrsweep.numerics import kernel
 from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import simulate
 from vrsweep.results import Status
 
-# Documented defaults of the config's continuation section (docs/continuation.md).
-DEFAULTS = dict(max_points=400, initial_step=0.05, min_step=1e-5, max_step=0.5, newton_tolerance=1e-8,
-                max_newton_iterations=12, max_period=16, location_tolerance=1e-6)
+# The config's continuation section's defaults (docs/continuation.md).
+DEFAULTS = dict(CONTINUATION_DEFAULTS)
 STEP_GROWTH = 1.5
 # Damped Newton: a step that does not reduce |F| + |arclength condition| is halved this many times.
 MAX_HALVINGS = 6
