@@ -30,7 +30,7 @@ regula falsi, or by bisection for grazing, until the parameter is known to locat
                      from the smooth side; see docs/continuation.md).
 
 Nothing here raises on a numerical failure: a branch ends with a status and a one-line reason.
-Bad requests (a chaotic start, an incommensurate forcing) raise VrsweepError.
+Bad requests (a chaotic start, an incommensurate forcing) raise UsageError (exit code 2).
 """
 
 from dataclasses import dataclass, field
@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vrsweep.analysis.diagnostics import detect_period
-from vrsweep.errors import VrsweepError
+from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
 from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
@@ -142,14 +142,14 @@ def check_commensurate(parameters, model, parameter):
     if model != "original" or parameters.get("g", 0.0) == 0.0:
         return
     if parameter in ("Omega", "omega"):
-        raise VrsweepError.naming(
+        raise UsageError.naming(
             "{parameter} = {name} cannot be continued in the original model: its fast forcing is periodic "
             "with the slow period only where Omega/omega is a whole number, which a moving {name} leaves "
             "at once; continue {name} in the effective model (no fast force) instead",
             {"parameter": "continuation.parameter"}, name=parameter)
     ratio = parameters["Omega"] / parameters["omega"]
     if abs(ratio - round(ratio)) > 1e-12 * ratio:
-        raise VrsweepError.naming(
+        raise UsageError.naming(
             "Omega/omega = {ratio} is not a whole number: the original model is then forced "
             "quasi-periodically and has no periodic orbit of the stroboscopic map to continue "
             "(choose {Omega} a multiple of omega, e.g. Omega = 4 with omega = 0.5)",
@@ -458,19 +458,19 @@ def _turned_back(previous, orbit, tangent, step):
 def find_start(problem, initial_state, value, transient_periods, max_period):
     """The orbit reached from ``initial_state`` at ``value``: integrate the transient, detect its
     period p as sweeps do (diagnostics.detect_period) and converge Newton on P^p. Raises
-    VrsweepError for a non-periodic start or one above max_period."""
+    UsageError for a non-periodic start or one above max_period."""
     settings = np.array(problem.settings, dtype=float)
     settings[kernel.TRANSIENT_PERIODS] = transient_periods
     settings[kernel.MEASURE_PERIODS] = START_STROBE_PERIODS
     run = simulate(problem.coefficients(value), initial_state, settings, method=problem.method)
     if run.status != Status.OK:
-        raise VrsweepError.naming("the start at {name} = {value} failed to integrate: {status}",
+        raise UsageError.naming("the start at {name} = {value} failed to integrate: {status}",
                                   name=problem.parameter, value=f"{value:g}", status=run.status.name.lower())
     strobe = run.period_records[-START_STROBE_PERIODS:]
     period = int(detect_period(strobe[None, :, kernel.REC_X], strobe[None, :, kernel.REC_V],
                                max(max_period, 1), START_PERIOD_TOLERANCE)[0])
     if period == 0:
-        raise VrsweepError.naming(
+        raise UsageError.naming(
             "no periodic orbit of at most {limit} slow periods at the start ({name} = {value}): the motion "
             "is chaotic, quasi-periodic, of a longer period or not yet settled; try another start value "
             "({start}), a longer transient (integration.transient_periods) or a larger {max_period}",
@@ -479,7 +479,7 @@ def find_start(problem, initial_state, value, transient_periods, max_period):
     state = strobe[-1, [kernel.REC_X, kernel.REC_V]]
     orbit, failure = correct(problem, np.array([state[0], state[1], value]), period)
     if failure:
-        raise VrsweepError.naming("the start orbit of period {period} did not converge at {name} = {value}: "
+        raise UsageError.naming("the start orbit of period {period} did not converge at {name} = {value}: "
                                   "{reason}", period=period, name=problem.parameter, value=f"{value:g}",
                                   reason=failure[1])
     return orbit
