@@ -117,3 +117,23 @@ def test_plot_draws_the_branch_with_a_sweep(branch_file, invoke, tmp_path, write
     assert any(label.startswith("fold") for label in labels)
     styles = {line.get_linestyle() for line in axes[0].lines if line.get_color() == "C0"}
     assert {"-", "--"} <= styles  # stable solid, unstable dashed
+
+
+def test_start_from_a_sweep_point(invoke, tmp_path, write_config):
+    """--start SWEEP.h5 --at g=...: the transient starts from that point's final state. The
+    down-sweep of the hysteresis loop is on the impacting orbit, which the start from rest at
+    the same g does not find."""
+    sweep_config = write_config(tmp_path, "model: effective\nparameters: {gamma: 0.05, alpha: 0.05, Omega: 4.0}\n"
+                                          "initial: {x: 0.0, v: 0.0}\n"
+                                          "sweep:\n  g: {start: 24.0, stop: 27.0, num: 4, continuation: down}\n"
+                                          "integration: {transient_periods: 50, measure_periods: 20}\n", "d.yaml")
+    sweep = tmp_path / "d.h5"
+    assert invoke("run", sweep_config, "-o", sweep, "-q").exit_code == 0
+    config = write_config(tmp_path, HYSTERESIS.replace("to: [23.5, 25.4]", "to: [23.8, 24.2]"), "c.yaml")
+    output = tmp_path / "impacting.h5"
+    result = invoke("continue", config, "-o", output, "--start", sweep, "--at", "g=24")
+    assert result.exit_code == 0, result.output
+    with vrsweep.open_results(output) as ds:
+        assert np.all(ds["impacts_per_period"].values == 1) and np.all(ds["stable"].values == 1)
+    result = invoke("continue", config, "-o", tmp_path / "y.h5", "--start", sweep)
+    assert result.exit_code == 2 and "--at" in result.output

@@ -15,6 +15,8 @@ BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period d
                        "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing")}
 BRANCH_COLOUR = "C0"
 FINE_POINTS = 600
+# The multipliers' panel is logarithmic when their moduli span more than this factor.
+LOG_SPAN = 100.0
 
 
 def is_branch(data) -> bool:
@@ -81,6 +83,9 @@ def branch_figure(ds, sweeps=()) -> Figure:
     bottom.axhline(1.0, color="k", lw=0.8, label="unit circle $|\\mu| = 1$")
     bottom.plot([], [], color="C0", label="$|\\mu_1|$")
     bottom.plot([], [], color="C1", label="$|\\mu_2|$")
+    positive = modulus[modulus > 0.0]
+    if positive.size and positive.max() / positive.min() > LOG_SPAN:
+        bottom.set_yscale("log")  # a strongly unstable or strongly damped branch spans decades
     bottom.set_ylabel("|Floquet multiplier|  [1]")
     bottom.set_xlabel(f"{symbol}  [1]")
     bottom.legend(fontsize=8, loc="best")
