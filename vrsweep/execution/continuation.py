@@ -29,14 +29,18 @@ def problem_of(config):
 def start_state_from_sweep(path, at):
     """x, v at the end of the run of the grid point ``at`` ({axis: value}) of sweep file ``path``:
     the point's attractor (its x_final, v_final), where the first orbit is looked for."""
-    from vrsweep.store.reading import open_results
+    from vrsweep.store.reading import grid_axes, open_results
 
     with open_results(path) as ds:
+        if ds.attrs.get("vrsweep_file") not in ("sweep", "shard"):
+            raise UsageError.naming("{path} is not a sweep file: {start} takes the results of vrsweep run",
+                                    path=str(path))
         selection = {}
+        axes = grid_axes(ds)
         for name, value in at.items():
-            if name not in ds.coords:
+            if name not in axes:
                 raise UsageError.naming("{path} has no axis {name}; its axes: {axes}", path=str(path), name=name,
-                                        axes=", ".join(str(c) for c in ds.coords))
+                                        axes=", ".join(str(a) for a in axes))
             selection[name] = value
         point = ds[["x_final", "v_final"]].sel(selection, method="nearest")
         for dim in list(point.dims):  # e.g. direction of a hysteresis sweep: its first
