@@ -12,8 +12,6 @@ thread's CPU time, best of 3, after a warm-up call that compiles (or loads) ever
 import argparse
 import time
 
-import numpy as np
-
 from vrsweep.analysis import continuation
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.shooting import periodic_map

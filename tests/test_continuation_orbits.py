@@ -189,7 +189,7 @@ def test_fold_lies_where_the_up_sweep_jumps(hysteresis_branch):
     located fold is within one grid step of that jump."""
     _, _, bifurcations = hysteresis_branch
     folds = [b.orbit.parameter for b in bifurcations if b.kind == "fold"]
-    gains, impacts, _ = _sweep(GRID, [0.0, 0.0])
+    _, impacts, _ = _sweep(GRID, [0.0, 0.0])
     jumped = int(np.argmax(impacts > 0))  # the small orbit never impacts, the large one does
     assert impacts[jumped] > 0 and np.all(impacts[:jumped] == 0)
     grid_step = GRID[1] - GRID[0]

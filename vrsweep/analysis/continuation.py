@@ -246,8 +246,8 @@ def correct(problem, z_guess, periods, tangent=None, z_predicted=None):
             return None, (ENDED_NEWTON, "non-finite Newton step")
         last_step = step
         z = z + step
-    return None, (ENDED_NEWTON, f"Newton did not converge in {problem.options['max_newton_iterations']} "
-                                f"iterations (residual {residual:.2g})")
+    iterations = problem.options["max_newton_iterations"]
+    return None, (ENDED_NEWTON, f"Newton did not converge in {iterations} iterations (residual {residual:.2g})")
 
 
 def tangent_of(orbit, previous=None):
@@ -370,21 +370,21 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None):
                 switched = switch_at_grazing(problem, current, tangent)
                 if switched is None:
                     side = "touches the barrier" if current.impacts_per_period == 0 else "impacts at zero speed"
-                    return orbits, bifurcations, (ENDED_GRAZING, f"the orbit {side} at {problem.parameter} = "
-                                                                 f"{current.parameter:.8g}; no branch beyond "
-                                                                 "the graze was found")
-                    orbit, tangent = switched
-                    if not lo <= orbit.parameter <= hi:
-                        return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
-                    orbits.append(orbit)
-                    if progress is not None:
-                        progress(orbit)
-                    current, step = orbit, options["initial_step"]
-                    continue
+                    reason = (f"the orbit {side} at {problem.parameter} = {current.parameter:.8g}; no branch "
+                              "beyond the graze was found")
+                    return orbits, bifurcations, (ENDED_GRAZING, reason)
+                orbit, tangent = switched
+                if not lo <= orbit.parameter <= hi:
+                    return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
+                orbits.append(orbit)
+                if progress is not None:
+                    progress(orbit)
+                current, step = orbit, options["initial_step"]
+                continue
             if step < options["min_step"]:
                 status, reason = failure or (ENDED_NEWTON, "the corrector keeps jumping to another branch")
-                return orbits, bifurcations, (status, f"{reason} at {problem.parameter} = "
-                                                      f"{current.parameter:.8g} with the smallest step")
+                reason = f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
+                return orbits, bifurcations, (status, reason)
             continue
         new_tangent = tangent_of(orbit, tangent)
         if not lo <= orbit.parameter <= hi:
