@@ -50,6 +50,7 @@ def test_info_summarises_the_branch(branch_file, invoke):
     result = invoke("info", path)
     assert result.exit_code == 0
     assert "vrsweep branch" in result.output and "branch 0:" in result.output
+    assert "g=24 " in result.output  # the continued parameter's start value, not the config's default
     assert "bifurcation: fold at g = " in result.output
 
 

@@ -1,5 +1,7 @@
 """vrsweep continue CONFIG.yaml [-o OUT.h5] [--start results.h5 --at g=23]: periodic orbits followed."""
 
+import dataclasses
+
 import click
 
 from vrsweep.commands.options import (
@@ -64,6 +66,9 @@ def command(config_path, overrides, output, start_path, at, overwrite, quiet):
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
         branches, bifurcations = execution.run_continuation(config, start_state)
         delta = config.parameters["Delta"]
+        # The stored config holds the start's value of the continued parameter, not its unused default.
+        section = config.continuation
+        config = dataclasses.replace(config, parameters={**config.parameters, section.parameter: section.start})
         write_branch(path, branch_arrays(branches, bifurcations, delta), config, config.integration.method,
                      overwrite=overwrite)
     if not quiet:
