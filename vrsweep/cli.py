@@ -61,7 +61,7 @@ def main():
 def _register():
     import importlib
 
-    for name in ("init", "run", "theory", "validate", "plot", "simulate", "merge", "info"):
+    for name in ("init", "run", "theory", "validate", "plot", "simulate", "continue_", "merge", "info"):
         try:
             module = importlib.import_module(f"vrsweep.commands.{name}")
         except ModuleNotFoundError as error:

@@ -33,7 +33,7 @@ _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "c
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 @click.option("--config", "show_config", is_flag=True, help="Also print the config the file was run from.")
 def command(path, as_json, show_config):
-    """Summarise a results, shard or trajectory file: grid, progress, status counts, variables.
+    """Summarise a results, shard, trajectory or branch file: grid, progress, status counts, variables.
 
     A figure from vrsweep plot (.png, .pdf, .svg): its title and full description, kept in the
     file's metadata (also with --no-title)."""
@@ -88,6 +88,12 @@ def describe(path) -> dict:
         if other is None:
             raise error from None
         return other
+    if kind == "branch":
+        described = _describe_groups(path, kind)
+        if described is None:
+            raise ResultFileError(f"{path} is a vrsweep branch file this vrsweep cannot describe")
+        described["branches"] = _describe_branches(path)
+        return described
     if kind == "trajectory":
         described = _describe_groups(path, kind)
         if described is None:  # the trajectory reader says what is wrong (a newer format...)
@@ -99,6 +105,52 @@ def describe(path) -> dict:
     # Every variable is read, not only what the summary shows: each chunk's checksum is checked,
     # so a damaged file is reported as such instead of described (tests/test_errors.py).
     return _describe_sweep(path, load_results(path))
+
+
+def _describe_branches(path) -> dict:
+    """A branch file's continuation (vrsweep continue): per branch its points, stable points,
+    parameter range and ends; the bifurcation table."""
+    from vrsweep.store.reading import open_results
+
+    with open_results(path) as ds:
+        parameter = str(_plain(ds.attrs.get("parameter", "parameter")))
+        branch = np.asarray(ds["branch"].values)
+        values = np.asarray(ds["parameter"].values)
+        stable = np.asarray(ds["stable"].values)
+        rows = []
+        for number in np.asarray(ds["branch_id"].values):
+            mine = branch == number
+            rows.append({
+                "branch": int(number), "periods": int(ds["branch_periods"].values[number]),
+                "points": int(mine.sum()), "stable_points": int(stable[mine].sum()),
+                "min": _number(values[mine].min()) if mine.any() else None,
+                "max": _number(values[mine].max()) if mine.any() else None,
+                "first_end": [str(ds["branch_end_first_status"].values[number]),
+                              str(ds["branch_end_first_reason"].values[number])],
+                "last_end": [str(ds["branch_end_last_status"].values[number]),
+                             str(ds["branch_end_last_reason"].values[number])],
+            })
+        bifurcations = [{"kind": str(kind), "branch": int(b), "parameter": _number(p), "R": _number(r)}
+                        for kind, b, p, r in zip(ds["bifurcation_kind"].values, ds["bifurcation_branch"].values,
+                                                 ds["bifurcation_parameter"].values, ds["bifurcation_R"].values)]
+    return {"parameter": parameter, "branches": rows, "bifurcations": bifurcations}
+
+
+def _format_branches(branches) -> list[str]:
+    if not branches:
+        return []
+    name = branches["parameter"]
+    lines = []
+    for row in branches["branches"]:
+        lines.append(f"branch {row['branch']}:    period {row['periods']}, {row['points']} points "
+                     f"({row['stable_points']} stable), {name} from {_short(row['min'])} to {_short(row['max'])}")
+        for side in ("first", "last"):
+            status, reason = row[f"{side}_end"]
+            lines.append(f"  {side} end:   {status}: {reason}")
+    for row in branches["bifurcations"]:
+        lines.append(f"bifurcation: {row['kind']} at {name} = {row['parameter']:.8g} (branch {row['branch']}, "
+                     f"R = {_short(row['R'])})")
+    return lines
 
 
 def _describe_sweep(path, ds) -> dict:
@@ -367,6 +419,7 @@ def format_summary(summary, show_config=False) -> str:
             else:
                 lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
     lines += _format_attractors(summary.get("attractors") or [])
+    lines += _format_branches(summary.get("branches"))
     created = summary["created"] or "unknown time"
     versions = summary["versions"]
     written = f"{created}"

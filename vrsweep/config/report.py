@@ -13,6 +13,7 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.nodes import MappingNode, SequenceNode
 from ruamel.yaml.reader import ReaderError
 
+from vrsweep.numerics.model import PARAMETER_NAMES
 from vrsweep.config.schema import (
     ALLOWED_KEYS, ANY, AXIS_FORMS, KEY_HOME, LINEAR_KEYS, NUM_DOMAIN, VALUES_KEYS, CONTINUATIONS,
     INITIAL_DOMAINS, INTEGRATION_DOMAINS, METHODS, PARAMETER_DOMAINS,
@@ -147,6 +148,8 @@ class Report:
             self.report(path, item["msg"])
         elif kind == "literal_error":
             choices = {("model",): MODELS, ("method",): METHODS}.get(path[-1:], CONTINUATIONS)
+            if tuple(path[:2]) == ("continuation", "parameter"):
+                choices = PARAMETER_NAMES
             hint = did_you_mean(value, choices) if isinstance(value, str) else ""
             self.report(path, f"must be one of {', '.join(choices)}, got {show(value)}{hint}")
         elif kind in ("model_type", "dict_type"):

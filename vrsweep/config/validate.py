@@ -26,7 +26,8 @@ from vrsweep.config.axes import SweepAxes
 from vrsweep.config.report import Report
 from vrsweep.config.rules import CrossFieldRules
 from vrsweep.config.schema import (
-    AXIS_FORMS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config, Document, Integration,
+    AXIS_FORMS, CONTINUATION_DEFAULTS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config,
+    Continuation, Document, Integration,
 )
 from vrsweep.config.wording import did_you_mean, dotted, show
 from vrsweep.config.yaml import (
@@ -124,6 +125,7 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
             axes=tuple(Axis(name, values, continuation) for name, (values, continuation, _) in axes.items()),
             integration=Integration(**document.integration.model_dump()),
             output=document.output,
+            continuation=_continuation(document.continuation),
             source_name=self.source,
             source_text=self.text,
             overrides=self.overrides,
@@ -230,6 +232,14 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
                 else:
                     self.report_pydantic(item, ())
             return None
+
+
+def _continuation(section):
+    if section is None:
+        return None
+    return Continuation(parameter=section.parameter, start=float(section.start), low=float(section.to[0]),
+                        high=float(section.to[1]),
+                        **{key: getattr(section, key) for key in CONTINUATION_DEFAULTS})
 
 
 def _override_targets():

@@ -63,7 +63,7 @@ from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, rea
 )
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import (
-    apply_saltation, collapse_tangents, seed_tangents, tangent_derivative,
+    apply_saltation, collapse_tangents, record_monodromy, seed_tangents, tangent_derivative,
     tangents_out_of_range,
 )
 
@@ -110,7 +110,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
                       ORDER, N_STAGES, False, N_DYNAMIC,
                       np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -128,7 +128,7 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
                       False, N_DYNAMIC,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -145,7 +145,7 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -159,7 +159,40 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+
+
+@kernel_jit
+def integrate_rk45_monodromy(coefficients, initial_state, settings, period_records, summary,
+                             sample_times, samples, impact_log, stick_log, monodromy_log):
+    """integrate_rk45_lyapunov that also returns each period's tangent map (continuation).
+
+    monodromy_log (n_periods, 4): row k is the 2x2 matrix d y((k+1)T) / d y(kT) of period k,
+    row-major (tangent.record_monodromy); the saltation matrix at every impact is in it, a sticking
+    interval makes it zero. No renormalisation: one period's map stays far inside double range
+    for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
+    """
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
+                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
+                      np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
+
+
+@kernel_jit
+def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
+                               sample_times, samples, impact_log, stick_log, monodromy_log):
+    """integrate_rk45_monodromy with DOP853 steps."""
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
+                      rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
+                      dop853_accepted_step_factor, dop853_rejected_step_factor, True,
+                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
+                      np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
 
 
 # integration.method -> the kernel. Each is compiled (or loaded from the cache) on its first call,
@@ -168,6 +201,8 @@ INTEGRATORS = {"rk45": integrate_rk45, "dop853": integrate_dop853}
 METHODS = tuple(INTEGRATORS)
 # The same with the tangent vectors (integration.lyapunov: true).
 LYAPUNOV_INTEGRATORS = {"rk45": integrate_rk45_lyapunov, "dop853": integrate_dop853_lyapunov}
+# With each period's raw tangent map (continuation, numerics/shooting.py).
+MONODROMY_INTEGRATORS = {"rk45": integrate_rk45_monodromy, "dop853": integrate_dop853_monodromy}
 
 
 def integrator(method, lyapunov=False):
@@ -181,7 +216,7 @@ def integrator(method, lyapunov=False):
 def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, step, step_error, dense_output,
                accepted_factor, rejected_factor, hold_after_reject, initial_order, n_stages, tangents, n_dynamic,
                K, dense, coefficients, initial_state, settings, period_records, summary, sample_times, samples,
-               impact_log, stick_log):
+               impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
@@ -199,6 +234,10 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     end; or attempt a step, and if it is accepted, resolve an impact inside it (reach it with an
     exact step), feed the observers, and apply the restitution law or start sticking. A pass that
     reaches the period's end closes the period.
+
+    monodromy_log (n, 4): with tangents, the raw one-period tangent map of each of the first n
+    periods (record_monodromy); the tangent vectors then restart from the unit vectors every period
+    instead of being renormalised. Length 0 (every kernel but the *_monodromy ones): unused.
     """
     rtol = settings[RTOL]
     atol = settings[ATOL]
@@ -383,7 +422,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     h = _rebound_step(h, t, v_after, coefficients)
                 err_previous = 1.0
 
-            if tangents and tangents_out_of_range(y):
+            if tangents and monodromy_log.shape[0] == 0 and tangents_out_of_range(y):
                 # A strongly damped or stretched period would underflow or overflow them before
                 # its end: renormalise now, the period's record sums the logs.
                 add_tangent_growth(record, y)
@@ -397,7 +436,13 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 break
 
         if t >= t_boundary:
+            raw = tangents and period < monodromy_log.shape[0]
+            if raw:
+                record_monodromy(monodromy_log[period], y)
             close_period(record, y, f, coefficients, tangents, stuck)
+            if raw and not stuck:
+                seed_tangents(y)  # the next period's map starts from the identity, not from Q
+                tangent_derivative(y, coefficients, f)
             period += 1
             if period == n_periods:
                 break

@@ -11,6 +11,10 @@ Sweep results (``vrsweep run``)
     ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
     ``lyapunov``     the largest Lyapunov exponent against the swept parameter, with the zero line;
                      ``bifurcation+lyapunov`` draws it under the bifurcation diagram, one x axis.
+Branch files (``vrsweep continue``)
+    R of the continued orbits against the parameter (stable solid, unstable dashed) with the
+    bifurcations marked and named, sweep files given after it on the same axes and the corrected
+    theory's branches (effective model); under it the moduli of the Floquet multipliers.
 Trajectories (``vrsweep simulate``)
     ``trajectory``   position, velocity and phase portrait, original above effective (Fig. 3-5).
     ``impacts``      impacts in each slow period against the period number (Fig. impact_no).
@@ -49,6 +53,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import UsageError
 from vrsweep.plot.analytic import analytic_branches, resonance_positions
 from vrsweep.plot.basins import basin_figure, basin_plot
+from vrsweep.plot.branches import branch_figure, is_branch
 from vrsweep.plot.labels import (
     KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, description, figure_options, metadata,
     layout_note, parameter_label, parse_size, read_description, render, resolve_style,
@@ -96,6 +101,11 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if not sources:
         raise UsageError.naming("no file to plot")
     data = [load(s) if isinstance(s, (str, os.PathLike)) else s for s in sources]
+    if is_branch(data[0]):
+        # vrsweep continue's file, with sweep files drawn on the same axes
+        if any(is_branch(d) or not hasattr(d, "attrs") for d in data[1:]):
+            raise UsageError.naming("after a branch file come sweep files only (vrsweep run results)")
+        return branch_figure(data[0], data[1:])
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
         raise UsageError.naming("plot sweep results and trajectory files separately")
