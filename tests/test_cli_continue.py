@@ -112,12 +112,17 @@ def test_plot_draws_the_branch_with_a_sweep(branch_file, invoke, tmp_path, write
 
     from vrsweep.plot import plot
 
-    axes = plot([path, sweep]).axes
+    figure = plot([path, sweep])
+    axes = figure.axes
     assert len(axes) == 2
-    labels = [text.get_text() for text in axes[0].texts]
-    assert any(label.startswith("fold") for label in labels)
+    labels = [text.get_text() for legend in figure.legends for text in legend.get_texts()]
+    assert any(label.startswith("fold, $g$ = ") for label in labels)  # each bifurcation named in the legend
     styles = {line.get_linestyle() for line in axes[0].lines if line.get_color() == "C0"}
     assert {"-", "--"} <= styles  # stable solid, unstable dashed
+    assert figure._suptitle is not None and "continued in" in figure._suptitle.get_text()
+    paper = plot([path, sweep], title=False, size=(3.4, 3.6))  # the options of every figure
+    assert paper._suptitle is None and not any(ax.get_title() for ax in paper.axes)
+    assert tuple(paper.get_size_inches()) == (3.4, 3.6)
 
 
 def test_start_from_a_sweep_point(invoke, tmp_path, write_config):

@@ -105,7 +105,7 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
         # vrsweep continue's file, with sweep files drawn on the same axes
         if any(is_branch(d) or not hasattr(d, "attrs") for d in data[1:]):
             raise UsageError.naming("after a branch file come sweep files only (vrsweep run results)")
-        return branch_figure(data[0], data[1:])
+        return branch_figure(data[0], data[1:], **options, **limits)
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
         raise UsageError.naming("plot sweep results and trajectory files separately")

@@ -5,11 +5,16 @@ Floquet multipliers with the unit circle's level."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from matplotlib.figure import Figure
 
 from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.analytic import _draw_branches, analytic_branches
+from vrsweep.plot.labels import (
+    _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
+)
 
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
                        "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing")}
@@ -41,11 +46,13 @@ def _stored_parameters(ds):
         return None
 
 
+@figure_options
 def branch_figure(ds, sweeps=()) -> Figure:
-    """The figure (two panels, one x axis) of branch Dataset ``ds`` with sweep Datasets ``sweeps``."""
+    """The figure (two panels, one x axis) of branch Dataset ``ds`` with sweep Datasets ``sweeps``;
+    takes the options of every figure (title, size, style: ``labels.figure_options``)."""
     name = str(ds.attrs.get("parameter", "parameter"))
     symbol = PARAMETER_SYMBOLS.get(name, name)
-    figure = Figure(figsize=(7.5, 6.5), layout="constrained")
+    figure = _new_figure(7.5, 6.5)
     top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
     values = np.asarray(ds["parameter"].values)
     gain = np.asarray(ds["R"].values)
@@ -73,22 +80,31 @@ def branch_figure(ds, sweeps=()) -> Figure:
     kinds = [str(kind) for kind in ds["bifurcation_kind"].values]
     for kind, at, R in zip(kinds, ds["bifurcation_parameter"].values, ds["bifurcation_R"].values):
         marker, label = BIFURCATION_MARKERS.get(kind, ("x", kind))
-        top.plot([at], [R], marker=marker, color="k", mfc="w", ms=8, zorder=5, ls="none")
-        top.annotate(f"{label}\n{symbol} = {at:.4f}", (at, R), textcoords="offset points", xytext=(6, 6),
-                     fontsize=8)
+        # Named in the legend, not beside the point: a fold and a grazing often lie close together.
+        top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=8, zorder=5, ls="none",
+                 label=f"{label}, {symbol} = {at:.4f}")
         bottom.axvline(at, color="0.75", lw=0.8, zorder=0)
-    top.set_ylabel("R = |Q|/c  [1]")
-    top.legend(fontsize=8, loc="best")
-    top.set_title(f"Periodic orbits continued in {symbol} ({ds.attrs.get('model', '')} model)")
+    top.set_ylabel("gain $R = |Q|/c$")
+    what = f"Periodic orbits continued in {symbol} ({ds.attrs.get('model', '')} model)"
+    path = str(ds.encoding.get("source", "") or ds.attrs.get("path", "") or "branch")
+    _title(figure, what, _caption(os.path.basename(path), config, str(ds.attrs.get("model", "")), omit=(name,),
+                                  width=_width(figure)))
     bottom.axhline(1.0, color="k", lw=0.8, label="unit circle $|\\mu| = 1$")
     bottom.plot([], [], color="C0", label="$|\\mu_1|$")
     bottom.plot([], [], color="C1", label="$|\\mu_2|$")
     positive = modulus[modulus > 0.0]
     if positive.size and positive.max() / positive.min() > LOG_SPAN:
         bottom.set_yscale("log")  # a strongly unstable or strongly damped branch spans decades
-    bottom.set_ylabel("|Floquet multiplier|  [1]")
-    bottom.set_xlabel(f"{symbol}  [1]")
-    bottom.legend(fontsize=8, loc="best")
+    bottom.set_ylabel("Floquet $|\\mu|$")
+    bottom.set_xlabel(parameter_label(name))
+    # One legend below both panels: inside, it covered the branch on a journal-column figure.
+    handles, labels = [], []
+    for ax in (top, bottom):
+        more_handles, more_labels = ax.get_legend_handles_labels()
+        handles += more_handles
+        labels += more_labels
+    figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",
+                  ncol=_legend_columns(figure, 3))
     return figure
 
 
@@ -104,4 +120,4 @@ def _draw_sweep(ax, sweep, name, number):
         line = data.sel(direction=direction) if direction is not None else data
         label = "sweep" if direction is None else f"sweep {'up' if direction > 0 else 'down'}"
         ax.plot(sweep[name].values, line.values, ls="none", marker="v" if direction is not None and direction < 0
-                else "^", ms=5, mfc="none", color=f"C{2 + number}", label=label, zorder=4)
+                else "^", ms=5, mfc="none", mew=1.0, color=f"C{2 + number}", label=label, zorder=4)
