@@ -51,7 +51,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     config = load_config(config_path, overrides)
     announce_fixed_axes(config_path, overrides, config)
     requested_threads = threads
-    if not dask_address:  # a Dask worker's thread count is the worker's business
+    # A remote Dask worker's thread count is the worker's business; a local one's is this machine's.
+    if not dask_address or dask_address.startswith("local:"):
         threads = capped_threads(threads)
 
     from vrsweep.execution.distributed import parse_local

@@ -30,6 +30,7 @@ import numpy as np
 from vrsweep.errors import InvalidArgument, RunFailed, VrsweepError
 from vrsweep.execution.chunks import count_statuses, default_chunk_lines, plan_lines
 from vrsweep.config.grid import Grid
+from vrsweep.execution.threads import machine_cpus
 
 LOCAL_PREFIX = "local:"
 CONNECT_TIMEOUT = "30s"
@@ -66,6 +67,10 @@ def parse_local(address):
         n = 0
     if n < 1:
         raise InvalidArgument("Dask address", address, "expected local:N with N >= 1 workers (e.g. local:4)")
+    most = machine_cpus()
+    if n > most:  # each worker is a process with its own numba threads: more is only slower
+        raise InvalidArgument("Dask address", address,
+                              f"local:N starts N worker processes; this machine has {most} CPUs, so N <= {most}")
     return n
 
 
@@ -152,7 +157,8 @@ class DaskExecutor:
             if chunk_lines is None:
                 if not threads:  # chunks sized for the workers' threads: wait for one to know them
                     client.wait_for_workers(1)
-                chunk_lines = default_chunk_lines(threads or _largest_worker(client), plan.line_length)
+                chunk_lines = default_chunk_lines(threads or _largest_worker(client), plan.line_length,
+                                                 config.integration)
             # All chunks are submitted at once and Dask balances them over the workers. Each result
             # is fetched and written as soon as it is ready, then dropped (the future is no longer
             # referenced), so results do not pile up on either side.
