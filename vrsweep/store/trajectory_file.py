@@ -247,7 +247,10 @@ def read_trajectory(path) -> TrajectoryData:
         with _open(path, "r") as f:
             if _text(f.attrs.get("vrsweep_file", "")) != FILE_KIND:
                 raise ResultFileError(f"{path} is not a vrsweep trajectory file (written by vrsweep simulate)")
-            version = int(f.attrs.get("vrsweep_format_version", 0))
+            version = f.attrs.get("vrsweep_format_version", 0)
+            if isinstance(version, (bool, np.bool_)) or not isinstance(version, (int, np.integer)):
+                raise ResultFileError(f"{path} is corrupt: attribute vrsweep_format_version must be a whole "
+                                      f"number, got {_text(version)!r}")
             if version != FORMAT_VERSION:
                 raise ResultFileError(f"{path} has trajectory format {version}; this vrsweep reads format "
                                       f"{FORMAT_VERSION}")
