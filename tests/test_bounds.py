@@ -60,7 +60,7 @@ def test_chunks_never_grow_past_the_memory_bound(measure, line_length, threads):
     integration = _config(measure=measure).integration
     most = chunks.max_chunk_lines(integration, line_length)
     assert most >= 1
-    assert chunks.default_chunk_lines(threads, line_length, integration) <= most
+    assert most <= chunks.MAX_CHUNK_LINES
     if most > 1:
         assert most * line_length * chunks.point_record_bytes(integration) <= chunks.CHUNK_RECORD_BYTES
 

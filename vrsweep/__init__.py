@@ -9,9 +9,18 @@ Results in Python::
     ds = vrsweep.open_results("results/quickstart.h5")   # an xarray.Dataset, read lazily
 """
 
-from vrsweep._version import __version__
-from vrsweep.numerics import numba_cache as _numba_cache
-from vrsweep.execution import threads as _threads
+import os as _os
+import sys as _sys
+
+if _os.path.basename(_sys.argv[0]) in ("vrsweep", "-m"):  # the command line (`vrsweep`, `python -m vrsweep`)
+    # First of all: Ctrl-C during the imports below exits 130 with one line, not a traceback.
+    from vrsweep.execution import signals as _signals
+
+    _signals.exit_at_once_on_sigint()
+
+from vrsweep._version import __version__  # noqa: E402
+from vrsweep.numerics import numba_cache as _numba_cache  # noqa: E402
+from vrsweep.execution import threads as _threads  # noqa: E402
 
 _numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
 _threads.drop_unreadable_setting()

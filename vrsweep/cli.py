@@ -23,6 +23,9 @@ class _Group(click.Group):
 
     def invoke(self, ctx):
         try:
+            from vrsweep.execution.signals import raise_on_sigint
+
+            raise_on_sigint()  # from here on, KeyboardInterrupt: handled below (and by run)
             return super().invoke(ctx)
         except VrsweepError as error:
             problems = getattr(error, "problems", None)

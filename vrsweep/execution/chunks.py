@@ -45,13 +45,10 @@ def max_chunk_lines(integration, line_length) -> int:
     return max(1, min(MAX_CHUNK_LINES, CHUNK_RECORD_BYTES // line_bytes))
 
 
-def default_chunk_lines(threads, line_length, integration=None):
-    """Enough lines per chunk to keep every thread busy and the progress bar moving, within
-    max_chunk_lines when the config's ``integration`` section is given."""
-    lines = max(threads, (16 * threads) // max(1, line_length))
-    if integration is not None:
-        lines = min(lines, max_chunk_lines(integration, line_length))
-    return lines
+def default_chunk_lines(threads, line_length):
+    """Enough lines per chunk to keep every thread busy and the progress bar moving (callers
+    bound it by max_chunk_lines)."""
+    return max(threads, (16 * threads) // max(1, line_length))
 
 
 @dataclass(frozen=True)

@@ -59,15 +59,15 @@ class Estimate:
 
 def memory_bytes(config, threads=None) -> int:
     """Bytes of per-period records a run of ``config`` holds at once, per process: one chunk's
-    (chunks.default_chunk_lines, which bounds them by CHUNK_RECORD_BYTES but never below one line)."""
+    (chunks.default_chunk_lines within chunks.max_chunk_lines: at most CHUNK_RECORD_BYTES, at least one line)."""
     from vrsweep.config.grid import Grid
-    from vrsweep.execution.chunks import default_chunk_lines, point_record_bytes
+    from vrsweep.execution.chunks import default_chunk_lines, max_chunk_lines, point_record_bytes
 
     threads = max(1, int(threads or available_threads()))
     grid = Grid.from_config(config)
     line_length = len(grid.axis_values[grid.continuation_axis]) if grid.continuation_axis is not None else 1
     n_lines = max(1, config.n_runs // line_length)
-    lines = min(n_lines, default_chunk_lines(threads, line_length, config.integration))
+    lines = min(n_lines, default_chunk_lines(threads, line_length), max_chunk_lines(config.integration, line_length))
     return lines * line_length * point_record_bytes(config.integration)
 
 

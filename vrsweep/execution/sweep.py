@@ -89,8 +89,9 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     plan = plan_lines(runner.grid, shard, done)
     lines = plan.lines
     adaptive = chunk_lines is None
-    chunk_lines = chunk_lines or default_chunk_lines(threads, plan.line_length, config.integration)
-    largest_chunk = max(chunk_lines, max_chunk_lines(config.integration, plan.line_length))
+    largest_chunk = max_chunk_lines(config.integration, plan.line_length)  # the memory bound
+    chunk_lines = chunk_lines or min(default_chunk_lines(threads, plan.line_length), largest_chunk)
+    largest_chunk = max(chunk_lines, largest_chunk)
     counts = {}
     start = 0
     while start < len(lines):
