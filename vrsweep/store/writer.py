@@ -183,7 +183,8 @@ class ResultWriter:
         if not os.path.exists(path):
             raise ResultFileError.naming("cannot resume: {path} does not exist ({start_afresh})", ARGUMENT_WORDS,
                                          path=path)
-        path = output_target(path, overwrite=True, inputs=inputs, inputs_are="the config being run")  # a link: its target, as create does
+        # A link: its target, as create does.
+        path = output_target(path, overwrite=True, inputs=inputs, inputs_are="the config being run")
         refuse_if_being_written(path, "resume")  # also where HDF5's own locking is switched off
         f = open_checked(path, "r+")
         try:
