@@ -199,6 +199,9 @@ class DaskExecutor:
             # the scheduler's small HTTP server on any free local port, not on 8787 (which a
             # second run on the machine would find taken, and warn).
             # The workers ignore SIGINT (dask_setup, preloaded), so Ctrl-C reaches only this client.
+            # After a stop (SIGINT, SIGTERM) a worker busy in the kernel is killed at shutdown, as
+            # intended (its chunk is not saved and --resume computes it): no warning line for that.
+            _drop_messages("distributed.nanny", "Worker process still alive after")
             with LocalCluster(n_workers=self.n_local, threads_per_worker=self.threads or 1,
                               processes=True, dashboard_address=None,
                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
