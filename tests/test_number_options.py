@@ -123,3 +123,16 @@ def test_dpi_refused(sweep, tmp_path, invoke, value):
     _, path = sweep
     result = invoke("plot", path, "-o", tmp_path / "f.png", "--at", "Omega=4", "--dpi", value)
     assert result.exit_code == 2 and "--dpi" in result.output, result.output
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.sampled_from(["omega", "Omega", "g", "c", "alpha"]),
+       value=st.sampled_from(["1e-320", "5e-324", "1e300", "1.7e308", "-1e300"]))
+def test_extreme_finite_values_give_answers_not_warnings(tmp_path, invoke, write_config, name, value):
+    """A value at the edge of the floats is answered (or refused by its domain) without numpy's
+    overflow warnings and their source lines on the user's terminal."""
+    config = write_config(tmp_path, "model: effective\n")
+    for command in ("validate", "theory"):
+        result = invoke(command, config, "--set", f"{name}={value}")
+        assert result.exit_code in (0, 2), result.output
+        assert "Warning" not in result.output, result.output
