@@ -26,7 +26,7 @@ integration: {transient_periods: 2, measure_periods: 16}
 """
 AXES = ("g", "Omega")
 VARIABLES = ("R", "status", "period", "strobe_x", "n_steps", "done")
-HYPOTHESIS = settings(max_examples=12, deadline=None,
+HYPOTHESIS = settings(max_examples=6, deadline=None,
                       suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 

@@ -23,7 +23,7 @@ integration: {transient_periods: 2, measure_periods: 16}
 """
 NOT_FINITE = ["nan", "NaN", "inf", "-inf", "+inf", "Infinity", "1e400", "-1e400", ".nan", ".inf", "-.inf"]
 HUGE = ["1e308", "-1e308", "99999999999999999999999999", "1.7976931348623157e308"]
-SETTINGS = settings(max_examples=15, deadline=None,
+SETTINGS = settings(max_examples=8, deadline=None,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 
@@ -91,7 +91,7 @@ def test_theory_json_at_huge_g_is_json(tmp_path, invoke, write_config, g):
     assert rows and all(isinstance(row, dict) for row in rows)
 
 
-@pytest.mark.parametrize("value", NOT_FINITE[:8] + ["-1"])
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf", "1e400", "-1"])
 def test_progress_interval_refuses_what_is_not_a_finite_number(tmp_path, invoke, write_config, value):
     config = write_config(tmp_path, CONFIG)
     result = invoke("run", config, "-o", tmp_path / "out.h5", "--progress-interval", value)
@@ -110,7 +110,7 @@ def test_run_numbers_refused(tmp_path, invoke, write_config, option, value):
     assert not list(tmp_path.glob("out*.h5"))
 
 
-@pytest.mark.parametrize("value", NOT_FINITE[:8] + ["0", "99999999999999999999"])
+@pytest.mark.parametrize("value", ["nan", "inf", "1e400", "0", "99999999999999999999"])
 def test_samples_per_period_refused(tmp_path, invoke, write_config, value):
     config = write_config(tmp_path, "model: effective\nparameters: {g: 5}\n")
     result = invoke("simulate", config, "-o", tmp_path / "t.h5", "--samples-per-period", value)
@@ -118,7 +118,7 @@ def test_samples_per_period_refused(tmp_path, invoke, write_config, value):
     assert not (tmp_path / "t.h5").exists()
 
 
-@pytest.mark.parametrize("value", NOT_FINITE[:8] + ["0", "99999999999999999999"])
+@pytest.mark.parametrize("value", ["nan", "inf", "1e400", "0", "99999999999999999999"])
 def test_dpi_refused(sweep, tmp_path, invoke, value):
     _, path = sweep
     result = invoke("plot", path, "-o", tmp_path / "f.png", "--at", "Omega=4", "--dpi", value)

@@ -128,11 +128,13 @@ def test_merge_checks_its_inputs_before_making_a_folder(tmp_path, invoke, depth,
     (b"caf\xe9.h5", {"LC_ALL": "C"}),                                     # not UTF-8 at all
     ("r\u00e9sum\u00e9.h5".encode(), {"LC_ALL": "C", "PYTHONCOERCECLOCALE": "0", "PYTHONUTF8": "0"}),
 ])
-def test_a_file_name_that_is_not_text_in_the_locale(tmp_path, write_config, name, env):
+def test_a_file_name_that_is_not_text_in_the_locale(tmp_path, invoke, write_config, name, env):
+    """history records the command line: merge writes it as run does, without compiling a kernel."""
     config = write_config(tmp_path, CONFIG)
+    assert invoke("run", config, "-o", tmp_path / "whole.h5", "-q").exit_code == 0
     out = os.path.join(os.fsencode(tmp_path), name)
-    done = subprocess.run([sys.executable, "-m", "vrsweep", "run", os.fsencode(config), "-o", out, "-q"],
-                          capture_output=True, env={**os.environ, **env}, timeout=600)
+    done = subprocess.run([sys.executable, "-m", "vrsweep", "merge", os.fsencode(tmp_path / "whole.h5"), "-o", out,
+                           "-q"], capture_output=True, env={**os.environ, **env}, timeout=600)
     assert done.returncode == 0, done.stderr.decode(errors="replace")
     assert b"Traceback" not in done.stderr
     with h5py.File(out, "r") as f:
