@@ -29,16 +29,44 @@ _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "c
 
 
 @click.command("info")
-@click.argument("path", metavar="RESULTS.h5", type=click.Path(dir_okay=True))
+@click.argument("path", metavar="RESULTS.h5|FIGURE.png", type=click.Path(dir_okay=True))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 @click.option("--config", "show_config", is_flag=True, help="Also print the config the file was run from.")
 def command(path, as_json, show_config):
-    """Summarise a results, shard or trajectory file: grid, progress, status counts, variables."""
+    """Summarise a results, shard or trajectory file: grid, progress, status counts, variables.
+
+    A figure from vrsweep plot (.png, .pdf, .svg): its title and full description, kept in the
+    file's metadata (also with --no-title)."""
+    from pathlib import Path
+
+    from vrsweep.plot.labels import FIGURE_SUFFIXES
+
+    if Path(path).suffix.lower() in FIGURE_SUFFIXES:
+        _describe_figure(path, as_json)
+        return
     summary = describe(path)
     if as_json:
         click.echo(json.dumps(summary, indent=2, allow_nan=False))
     else:
         click.echo(format_summary(summary, show_config))
+
+
+def _describe_figure(path, as_json):
+    """Print the title and description ``vrsweep plot`` wrote into a figure's metadata."""
+    from vrsweep.plot.labels import read_description
+
+    if not os.path.isfile(path):
+        raise ResultFileError(f"{path}: no such file")
+    try:
+        found = read_description(path)
+    except (OSError, ValueError) as error:
+        raise ResultFileError(f"{path}: cannot read the figure's metadata ({error})") from None
+    if as_json:
+        click.echo(json.dumps({"file": os.fspath(path), "kind": "figure", **found}, indent=2))
+    elif not (found["Title"] or found["Description"]):
+        click.echo(f"{path}: a figure without a vrsweep description in its metadata")
+    else:
+        click.echo(f"{path}: figure\n{found['Description'] or found['Title']}")
 
 
 # --------------------------------------------------------------------------------------------

@@ -28,9 +28,10 @@ from vrsweep.config.rules import CrossFieldRules
 from vrsweep.config.schema import (
     AXIS_FORMS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config, Document, Integration,
 )
-from vrsweep.config.wording import did_you_mean, show
+from vrsweep.config.wording import did_you_mean, dotted, show
 from vrsweep.config.yaml import (
-    MAX_EXPANDED_VALUES, CyclicAlias, TooManyValues, error_line, load_round_trip, parse_scalar, plain_data,
+    MAX_EXPANDED_VALUES, CyclicAlias, TooManyValues, Unrepresentable, error_line, load_round_trip, parse_scalar,
+    plain_data, yaml_text,
 )
 from vrsweep.errors import ConfigError
 from vrsweep.numerics.model import PARAMETER_NAMES
@@ -64,9 +65,30 @@ def load_config(path, overrides=()) -> Config:
     return parse_config(text, source_name=name, overrides=overrides)
 
 
-def parse_config(text: str, source_name: str = "<string>", overrides=()) -> Config:
-    """Validate config ``text``; raise ConfigError listing every problem found."""
-    return _Validator(text, source_name, tuple(overrides)).run()
+def parse_config(text: str, source_name: str = "<string>", overrides=(), *, line_numbers=True) -> Config:
+    """Validate config ``text``; raise ConfigError listing every problem found.
+
+    ``line_numbers=False``: problems name the source and the field but no line (for text written
+    out from a Python dict, whose lines the user never saw).
+    """
+    return _Validator(text, source_name, tuple(overrides), line_numbers).run()
+
+
+def config_from_dict(data, source_name: str = "<dict>", overrides=()) -> Config:
+    """Validate a config given as a dict nested as the YAML is (``{"sweep": {"g": [5, 10]}}``).
+
+    The dict is written out as YAML text and validated as a file is, so every message is the one
+    a file would get; problems name ``source_name`` and the field, without a line (the text's
+    lines are not the user's).
+    """
+    if not isinstance(data, dict):
+        raise ConfigError([f"{source_name}: the config must be a mapping of sections, got {show(data)}"],
+                          source=source_name)
+    try:
+        text = yaml_text(data)
+    except Unrepresentable as error:
+        raise ConfigError([f"{source_name}: {dotted(error.path)}: {error}"], source=source_name) from None
+    return parse_config(text, source_name, overrides, line_numbers=False)
 
 
 def with_overrides(config: Config, overrides) -> Config:

@@ -130,3 +130,47 @@ def error_line(error, text) -> int:
     if isinstance(error, ReaderError):
         return line_and_column(text, error.position)[0]
     return 1
+
+
+class Unrepresentable(Exception):
+    """A value of a dict config that YAML cannot hold; ``path`` says where (keys and indices)."""
+
+    def __init__(self, path, value):
+        self.path, self.value = tuple(path), value
+        super().__init__(f"must be a number, a string, true/false, a list or a mapping, got a "
+                         f"{type(value).__qualname__} ({show(value)})")
+
+
+def yaml_text(data) -> str:
+    """A dict nested as a config's YAML, written as YAML text that reads back to the same values.
+
+    Accepts what Python code naturally holds: numpy numbers and arrays (as numbers and lists),
+    tuples (as lists), paths (as strings). Floats are written by ruamel as ``repr`` does, so they
+    read back bit for bit; key order is kept (it is the order of a sweep's axes). Raises
+    :class:`Unrepresentable` for anything else (a set, an object).
+    """
+    import io
+
+    stream = io.StringIO()
+    YAML(typ="rt").dump(_yaml_ready(data, ()), stream)
+    return stream.getvalue()
+
+
+def _yaml_ready(value, path):
+    import os
+
+    import numpy as np
+
+    if isinstance(value, dict):
+        return {key_text(key): _yaml_ready(item, path + (key_text(key),)) for key, item in value.items()}
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_yaml_ready(item, path + (index,)) for index, item in enumerate(value)]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise Unrepresentable(path, value)

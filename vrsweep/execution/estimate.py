@@ -20,7 +20,7 @@ from vrsweep.store.fileio import format_bytes  # noqa: F401
 
 # Wall time of one grid point over one slow period 2 pi/omega, on one thread, at rtol = 1e-9.
 # The original model resolves the fast forcing Omega, so it takes several times more steps.
-# Calibrated with `vrsweep run configs/paper_fig1.yaml --threads 1` (81 points x 200 periods at
+# Calibrated with `vrsweep run configs/fig1.yaml --threads 1` (81 points x 200 periods at
 # rtol 1e-9, 2-core workstation): 5.7 s user for the original model, 2.2 s for the effective one,
 # less ~1.5 s of start-up. Points with many impacts cost several times the mean.
 SECONDS_PER_POINT_PERIOD = {"original": 2.6e-4, "effective": 4e-5}

@@ -1,6 +1,6 @@
 """What the sweep figures draw from: a Dataset with axes fixed by ``select`` (xarray's labelled
 selection, after a check that each value is on the grid), the curves to draw, which points to
-trust (README "Can R be trusted?") and which failed, and what part of the grid the file holds."""
+trust (docs/trust.md, "Can R be trusted?") and which failed, and what part of the grid the file holds."""
 
 from __future__ import annotations
 
@@ -204,7 +204,7 @@ def _choose_x_axis(view, x_axis, need_axes=None):
 
 
 def _point_classes(view, x_axis, where):
-    """Masks along x_axis: (trusted, aperiodic, failed), the README's rule ("Can R be trusted?").
+    """Masks along x_axis: (trusted, aperiodic, failed), the rule of docs/trust.md, "Can R be trusted?".
 
     Trust is judged by R_err alone: R is trusted where R_err <= RELATIVE_ERROR_LIMIT of R. The
     kind of motion is what ``period`` says: period 0 (no period up to max_period) with a tiny

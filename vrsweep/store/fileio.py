@@ -3,7 +3,7 @@
 Everything vrsweep writes whole (result files, finished results, shard merges, trajectories,
 figures) is written beside its path and renamed into place (:func:`replacing`,
 :func:`atomic_write`), and every HDF5 file it opens goes through :func:`open_hdf5`. What a
-shared machine does to a run, and what happens then (README, "Long runs and clusters"):
+shared machine does to a run, and what happens then (docs/clusters.md, "Long runs and clusters"):
 
 - **A full disk or quota.** HDF5 cannot recover from a failed write: closing what it holds
   writes again, fails again, and the process crashes (at exit, or at the next HDF5 call). So the

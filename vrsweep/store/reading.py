@@ -1,6 +1,6 @@
 """Results in Python: any vrsweep file as a lazily read ``xarray.Dataset``.
 
-Every file vrsweep writes is netCDF-4 compatible HDF5 (docs/design.md, "Result files"), so xarray's
+Every file vrsweep writes is netCDF-4 compatible HDF5 (docs/design.md, "Sweep and shard files"), so xarray's
 h5netcdf backend reads it as it is; this module adds only what xarray cannot know:
 
 - which file it is (sweep, shard or trajectory) and a clear error for anything else;
