@@ -15,9 +15,18 @@ Computing and reading in Python (docs/python-api.md)::
 first use, so that the command line starts without numba, xarray or tqdm.
 """
 
-from vrsweep._version import __version__
-from vrsweep.numerics import numba_cache as _numba_cache
-from vrsweep.execution import threads as _threads
+import os as _os
+import sys as _sys
+
+if _os.path.basename(_sys.argv[0]) in ("vrsweep", "-m"):  # the command line (`vrsweep`, `python -m vrsweep`)
+    # First of all: Ctrl-C during the imports below exits 130 with one line, not a traceback.
+    from vrsweep.execution import signals as _signals
+
+    _signals.exit_at_once_on_sigint()
+
+from vrsweep._version import __version__  # noqa: E402
+from vrsweep.numerics import numba_cache as _numba_cache  # noqa: E402
+from vrsweep.execution import threads as _threads  # noqa: E402
 
 _numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
 _threads.drop_unreadable_setting()

@@ -251,7 +251,8 @@ def _describe_groups(path, kind) -> dict | None:
     try:
         attrs = {key: _plain(value) for key, value in groups[""].attrs.items()}
         version = attrs.get("vrsweep_format_version")
-        if version is None or int(version) != FORMAT_VERSION or "done" in groups[""]:
+        # Not a whole number ("one"): not a file of this format, and the reader says what is wrong.
+        if type(version) is not int or version != FORMAT_VERSION or "done" in groups[""]:
             return None
         variables, statuses = [], []
         for group, ds in groups.items():

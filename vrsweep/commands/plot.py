@@ -128,6 +128,11 @@ def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     path = Path(output) if output else default_output(paths[0], kind)
     if path.suffix.lower() not in FORMATS:
         raise UsageError(f"-o {path}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
+    from vrsweep.store.fileio import output_target
+
+    # A figure is replaced without asking (as it always was), but never an input nor anything other
+    # than a regular file; a link is followed (fileio.output_target).
+    path = Path(output_target(path, overwrite=True, inputs=paths, inputs_are="one of the files being plotted"))
     data = [plot.load(p) for p in paths]
     for path_in, loaded in zip(paths, data):
         if isinstance(loaded, TrajectoryData):

@@ -9,7 +9,8 @@ import click
 
 from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
 from vrsweep.config import INTEGRATION_DEFAULTS, load_config
-from vrsweep.execution.estimate import estimate, format_bytes, format_duration, size_problem
+from vrsweep.errors import ConfigError
+from vrsweep.execution.estimate import estimate, format_bytes, format_duration, memory_problem, size_problem
 from vrsweep.execution.threads import available_threads
 from vrsweep.numerics.model import PARAMETER_NAMES
 
@@ -27,6 +28,9 @@ def command(config_path, overrides, threads):
     config = load_config(config_path, overrides)  # ConfigError -> every problem, exit 2 (cli.py)
     announce_fixed_axes(config_path, overrides, config)
     threads = threads or available_threads()  # not capped: the run may be planned for another machine
+    memory = memory_problem(config, threads)
+    if memory is not None:  # no machine-independent way to run it: refused as run refuses it
+        raise ConfigError([memory], source=config.source_name)
     guess = estimate(config, threads)
 
     click.echo(f"{config.source_name}: valid")
@@ -53,6 +57,7 @@ def command(config_path, overrides, threads):
     duration = format_duration(guess.seconds)
     click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
                f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)")
+    click.echo(f"memory:      {format_bytes(guess.memory_bytes)} of per-period records held at once")
     problem = size_problem(config, threads, allow="--allow-large")
     if problem is not None:
         # A valid config, just a big one: `run` will ask for --allow-large.

@@ -31,17 +31,29 @@ from vrsweep.config.schema import (
 )
 from vrsweep.config.wording import did_you_mean, dotted, show
 from vrsweep.config.yaml import (
-    CyclicAlias, Unrepresentable, error_line, load_round_trip, parse_scalar, plain_data, yaml_text,
+    MAX_EXPANDED_VALUES, CyclicAlias, TooManyValues, Unrepresentable, error_line, load_round_trip, parse_scalar,
+    plain_data, yaml_text,
 )
 from vrsweep.errors import ConfigError
 from vrsweep.numerics.model import PARAMETER_NAMES
+
+
+# A config is a few kB; a sweep listing every value of a long axis some hundred kB at most.
+MAX_CONFIG_BYTES = 2 ** 20
 
 
 def load_config(path, overrides=()) -> Config:
     """Read and validate the config file at ``path``; messages name the file as given."""
     name = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        with open(path, "rb") as file:  # bounded: /dev/zero or a huge file is not read to its end
+            raw = file.read(MAX_CONFIG_BYTES + 1)
+        if len(raw) > MAX_CONFIG_BYTES:
+            raise ConfigError([f"{name}: larger than {MAX_CONFIG_BYTES // 2 ** 20} MiB, not a config file"],
+                              source=name)
+        text = raw.decode("utf-8")
+        if "\r" in text:  # as read_text's universal newlines did
+            text = text.replace("\r\n", "\n").replace("\r", "\n")
     except FileNotFoundError:
         raise ConfigError([f"{name}: no such config file"], source=name) from None
     except IsADirectoryError:
@@ -157,6 +169,10 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
             data = plain_data(self.root)
         except CyclicAlias:
             self.report_raw((0, 1, ""), f"{self.source}:1: the YAML refers to itself through an alias")
+            return None
+        except TooManyValues:
+            self.report_raw((0, 1, ""), f"{self.source}:1: the YAML's aliases expand to more than "
+                                        f"{MAX_EXPANDED_VALUES} values; a config holds a few hundred")
             return None
         except RecursionError:
             self.report_raw((0, 1, ""), f"{self.source}:1: YAML nested too deeply to read")

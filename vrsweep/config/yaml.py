@@ -33,17 +33,33 @@ class CyclicAlias(Exception):
     pass
 
 
-def plain_data(node, _active=None):
-    """ruamel's tree as plain dict/list/float/int/str/bool (keys as str), keeping order."""
+# A config's whole tree, aliases expanded, holds a few hundred values; YAML aliases can make 1 kB
+# of text expand to 10^10 (ten levels of ten aliases). plain_data stops past this many values.
+MAX_EXPANDED_VALUES = 100_000
+
+
+class TooManyValues(Exception):
+    """The document, its aliases expanded, holds more than MAX_EXPANDED_VALUES values."""
+
+
+def plain_data(node, _active=None, _budget=None):
+    """ruamel's tree as plain dict/list/float/int/str/bool (keys as str), keeping order.
+
+    Raises CyclicAlias for a tree that contains itself, TooManyValues past MAX_EXPANDED_VALUES
+    values (aliases counted as many times as they are expanded)."""
     active = set() if _active is None else _active
+    budget = [MAX_EXPANDED_VALUES] if _budget is None else _budget
+    budget[0] -= 1
+    if budget[0] < 0:
+        raise TooManyValues
     if isinstance(node, (dict, list)):
         if id(node) in active:
             raise CyclicAlias
         active.add(id(node))
         try:
             if isinstance(node, dict):
-                return {key_text(key): plain_data(value, active) for key, value in node.items()}
-            return [plain_data(item, active) for item in node]
+                return {key_text(key): plain_data(value, active, budget) for key, value in node.items()}
+            return [plain_data(item, active, budget) for item in node]
         finally:
             active.discard(id(node))
     if isinstance(node, bool):

@@ -95,7 +95,8 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     coefficients    (N_COEFFICIENTS,)        model.kernel_coefficients
     initial_state   (2,)                      x(0), v(0)
     settings        (N_SETTINGS,)            layout above
-    period_records  (n_periods, N_RECORD)    filled for every completed period
+    period_records  (n_rows, N_RECORD)       the last n_rows periods' records, measure_periods <= n_rows
+                                             <= n_periods (a sweep: measure_periods, a trajectory: all)
     summary         (N_SUMMARY,)             filled at the end; R, Qs, Qc NaN unless status OK
     sample_times    (n_samples,)             sorted times for dense samples (may be empty)
     samples         (n_samples, 2)           x, v at sample_times
@@ -243,6 +244,10 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     atol = settings[ATOL]
     n_transient = int(settings[TRANSIENT_PERIODS])
     n_periods = n_transient + int(settings[MEASURE_PERIODS])
+    # period_records may hold only the last rows (a sweep keeps the measurement window's, so its
+    # memory does not grow with the transient): period k is row max(k - first_row, 0), and the
+    # transient's periods before the kept rows all reuse row 0 (start_period resets it).
+    first_row = n_periods - period_records.shape[0]
     max_steps = settings[MAX_STEPS]
     max_impacts_per_period = settings[MAX_IMPACTS_PER_PERIOD]
     divergence_bound = settings[DIVERGENCE_BOUND]
@@ -290,7 +295,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     next_sample = emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
 
     while True:
-        record = period_records[period]
+        record = period_records[max(period - first_row, 0)]
         if stuck:
             # --- held at (Delta, 0) until the force lets go or the period ends ---
             t_release, scans = release_time(t, t_boundary, coefficients, stick_scan_step, max_steps - n_scans)
@@ -447,11 +452,12 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             if period == n_periods:
                 break
             t_boundary = (period + 1) * slow_period
-            start_period(period_records[period], y[X], tangents)
+            start_period(period_records[max(period - first_row, 0)], y[X], tangents)
 
     if stuck and n_sticks - 1 < stick_log.shape[0]:
         stick_log[n_sticks - 1, 1] = t
-    status = summarize(period_records, n_transient, n_periods, slow_period, coefficients[C], status, summary)
+    status = summarize(period_records, n_transient - first_row, n_periods - first_row, slow_period, coefficients[C],
+                       status, summary)
     summary[SUM_STEPS] = n_steps
     summary[SUM_REJECTED] = n_rejected
     summary[SUM_RHS] = n_rhs

@@ -151,13 +151,17 @@ def _axis_index(name, values, wanted):
         if key not in words:
             raise UsageError.naming("{at} direction={value}: the direction is up or down (+1 or -1)", value=wanted)
         wanted = words[key]
+    given = wanted
     try:
         wanted = float(wanted)
     except ValueError:
         raise UsageError.naming("{at} {name}={value}: not a number; {name} takes values {span}",
                                 name=name, value=wanted, span=_axis_span(values)) from None
+    if not np.isfinite(wanted):  # nan, inf, 1e400: argmin would answer with the first value
+        raise UsageError.naming("{at} {name}={value}: not a finite number; {name} takes values {span}",
+                                name=name, value=given, span=_axis_span(values))
     index = int(np.argmin(np.abs(values - wanted)))
-    if abs(values[index] - wanted) > 1e-9 * max(1.0, abs(wanted)):
+    if not abs(values[index] - wanted) <= 1e-9 * max(1.0, abs(wanted)):
         raise UsageError.naming("{at} {name}={value}: not a value of the axis {name}; {nearest} (axis: {span})",
                                 name=name, value=_number(wanted), nearest=_nearest_text(values, wanted),
                                 span=_axis_span(values))

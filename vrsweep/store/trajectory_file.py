@@ -53,7 +53,7 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.results import MESSAGES, Status
-from vrsweep.store.fileio import open_hdf5, write_bytes
+from vrsweep.store.fileio import open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "trajectory"
@@ -132,12 +132,7 @@ def root_attributes(config):
 
 def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
     """Write ``data`` to ``path`` atomically; refuse an existing file unless ``overwrite``."""
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise UsageError(f"output {path} is a directory")
-    if os.path.lexists(path) and not overwrite:
-        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
-                                {"overwrite": "overwrite=True"}, path=path)
+    path = output_target(path, overwrite=overwrite)  # fileio's one rule of what may be replaced
     attrs = {"vrsweep_file": FILE_KIND, "vrsweep_format_version": np.int32(FORMAT_VERSION),
              "vrsweep_complete": np.int32(1),
              "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -247,7 +242,10 @@ def read_trajectory(path) -> TrajectoryData:
         with _open(path, "r") as f:
             if _text(f.attrs.get("vrsweep_file", "")) != FILE_KIND:
                 raise ResultFileError(f"{path} is not a vrsweep trajectory file (written by vrsweep simulate)")
-            version = int(f.attrs.get("vrsweep_format_version", 0))
+            version = f.attrs.get("vrsweep_format_version", 0)
+            if isinstance(version, (bool, np.bool_)) or not isinstance(version, (int, np.integer)):
+                raise ResultFileError(f"{path} is corrupt: attribute vrsweep_format_version must be a whole "
+                                      f"number, got {_text(version)!r}")
             if version != FORMAT_VERSION:
                 raise ResultFileError(f"{path} has trajectory format {version}; this vrsweep reads format "
                                       f"{FORMAT_VERSION}")
