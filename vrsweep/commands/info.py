@@ -95,10 +95,11 @@ def describe(path) -> dict:
         described["branches"] = _describe_branches(path)
         return described
     if kind == "trajectory":
+        from vrsweep.store.trajectory_file import check_trajectory, read_trajectory
+
+        check_trajectory(path)  # a damaged file is one line, as every reader of it says
         described = _describe_groups(path, kind)
         if described is None:  # the trajectory reader says what is wrong (a newer format...)
-            from vrsweep.store.trajectory_file import read_trajectory
-
             read_trajectory(path)
             raise ResultFileError(f"{path} is a vrsweep trajectory this vrsweep cannot describe")
         return described
