@@ -143,3 +143,7 @@ def test_start_from_a_sweep_point(invoke, tmp_path, write_config):
         assert np.all(ds["impacts_per_period"].values == 1) and np.all(ds["stable"].values == 1)
     result = invoke("continue", config, "-o", tmp_path / "y.h5", "--start", sweep)
     assert result.exit_code == 2 and "--at" in result.output
+    for off_grid in ("24.3", "nan", "1e400"):  # no nearest point chosen for the user
+        result = invoke("continue", config, "-o", tmp_path / "z.h5", "--start", sweep, "--at", f"g={off_grid}")
+        assert result.exit_code == 2 and "--at g=" in result.output, result.output
+        assert not (tmp_path / "z.h5").exists()

@@ -29,7 +29,7 @@ def problem_of(config):
 def start_state_from_sweep(path, at):
     """x, v at the end of the run of the grid point ``at`` ({axis: value}) of sweep file ``path``:
     the point's attractor (its x_final, v_final), where the first orbit is looked for."""
-    from vrsweep.store.reading import grid_axes, open_results
+    from vrsweep.store.reading import axis_index, grid_axes, open_results
 
     with open_results(path) as ds:
         if ds.attrs.get("vrsweep_file") not in ("sweep", "shard"):
@@ -41,8 +41,8 @@ def start_state_from_sweep(path, at):
             if name not in axes:
                 raise UsageError.naming("{path} has no axis {name}; its axes: {axes}", path=str(path), name=name,
                                         axes=", ".join(str(a) for a in axes))
-            selection[name] = value
-        point = ds[["x_final", "v_final"]].sel(selection, method="nearest")
+            selection[name] = axis_index(name, np.asarray(ds[name].values, dtype=np.float64), value)
+        point = ds[["x_final", "v_final"]].isel(selection)
         for dim in list(point.dims):  # e.g. direction of a hysteresis sweep: its first
             point = point.isel({dim: 0})
         return np.array([float(point["x_final"]), float(point["v_final"])])
