@@ -87,15 +87,33 @@ def test_python_blocks_run(page, tmp_path, monkeypatch, invoke):
     monkeypatch.setenv("MPLBACKEND", "Agg")
     (tmp_path / "configs").symlink_to(ROOT / "configs")  # the blocks' commands name configs/...
     done, namespace = set(), {}
-    for number, (_, code, line) in enumerate(code_blocks(page, "python"), 1):
-        for words in commands_in_header(code):
-            if tuple(words) in done:
-                continue
-            done.add(tuple(words))
-            extra = ["--quiet", "--overwrite", *SHORT] if words[0] == "run" else ["--overwrite"]
-            result = invoke(*words, *extra)
-            assert result.exit_code == 0, f"{page_id(page)}:{line}: vrsweep {shlex.join(words)}\n{result.output}"
-        exec(compile(code, f"{page_id(page)}:{line} (python block {number})", "exec"), namespace)
+    try:
+        for number, (_, code, line) in enumerate(code_blocks(page, "python"), 1):
+            for words in commands_in_header(code):
+                if tuple(words) in done:
+                    continue
+                done.add(tuple(words))
+                extra = ["--quiet", "--overwrite", *SHORT] if words[0] == "run" else ["--overwrite"]
+                result = invoke(*words, *extra)
+                assert result.exit_code == 0, f"{page_id(page)}:{line}: vrsweep {shlex.join(words)}\n{result.output}"
+            exec(compile(code, f"{page_id(page)}:{line} (python block {number})", "exec"), namespace)
+    finally:
+        _end_of_notebook(namespace)
+
+
+def _end_of_notebook(namespace):
+    """Close what a page's blocks left open, as a notebook's kernel does when it stops: a lazily
+    read Dataset keeps its HDF5 file open, and a later test counts the files this process has open."""
+    import gc
+
+    import h5py
+    import xarray as xr
+
+    for value in namespace.values():
+        if isinstance(value, (xr.Dataset, xr.DataArray, h5py.File)):
+            value.close()
+    namespace.clear()
+    gc.collect()
 
 
 def test_the_python_pages_show_each_way_in():
