@@ -65,7 +65,8 @@ ENDED_NEWTON = "newton_failed"
 ENDED_INTEGRATION = "integration_failed"
 ENDED_STICKING = "sticking"
 GRAZING_MEETING = {"fold": "fold_grazing", "period_doubling": "period_doubling_grazing"}
-# An orbit within this distance of the barrier (relative to max(1, Delta)) is next to a graze.
+# An orbit within this distance of the barrier (relative to max(1, Delta)) is next to a graze
+# (or within the Jacobian's reach of it: _near_barrier).
 GRAZING_PROXIMITY = continuation.GRAZING_PROXIMITY
 STEP_GROWTH = continuation.STEP_GROWTH
 MAX_HALVINGS = continuation.MAX_HALVINGS
@@ -367,8 +368,12 @@ def _turned_back(previous, point, tangent, step):
 
 
 def _near_barrier(problem, point):
+    """Impacting, or close enough to the barrier that the Jacobian's displaced maps (steps of
+    problem.step relative, up to 0.0125 in g = 27) may impact: within ten difference steps of
+    the largest coordinate, or GRAZING_PROXIMITY, of the barrier."""
     scale = max(1.0, abs(problem.delta(point.values)))
-    return point.impacts_per_period > 0 or point.barrier_distance < GRAZING_PROXIMITY * scale
+    reach = 10.0 * problem.step * max(1.0, float(np.max(np.abs(point.z))))
+    return point.impacts_per_period > 0 or point.barrier_distance < max(GRAZING_PROXIMITY * scale, reach)
 
 
 def _locate_impact_change(problem, kind, previous, tangent, step):
