@@ -501,9 +501,11 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
             continue
         _orient(point, current)
         new_tangent = tangent_of(point, tangent)
-        if not _inside(problem, point, ranges):
-            return points, specials, (ENDED_RANGE, _range_reason(problem, point, ranges))
         found, end = _specials(problem, kind, current, point, tangent, step)
+        if not _inside(problem, point, ranges):
+            # The last step may have crossed a special point before leaving the range.
+            specials.extend((name, special) for name, special in found if _inside(problem, special, ranges))
+            return points, specials, (ENDED_RANGE, _range_reason(problem, point, ranges))
         specials.extend(found)
         if end is not None:
             return points, specials, end
