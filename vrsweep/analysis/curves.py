@@ -155,6 +155,7 @@ class CurvePoint:
     impacts_per_period: float
     x_max: float
     barrier_distance: float
+    slowest_impact: float      # smallest impact velocity (inf without impacts)
     residual: float
     newton_iterations: int
     jacobian: np.ndarray       # (3, 4) derivative of the three equations at the point
@@ -248,7 +249,8 @@ def _point(problem, kind, z, periods, orbit_map, residual, iterations, jacobian)
     point = CurvePoint(kind=kind, values=z[2:].copy(), state=z[:2].copy(), periods=periods,
                        monodromy=orbit_map.monodromy.copy(), R=orbit_map.R,
                        impacts_per_period=orbit_map.impacts / periods, x_max=orbit_map.x_max,
-                       barrier_distance=delta - orbit_map.x_max, residual=residual, newton_iterations=iterations,
+                       barrier_distance=delta - orbit_map.x_max, slowest_impact=orbit_map.slowest_impact,
+                       residual=residual, newton_iterations=iterations,
                        jacobian=jacobian)
     if kind == "fold":
         point.cusp_test, point.fold_left = _cusp_test(problem, z, periods, orbit_map)
@@ -368,12 +370,21 @@ def _turned_back(previous, point, tangent, step):
 
 
 def _near_barrier(problem, point):
-    """Impacting, or close enough to the barrier that the Jacobian's displaced maps (steps of
-    problem.step relative, up to 0.0125 in g = 27) may impact: within ten difference steps of
-    the largest coordinate, or GRAZING_PROXIMITY, of the barrier."""
+    """Close enough to a graze that the Jacobian's displaced maps (steps of problem.step relative,
+    up to 0.0125 in g = 27) may cross it: a free orbit within ten difference steps of the largest
+    coordinate, or GRAZING_PROXIMITY, of the barrier; an impacting one whose slowest impact
+    would penetrate that deep without the barrier (depth v^2 / 2 at an acceleration ~ 1)."""
     scale = max(1.0, abs(problem.delta(point.values)))
-    reach = 10.0 * problem.step * max(1.0, float(np.max(np.abs(point.z))))
-    return point.impacts_per_period > 0 or point.barrier_distance < max(GRAZING_PROXIMITY * scale, reach)
+    reach = max(GRAZING_PROXIMITY * scale, 10.0 * problem.step * max(1.0, float(np.max(np.abs(point.z)))))
+    if point.impacts_per_period > 0:
+        return 0.5 * point.slowest_impact ** 2 < reach
+    return point.barrier_distance < reach
+
+
+def _clearance(point):
+    """A measure of the distance from the graze that is linear in the parameters near it: the
+    barrier distance of a free orbit, the squared slowest impact speed of an impacting one."""
+    return point.barrier_distance if point.impacts_per_period == 0 else point.slowest_impact ** 2
 
 
 def _locate_impact_change(problem, kind, previous, tangent, step):
@@ -493,9 +504,12 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
                     status = GRAZING_MEETING[kind]
                     values = _extrapolate_to_barrier(points, start, current)
                     specials.append((status, current, values))
-                    reason = (f"{reason} next to the barrier (distance {current.barrier_distance:.2g} at "
-                              f"{_where(problem, current)}); the orbit grazes at about "
-                              + ", ".join(f"{n} = {v:.8g}" for n, v in zip(problem.names, values)))
+                    near = (f"distance {current.barrier_distance:.2g}" if current.impacts_per_period == 0
+                            else f"slowest impact {current.slowest_impact:.2g}")
+                    reason = f"{reason} next to the barrier ({near} at {_where(problem, current)})"
+                    if values is not None:
+                        reason += "; the orbit grazes at about " + ", ".join(
+                            f"{n} = {v:.8g}" for n, v in zip(problem.names, values))
                     return points, specials, (status, reason)
                 return points, specials, (status, f"{reason} at {_where(problem, current)} with the smallest step")
             continue
@@ -518,13 +532,14 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
 
 
 def _extrapolate_to_barrier(points, start, current):
-    """(2,) the parameters where the barrier distance, linear through the last two points, is 0."""
+    """(2,) the parameters where _clearance, linear through the last two points, reaches 0, when
+    that is within one more chord of ``current``; else None (too far to trust a line)."""
     before = points[-2] if len(points) >= 2 else start
-    if before is current or current.impacts_per_period > 0:
-        return current.values.copy()
-    d0, d1 = before.barrier_distance, current.barrier_distance
-    if not d0 > d1 > 0.0:
-        return current.values.copy()
+    if before is current or before.impacts_per_period != current.impacts_per_period:
+        return None
+    d0, d1 = _clearance(before), _clearance(current)
+    if not d0 > d1 > 0.0 or d1 > d0 - d1:
+        return None
     return current.values + (current.values - before.values) * d1 / (d0 - d1)
 
 
