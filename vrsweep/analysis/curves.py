@@ -135,8 +135,12 @@ def check_pair(parameters, model, names):
     if first == second:
         raise UsageError.naming("{along} = {name} is the branch's own parameter: choose another one to move "
                                 "the point along", {"along": "along"}, name=second)
-    for name in names:
-        continuation.check_commensurate(parameters, model, name)
+    if model == "original" and second in ("Omega", "omega"):
+        raise UsageError.naming(
+            "{along} = {name} cannot move in the original model: its fast forcing is periodic with the slow "
+            "period only where Omega/omega is a whole number, which a moving {name} leaves at once; follow "
+            "the point in {name} in the effective model (no fast force) instead", {"along": "along"}, name=second)
+    continuation.check_commensurate(parameters, model, first)
 
 
 @dataclass
