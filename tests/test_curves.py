@@ -293,3 +293,26 @@ def test_pairs_the_original_model_cannot_follow_are_refused():
 
 def test_difference_step_is_the_cube_root_of_the_tolerance():
     assert curves._difference_step(settings_vector(rtol=1e-12, atol=1e-14)) == pytest.approx(1e-4)
+
+
+@pytest.mark.slow
+def test_original_model_fold_curve_in_g_e_is_where_one_parameter_continuation_folds():
+    # The original model (fast force kept, Omega/omega = 8): its period-1 orbit with 4 impacts
+    # per slow period folds near g = 23.5; the fold followed in the restitution coefficient e.
+    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0)
+    settings = settings_vector(rtol=1e-9, atol=1e-11)
+    options = dict(continuation.DEFAULTS, max_step=0.2)
+    one = continuation.ContinuationProblem(dict(parameters, g=24.0), "original", "g", settings, "rk45", options)
+    start = continuation.find_start(one, [0.99, 0.5], 24.0, 100, 16)
+    _, bifurcations = continuation.continue_branch(one, start, 23.3, 24.5, 40)
+    fold = [b.orbit for b in bifurcations if b.kind == "fold"]
+    assert len(fold) == 1
+    problem = curves.CurveProblem(dict(parameters), "original", ("g", "e"), settings, "rk45", dict(options))
+    point, failure = curves.start_point(problem, "fold", fold[0].state, [fold[0].parameter, 0.95], 1)
+    assert failure is None, failure
+    curve, _ = curves.continue_curve(problem, "fold", point, ((20.0, 27.0), (0.8, 1.0)), 40)
+    assert len(curve.points) >= 5 and all(p.impacts_per_period > 0 for p in curve.points)
+    for point in _sample(curve.points, 3):
+        located = _fold_located_by_one_parameter_continuation(problem, point)
+        assert len(located) == 1, (point.values, located)
+        assert abs(located[0] - point.values[0]) < 2.0 * _relative_location(problem, point), (point.values, located)
