@@ -325,3 +325,24 @@ def test_the_graze_is_found_alike_from_the_impacting_side(hysteresis_branch):
     tolerance = problem.options["location_tolerance"] * graze.parameter
     assert reverse[0].parameter == pytest.approx(graze.parameter, abs=tolerance)
     assert any(o.impacts_per_period == 0 and o.parameter > graze.parameter for o in orbits)
+
+
+@pytest.mark.slow
+def test_dop853_crosses_the_same_graze(hysteresis_branch):
+    """The crossing with the other method: from the small orbit at g = 25 up through the fold and
+    back through the graze. SciPy's free orbit from dop853's grazing point reaches Delta, and
+    SciPy sees no impact on its free neighbour and one on its impacting one."""
+    _, branch, _ = hysteresis_branch
+    problem = _problem("dop853")
+    nearest = min((o for o in branch.orbits if o.stable), key=lambda o: abs(o.parameter - 25.0))
+    start, failure = continuation.correct(problem, np.array([*nearest.state, 25.0]), 1)
+    assert failure is None, failure
+    crossed, bifurcations = continuation.continue_branch(problem, start, 24.8, 25.5, 60)
+    grazes = [b.orbit for b in bifurcations if b.kind == "grazing"]
+    assert len(grazes) == 1, crossed.ends
+    graze = grazes[0]
+    assert _free_maximum(_coefficients(graze.parameter), graze.state, 1) == pytest.approx(HYSTERESIS["Delta"], abs=1e-8)
+    free, impacting = _graze_neighbours(crossed, graze)
+    for orbit, impacts in ((free, 0), (impacting, 1)):
+        _, run = _one_period(_coefficients(orbit.parameter), orbit.state, 0, _resolving_step(orbit))
+        assert len(run["impact_times"]) == impacts, (orbit.parameter, impacts)
