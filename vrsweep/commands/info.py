@@ -89,6 +89,9 @@ def describe(path) -> dict:
             raise error from None
         return other
     if kind == "branch":
+        from vrsweep.store.branch_file import check_branch
+
+        check_branch(path)  # a damaged file is one line, as every reader of it says
         described = _describe_groups(path, kind)
         if described is None:
             raise ResultFileError(f"{path} is a vrsweep branch file this vrsweep cannot describe")
