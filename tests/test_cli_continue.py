@@ -232,3 +232,25 @@ def test_curve_requests_that_cannot_be_met_are_refused(branch_file, invoke, tmp_
     result = invoke("continue", config, "--point", 0, "--along", "Omega", "-o", out)
     assert result.exit_code == 2 and "branch file" in result.output
     assert not out.exists()
+
+
+@pytest.mark.parametrize("damage", ["missing", "short", "kind"])
+def test_damaged_curves_file_is_one_line(curves_file, invoke, tmp_path, damage):
+    import shutil
+
+    import h5py
+
+    path = tmp_path / "damaged.h5"
+    shutil.copy(curves_file[0], path)
+    with h5py.File(path, "r+") as f:
+        if damage == "missing":
+            del f["Omega"]
+        elif damage == "short":
+            del f["R"]
+            f.create_dataset("R", data=np.zeros(2))
+        else:
+            f["curve_kind"][0] = "exploded"
+    with pytest.raises(vrsweep.errors.ResultFileError, match="is corrupt"):
+        vrsweep.open_results(path)
+    result = invoke("info", path)
+    assert result.exit_code == 2 and "is corrupt" in result.output and "Traceback" not in result.output

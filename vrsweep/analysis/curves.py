@@ -9,10 +9,11 @@ periods (numerics/shooting.py), each curve is the solution set of three equation
     period doubling  P^p(y) - y = 0,       det(M + I) = 0        (a multiplier at -1)
     grazing          P_free^p(y) - y = 0,  Delta - x_max_free = 0
 
-M = dP^p/dy the monodromy; P_free the map of the same oscillator without the barrier (the
-coefficient vector's DELTA set to inf: the kernel then never impacts) and x_max_free its largest x
-over the p periods, from the kernel's dense-output turning points. On a grazing curve the free
-orbit is the real one and touches the barrier with zero velocity.
+M = dP^p/dy the monodromy; P_free the map of the same oscillator without the barrier
+(grazing.free_coefficients: Delta = inf, the kernel then never impacts) and x_max_free its
+largest x over the p periods, from the kernel's dense-output turning points: grazing.py's system
+with lam2 free (a grazing curve starts from grazing.locate_graze at the start's lam2). On a
+grazing curve the free orbit is the real one and touches the barrier with zero velocity.
 
 Three equations in four unknowns: a curve, followed by pseudo-arclength continuation as
 continuation.follow follows a branch: predictor along the unit tangent (the null vector of the
@@ -52,7 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vrsweep.analysis import continuation
+from vrsweep.analysis import continuation, grazing
 from vrsweep.errors import UsageError
 from vrsweep.numerics import model as model_metadata
 from vrsweep.numerics.settings import ATOL, RTOL
@@ -109,10 +110,7 @@ class CurveProblem:
         """The kernel's coefficient vector at (lam1, lam2) = values; without the barrier if free."""
         coefficients = model_metadata.kernel_coefficients(dict(self.parameters, **dict(zip(self.names, values))),
                                                           self.model)
-        if free:
-            coefficients = np.array(coefficients)
-            coefficients[model_metadata.DELTA] = np.inf
-        return coefficients
+        return grazing.free_coefficients(coefficients) if free else coefficients
 
     def delta(self, values):
         return float(self.coefficients(values)[model_metadata.DELTA])
@@ -350,6 +348,13 @@ def start_point(problem, kind, state, values, periods):
 
     Returns (CurvePoint, None) or (None, (status, reason))."""
     z = np.concatenate([np.asarray(state, dtype=float), np.asarray(values, dtype=float)])
+    if kind == "grazing":
+        # The one-parameter graze at this lam2, by grazing.locate_graze (the same two equations
+        # with lam2 fixed), so that the curve starts on the graze itself.
+        one = problem.one_parameter(z[3])
+        graze = grazing.locate_graze(one, z[:3], periods, _tolerance(problem, z))
+        if graze is not None:
+            z[:3] = graze.z
     return correct(problem, kind, z, periods, np.array([0.0, 0.0, 0.0, 1.0]), z)
 
 

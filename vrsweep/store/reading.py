@@ -119,6 +119,10 @@ def open_results(path, group: str | None = None):
         from vrsweep.store.branch_file import check_branch
 
         check_branch(path)  # one line for a damaged file, before xarray sees it
+    if kind == "curves":
+        from vrsweep.store.curve_file import check_curves
+
+        check_curves(path)
 
     try:
         ds = _open_dataset(path, group)
