@@ -235,7 +235,9 @@ def test_curve_requests_that_cannot_be_met_are_refused(branch_file, invoke, tmp_
     result = invoke("continue", path, "--point", 0, "--along", "Omega", "-o", out)
     assert result.exit_code == 2 and "--to" in result.output
     result = invoke("continue", path, "--point", 0, "--along", "Omega", "--to", "4.5", "5", "-o", out)
-    assert result.exit_code == 2 and "outside its range" in result.output
+    assert result.exit_code == 2 and "outside its range [4.5, 5] (--to)" in result.output
+    result = invoke("continue", path, "--point", 0, "--along", "Omega", "--to", "5", "4", "-o", out)
+    assert result.exit_code == 2 and "--to 5 4: the range of Omega is empty" in result.output
     result = invoke("continue", path, "-o", out)
     assert result.exit_code == 2 and "--point 0 --along Omega" in result.output
     config = write_config(tmp_path, HYSTERESIS, "h.yaml")

@@ -127,7 +127,7 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
                          "e.g. --point 0 --along Omega (vrsweep info lists its bifurcations)")
     if start_path or overrides:
         raise UsageError("--start, --at and --set go with a config, not with a branch file")
-    flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to"}
+    flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to", "within": "--within"}
     with flag_wording(flags):
         requests = [execution.read_request(path, index, along, to, within) for index in point]
     name = "_".join(str(index) for index in point)
