@@ -291,8 +291,8 @@ def test_pairs_the_original_model_cannot_follow_are_refused():
     curves.check_pair(DEFAULT_PARAMETERS, "effective", ("g", "Omega"))
 
 
-def test_difference_step_is_the_cube_root_of_the_tolerance():
-    assert curves._difference_step(settings_vector(rtol=1e-12, atol=1e-14)) == pytest.approx(1e-4)
+def test_difference_step_is_a_tenth_of_the_cube_root_of_the_tolerance():
+    assert curves._difference_step(settings_vector(rtol=1e-12, atol=1e-14)) == pytest.approx(1e-5)
 
 
 @pytest.mark.slow

@@ -83,18 +83,25 @@ EASY_NEWTON = continuation.EASY_NEWTON
 
 
 def _difference_step(settings):
-    """The relative step of every central difference here.
+    """The relative step of every central difference here: DIFFERENCE_FACTOR eps^(1/3).
 
     The differenced quantities (P^p, det(M -/+ I), x_max) are computed to about the integration
     tolerance eps = max(rtol, atol) (the tangent equations are integrated with the state, and
     x_max comes from the dense output, both to the step's error control). A central difference
-    with step h errs by about h^2 |f'''| / 6 (truncation) plus eps / h (the values' errors); the
-    sum is smallest at h ~ eps^(1/3): 5e-4 for eps = 1e-10, an error of about 2e-7 relative in the
-    derivative, which is more than Newton needs to converge (linearly at worst) and a predictor
-    needs to stay on the curve. A forward difference (error h |f''| / 2 + eps / h, best at
-    sqrt(eps)) would give only 1e-5.
+    with step h errs by about h^2 |f'''| / 6 (truncation) plus eps / h (the values' errors),
+    smallest at h = (3 eps / |f'''|)^(1/3). |f'''| is not of order 1 for these maps: for the
+    original model's period-3 orbit with 8 impacts near g = 15.7, Delta = 2.61, the x column of
+    P^3 differenced at h = 3.5e-3 (eps^(1/3) |x| at rtol 1e-9) is 0.8 % off the tangent kernel's
+    (|f'''| ~ 4e3), and Newton on the fold system converged only linearly, by a factor 0.3 per
+    iteration: the 2 x 2 block M - I is singular at a fold, so the other rows' errors weigh
+    through a condition number of ~900. DIFFERENCE_FACTOR = 0.1 is the optimum for |f'''| ~ 3e3;
+    for a smooth orbit (|f'''| ~ 1) it costs a derivative error of 10 eps^(2/3) (1e-5 at
+    eps = 1e-9) where 1e-6 was possible, which Newton's quadratic phase does not notice.
     """
-    return float(np.cbrt(max(settings[RTOL], settings[ATOL], 1e-15)))
+    return DIFFERENCE_FACTOR * float(np.cbrt(max(settings[RTOL], settings[ATOL], 1e-15)))
+
+
+DIFFERENCE_FACTOR = 0.1
 
 
 @dataclass
