@@ -370,3 +370,22 @@ def test_cusp_against_the_corrected_first_order_theory(fold_g_c):
         return theory.effective_frequency_squared(dict(parameters, g=g))
     assert abs(wt2(cusp[0]) - wt2(g_theory)) / omega**2 <= eps**2, (cusp, g_theory)
     assert abs(cusp[1] - c_theory) <= eps * c_theory, (cusp, c_theory)
+
+
+def _point_with(kind, monodromy, barrier_distance=0.5):
+    return curves.CurvePoint(kind=kind, values=np.array([20.0, 4.0]), state=np.zeros(2), periods=1,
+                             monodromy=np.asarray(monodromy, dtype=float), R=1.0, impacts_per_period=0.0, x_max=0.5,
+                             barrier_distance=barrier_distance, slowest_impact=np.inf, residual=0.0,
+                             newton_iterations=2, jacobian=np.zeros((3, 4)))
+
+
+def test_a_point_off_its_bifurcation_is_not_accepted():
+    # Newton's step criterion can be met where a test function jumps (module doc of
+    # CLAIM_TOLERANCE); the multiplier (or the barrier distance) itself decides.
+    problem = curves.CurveProblem(dict(HYSTERESIS), "effective", ("g", "Omega"), SETTINGS)
+    assert curves._off_the_bifurcation(problem, _point_with("period_doubling", np.diag([-1.012, 0.0])))
+    assert curves._off_the_bifurcation(problem, _point_with("period_doubling", np.diag([-1.0 - 1e-6, 0.5]))) is None
+    assert curves._off_the_bifurcation(problem, _point_with("fold", np.diag([1.0 + 2e-3, 0.5])))
+    assert curves._off_the_bifurcation(problem, _point_with("fold", [[1.0, 1e-7], [0.0, 0.3]])) is None
+    assert curves._off_the_bifurcation(problem, _point_with("grazing", np.eye(2) * 0.5, barrier_distance=0.01))
+    assert curves._off_the_bifurcation(problem, _point_with("grazing", np.eye(2) * 0.5, barrier_distance=1e-9)) is None

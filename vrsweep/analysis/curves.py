@@ -50,7 +50,7 @@ regular there):
                    the grazing curve meets the fold or period-doubling curve there.
 Nothing here raises on a numerical failure; bad requests raise UsageError.
 
-Limits: a curve cannot start, or pass, within a difference step (eps^(1/3) relative, e.g. 0.018
+Limits: a curve cannot start, or pass, within a difference step (0.1 eps^(1/3) relative: 0.0018
 in g = 18 at rtol 1e-9) of a graze, where the displaced maps impact and the Jacobian is lost; the
 graze of an impacting orbit (an impact slowing to zero) is not followed as a grazing curve.
 """
@@ -313,11 +313,39 @@ def correct(problem, kind, z_guess, periods, tangent, z_predicted):
         # only that close, and one more step makes it (quadratically) much closer.
         if (iteration > 1 and residual <= tolerance and abs(arc) <= tolerance
                 and np.max(np.abs(step)) <= _location_tolerance(problem, z)):
-            return _point(problem, kind, z, periods, orbit_map, residual, iteration, jacobian), None
+            point = _point(problem, kind, z, periods, orbit_map, residual, iteration, jacobian)
+            off = _off_the_bifurcation(problem, point)
+            if off:
+                return None, (ENDED_NEWTON, off)
+            return point, None
         last_step = step
         z = z + step
     iterations = problem.options["max_newton_iterations"]
     return None, (ENDED_NEWTON, f"Newton did not converge in {iterations} iterations (residual {residual:.2g})")
+
+
+# A converged point must be the bifurcation it claims to this accuracy: a multiplier within this of
+# +1 or -1, or (grazing) the orbit's maximum within this (relative to max(1, Delta)) of the barrier.
+# Newton's step criterion alone can be met where the test function jumps (a huge difference
+# quotient makes a small step out of a large value): at the original model's period doubling next
+# to a graze (g = 18.13, Omega = 4) it "converged" with a multiplier at -1.012. A true point, located
+# to location_tolerance (1e-6), is within |d mu / dz| 1e-6 of it, far inside.
+CLAIM_TOLERANCE = 1e-3
+
+
+def _off_the_bifurcation(problem, point):
+    """None, or why ``point`` is not the bifurcation its curve claims (CLAIM_TOLERANCE)."""
+    if point.kind == "grazing":
+        scale = max(1.0, abs(problem.delta(point.values)))
+        if abs(point.barrier_distance) > CLAIM_TOLERANCE * scale:
+            return f"converged {point.barrier_distance:.2g} from the barrier: not a graze"
+        return None
+    target = 1.0 if point.kind == "fold" else -1.0
+    distance = float(np.min(np.abs(point.multipliers - target)))
+    if distance > CLAIM_TOLERANCE:
+        return (f"converged where det(M {'-' if target > 0 else '+'} I) jumps: no multiplier within "
+                f"{CLAIM_TOLERANCE:g} of {target:+g} (the nearest {distance:.2g} away)")
+    return None
 
 
 def tangent_of(point, previous=None):
@@ -395,8 +423,8 @@ def _turned_back(previous, point, tangent, step):
 
 def _near_barrier(problem, point):
     """Close enough to a graze that the Jacobian's displaced maps (steps of problem.step relative,
-    up to 0.0125 in g = 27) may cross it: a free orbit within ten difference steps of the largest
-    coordinate, or GRAZING_PROXIMITY, of the barrier; an impacting one whose slowest impact is as
+    1.2e-3 in g = 27 at rtol 1e-10) may cross it: a free orbit within ten difference steps of the
+    largest coordinate, or GRAZING_PROXIMITY, of the barrier; an impacting one whose slowest impact is as
     slow as continuation's test of the same (v < sqrt(GRAZING_PROXIMITY max(1, Delta)): it would
     have penetrated about v^2 / 2 without the barrier). Not the difference steps' reach for
     impacting orbits: an orbit of the paper's parameters (g = 9.7, a period doubling) whose
