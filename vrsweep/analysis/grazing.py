@@ -5,7 +5,8 @@ P^p is continuous there but not smooth: on the impacting side an orbit whose fre
 have overshot the barrier by sigma hits it with speed u = sqrt(2 a sigma) (a = -x'' at the
 touch), and the map gains a term proportional to u, the square root of a distance. Newton started
 on the free side sees only the free map's Jacobian and does not cross into the square-root
-region, so vrsweep handles grazing with two tools (docs/design.md, "Grazing"):
+region, so vrsweep handles grazing with two tools (docs/design.md, "Continuation of periodic
+orbits", its part on grazing):
 
 1. The barrier-free map P_free (the same oscillator with Delta -> infinity) is smooth through the
    graze, and so is its orbit's largest x, x_max_free. The grazing orbit solves
