@@ -19,13 +19,17 @@ from vrsweep.store.reading import axis_index
 
 
 def load(path):
-    """A trajectory (TrajectoryData) or a sweep result (an xarray Dataset, loaded and its file
-    closed); ResultFileError otherwise."""
+    """A trajectory (TrajectoryData), a sweep result or a curves file (an xarray Dataset, loaded and
+    its file closed); ResultFileError otherwise."""
     from vrsweep.store.reading import load_results
     from vrsweep.store.trajectory_file import is_trajectory_file, read_trajectory
 
     if is_trajectory_file(path):
         return read_trajectory(path)
+    from vrsweep.plot.curves import is_curves_path, load_curves
+
+    if is_curves_path(path):
+        return load_curves(path)
     ds = load_results(path)  # says what is wrong with anything that is not a results file
     ds.encoding["source"] = os.fspath(path)  # messages name the file as the user did
     return ds
