@@ -1,4 +1,6 @@
-"""vrsweep continue CONFIG.yaml [-o OUT.h5] [--start results.h5 --at g=23]: periodic orbits followed."""
+"""vrsweep continue CONFIG.yaml [-o OUT.h5] [--start results.h5 --at g=23]: periodic orbits followed;
+vrsweep continue BRANCH.h5 --point K --along NAME [--to LOW HIGH] [-o CURVES.h5]: a bifurcation
+point of a branch followed in a second parameter (a bifurcation curve)."""
 
 import dataclasses
 
@@ -30,9 +32,17 @@ def _parse_at(values):
               help="A sweep file: the first orbit is looked for from the final state of its point --at.")
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="The grid point of --start (nearest value per axis), e.g. --at g=23; repeatable.")
+@click.option("--point", "point", type=int, default=None, metavar="K",
+              help="With a branch file: the bifurcation (its index in the file's table, see vrsweep info) to follow.")
+@click.option("--along", "along", default=None, metavar="NAME",
+              help="With a branch file: the second parameter the bifurcation point moves along, e.g. Omega.")
+@click.option("--to", "to", type=float, nargs=2, default=None, metavar="LOW HIGH",
+              help="The range of --along (default: the config's sweep axis of that name).")
+@click.option("--within", "within", type=float, nargs=2, default=None, metavar="LOW HIGH",
+              help="The range of the branch's parameter (default: the branch's continuation.to).")
 @overwrite_option
 @click.option("--quiet", "-q", is_flag=True, help="No summary.")
-def command(config_path, overrides, output, start_path, at, overwrite, quiet):
+def command(config_path, overrides, output, start_path, at, point, along, to, within, overwrite, quiet):
     """Follow the periodic orbits of CONFIG.yaml's continuation section, stable and unstable.
 
     The first orbit is found at continuation.from by integrating the config's initial state
@@ -40,7 +50,21 @@ def command(config_path, overrides, output, start_path, at, overwrite, quiet):
     detected, and the fixed point of the p-period stroboscopic map is followed both ways in
     continuation.parameter within continuation.to, with its Floquet multipliers, folds, period
     doublings, Neimark-Sacker points and grazings (docs/continuation.md).
+
+    Given a branch file instead (the output of the above), --point K --along NAME follows its
+    bifurcation K (a fold, period doubling or grazing) in the second parameter NAME, both ways
+    within --to and --within, into a curves file (docs/commands.md).
     """
+    from vrsweep.store.branch_file import is_branch_file
+
+    if is_branch_file(config_path):
+        _curves(config_path, overrides, output, start_path, point, along, to, within, overwrite, quiet)
+        return
+    if point is not None or along is not None or to or within:
+        from vrsweep.errors import UsageError
+
+        raise UsageError("--point, --along, --to and --within go with a branch file (the output of vrsweep "
+                         f"continue CONFIG.yaml), and {config_path} is not one")
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
     from vrsweep.execution import continuation as execution
@@ -83,4 +107,52 @@ def command(config_path, overrides, output, start_path, at, overwrite, quiet):
         for bifurcation in bifurcations:
             click.echo(f"{bifurcation.kind} at {name} = {bifurcation.orbit.parameter:.8g} "
                        f"(R = {bifurcation.orbit.R:.6g})", err=True)
+        click.echo(f"-> {path}", err=True)
+
+
+def _curves(path, overrides, output, start_path, point, along, to, within, overwrite, quiet):
+    """continue BRANCH.h5 --point K --along NAME: the bifurcation curve (execution/curves.py)."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from vrsweep.errors import UsageError
+    from vrsweep.execution import curves as execution
+    from vrsweep.store.curve_file import curve_arrays, write_curves
+    from vrsweep.store.fileio import prepare_output_directory
+
+    if point is None or along is None:
+        raise UsageError(f"{path} is a branch file: say which bifurcation to follow in which parameter, "
+                         "e.g. --point 0 --along Omega (vrsweep info lists its bifurcations)")
+    if start_path or overrides:
+        raise UsageError("--start, --at and --set go with a config, not with a branch file")
+    flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to"}
+    with flag_wording(flags):
+        request = execution.read_request(path, point, along, to, within)
+    path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{point}_{along}.h5")
+    if path.exists() and not overwrite:
+        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
+    prepare_output_directory(path)
+    if not quiet:
+        from vrsweep.commands.options import say_cache_notice
+
+        say_cache_notice()
+    with flag_wording(flags):
+        curves, specials = execution.run_curve(request)
+        write_curves(path, curve_arrays(curves, specials, request.names), request.names, request.config,
+                     request.config.integration.method, overwrite=overwrite)
+    if not quiet:
+        first, second = request.names
+        for number, curve in enumerate(curves):
+            values = np.array([p.values for p in curve.points])
+            click.echo(f"curve {number}: {curve.kind.replace('_', ' ')}, period {curve.periods}, "
+                       f"{len(curve.points)} points, {first} from {values[:, 0].min():.6g} to "
+                       f"{values[:, 0].max():.6g}, {second} from {values[:, 1].min():.6g} to "
+                       f"{values[:, 1].max():.6g}", err=True)
+            for side in ("first", "last"):
+                status, reason = curve.ends[side]
+                click.echo(f"  {side} end: {status}: {reason}", err=True)
+        for special in specials:
+            click.echo(f"{special.kind} at {first} = {special.values[0]:.8g}, {second} = {special.values[1]:.8g}",
+                       err=True)
         click.echo(f"-> {path}", err=True)

@@ -33,7 +33,7 @@ _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "c
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 @click.option("--config", "show_config", is_flag=True, help="Also print the config the file was run from.")
 def command(path, as_json, show_config):
-    """Summarise a results, shard, trajectory or branch file: grid, progress, status counts, variables.
+    """Summarise a results, shard, trajectory, branch or curves file: grid, progress, status counts, variables.
 
     A figure from vrsweep plot (.png, .pdf, .svg): its title and full description, kept in the
     file's metadata (also with --no-title)."""
@@ -94,6 +94,12 @@ def describe(path) -> dict:
             raise ResultFileError(f"{path} is a vrsweep branch file this vrsweep cannot describe")
         described["branches"] = _describe_branches(path)
         return described
+    if kind == "curves":
+        described = _describe_groups(path, kind)
+        if described is None:
+            raise ResultFileError(f"{path} is a vrsweep curves file this vrsweep cannot describe")
+        described["curves"] = _describe_curves(path)
+        return described
     if kind == "trajectory":
         from vrsweep.store.trajectory_file import check_trajectory, read_trajectory
 
@@ -135,6 +141,51 @@ def _describe_branches(path) -> dict:
                         for kind, b, p, r in zip(ds["bifurcation_kind"].values, ds["bifurcation_branch"].values,
                                                  ds["bifurcation_parameter"].values, ds["bifurcation_R"].values)]
     return {"parameter": parameter, "branches": rows, "bifurcations": bifurcations}
+
+
+def _describe_curves(path) -> dict:
+    """A curves file (vrsweep continue BRANCH.h5 --point K --along NAME): per curve its kind,
+    period, points, both parameters' ranges and ends; the codimension-two points."""
+    from vrsweep.store.reading import open_results
+
+    with open_results(path) as ds:
+        names = [str(name) for name in np.atleast_1d(_plain(ds.attrs.get("parameter_names", [])))]
+        curve = np.asarray(ds["curve"].values)
+        rows = []
+        for number in np.asarray(ds["curve_id"].values):
+            mine = curve == number
+            row = {"curve": int(number), "kind": str(ds["curve_kind"].values[number]),
+                   "periods": int(ds["curve_periods"].values[number]), "points": int(mine.sum()),
+                   "first_end": [str(ds["curve_end_first_status"].values[number]),
+                                 str(ds["curve_end_first_reason"].values[number])],
+                   "last_end": [str(ds["curve_end_last_status"].values[number]),
+                                str(ds["curve_end_last_reason"].values[number])]}
+            for name in names:
+                values = np.asarray(ds[name].values)[mine]
+                row[name] = [_number(values.min()), _number(values.max())] if mine.any() else [None, None]
+            rows.append(row)
+        specials = [{"kind": str(kind), "curve": int(number),
+                     **{name: _number(ds[f"special_{name}"].values[index]) for name in names}}
+                    for index, (kind, number) in enumerate(zip(ds["special_kind"].values, ds["special_curve"].values))]
+    return {"parameters": names, "curves": rows, "specials": specials}
+
+
+def _format_curves(curves) -> list[str]:
+    if not curves:
+        return []
+    names = curves["parameters"]
+    lines = []
+    for row in curves["curves"]:
+        ranges = ", ".join(f"{name} from {_short(row[name][0])} to {_short(row[name][1])}" for name in names)
+        lines.append(f"curve {row['curve']}:     {row['kind']}, period {row['periods']}, {row['points']} points, "
+                     f"{ranges}")
+        for side in ("first", "last"):
+            status, reason = row[f"{side}_end"]
+            lines.append(f"  {side} end:   {status}: {reason}")
+    for row in curves["specials"]:
+        where = ", ".join(f"{name} = {row[name]:.8g}" for name in names)
+        lines.append(f"special:     {row['kind']} at {where} (curve {row['curve']})")
+    return lines
 
 
 def _format_branches(branches) -> list[str]:
@@ -422,6 +473,7 @@ def format_summary(summary, show_config=False) -> str:
                 lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
     lines += _format_attractors(summary.get("attractors") or [])
     lines += _format_branches(summary.get("branches"))
+    lines += _format_curves(summary.get("curves"))
     created = summary["created"] or "unknown time"
     versions = summary["versions"]
     written = f"{created}"

@@ -182,11 +182,17 @@ def _variable(group, name, values, scales, long_name, units):
 
 def is_branch_file(path) -> bool:
     """True for an HDF5 file that says it is a vrsweep branch file; False for anything else."""
+    return has_file_kind(path, FILE_KIND)
+
+
+def has_file_kind(path, kind) -> bool:
+    """True for an HDF5 file whose root attribute vrsweep_file is ``kind``; False for anything else
+    (shared with the curves file, store/curve_file.py)."""
     try:
         if not os.path.isfile(path) or not h5py.is_hdf5(path):
             return False
         with open_hdf5(path, "r") as f:
-            kind = f.attrs.get("vrsweep_file", "")
-            return (kind.decode() if isinstance(kind, bytes) else kind) == FILE_KIND
+            found = f.attrs.get("vrsweep_file", "")
+            return (found.decode() if isinstance(found, bytes) else found) == kind
     except (OSError, ValueError):
         return False

@@ -46,14 +46,17 @@ def _open_dataset(path, group=None, **kwargs):
 
 
 def file_kind(path) -> str:
-    """``"sweep"``, ``"shard"``, ``"trajectory"`` or ``"branch"``; ResultFileError for anything else."""
-    from vrsweep.store import branch_file, trajectory_file
+    """``"sweep"``, ``"shard"``, ``"trajectory"``, ``"branch"`` or ``"curves"``; ResultFileError for
+    anything else."""
+    from vrsweep.store import branch_file, curve_file, trajectory_file
     from vrsweep.store.reader import open_checked
 
     if trajectory_file.is_trajectory_file(path):
         return "trajectory"
     if branch_file.is_branch_file(path):
         return "branch"
+    if curve_file.is_curves_file(path):
+        return "curves"
     with open_checked(path) as f:  # raises a ResultFileError that says what is wrong
         return "shard" if "shard" in f.attrs else "sweep"
 
@@ -85,7 +88,9 @@ def open_results(path, group: str | None = None):
     path : str or os.PathLike
         A sweep file (``vrsweep run``), a shard file (``--shard I/N``, possibly unfinished), a
         trajectory file (``vrsweep simulate``) or a branch file (``vrsweep continue``: dimension
-        ``point`` along the branches, store/branch_file.py).
+        ``point`` along the branches, store/branch_file.py) or a curves file (``vrsweep continue
+        BRANCH.h5 --point K --along NAME``: dimension ``point`` along the bifurcation curves,
+        store/curve_file.py).
     group : str, optional
         Trajectory files only: ``"original"``, ``"effective"`` or ``"slow_flow/<start>"``
         (``state``, ``paper``, ``paper_literal``). Default: the config's own model.

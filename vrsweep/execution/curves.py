@@ -1,0 +1,99 @@
+"""A bifurcation point of a branch file followed in a second parameter: the curve both ways.
+
+The algorithm is analysis/curves.py; the file it makes is store/curve_file.py.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from vrsweep.analysis import curves
+from vrsweep.errors import UsageError
+from vrsweep.execution.sweep import integration_settings
+
+
+@dataclass
+class CurveRequest:
+    """What ``continue BRANCH.h5 --point K --along NAME`` asks for, read from the branch file."""
+    config: object          # the branch's Config (its resolved YAML)
+    kind: str               # fold, period_doubling or grazing
+    names: tuple            # (branch parameter, along)
+    values: np.ndarray      # (2,) where the point lies
+    state: np.ndarray       # (2,) its x, v
+    periods: int
+    ranges: tuple           # ((low1, high1), (low2, high2))
+
+
+def read_request(path, point, along, to=None, within=None):
+    """The CurveRequest of bifurcation row ``point`` of branch file ``path`` moved along ``along``.
+
+    to: (low, high) of ``along`` (default: the config's sweep axis of that name); within: (low,
+    high) of the branch's parameter (default: the branch's continuation.to)."""
+    from vrsweep.config import parse_config
+    from vrsweep.store.reading import open_results
+
+    with open_results(path) as ds:
+        if ds.attrs.get("vrsweep_file") != "branch":
+            raise UsageError.naming("{path} is not a branch file: follow a bifurcation point of the output of "
+                                    "vrsweep continue CONFIG.yaml", path=str(path))
+        count = ds.sizes.get("bifurcation", 0)
+        if not 0 <= point < count:
+            raise UsageError.naming("{point} = {index} is not a bifurcation of {path}: it has {count} (0 to "
+                                    "{last}); vrsweep info {path} lists them", {"point": "point"}, index=point,
+                                    path=str(path), count=count, last=count - 1)
+        kind = str(ds["bifurcation_kind"].values[point])
+        branch = int(ds["bifurcation_branch"].values[point])
+        periods = int(ds["branch_periods"].values[branch])
+        value = float(ds["bifurcation_parameter"].values[point])
+        state = np.array([float(ds["bifurcation_x"].values[point]), float(ds["bifurcation_v"].values[point])])
+        config = parse_config(ds.attrs["config"], f"{path} (its config)", line_numbers=False)
+        first = str(ds.attrs["parameter"])
+    if kind not in curves.KINDS:
+        raise UsageError.naming("{point} = {index} is a {kind} point: only fold, period_doubling and grazing "
+                                "points can be followed in two parameters", {"point": "point"}, index=point,
+                                kind=kind)
+    names = (first, along)
+    curves.check_pair(config.parameters, config.model, names)
+    section = config.continuation
+    within = (section.low, section.high) if within is None else tuple(within)
+    if to is None:
+        axis = next((a for a in config.axes if a.name == along), None)
+        if axis is None:
+            raise UsageError.naming("no range for {along_name}: give one with {to}, e.g. {to} 3.5 4.5",
+                                    {"to": "to"}, along_name=along)
+        to = (float(np.min(axis.values)), float(np.max(axis.values)))
+    second = float(config.parameters[along])
+    for name, (low, high), now in ((first, within, value), (along, tuple(to), second)):
+        if not low < high:
+            raise UsageError.naming("the range of {name} [{low}, {high}] is empty", name=name, low=low, high=high)
+        if not low <= now <= high:
+            raise UsageError.naming("the point's {name} = {now} lies outside its range [{low}, {high}]",
+                                    name=name, now=f"{now:.8g}", low=low, high=high)
+    # The stored config holds the point's own values of both parameters, not the branch's start.
+    config = dataclasses.replace(config, parameters={**config.parameters, first: value})
+    return CurveRequest(config, kind, names, np.array([value, second]), state, periods, (within, tuple(to)))
+
+
+def problem_of(request):
+    config = request.config
+    parameters = dict(config.parameters, **dict(zip(request.names, request.values)))
+    return curves.CurveProblem(parameters, config.model, request.names, integration_settings(config.integration),
+                               config.integration.method, config.continuation.options())
+
+
+def run_curve(request, progress=None):
+    """The curve through the request's point both ways. Returns ([Curve], [SpecialPoint]). A start
+    that does not converge raises UsageError saying why (there is nothing to follow)."""
+    problem = problem_of(request)
+    start, failure = curves.start_point(problem, request.kind, request.state, request.values, request.periods)
+    if failure is not None:
+        raise UsageError.naming("the {kind} point did not converge as a point of the {kind} curve at {where}: "
+                                "{reason}", kind=request.kind.replace("_", " "),
+                                where=", ".join(f"{n} = {v:.8g}" for n, v in zip(request.names, request.values)),
+                                reason=failure[1])
+    curve, specials = curves.continue_curve(problem, request.kind, start, request.ranges,
+                                            request.config.continuation.max_points, progress)
+    return [curve], specials

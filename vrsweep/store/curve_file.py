@@ -1,0 +1,153 @@
+"""The curves file of ``vrsweep continue BRANCH.h5 --point K --along NAME``: bifurcation curves
+in a parameter plane (analysis/curves.py).
+
+Layout (HDF5, flat; ``vrsweep.open_results`` opens it as one xarray Dataset)
+---------------------------------------------------------------------------
+root attributes: ``vrsweep_file = "curves"``, ``vrsweep_format_version``, ``vrsweep_complete``,
+``created``, ``config`` (the resolved YAML), ``model``, ``method``, ``parameter_names`` (the two
+parameters in order, a string array, e.g. ["g", "Omega"]), CF globals (title, history, source,
+references, date_created), ``vrsweep_version``.
+
+    point (dim)                   index along the curves, in arc order within each curve
+    curve (point)                 which curve the point is on (0, 1, ...)
+    <first>, <second> (point)     the two parameters, each variable named by its parameter
+    x, v (point)                  the orbit's state at t = 0 mod T (T = 2 pi / omega)
+    periods (point)               p: the orbit closes after p slow periods
+    R (point)                     eq3.3 over the orbit's p periods
+    impacts_per_period (point)
+    barrier_distance (point)      Delta - x_max of the orbit (0 on a grazing curve, to tolerance)
+    residual (point)              max |P^p(y) - y| at convergence
+    multiplier (dim, 2)           Floquet multipliers, larger modulus first
+    multiplier_real, multiplier_imag, multiplier_modulus (point, multiplier)
+    curve_id (dim)                one entry per curve
+    curve_kind (curve_id)         fold, period_doubling or grazing
+    curve_periods (curve_id)
+    curve_end_first_status, curve_end_first_reason, curve_end_last_status, curve_end_last_reason
+                  (curve_id)      why each curve stops at its first and last point (statuses:
+                                  left_range, max_points, newton_failed, sticking,
+                                  integration_failed, fold_grazing, period_doubling_grazing)
+    special (dim)                 codimension-two points
+    special_kind (special)        fold_grazing, period_doubling_grazing or cusp
+    special_curve (special)
+    special_<first>, special_<second> (special)
+
+On a grazing curve the orbit is the barrier-free one (it touches the barrier with zero velocity),
+so its multipliers are those of the smooth side. Built in memory and written whole through
+``fileio.write_bytes`` (atomic).
+"""
+
+from __future__ import annotations
+
+import datetime
+import io
+import os
+
+import h5py
+import numpy as np
+
+from vrsweep import __version__
+from vrsweep.errors import UsageError
+from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.store.branch_file import _dimension, _variable, has_file_kind
+from vrsweep.store.fileio import write_bytes
+from vrsweep.store.layout import FORMAT_VERSION
+
+FILE_KIND = "curves"
+
+_POINT_VARIABLES = {
+    # name: (long name, units); the two parameters' variables go after "curve"
+    "x": ("position x at t = 0 mod T", "1"),
+    "v": ("velocity dx/dt at t = 0 mod T", "1"),
+    "periods": ("orbit period in slow periods T = 2 pi/omega", "1"),
+    "R": ("gain R = |Q|/c over the orbit (eq3.3)", "1"),
+    "impacts_per_period": ("impacts per slow period", "1"),
+    "barrier_distance": ("distance Delta - x_max of the orbit from the barrier", "1"),
+    "residual": ("Newton residual max |P^p(y) - y|", "1"),
+}
+_INTEGER = ("curve", "periods")
+
+
+def curve_arrays(curves, specials, names):
+    """Plain arrays from analysis.curves' Curve and SpecialPoint lists (see the layout)."""
+    columns = {name: [] for name in ("curve", *names, *_POINT_VARIABLES)}
+    multipliers = []
+    for number, curve in enumerate(curves):
+        for point in curve.points:
+            values = dict(curve=number, x=point.state[0], v=point.state[1], periods=point.periods, R=point.R,
+                          impacts_per_period=point.impacts_per_period, barrier_distance=point.barrier_distance,
+                          residual=point.residual, **dict(zip(names, point.values)))
+            for name in columns:
+                columns[name].append(values[name])
+            multipliers.append(point.multipliers)
+    arrays = {name: np.asarray(values, dtype=np.int64 if name in _INTEGER else np.float64)
+              for name, values in columns.items()}
+    arrays["multipliers"] = np.asarray(multipliers, dtype=np.complex128).reshape(-1, 2)
+    arrays["curves"] = [(curve.kind, curve.periods, curve.ends["first"], curve.ends["last"]) for curve in curves]
+    arrays["specials"] = [(special.kind, special.curve, *special.values) for special in specials]
+    return arrays
+
+
+def write_curves(path, arrays, names, config, method, overwrite=False):
+    """Write curve_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``.
+
+    names: the two parameters in order; config: the Config whose resolved YAML is stored."""
+    import numba
+
+    from vrsweep.store.provenance import cf_attributes
+
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        raise UsageError(f"output {path} is a directory")
+    if os.path.lexists(path) and not overwrite:
+        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
+                                {"overwrite": "overwrite=True"}, path=path)
+    first, second = names
+    attrs = {"vrsweep_file": FILE_KIND, "vrsweep_format_version": np.int32(FORMAT_VERSION),
+             "vrsweep_complete": np.int32(1),
+             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+             "config": config.to_yaml(), "model": config.model, "method": method,
+             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
+             **cf_attributes(f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})")}
+    image = io.BytesIO()
+    with h5py.File(image, "w", track_order=True) as f:
+        for name, value in attrs.items():
+            f.attrs[name] = value
+        f.attrs.create("parameter_names", np.asarray(names, dtype=object), dtype=h5py.string_dtype())
+        point = _dimension(f, "point", np.arange(len(arrays["curve"]), dtype=np.int64), "point along the curves")
+        multiplier = _dimension(f, "multiplier", np.arange(2, dtype=np.int64),
+                                "Floquet multiplier number, larger modulus first")
+        _variable(f, "curve", arrays["curve"], (point,), "curve number", "1")
+        for name in names:
+            _variable(f, name, arrays[name], (point,), PARAMETER_LONG_NAMES[name], PARAMETER_UNITS[name])
+        for name, (long_name, units) in _POINT_VARIABLES.items():
+            _variable(f, name, arrays[name], (point,), long_name, units)
+        mu = arrays["multipliers"]
+        _variable(f, "multiplier_real", mu.real, (point, multiplier), "real part of the Floquet multiplier", "1")
+        _variable(f, "multiplier_imag", mu.imag, (point, multiplier), "imaginary part of the Floquet multiplier", "1")
+        _variable(f, "multiplier_modulus", np.abs(mu), (point, multiplier), "modulus of the Floquet multiplier", "1")
+        curves = arrays["curves"]
+        curve_id = _dimension(f, "curve_id", np.arange(len(curves), dtype=np.int64), "curve number")
+        _variable(f, "curve_kind", np.asarray([c[0] for c in curves], dtype=object), (curve_id,),
+                  "kind: fold, period_doubling or grazing", None)
+        _variable(f, "curve_periods", np.asarray([c[1] for c in curves], dtype=np.int64), (curve_id,),
+                  "orbit period of the curve in slow periods", "1")
+        for side, index, where in (("first", 2, "its first point"), ("last", 3, "its last point")):
+            _variable(f, f"curve_end_{side}_status", np.asarray([c[index][0] for c in curves], dtype=object),
+                      (curve_id,), f"why the curve stops at {where}", None)
+            _variable(f, f"curve_end_{side}_reason", np.asarray([c[index][1] for c in curves], dtype=object),
+                      (curve_id,), f"why the curve stops at {where}, in words", None)
+        specials = arrays["specials"]
+        special = _dimension(f, "special", np.arange(len(specials), dtype=np.int64), "codimension-two point")
+        _variable(f, "special_kind", np.asarray([s[0] for s in specials], dtype=object), (special,),
+                  "kind: fold_grazing, period_doubling_grazing or cusp", None)
+        _variable(f, "special_curve", np.asarray([s[1] for s in specials], dtype=np.int64), (special,),
+                  "curve of the codimension-two point", "1")
+        for index, name in enumerate(names):
+            _variable(f, f"special_{name}", np.asarray([s[2 + index] for s in specials], dtype=np.float64),
+                      (special,), f"{PARAMETER_LONG_NAMES[name]} at the codimension-two point", PARAMETER_UNITS[name])
+    write_bytes(path, image.getvalue())
+
+
+def is_curves_file(path) -> bool:
+    """True for an HDF5 file that says it is a vrsweep curves file; False for anything else."""
+    return has_file_kind(path, FILE_KIND)
