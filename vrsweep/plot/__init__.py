@@ -11,7 +11,7 @@ Sweep results (``vrsweep run``)
     ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
     ``lyapunov``     the largest Lyapunov exponent against the swept parameter, with the zero line;
                      ``bifurcation+lyapunov`` draws it under the bifurcation diagram, one x axis.
-Curves files (``vrsweep continue BRANCH.h5 --point K --along NAME``), after a map
+Curves files (``vrsweep continue`` on a branch file), after a map
     ``vrsweep plot MAP.h5 CURVES.h5 ...``: the map of any variable (``var``) with the fold,
     period-doubling and grazing curves over it, codimension-two points marked, and for the
     effective model the corrected theory's fold and Hopf curves (``curves``).
@@ -169,7 +169,8 @@ def _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, 
         raise UsageError.naming("curves files go after the map they are drawn over: vrsweep plot MAP.h5 "
                                 "CURVES.h5 [CURVES2.h5 ...], MAP.h5 a sweep over the curves' two parameters")
     if not all(is_curves(d) for d in curve_files):
-        raise UsageError.naming("after a map come curves files only (vrsweep continue BRANCH.h5 --point K --along NAME)")
+        raise UsageError.naming("after a map come curves files only (the bifurcation curves vrsweep continue "
+                                "writes from a branch file)")
     if kind not in (None, "map"):
         raise UsageError.naming("curves go over a map: {kind} {value} does not take curves files", value=kind)
     if periods is not None:

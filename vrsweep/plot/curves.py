@@ -44,9 +44,9 @@ SPECIAL_MARKERS = {
     "cusp": ("*", "cusp: two folds meet"),
 }
 ANALYTIC_STYLES = {
-    "fold": dict(color="#d62728", ls=(0, (3, 2)), lw=1.3,
+    "fold": dict(color="#d62728", ls=(0, (3, 2)), lw=1.6,
                  label="theory (corrected): fold, two fixed points of the slow flow merge"),
-    "hopf": dict(color="#e377c2", ls=(0, (3, 2)), lw=1.3,
+    "hopf": dict(color="#e377c2", ls=(0, (3, 2)), lw=1.6,
                  label="theory (corrected): Hopf of the slow flow (Neimark-Sacker)"),
 }
 ANALYTIC_MESH = 400  # points per axis of the mesh the analytic curves are contoured on
@@ -56,51 +56,22 @@ def is_curves(data) -> bool:
     return hasattr(data, "attrs") and data.attrs.get("vrsweep_file") == FILE_KIND
 
 
-def is_curves_path(path) -> bool:
-    """True for an HDF5 file whose root says vrsweep_file = "curves" (anything else: False)."""
-    import h5py
-
-    from vrsweep.store.fileio import open_hdf5
-
-    try:
-        if not os.path.isfile(path) or not h5py.is_hdf5(path):
-            return False
-        with open_hdf5(path, "r") as f:
-            kind = f.attrs.get("vrsweep_file")
-    except Exception:  # noqa: BLE001 - not ours to judge: the sweep reader says what is wrong
-        return False
-    return (kind.decode() if isinstance(kind, bytes) else str(kind)) == FILE_KIND
-
-
-def load_curves(path):
-    """A curves file as an xarray Dataset, loaded and its file closed."""
-    from vrsweep.store.reading import file_kind, load_results
-
-    try:
-        readable = file_kind(path) == FILE_KIND  # once the store knows curves files
-    except Exception:  # noqa: BLE001 - an older store: read it directly
-        readable = False
-    if readable:
-        ds = load_results(path)
-    else:
-        import xarray as xr
-
-        from vrsweep.store.fileio import open_hdf5
-
-        try:
-            with open_hdf5(path, "r") as h5file, xr.open_dataset(h5file, engine="h5netcdf") as opened:
-                ds = opened.load()
-        except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
-            from vrsweep.store.reader import corrupt_error
-
-            raise corrupt_error(os.fspath(path), error) from None
-    ds.encoding["source"] = os.fspath(path)
-    _check_curves(ds)
-    return ds
-
-
 def _text(value) -> str:
     return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def check_curves(ds):
+    """A ResultFileError unless ``ds`` has what the figure draws: two parameters and the curves."""
+    from vrsweep.errors import ResultFileError
+
+    path = ds.encoding.get("source", "the curves file")
+    names = parameter_names(ds)
+    if len(names) != 2:
+        raise ResultFileError(f"{path}: a curves file names two parameters (root attribute parameter_names); "
+                              f"it has {', '.join(names) or 'none'}")
+    missing = [name for name in ("curve", *names, "curve_kind") if name not in ds.variables]
+    if missing:
+        raise ResultFileError(f"{path}: a curves file without {', '.join(missing)}")
 
 
 def parameter_names(ds) -> list:
@@ -109,19 +80,6 @@ def parameter_names(ds) -> list:
     if names is None:
         return []
     return [_text(name) for name in np.atleast_1d(names)]
-
-
-def _check_curves(ds):
-    from vrsweep.errors import ResultFileError
-
-    path = ds.encoding.get("source", "the curves file")
-    names = parameter_names(ds)
-    if len(names) != 2:
-        raise ResultFileError(f"{path}: a curves file names two parameters (root attribute parameter_names); "
-                              f"it has {names or 'none'}")
-    missing = [name for name in ("curve", *names, "curve_kind") if name not in ds.variables]
-    if missing:
-        raise ResultFileError(f"{path}: a curves file without {', '.join(missing)}")
 
 
 def _path(ds):
@@ -138,6 +96,7 @@ def curves_figure(ds, curve_files, name="R", x_axis=None, log=False, vmin=None, 
     view = _Sweep(ds)
     x_axis, y_axis = _map_axes(view, x_axis)
     for curves in curve_files:
+        check_curves(curves)
         names = parameter_names(curves)
         if sorted(names) != sorted((x_axis, y_axis)):
             raise UsageError.naming("{path} has curves in ({curve_names}) but the map {map} is over ({map_names}): "
@@ -161,8 +120,12 @@ def curves_figure(ds, curve_files, name="R", x_axis=None, log=False, vmin=None, 
     what, caption = getattr(fig, "_vrsweep_description", ("", ""))
     files = ", ".join(_path(curves) for curves in curve_files)
     counts = _curve_counts(curve_files)
-    _title(fig, f"{what.split(' (light grey')[0]} with bifurcation curves",
-           f"{caption}\ncurves: {files}" + (f" ({counts})" if counts else ""))
+    if curve_files:
+        what, caption = f"{what.split(' (light grey')[0]} with bifurcation curves", \
+            f"{caption}\ncurves: {files}" + (f" ({counts})" if counts else "")
+    elif handles:
+        what = f"{what.split(' (light grey')[0]} with the corrected theory's fold and Hopf curves"
+    _title(fig, what, caption)
     return fig
 
 

@@ -26,10 +26,6 @@ def load(path):
 
     if is_trajectory_file(path):
         return read_trajectory(path)
-    from vrsweep.plot.curves import is_curves_path, load_curves
-
-    if is_curves_path(path):
-        return load_curves(path)
     ds = load_results(path)  # says what is wrong with anything that is not a results file
     ds.encoding["source"] = os.fspath(path)  # messages name the file as the user did
     return ds
