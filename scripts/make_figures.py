@@ -17,7 +17,8 @@ fig6 (effective system against the slow-flow reconstruction); and, not in the pa
 hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down) and the basins of
 attraction of that bistable example at g = 23 (configs/basins_g23.yaml) and of four coexisting
 orbits of the original model at g = 5 (configs/basins_g5_original.yaml); the map of R over g
-and Omega (configs/map_g_Omega.yaml).
+and Omega (configs/map_g_Omega.yaml); bifurcation curves over an effective (g, Omega) map and an
+original (g, Delta) map (curves_g_Omega_effective, curves_original: docs/bifurcation-curves.md).
 """
 
 import argparse
@@ -95,6 +96,29 @@ COMMANDS = {
     "map_g_Omega": [
         ["run", "configs/map_g_Omega.yaml", "--overwrite"],
         ["plot", "results/map_g_Omega.h5", "-o", "docs/figures/map_g_Omega.png"],
+    ],
+    # Not in the paper: bifurcation curves over maps (docs/bifurcation-curves.md). --point K is the
+    # bifurcation's index in the branch file (vrsweep info lists them).
+    "curves_g_Omega_effective": [
+        ["run", "configs/curves_g_Omega_effective.yaml", "--overwrite"],
+        ["continue", "configs/curves_branch_effective.yaml", "-o", "results/curves_branch_effective.h5",
+         "--overwrite"],
+        ["continue", "results/curves_branch_effective.h5", "--point", "2", "--along", "Omega", "--to", "3.5", "5.0",
+         "-o", "results/curves_effective_fold.h5", "--overwrite"],
+        ["continue", "results/curves_branch_effective.h5", "--point", "1", "--along", "Omega", "--to", "3.5",
+         "5.0", "-o", "results/curves_effective_grazing.h5", "--overwrite"],
+        ["plot", "results/curves_g_Omega_effective.h5", "results/curves_effective_fold.h5",
+         "results/curves_effective_grazing.h5", "--var", "R", "-o", "docs/figures/curves_g_Omega_effective.png"],
+    ],
+    "curves_original": [
+        ["run", "configs/curves_original.yaml", "--overwrite"],
+        *[["continue", f"configs/curves_branch_original_{branch}.yaml", "-o",
+           f"results/curves_branch_original_{branch}.h5", "--overwrite"] for branch in ("free", "p1", "p3")],
+        *[["continue", f"results/curves_branch_original_{branch}.h5", "--point", "0", "--along", "Delta",
+           "--to", "1.0", "3.0", "-o", f"results/curves_original_{branch}.h5", "--overwrite"]
+          for branch in ("free", "p1", "p3")],
+        ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
+         "results/curves_original_p3.h5", "--var", "period", "-o", "docs/figures/curves_original.png"],
     ],
 }
 
