@@ -584,3 +584,13 @@ def test_fold_curve_without_folds_gives_nan_and_names_bad_planes():
         theory.fold_curve(HYSTERESIS, along="Delta", values=[1.0])
     with pytest.raises(ValueError, match="within"):
         theory.fold_curve(HYSTERESIS, along="g", values=[20.0], over="alpha")
+
+
+@pytest.mark.parametrize("Omega", [3.5, 4.0, 5.0])
+def test_a_response_sweep_across_the_fold_curve_loses_two_roots_there(Omega):
+    params = dict(HYSTERESIS, Omega=Omega)
+    folds = theory.fold_curve(params, along="Omega").at[0]
+    upper = np.nanmax(folds)
+    g = np.linspace(upper - 0.5, upper + 0.5, 101)  # the fold falls between two of these
+    counts = np.isfinite(theory.response_branches(params, g).R).sum(axis=1)
+    assert set(counts[g < upper]) == {3} and set(counts[g > upper]) == {1}
