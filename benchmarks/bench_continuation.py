@@ -51,11 +51,19 @@ def main():
     whole, (branch, bifurcations) = best_of(
         lambda: continuation.continue_branch(problem, start, 20.0, 27.0, 400), repeats=1)
     n = len(branch.orbits)
+    # Crossing the graze: from the last free orbit before it (locate on the barrier-free map,
+    # probe, normal-form predictor, corrector).
+    graze = next(b.orbit for b in bifurcations if b.kind == "grazing")
+    near = min((o for o in branch.orbits if o.impacts_per_period == 0 and not o.stable),
+               key=lambda o: abs(o.parameter - graze.parameter))
+    crossing, (_, beyond, _, _) = best_of(lambda: continuation.cross_grazing(problem, near, continuation.tangent_of(near)))
+    assert beyond is not None
     print(f"method {method}, rtol 1e-10")
     print(f"sweep point (100 + 100 periods)          {1e3 * sweep_point:8.2f} ms   1.00x")
     print(f"P and its monodromy (1 period)           {1e3 * one_map:8.3f} ms   {one_map / sweep_point:.3f}x")
     print(f"continuation point (step 0.1, {orbit.newton_iterations} Newton)     "
           f"{1e3 * one_point:8.2f} ms   {one_point / sweep_point:.3f}x")
+    print(f"crossing the graze (locate, probe, correct)   {1e3 * crossing:8.2f} ms   {crossing / sweep_point:.3f}x")
     print(f"whole branch: {n} points, {len(bifurcations)} bifurcations located   "
           f"{1e3 * whole:8.1f} ms   {whole / sweep_point:.2f}x  ({1e3 * whole / n:.2f} ms per point)")
     print("bifurcations:", ", ".join(f"{b.kind} g = {b.orbit.parameter:.6f}" for b in bifurcations))

@@ -82,6 +82,13 @@ COMMANDS = {
         ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
         ["plot", "results/hysteresis_effective.h5", "-o", "docs/figures/hysteresis.png"],
     ],
+    # Not in the paper: the same example followed by continuation, stable and unstable (issue 20).
+    "continuation_hysteresis": [
+        ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
+        ["continue", "configs/continuation_hysteresis.yaml", "--overwrite"],
+        ["plot", "results/continuation_hysteresis.h5", "results/hysteresis_effective.h5",
+         "-o", "docs/figures/continuation_hysteresis.png"],
+    ],
     # Not in the paper: basins of attraction of the bistable hysteresis example at g = 23 (issue 13).
     "basins_g23": [
         ["run", "configs/basins_g23.yaml", "-o", "results/basins_g23.h5", "--overwrite"],

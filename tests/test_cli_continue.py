@@ -147,3 +147,110 @@ def test_start_from_a_sweep_point(invoke, tmp_path, write_config):
         result = invoke("continue", config, "-o", tmp_path / "z.h5", "--start", sweep, "--at", f"g={off_grid}")
         assert result.exit_code == 2 and "--at g=" in result.output, result.output
         assert not (tmp_path / "z.h5").exists()
+
+
+# --- continue BRANCH.h5 --point K --along NAME: bifurcation curves (analysis/curves.py) ---------
+def _bifurcation_index(path, kind):
+    with vrsweep.open_results(path) as ds:
+        return list(ds["bifurcation_kind"].values).index(kind)
+
+
+@pytest.fixture(scope="module")
+def curves_file(branch_file, invoke):
+    path, _ = branch_file
+    output = path.with_name("fold_curve.h5")
+    point = _bifurcation_index(path, "fold")
+    result = invoke("continue", path, "--point", point, "--along", "Omega", "--to", "3.9", "4.1",
+                    "--within", "20", "30", "-o", output)
+    assert result.exit_code == 0, result.output
+    return output, result.output
+
+
+def test_curves_file_opens_with_the_agreed_layout(curves_file):
+    path, output = curves_file
+    with vrsweep.open_results(path) as ds:
+        assert ds.attrs["vrsweep_file"] == "curves" and list(ds.attrs["parameter_names"]) == ["g", "Omega"]
+        assert ds.attrs["model"] == "effective" and ds.attrs["vrsweep_complete"] == 1
+        for name in ("curve", "g", "Omega", "x", "v", "periods", "R", "impacts_per_period", "barrier_distance",
+                     "residual"):
+            assert ds[name].dims == ("point",) and ds[name].attrs["units"] == "1" and ds[name].attrs["long_name"]
+        assert ds["Omega"].attrs["long_name"] == "fast forcing frequency Omega"
+        for name in ("multiplier_real", "multiplier_imag", "multiplier_modulus"):
+            assert ds[name].dims == ("point", "multiplier")
+        assert list(ds["curve_kind"].values) == ["fold"]
+        for name in ("curve_periods", "curve_end_first_status", "curve_end_first_reason", "curve_end_last_status",
+                     "curve_end_last_reason"):
+            assert ds[name].dims == ("curve_id",)
+        for name in ("special_kind", "special_curve", "special_g", "special_Omega"):
+            assert ds[name].dims == ("special",)
+        g, omega = ds["g"].values, ds["Omega"].values
+        assert omega.min() < 3.95 and omega.max() > 4.05
+        # the effective model's fold curve is g = k Omega^2 (eq2.11, eq2.12: g/Omega^2 only)
+        assert np.ptp(g / omega**2) < 3e-5 * np.mean(g / omega**2)
+        # a multiplier at +1 at every point (the fold's test function det(M - I) = 0)
+        assert np.all(np.min(np.abs(ds["multiplier_real"].values - 1.0), axis=1) < 1e-5)
+        assert np.all(ds["residual"].values < 1e-7)
+        assert set(ds["curve_end_first_status"].values) | set(ds["curve_end_last_status"].values) == {"left_range"}
+    assert "curve 0: fold, period 1" in output and "Omega left [3.9, 4.1]" in output
+
+
+def test_info_summarises_the_curves(curves_file, invoke):
+    path, _ = curves_file
+    result = invoke("info", path)
+    assert result.exit_code == 0, result.output
+    assert "vrsweep curves" in result.output and "curve 0:     fold, period 1" in result.output
+    assert "first end:   left_range: Omega left [3.9, 4.1]" in result.output
+
+
+def test_grazing_curve_from_the_command(branch_file, invoke, tmp_path):
+    path, _ = branch_file
+    output = tmp_path / "graze.h5"
+    result = invoke("continue", path, "--point", _bifurcation_index(path, "grazing"), "--along", "Delta",
+                    "--to", "0.8", "1.2", "-o", output)
+    assert result.exit_code == 0, result.output
+    with vrsweep.open_results(output) as ds:
+        assert list(ds["curve_kind"].values) == ["grazing"]
+        assert np.all(np.abs(ds["barrier_distance"].values) < 1e-6)
+        assert "fold_grazing" in list(ds["special_kind"].values)
+    assert "fold_grazing at g = " in result.output
+
+
+def test_curve_requests_that_cannot_be_met_are_refused(branch_file, invoke, tmp_path, write_config):
+    path, _ = branch_file
+    out = tmp_path / "c.h5"
+    result = invoke("continue", path, "--point", 9, "--along", "Omega", "--to", "3", "5", "-o", out)
+    assert result.exit_code == 2 and "--point = 9 is not a bifurcation" in result.output
+    result = invoke("continue", path, "--point", 0, "--along", "g", "--to", "3", "5", "-o", out)
+    assert result.exit_code == 2 and "--along = g is the branch's own parameter" in result.output
+    result = invoke("continue", path, "--point", 0, "--along", "Omega", "-o", out)
+    assert result.exit_code == 2 and "--to" in result.output
+    result = invoke("continue", path, "--point", 0, "--along", "Omega", "--to", "4.5", "5", "-o", out)
+    assert result.exit_code == 2 and "outside its range" in result.output
+    result = invoke("continue", path, "-o", out)
+    assert result.exit_code == 2 and "--point 0 --along Omega" in result.output
+    config = write_config(tmp_path, HYSTERESIS, "h.yaml")
+    result = invoke("continue", config, "--point", 0, "--along", "Omega", "-o", out)
+    assert result.exit_code == 2 and "branch file" in result.output
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("damage", ["missing", "short", "kind"])
+def test_damaged_curves_file_is_one_line(curves_file, invoke, tmp_path, damage):
+    import shutil
+
+    import h5py
+
+    path = tmp_path / "damaged.h5"
+    shutil.copy(curves_file[0], path)
+    with h5py.File(path, "r+") as f:
+        if damage == "missing":
+            del f["Omega"]
+        elif damage == "short":
+            del f["R"]
+            f.create_dataset("R", data=np.zeros(2))
+        else:
+            f["curve_kind"][0] = "exploded"
+    with pytest.raises(vrsweep.errors.ResultFileError, match="is corrupt"):
+        vrsweep.open_results(path)
+    result = invoke("info", path)
+    assert result.exit_code == 2 and "is corrupt" in result.output and "Traceback" not in result.output

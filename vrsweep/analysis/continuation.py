@@ -17,17 +17,21 @@ orbits", derives all of it):
 
 Bifurcations between consecutive points are detected by sign changes of test functions and
 located on the arc between them (the same corrector at a shorter step) by the Illinois variant of
-regula falsi, or by bisection for grazing, until the parameter is known to location_tolerance:
+regula falsi until the parameter is known to location_tolerance (grazing: below):
     fold             det(M - I)  (a real multiplier through +1)
     period doubling  det(M + I)  (a real multiplier through -1)
     Neimark-Sacker   det(M) - 1  while the multipliers are a complex pair
-    grazing          the number of impacts per period changes between two points, or the
-                     corrector fails next to an orbit whose highest free maximum is within
-                     GRAZING_PROXIMITY of Delta (or whose slowest impact is that slow): the
-                     point is recorded, and the branch beyond it is searched for
-                     (switch_at_grazing); when none is found the branch ends with status
-                     "grazing" (the square-root term of the map beyond a graze defeats Newton
-                     from the smooth side; see docs/continuation.md).
+    grazing          an orbit without impacts touches the barrier, or the one impact of an
+                     orbit slows to zero: located by Newton on the barrier-free map's fixed
+                     point with its largest x at Delta (grazing.py), when the corrector fails
+                     next to such an orbit or steps over the graze.
+
+At a graze the map has a square-root term and Newton from one side does not reach the other:
+the branch is carried across by grazing.py's normal form (cross_grazing). An orbit with other
+impacts besides the grazing one has no barrier-free map; there the graze is only bracketed (the
+impact count changes along the arc, or the corrector gives up next to it) and the branch beyond
+is searched for around it (switch_at_grazing); when none is found the branch ends with status
+"grazing".
 
 Nothing here raises on a numerical failure: a branch ends with a status and a one-line reason.
 Bad requests (a chaotic start, an incommensurate forcing) raise UsageError (exit code 2).
@@ -37,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vrsweep.analysis import grazing
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
@@ -337,10 +342,26 @@ def _detect(problem, previous, current, tangent, step, periods):
             if orbit is not None:
                 found.append((kind, orbit))
     if previous.impacts_per_period != current.impacts_per_period:
-        orbit = _locate(problem, previous, tangent, step, "grazing", previous.impacts_per_period, 1.0, periods)
-        if orbit is not None:
-            found.append(("grazing", orbit))
+        # The corrector stepped over a graze by itself: locate it on the barrier-free map where
+        # that map is the free side's, else by bisection on the impact count along the arc.
+        free_side = previous if previous.impacts_per_period < current.impacts_per_period else current
+        located = None
+        if grazing.crossable(previous) and grazing.crossable(current):
+            located = grazing.locate_graze(problem, free_side.z, periods, _tolerance(problem, free_side.state))
+        if located is not None and min(previous.parameter, current.parameter) <= located.z[2] <= max(
+                previous.parameter, current.parameter):
+            found.append(("grazing", _graze_orbit(problem, located)))
+        else:
+            orbit = _locate(problem, previous, tangent, step, "grazing", previous.impacts_per_period, 1.0, periods)
+            if orbit is not None:
+                found.append(("grazing", orbit))
     return found
+
+
+def _graze_orbit(problem, located):
+    """The Orbit of a grazing.Graze (its free map's measures: the touch costs no impact)."""
+    return _orbit(problem, located.z[:2], located.z[2], located.periods, located.orbit_map, located.residual,
+                  located.iterations, located.jacobian[:2, 2].copy())
 
 
 def follow(problem, start, direction, lo, hi, max_points, progress=None):
@@ -354,53 +375,100 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None):
         tangent = -tangent
     step = options["initial_step"]
     current = start
-    orbits, bifurcations, crossed = [], [], []
+    orbits, bifurcations = [], []
+    tried_crossing = False  # from this ``current``
+    grazing_reason = None
     while True:
         if len(orbits) >= max_points:
             return orbits, bifurcations, (ENDED_MAX_POINTS, f"{max_points} points reached")
         z_predicted = current.z + step * tangent
         orbit, failure = correct(problem, z_predicted, start.periods, tangent, z_predicted)
+        crossed = False
         if failure is not None or _turned_back(current, orbit, tangent, step):
             step *= 0.5
-            if step < options["min_step"] and _near_grazing(problem, current) and current.z.tolist() not in crossed:
-                # The square-root singularity of grazing: the branch goes on from here in another
-                # direction, on the other side of the barrier (module doc).
-                crossed.append(current.z.tolist())
-                bifurcations.append(("grazing", current))
-                switched = switch_at_grazing(problem, current, tangent)
-                if switched is None:
+            near = _near_grazing(problem, current)
+            if near and not tried_crossing and (grazing.crossable(current) or step < options["min_step"]):
+                # The square-root singularity of grazing: Newton from this side cannot reach the
+                # other (module doc); the graze is located and crossed from its normal form.
+                tried_crossing = True
+                graze, orbit, new_tangent, grazing_reason = cross_grazing(problem, current, tangent)
+                if graze is not None:
+                    bifurcations.append(("grazing", graze))
+                crossed = orbit is not None
+            if not crossed:
+                if step >= options["min_step"]:
+                    continue
+                if near:
+                    if grazing_reason is None and not tried_crossing:
+                        grazing_reason = "no branch beyond the graze was found"
                     side = "touches the barrier" if current.impacts_per_period == 0 else "impacts at zero speed"
-                    reason = (f"the orbit {side} at {problem.parameter} = {current.parameter:.8g}; no branch "
-                              "beyond the graze was found")
+                    reason = (f"the orbit {side} at {problem.parameter} = {current.parameter:.8g}; "
+                              f"{grazing_reason or 'no branch beyond the graze was found'}")
                     return orbits, bifurcations, (ENDED_GRAZING, reason)
-                orbit, tangent = switched
-                if not lo <= orbit.parameter <= hi:
-                    return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
-                orbits.append(orbit)
-                if progress is not None:
-                    progress(orbit)
-                current, step = orbit, options["initial_step"]
-                continue
-            if step < options["min_step"]:
                 status, reason = failure or (ENDED_NEWTON, "the corrector keeps jumping to another branch")
                 reason = f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
                 return orbits, bifurcations, (status, reason)
-            continue
-        new_tangent = tangent_of(orbit, tangent)
+        else:
+            new_tangent = tangent_of(orbit, tangent)
         if not lo <= orbit.parameter <= hi:
             return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
-        bifurcations.extend(_detect(problem, current, orbit, tangent, step, start.periods))
+        if crossed:
+            step = options["initial_step"]
+        else:
+            bifurcations.extend(_detect(problem, current, orbit, tangent, step, start.periods))
+            if orbit.newton_iterations <= EASY_NEWTON:
+                step = min(step * STEP_GROWTH, options["max_step"])
         orbits.append(orbit)
         if progress is not None:
             progress(orbit)
-        if orbit.newton_iterations <= EASY_NEWTON:
-            step = min(step * STEP_GROWTH, options["max_step"])
         current, tangent = orbit, new_tangent
+        tried_crossing, grazing_reason = False, None
+
+
+def cross_grazing(problem, near, tangent):
+    """Locate the graze next to ``near`` (an Orbit on either side of it) and step across.
+
+    Returns (the grazing Orbit or None, the first Orbit beyond or None, its tangent, a one-line
+    reason when there is none). Orbits whose other impacts keep going through the graze have no
+    barrier-free map (grazing.py): for them the graze is only recorded where the corrector gave
+    up, and the branch beyond is searched for around it (switch_at_grazing).
+    """
+    periods = near.periods
+    if not grazing.crossable(near):
+        switched = switch_at_grazing(problem, near, tangent)
+        if switched is None:
+            return near, None, None, "no branch beyond the graze was found"
+        return near, switched[0], switched[1], None
+    located = grazing.locate_graze(problem, near.z, periods, _tolerance(problem, near.state))
+    if located is None:
+        return None, None, None, "the grazing orbit could not be located (Newton on the barrier-free map failed)"
+    graze = _graze_orbit(problem, located)
+    lengths = [problem.options["initial_step"] * factor for factor in CROSSING_DISTANCES]
+    if near.impacts_per_period == 0:
+        normal_form = grazing.impacting_direction(problem, located)
+        if normal_form is None:
+            return graze, None, None, "the orbit beyond the graze does not impact once, as its normal form needs"
+        direction, predictor, speed_scale = normal_form
+        candidates = [predictor(length / speed_scale) for length in lengths]
+        beyond = "impacting"
+    else:
+        direction = grazing.free_direction(located)
+        candidates = [located.z + length * direction for length in lengths]
+        beyond = "free"
+    for z_predicted in candidates:
+        orbit, failure = correct(problem, z_predicted, periods, direction, z_predicted)
+        if (failure is None and (orbit.impacts_per_period == 0) == (beyond == "free")
+                and (orbit.z - located.z) @ direction > 0.0):
+            return graze, orbit, tangent_of(orbit, direction), None
+    return graze, None, None, f"no {beyond} orbit converged beyond the graze"
 
 
 # An orbit is near grazing when its highest free maximum is this close to Delta (relative), or
 # its slowest impact this slow (relative to the orbit's speed scale max(1, |v|)).
 GRAZING_PROXIMITY = 1e-3
+# Arclength distances from a graze at which the branch beyond is looked for, relative to the
+# initial step: the first that converges onto the other side wins.
+CROSSING_DISTANCES = (1.0, 0.25, 0.0625, 0.015625)
 # Radii (in (x, v, parameter)) of the spheres of predictors searched for the branch beyond a graze.
 GRAZING_SEARCH_RADII = (1e-3, 4e-3, 1.6e-2)
 
@@ -432,10 +500,10 @@ def switch_at_grazing(problem, graze, tangent):
     Beyond a graze the map has a square-root term, F = A dz + C sqrt(sigma) (sigma the
     penetration), so the continuing branch leaves the grazing point at a corner, in a direction
     tangent to the grazing surface (docs/design.md). It is found by the arclength corrector on
-    planes at distance rho from the grazing point, normal to each of 26 directions. Best effort:
-    Newton started on the wrong side of the graze sees the smooth side's Jacobian only, and on
-    the hysteresis example's unstable orbit it finds nothing (docs/continuation.md); the branch
-    then ends with status "grazing".
+    planes at distance rho from the grazing point, normal to each of 26 directions. Best effort,
+    for the grazes grazing.py's normal form does not cover (an orbit with other impacts besides
+    the grazing one): Newton started on the wrong side of the graze sees the smooth side's
+    Jacobian only; when nothing is found the branch ends with status "grazing".
     """
     for radius in GRAZING_SEARCH_RADII:
         for direction in _search_directions():

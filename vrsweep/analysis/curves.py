@@ -9,10 +9,11 @@ periods (numerics/shooting.py), each curve is the solution set of three equation
     period doubling  P^p(y) - y = 0,       det(M + I) = 0        (a multiplier at -1)
     grazing          P_free^p(y) - y = 0,  Delta - x_max_free = 0
 
-M = dP^p/dy the monodromy; P_free the map of the same oscillator without the barrier (the
-coefficient vector's DELTA set to inf: the kernel then never impacts) and x_max_free its largest x
-over the p periods, from the kernel's dense-output turning points. On a grazing curve the free
-orbit is the real one and touches the barrier with zero velocity.
+M = dP^p/dy the monodromy; P_free the map of the same oscillator without the barrier
+(grazing.free_coefficients: Delta = inf, the kernel then never impacts) and x_max_free its
+largest x over the p periods, from the kernel's dense-output turning points: grazing.py's system
+with lam2 free (a grazing curve starts from grazing.locate_graze at the start's lam2). On a
+grazing curve the free orbit is the real one and touches the barrier with zero velocity.
 
 Three equations in four unknowns: a curve, followed by pseudo-arclength continuation as
 continuation.follow follows a branch: predictor along the unit tangent (the null vector of the
@@ -52,7 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vrsweep.analysis import continuation
+from vrsweep.analysis import continuation, grazing
 from vrsweep.errors import UsageError
 from vrsweep.numerics import model as model_metadata
 from vrsweep.numerics.settings import ATOL, RTOL
@@ -65,7 +66,8 @@ ENDED_NEWTON = "newton_failed"
 ENDED_INTEGRATION = "integration_failed"
 ENDED_STICKING = "sticking"
 GRAZING_MEETING = {"fold": "fold_grazing", "period_doubling": "period_doubling_grazing"}
-# An orbit within this distance of the barrier (relative to max(1, Delta)) is next to a graze.
+# An orbit within this distance of the barrier (relative to max(1, Delta)) is next to a graze
+# (or within the Jacobian's reach of it: _near_barrier).
 GRAZING_PROXIMITY = continuation.GRAZING_PROXIMITY
 STEP_GROWTH = continuation.STEP_GROWTH
 MAX_HALVINGS = continuation.MAX_HALVINGS
@@ -108,10 +110,7 @@ class CurveProblem:
         """The kernel's coefficient vector at (lam1, lam2) = values; without the barrier if free."""
         coefficients = model_metadata.kernel_coefficients(dict(self.parameters, **dict(zip(self.names, values))),
                                                           self.model)
-        if free:
-            coefficients = np.array(coefficients)
-            coefficients[model_metadata.DELTA] = np.inf
-        return coefficients
+        return grazing.free_coefficients(coefficients) if free else coefficients
 
     def delta(self, values):
         return float(self.coefficients(values)[model_metadata.DELTA])
@@ -134,8 +133,12 @@ def check_pair(parameters, model, names):
     if first == second:
         raise UsageError.naming("{along} = {name} is the branch's own parameter: choose another one to move "
                                 "the point along", {"along": "along"}, name=second)
-    for name in names:
-        continuation.check_commensurate(parameters, model, name)
+    if model == "original" and second in ("Omega", "omega"):
+        raise UsageError.naming(
+            "{along} = {name} cannot move in the original model: its fast forcing is periodic with the slow "
+            "period only where Omega/omega is a whole number, which a moving {name} leaves at once; follow "
+            "the point in {name} in the effective model (no fast force) instead", {"along": "along"}, name=second)
+    continuation.check_commensurate(parameters, model, first)
 
 
 @dataclass
@@ -154,6 +157,7 @@ class CurvePoint:
     impacts_per_period: float
     x_max: float
     barrier_distance: float
+    slowest_impact: float      # smallest impact velocity (inf without impacts)
     residual: float
     newton_iterations: int
     jacobian: np.ndarray       # (3, 4) derivative of the three equations at the point
@@ -247,7 +251,8 @@ def _point(problem, kind, z, periods, orbit_map, residual, iterations, jacobian)
     point = CurvePoint(kind=kind, values=z[2:].copy(), state=z[:2].copy(), periods=periods,
                        monodromy=orbit_map.monodromy.copy(), R=orbit_map.R,
                        impacts_per_period=orbit_map.impacts / periods, x_max=orbit_map.x_max,
-                       barrier_distance=delta - orbit_map.x_max, residual=residual, newton_iterations=iterations,
+                       barrier_distance=delta - orbit_map.x_max, slowest_impact=orbit_map.slowest_impact,
+                       residual=residual, newton_iterations=iterations,
                        jacobian=jacobian)
     if kind == "fold":
         point.cusp_test, point.fold_left = _cusp_test(problem, z, periods, orbit_map)
@@ -343,6 +348,13 @@ def start_point(problem, kind, state, values, periods):
 
     Returns (CurvePoint, None) or (None, (status, reason))."""
     z = np.concatenate([np.asarray(state, dtype=float), np.asarray(values, dtype=float)])
+    if kind == "grazing":
+        # The one-parameter graze at this lam2, by grazing.locate_graze (the same two equations
+        # with lam2 fixed), so that the curve starts on the graze itself.
+        one = problem.one_parameter(z[3])
+        graze = grazing.locate_graze(one, z[:3], periods, _tolerance(problem, z))
+        if graze is not None:
+            z[:3] = graze.z
     return correct(problem, kind, z, periods, np.array([0.0, 0.0, 0.0, 1.0]), z)
 
 
@@ -367,8 +379,21 @@ def _turned_back(previous, point, tangent, step):
 
 
 def _near_barrier(problem, point):
+    """Close enough to a graze that the Jacobian's displaced maps (steps of problem.step relative,
+    up to 0.0125 in g = 27) may cross it: a free orbit within ten difference steps of the largest
+    coordinate, or GRAZING_PROXIMITY, of the barrier; an impacting one whose slowest impact
+    would penetrate that deep without the barrier (depth v^2 / 2 at an acceleration ~ 1)."""
     scale = max(1.0, abs(problem.delta(point.values)))
-    return point.impacts_per_period > 0 or point.barrier_distance < GRAZING_PROXIMITY * scale
+    reach = max(GRAZING_PROXIMITY * scale, 10.0 * problem.step * max(1.0, float(np.max(np.abs(point.z)))))
+    if point.impacts_per_period > 0:
+        return 0.5 * point.slowest_impact ** 2 < reach
+    return point.barrier_distance < reach
+
+
+def _clearance(point):
+    """A measure of the distance from the graze that is linear in the parameters near it: the
+    barrier distance of a free orbit, the squared slowest impact speed of an impacting one."""
+    return point.barrier_distance if point.impacts_per_period == 0 else point.slowest_impact ** 2
 
 
 def _locate_impact_change(problem, kind, previous, tangent, step):
@@ -488,17 +513,22 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
                     status = GRAZING_MEETING[kind]
                     values = _extrapolate_to_barrier(points, start, current)
                     specials.append((status, current, values))
-                    reason = (f"{reason} next to the barrier (distance {current.barrier_distance:.2g} at "
-                              f"{_where(problem, current)}); the orbit grazes at about "
-                              + ", ".join(f"{n} = {v:.8g}" for n, v in zip(problem.names, values)))
+                    near = (f"distance {current.barrier_distance:.2g}" if current.impacts_per_period == 0
+                            else f"slowest impact {current.slowest_impact:.2g}")
+                    reason = f"{reason} next to the barrier ({near} at {_where(problem, current)})"
+                    if values is not None:
+                        reason += "; the orbit grazes at about " + ", ".join(
+                            f"{n} = {v:.8g}" for n, v in zip(problem.names, values))
                     return points, specials, (status, reason)
                 return points, specials, (status, f"{reason} at {_where(problem, current)} with the smallest step")
             continue
         _orient(point, current)
         new_tangent = tangent_of(point, tangent)
-        if not _inside(problem, point, ranges):
-            return points, specials, (ENDED_RANGE, _range_reason(problem, point, ranges))
         found, end = _specials(problem, kind, current, point, tangent, step)
+        if not _inside(problem, point, ranges):
+            # The last step may have crossed a special point before leaving the range.
+            specials.extend((name, special) for name, special in found if _inside(problem, special, ranges))
+            return points, specials, (ENDED_RANGE, _range_reason(problem, point, ranges))
         specials.extend(found)
         if end is not None:
             return points, specials, end
@@ -511,13 +541,14 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
 
 
 def _extrapolate_to_barrier(points, start, current):
-    """(2,) the parameters where the barrier distance, linear through the last two points, is 0."""
+    """(2,) the parameters where _clearance, linear through the last two points, reaches 0, when
+    that is within one more chord of ``current``; else None (too far to trust a line)."""
     before = points[-2] if len(points) >= 2 else start
-    if before is current or current.impacts_per_period > 0:
-        return current.values.copy()
-    d0, d1 = before.barrier_distance, current.barrier_distance
-    if not d0 > d1 > 0.0:
-        return current.values.copy()
+    if before is current or before.impacts_per_period != current.impacts_per_period:
+        return None
+    d0, d1 = _clearance(before), _clearance(current)
+    if not d0 > d1 > 0.0 or d1 > d0 - d1:
+        return None
     return current.values + (current.values - before.values) * d1 / (d0 - d1)
 
 

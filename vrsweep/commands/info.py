@@ -89,12 +89,18 @@ def describe(path) -> dict:
             raise error from None
         return other
     if kind == "branch":
+        from vrsweep.store.branch_file import check_branch
+
+        check_branch(path)  # a damaged file is one line, as every reader of it says
         described = _describe_groups(path, kind)
         if described is None:
             raise ResultFileError(f"{path} is a vrsweep branch file this vrsweep cannot describe")
         described["branches"] = _describe_branches(path)
         return described
     if kind == "curves":
+        from vrsweep.store.curve_file import check_curves
+
+        check_curves(path)  # a damaged file is one line, as every reader of it says
         described = _describe_groups(path, kind)
         if described is None:
             raise ResultFileError(f"{path} is a vrsweep curves file this vrsweep cannot describe")

@@ -15,6 +15,12 @@ from vrsweep.errors import UsageError
 from vrsweep.execution.sweep import integration_settings
 
 
+# The branch file's grazing orbit and the barrier-free orbit Newton finds from it are the same orbit
+# when they agree to this (relative): the branch locates a graze to location_tolerance (1e-6) in the
+# parameter, where the state moves by the square root of that at worst (1e-3).
+GRAZE_MATCH = 1e-2
+
+
 @dataclass
 class CurveRequest:
     """What ``continue BRANCH.h5 --point K --along NAME`` asks for, read from the branch file."""
@@ -93,7 +99,16 @@ def run_curve(request, progress=None):
         raise UsageError.naming("the {kind} point did not converge as a point of the {kind} curve at {where}: "
                                 "{reason}", kind=request.kind.replace("_", " "),
                                 where=", ".join(f"{n} = {v:.8g}" for n, v in zip(request.names, request.values)),
-                                reason=failure[1])
+                                reason=failure[1] + (
+                                    "; only the graze of a non-impacting orbit is followed, not an impact reaching "
+                                    "zero speed" if request.kind == "grazing" else ""))
+    if request.kind == "grazing" and np.max(np.abs(start.state - request.state)) > GRAZE_MATCH * max(
+            1.0, float(np.max(np.abs(request.state)))):
+        raise UsageError.naming(
+            "the grazing point at {where} is not the graze of a non-impacting orbit (the barrier-free orbit "
+            "there is another one): the graze of an impacting orbit, whose slowest impact reaches zero speed, "
+            "is not followed in two parameters", where=", ".join(f"{n} = {v:.8g}" for n, v in
+                                                                  zip(request.names, request.values)))
     curve, specials = curves.continue_curve(problem, request.kind, start, request.ranges,
                                             request.config.continuation.max_points, progress)
     return [curve], specials

@@ -28,7 +28,10 @@ root attributes: ``vrsweep_file = "branch"``, ``vrsweep_format_version``, ``vrsw
     branch_end_last_reason (branch_id): why each branch stops at its first and last point
     (statuses: left_range, max_points, newton_failed, sticking, integration_failed, grazing)
 
-Built in memory and written whole through ``fileio.write_bytes`` (atomic).
+Built in memory and written whole through ``fileio.write_bytes`` (atomic). Every numeric array
+carries a Fletcher-32 checksum, and ``check_branch`` (the one check every reader goes through:
+``open_results``, ``info``, ``plot``) reads them all and checks the layout above, so a damaged
+file is one line, not a traceback or a wrong figure.
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ import h5py
 import numpy as np
 
 from vrsweep import __version__
-from vrsweep.errors import UsageError
+from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.store.fileio import open_hdf5, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
@@ -157,8 +160,15 @@ def write_branch(path, arrays, config, method, overwrite=False):
     write_bytes(path, image.getvalue())
 
 
+def _checksummed(values):
+    """create_dataset's storage options: a checksum on every non-empty numeric array (HDF5's
+    Fletcher-32 filter needs chunked storage, which an empty array cannot have)."""
+    return {"fletcher32": True, "chunks": True} if values.size and values.dtype.kind in "iuf" else {}
+
+
 def _dimension(group, name, values, long_name):
-    scale = group.create_dataset(name, data=np.asarray(values))
+    values = np.asarray(values)
+    scale = group.create_dataset(name, data=values, **_checksummed(values))
     scale.make_scale(name)
     scale.attrs["units"] = "1"
     scale.attrs["long_name"] = long_name
@@ -171,7 +181,7 @@ def _variable(group, name, values, scales, long_name, units):
         ds = group.create_dataset(name, data=values.astype(str).astype(object), dtype=h5py.string_dtype(),
                                   shape=values.shape)
     else:
-        ds = group.create_dataset(name, data=values)
+        ds = group.create_dataset(name, data=values, **_checksummed(values))
     for axis, scale in enumerate(scales):
         ds.dims[axis].attach_scale(scale)
     if units is not None:
@@ -196,3 +206,81 @@ def has_file_kind(path, kind) -> bool:
             return (found.decode() if isinstance(found, bytes) else found) == kind
     except (OSError, ValueError):
         return False
+
+
+# What check_branch expects: each array's dimensions and kind of number ("i" whole, "f" real,
+# "s" text). A file written by this version has all of them.
+STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing")
+KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
+LAYOUT = {
+    "point": (("point",), "i"), "multiplier": (("multiplier",), "i"), "bifurcation": (("bifurcation",), "i"),
+    "branch_id": (("branch_id",), "i"),
+    **{name: (("point",), "i" if name in ("branch", "periods", "stable") else "f") for name in _POINT_VARIABLES},
+    **{f"multiplier_{part}": (("point", "multiplier"), "f") for part in ("real", "imag", "modulus")},
+    "bifurcation_kind": (("bifurcation",), "s"), "bifurcation_branch": (("bifurcation",), "i"),
+    **{f"bifurcation_{key}": (("bifurcation",), "f") for key in ("parameter", "x", "v", "R")},
+    **{f"bifurcation_multiplier_{part}": (("bifurcation", "multiplier"), "f") for part in ("real", "imag")},
+    "branch_periods": (("branch_id",), "i"),
+    **{f"branch_end_{side}_{what}": (("branch_id",), "s") for side in ("first", "last") for what in ("status", "reason")},
+}
+
+
+def _text(value):
+    return value.decode() if isinstance(value, bytes) else value
+
+
+def check_layout(f, path, layout, kind):
+    """Raise ResultFileError (one line) unless the open HDF5 file ``f`` holds every array of
+    ``layout`` ({name: (dimensions, "i" | "f" | "s")}) with lengths that agree along each
+    dimension (a dimension's length is that of its own array), and every checksum holds (each
+    array is read whole). Returns {name: values} of the arrays read."""
+    if _text(f.attrs.get("vrsweep_file", "")) != kind:
+        raise ResultFileError(f"{path} is not a vrsweep {kind} file")
+    version = f.attrs.get("vrsweep_format_version", 0)
+    if isinstance(version, (bool, np.bool_)) or not isinstance(version, (int, np.integer)):
+        raise ResultFileError(f"{path} is corrupt: attribute vrsweep_format_version must be a whole number")
+    if version != FORMAT_VERSION:
+        raise ResultFileError(f"{path} has {kind} format {version}; this vrsweep reads format {FORMAT_VERSION}")
+    if f.attrs.get("vrsweep_complete", 0) != 1:
+        raise ResultFileError(f"{path} is incomplete: the run that wrote it did not finish")
+    values = {}
+    for name, (dimensions, number) in layout.items():
+        if name not in f or not isinstance(f[name], h5py.Dataset):
+            raise ResultFileError(f"{path} is corrupt: {name} is missing")
+        data = f[name]
+        wanted = {"i": "iu", "f": "f", "s": "OSU"}[number]
+        if data.ndim != len(dimensions) or data.dtype.kind not in wanted:
+            raise ResultFileError(f"{path} is corrupt: {name} must be {'text' if number == 's' else 'numbers'} "
+                                  f"over ({', '.join(dimensions)}), found shape {data.shape} {data.dtype}")
+        values[name] = data[()]
+    for name, (dimensions, _) in layout.items():
+        for axis, dimension in enumerate(dimensions):
+            length = len(values[dimension])
+            if values[name].shape[axis] != length:
+                raise ResultFileError(f"{path} is corrupt: {name} has {values[name].shape[axis]} values along "
+                                      f"{dimension}, which has {length}")
+    return values
+
+
+def check_branch(path) -> None:
+    """Raise ResultFileError (one line) unless ``path`` is a sound branch file of this format."""
+    path = os.fspath(path)
+    try:
+        with open_hdf5(path, "r") as f:
+            values = check_layout(f, path, LAYOUT, FILE_KIND)
+            parameter = _text(f.attrs.get("parameter", None))
+    except ResultFileError:
+        raise
+    except (OSError, KeyError, ValueError, TypeError) as error:
+        raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
+    if not isinstance(parameter, str) or not parameter:
+        raise ResultFileError(f"{path} is corrupt: attribute parameter must name the continued parameter")
+    n_branches = len(values["branch_id"])
+    for name in ("branch", "bifurcation_branch"):
+        if np.any((values[name] < 0) | (values[name] >= n_branches)):
+            raise ResultFileError(f"{path} is corrupt: {name} names a branch outside 0..{n_branches - 1}")
+    for name, allowed in (("bifurcation_kind", KINDS), ("branch_end_first_status", STATUSES),
+                          ("branch_end_last_status", STATUSES)):
+        unknown = sorted({_text(v) for v in values[name]} - set(allowed))
+        if unknown:
+            raise ResultFileError(f"{path} is corrupt: {name} holds {unknown[0]!r}, not one of {', '.join(allowed)}")

@@ -33,7 +33,9 @@ references, date_created), ``vrsweep_version``.
 
 On a grazing curve the orbit is the barrier-free one (it touches the barrier with zero velocity),
 so its multipliers are those of the smooth side. Built in memory and written whole through
-``fileio.write_bytes`` (atomic).
+``fileio.write_bytes`` (atomic), every numeric array with a Fletcher-32 checksum (branch_file's
+writers); ``check_curves``, which open_results and info go through, reads them all and checks
+the layout, so a damaged file is one line.
 """
 
 from __future__ import annotations
@@ -46,10 +48,10 @@ import h5py
 import numpy as np
 
 from vrsweep import __version__
-from vrsweep.errors import UsageError
-from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
-from vrsweep.store.branch_file import _dimension, _variable, has_file_kind
-from vrsweep.store.fileio import write_bytes
+from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
+from vrsweep.store.branch_file import _dimension, _text, _variable, check_layout, has_file_kind
+from vrsweep.store.fileio import open_hdf5, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "curves"
@@ -151,3 +153,48 @@ def write_curves(path, arrays, names, config, method, overwrite=False):
 def is_curves_file(path) -> bool:
     """True for an HDF5 file that says it is a vrsweep curves file; False for anything else."""
     return has_file_kind(path, FILE_KIND)
+
+
+STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "fold_grazing",
+            "period_doubling_grazing")
+KINDS = ("fold", "period_doubling", "grazing")
+SPECIAL_KINDS = ("fold_grazing", "period_doubling_grazing", "cusp")
+
+
+def layout(names):
+    """{array: (dimensions, "i" | "f" | "s")} of a curves file in parameters ``names`` (check_layout's form)."""
+    return {
+        "point": (("point",), "i"), "multiplier": (("multiplier",), "i"), "curve_id": (("curve_id",), "i"),
+        "special": (("special",), "i"), "curve": (("point",), "i"),
+        **{name: (("point",), "f") for name in names},
+        **{name: (("point",), "i" if name in _INTEGER else "f") for name in _POINT_VARIABLES},
+        **{f"multiplier_{part}": (("point", "multiplier"), "f") for part in ("real", "imag", "modulus")},
+        "curve_kind": (("curve_id",), "s"), "curve_periods": (("curve_id",), "i"),
+        **{f"curve_end_{side}_{what}": (("curve_id",), "s") for side in ("first", "last") for what in ("status", "reason")},
+        "special_kind": (("special",), "s"), "special_curve": (("special",), "i"),
+        **{f"special_{name}": (("special",), "f") for name in names},
+    }
+
+
+def check_curves(path) -> None:
+    """Raise ResultFileError (one line) unless ``path`` is a sound curves file of this format."""
+    path = os.fspath(path)
+    try:
+        with open_hdf5(path, "r") as f:
+            names = [_text(name) for name in np.atleast_1d(f.attrs.get("parameter_names", []))]
+            if len(names) != 2 or not set(names) <= set(PARAMETER_NAMES) or names[0] == names[1]:
+                raise ResultFileError(f"{path} is corrupt: attribute parameter_names must name two parameters")
+            values = check_layout(f, path, layout(names), FILE_KIND)
+    except ResultFileError:
+        raise
+    except (OSError, KeyError, ValueError, TypeError) as error:
+        raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
+    n_curves = len(values["curve_id"])
+    for name in ("curve", "special_curve"):
+        if np.any((values[name] < 0) | (values[name] >= n_curves)):
+            raise ResultFileError(f"{path} is corrupt: {name} names a curve outside 0..{n_curves - 1}")
+    for name, allowed in (("curve_kind", KINDS), ("special_kind", SPECIAL_KINDS),
+                          ("curve_end_first_status", STATUSES), ("curve_end_last_status", STATUSES)):
+        unknown = sorted({_text(v) for v in values[name]} - set(allowed))
+        if unknown:
+            raise ResultFileError(f"{path} is corrupt: {name} holds {unknown[0]!r}, not one of {', '.join(allowed)}")

@@ -115,6 +115,14 @@ def open_results(path, group: str | None = None):
             raise ResultFileError(f"{path} has no group {group!r}; it has: {', '.join(groups)}")
     elif group is not None:
         raise ResultFileError(f"{path} is a {kind} file, which has no groups (group={group!r})")
+    if kind == "branch":
+        from vrsweep.store.branch_file import check_branch
+
+        check_branch(path)  # one line for a damaged file, before xarray sees it
+    if kind == "curves":
+        from vrsweep.store.curve_file import check_curves
+
+        check_curves(path)
 
     try:
         ds = _open_dataset(path, group)

@@ -1,0 +1,128 @@
+"""Issue 24, class 4, for branch files (vrsweep continue): their layout and checksums are checked
+once where they are opened (store/branch_file.check_branch), so open_results, info and plot give
+one line and exit 2 for a damaged file, never a traceback or a figure of wrong numbers.
+
+The file is made from hand-built orbits: what is checked is the store, not the numerics."""
+
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+
+import vrsweep
+from vrsweep.analysis.continuation import Bifurcation, Branch, Orbit
+from vrsweep.config.validate import config_from_dict
+from vrsweep.errors import ResultFileError
+from vrsweep.store.branch_file import branch_arrays, write_branch
+
+CONFIG = {"model": "effective", "parameters": {"gamma": 0.05, "alpha": 0.05},
+          "continuation": {"parameter": "g", "from": 23.0, "to": [21.0, 27.0]}}
+
+
+def _orbit(g, stable):
+    scale = 0.5 if stable else 1.5
+    return Orbit(parameter=g, state=np.array([0.1 * g, -0.2]), periods=1, monodromy=np.diag([scale, 0.3]),
+                 R=10.0 + g, Q_amplitude=0.4 + g / 100, impacts_per_period=0.0, x_max=0.8, slowest_impact=np.inf,
+                 residual=1e-11, newton_iterations=2)
+
+
+@pytest.fixture(scope="module")
+def branch(tmp_path_factory):
+    orbits = [_orbit(g, g < 24.0) for g in np.linspace(22.0, 26.0, 9)]
+    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "g left [21, 27]"),
+                                                       "up": ("grazing", "the orbit touches the barrier")})]
+    bifurcations = [Bifurcation("fold", orbits[4])]
+    path = tmp_path_factory.mktemp("branch") / "good.h5"
+    config = config_from_dict(CONFIG)
+    write_branch(path, branch_arrays(branches, bifurcations, 1.0), config, "rk45")
+    return path
+
+
+def _point_variable_too_short(f):
+    del f["R"]
+    f.create_dataset("R", data=np.zeros(4))
+
+
+def _multipliers_missing(f):
+    del f["multiplier_modulus"]
+
+
+def _parameter_as_text(f):
+    del f["parameter"]
+    f.create_dataset("parameter", data=np.array([b"a"] * 9))
+
+
+def _unknown_status(f):
+    f["branch_end_last_status"][0] = "exploded"
+
+
+def _unknown_kind(f):
+    f["bifurcation_kind"][0] = "cusp"
+
+
+def _branch_out_of_range(f):
+    f["branch"][3] = 7
+
+
+def _incomplete(f):
+    f.attrs["vrsweep_complete"] = np.int32(0)
+
+
+def _future_format(f):
+    f.attrs["vrsweep_format_version"] = np.int32(99)
+
+
+DAMAGES = {
+    "point variable too short": (_point_variable_too_short, "R has 4 values along point, which has 9"),
+    "multipliers missing": (_multipliers_missing, "multiplier_modulus is missing"),
+    "parameter as text": (_parameter_as_text, "parameter must be numbers over (point)"),
+    "unknown status": (_unknown_status, "branch_end_last_status holds 'exploded'"),
+    "unknown kind": (_unknown_kind, "bifurcation_kind holds 'cusp'"),
+    "branch out of range": (_branch_out_of_range, "branch names a branch outside 0..0"),
+    "incomplete": (_incomplete, "is incomplete"),
+    "future format": (_future_format, "has branch format 99"),
+}
+
+
+def _one_line(result):
+    lines = [line for line in result.output.strip().splitlines() if line.strip()]
+    assert "Traceback" not in result.output, result.output
+    assert result.exit_code == 2, result.output
+    assert len(lines) == 1 and lines[0].startswith("Error: "), result.output
+    return lines[0]
+
+
+@pytest.mark.parametrize("damage", sorted(DAMAGES))
+def test_a_damaged_branch_file_is_one_line_everywhere(damage, branch, tmp_path, invoke):
+    change, words = DAMAGES[damage]
+    path = tmp_path / "damaged.h5"
+    shutil.copy(branch, path)
+    with h5py.File(path, "r+") as f:
+        change(f)
+    for args in (("plot", path, "-o", tmp_path / "figure.png"), ("info", path)):
+        assert words in _one_line(invoke(*args)), args
+    assert not (tmp_path / "figure.png").exists()
+    with pytest.raises(ResultFileError) as error:
+        vrsweep.open_results(path)
+    assert words in str(error.value)
+
+
+def test_a_flipped_bit_fails_its_checksum(branch, tmp_path, invoke):
+    path = tmp_path / "flipped.h5"
+    shutil.copy(branch, path)
+    with h5py.File(path, "r") as f:
+        variable = f["x"]
+        assert variable.fletcher32
+        chunk = variable.id.get_chunk_info(0)
+    data = bytearray(path.read_bytes())
+    data[chunk.byte_offset + chunk.size // 2] ^= 0x10
+    path.write_bytes(bytes(data))
+    assert "is truncated or corrupt" in _one_line(invoke("info", path))
+
+
+def test_an_undamaged_branch_file_reads_back(branch):
+    with vrsweep.open_results(branch) as ds:
+        assert ds.sizes["point"] == 9 and ds.sizes["bifurcation"] == 1
+        assert np.array_equal(ds["stable"].values, (ds["parameter"].values < 24.0).astype(int))
+        assert str(ds["bifurcation_kind"].values[0]) == "fold"
