@@ -33,6 +33,9 @@ ROOT = Path(__file__).resolve().parent.parent
 FIGURES = Path("docs/figures")
 RESULTS = Path("results")
 DPI = "110"  # ~100 kB per PNG, sharp enough for the README
+# Maps whose curves are told apart by colour: a 32-colour palette merges an orange curve into
+# viridis' yellow and bands the colour bar, so these stay full-colour (~150 kB).
+FULL_COLOUR = {"curves_g_Omega_effective", "curves_original"}
 
 COMMANDS = {
     # The README's first figure: configs/quickstart.yaml as a new user runs and plots it.
@@ -117,9 +120,12 @@ COMMANDS = {
         ["continue", "configs/curves_branch_effective_large.yaml", "-o", "results/curves_branch_effective_large.h5",
          "--overwrite"],
         ["continue", "results/curves_branch_effective_large.h5", "--point", "0", "--along", "Omega", "--to", "3.5",
+         "5.0", "-o", "results/curves_effective_period_doubling_large.h5", "--overwrite"],
+        ["continue", "results/curves_branch_effective_large.h5", "--point", "1", "--along", "Omega", "--to", "3.5",
          "5.0", "-o", "results/curves_effective_grazing_large.h5", "--overwrite"],
         ["plot", "results/curves_g_Omega_effective.h5", "results/curves_effective_fold.h5",
-         "results/curves_effective_grazing.h5", "results/curves_effective_grazing_large.h5",
+         "results/curves_effective_grazing.h5", "results/curves_effective_period_doubling_large.h5",
+         "results/curves_effective_grazing_large.h5",
          "--var", "impacts_per_period", "-o", "docs/figures/curves_g_Omega_effective.png"],
     ],
     "curves_original": [
@@ -159,7 +165,7 @@ def main():
             print("vrsweep " + shlex.join(words), flush=True)
             if subprocess.run([sys.executable, "-m", "vrsweep", *words], env=environment).returncode != 0:
                 sys.exit(f"make_figures: the command above failed; {figure} not made")
-            if words[0] == "plot":
+            if words[0] == "plot" and figure not in FULL_COLOUR:
                 shrink_png(Path(words[words.index("-o") + 1]))
     print(f"done in {time.monotonic() - started:.0f} s -> {FIGURES}/", flush=True)
 

@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from vrsweep.errors import UsageError
-from vrsweep.plot.labels import _legend_columns, _parse_config, _title, figure_options
+from vrsweep.plot.labels import _legend_columns, _parse_config, _title, _width, figure_options
 from vrsweep.plot.selection import _limits, _map_axes, _Sweep
 
 FILE_KIND = "curves"
@@ -118,15 +118,28 @@ def curves_figure(ds, curve_files, name="R", x_axis=None, log=False, vmin=None, 
         ax.set_ylim(y_limits)
     _relegend(fig, handles)
     what, caption = getattr(fig, "_vrsweep_description", ("", ""))
-    files = ", ".join(_path(curves) for curves in curve_files)
+    files = [_path(curves) + ("," if number < len(curve_files) - 1 else "")
+             for number, curves in enumerate(curve_files)]
     counts = _curve_counts(curve_files)
     if curve_files:
-        what, caption = f"{what.split(' (light grey')[0]} with bifurcation curves", \
-            f"{caption}\ncurves: {files}" + (f" ({counts})" if counts else "")
+        what = f"{what.split(' (light grey')[0]} with bifurcation curves"
+        caption = f"{caption}\n{_wrapped(['curves:'] + files + ([f'({counts})'] if counts else []), _width(fig))}"
     elif handles:
         what = f"{what.split(' (light grey')[0]} with the corrected theory's fold and Hopf curves"
     _title(fig, what, caption)
     return fig
+
+
+def _wrapped(words, width):
+    """Words joined by spaces, a new line before one that would pass ``width`` characters."""
+    lines, line = [], ""
+    for word in words:
+        if line and len(line) + 1 + len(word) > width:
+            lines.append(line)
+            line = word
+        else:
+            line = f"{line} {word}" if line else word
+    return "\n".join(lines + [line])
 
 
 def _check_same_system(view, curves):
