@@ -121,11 +121,12 @@ def curves_figure(ds, curve_files, name="R", x_axis=None, log=False, vmin=None, 
     files = [_path(curves) + ("," if number < len(curve_files) - 1 else "")
              for number, curves in enumerate(curve_files)]
     counts = _curve_counts(curve_files)
+    head, grey, tail = what.partition(" (light grey")  # the map's note on grey cells stays last
     if curve_files:
-        what = f"{what.split(' (light grey')[0]} with bifurcation curves"
+        what = f"{head} with bifurcation curves{grey}{tail}"
         caption = f"{caption}\n{_wrapped(['curves:'] + files + ([f'({counts})'] if counts else []), _width(fig))}"
     elif handles:
-        what = f"{what.split(' (light grey')[0]} with the corrected theory's fold and Hopf curves"
+        what = f"{head} with the corrected theory's fold and Hopf curves{grey}{tail}"
     _title(fig, what, caption)
     return fig
 
