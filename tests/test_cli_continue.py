@@ -202,17 +202,27 @@ def test_info_summarises_the_curves(curves_file, invoke):
     assert "first end:   left_range: Omega left [3.9, 4.1]" in result.output
 
 
-def test_grazing_curve_from_the_command(branch_file, invoke, tmp_path):
+def test_grazing_and_fold_curves_in_one_file(branch_file, invoke, tmp_path):
+    # Both bifurcations of the branch followed in Delta: the fold curve (g constant: the fold
+    # orbit is clear of the barrier) ends where its orbit starts to hit the barrier, the very
+    # point where the grazing curve passes the free orbit's fold.
     path, _ = branch_file
-    output = tmp_path / "graze.h5"
-    result = invoke("continue", path, "--point", _bifurcation_index(path, "grazing"), "--along", "Delta",
-                    "--to", "0.8", "1.2", "-o", output)
+    output = tmp_path / "both.h5"
+    result = invoke("continue", path, "--point", _bifurcation_index(path, "grazing"), "--point",
+                    _bifurcation_index(path, "fold"), "--along", "Delta", "--to", "0.8", "1.2", "-o", output)
     assert result.exit_code == 0, result.output
     with vrsweep.open_results(output) as ds:
-        assert list(ds["curve_kind"].values) == ["grazing"]
-        assert np.all(np.abs(ds["barrier_distance"].values) < 1e-6)
-        assert "fold_grazing" in list(ds["special_kind"].values)
-    assert "fold_grazing at g = " in result.output
+        assert list(ds["curve_kind"].values) == ["grazing", "fold"]
+        on_graze = ds["curve"].values == 0
+        assert np.all(np.abs(ds["barrier_distance"].values[on_graze]) < 1e-6)
+        assert ds["curve_end_first_status"].values[1] == "fold_grazing" or \
+            ds["curve_end_last_status"].values[1] == "fold_grazing"
+        kinds, curve = list(ds["special_kind"].values), list(ds["special_curve"].values)
+        assert sorted(zip(kinds, curve)) == [("fold_grazing", 0), ("fold_grazing", 1)]
+        # two computations of one point: a regula falsi on the grazing curve, an extrapolation
+        # to the barrier on the fold curve (tests/test_curves.py says why 1e-4)
+        assert np.ptp(ds["special_g"].values) < 1e-4 and np.ptp(ds["special_Delta"].values) < 1e-4
+    assert "fold_grazing at g = " in result.output and "(curve 1)" in result.output
 
 
 def test_curve_requests_that_cannot_be_met_are_refused(branch_file, invoke, tmp_path, write_config):
@@ -225,7 +235,9 @@ def test_curve_requests_that_cannot_be_met_are_refused(branch_file, invoke, tmp_
     result = invoke("continue", path, "--point", 0, "--along", "Omega", "-o", out)
     assert result.exit_code == 2 and "--to" in result.output
     result = invoke("continue", path, "--point", 0, "--along", "Omega", "--to", "4.5", "5", "-o", out)
-    assert result.exit_code == 2 and "outside its range" in result.output
+    assert result.exit_code == 2 and "outside its range [4.5, 5] (--to)" in result.output
+    result = invoke("continue", path, "--point", 0, "--along", "Omega", "--to", "5", "4", "-o", out)
+    assert result.exit_code == 2 and "--to 5 4: the range of Omega is empty" in result.output
     result = invoke("continue", path, "-o", out)
     assert result.exit_code == 2 and "--point 0 --along Omega" in result.output
     config = write_config(tmp_path, HYSTERESIS, "h.yaml")

@@ -316,3 +316,16 @@ def test_original_model_fold_curve_in_g_e_is_where_one_parameter_continuation_fo
         located = _fold_located_by_one_parameter_continuation(problem, point)
         assert len(located) == 1, (point.values, located)
         assert abs(located[0] - point.values[0]) < 2.0 * _relative_location(problem, point), (point.values, located)
+
+
+def test_dop853_finds_the_same_fold_curve(hysteresis_bifurcations, fold_g_Omega):
+    # Another integrator (its own dense output, error control and monodromy kernel) gives the
+    # same curve g = k Omega^2 to the location tolerances of both (3e-5 relative in k each, see
+    # test_curves_in_g_Omega_keep_g_over_Omega_squared) plus the integrations' own errors.
+    problem, curve, _ = fold_g_Omega
+    fold = hysteresis_bifurcations["fold"]
+    other = curves.CurveProblem(dict(HYSTERESIS), "effective", ("g", "Omega"), SETTINGS, "dop853", dict(OPTIONS))
+    start, failure = curves.start_point(other, "fold", fold.state, [fold.parameter, 4.2], 1)
+    assert failure is None, failure
+    k_rk45 = np.mean([point.values[0] / point.values[1] ** 2 for point in curve.points])
+    assert start.values[0] / start.values[1] ** 2 == pytest.approx(k_rk45, rel=6e-5)

@@ -32,8 +32,9 @@ def _parse_at(values):
               help="A sweep file: the first orbit is looked for from the final state of its point --at.")
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="The grid point of --start (nearest value per axis), e.g. --at g=23; repeatable.")
-@click.option("--point", "point", type=int, default=None, metavar="K",
-              help="With a branch file: the bifurcation (its index in the file's table, see vrsweep info) to follow.")
+@click.option("--point", "point", type=int, multiple=True, metavar="K",
+              help="With a branch file: the bifurcation (its index in the file's table, counted from 0 in the "
+                   "order vrsweep info lists them) to follow; repeatable: one curve each, in one file.")
 @click.option("--along", "along", default=None, metavar="NAME",
               help="With a branch file: the second parameter the bifurcation point moves along, e.g. Omega.")
 @click.option("--to", "to", type=float, nargs=2, default=None, metavar="LOW HIGH",
@@ -60,7 +61,7 @@ def command(config_path, overrides, output, start_path, at, point, along, to, wi
     if is_branch_file(config_path):
         _curves(config_path, overrides, output, start_path, point, along, to, within, overwrite, quiet)
         return
-    if point is not None or along is not None or to or within:
+    if point or along is not None or to or within:
         from vrsweep.errors import UsageError
 
         raise UsageError("--point, --along, --to and --within go with a branch file (the output of vrsweep "
@@ -121,15 +122,16 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
     from vrsweep.store.curve_file import curve_arrays, write_curves
     from vrsweep.store.fileio import prepare_output_directory
 
-    if point is None or along is None:
+    if not point or along is None:
         raise UsageError(f"{path} is a branch file: say which bifurcation to follow in which parameter, "
                          "e.g. --point 0 --along Omega (vrsweep info lists its bifurcations)")
     if start_path or overrides:
         raise UsageError("--start, --at and --set go with a config, not with a branch file")
-    flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to"}
+    flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to", "within": "--within"}
     with flag_wording(flags):
-        request = execution.read_request(path, point, along, to, within)
-    path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{point}_{along}.h5")
+        requests = [execution.read_request(path, index, along, to, within) for index in point]
+    name = "_".join(str(index) for index in point)
+    path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{name}_{along}.h5")
     if path.exists() and not overwrite:
         raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
     prepare_output_directory(path)
@@ -138,7 +140,13 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
 
         say_cache_notice()
     with flag_wording(flags):
-        curves, specials = execution.run_curve(request)
+        curves, specials = [], []
+        for request in requests:
+            found, found_specials = execution.run_curve(request)
+            for special in found_specials:
+                special.curve = len(curves)
+            curves += found
+            specials += found_specials
         write_curves(path, curve_arrays(curves, specials, request.names), request.names, request.config,
                      request.config.integration.method, overwrite=overwrite)
     if not quiet:
@@ -153,6 +161,6 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
                 status, reason = curve.ends[side]
                 click.echo(f"  {side} end: {status}: {reason}", err=True)
         for special in specials:
-            click.echo(f"{special.kind} at {first} = {special.values[0]:.8g}, {second} = {special.values[1]:.8g}",
-                       err=True)
+            click.echo(f"{special.kind} at {first} = {special.values[0]:.8g}, {second} = {special.values[1]:.8g} "
+                       f"(curve {special.curve})", err=True)
         click.echo(f"-> {path}", err=True)

@@ -72,12 +72,14 @@ def read_request(path, point, along, to=None, within=None):
                                     {"to": "to"}, along_name=along)
         to = (float(np.min(axis.values)), float(np.max(axis.values)))
     second = float(config.parameters[along])
-    for name, (low, high), now in ((first, within, value), (along, tuple(to), second)):
+    for key, name, (low, high), now in (("within", first, within, value), ("to", along, tuple(to), second)):
+        # The placeholder is the argument's own name (to, within), which a command words as its flag.
         if not low < high:
-            raise UsageError.naming("the range of {name} [{low}, {high}] is empty", name=name, low=low, high=high)
+            raise UsageError.naming("{" + key + "} {low} {high}: the range of {name} is empty (give LOW HIGH, "
+                                    "LOW < HIGH)", name=name, low=f"{low:g}", high=f"{high:g}")
         if not low <= now <= high:
-            raise UsageError.naming("the point's {name} = {now} lies outside its range [{low}, {high}]",
-                                    name=name, now=f"{now:.8g}", low=low, high=high)
+            raise UsageError.naming("the point's {name} = {now} lies outside its range [{low}, {high}] ({" + key + "})",
+                                    name=name, now=f"{now:.8g}", low=f"{low:g}", high=f"{high:g}")
     # The stored config holds the point's own values of both parameters, not the branch's start.
     config = dataclasses.replace(config, parameters={**config.parameters, first: value})
     return CurveRequest(config, kind, names, np.array([value, second]), state, periods, (within, tuple(to)))
