@@ -137,6 +137,9 @@ COMMANDS = {
           for branch in ("free", "p1", "p3")],
         ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
          "results/curves_original_p3.h5", "--var", "period", "-o", "docs/figures/curves_original.png"],
+        ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
+         "results/curves_original_p3.h5", "--var", "impacts_per_period", "--vmax", "4",
+         "-o", "docs/figures/curves_original_impacts.png"],
     ],
 }
 
