@@ -364,6 +364,7 @@ def test_curves_over_an_effective_map_add_the_theory_s_fold_curve(effective_map,
 
     figure = plot.plot([effective_map, three_kinds], var="R")
     ax = figure.axes[0]
+    assert [c.get_gid() for c in ax.collections].count("analytic_hopf") == 1  # the small branch's Hopf too
     contours = [c for c in ax.collections if c.get_gid() == "analytic_fold"]
     assert len(contours) == 1
     vertices = np.concatenate([path.vertices for path in contours[0].get_paths() if len(path.vertices)])
@@ -420,3 +421,26 @@ def test_curves_figure_takes_the_figure_options(effective_map, three_kinds, tmp_
     assert (mesh.norm.vmin, mesh.norm.vmax) == (5.0, 30.0)
     integer = invoke("plot", effective_map, three_kinds, "--var", "period", "--vmax", "3", "-o", out)
     assert integer.exit_code == 2 and "--vmax" in integer.output
+
+
+def test_curves_over_an_original_map_have_no_analytic_curves(tmp_path, invoke):
+    from vrsweep import plot
+
+    config = tmp_path / "original.yaml"
+    config.write_text("sweep:\n  g: [10.0, 20.0, 30.0]\n  Delta: [1.0, 2.0, 3.0]\n"
+                      "integration: {transient_periods: 1, measure_periods: 2, strobe_periods: 1}\n")
+    sweep = tmp_path / "original.h5"
+    assert invoke("run", config, "-o", sweep, "-q").exit_code == 0
+    curves = write_curves(tmp_path / "fold_g_Delta.h5", ["g", "Delta"],
+                          [("fold", {"g": np.array([12.0, 18.0, 25.0]), "Delta": np.array([1.2, 2.0, 2.8])})],
+                          model="original", config=_stored_config(sweep))
+    result = invoke("plot", sweep, curves, "--var", "impacts_per_period", "-o", tmp_path / "o.png")
+    assert result.exit_code == 0, result.output
+    ax = plot.plot([sweep, curves], var="impacts_per_period").axes[0]
+    gids = {artist.get_gid() for artist in [*ax.get_lines(), *ax.collections]}
+    assert "curve_fold" in gids and not any(str(gid).startswith("analytic") for gid in gids)
+    moved = write_curves(tmp_path / "other_e.h5", ["Delta", "g"],
+                         [("fold", {"g": np.array([12.0, 18.0]), "Delta": np.array([1.2, 2.0])})], model="original",
+                         config=_stored_config(sweep).replace("e: 0.95", "e: 0.5"))
+    refused = invoke("plot", sweep, moved, "-o", tmp_path / "o.png")
+    assert refused.exit_code == 2 and "e = 0.5" in refused.output and "e = 0.95" in refused.output, refused.output
