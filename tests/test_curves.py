@@ -329,3 +329,44 @@ def test_dop853_finds_the_same_fold_curve(hysteresis_bifurcations, fold_g_Omega)
     assert failure is None, failure
     k_rk45 = np.mean([point.values[0] / point.values[1] ** 2 for point in curve.points])
     assert start.values[0] / start.values[1] ** 2 == pytest.approx(k_rk45, rel=6e-5)
+
+
+def _analytic_cusp(parameters, low, high):
+    """(g, c, amplitude) of the corrected first-order theory's cusp: the fixed-point cubic
+    a3 u^3 + a2 u^2 + a1 u + a0 (u = A^2) has a triple root u0 = -a2 / (3 a3). a3, a2, a1 do not
+    depend on c, so g solves a2^2 = 3 a1 a3 (bisection), and then a0 = -F^2 = -a3 u0^3 gives
+    F = c / omega^2 (eq2.13), i.e. c."""
+    def condition(g):
+        a3, a2, a1, _ = theory.fixed_point_cubic(dict(parameters, g=g))
+        return float(a2 ** 2 - 3.0 * a1 * a3)
+    assert condition(low) * condition(high) < 0.0
+    for _ in range(80):
+        middle = 0.5 * (low + high)
+        if condition(low) * condition(middle) <= 0.0:
+            high = middle
+        else:
+            low = middle
+    g = 0.5 * (low + high)
+    a3, a2, _, _ = theory.fixed_point_cubic(dict(parameters, g=g))
+    u0 = float(-a2 / (3.0 * a3))
+    return g, float(np.sqrt(a3 * u0 ** 3)) * parameters["omega"] ** 2, np.sqrt(u0)
+
+
+def test_cusp_against_the_corrected_first_order_theory(fold_g_c):
+    # The theory's cusp, where its three fixed points merge, has the same O(eps^2) error in the
+    # detuning as its folds (test_fold_against_the_corrected_first_order_theory): |wt2_num -
+    # wt2_th| <= eps^2 omega^2 at the cusp's g. Its c follows from F^2 = a3 u0^3, a relation
+    # between first-order coefficients (Gamma, Lambda, sigma) that the dropped second-order
+    # terms change by a relative O(eps): |c_num - c_th| <= eps c_th. eps as there, at the
+    # cusp's amplitude.
+    problem, _, specials = fold_g_c
+    cusp = [s for s in specials if s.kind == "cusp"][0].values
+    parameters = problem.parameters
+    g_theory, c_theory, amplitude = _analytic_cusp(parameters, 25.0, 30.0)
+    omega = parameters["omega"]
+    eps = max(parameters["gamma"] / omega, c_theory / omega**2, parameters["alpha"] * amplitude**2 / omega**2)
+
+    def wt2(g):
+        return theory.effective_frequency_squared(dict(parameters, g=g))
+    assert abs(wt2(cusp[0]) - wt2(g_theory)) / omega**2 <= eps**2, (cusp, g_theory)
+    assert abs(cusp[1] - c_theory) <= eps * c_theory, (cusp, c_theory)
