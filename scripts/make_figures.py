@@ -17,7 +17,8 @@ fig6 (effective system against the slow-flow reconstruction); and, not in the pa
 hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down) and the basins of
 attraction of that bistable example at g = 23 (configs/basins_g23.yaml) and of four coexisting
 orbits of the original model at g = 5 (configs/basins_g5_original.yaml); the map of R over g
-and Omega (configs/map_g_Omega.yaml).
+and Omega (configs/map_g_Omega.yaml); bifurcation curves over an effective (g, Omega) map and an
+original (g, Delta) map (curves_g_Omega_effective, curves_original: docs/bifurcation-curves.md).
 """
 
 import argparse
@@ -32,6 +33,9 @@ ROOT = Path(__file__).resolve().parent.parent
 FIGURES = Path("docs/figures")
 RESULTS = Path("results")
 DPI = "110"  # ~100 kB per PNG, sharp enough for the README
+# Maps whose curves are told apart by colour: a 32-colour palette merges an orange curve into
+# viridis' yellow and bands the colour bar, so these stay full-colour (~150 kB).
+FULL_COLOUR = {"curves_g_Omega_effective", "curves_original"}
 
 COMMANDS = {
     # The README's first figure: configs/quickstart.yaml as a new user runs and plots it.
@@ -103,6 +107,40 @@ COMMANDS = {
         ["run", "configs/map_g_Omega.yaml", "--overwrite"],
         ["plot", "results/map_g_Omega.h5", "-o", "docs/figures/map_g_Omega.png"],
     ],
+    # Not in the paper: bifurcation curves over maps (docs/bifurcation-curves.md). --point K is the
+    # bifurcation's index in the branch file (vrsweep info lists them).
+    "curves_g_Omega_effective": [
+        ["run", "configs/curves_g_Omega_effective.yaml", "--overwrite"],
+        ["continue", "configs/curves_branch_effective.yaml", "-o", "results/curves_branch_effective.h5",
+         "--overwrite"],
+        ["continue", "results/curves_branch_effective.h5", "--point", "2", "--along", "Omega", "--to", "3.5", "5.0",
+         "-o", "results/curves_effective_fold.h5", "--overwrite"],
+        ["continue", "results/curves_branch_effective.h5", "--point", "1", "--along", "Omega", "--to", "3.5",
+         "5.0", "-o", "results/curves_effective_grazing.h5", "--overwrite"],
+        ["continue", "configs/curves_branch_effective_large.yaml", "-o", "results/curves_branch_effective_large.h5",
+         "--overwrite"],
+        ["continue", "results/curves_branch_effective_large.h5", "--point", "0", "--along", "Omega", "--to", "3.5",
+         "5.0", "-o", "results/curves_effective_period_doubling_large.h5", "--overwrite"],
+        ["continue", "results/curves_branch_effective_large.h5", "--point", "1", "--along", "Omega", "--to", "3.5",
+         "5.0", "-o", "results/curves_effective_grazing_large.h5", "--overwrite"],
+        ["plot", "results/curves_g_Omega_effective.h5", "results/curves_effective_fold.h5",
+         "results/curves_effective_grazing.h5", "results/curves_effective_period_doubling_large.h5",
+         "results/curves_effective_grazing_large.h5",
+         "--var", "impacts_per_period", "-o", "docs/figures/curves_g_Omega_effective.png"],
+    ],
+    "curves_original": [
+        ["run", "configs/curves_original.yaml", "--overwrite"],
+        *[["continue", f"configs/curves_branch_original_{branch}.yaml", "-o",
+           f"results/curves_branch_original_{branch}.h5", "--overwrite"] for branch in ("free", "p1", "p3")],
+        *[["continue", f"results/curves_branch_original_{branch}.h5", "--point", "0", "--along", "Delta",
+           "--to", "1.0", "3.0", "-o", f"results/curves_original_{branch}.h5", "--overwrite"]
+          for branch in ("free", "p1", "p3")],
+        ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
+         "results/curves_original_p3.h5", "--var", "period", "-o", "docs/figures/curves_original.png"],
+        ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
+         "results/curves_original_p3.h5", "--var", "impacts_per_period", "--vmax", "4",
+         "-o", "docs/figures/curves_original_impacts.png"],
+    ],
 }
 
 
@@ -130,7 +168,7 @@ def main():
             print("vrsweep " + shlex.join(words), flush=True)
             if subprocess.run([sys.executable, "-m", "vrsweep", *words], env=environment).returncode != 0:
                 sys.exit(f"make_figures: the command above failed; {figure} not made")
-            if words[0] == "plot":
+            if words[0] == "plot" and figure not in FULL_COLOUR:
                 shrink_png(Path(words[words.index("-o") + 1]))
     print(f"done in {time.monotonic() - started:.0f} s -> {FIGURES}/", flush=True)
 

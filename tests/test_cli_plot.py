@@ -241,3 +241,206 @@ def test_cli_messages_name_the_flags_the_library_names_arguments(sweep, trajecto
         plot.plot(trajectory, at={"g": "1"})
     result = invoke("plot", trajectory, "--at", "g=1", "-o", tmp_path / "f.png")
     assert "Error: --at, --x, --amplitude and --log/--linear are for sweep results" in result.output
+
+
+# --- curves over a map (issue 21): vrsweep plot MAP.h5 CURVES.h5 ... -------------------------------
+
+EFFECTIVE_MAP = """\
+model: effective
+parameters: {gamma: 0.05, alpha: 0.05}
+initial: {x: 0.0, v: 0.0}
+sweep:
+  g: {start: 20.0, stop: 28.0, num: 5}
+  Omega: {start: 3.8, stop: 4.2, num: 5}
+integration: {transient_periods: 2, measure_periods: 4, strobe_periods: 2}
+"""
+
+
+def write_curves(path, names, curves, specials=(), model="effective", config=""):
+    """A curves file as `vrsweep continue BRANCH.h5 --point K --along NAME` writes it (the agreed
+    layout, store/curve_file.py), by h5py: curves = [(kind, {name: values})], specials =
+    [(kind, curve, {name: value})]."""
+    strings = h5py.string_dtype()
+    with h5py.File(path, "w") as f:
+        f.attrs.update(vrsweep_file="curves", vrsweep_format_version=1, vrsweep_complete=1, model=model,
+                       method="rk45", config=config)
+        f.attrs["parameter_names"] = np.array(names, dtype=strings)
+
+        def dimension(name, size):
+            f.create_dataset(name, data=np.arange(size)).make_scale(name)
+
+        def variable(name, data, dims, dtype=None):
+            dataset = f.create_dataset(name, data=np.asarray(data, dtype=dtype))
+            for i, dim in enumerate(dims):
+                dataset.dims[i].attach_scale(f[dim])
+
+        points = sum(len(next(iter(values.values()))) for _, values in curves)
+        dimension("point", points)
+        dimension("multiplier", 2)
+        dimension("curve_id", len(curves))
+        dimension("special", len(specials))
+        variable("curve", np.concatenate([np.full(len(values[names[0]]), k) for k, (_, values) in enumerate(curves)]),
+                 ("point",))
+        for name in names:
+            variable(name, np.concatenate([values[name] for _, values in curves]), ("point",))
+        for name in ("x", "v", "R", "impacts_per_period", "barrier_distance", "residual"):
+            variable(name, np.zeros(points), ("point",))
+        variable("periods", np.ones(points, dtype=np.int64), ("point",))
+        for name in ("multiplier_real", "multiplier_imag", "multiplier_modulus"):
+            variable(name, np.zeros((points, 2)), ("point", "multiplier"))
+        variable("curve_kind", [kind for kind, _ in curves], ("curve_id",), strings)
+        variable("curve_periods", np.ones(len(curves), dtype=np.int64), ("curve_id",))
+        for end in ("first", "last"):
+            variable(f"curve_end_{end}_status", ["left_range"] * len(curves), ("curve_id",), strings)
+            variable(f"curve_end_{end}_reason", ["left the range"] * len(curves), ("curve_id",), strings)
+        variable("special_kind", [kind for kind, _, _ in specials], ("special",), strings)
+        variable("special_curve", np.array([curve for _, curve, _ in specials], dtype=np.int64), ("special",))
+        for name in names:
+            variable(f"special_{name}", np.array([where[name] for _, _, where in specials], dtype=float),
+                     ("special",))
+    return path
+
+
+@pytest.fixture(scope="module")
+def effective_map(tmp_path_factory, invoke):
+    directory = tmp_path_factory.mktemp("cli_plot_curves")
+    config = directory / "map.yaml"
+    config.write_text(EFFECTIVE_MAP)
+    out = directory / "map.h5"
+    assert invoke("run", config, "-o", out, "-q").exit_code == 0
+    return out
+
+
+def _stored_config(path):
+    with h5py.File(path, "r") as f:
+        text = f.attrs["config"]
+    return text.decode() if isinstance(text, bytes) else str(text)
+
+
+@pytest.fixture(scope="module")
+def three_kinds(effective_map, tmp_path_factory):
+    """Curves of all three kinds in (Omega, g) order -- the map's axes the other way round -- with a
+    fold meeting a grazing and a cusp."""
+    Omega = np.linspace(3.8, 4.2, 9)
+    curves = [("fold", {"g": 25.0 + 5.0 * (Omega - 4.0), "Omega": Omega}),
+              ("period_doubling", {"g": 22.0 + 3.0 * (Omega - 4.0), "Omega": Omega}),
+              ("grazing", {"g": np.linspace(20.5, 27.5, 9), "Omega": np.full(9, 4.1)})]
+    specials = [("fold_grazing", 2, {"g": 25.5, "Omega": 4.1}), ("cusp", 0, {"g": 24.0, "Omega": 3.8})]
+    return write_curves(tmp_path_factory.mktemp("curves") / "curves.h5", ["Omega", "g"], curves, specials,
+                        config=_stored_config(effective_map))
+
+
+def test_curves_over_a_map_each_kind_named_in_the_legend(effective_map, three_kinds, tmp_path, invoke):
+    from vrsweep import plot
+
+    for var in ("R", "period", "impacts_per_period"):
+        out = tmp_path / f"curves_{var}.png"
+        result = invoke("plot", effective_map, three_kinds, "--var", var, "-o", out)
+        assert result.exit_code == 0, result.output
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    figure = plot.plot([effective_map, three_kinds], var="period")
+    ax = figure.axes[0]
+    lines = {line.get_gid(): line for line in ax.get_lines() if line.get_gid()}
+    fold = lines["curve_fold"]
+    # The curves file lists (Omega, g); the map's x axis is g, so x is the file's g.
+    np.testing.assert_array_equal(fold.get_xdata(), 25.0 + 5.0 * (np.linspace(3.8, 4.2, 9) - 4.0))
+    np.testing.assert_array_equal(fold.get_ydata(), np.linspace(3.8, 4.2, 9))
+    styles = {kind: (lines[f"curve_{kind}"].get_color(), str(lines[f"curve_{kind}"].get_linestyle()))
+              for kind in ("fold", "period_doubling", "grazing")}
+    assert len(set(styles.values())) == 3  # each kind its own style
+    assert {"special_fold_grazing", "special_cusp"} <= set(lines)
+    assert lines["special_fold_grazing"].get_xydata().tolist() == [[25.5, 4.1]]
+    legend = " | ".join(text.get_text() for text in figure.legends[0].get_texts())
+    for words in ("fold (saddle-node)", "period doubling", "grazing", "fold meets grazing", "cusp",
+                  "theory (corrected): fold"):
+        assert words in legend, legend
+    assert ax.get_xlabel().startswith("fast forcing amplitude") and ax.get_ylabel().startswith("fast forcing frequency")
+    assert "curves.h5" in plot.description(figure)
+
+
+def test_curves_over_an_effective_map_add_the_theory_s_fold_curve(effective_map, three_kinds):
+    from vrsweep import plot
+    from vrsweep.analysis import theory
+
+    figure = plot.plot([effective_map, three_kinds], var="R")
+    ax = figure.axes[0]
+    assert [c.get_gid() for c in ax.collections].count("analytic_hopf") == 1  # the small branch's Hopf too
+    contours = [c for c in ax.collections if c.get_gid() == "analytic_fold"]
+    assert len(contours) == 1
+    vertices = np.concatenate([path.vertices for path in contours[0].get_paths() if len(path.vertices)])
+    assert len(vertices) > 10
+    from vrsweep.config import parse_config
+
+    params = dict(parse_config(_stored_config(effective_map), "map").parameters)
+    folds = theory.fold_curve(params, along="Omega", values=vertices[:, 1], within=(20.0, 28.0)).at
+    # The contour interpolates on a 400 x 400 mesh over g in [20, 28]: within a mesh step of the fold.
+    step = 8.0 / (400 - 1)
+    assert np.all(np.nanmin(np.abs(folds - vertices[:, :1]), axis=1) < step)
+
+
+def test_curves_must_be_in_the_plane_of_the_map(effective_map, tmp_path, invoke):
+    other = write_curves(tmp_path / "g_e.h5", ["g", "e"], [("grazing", {"g": np.array([21.0, 22.0]),
+                                                                           "e": np.array([0.6, 0.7])})])
+    result = invoke("plot", effective_map, other, "-o", tmp_path / "x.png")
+    assert result.exit_code == 2
+    message = result.output.strip().splitlines()
+    assert len(message) == 1, result.output
+    assert "(g, e)" in message[0] and "(g, Omega)" in message[0] and "g_e.h5" in message[0], message[0]
+
+
+def test_curves_usage_errors_exit_2(effective_map, three_kinds, tmp_path, invoke):
+    original = write_curves(tmp_path / "original.h5", ["g", "Omega"],
+                            [("fold", {"g": np.array([21.0, 22.0]), "Omega": np.array([3.9, 4.0])})],
+                            model="original")
+    for args, words in [
+        ((three_kinds, effective_map), "curves files go after the map"),
+        ((three_kinds,), "curves files go after the map"),
+        ((effective_map, three_kinds, effective_map), "after a map come curves files only"),
+        ((effective_map, three_kinds, "--kind", "response"), "--kind response does not take curves files"),
+        ((effective_map, three_kinds, "--var", "R", "--amplitude"), "--amplitude"),
+        ((effective_map, three_kinds, "--var", "no_such"), "--var no_such"),
+        ((effective_map, original), "curves of the original model"),
+    ]:
+        result = invoke("plot", *args, "-o", tmp_path / "x.png")
+        assert result.exit_code == 2, (args, result.output)
+        assert words in result.output, (args, result.output)
+
+
+def test_curves_figure_takes_the_figure_options(effective_map, three_kinds, tmp_path, invoke):
+    from vrsweep import plot
+
+    out = tmp_path / "options.png"
+    result = invoke("plot", effective_map, three_kinds, "--no-title", "--size", "6,5", "--style", "ggplot",
+                    "--vmin", "5", "--vmax", "30", "-o", out)
+    assert result.exit_code == 0, result.output
+    assert out.exists()
+    figure = plot.plot([effective_map, three_kinds], title=False, size=(6, 5), vmin=5.0, vmax=30.0)
+    assert tuple(figure.get_size_inches()) == (6.0, 5.0)
+    assert figure._suptitle is None
+    mesh = next(c for c in figure.axes[0].collections if hasattr(c, "norm") and c.get_array() is not None)
+    assert (mesh.norm.vmin, mesh.norm.vmax) == (5.0, 30.0)
+    integer = invoke("plot", effective_map, three_kinds, "--var", "period", "--vmax", "3", "-o", out)
+    assert integer.exit_code == 2 and "--vmax" in integer.output
+
+
+def test_curves_over_an_original_map_have_no_analytic_curves(tmp_path, invoke):
+    from vrsweep import plot
+
+    config = tmp_path / "original.yaml"
+    config.write_text("sweep:\n  g: [10.0, 20.0, 30.0]\n  Delta: [1.0, 2.0, 3.0]\n"
+                      "integration: {transient_periods: 1, measure_periods: 2, strobe_periods: 1}\n")
+    sweep = tmp_path / "original.h5"
+    assert invoke("run", config, "-o", sweep, "-q").exit_code == 0
+    curves = write_curves(tmp_path / "fold_g_Delta.h5", ["g", "Delta"],
+                          [("fold", {"g": np.array([12.0, 18.0, 25.0]), "Delta": np.array([1.2, 2.0, 2.8])})],
+                          model="original", config=_stored_config(sweep))
+    result = invoke("plot", sweep, curves, "--var", "impacts_per_period", "-o", tmp_path / "o.png")
+    assert result.exit_code == 0, result.output
+    ax = plot.plot([sweep, curves], var="impacts_per_period").axes[0]
+    gids = {artist.get_gid() for artist in [*ax.get_lines(), *ax.collections]}
+    assert "curve_fold" in gids and not any(str(gid).startswith("analytic") for gid in gids)
+    moved = write_curves(tmp_path / "other_e.h5", ["Delta", "g"],
+                         [("fold", {"g": np.array([12.0, 18.0]), "Delta": np.array([1.2, 2.0])})], model="original",
+                         config=_stored_config(sweep).replace("e: 0.95", "e: 0.5"))
+    refused = invoke("plot", sweep, moved, "-o", tmp_path / "o.png")
+    assert refused.exit_code == 2 and "e = 0.5" in refused.output and "e = 0.95" in refused.output, refused.output

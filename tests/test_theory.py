@@ -466,3 +466,131 @@ def test_the_corrected_phase_and_stability_are_those_of_the_effective_system():
     assert phase == pytest.approx(corrected.theta[0], abs=0.03)  # first-order accuracy
     assert abs(phase - printed.theta[0]) > 1.5                   # about pi/2 off
     assert corrected.stable[0] and not printed.stable[0]
+
+
+# --- folds and Hopf points in a parameter plane (issue 21) --------------------------------------
+
+HYSTERESIS = dict(DEFAULT_PARAMETERS, gamma=0.05, alpha=0.05, Omega=4.0)  # configs/hysteresis_effective.yaml
+PLANES = [  # (along, its values, over, its range): the first-order theory's planes
+    ("Omega", np.linspace(3.0, 6.0, 7), "g", (0.0, 120.0)),
+    ("gamma", np.linspace(0.02, 0.08, 4), "g", (0.0, 60.0)),
+    ("c", np.linspace(0.02, 0.08, 4), "g", (0.0, 60.0)),
+    ("g", np.linspace(22.0, 26.0, 3), "alpha", (0.02, 0.1)),
+]
+
+
+def _cubic_at(params):
+    return [np.asarray(a, dtype=float) for a in theory.fixed_point_cubic(params)]
+
+
+def _plane_points(curve, params):
+    """Each point of a ParameterCurve as a full parameter dict."""
+    points = []
+    for value, row in zip(curve.values, curve.at):
+        for position in row[np.isfinite(row)]:
+            points.append(dict(params, **{curve.along: float(value), curve.over: float(position)}))
+    return points
+
+
+@pytest.mark.parametrize("along, values, over, within", PLANES)
+def test_on_the_fold_curve_the_cubic_has_a_double_root(along, values, over, within):
+    curve = theory.fold_curve(HYSTERESIS, along=along, values=values, over=over, within=within)
+    points = _plane_points(curve, HYSTERESIS)
+    assert len(points) >= len(values)  # every line of the plane crosses the fold at least once
+    for params in points:
+        a3, a2, a1, a0 = _cubic_at(params)
+        # A cubic with a double root u2 has u2 = (9 a3 a0 - a2 a1) / (2 (a2^2 - 3 a3 a1)) (closed
+        # form, independent of the discriminant). There p and p' vanish: p to rounding of its
+        # terms, p' to sqrt of it (the fold is located to rounding in `over`, and two roots split
+        # as the square root of the distance from the fold).
+        u2 = (9 * a3 * a0 - a2 * a1) / (2 * (a2 * a2 - 3 * a3 * a1))
+        assert u2 > 0
+        terms = np.abs([a3 * u2**3, a2 * u2**2, a1 * u2, a0])
+        assert abs(((a3 * u2 + a2) * u2 + a1) * u2 + a0) <= 1e-10 * terms.sum()
+        slope_terms = np.abs([3 * a3 * u2**2, 2 * a2 * u2, a1])
+        assert abs((3 * a3 * u2 + 2 * a2) * u2 + a1) <= 1e-6 * slope_terms.sum()
+
+
+@pytest.mark.parametrize("along, values, over, within", PLANES)
+def test_crossing_the_fold_curve_changes_the_number_of_fixed_points_by_two(along, values, over, within):
+    curve = theory.fold_curve(HYSTERESIS, along=along, values=values, over=over, within=within)
+    for params, R in zip(_plane_points(curve, HYSTERESIS), curve.R[np.isfinite(curve.at)]):
+        position = params[over]
+        either_side = [theory.fixed_points(dict(params, **{over: position * (1 + side * 1e-6)})).R
+                       for side in (-1, 1)]
+        assert sorted(map(len, either_side)) == [1, 3]
+        # On the three-root side the two roots about to merge lie either side of the fold's R,
+        # split by about sqrt(1e-6) of it.
+        three = next(roots for roots in either_side if len(roots) == 3)
+        pair = three[np.argsort(np.abs(three - R))[:2]]
+        assert pair.min() < R < pair.max() and pair.max() - pair.min() < 0.05 * R
+
+
+def test_the_fold_of_the_hysteresis_example_is_where_fixed_points_vanish():
+    # Independently: bisection on the number of fixed points (companion-matrix eigenvalues) that
+    # theory.fixed_points finds between g = 24 (three) and g = 26 (one).
+    low, high = 24.0, 26.0
+    assert len(theory.fixed_points(dict(HYSTERESIS, g=low))) == 3
+    assert len(theory.fixed_points(dict(HYSTERESIS, g=high))) == 1
+    while high - low > 1e-9:
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if len(theory.fixed_points(dict(HYSTERESIS, g=middle))) == 3 else (low, middle)
+    folds = theory.fold_curve(HYSTERESIS, along="Omega").at[0]
+    assert np.nanmin(np.abs(folds - low)) < 1e-6  # bisection's count of near-double roots: 1e-7 of size
+    # the value the docs give (docs/continuation.md, docs/hysteresis.md), to its last digit
+    assert np.nanmin(np.abs(folds - 25.27327)) < 5e-6
+    # The small branch's Hopf point, by bisection on the stability of the smallest fixed point.
+    low, high = 21.0, 23.0
+    assert not theory.fixed_points(dict(HYSTERESIS, g=low)).stable[0]
+    assert theory.fixed_points(dict(HYSTERESIS, g=high)).stable[0]
+    while high - low > 1e-9:
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if theory.fixed_points(dict(HYSTERESIS, g=middle)).stable[0] else (middle, high)
+    hopf = theory.hopf_curve(HYSTERESIS, along="Omega").at[0]
+    assert np.nanmin(np.abs(hopf - low)) < 1e-8
+
+
+def test_the_fold_curve_in_g_omega_scales_as_omega_squared():
+    # eq2.11, eq2.12: g enters the theory only through g^2 / Omega^4, so g_fold / Omega^2 is constant.
+    Omega = np.linspace(3.0, 6.0, 13)
+    curve = theory.fold_curve(HYSTERESIS, along="Omega", values=Omega, within=(0.0, 150.0))
+    assert curve.at.shape == (13, 2)
+    scaled = curve.at / Omega[:, None] ** 2
+    np.testing.assert_allclose(scaled, np.broadcast_to(scaled[0], scaled.shape), rtol=1e-12)
+    np.testing.assert_allclose(curve.R, np.broadcast_to(curve.R[0], curve.R.shape), rtol=1e-9)
+
+
+def test_on_the_hopf_curve_a_fixed_point_has_imaginary_eigenvalues_and_changes_stability():
+    curve = theory.hopf_curve(HYSTERESIS, along="Omega", values=np.linspace(3.5, 5.0, 4), within=(0.0, 60.0))
+    points = _plane_points(curve, HYSTERESIS)
+    assert len(points) == 4
+    for params, R in zip(points, curve.R[np.isfinite(curve.R)]):
+        fixed = theory.fixed_points(params)
+        nearest = int(np.argmin(np.abs(fixed.R - R)))
+        assert fixed.R[nearest] == pytest.approx(R, rel=1e-9)
+        eigenvalues = fixed.eigenvalues[nearest]
+        assert np.max(np.abs(eigenvalues.real)) < 1e-9 * np.max(np.abs(eigenvalues.imag))
+        stable_either_side = []
+        for side in (-1, 1):
+            moved = theory.fixed_points(dict(params, g=params["g"] * (1 + side * 1e-6)))
+            stable_either_side.append(bool(moved.stable[np.argmin(np.abs(moved.R - R))]))
+        assert sorted(stable_either_side) == [False, True]
+
+
+def test_fold_curve_without_folds_gives_nan_and_names_bad_planes():
+    curve = theory.fold_curve(HYSTERESIS, along="Omega", values=[4.0], within=(26.0, 30.0))
+    assert curve.at.shape == (1, 1) and np.isnan(curve.at).all()
+    with pytest.raises(ValueError, match="Delta"):
+        theory.fold_curve(HYSTERESIS, along="Delta", values=[1.0])
+    with pytest.raises(ValueError, match="within"):
+        theory.fold_curve(HYSTERESIS, along="g", values=[20.0], over="alpha")
+
+
+@pytest.mark.parametrize("Omega", [3.5, 4.0, 5.0])
+def test_a_response_sweep_across_the_fold_curve_loses_two_roots_there(Omega):
+    params = dict(HYSTERESIS, Omega=Omega)
+    folds = theory.fold_curve(params, along="Omega").at[0]
+    upper = np.nanmax(folds)
+    g = np.linspace(upper - 0.5, upper + 0.5, 101)  # the fold falls between two of these
+    counts = np.isfinite(theory.response_branches(params, g).R).sum(axis=1)
+    assert set(counts[g < upper]) == {3} and set(counts[g > upper]) == {1}

@@ -94,14 +94,14 @@ def description(text, width=None):
 
 
 def _command_of(text):
-    """'simulate' for a trajectory example (its comments run `vrsweep simulate`), else 'run'."""
-    match = re.search(r"^#\s+vrsweep (run|simulate) ", text, flags=re.MULTILINE)
+    """'simulate' or 'continue' for an example whose comments run that command, else 'run'."""
+    match = re.search(r"^#\s+vrsweep (run|simulate|continue) ", text, flags=re.MULTILINE)
     return match.group(1) if match else "run"
 
 
 def _run_command(text, written):
     """The first `vrsweep run|simulate` command of the config's comments, else `vrsweep run PATH`."""
-    match = re.search(r"^#\s+(vrsweep (?:run|simulate) [^#]*)", text, flags=re.MULTILINE)
+    match = re.search(r"^#\s+(vrsweep (?:run|simulate|continue) [^#]*)", text, flags=re.MULTILINE)
     return " ".join(match.group(1).split()) if match else f"vrsweep run {written}"
 
 

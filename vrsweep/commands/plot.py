@@ -1,4 +1,5 @@
-"""vrsweep plot FILE.h5 [-o FIG.png|.pdf|.svg] [--kind ...]: a figure from a sweep or a trajectory."""
+"""vrsweep plot FILE.h5 [-o FIG.png|.pdf|.svg] [--kind ...]: a figure from a sweep or a trajectory;
+vrsweep plot MAP.h5 CURVES.h5 ...: bifurcation curves over a map."""
 
 from pathlib import Path
 
@@ -90,6 +91,12 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
       basin        the x0-v0 plane coloured by the attractor each start reached
                    (sweeps with x0 / v0 axes, their default; other axes: pick a slice
                    with --at)
+    Bifurcation curves over a map: vrsweep plot MAP.h5 CURVES.h5 [CURVES2.h5 ...]
+      the map of --var (default R) with the curves of each curves file (vrsweep
+      continue BRANCH.h5 --point K --along NAME) over it: fold, period doubling and
+      grazing each in its own style, codimension-two points marked; for the effective
+      model the corrected theory's fold and Hopf curves too. The map's two axes must
+      be the curves' two parameters.
     Trajectory files (vrsweep simulate), --kind:
       trajectory   position, velocity, phase portrait; original above effective (default)
       impacts      impacts per slow period, period by period (several files: one panel each)

@@ -11,6 +11,10 @@ Sweep results (``vrsweep run``)
     ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
     ``lyapunov``     the largest Lyapunov exponent against the swept parameter, with the zero line;
                      ``bifurcation+lyapunov`` draws it under the bifurcation diagram, one x axis.
+Curves files (``vrsweep continue`` on a branch file), after a map
+    ``vrsweep plot MAP.h5 CURVES.h5 ...``: the map of any variable (``var``) with the fold,
+    period-doubling and grazing curves over it, codimension-two points marked, and for the
+    effective model the corrected theory's fold and Hopf curves (``curves``).
 Branch files (``vrsweep continue``)
     R of the continued orbits against the parameter (stable solid, unstable dashed) with the
     bifurcations marked and named, sweep files given after it on the same axes and the corrected
@@ -54,6 +58,7 @@ from vrsweep.errors import UsageError
 from vrsweep.plot.analytic import analytic_branches, resonance_positions
 from vrsweep.plot.basins import basin_figure, basin_plot
 from vrsweep.plot.branches import branch_figure, is_branch
+from vrsweep.plot.curves import curves_figure, is_curves
 from vrsweep.plot.labels import (
     KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, description, figure_options, metadata,
     layout_note, parameter_label, parse_size, read_description, render, resolve_style,
@@ -101,6 +106,8 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if not sources:
         raise UsageError.naming("no file to plot")
     data = [load(s) if isinstance(s, (str, os.PathLike)) else s for s in sources]
+    if any(is_curves(d) for d in data):
+        return _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, limits)
     if is_branch(data[0]):
         # vrsweep continue's file, with sweep files drawn on the same axes
         if any(is_branch(d) or not hasattr(d, "attrs") for d in data[1:]):
@@ -153,8 +160,30 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     return bifurcation_figure(ds, x_axis=x_axis, **options, **limits)
 
 
+def _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, limits):
+    """A map (the first file, a sweep over two parameters) with the curves files after it."""
+    from vrsweep.store.trajectory_file import TrajectoryData
+
+    map_data, curve_files = data[0], data[1:]
+    if is_curves(map_data) or isinstance(map_data, TrajectoryData) or is_branch(map_data) or not curve_files:
+        raise UsageError.naming("curves files go after the map they are drawn over: vrsweep plot MAP.h5 "
+                                "CURVES.h5 [CURVES2.h5 ...], MAP.h5 a sweep over the curves' two parameters")
+    if not all(is_curves(d) for d in curve_files):
+        raise UsageError.naming("after a map come curves files only (the bifurcation curves vrsweep continue "
+                                "writes from a branch file)")
+    if kind not in (None, "map"):
+        raise UsageError.naming("curves go over a map: {kind} {value} does not take curves files", value=kind)
+    if periods is not None:
+        raise UsageError.naming("{periods} is for trajectory files (vrsweep simulate), not maps")
+    if var is not None and amplitude:  # never ignored quietly
+        raise UsageError.naming("{amplitude} maps Q_amplitude and {var} names the variable itself: give one of them")
+    ds = select(map_data, at or {})
+    return curves_figure(ds, curve_files, var or ("Q_amplitude" if amplitude else "R"), x_axis=x_axis,
+                         log=bool(log), **options, **limits)
+
+
 __all__ = [
-    "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "LOG_SPAN", "load", "default_kind", "plot",
+    "curves_figure", "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "LOG_SPAN", "load", "default_kind", "plot",
     "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",

@@ -19,8 +19,8 @@ from vrsweep.store.reading import axis_index
 
 
 def load(path):
-    """A trajectory (TrajectoryData) or a sweep result (an xarray Dataset, loaded and its file
-    closed); ResultFileError otherwise."""
+    """A trajectory (TrajectoryData), a sweep result or a curves file (an xarray Dataset, loaded and
+    its file closed); ResultFileError otherwise."""
     from vrsweep.store.reading import load_results
     from vrsweep.store.trajectory_file import is_trajectory_file, read_trajectory
 
