@@ -30,16 +30,21 @@ def _parse_at(values):
               help="A sweep file: the first orbit is looked for from the final state of its point --at.")
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="The grid point of --start (nearest value per axis), e.g. --at g=23; repeatable.")
+@click.option("--switch", is_flag=True,
+              help="Also follow the branch of 2p periods born at each period doubling "
+                   "(as continuation.switch: true).")
 @overwrite_option
 @click.option("--quiet", "-q", is_flag=True, help="No summary.")
-def command(config_path, overrides, output, start_path, at, overwrite, quiet):
+def command(config_path, overrides, output, start_path, at, switch, overwrite, quiet):
     """Follow the periodic orbits of CONFIG.yaml's continuation section, stable and unstable.
 
     The first orbit is found at continuation.from by integrating the config's initial state
     (or, with --start, the final state of a sweep point) over the transient; its period p is
     detected, and the fixed point of the p-period stroboscopic map is followed both ways in
     continuation.parameter within continuation.to, with its Floquet multipliers, folds, period
-    doublings, Neimark-Sacker points and grazings (docs/continuation.md).
+    doublings, Neimark-Sacker points and grazings (docs/continuation.md). With --switch (or
+    continuation.switch: true) the branch of 2p periods born at each period doubling is followed
+    too, and at its own doublings while 2p <= continuation.max_period: several branches per file.
     """
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
@@ -51,6 +56,8 @@ def command(config_path, overrides, output, start_path, at, overwrite, quiet):
         raise UsageError("--start and --at go together: --start SWEEP.h5 --at g=23")
     at = _parse_at(at)
     config = load_config(config_path, overrides)
+    if switch and config.continuation is not None:  # the stored config says what was run
+        config = dataclasses.replace(config, continuation=dataclasses.replace(config.continuation, switch=True))
     flags = {**OUTPUT_FLAGS, "start": "--start", "at": "--at"}
     with flag_wording(flags):
         execution.problem_of(config)  # refuse a bad request before integrating anything
@@ -64,7 +71,8 @@ def command(config_path, overrides, output, start_path, at, overwrite, quiet):
         say_cache_notice()
     with flag_wording(flags):
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
-        branches, bifurcations = execution.run_continuation(config, start_state)
+        missed = []
+        branches, bifurcations = execution.run_continuation(config, start_state, failures=missed)
         delta = config.parameters["Delta"]
         # The stored config holds the start's value of the continued parameter, not its unused default.
         section = config.continuation
@@ -80,7 +88,12 @@ def command(config_path, overrides, output, start_path, at, overwrite, quiet):
                        f"to {max(o.parameter for o in branch.orbits):.6g}", err=True)
             for side, (status, reason) in (("first", branch.ends["down"]), ("last", branch.ends["up"])):
                 click.echo(f"  {side} end: {status}: {reason}", err=True)
+        several = len(branches) > 1
         for bifurcation in bifurcations:
+            where = f"branch {bifurcation.branch}, " if several else ""
             click.echo(f"{bifurcation.kind} at {name} = {bifurcation.orbit.parameter:.8g} "
-                       f"(R = {bifurcation.orbit.R:.6g})", err=True)
+                       f"({where}R = {bifurcation.orbit.R:.6g})", err=True)
+        for value, reason in missed:
+            click.echo(f"period doubling at {name} = {value:.8g}: no branch of twice its period found ({reason})",
+                       err=True)
         click.echo(f"-> {path}", err=True)
