@@ -109,8 +109,7 @@ def _back_on_the_p_branch(problem, doublings, periods):
             # is of second order in it.
             a_previous = float(u @ (previous.state - doubling.state))
             a_now = float(u @ (orbit.state - doubling.state))
-            near = min(np.linalg.norm(previous.z - doubling.z), np.linalg.norm(orbit.z - doubling.z)) <= chord
-            if a_previous * a_now <= 0.0 and near:
+            if a_previous * a_now <= 0.0 and _passes_by(previous.z, orbit.z, doubling.z):
                 met.append(doubling)
                 return (ENDED_PERIOD_DOUBLING, f"meets the period-{periods} branch at its period doubling "
                                                f"at {name} = {doubling.parameter:.8g}")
@@ -118,6 +117,22 @@ def _back_on_the_p_branch(problem, doublings, periods):
             return (ENDED_PERIOD_DOUBLING, f"returns to a period-{periods} orbit at {name} = {orbit.parameter:.8g}")
         return None
     return stop, met
+
+
+# Through the pitchfork, a step from amplitude a1 > 0 to a2 < 0 passes the doubling point at a
+# distance of second order in the a's; a chord that misses it by more than this fraction of its
+# length crossed a = 0 elsewhere.
+PASSING_FRACTION = 0.1
+
+
+def _passes_by(z_from, z_to, point):
+    """True when the segment [z_from, z_to] passes within PASSING_FRACTION of its length of point."""
+    chord = z_to - z_from
+    length = np.linalg.norm(chord)
+    if length == 0.0:
+        return np.linalg.norm(point - z_from) == 0.0
+    s = np.clip((point - z_from) @ chord / (length * length), 0.0, 1.0)
+    return bool(np.linalg.norm(z_from + s * chord - point) <= PASSING_FRACTION * length)
 
 
 def doubled_branch(problem, doubling, lo, hi, max_points, progress=None, doublings=None):
