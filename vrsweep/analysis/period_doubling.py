@@ -32,14 +32,21 @@ from vrsweep.results import Status
 
 ENDED_PERIOD_DOUBLING = "period_doubling"
 # Amplitudes along w of the first 2p-orbit, relative to max(1, |y*|): the smallest that converges
-# onto a genuine 2p-orbit wins (the pitchfork's corrector is conditioned like eps).
-SWITCH_AMPLITUDES = (1e-3, 4e-3, 1.6e-2)
+# onto a genuine 2p-orbit next to the doubling wins (the pitchfork's corrector is conditioned like
+# eps, and its basin shrinks with the curvature of the 2p-branch: at one phase of the original
+# model's orbit of period 2 at g = 17.833 only 1e-4 converges).
+SWITCH_AMPLITUDES = (1e-4, 1e-3, 4e-3, 1.6e-2)
+# ... and it is accepted only this many amplitudes from the doubling point in (x, v, lam): a
+# corrector that wandered to another orbit far away did not find the 2p-branch born here.
+NEAR_AMPLITUDES = 4.0
 # A 2p-orbit is genuine when |P^p(y) - y| exceeds this many Newton tolerances; an orbit on the
 # switched branch below it is the p-orbit again.
 GENUINE_DISTANCE = 1e3
-# A located doubling is switched only when a multiplier is this close to -1 (a sign change of
-# det(M + I) across a grazing, where the monodromy jumps, is not a period doubling).
-MULTIPLIER_TOLERANCE = 1e-3
+# A located doubling is switched only when a real multiplier is this close to -1 (a sign change of
+# det(M + I) across a grazing, where the monodromy jumps, is not a period doubling). Not tighter:
+# the doubling is located to location_tolerance in the parameter, and where the multiplier moves
+# fast (next to a graze: -1.3 to -0.7 within 1e-4 in g) that leaves it a few 1e-2 from -1.
+MULTIPLIER_TOLERANCE = 0.1
 MAX_BRANCHES = 8
 
 
@@ -56,8 +63,10 @@ def doubling_vectors(orbit):
 
 
 def is_doubling(orbit):
-    """True when one multiplier of ``orbit`` lies within MULTIPLIER_TOLERANCE of -1."""
-    return bool(np.min(np.abs(orbit.multipliers + 1.0)) < MULTIPLIER_TOLERANCE)
+    """True when a real multiplier of ``orbit`` lies within MULTIPLIER_TOLERANCE of -1."""
+    mu = orbit.multipliers
+    real = np.abs(mu.imag) <= 1e-12 * np.maximum(1.0, np.abs(mu))
+    return bool(np.any(real & (np.abs(mu.real + 1.0) < MULTIPLIER_TOLERANCE)))
 
 
 def distance_from_p_orbit(problem, orbit, periods):
@@ -87,6 +96,9 @@ def first_doubled_orbit(problem, doubling):
             if failure is not None:
                 reason = failure[1]
                 continue
+            if np.linalg.norm(orbit.z - doubling.z) > NEAR_AMPLITUDES * amplitude * scale:
+                reason = f"the corrector went to an orbit at {problem.parameter} = {orbit.parameter:.8g}"
+                continue
             if distance_from_p_orbit(problem, orbit, doubling.periods) > threshold:
                 return orbit, None
             reason = "the corrector returned to the period-p orbit"
@@ -114,6 +126,13 @@ def _back_on_the_p_branch(problem, doublings, periods):
                 return (ENDED_PERIOD_DOUBLING, f"meets the period-{periods} branch at its period doubling "
                                                f"at {name} = {doubling.parameter:.8g}")
         if distance_from_p_orbit(problem, orbit, periods) <= threshold:
+            # The corrector crossed onto the p-branch itself; next to a doubling (within the
+            # step just taken) that is the pitchfork's crossing too.
+            nearest = min(doublings, key=lambda d: np.linalg.norm(previous.z - d.z))
+            if np.linalg.norm(previous.z - nearest.z) <= chord:
+                met.append(nearest)
+                return (ENDED_PERIOD_DOUBLING, f"meets the period-{periods} branch at its period doubling "
+                                               f"at {name} = {nearest.parameter:.8g}")
             return (ENDED_PERIOD_DOUBLING, f"returns to a period-{periods} orbit at {name} = {orbit.parameter:.8g}")
         return None
     return stop, met
@@ -171,6 +190,22 @@ def doubled_branch(problem, doubling, lo, hi, max_points, progress=None, doublin
     return branch, back_bifurcations + away_bifurcations, met
 
 
+def _doublings(bifurcations, failures):
+    """The orbits of the period doublings among ``bifurcations`` whose multiplier is near -1; the
+    others go to ``failures`` as (parameter, reason)."""
+    orbits = []
+    for bifurcation in bifurcations:
+        if bifurcation.kind != "period_doubling":
+            continue
+        if is_doubling(bifurcation.orbit):
+            orbits.append(bifurcation.orbit)
+        else:
+            nearest = bifurcation.orbit.multipliers[np.argmin(np.abs(bifurcation.orbit.multipliers + 1.0))]
+            failures.append((bifurcation.orbit.parameter, f"no real multiplier within {MULTIPLIER_TOLERANCE:g} of -1 "
+                                                          f"at the located point (nearest {nearest:.4g})"))
+    return orbits
+
+
 def switch_all(problem, branch, bifurcations, lo, hi, max_points, max_period, progress=None):
     """``branch`` (a Branch) and the branches switched at its period doublings, and at theirs while
     2p <= max_period, at most MAX_BRANCHES in all. ``bifurcations``: [Bifurcation] of ``branch``.
@@ -183,7 +218,7 @@ def switch_all(problem, branch, bifurcations, lo, hi, max_points, max_period, pr
     for bifurcation in found:
         bifurcation.branch = 0
     failures = []
-    pending = [(0, [b.orbit for b in found if b.kind == "period_doubling" and is_doubling(b.orbit)])]
+    pending = [(0, _doublings(found, failures))]
     reached = []  # doublings a switched branch already ended at
     while pending and len(branches) < MAX_BRANCHES:
         _, doublings = pending.pop(0)
@@ -201,6 +236,6 @@ def switch_all(problem, branch, bifurcations, lo, hi, max_points, max_period, pr
             reached.extend(met)
             new = [continuation.Bifurcation(kind, orbit, number) for kind, orbit in detail]
             found.extend(new)
-            pending.append((number, [b.orbit for b in new if b.kind == "period_doubling" and is_doubling(b.orbit)]))
+            pending.append((number, _doublings(new, failures)))
     found.sort(key=lambda b: (b.branch, b.orbit.parameter))
     return branches, found, failures

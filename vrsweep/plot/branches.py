@@ -22,6 +22,7 @@ BRANCH_COLOUR = "C0"
 FINE_POINTS = 600
 # The multipliers' panel is logarithmic when their moduli span more than this factor.
 LOG_SPAN = 100.0
+ROUNDOFF_SPAN = 1e13
 
 
 def is_branch(data) -> bool:
@@ -108,6 +109,9 @@ def branch_figure(ds, sweeps=(), more_branches=()) -> Figure:
     positive = modulus[modulus > 0.0]
     if positive.size and positive.max() / positive.min() > LOG_SPAN:
         bottom.set_yscale("log")  # a strongly unstable or strongly damped branch spans decades
+        # Below ROUNDOFF_SPAN of the largest, a modulus is the eigenvalue solver's roundoff
+        # (e.g. the second multiplier of P^4 when det P ~ 1e-8), not worth a dozen decades.
+        bottom.set_ylim(bottom=max(positive.min(), positive.max() / ROUNDOFF_SPAN) / 2.0)
     bottom.set_ylabel("Floquet $|\\mu|$")
     bottom.set_xlabel(parameter_label(name))
     # One legend below both panels: inside, it covered the branch on a journal-column figure.
