@@ -153,3 +153,29 @@ def test_sampled_2p_points_are_fixed_points_of_scipys_2p_map_not_of_its_p_map(ca
         assert np.max(np.abs(samples[-1] - orbit.state)) < 1e-7 * scale, orbit.parameter
         half = orbit.periods // 2
         assert np.max(np.abs(samples[half - 1] - orbit.state)) > 1e-5 * scale, orbit.parameter
+
+
+def _orbit_with(monodromy):
+    return continuation.Orbit(parameter=1.0, state=np.zeros(2), periods=1, monodromy=np.asarray(monodromy, float),
+                              R=0.0, Q_amplitude=0.0, impacts_per_period=0.0, x_max=0.0, slowest_impact=np.inf,
+                              residual=0.0, newton_iterations=0)
+
+
+def test_only_a_real_multiplier_near_minus_one_is_switched():
+    # det(M + I) changes sign across a graze where M jumps (the effective model's impacting orbit
+    # at g = 29.5: mu = 0.53 +/- 0.43i on one side); that is not a period doubling.
+    rotation = 0.7 * np.array([[np.cos(0.68), -np.sin(0.68)], [np.sin(0.68), np.cos(0.68)]])
+    assert not period_doubling.is_doubling(_orbit_with(rotation))
+    assert not period_doubling.is_doubling(_orbit_with([[5.8, 0.0], [0.0, 0.02]]))
+    doubling = _orbit_with([[-1.0, 0.3], [0.0, -0.4]])
+    assert period_doubling.is_doubling(doubling)
+    w, u = period_doubling.doubling_vectors(doubling)
+    assert doubling.monodromy @ w == pytest.approx(-w) and u @ doubling.monodromy == pytest.approx(-u)
+    assert u @ w == pytest.approx(1.0) and np.linalg.norm(w) == pytest.approx(1.0)
+
+
+def test_a_step_passes_the_doubling_only_when_its_chord_does():
+    point = np.array([0.0, 0.0, 1.0])
+    assert period_doubling._passes_by(np.array([-0.1, 0.0, 1.0]), np.array([0.1, 0.0, 1.0]), point)
+    # the same sign change of x, a chord's length away from the doubling: not a return
+    assert not period_doubling._passes_by(np.array([-0.1, 0.0, 1.2]), np.array([0.1, 0.0, 1.2]), point)
