@@ -11,13 +11,15 @@ switching"):
 - predictor z = (y* + eps w, lam*), eps in SWITCH_AMPLITUDES (relative to max(1, |y*|));
 - corrector: continuation.correct on P^2p with the arclength condition along t = (w, 0), which
   fixes the amplitude along w at eps and leaves the parameter free;
-- the result is a genuine 2p-orbit only when it is not the p-orbit: |P^p(y) - y| must exceed
-  GENUINE_DISTANCE times the Newton tolerance (the corrector could otherwise land on the p-branch,
-  which also crosses the predictor's plane);
+- the result is the 2p-orbit born here only when it lies within NEAR_AMPLITUDES amplitudes of
+  the doubling point and is not the p-orbit: |P^p(y) - y| must exceed GENUINE_DISTANCE times the
+  Newton tolerance (the corrector could otherwise land on the p-branch, which also crosses the
+  predictor's plane);
 - then the 2p-branch is followed both ways with continuation.follow. The way back towards the
   period doubling meets the p-branch there: it stops (status "period_doubling") when the
-  amplitude along w changes sign next to the doubling point or an orbit is a p-orbit again, and
-  the doubling point itself (as a 2p-orbit) is the branch's first point.
+  amplitude along w changes sign on a step whose chord passes the doubling point, or when an
+  orbit is a p-orbit again (within a step of a doubling: meeting that doubling), and the doubling
+  point itself (as a 2p-orbit) is the branch's first point.
 
 Switching is repeated on the new branches' own period doublings while 2p <= max_period (a
 cascade), at most MAX_BRANCHES branches in all. A doubling point that an earlier switched branch
