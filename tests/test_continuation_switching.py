@@ -145,8 +145,8 @@ def _scipy_periods(g, state, periods):
 @pytest.mark.slow
 def test_sampled_2p_points_are_fixed_points_of_scipys_2p_map_not_of_its_p_map(cascade):
     _, branches, _, _ = cascade
-    orbits = branches[1].orbits[1:]
-    sample = [orbits[i] for i in np.unique(np.linspace(0, len(orbits) - 1, 3).round().astype(int))]
+    orbits = branches[1].orbits[1:]  # the first 2p-orbit (next to the doubling) included
+    sample = [orbits[i] for i in np.unique(np.linspace(0, len(orbits) - 1, 6).round().astype(int))]
     for orbit in sample:
         samples = _scipy_periods(orbit.parameter, orbit.state, orbit.periods)
         scale = max(1.0, np.max(np.abs(orbit.state)))
