@@ -7,12 +7,17 @@ at rtol 1e-10, atol 1e-12, continued in g from 23 over [20, 27]. Baseline, measu
 run: one sweep point of the same settings (100 transient + 100 measured slow periods, the
 config's defaults), i.e. what `vrsweep run` spends per grid point. Times are the calling
 thread's CPU time, best of 3, after a warm-up call that compiles (or loads) every kernel.
+
+Then period-doubling branch switching (--switch) on the original model's cascade at Fig. 1's
+parameters (Omega = 4), rtol 1e-12, atol 1e-14 (docs/continuation.md): the period-2 branch over
+[17.8255, 17.87] from g = 17.86 and the period-4 branch switched at its doubling (g = 17.833),
+against a sweep point of the original model at the same settings.
 """
 
 import argparse
 import time
 
-from vrsweep.analysis import continuation
+from vrsweep.analysis import continuation, period_doubling
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import settings_vector, simulate
@@ -67,6 +72,29 @@ def main():
     print(f"whole branch: {n} points, {len(bifurcations)} bifurcations located   "
           f"{1e3 * whole:8.1f} ms   {whole / sweep_point:.2f}x  ({1e3 * whole / n:.2f} ms per point)")
     print("bifurcations:", ", ".join(f"{b.kind} g = {b.orbit.parameter:.6f}" for b in bifurcations))
+    switching(method)
+
+
+def switching(method):
+    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0, g=17.86)
+    settings = settings_vector(rtol=1e-12, atol=1e-14)
+    coefficients = kernel_coefficients(parameters, "original")
+    problem = continuation.ContinuationProblem(parameters, "original", "g", settings, method,
+                                               dict(continuation.DEFAULTS, max_step=0.3))
+    start = continuation.find_start(problem, [0.99, 0.5], 17.86, 300, 16)  # warm-up: compiles
+    sweep_point, _ = best_of(lambda: simulate(coefficients, start.state, settings, method=method))
+    whole, (branch, bifurcations) = best_of(
+        lambda: continuation.continue_branch(problem, start, 17.8255, 17.87, 40), repeats=1)
+    switched, (branches, _, failures) = best_of(
+        lambda: period_doubling.switch_all(problem, branch, bifurcations, 17.8255, 17.87, 40, 4), repeats=1)
+    assert len(branches) == 2 and not failures, failures
+    n, m = len(branch.orbits), len(branches[1].orbits)
+    print(f"original model, Omega = 4, method {method}, rtol 1e-12")
+    print(f"sweep point (100 + 100 periods)          {1e3 * sweep_point:8.2f} ms   1.00x")
+    print(f"period-2 branch: {n} points              {1e3 * whole:8.1f} ms   {whole / sweep_point:.2f}x  "
+          f"({1e3 * whole / n:.2f} ms per point)")
+    print(f"switched period-4 branch: {m} points     {1e3 * switched:8.1f} ms   {switched / sweep_point:.2f}x  "
+          f"({1e3 * switched / m:.2f} ms per point)")
 
 
 if __name__ == "__main__":

@@ -166,6 +166,33 @@ def curves_file(branch_file, invoke):
     return output, result.output
 
 
+CASCADE = """\
+model: original
+parameters: {g: 17.86}
+initial: {x: 0.99, v: 0.5}
+integration: {rtol: 1.0e-12, atol: 1.0e-14, transient_periods: 300}
+continuation:
+  parameter: g
+  from: 17.86
+  to: [17.8255, 17.87]
+  max_points: 50
+  max_step: 0.3
+  max_period: 4
+"""
+
+
+@pytest.fixture(scope="module")
+def switched_file(tmp_path_factory, write_config, invoke):
+    """The original model's orbit of 2 slow periods near g = 17.86 (Fig. 1's parameters) and, with
+    --switch, the period-4 branch born at its period doubling (max_period 4: no further switch)."""
+    folder = tmp_path_factory.mktemp("switch")
+    config = write_config(folder, CASCADE, "cascade.yaml")
+    output = folder / "switched.h5"
+    result = invoke("continue", config, "-o", output, "--switch")
+    assert result.exit_code == 0, result.output
+    return output, result.output
+
+
 def test_curves_file_opens_with_the_agreed_layout(curves_file):
     path, output = curves_file
     with vrsweep.open_results(path) as ds:
@@ -266,3 +293,40 @@ def test_damaged_curves_file_is_one_line(curves_file, invoke, tmp_path, damage):
         vrsweep.open_results(path)
     result = invoke("info", path)
     assert result.exit_code == 2 and "is corrupt" in result.output and "Traceback" not in result.output
+
+
+def test_switch_writes_the_doubled_branch(switched_file, invoke):
+    path, output = switched_file
+    with vrsweep.open_results(path) as ds:
+        assert ds["branch_periods"].values.tolist() == [2, 4]
+        assert str(ds["branch_end_first_status"].values[1]) == "period_doubling"
+        on_second = ds["branch"].values == 1
+        assert np.all(ds["periods"].values[on_second] == 4) and np.all(ds["periods"].values[~on_second] == 2)
+        kinds = list(ds["bifurcation_kind"].values)
+        branches = ds["bifurcation_branch"].values
+        # the doubling of branch 0 where branch 1 starts, and branch 1's own
+        assert {int(b) for k, b in zip(kinds, branches) if k == "period_doubling"} == {0, 1}
+        assert "switch: true" in ds.attrs["config"]  # the stored config says what was run
+    assert "branch 1: period 4" in output and "period_doubling at g = " in output
+    info = invoke("info", path)
+    assert info.exit_code == 0 and "branch 1:" in info.output and "period 4" in info.output
+    assert "first end:   period_doubling: meets the period-2 branch" in info.output
+
+
+def test_plot_draws_every_branch_in_its_period_colour(switched_file):
+    from vrsweep.plot import plot
+
+    path, _ = switched_file
+    figure = plot([path])
+    colours = {line.get_color() for line in figure.axes[0].lines if line.get_xdata().size > 1}
+    assert len(colours) == 2  # period 2 and period 4
+    labels = [text.get_text() for legend in figure.legends for text in legend.get_texts()]
+    assert "period 2 T" in labels and "period 4 T" in labels
+    assert any(label.startswith("period doubling, $g$ = ") for label in labels)
+
+
+def test_switch_key_is_validated(invoke, tmp_path, write_config):
+    config = write_config(tmp_path, CASCADE + "  switch: sometimes\n", "s.yaml")
+    result = invoke("continue", config, "-o", tmp_path / "s.h5")
+    assert result.exit_code == 2
+    assert "s.yaml:12: continuation.switch: must be true or false" in result.output

@@ -16,7 +16,9 @@ from scipy.integrate import simpson
 
 from reference import reference_trajectory
 from vrsweep.analysis import continuation
+from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import VrsweepError
+from vrsweep.numerics import kernel
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.trajectory import settings_vector, simulate
 
@@ -346,3 +348,34 @@ def test_dop853_crosses_the_same_graze(hysteresis_branch):
     for orbit, impacts in ((free, 0), (impacting, 1)):
         _, run = _one_period(_coefficients(orbit.parameter), orbit.state, 0, _resolving_step(orbit))
         assert len(run["impact_times"]) == impacts, (orbit.parameter, impacts)
+
+
+@pytest.mark.slow
+def test_fold_lies_where_a_down_sweep_jumps_in_the_original_model():
+    """The other side of a hysteresis loop: in the original model at Fig. 1's parameters the
+    orbit of three slow periods is born at a fold near g = 6.24 (the left end of Fig. 1's
+    period-3 window). A down-sweep along it (each point from the last, as `continuation: down`)
+    leaves it at the first grid point past the fold: within one grid step of the located fold.
+    (The hysteresis example's impacting branch, the down-sweep's there, has no fold above
+    g = 10.3, out of that sweep's reach.)"""
+    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0)
+    settings = settings_vector(rtol=1e-12, atol=1e-14)
+    problem = continuation.ContinuationProblem(dict(parameters, g=6.5), "original", "g", settings, "rk45",
+                                               dict(continuation.DEFAULTS, max_step=0.05))
+    start = continuation.find_start(problem, [0.99, 0.5], 6.5, 100, 8)
+    assert start.periods == 3
+    _, bifurcations = continuation.continue_branch(problem, start, 6.0, 6.6, 16)
+    folds = [b.orbit.parameter for b in bifurcations if b.kind == "fold"]
+    assert folds
+    grid = np.arange(6.5, 5.99, -0.05)
+    state, periods = start.state, []
+    sweep_settings = settings_vector(rtol=1e-10, atol=1e-12, transient_periods=100, measure_periods=48)
+    for g in grid:
+        run = simulate(kernel_coefficients(dict(parameters, g=g), "original"), state, sweep_settings)
+        state = run.summary[[8, 9]]
+        strobe = run.period_records[-48:]
+        periods.append(int(detect_period(strobe[None, :, kernel.REC_X], strobe[None, :, kernel.REC_V], 8, 1e-6)[0]))
+    periods = np.array(periods)
+    jumped = int(np.argmax(periods != 3))
+    assert periods[jumped] != 3 and np.all(periods[:jumped] == 3), periods
+    assert any(abs(grid[jumped] - fold) <= 0.05 + 1e-12 for fold in folds), (folds, grid[jumped])

@@ -364,8 +364,11 @@ def _graze_orbit(problem, located):
                   located.iterations, located.jacobian[:2, 2].copy())
 
 
-def follow(problem, start, direction, lo, hi, max_points, progress=None):
+def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=None):
     """Orbits from ``start`` (excluded) in ``direction`` (+1: parameter increasing at first).
+
+    stop(previous, orbit): None, or the (status, reason) that ends the branch before ``orbit``
+    (analysis/period_doubling.py: a switched branch back on the branch it was born on).
 
     Returns (orbits, bifurcations [(kind, Orbit)], (status, reason)).
     """
@@ -410,6 +413,9 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None):
                 return orbits, bifurcations, (status, reason)
         else:
             new_tangent = tangent_of(orbit, tangent)
+        ended = None if stop is None else stop(current, orbit)
+        if ended is not None:
+            return orbits, bifurcations, ended
         if not lo <= orbit.parameter <= hi:
             return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
         if crossed:

@@ -32,6 +32,9 @@ def _parse_at(values):
               help="A sweep file: the first orbit is looked for from the final state of its point --at.")
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="The grid point of --start (nearest value per axis), e.g. --at g=23; repeatable.")
+@click.option("--switch", is_flag=True,
+              help="Also follow the branch of 2p periods born at each period doubling "
+                   "(as continuation.switch: true).")
 @click.option("--point", "point", type=int, multiple=True, metavar="K",
               help="With a branch file: the bifurcation (its index in the file's table, counted from 0 in the "
                    "order vrsweep info lists them) to follow; repeatable: one curve each, in one file.")
@@ -43,14 +46,16 @@ def _parse_at(values):
               help="The range of the branch's parameter (default: the branch's continuation.to).")
 @overwrite_option
 @click.option("--quiet", "-q", is_flag=True, help="No summary.")
-def command(config_path, overrides, output, start_path, at, point, along, to, within, overwrite, quiet):
+def command(config_path, overrides, output, start_path, at, switch, point, along, to, within, overwrite, quiet):
     """Follow the periodic orbits of CONFIG.yaml's continuation section, stable and unstable.
 
     The first orbit is found at continuation.from by integrating the config's initial state
     (or, with --start, the final state of a sweep point) over the transient; its period p is
     detected, and the fixed point of the p-period stroboscopic map is followed both ways in
     continuation.parameter within continuation.to, with its Floquet multipliers, folds, period
-    doublings, Neimark-Sacker points and grazings (docs/continuation.md).
+    doublings, Neimark-Sacker points and grazings (docs/continuation.md). With --switch (or
+    continuation.switch: true) the branch of 2p periods born at each period doubling is followed
+    too, and at its own doublings while 2p <= continuation.max_period: several branches per file.
 
     Given a branch file instead (the output of the above), --point K --along NAME follows its
     bifurcation K (a fold, period doubling or grazing) in the second parameter NAME, both ways
@@ -59,6 +64,11 @@ def command(config_path, overrides, output, start_path, at, point, along, to, wi
     from vrsweep.store.branch_file import is_branch_file
 
     if is_branch_file(config_path):
+        if switch:
+            from vrsweep.errors import UsageError
+
+            raise UsageError(f"--switch goes with a config (vrsweep continue CONFIG.yaml --switch); {config_path} "
+                             "is a branch file, whose bifurcations --point K --along NAME follows")
         _curves(config_path, overrides, output, start_path, point, along, to, within, overwrite, quiet)
         return
     if point or along is not None or to or within:
@@ -76,6 +86,8 @@ def command(config_path, overrides, output, start_path, at, point, along, to, wi
         raise UsageError("--start and --at go together: --start SWEEP.h5 --at g=23")
     at = _parse_at(at)
     config = load_config(config_path, overrides)
+    if switch and config.continuation is not None:  # the stored config says what was run
+        config = dataclasses.replace(config, continuation=dataclasses.replace(config.continuation, switch=True))
     flags = {**OUTPUT_FLAGS, "start": "--start", "at": "--at"}
     with flag_wording(flags):
         execution.problem_of(config)  # refuse a bad request before integrating anything
@@ -89,7 +101,8 @@ def command(config_path, overrides, output, start_path, at, point, along, to, wi
         say_cache_notice()
     with flag_wording(flags):
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
-        branches, bifurcations = execution.run_continuation(config, start_state)
+        missed = []
+        branches, bifurcations = execution.run_continuation(config, start_state, failures=missed)
         delta = config.parameters["Delta"]
         # The stored config holds the start's value of the continued parameter, not its unused default.
         section = config.continuation
@@ -105,9 +118,14 @@ def command(config_path, overrides, output, start_path, at, point, along, to, wi
                        f"to {max(o.parameter for o in branch.orbits):.6g}", err=True)
             for side, (status, reason) in (("first", branch.ends["down"]), ("last", branch.ends["up"])):
                 click.echo(f"  {side} end: {status}: {reason}", err=True)
+        several = len(branches) > 1
         for bifurcation in bifurcations:
+            where = f"branch {bifurcation.branch}, " if several else ""
             click.echo(f"{bifurcation.kind} at {name} = {bifurcation.orbit.parameter:.8g} "
-                       f"(R = {bifurcation.orbit.R:.6g})", err=True)
+                       f"({where}R = {bifurcation.orbit.R:.6g})", err=True)
+        for value, reason in missed:
+            click.echo(f"period doubling at {name} = {value:.8g}: no branch of twice its period found ({reason})",
+                       err=True)
         click.echo(f"-> {path}", err=True)
 
 

@@ -57,6 +57,8 @@ def dump_config(config) -> str:
         block["from"] = float(section.pop("start"))
         block["to"] = CommentedSeq([float(section.pop("low")), float(section.pop("high"))])
         block["to"].fa.set_flow_style()
+        if not section["switch"]:  # named only when on, as integration.lyapunov
+            del section["switch"]
         for key, value in section.items():
             block[key] = value
         document["continuation"] = block

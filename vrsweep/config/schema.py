@@ -127,7 +127,8 @@ CONTINUATION_DOMAINS = {
     "newton_tolerance": _POSITIVE, "max_newton_iterations": _COUNT, "max_period": _COUNT,
     "location_tolerance": _POSITIVE,
 }
-CONTINUATION_KEYS = ("parameter", "from", "to", *CONTINUATION_DEFAULTS)
+# switch: start the branch of 2p periods at every period doubling (analysis/period_doubling.py).
+CONTINUATION_KEYS = ("parameter", "from", "to", *CONTINUATION_DEFAULTS, "switch")
 LINEAR_KEYS = ("start", "stop", "num", "continuation")
 VALUES_KEYS = ("values", "continuation")
 
@@ -186,7 +187,7 @@ class Integration:
 class Continuation:
     """The config's continuation section: which parameter, where the first orbit is found
     (``start``, the key ``from``), the range [low, high] the branch stays in, and the numerics'
-    settings (CONTINUATION_DEFAULTS)."""
+    settings (CONTINUATION_DEFAULTS); ``switch``: follow the 2p-branch born at each period doubling."""
 
     parameter: str
     start: float
@@ -200,6 +201,7 @@ class Continuation:
     max_newton_iterations: int
     max_period: int
     location_tolerance: float
+    switch: bool = False
 
     def options(self) -> dict:
         """The settings analysis.continuation reads (its DEFAULTS' keys)."""
@@ -353,6 +355,7 @@ _ContinuationModel = create_model(
     "Continuation", __base__=_section_model("NumericContinuation", CONTINUATION_DOMAINS, CONTINUATION_DEFAULTS),
     parameter=(Literal[PARAMETER_NAMES], ...),
     start=(float, Field(alias="from")),
+    switch=(bool, False),
     to=(Annotated[list[float], Field(min_length=2, max_length=2), AfterValidator(_check_range_pair)], ...))
 
 

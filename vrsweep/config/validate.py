@@ -254,7 +254,7 @@ def _continuation(section):
     if section is None:
         return None
     return Continuation(parameter=section.parameter, start=float(section.start), low=float(section.to[0]),
-                        high=float(section.to[1]),
+                        high=float(section.to[1]), switch=section.switch,
                         **{key: getattr(section, key) for key in CONTINUATION_DEFAULTS})
 
 

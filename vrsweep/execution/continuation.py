@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrsweep.analysis import continuation
+from vrsweep.analysis import continuation, period_doubling
 from vrsweep.errors import UsageError
 from vrsweep.execution.sweep import integration_settings
 
@@ -48,10 +48,14 @@ def start_state_from_sweep(path, at):
         return np.array([float(point["x_final"]), float(point["v_final"])])
 
 
-def run_continuation(config, start_state=None, progress=None):
-    """The branch through the orbit found at the section's ``from``. Returns (branches, bifurcations).
+def run_continuation(config, start_state=None, progress=None, switch=None, failures=None):
+    """The branch through the orbit found at the section's ``from`` and, with ``switch`` (default:
+    the section's ``switch``), the branches of 2p periods born at its period doublings
+    (analysis/period_doubling.py). Returns (branches, bifurcations); branch 0 is the first.
 
     start_state: (2,) where the transient starts (default: the config's initial state).
+    failures: a list that receives (parameter, reason) for each period doubling where no branch of
+    2p periods was found.
     """
     problem = problem_of(config)
     section = config.continuation
@@ -65,4 +69,10 @@ def run_continuation(config, start_state=None, progress=None):
                                     section.max_period)
     branch, bifurcations = continuation.continue_branch(problem, start, section.low, section.high,
                                                         section.max_points, progress)
-    return [branch], bifurcations
+    if not (section.switch if switch is None else switch):
+        return [branch], bifurcations
+    branches, bifurcations, missed = period_doubling.switch_all(problem, branch, bifurcations, section.low, section.high,
+                                                           section.max_points, section.max_period, progress)
+    if failures is not None:
+        failures.extend(missed)
+    return branches, bifurcations

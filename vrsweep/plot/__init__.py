@@ -109,10 +109,16 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if any(is_curves(d) for d in data):
         return _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, limits)
     if is_branch(data[0]):
-        # vrsweep continue's file, with sweep files drawn on the same axes
-        if any(is_branch(d) or not hasattr(d, "attrs") for d in data[1:]):
-            raise UsageError.naming("after a branch file come sweep files only (vrsweep run results)")
-        return branch_figure(data[0], data[1:], **options, **limits)
+        # vrsweep continue's files (several: e.g. branches from several starts), then sweep files
+        # drawn on the same axes
+        count = 1
+        while count < len(data) and is_branch(data[count]):
+            count += 1
+        if any(is_branch(d) or not hasattr(d, "attrs") for d in data[count:]):
+            raise UsageError.naming("after the branch files come sweep files only (vrsweep run results)")
+        if len({str(d.attrs.get("parameter")) for d in data[:count]}) > 1:
+            raise UsageError.naming("branch files drawn together must continue the same parameter")
+        return branch_figure(data[0], data[count:], more_branches=data[1:count], **options, **limits)
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
         raise UsageError.naming("plot sweep results and trajectory files separately")

@@ -22,6 +22,7 @@ BRANCH_COLOUR = "C0"
 FINE_POINTS = 600
 # The multipliers' panel is logarithmic when their moduli span more than this factor.
 LOG_SPAN = 100.0
+ROUNDOFF_SPAN = 1e13
 
 
 def is_branch(data) -> bool:
@@ -47,18 +48,25 @@ def _stored_parameters(ds):
 
 
 @figure_options
-def branch_figure(ds, sweeps=()) -> Figure:
-    """The figure (two panels, one x axis) of branch Dataset ``ds`` with sweep Datasets ``sweeps``;
-    takes the options of every figure (title, size, style: ``labels.figure_options``)."""
+def branch_figure(ds, sweeps=(), more_branches=()) -> Figure:
+    """The figure (two panels, one x axis) of branch Dataset ``ds`` (and of the branch Datasets
+    ``more_branches``, of the same parameter) with sweep Datasets ``sweeps``; takes the options of
+    every figure (title, size, style: ``labels.figure_options``). Branches are coloured by their
+    period (in slow periods), the first file's first branch's period in BRANCH_COLOUR."""
     name = str(ds.attrs.get("parameter", "parameter"))
     symbol = PARAMETER_SYMBOLS.get(name, name)
     figure = _new_figure(7.5, 6.5)
     top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
-    values = np.asarray(ds["parameter"].values)
-    gain = np.asarray(ds["R"].values)
-    stable = np.asarray(ds["stable"].values).astype(bool)
-    modulus = np.asarray(ds["multiplier_modulus"].values)
-    branch = np.asarray(ds["branch"].values)
+    datasets = [ds, *more_branches]
+    values = np.concatenate([np.asarray(d["parameter"].values) for d in datasets])
+    gain = np.concatenate([np.asarray(d["R"].values) for d in datasets])
+    stable = np.concatenate([np.asarray(d["stable"].values).astype(bool) for d in datasets])
+    modulus = np.concatenate([np.asarray(d["multiplier_modulus"].values).reshape(-1, 2) for d in datasets])
+    periods = np.concatenate([np.asarray(d["periods"].values) for d in datasets])
+    # One number per (file, branch): the branches of every file in turn.
+    offsets = np.cumsum([0] + [len(d["branch_id"]) for d in datasets[:-1]])
+    branch = np.concatenate([np.asarray(d["branch"].values) + offset for d, offset in zip(datasets, offsets)])
+    colours = _period_colours(periods)
     config = _stored_parameters(ds)
     if config is not None and config.model == "effective" and values.size:
         low, high = values.min(), values.max()
@@ -68,17 +76,23 @@ def branch_figure(ds, sweeps=()) -> Figure:
         top.plot([], [], color="0.6", label="theory (corrected), stable / unstable")
     for number in np.unique(branch):
         mine = branch == number
+        colour = colours[int(periods[mine][0])] if mine.any() else BRANCH_COLOUR
         for piece, is_stable in _runs(values[mine], stable[mine]):
             style = "-" if is_stable else "--"
-            top.plot(values[mine][piece], gain[mine][piece], color=BRANCH_COLOUR, ls=style, lw=1.8, zorder=3)
+            top.plot(values[mine][piece], gain[mine][piece], color=colour, ls=style, lw=1.8, zorder=3)
             for k in range(2):
                 bottom.plot(values[mine][piece], modulus[mine][piece, k], color=f"C{k}", ls=style, lw=1.4)
     top.plot([], [], color=BRANCH_COLOUR, lw=1.8, label="continuation: stable")
     top.plot([], [], color=BRANCH_COLOUR, lw=1.8, ls="--", label="continuation: unstable")
+    if len(colours) > 1:
+        for period, colour in colours.items():
+            top.plot([], [], color=colour, lw=1.8, label=f"period {period} T")
     for sweep_number, sweep in enumerate(sweeps):
         _draw_sweep(top, sweep, name, sweep_number)
-    kinds = [str(kind) for kind in ds["bifurcation_kind"].values]
-    for kind, at, R in zip(kinds, ds["bifurcation_parameter"].values, ds["bifurcation_R"].values):
+    kinds = [str(kind) for d in datasets for kind in d["bifurcation_kind"].values]
+    places = np.concatenate([np.asarray(d["bifurcation_parameter"].values, dtype=float) for d in datasets])
+    heights = np.concatenate([np.asarray(d["bifurcation_R"].values, dtype=float) for d in datasets])
+    for kind, at, R in zip(kinds, places, heights):
         marker, label = BIFURCATION_MARKERS.get(kind, ("x", kind))
         # Named in the legend, not beside the point: a fold and a grazing often lie close together.
         top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=8, zorder=5, ls="none",
@@ -95,6 +109,9 @@ def branch_figure(ds, sweeps=()) -> Figure:
     positive = modulus[modulus > 0.0]
     if positive.size and positive.max() / positive.min() > LOG_SPAN:
         bottom.set_yscale("log")  # a strongly unstable or strongly damped branch spans decades
+        # Below ROUNDOFF_SPAN of the largest, a modulus is the eigenvalue solver's roundoff
+        # (e.g. the second multiplier of P^4 when det P ~ 1e-8), not worth a dozen decades.
+        bottom.set_ylim(bottom=max(positive.min(), positive.max() / ROUNDOFF_SPAN) / 2.0)
     bottom.set_ylabel("Floquet $|\\mu|$")
     bottom.set_xlabel(parameter_label(name))
     # One legend below both panels: inside, it covered the branch on a journal-column figure.
@@ -106,6 +123,18 @@ def branch_figure(ds, sweeps=()) -> Figure:
     figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",
                   ncol=_legend_columns(figure, 3))
     return figure
+
+
+# Colours of the periods after the first (BRANCH_COLOUR); C0/C1 are the multipliers' panel's,
+# C2, C3 the sweeps'.
+PERIOD_COLOURS = ("C4", "C5", "C6", "C9", "C8", "C7")
+
+
+def _period_colours(periods):
+    """{period: colour}: the first point's period in BRANCH_COLOUR, the others in turn."""
+    order = list(dict.fromkeys(int(p) for p in periods))
+    return {period: BRANCH_COLOUR if k == 0 else PERIOD_COLOURS[(k - 1) % len(PERIOD_COLOURS)]
+            for k, period in enumerate(order)}
 
 
 def _draw_sweep(ax, sweep, name, number):
