@@ -69,15 +69,16 @@ from vrsweep.numerics.tangent import (
 )
 
 # Impacts are decided on each step's dense output in Bernstein form (impact.find_crossing), which
-# sees a graze between a step's ends however long the step: no step cap is needed for events (up to
-# version 0.1 a step was capped at 1/8 of the shortest forcing period so that a graze showed as one
-# turning point). One cap stays, for accuracy, and only with the fast forcing (g != 0): a step of
-# at most 1/8 of the fast period. Without it the controller lets local errors grow to the
-# tolerance, and R (a Fourier component about 1e-3 of x's size at g = 30) then needs rtol 1e-6 to
-# 1e-7 and more steps than the cap at rtol 1e-4 (benchmarks/README.md, "Steps without the cap").
-# Without the fast forcing (the effective model) a step is limited by the tolerance and the slow
-# period alone (a step never crosses a period's end t = nT anyway).
+# sees a graze between a step's ends however long the step: events need no step cap (up to version
+# 0.1 a step was capped at 1/8 of the shortest forcing period so that a graze showed as one turning
+# point). The caps that stay are for accuracy (benchmarks/README.md, "Steps without the cap"):
+# without them the controller lets local errors grow to the tolerance, and R, a Fourier component
+# about 1e-3 of x's size at g = 30, then needed rtol 1e-6 to 1e-7 and more steps than the capped
+# run at rtol 1e-4. With the fast forcing (g != 0): 1/8 of its period (1/6 left R 1.7e-3 off at
+# g = 30, rtol 1e-4). Without it (the effective model): 1/6 of the slow period (none left R 1.5e-5
+# off at g = 25, rtol 1e-4; 1/6 took 1404 steps for R within 8.5e-7, 1/8 1606).
 FAST_STEP_FRACTION = 1.0 / 8.0
+SLOW_STEP_FRACTION = 1.0 / 6.0
 # Sticking: the force at the barrier is scanned in steps of this fraction of the shortest period.
 STICK_SCAN_FRACTION = 1.0 / 64.0
 # The exact step to an impact is Newton-refined until x is this close to Delta (relative).
@@ -224,7 +225,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     shortest_period = slow_period
     if coefficients[G] != 0.0:
         shortest_period = min(shortest_period, 2.0 * math.pi / coefficients[BIG_OMEGA])
-    h_max = slow_period
+    h_max = SLOW_STEP_FRACTION * slow_period
     if coefficients[G] != 0.0:
         h_max = min(h_max, FAST_STEP_FRACTION * 2.0 * math.pi / coefficients[BIG_OMEGA])
     stick_scan_step = STICK_SCAN_FRACTION * shortest_period

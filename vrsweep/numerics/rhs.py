@@ -72,7 +72,7 @@ def no_preparation(t, h, coefficients, scratch):
 # oscillator_rhs makes three library calls. Step sizes are rounded down to the grid
 # h_max 2^(-k / STEP_LEVELS_PER_OCTAVE) (grid_step), whose rotations are tabulated once per point.
 STEP_LEVELS_PER_OCTAVE = 16
-N_STEP_LEVELS = 192  # 12 octaves below the longest step (a slow period)
+N_STEP_LEVELS = 128
 MAX_NODES = 16
 ROTATION_VALUES = 4 * MAX_NODES  # cos, sin of omega c h and of Omega c h, per node
 # The phases at the next step's start are the last step's rotated by its full step (a node c = 1),
