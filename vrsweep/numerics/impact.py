@@ -33,8 +33,12 @@ NO_CROSSING = -1.0
 # find_crossing's bracket: (theta_low, theta_high, the turning point it located), then room for the
 # step's Bernstein coefficients (so that the kernel's hot loop allocates nothing).
 TURNING_POINT = 2
-BERNSTEIN = 3
-N_BRACKET = BERNSTEIN + 9  # up to degree 8 (the dense outputs here: 4 for rk45, 7 for dop853)
+BERNSTEIN = 3                    # the step's coefficients, up to degree 8 (rk45: 4, dop853: 7)
+PIECE = BERNSTEIN + 9            # first_reach's workspace: the piece being examined,
+STACK_LOW = PIECE + 9            # the pieces still to examine (their start, depth, coefficients)
+STACK_DEPTH = STACK_LOW + 42     # (MAX_SUBDIVISIONS + 2 entries each)
+STACK = STACK_DEPTH + 42
+N_BRACKET = STACK + 42 * 9
 # find_crossing's verdicts.
 NO_IMPACT = 0
 IMPACT = 1
@@ -228,21 +232,21 @@ def first_reach(dense, y, h, delta, coefficients, bracket):
     slack = BERNSTEIN_ROUNDING * size
     if largest < -slack:
         return NO_IMPACT  # proven below the barrier over the whole step (the usual case)
-    # Depth-first over halvings, left piece first, so the first crossing is the one found.
-    stack = np.empty((MAX_SUBDIVISIONS + 2, n + 1))
-    stack_low = np.empty(MAX_SUBDIVISIONS + 2)
-    stack_depth = np.empty(MAX_SUBDIVISIONS + 2, dtype=np.int64)
-    piece = np.empty(n + 1)
-    stack[0, :] = coefficients[:n + 1]
-    stack_low[0] = 0.0
-    stack_depth[0] = 0
+    # Depth-first over halvings, left piece first, so the first crossing is the one found. The
+    # stack lives in the bracket array (no allocation in the kernel's loop): entry k's
+    # coefficients at STACK + 9 k.
+    piece = bracket[PIECE:PIECE + n + 1]
+    for i in range(n + 1):
+        bracket[STACK + i] = coefficients[i]
+    bracket[STACK_LOW] = 0.0
+    bracket[STACK_DEPTH] = 0.0
     top = 1
     while top > 0:
         top -= 1
         for i in range(n + 1):
-            piece[i] = stack[top, i]
-        low = stack_low[top]
-        depth = stack_depth[top]
+            piece[i] = bracket[STACK + 9 * top + i]
+        low = bracket[STACK_LOW + top]
+        depth = int(bracket[STACK_DEPTH + top])
         width = 0.5 ** depth
         high = low + width if depth > 0 else 1.0
         largest = piece[0]
@@ -271,11 +275,12 @@ def first_reach(dense, y, h, delta, coefficients, bracket):
         # Halve (de Casteljau at 1/2): the right half lower on the stack, so the left comes next.
         right = top
         left = top + 1
-        _halve(piece, n, stack[left], stack[right])
-        stack_low[right] = low + 0.5 * width
-        stack_depth[right] = depth + 1
-        stack_low[left] = low
-        stack_depth[left] = depth + 1
+        _halve(piece, n, bracket[STACK + 9 * left:STACK + 9 * left + n + 1],
+               bracket[STACK + 9 * right:STACK + 9 * right + n + 1])
+        bracket[STACK_LOW + right] = low + 0.5 * width
+        bracket[STACK_DEPTH + right] = depth + 1
+        bracket[STACK_LOW + left] = low
+        bracket[STACK_DEPTH + left] = depth + 1
         top += 2
     return NO_IMPACT
 
