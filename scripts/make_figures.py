@@ -5,9 +5,9 @@
 
 Each figure is the `vrsweep` commands a user would type (printed as they run), so any one of
 them can be re-run, changed or extended by hand. Result files go to results/ (not committed);
-the PNGs to docs/figures/ (committed, shown in the README).
+the PNGs to docs/figures/ (committed, shown in the user guide).
 
-Figures: quickstart (the README's first figure: configs/quickstart.yaml, effective model, R
+Figures: quickstart (the README's and the guide's first figure: configs/quickstart.yaml, effective model, R
 against g with the analytic response), fig1, fig2 (R against g, Omega = 4 and 5, with the
 analytic response), their bifurcation diagrams (stroboscopic x against g: which R is trustworthy),
 fig1_lyapunov (Fig. 1's sweep on a finer grid with the largest Lyapunov exponent under its
@@ -16,7 +16,8 @@ bifurcation diagram), fig_impact_no
 fig6 (effective system against the slow-flow reconstruction); and, not in the paper, the
 hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down) and the basins of
 attraction of that bistable example at g = 23 (configs/basins_g23.yaml) and of four coexisting
-orbits of the original model at g = 5 (configs/basins_g5_original.yaml).
+orbits of the original model at g = 5 (configs/basins_g5_original.yaml); the map of R over g
+and Omega (configs/map_g_Omega.yaml).
 """
 
 import argparse
@@ -80,6 +81,13 @@ COMMANDS = {
         ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
         ["plot", "results/hysteresis_effective.h5", "-o", "docs/figures/hysteresis.png"],
     ],
+    # Not in the paper: the same example followed by continuation, stable and unstable (issue 20).
+    "continuation_hysteresis": [
+        ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
+        ["continue", "configs/continuation_hysteresis.yaml", "--overwrite"],
+        ["plot", "results/continuation_hysteresis.h5", "results/hysteresis_effective.h5",
+         "-o", "docs/figures/continuation_hysteresis.png"],
+    ],
     # Not in the paper: basins of attraction of the bistable hysteresis example at g = 23 (issue 13).
     "basins_g23": [
         ["run", "configs/basins_g23.yaml", "-o", "results/basins_g23.h5", "--overwrite"],
@@ -89,6 +97,11 @@ COMMANDS = {
     "basins_g5_original": [
         ["run", "configs/basins_g5_original.yaml", "-o", "results/basins_g5_original.h5", "--overwrite"],
         ["plot", "results/basins_g5_original.h5", "--kind", "basin", "-o", "docs/figures/basins_g5_original.png"],
+    ],
+    # Not in the paper: R over g and Omega (docs/maps.md).
+    "map_g_Omega": [
+        ["run", "configs/map_g_Omega.yaml", "--overwrite"],
+        ["plot", "results/map_g_Omega.h5", "-o", "docs/figures/map_g_Omega.png"],
     ],
 }
 
@@ -125,11 +138,14 @@ def main():
 def shrink_png(path):
     """Re-save a PNG with a 32-colour palette: 3-4 times smaller, no visible change for line plots
     (the dense trajectory figures would otherwise weigh ~600 kB each in the repository)."""
-    from PIL import Image
+    from PIL import Image, PngImagePlugin
 
     with Image.open(path) as image:
         palette = image.convert("RGB").quantize(colors=32, dither=Image.Dither.NONE)
-    palette.save(path, optimize=True)
+        text = PngImagePlugin.PngInfo()  # the figure's description (vrsweep info FIGURE.png) stays
+        for key, value in getattr(image, "text", {}).items():
+            text.add_text(key, value)
+    palette.save(path, optimize=True, pnginfo=text)
 
 
 if __name__ == "__main__":

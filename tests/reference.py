@@ -145,8 +145,9 @@ class _Integration:
     the dense-output segments when asked (for reference_trajectory).
     """
 
-    def __init__(self, p, rtol, atol, method, max_impacts, min_rebound, keep_dense=False):
+    def __init__(self, p, rtol, atol, method, max_impacts, min_rebound, keep_dense=False, max_step=np.inf):
         self.p, self.rtol, self.atol, self.method = p, rtol, atol, method
+        self.max_step = max_step
         self.min_flight_height = 1e4 * np.spacing(max(1.0, abs(p["Delta"])))
         self.max_impacts, self.min_rebound = max_impacts, min_rebound
         self.keep_dense = keep_dense
@@ -156,7 +157,7 @@ class _Integration:
 
     def _solve(self, rhs, t_span, y0, events=None):
         sol = solve_ivp(rhs, t_span, y0, method=self.method, rtol=self.rtol, atol=self.atol,
-                        events=events, dense_output=self.keep_dense)
+                        events=events, dense_output=self.keep_dense, max_step=self.max_step)
         self.n_rhs += sol.nfev
         if sol.status == -1:
             raise RuntimeError(f"solve_ivp failed on {t_span}: {sol.message}")
@@ -293,14 +294,18 @@ class PiecewiseSolution:
 
 
 def reference_trajectory(coefficients, x0, v0, t_end, rtol=1e-12, atol=1e-14, method="DOP853",
-                         t0=0.0, max_impacts=100000, min_rebound=1e-9):
+                         t0=0.0, max_impacts=100000, min_rebound=1e-9, max_step=np.inf):
     """The impacting trajectory from (t0, x0, v0) to t_end, for impact-sequence comparisons.
+
+    max_step: solve_ivp's, for motions that graze: scipy sees an event only where x - Delta
+    changes sign between two step ends, so an impact whose flight beyond the barrier would last
+    less than a step is missed; a step below that flight time catches it.
 
     Returns a dict: impact_times, v_before (x'(-)), v_after (x'(+) = -e x'(-), eq2.2) as arrays;
     sol, a PiecewiseSolution (callable t -> (x, v)); x_final, v_final; n_rhs.
     """
     p = _unpack(coefficients)
-    run = _Integration(p, rtol, atol, method, max_impacts, min_rebound, keep_dense=True)
+    run = _Integration(p, rtol, atol, method, max_impacts, min_rebound, keep_dense=True, max_step=max_step)
     y = run.leg(t0, t_end, np.array([x0, v0], dtype=float), with_quadrature=False)
     return {
         "impact_times": np.array(run.impact_times),

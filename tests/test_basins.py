@@ -2,7 +2,7 @@
 
 The initial state as sweep axes must reproduce single runs started from `initial` bit for bit;
 continuation along it is refused; the labelling is checked on synthetic stroboscopic tables
-(cyclic shifts, the tolerance, period 0, failed points) and on the README's bistable hysteresis
+(cyclic shifts, the tolerance, period 0, failed points) and on the bistable hysteresis
 example at g = 23 (effective model, gamma = alpha = 0.05): from rest a barrier-free orbit with
 R = 10.1 and no impacts, from (0.9, 1.0), (-2, 0) or (0.5, -1.5) an impacting period-1 orbit
 with R = 24.28 and one impact per period.

@@ -86,3 +86,45 @@ def test_path_options_and_unknown_example(tmp_path, invoke):
     result = invoke("init", tmp_path / "missing" / "x.yaml")
     assert result.exit_code == 2 and "does not exist" in result.stderr
     assert not (tmp_path / "x.yaml").exists()
+
+
+def _quoted_commands():
+    """(example, line, argv) for every `vrsweep ...` command in the shipped examples' comments."""
+    import shlex
+
+    for name, resource in shipped_examples().items():
+        for line in resource.read_text(encoding="utf-8").splitlines():
+            if not line.startswith("#"):
+                break
+            if line.lstrip("#").strip().startswith("vrsweep "):
+                yield name, line, shlex.split(line.lstrip("#"), comments=True)[1:]
+
+
+QUOTED = list(_quoted_commands())
+
+
+def test_the_examples_quote_commands():
+    assert len(QUOTED) > 20 and {argv[0] for _, _, argv in QUOTED} >= {"run", "plot", "simulate", "theory"}
+
+
+@pytest.mark.parametrize("example, line, argv", QUOTED, ids=[f"{name}:{argv[0]}" for name, _, argv in QUOTED])
+def test_every_command_quoted_in_an_example_parses(example, line, argv):
+    """Each command the examples' comments show is one click accepts (options, --kind choices),
+    and a command that reads a config accepts its --set overrides for that config (a result file
+    it names need not exist: the check parses, it does not run)."""
+    import click
+
+    from vrsweep.cli import main
+    from vrsweep.execution.simulate import check_single_point
+
+    command = main.commands[argv[0]]
+    try:
+        context = command.make_context(argv[0], list(argv[1:]))
+    except click.ClickException as error:  # click.UsageError, BadParameter: a quoted command that fails
+        pytest.fail(f"{example}.yaml: {line.strip()}: {error.format_message()}")
+    if "config_path" in context.params:
+        config_path = context.params["config_path"]
+        assert config_path.startswith("configs/"), line  # init rewrites these paths for the new file
+        config = load_config(REPOSITORY / config_path, context.params.get("overrides", ()))
+        if argv[0] == "simulate":
+            check_single_point(config)

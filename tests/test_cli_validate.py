@@ -41,9 +41,34 @@ def test_valid_config_prints_the_plan(tmp_path, monkeypatch):
 
 
 def test_set_is_applied(tmp_path):
-    result, output = invoke("validate", str(CONFIGS / "paper_fig1.yaml"), "--set", "g=5", "--set", "rtol=1e-10")
+    result, output = invoke("validate", str(CONFIGS / "fig1.yaml"), "--set", "g=5", "--set", "rtol=1e-10")
     assert result.exit_code == 0, output
     assert "none (a single point)" in output and "1 point" in output and "rtol=1e-10" in output
+
+
+def integration_line(output):
+    return next(line for line in output.splitlines() if line.startswith("integration:"))
+
+
+def test_integration_line_names_every_setting_off_its_default():
+    from vrsweep.config import INTEGRATION_DEFAULTS
+
+    result, output = invoke("validate", str(CONFIGS / "fig1.yaml"))
+    assert result.exit_code == 0, output
+    line = integration_line(output)
+    assert line == "integration: rk45, rtol=1e-09 atol=1e-11, 100 transient + 100 measured slow periods", line
+
+    # fig1_lyapunov.yaml sets strobe_periods and lyapunov; every other setting changed by --set
+    changed = {"max_steps": "1000", "max_impacts_per_period": "7", "divergence_bound": "500",
+               "stick_velocity": "0.001", "max_period": "4", "period_tolerance": "1e-05"}
+    args = [item for name, value in changed.items() for item in ("--set", f"{name}={value}")]
+    result, output = invoke("validate", str(CONFIGS / "fig1_lyapunov.yaml"), *args)
+    assert result.exit_code == 0, output
+    line = integration_line(output)
+    for name, value in {**changed, "strobe_periods": "32", "lyapunov": "true"}.items():
+        assert f"{name}={value}" in line, (name, line)
+    shown = {"method", "rtol", "atol", "transient_periods", "measure_periods"}
+    assert set(INTEGRATION_DEFAULTS) == shown | set(changed) | {"strobe_periods", "lyapunov"}  # none left untested
 
 
 @pytest.mark.parametrize("path", sorted(CONFIGS.glob("*.yaml")), ids=lambda path: path.name)
@@ -121,7 +146,7 @@ def test_validate_imports_no_numba(tmp_path):
         import sys
         from vrsweep.cli import main
         try:
-            main(["validate", {str(CONFIGS / "paper_fig1.yaml")!r}], standalone_mode=False)
+            main(["validate", {str(CONFIGS / "fig1.yaml")!r}], standalone_mode=False)
         finally:
             print("numba imported:", "numba" in sys.modules)
         """)

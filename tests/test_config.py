@@ -270,6 +270,20 @@ def test_override_of_a_swept_parameter_removes_its_axis():
     assert config.axes == () and config.n_points == 1 and config.parameters["Omega"] == 4.0
 
 
+def test_a_boolean_says_true_or_false_in_the_configs_words():
+    """Strict: 'yes', 'on', 1 or a quoted "true" is not taken for true (YAML 1.2 reads yes as a
+    word), and the message is worded as every other one, not pydantic's 'Input should be...'."""
+    assert only_problem("integration: {lyapunov: yes}") == \
+        "fig1.yaml:1: integration.lyapunov: must be true or false, got 'yes'"
+    assert only_problem("", overrides=["lyapunov=yes"]) == \
+        "--set lyapunov=yes: integration.lyapunov: must be true or false, got 'yes'"
+    assert only_problem("", overrides=["lyapunov=1"]) == \
+        "--set lyapunov=1: integration.lyapunov: must be true or false, got 1"
+    assert_words(only_problem("integration:\n  lyapunov: 'true'\n"), "fig1.yaml:2:", "got 'true'")
+    assert parse_config("integration: {lyapunov: true}").integration.lyapunov is True
+    assert parse_config("", overrides=["lyapunov=false"]).integration.lyapunov is False
+
+
 def test_bad_overrides_are_reported_with_the_other_problems():
     found = problems("parameters:\n  e: 1.5\n  omega: 0\n",
                      overrides=["gg=5", "e=0.5", "rtol=abc", "g", "g=[1", "Omega=-1", "model=nope"])
@@ -401,11 +415,11 @@ def test_shipped_configs_load(path):
 
 
 def test_shipped_configs_are_what_they_say():
-    fig1 = load_config(CONFIGS / "paper_fig1.yaml")
+    fig1 = load_config(CONFIGS / "fig1.yaml")
     assert fig1.axis_names == ("g",) and fig1.parameters["Omega"] == 4.0
     assert np.array_equal(fig1.axes[0].values, np.linspace(0, 40, 81))
-    assert str(fig1.output_path()) == "results/paper_fig1.h5"
-    fig2 = load_config(CONFIGS / "paper_fig2.yaml")
+    assert str(fig1.output_path()) == "results/fig1.h5"
+    fig2 = load_config(CONFIGS / "fig2.yaml")
     assert fig2.parameters["Omega"] == 5.0 and fig2.shape == (121,) and fig2.axes[0].values[-1] == 60.0
     grid = load_config(CONFIGS / "map_g_Omega.yaml")
     assert grid.axis_names == ("g", "Omega") and grid.n_points <= 500

@@ -1,11 +1,13 @@
 """The documentation stands alone and keeps up with the code.
 
-docs/errata.md and docs/design.md ship with the repository; code, tests, configs and the README
-cite them (and "ERRATA N" items). These tests fail when a citation, a link or a documented name
-has nothing behind it, naming what is missing.
+The user guide (docs/, built as a site by mkdocs.yml), docs/errata.md and docs/design.md ship
+with the repository; code, tests, configs and the README cite them (and "ERRATA N" items). These
+tests fail when a citation, a link, a page or a documented name has nothing behind it, naming what
+is missing. (tests/test_docs_code.py runs the docs' code blocks.)
 """
 
 import re
+import unicodedata
 from pathlib import Path
 
 import pytest
@@ -18,11 +20,13 @@ from vrsweep.store.variables import point_variables
 ROOT = Path(__file__).resolve().parent.parent
 ERRATA = ROOT / "docs" / "errata.md"
 DESIGN = ROOT / "docs" / "design.md"
+CONFIG_PAGE = ROOT / "docs" / "config.md"  # the user guide's table of config keys
 TEXT_SUFFIXES = {".py", ".md", ".yaml", ".sh", ".sbatch", ".toml", ".cfg", ".txt"}
 
 
 def repository_text_files():
     files = [ROOT / "README.md", ROOT / "pyproject.toml"]
+    files.append(ROOT / "mkdocs.yml")
     for folder in ("vrsweep", "tests", "configs", "scripts", "examples", "benchmarks", "docs", ".ci"):
         files += [p for p in (ROOT / folder).rglob("*")
                   if p.is_file() and (p.suffix in TEXT_SUFFIXES or p.parent.name == ".ci")
@@ -50,11 +54,17 @@ def test_every_cited_errata_item_exists():
     assert not missing, f"cited but not in docs/errata.md: {missing}"
 
 
-@pytest.mark.parametrize("document", ["README.md", "docs/errata.md", "docs/design.md"])
+DOCUMENTS = ["README.md", "benchmarks/README.md"] + sorted(
+    str(p.relative_to(ROOT)) for p in (ROOT / "docs").glob("*.md"))
+
+
+@pytest.mark.parametrize("document", DOCUMENTS)
 def test_relative_links_resolve(document):
+    """Every relative link leads to a file, and every #anchor to a heading or an <a id>. Pages of
+    docs/ are read both on GitHub and on the site (mkdocs), which make anchors from headings
+    differently (GitHub keeps non-ASCII letters): an anchor into docs/ must work for both."""
     path = ROOT / document
-    text = path.read_text(encoding="utf-8")
-    headings = {_anchor(h) for h in re.findall(r"^#+ (.+)$", text, re.MULTILINE)}
+    text = _without_code(path.read_text(encoding="utf-8"))
     broken = []
     for target in re.findall(r"\]\(([^)\s]+)\)", text):
         if re.match(r"[a-z]+://", target):
@@ -64,17 +74,76 @@ def test_relative_links_resolve(document):
         if not linked.exists():
             broken.append(target)
         elif anchor and linked.is_file():
-            linked_text = linked.read_text(encoding="utf-8")
-            ids = set(re.findall(r'<a id="([^"]+)"></a>', linked_text))
-            ids |= headings if linked == path else {_anchor(h) for h in re.findall(r"^#+ (.+)$", linked_text, re.M)}
-            if anchor not in ids:
+            if anchor not in _anchors(linked, _github_anchor) or (
+                    linked.parent == ROOT / "docs" and anchor not in _anchors(linked, _mkdocs_anchor)):
                 broken.append(target)
     assert not broken, f"{document}: links to nothing: {broken}"
 
 
-def _anchor(heading):
+def _without_code(text):
+    return re.sub(r"^```.*?^```", "", text, flags=re.M | re.S)
+
+
+def _anchors(path, slug):
+    text = _with_snippets(path.read_text(encoding="utf-8"))
+    ids = set(re.findall(r'<a id="([^"]+)"></a>', text))
+    return ids | {slug(h) for h in re.findall(r"^#+ (.+)$", _without_code(text), re.M)}
+
+
+def _with_snippets(text):
+    """The page as the site shows it: a `--8<-- "FILE"` line (pymdownx.snippets, paths from the
+    repository root, as mkdocs.yml sets) replaced by FILE's text."""
+    return re.sub(r'^--8<-- "([^"]+)"$', lambda m: (ROOT / m.group(1)).read_text(encoding="utf-8"), text, flags=re.M)
+
+
+def _github_anchor(heading):
     """GitHub's anchor for a heading: lower case, punctuation dropped, spaces to hyphens."""
     return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def _mkdocs_anchor(heading):
+    """Python-Markdown's (mkdocs' toc) default: code marks dropped, ASCII only, runs of spaces and
+    hyphens to one hyphen."""
+    ascii_text = unicodedata.normalize("NFKD", heading.replace("`", "")).encode("ascii", "ignore").decode()
+    return re.sub(r"[-\s]+", "-", re.sub(r"[^\w\s-]", "", ascii_text).strip().lower())
+
+
+def test_every_docs_page_is_in_the_site_nav():
+    """mkdocs.yml lists every page of docs/ once (adding a page is one line there), and nothing else."""
+    from ruamel.yaml import YAML
+
+    def pages(node):
+        if isinstance(node, str):
+            return [node]
+        if isinstance(node, dict):
+            return [p for value in node.values() for p in pages(value)]
+        return [p for item in node for p in pages(item)]
+
+    nav = pages(YAML(typ="safe").load((ROOT / "mkdocs.yml").read_text(encoding="utf-8"))["nav"])
+    present = sorted(p.name for p in (ROOT / "docs").glob("*.md"))
+    assert sorted(nav) == present, f"in docs/ but not in the nav: {sorted(set(present) - set(nav))}; " \
+                                   f"in the nav but not in docs/: {sorted(set(nav) - set(present))}; nav: {nav}"
+
+
+CITATION = re.compile(r"(README(?:\.md)?|docs/[\w-]+\.md|benchmarks/README\.md)(?:'s)?,? (?:section )?\(?\"([^\"]+)\"")
+
+
+def test_cited_sections_exist():
+    """Code and docs cite sections as `docs/trust.md, "Can R be trusted?"`: each must be a heading
+    of that file (a moved or renamed section leaves the citation stale)."""
+    stale = []
+    for path in repository_text_files():
+        for match in CITATION.finditer(path.read_text(encoding="utf-8", errors="replace")):
+            document, section = match.groups()
+            section = " ".join(section.split())  # a citation wrapped across lines
+            if Path(document).stem.isupper() and document.startswith("docs/"):  # a placeholder: docs/PAGE.md
+                continue
+            target = ROOT / (document if document.endswith(".md") else "README.md")
+            headings = re.findall(r"^#+ (.+)$", _without_code(target.read_text(encoding="utf-8")), re.M) \
+                if target.exists() else []
+            if not any(h.replace("`", "").lower().startswith(section.replace("`", "").lower()) for h in headings):
+                stale.append(f"{path.relative_to(ROOT)}: {document}, \"{section}\"")
+    assert not stale, f"cited sections that do not exist: {stale}"
 
 
 def _table_row(text, key):
@@ -86,8 +155,9 @@ def _table_row(text, key):
     return None
 
 
-def test_design_documents_every_config_key_with_its_default():
-    text = DESIGN.read_text(encoding="utf-8")
+@pytest.mark.parametrize("document", [DESIGN, CONFIG_PAGE], ids=["design", "config"])
+def test_every_config_key_is_documented_with_its_default(document):
+    text = document.read_text(encoding="utf-8")
     keys = {f"parameters.{name}": value for name, value in DEFAULT_PARAMETERS.items()}
     keys.update({f"integration.{name}": value for name, value in INTEGRATION_DEFAULTS.items()})
     problems = []
@@ -106,13 +176,21 @@ def test_design_documents_every_config_key_with_its_default():
     assert not problems, problems
 
 
-def test_design_documents_every_status_and_stored_variable():
-    text = DESIGN.read_text(encoding="utf-8")
+def _status_problems(text):
     rows = [[cell.strip() for cell in line.strip().strip("|").split("|")]
             for line in text.splitlines() if line.startswith("|")]
-    problems = [f"status {status.name.lower()} = {int(status)}" for status in Status
-                if [str(int(status)), f"`{status.name.lower()}`"] not in
-                [[row[0].replace("\u2212", "-"), row[1]] for row in rows if len(row) > 1]]
+    return [f"status {status.name.lower()} = {int(status)}" for status in Status
+            if [str(int(status)), f"`{status.name.lower()}`"] not in
+            [[row[0].replace("\u2212", "-"), row[1]] for row in rows if len(row) > 1]], rows
+
+
+def test_the_guide_documents_every_status():
+    problems, _ = _status_problems((ROOT / "docs" / "file-format.md").read_text(encoding="utf-8"))
+    assert not problems, f"docs/file-format.md lacks: {problems}"
+
+
+def test_design_documents_every_status_and_stored_variable():
+    problems, rows = _status_problems(DESIGN.read_text(encoding="utf-8"))
 
     class Integration:  # every optional variable on: lyapunov, lyapunov_err
         strobe_periods = 16

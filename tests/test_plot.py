@@ -79,8 +79,8 @@ def test_response_is_the_default_for_one_axis(files):
     fig = plot.plot(files["g"])
     assert isinstance(fig, Figure) and len(fig.axes) == 1
     ax = fig.axes[0]
-    assert "$g$" in ax.get_xlabel() and "[1]" in ax.get_xlabel()
-    assert "R = |Q|/c" in ax.get_ylabel() and "A/c" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
+    assert "$g$" in ax.get_xlabel() and "[1]" not in ax.get_xlabel()
+    assert "R = |Q|/c" in ax.get_ylabel() and "A/c" in ax.get_ylabel() and "[1]" not in ax.get_ylabel()
     assert "g.h5" in fig._suptitle.get_text() and "original" in fig._suptitle.get_text()
     assert "Ω" in fig._suptitle.get_text() or "Omega" in fig._suptitle.get_text()
 
@@ -88,7 +88,7 @@ def test_response_is_the_default_for_one_axis(files):
 def markers(ax):
     """The numerical points of a response plot by class: {gid: line}, gid = 'trusted periodic' etc."""
     return {line.get_gid(): line for line in ax.get_lines()
-            if line.get_gid() and line.get_gid() != "failed"}
+            if line.get_gid() and line.get_gid() not in ("failed", "barrier")}
 
 
 def curve_labels(fig):
@@ -232,7 +232,7 @@ def test_two_long_axes_make_a_map_with_g_res_over_it(files):
     assert len(meshes) == 1
     np.testing.assert_array_equal(np.ma.filled(meshes[0].get_array(), np.nan).reshape(6, 7),
                                   results["R"].values.T)
-    assert "$g$" in ax.get_xlabel() and "$\\Omega$" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
+    assert "$g$" in ax.get_xlabel() and "$\\Omega$" in ax.get_ylabel() and "[1]" not in ax.get_ylabel()
     colorbar = fig.axes[1]
     assert "R = |Q|/c" in colorbar.get_ylabel()
     contours = [c for c in ax.collections if not isinstance(c, QuadMesh) and hasattr(c, "get_paths")
@@ -261,7 +261,7 @@ def test_impacts_against_the_axis(files):
     fig = plot.plot(files["g"], kind="impacts")
     (line,) = fig.axes[0].get_lines()
     np.testing.assert_array_equal(line.get_ydata(), results["impacts_per_period"].values)
-    assert "impacts per slow period" in fig.axes[0].get_ylabel() and "[1]" in fig.axes[0].get_ylabel()
+    assert "impacts per slow period" in fig.axes[0].get_ylabel() and "[1]" not in fig.axes[0].get_ylabel()
 
 
 def test_status_strip(files):
@@ -281,7 +281,7 @@ def test_bifurcation_draws_every_strobe_sample(files):
     assert len(dots.get_xdata()) == 9 * 8
     np.testing.assert_array_equal(dots.get_ydata(), results["strobe_x"].values.reshape(-1))
     np.testing.assert_array_equal(dots.get_xdata(), np.repeat(results["g"].values, 8))
-    assert "x(nT)" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
+    assert "x(nT)" in ax.get_ylabel() and "[1]" not in ax.get_ylabel()
 
 
 def test_bifurcation_of_two_axes_needs_at(files):
@@ -302,7 +302,7 @@ def test_trajectory_puts_original_above_effective(files):
     titles = [ax.get_title() for ax in fig.axes]
     assert all("original" in t for t in titles[:3]) and all("effective" in t for t in titles[3:])
     x_ax, v_ax, phase_ax = fig.axes[:3]
-    assert "$t$" in x_ax.get_xlabel() and "$x$" in x_ax.get_ylabel() and "[1]" in x_ax.get_ylabel()
+    assert "$t$" in x_ax.get_xlabel() and "$x$" in x_ax.get_ylabel() and "[1]" not in x_ax.get_ylabel()
     assert "\\dot{x}" in v_ax.get_ylabel() and "$x$" in phase_ax.get_xlabel()
     drawn_x = np.concatenate([line.get_ydata() for line in x_ax.get_lines() if len(line.get_xdata()) > 2])
     run = data.runs["original"]
@@ -500,6 +500,6 @@ def test_the_slow_flow_from_rest_is_drawn(tmp_path):
 def test_axis_labels_of_the_initial_state_name_it_once():
     from vrsweep.plot import parameter_label
 
-    assert parameter_label("x0") == "initial position $x(0)$ [1]"
-    assert parameter_label("v0") == r"initial velocity $\dot{x}(0)$ [1]"
-    assert parameter_label("g") == "fast forcing amplitude $g$ [1]"
+    assert parameter_label("x0") == "initial position $x(0)$"
+    assert parameter_label("v0") == r"initial velocity $\dot{x}(0)$"
+    assert parameter_label("g") == "fast forcing amplitude $g$"

@@ -200,7 +200,7 @@ def test_the_slow_flow_starts_from_rest():
 
     configs/hysteresis_effective.yaml at g = 24, from x = v = 0: the flow leaves the origin at
     once (dw/dtau = -F/2 there), agrees with the polar form started 1e-4 off rest, and settles on
-    the small stable fixed point (the up sweep's branch in the README's table).
+    the small stable fixed point (the up sweep's branch in docs/hysteresis.md's table).
     """
     params = dict(BISTABLE, g=24.0)
     R0, theta0 = theory.initial_slow_state(params, rule="state", x0=0.0, v0=0.0)

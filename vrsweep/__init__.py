@@ -3,15 +3,30 @@
 Implements Roy & Gupta, "Vibrational resonance in vibro-impact oscillator through fast
 harmonic excitation", with the corrections listed in docs/errata.md.
 
-Results in Python::
+Computing and reading in Python (docs/python-api.md)::
 
     import vrsweep
-    ds = vrsweep.open_results("results/quickstart.h5")   # an xarray.Dataset, read lazily
+    ds = vrsweep.sweep({"sweep": {"g": [5.0, 10.0]}}, measure_periods=20)  # an xarray.Dataset
+    traj = vrsweep.simulate("configs/fig3.yaml")                           # one trajectory
+    rows = vrsweep.theory("configs/fig1.yaml")                             # g_res, peak, ...
+    ds = vrsweep.open_results("results/quickstart.h5")   # a file written before, read lazily
+
+``sweep``, ``simulate`` and ``theory`` live in :mod:`vrsweep.execution.api` and are imported on
+first use, so that the command line starts without numba, xarray or tqdm.
 """
 
-from vrsweep._version import __version__
-from vrsweep.numerics import numba_cache as _numba_cache
-from vrsweep.execution import threads as _threads
+import os as _os
+import sys as _sys
+
+if _os.path.basename(_sys.argv[0]) in ("vrsweep", "-m"):  # the command line (`vrsweep`, `python -m vrsweep`)
+    # First of all: Ctrl-C during the imports below exits 130 with one line, not a traceback.
+    from vrsweep.execution import signals as _signals
+
+    _signals.exit_at_once_on_sigint()
+
+from vrsweep._version import __version__  # noqa: E402
+from vrsweep.numerics import numba_cache as _numba_cache  # noqa: E402
+from vrsweep.execution import threads as _threads  # noqa: E402
 
 _numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
 _threads.drop_unreadable_setting()
@@ -28,4 +43,19 @@ def open_results(path, **kwargs):
     return _open_results(path, **kwargs)
 
 
-__all__ = ["__version__", "open_results"]
+_COMPUTING = ("sweep", "simulate", "theory")  # vrsweep.execution.api, imported on first use
+
+
+def __getattr__(name):
+    if name in _COMPUTING:
+        from vrsweep.execution import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'vrsweep' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_COMPUTING))
+
+
+__all__ = ["__version__", "open_results", "sweep", "simulate", "theory"]

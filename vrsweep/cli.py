@@ -7,6 +7,7 @@ project's own exceptions into one clear message and an exit code (2: bad input, 
 
 import os
 import sys
+import warnings
 
 import click
 
@@ -23,7 +24,15 @@ class _Group(click.Group):
 
     def invoke(self, ctx):
         try:
-            return super().invoke(ctx)
+            from vrsweep.execution.signals import raise_on_sigint
+
+            raise_on_sigint()  # from here on, KeyboardInterrupt: handled below (and by run)
+            # numpy's overflow warnings from vrsweep's own arithmetic (omega = 1e-320 in the theory)
+            # print source lines to a user who can do nothing with them: the results already say
+            # it (NaN, a status, "-" in a table).
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"vrsweep\.")
+                return super().invoke(ctx)
         except VrsweepError as error:
             problems = getattr(error, "problems", None)
             if problems and len(problems) > 1:
@@ -61,7 +70,7 @@ def main():
 def _register():
     import importlib
 
-    for name in ("init", "run", "theory", "validate", "plot", "simulate", "merge", "info"):
+    for name in ("init", "run", "theory", "validate", "plot", "simulate", "continue_", "merge", "info"):
         try:
             module = importlib.import_module(f"vrsweep.commands.{name}")
         except ModuleNotFoundError as error:

@@ -5,7 +5,9 @@ On a periodic orbit it is a property of the system; on a chaotic one it is one d
 variable: another rtol, the last bit of atol or of x(0) gives another trajectory and another R
 (at g = 5, Omega = 4 with the paper's parameters, R over 100 periods ranges from 0.4 to 2.6 with
 the solver tolerance alone). These diagnostics say which case a point is in. All are vectorised
-over the points of a chunk; records are (n_points, n_periods, N_RECORD).
+over the points of a chunk; records are (n_points, n_rows, N_RECORD), the last n_rows periods'
+records with n_rows >= measure_periods (a sweep keeps the measurement window's only: see
+window_records); only the measurement window's rows are read.
 
 Stroboscopic (Poincare) samples
     ``strobe_x``, ``strobe_v``: x and v at t = nT, T = 2 pi/omega, for the last
@@ -152,12 +154,23 @@ def r_error(sin_part, cos_part, slow_period, c, period):
     return half_width
 
 
-def batch_error(records, n_transient, slow_period, c, period, ok):
-    """R_err for every point of a chunk (see r_error and the module doc); NaN where not ok."""
-    n_points = records.shape[0]
+def window_records(records, integration):
+    """The measurement window's rows of records (n_points, n_rows, N_RECORD): the last
+    measure_periods, whether the kernel kept the transient's rows (a trajectory) or not (a sweep)."""
+    n_measure = integration.measure_periods
+    if records.shape[1] < n_measure:
+        raise ValueError(f"records hold {records.shape[1]} periods, fewer than the {n_measure} measured")
+    return records[:, records.shape[1] - n_measure:]
+
+
+def batch_error(measured, slow_period, c, period, ok):
+    """R_err for every point of a chunk (see r_error and the module doc); NaN where not ok.
+
+    measured: (n_points, measure_periods, N_RECORD), the measurement window's records."""
+    n_points = measured.shape[0]
     r_err = np.full(n_points, np.nan)
     for i in np.flatnonzero(ok):  # a failed point's records are partly NaN: nothing to estimate
-        r_err[i] = r_error(records[i, n_transient:, kernel.REC_QS], records[i, n_transient:, kernel.REC_QC],
+        r_err[i] = r_error(measured[i, :, kernel.REC_QS], measured[i, :, kernel.REC_QC],
                            slow_period[i], c[i], period[i])
     return r_err
 
@@ -192,9 +205,9 @@ def lyapunov_values(records, summaries, statuses, coefficients, integration, per
     lyapunov = summaries[:, kernel.SUM_LYAPUNOV].copy()
     lyapunov_err = np.full(len(lyapunov), np.nan)
     slow_period = 2.0 * np.pi / coefficients[:, OMEGA]
-    n_transient = integration.transient_periods
+    measured = window_records(records, integration)
     for i in np.flatnonzero(ok):
-        lyapunov_err[i] = lyapunov_error(records[i, n_transient:, kernel.REC_LOG_STRETCH], slow_period[i],
+        lyapunov_err[i] = lyapunov_error(measured[i, :, kernel.REC_LOG_STRETCH], slow_period[i],
                                          period[i])
     lyapunov[~ok] = np.nan
     return {"lyapunov": lyapunov, "lyapunov_err": lyapunov_err}
@@ -202,23 +215,22 @@ def lyapunov_values(records, summaries, statuses, coefficients, integration, per
 
 def point_diagnostics(records, statuses, coefficients, integration):
     """R_err, stroboscopic samples, period, impacts per cycle, x_min, x_max (NaN/0/-1 if failed)."""
-    n_transient = integration.transient_periods
-    n_strobe = integration.strobe_periods
+    measured = window_records(records, integration)
+    n_strobe = integration.strobe_periods  # <= measure_periods (config rule)
     ok = statuses == Status.OK
-    strobe_x = records[:, -n_strobe:, kernel.REC_X].copy()
-    strobe_v = records[:, -n_strobe:, kernel.REC_V].copy()
+    strobe_x = measured[:, -n_strobe:, kernel.REC_X].copy()
+    strobe_v = measured[:, -n_strobe:, kernel.REC_V].copy()
     strobe_x[~ok] = np.nan
     strobe_v[~ok] = np.nan
     period = detect_period(strobe_x, strobe_v, integration.max_period, integration.period_tolerance)
     period[~ok] = 0
     slow_period = 2.0 * np.pi / coefficients[:, OMEGA]
-    r_err = batch_error(records, n_transient, slow_period, coefficients[:, C], period, ok)
-    impacts = records[:, :, kernel.REC_IMPACTS]
+    r_err = batch_error(measured, slow_period, coefficients[:, C], period, ok)
+    impacts = measured[:, :, kernel.REC_IMPACTS]  # the last p <= strobe_periods // 2 periods are read
     impacts_per_cycle = np.full(len(period), -1, dtype=np.int64)
     for p in np.unique(period[period > 0]):
         rows = period == p
         impacts_per_cycle[rows] = impacts[rows, -p:].sum(axis=1).astype(np.int64)
-    measured = records[:, n_transient:]
     x_min = np.min(measured[:, :, kernel.REC_X_MIN], axis=1)
     x_max = np.max(measured[:, :, kernel.REC_X_MAX], axis=1)
     for array in (r_err, x_min, x_max):

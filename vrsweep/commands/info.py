@@ -29,16 +29,44 @@ _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "c
 
 
 @click.command("info")
-@click.argument("path", metavar="RESULTS.h5", type=click.Path(dir_okay=True))
+@click.argument("path", metavar="RESULTS.h5|FIGURE.png", type=click.Path(dir_okay=True))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 @click.option("--config", "show_config", is_flag=True, help="Also print the config the file was run from.")
 def command(path, as_json, show_config):
-    """Summarise a results, shard or trajectory file: grid, progress, status counts, variables."""
+    """Summarise a results, shard, trajectory or branch file: grid, progress, status counts, variables.
+
+    A figure from vrsweep plot (.png, .pdf, .svg): its title and full description, kept in the
+    file's metadata (also with --no-title)."""
+    from pathlib import Path
+
+    from vrsweep.plot.labels import FIGURE_SUFFIXES
+
+    if Path(path).suffix.lower() in FIGURE_SUFFIXES:
+        _describe_figure(path, as_json)
+        return
     summary = describe(path)
     if as_json:
         click.echo(json.dumps(summary, indent=2, allow_nan=False))
     else:
         click.echo(format_summary(summary, show_config))
+
+
+def _describe_figure(path, as_json):
+    """Print the title and description ``vrsweep plot`` wrote into a figure's metadata."""
+    from vrsweep.plot.labels import read_description
+
+    if not os.path.isfile(path):
+        raise ResultFileError(f"{path}: no such file")
+    try:
+        found = read_description(path)
+    except (OSError, ValueError) as error:
+        raise ResultFileError(f"{path}: cannot read the figure's metadata ({error})") from None
+    if as_json:
+        click.echo(json.dumps({"file": os.fspath(path), "kind": "figure", **found}, indent=2))
+    elif not (found["Title"] or found["Description"]):
+        click.echo(f"{path}: a figure without a vrsweep description in its metadata")
+    else:
+        click.echo(f"{path}: figure\n{found['Description'] or found['Title']}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -60,17 +88,70 @@ def describe(path) -> dict:
         if other is None:
             raise error from None
         return other
+    if kind == "branch":
+        described = _describe_groups(path, kind)
+        if described is None:
+            raise ResultFileError(f"{path} is a vrsweep branch file this vrsweep cannot describe")
+        described["branches"] = _describe_branches(path)
+        return described
     if kind == "trajectory":
+        from vrsweep.store.trajectory_file import check_trajectory, read_trajectory
+
+        check_trajectory(path)  # a damaged file is one line, as every reader of it says
         described = _describe_groups(path, kind)
         if described is None:  # the trajectory reader says what is wrong (a newer format...)
-            from vrsweep.store.trajectory_file import read_trajectory
-
             read_trajectory(path)
             raise ResultFileError(f"{path} is a vrsweep trajectory this vrsweep cannot describe")
         return described
     # Every variable is read, not only what the summary shows: each chunk's checksum is checked,
     # so a damaged file is reported as such instead of described (tests/test_errors.py).
     return _describe_sweep(path, load_results(path))
+
+
+def _describe_branches(path) -> dict:
+    """A branch file's continuation (vrsweep continue): per branch its points, stable points,
+    parameter range and ends; the bifurcation table."""
+    from vrsweep.store.reading import open_results
+
+    with open_results(path) as ds:
+        parameter = str(_plain(ds.attrs.get("parameter", "parameter")))
+        branch = np.asarray(ds["branch"].values)
+        values = np.asarray(ds["parameter"].values)
+        stable = np.asarray(ds["stable"].values)
+        rows = []
+        for number in np.asarray(ds["branch_id"].values):
+            mine = branch == number
+            rows.append({
+                "branch": int(number), "periods": int(ds["branch_periods"].values[number]),
+                "points": int(mine.sum()), "stable_points": int(stable[mine].sum()),
+                "min": _number(values[mine].min()) if mine.any() else None,
+                "max": _number(values[mine].max()) if mine.any() else None,
+                "first_end": [str(ds["branch_end_first_status"].values[number]),
+                              str(ds["branch_end_first_reason"].values[number])],
+                "last_end": [str(ds["branch_end_last_status"].values[number]),
+                             str(ds["branch_end_last_reason"].values[number])],
+            })
+        bifurcations = [{"kind": str(kind), "branch": int(b), "parameter": _number(p), "R": _number(r)}
+                        for kind, b, p, r in zip(ds["bifurcation_kind"].values, ds["bifurcation_branch"].values,
+                                                 ds["bifurcation_parameter"].values, ds["bifurcation_R"].values)]
+    return {"parameter": parameter, "branches": rows, "bifurcations": bifurcations}
+
+
+def _format_branches(branches) -> list[str]:
+    if not branches:
+        return []
+    name = branches["parameter"]
+    lines = []
+    for row in branches["branches"]:
+        lines.append(f"branch {row['branch']}:    period {row['periods']}, {row['points']} points "
+                     f"({row['stable_points']} stable), {name} from {_short(row['min'])} to {_short(row['max'])}")
+        for side in ("first", "last"):
+            status, reason = row[f"{side}_end"]
+            lines.append(f"  {side} end:   {status}: {reason}")
+    for row in branches["bifurcations"]:
+        lines.append(f"bifurcation: {row['kind']} at {name} = {row['parameter']:.8g} (branch {row['branch']}, "
+                     f"R = {_short(row['R'])})")
+    return lines
 
 
 def _describe_sweep(path, ds) -> dict:
@@ -171,7 +252,8 @@ def _describe_groups(path, kind) -> dict | None:
     try:
         attrs = {key: _plain(value) for key, value in groups[""].attrs.items()}
         version = attrs.get("vrsweep_format_version")
-        if version is None or int(version) != FORMAT_VERSION or "done" in groups[""]:
+        # Not a whole number ("one"): not a file of this format, and the reader says what is wrong.
+        if type(version) is not int or version != FORMAT_VERSION or "done" in groups[""]:
             return None
         variables, statuses = [], []
         for group, ds in groups.items():
@@ -339,6 +421,7 @@ def format_summary(summary, show_config=False) -> str:
             else:
                 lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
     lines += _format_attractors(summary.get("attractors") or [])
+    lines += _format_branches(summary.get("branches"))
     created = summary["created"] or "unknown time"
     versions = summary["versions"]
     written = f"{created}"

@@ -42,8 +42,11 @@ def command(path, name, list_only, overwrite):
     target = Path(path) if path else Path(f"{name}.yaml")
     if target.is_dir():
         target = target / f"{name}.yaml"
-    if target.exists() and not overwrite:
-        raise UsageError(f"{target} already exists: pass --overwrite to replace it")
+    from vrsweep.store.fileio import output_target, write_bytes
+
+    shown = target
+    target = Path(output_target(target, overwrite=overwrite, exists_error=lambda: UsageError(
+        f"{shown} already exists: pass --overwrite to replace it")))
     if not target.parent.is_dir():
         raise UsageError(f"directory {target.parent} does not exist (PATH: {target})")
 
@@ -54,7 +57,9 @@ def command(path, name, list_only, overwrite):
     text = re.sub(rf"configs/{re.escape(name)}\.yaml( +)(?=#)",
                   lambda match: written.ljust(len(match.group(0)) - 1) + " ", text)
     text = text.replace(f"configs/{name}.yaml", written)
-    target.write_text(text, encoding="utf-8")
+    # Written beside and renamed into place: a full disk leaves the old file or none, never a
+    # 0-byte config that validate would then accept.
+    write_bytes(target, text.encode("utf-8"), doing="write the config")
     click.echo(f"-> {target} (example {name}); run it with: {_run_command(text, written)}", err=True)
     _make_output_folder(target)
 

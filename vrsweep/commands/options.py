@@ -41,6 +41,19 @@ output_option = click.option(
     "-o", "--output", type=click.Path(dir_okay=False), default=None,
     help="Output file (overrides the config's 'output').",
 )
+class FiniteFloatRange(click.FloatRange):
+    """click's FloatRange that also refuses nan and inf (1e400 reads as inf): a number option
+    never takes a value that no comparison can place."""
+
+    def convert(self, value, param, ctx):
+        import math
+
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number.", param, ctx)
+        return number
+
+
 threads_option = click.option(
     "--threads", type=click.IntRange(min=1), default=None,
     help="Numba threads (default: all cores, or NUMBA_NUM_THREADS).",

@@ -7,7 +7,8 @@ import click
 FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
 FLAGS = {"at": "--at", "x_axis": "--x", "kind": "--kind", "amplitude": "--amplitude", "log": "--log",
-         "linear": "--linear", "periods": "--periods", "var": "--var",
+         "linear": "--linear", "periods": "--periods", "var": "--var", "style": "--style", "size": "--size",
+         "vmin": "--vmin", "vmax": "--vmax", "title": "--title",
          "finish": "'vrsweep run CONFIG --resume -o FILE'", "simulate_compare": "vrsweep simulate --compare effective"}
 
 
@@ -54,8 +55,21 @@ def default_output(path, kind):
 @click.option("--periods", default=None, metavar="FIRST:LAST",
               help="Trajectory files: show slow periods FIRST to LAST only (1-based), e.g. 1:20.")
 @click.option("--dpi", type=click.IntRange(min=20, max=1200), default=150, show_default=True,
-              help="Resolution of a .png.")
-def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, dpi):
+              help="Resolution of a .png (pixels = --size x --dpi).")
+@click.option("--title/--no-title", "title", default=True, show_default=True,
+              help="Draw the title and caption above the figure. Either way the full description is in "
+                   "the file's metadata (PNG/SVG Description, PDF Subject); vrsweep info FILE.h5 shows "
+                   "the parameters.")
+@click.option("--size", default=None, metavar="W,H", help="Figure size in inches, e.g. --size 3.4,2.6.")
+@click.option("--style", default=None, metavar="NAME|FILE",
+              help="A matplotlib style sheet (e.g. seaborn-v0_8-paper, ggplot) or a .mplstyle file: fonts, "
+                   "colours and line widths follow it.")
+@click.option("--vmin", type=float, default=None, help="Maps: the bottom of the colour scale.")
+@click.option("--vmax", type=float, default=None,
+              help="Maps: the top of the colour scale (default: the 99th percentile, said on the colour "
+                   "bar when it caps; lyapunov: symmetric about 0, --vmax alone sets both ends).")
+def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, dpi, title, size, style, vmin,
+            vmax):
     """Draw a figure from a vrsweep file.
 
     \b
@@ -89,22 +103,24 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     from vrsweep.errors import VrsweepError
 
     try:
-        figure, path = _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var)
+        options = dict(title=title, size=size, style=style, vmin=vmin, vmax=vmax)
+        figure, path = _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, options)
     except VrsweepError as error:
         raise error.reworded(FLAGS) from None
     # Rendered in memory, then written whole: a full disk leaves no half figure, and the
     # message can say how many bytes the figure needs.
-    import io
-
+    from vrsweep.plot import render
     from vrsweep.store.fileio import write_bytes
 
-    image = io.BytesIO()
-    figure.savefig(image, format=path.suffix.lower()[1:], dpi=dpi)
-    write_bytes(path, image.getvalue())
+    write_bytes(path, render(figure, path.suffix.lower()[1:], dpi))
+    from vrsweep.plot import layout_note
+
+    if layout_note(figure):
+        click.echo(f"Note: {path}: {layout_note(figure)} (--no-title, a larger --size)", err=True)
     click.echo(f"-> {path}", err=True)
 
 
-def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var):
+def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, options):
     from vrsweep import plot
     from vrsweep.errors import UsageError
     from vrsweep.store.trajectory_file import TrajectoryData
@@ -112,6 +128,11 @@ def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var)
     path = Path(output) if output else default_output(paths[0], kind)
     if path.suffix.lower() not in FORMATS:
         raise UsageError(f"-o {path}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
+    from vrsweep.store.fileio import output_target
+
+    # A figure is replaced without asking (as it always was), but never an input nor anything other
+    # than a regular file; a link is followed (fileio.output_target).
+    path = Path(output_target(path, overwrite=True, inputs=paths, inputs_are="one of the files being plotted"))
     data = [plot.load(p) for p in paths]
     for path_in, loaded in zip(paths, data):
         if isinstance(loaded, TrajectoryData):
@@ -139,6 +160,6 @@ def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var)
             raise UsageError("--kind basin draws one file; plot the others one at a time")
         if x_axis or amplitude or log or periods or var:
             raise UsageError("--x, --amplitude, --log, --periods and --var do not apply to --kind basin")
-        return plot.basin_plot(data[0], at=_parse_at(at_items)), path
+        return plot.basin_plot(data[0], at=_parse_at(at_items), **options), path
     return plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis,
-                     log=log, periods=window, var=var), path
+                     log=log, periods=window, var=var, **options), path

@@ -6,8 +6,8 @@ import sys
 import click
 
 from vrsweep.commands.options import (
-    announce_fixed_axes, capped_threads, config_argument, flag_wording, output_option, overwrite_option, quiet_option,
-    set_option, threads_option,
+    FiniteFloatRange, announce_fixed_axes, capped_threads, config_argument, flag_wording, output_option,
+    overwrite_option, quiet_option, set_option, threads_option,
 )
 
 PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
@@ -26,7 +26,7 @@ PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
 @click.option("--dask", "dask_address", default=None, metavar="ADDRESS",
               help="Send chunks to a dask.distributed scheduler (or 'local:N' for a local cluster of N workers).")
 @click.option("--allow-large", is_flag=True, help="Run a grid whose estimated size or time is out of proportion.")
-@click.option("--progress-interval", type=click.FloatRange(min=0), default=PROGRESS_INTERVAL, show_default=True,
+@click.option("--progress-interval", type=FiniteFloatRange(min=0), default=PROGRESS_INTERVAL, show_default=True,
               metavar="SECONDS",
               help="When stderr is not a terminal (a batch job's log): a progress line every SECONDS "
                    "(points done, percent, points/s, ETA) instead of a progress bar.")
@@ -51,7 +51,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
     config = load_config(config_path, overrides)
     announce_fixed_axes(config_path, overrides, config)
     requested_threads = threads
-    if not dask_address:  # a Dask worker's thread count is the worker's business
+    # A remote Dask worker's thread count is the worker's business; a local one's is this machine's.
+    if not dask_address or dask_address.startswith("local:"):
         threads = capped_threads(threads)
 
     from vrsweep.execution.distributed import parse_local
@@ -62,6 +63,10 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         shard_pair = parse_shard(shard)
     except InvalidArgument as error:
         raise error.as_option("--shard") from None
+    n_lines = config.n_runs // max(1, _line_length(config))
+    if shard_pair[1] > n_lines:  # shards past the grid's lines would hold nothing: not a question to answer
+        raise UsageError(f"--shard {shard}: the grid has {n_lines} line{'s' if n_lines != 1 else ''} of work "
+                         f"(points, or continuation lines), so at most {n_lines} shards")
     executor = None
     workers = 1
     if dask_address:
@@ -131,6 +136,13 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         example = f", e.g. --set {item.setting}" if item.setting else ""
         click.echo(f"Warning: {item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "
                    f"{item.status.name.lower()}: {item.remedy}{example}, and run again with --overwrite", err=True)
+
+
+def _line_length(config):
+    from vrsweep.config.grid import Grid
+
+    grid = Grid.from_config(config)
+    return len(grid.axis_values[grid.continuation_axis]) if grid.continuation_axis is not None else 1
 
 
 # Measured with an empty cache on a loaded 2-core machine: rk45 29 s wall (11 s of CPU); dop853

@@ -1,5 +1,7 @@
 """vrsweep simulate CONFIG.yaml [--set ...] -o TRAJ.h5: one trajectory, densely sampled, to HDF5."""
 
+from pathlib import Path
+
 import click
 
 from vrsweep.commands.options import (
@@ -37,12 +39,11 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
              "compare": "--compare", "model_original": "--set model=original", "set": "--set "}
     with flag_wording(flags):
         check_single_point(config)  # before compiling anything
-    path = config.output_path(output)
-    if path.exists() and not overwrite:  # say so before integrating, not after
-        from vrsweep.errors import UsageError
+    from vrsweep.store.fileio import output_target, prepare_output_directory
 
-        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
-    from vrsweep.store.fileio import prepare_output_directory
+    with flag_wording(flags):  # say so before integrating, not after
+        path = Path(output_target(config.output_path(output), overwrite=overwrite, inputs=(config_path,),
+                                  inputs_are="the config being run"))
 
     prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
     if not quiet:

@@ -10,6 +10,7 @@ ERRATA 1-3); amplitudes are of X, the gain is A/c (ERRATA 6).
 from __future__ import annotations
 
 import json
+import math
 import textwrap
 
 import click
@@ -72,6 +73,17 @@ def format_table(rows) -> str:
     return "\n".join(text)
 
 
+def _finite_or_null(value):
+    """``value`` with every float that is not finite (inf, nan) replaced by None, at any depth."""
+    if isinstance(value, dict):
+        return {key: _finite_or_null(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite_or_null(item) for item in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
 @click.command("theory")
 @config_argument
 @set_option
@@ -83,6 +95,8 @@ def command(config_path, overrides, as_json):
 
     rows = theory_rows(load_config(config_path, overrides))
     if as_json:
-        click.echo(json.dumps(rows, indent=2, allow_nan=False))
+        # JSON has no inf or nan: a value that overflows (g >= 1e155 squares past the largest
+        # float) is written as null, as the table writes "-" for a value that does not exist.
+        click.echo(json.dumps(_finite_or_null(rows), indent=2, allow_nan=False))
     else:
         click.echo(format_table(rows))

@@ -8,8 +8,9 @@ config, 2 with every problem listed for an invalid one.
 import click
 
 from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
-from vrsweep.config import load_config
-from vrsweep.execution.estimate import estimate, format_bytes, format_duration, size_problem
+from vrsweep.config import INTEGRATION_DEFAULTS, load_config
+from vrsweep.errors import ConfigError
+from vrsweep.execution.estimate import estimate, format_bytes, format_duration, memory_problem, size_problem
 from vrsweep.execution.threads import available_threads
 from vrsweep.numerics.model import PARAMETER_NAMES
 
@@ -27,6 +28,9 @@ def command(config_path, overrides, threads):
     config = load_config(config_path, overrides)  # ConfigError -> every problem, exit 2 (cli.py)
     announce_fixed_axes(config_path, overrides, config)
     threads = threads or available_threads()  # not capped: the run may be planned for another machine
+    memory = memory_problem(config, threads)
+    if memory is not None:  # no machine-independent way to run it: refused as run refuses it
+        raise ConfigError([memory], source=config.source_name)
     guess = estimate(config, threads)
 
     click.echo(f"{config.source_name}: valid")
@@ -48,15 +52,35 @@ def command(config_path, overrides, threads):
     integration = config.integration
     click.echo(f"integration: {integration.method}, rtol={integration.rtol:g} atol={integration.atol:g}, "
                f"{integration.transient_periods} transient + {integration.measure_periods} measured "
-               f"slow periods")
+               f"slow periods{_other_settings(integration)}")
     click.echo(f"output:      {config.output_path()}")
     duration = format_duration(guess.seconds)
     click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
                f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)")
+    click.echo(f"memory:      {format_bytes(guess.memory_bytes)} of per-period records held at once")
     problem = size_problem(config, threads, allow="--allow-large")
     if problem is not None:
         # A valid config, just a big one: `run` will ask for --allow-large.
         click.echo(f"warning:     {problem}")
+
+
+# Always on the integration line, whatever their values; every other setting is named when it
+# differs from its default (INTEGRATION_DEFAULTS), so that the line shows all that was changed.
+ALWAYS_SHOWN = ("method", "rtol", "atol", "transient_periods", "measure_periods")
+
+
+def _other_settings(integration) -> str:
+    """``; strobe_periods=32 lyapunov=true`` for the settings off their defaults, '' if none is."""
+    changed = []
+    for key, default in INTEGRATION_DEFAULTS.items():
+        value = getattr(integration, key)
+        if key in ALWAYS_SHOWN or value == default:
+            continue
+        if isinstance(value, bool):
+            changed.append(f"{key}={'true' if value else 'false'}")
+        else:
+            changed.append(f"{key}={value:g}")
+    return f"; {' '.join(changed)}" if changed else ""
 
 
 def _describe_axis(axis) -> str:

@@ -28,7 +28,8 @@ The package, one module per concern:
 - ``schema``: allowed values and defaults as data (the one source of defaults), the pydantic
   models generated from them, and the result types Config, Axis, Integration;
 - ``validate``: one validation run (text + overrides -> Config) and the entry points
-  load_config, parse_config, with_overrides, and same_config (what --resume compares);
+  load_config, parse_config, config_from_dict (a dict nested as the YAML, for the Python API),
+  with_overrides, and same_config (what --resume compares);
 - ``axes``: each sweep axis checked on its own; ``rules``: the rules across fields;
 - ``report``: problems worded and located (file, line, field path), pydantic's and ruamel's
   errors in this project's words;
@@ -42,11 +43,11 @@ from vrsweep.config.schema import (
     AXIS_DOMAINS, AXIS_NAMES, CONTINUATIONS, INITIAL_DEFAULTS, INITIAL_DOMAINS, INTEGRATION_DEFAULTS,
     INTEGRATION_DOMAINS, MAX_AXIS_POINTS, METHODS, PARAMETER_DOMAINS, Axis, Config, Domain, Integration,
 )
-from vrsweep.config.validate import load_config, parse_config, same_config, with_overrides
+from vrsweep.config.validate import config_from_dict, load_config, parse_config, same_config, with_overrides
 from vrsweep.errors import ConfigError
 
 __all__ = [
-    "Axis", "Integration", "Config", "load_config", "parse_config", "with_overrides", "same_config",
+    "Axis", "Integration", "Config", "load_config", "parse_config", "config_from_dict", "with_overrides", "same_config",
     "Domain", "PARAMETER_DOMAINS", "INITIAL_DEFAULTS", "INITIAL_DOMAINS", "INTEGRATION_DEFAULTS",
     "INTEGRATION_DOMAINS", "AXIS_NAMES", "AXIS_DOMAINS", "CONTINUATIONS", "MAX_AXIS_POINTS", "METHODS",
     "Grid", "DIRECTION_VALUES", "ConfigError",

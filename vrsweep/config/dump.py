@@ -51,6 +51,15 @@ def dump_config(config) -> str:
         del integration["lyapunov"]
     document["integration"] = _block(integration, {})
     document["output"] = None if config.output is None else DoubleQuotedScalarString(config.output)
+    if config.continuation is not None:  # only when present: configs without it keep their text
+        section = dataclasses.asdict(config.continuation)
+        block = CommentedMap(parameter=section.pop("parameter"))
+        block["from"] = float(section.pop("start"))
+        block["to"] = CommentedSeq([float(section.pop("low")), float(section.pop("high"))])
+        block["to"].fa.set_flow_style()
+        for key, value in section.items():
+            block[key] = value
+        document["continuation"] = block
     stream = io.StringIO()
     _dumper().dump(document, stream)
     return stream.getvalue()

@@ -13,6 +13,7 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.nodes import MappingNode, SequenceNode
 from ruamel.yaml.reader import ReaderError
 
+from vrsweep.numerics.model import PARAMETER_NAMES
 from vrsweep.config.schema import (
     ALLOWED_KEYS, ANY, AXIS_FORMS, KEY_HOME, LINEAR_KEYS, NUM_DOMAIN, VALUES_KEYS, CONTINUATIONS,
     INITIAL_DOMAINS, INTEGRATION_DOMAINS, METHODS, PARAMETER_DOMAINS,
@@ -26,9 +27,10 @@ from vrsweep.numerics.model import MODELS
 class Report:
     """The problems found in one config text (and its overrides), each with its file and line."""
 
-    def __init__(self, text, source_name, overrides):
+    def __init__(self, text, source_name, overrides, line_numbers=True):
         self.text = text if isinstance(text, str) else str(text)
         self.source = source_name
+        self.line_numbers = line_numbers  # False: the text was made from a dict, its lines mean nothing
         self.overrides = overrides
         self.root = None          # the ruamel tree (CommentedMap ...), for line numbers
         self.overridden = {}      # path tuple -> the "--set NAME=VALUE" that set it
@@ -46,7 +48,8 @@ class Report:
                 self.problems.append((self.setting_order(setting), f"--set {setting}: {text}"))
                 return
         line = self.line_of(path)
-        self.problems.append(((0, line, ""), f"{self.source}:{line}: {text}"))
+        where = f"{self.source}:{line}" if self.line_numbers else self.source
+        self.problems.append(((0, line, ""), f"{where}: {text}"))
 
     def setting_order(self, setting):
         """Problems with --set options come after the file's, in the order the options were given."""
@@ -145,6 +148,8 @@ class Report:
             self.report(path, item["msg"])
         elif kind == "literal_error":
             choices = {("model",): MODELS, ("method",): METHODS}.get(path[-1:], CONTINUATIONS)
+            if tuple(path[:2]) == ("continuation", "parameter"):
+                choices = PARAMETER_NAMES
             hint = did_you_mean(value, choices) if isinstance(value, str) else ""
             self.report(path, f"must be one of {', '.join(choices)}, got {show(value)}{hint}")
         elif kind in ("model_type", "dict_type"):
@@ -160,6 +165,8 @@ class Report:
             self.report(path, f"must be a number, got {show(value)}", allowed=self.describe(path))
         elif kind in ("int_type", "int_parsing", "int_from_float"):
             self.report(path, f"must be an integer, got {show(value)}", allowed=self.describe(path))
+        elif kind in ("bool_type", "bool_parsing"):  # strict: "yes", 1 or "on" is not taken for true
+            self.report(path, f"must be true or false, got {show(value)}")
         elif kind == "string_type":
             self.report(path, f"must be a string, got {show(value)}", allowed="a file path")
         else:  # something pydantic says that is not rephrased here

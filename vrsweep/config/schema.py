@@ -18,7 +18,7 @@ from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fie
 from pydantic_core import PydanticCustomError
 
 from vrsweep.config.wording import show_number, show
-from vrsweep.numerics.settings import DEFAULT_METHOD, SETTING_DEFAULTS as KERNEL_SETTING_DEFAULTS
+from vrsweep.numerics.settings import CONTINUATION_DEFAULTS, DEFAULT_METHOD, SETTING_DEFAULTS as KERNEL_SETTING_DEFAULTS
 from vrsweep.numerics.model import (
     DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
 )
@@ -118,7 +118,16 @@ CONTINUATIONS = ("up", "down", "both")
 MAX_AXIS_POINTS = 10_000_000
 NUM_DOMAIN = Domain(low=1, low_open=False, high=MAX_AXIS_POINTS, high_open=False, integer=True)
 
-SECTIONS = ("model", "parameters", "initial", "sweep", "integration", "output")
+SECTIONS = ("model", "parameters", "initial", "sweep", "integration", "output", "continuation")
+
+# The continuation section (vrsweep continue; analysis/continuation.py, docs/continuation.md).
+# Separate from a sweep axis's `continuation: up|down|both` (hysteresis sweeps), which it leaves alone.
+CONTINUATION_DOMAINS = {
+    "max_points": _COUNT, "initial_step": _POSITIVE, "min_step": _POSITIVE, "max_step": _POSITIVE,
+    "newton_tolerance": _POSITIVE, "max_newton_iterations": _COUNT, "max_period": _COUNT,
+    "location_tolerance": _POSITIVE,
+}
+CONTINUATION_KEYS = ("parameter", "from", "to", *CONTINUATION_DEFAULTS)
 LINEAR_KEYS = ("start", "stop", "num", "continuation")
 VALUES_KEYS = ("values", "continuation")
 
@@ -174,6 +183,30 @@ class Integration:
 
 
 @dataclass(frozen=True)
+class Continuation:
+    """The config's continuation section: which parameter, where the first orbit is found
+    (``start``, the key ``from``), the range [low, high] the branch stays in, and the numerics'
+    settings (CONTINUATION_DEFAULTS)."""
+
+    parameter: str
+    start: float
+    low: float
+    high: float
+    max_points: int
+    initial_step: float
+    min_step: float
+    max_step: float
+    newton_tolerance: float
+    max_newton_iterations: int
+    max_period: int
+    location_tolerance: float
+
+    def options(self) -> dict:
+        """The settings analysis.continuation reads (its DEFAULTS' keys)."""
+        return {key: getattr(self, key) for key in CONTINUATION_DEFAULTS}
+
+
+@dataclass(frozen=True)
 class Config:
     """A validated config with every default filled in and every override applied.
 
@@ -188,6 +221,7 @@ class Config:
     axes: tuple[Axis, ...]
     integration: Integration
     output: str | None = None
+    continuation: Continuation | None = None
     source_name: str = field(default="<string>", compare=False)
     source_text: str = field(default="", compare=False, repr=False)
     overrides: tuple[str, ...] = field(default=(), compare=False)
@@ -308,6 +342,20 @@ _IntegrationModel = create_model(
     lyapunov=(bool, INTEGRATION_DEFAULTS["lyapunov"]))
 
 
+def _check_range_pair(value):
+    if not value[0] < value[1]:
+        raise PydanticCustomError("bad_range", "must be [low, high] with low < high, got {value}",
+                                  {"value": show(list(value))})
+    return value
+
+
+_ContinuationModel = create_model(
+    "Continuation", __base__=_section_model("NumericContinuation", CONTINUATION_DOMAINS, CONTINUATION_DEFAULTS),
+    parameter=(Literal[PARAMETER_NAMES], ...),
+    start=(float, Field(alias="from")),
+    to=(Annotated[list[float], Field(min_length=2, max_length=2), AfterValidator(_check_range_pair)], ...))
+
+
 class Document(BaseModel):
     model_config = _STRICT
 
@@ -317,6 +365,7 @@ class Document(BaseModel):
     sweep: dict[str, Any] = Field(default_factory=dict)  # each axis validated by the models below
     integration: _IntegrationModel = Field(default_factory=_IntegrationModel)
     output: Annotated[str, AfterValidator(_check_path)] | None = None
+    continuation: _ContinuationModel | None = None
 
 
 _Continuation = Literal[CONTINUATIONS] | None
@@ -351,6 +400,7 @@ ALLOWED_KEYS = {
     ("parameters",): PARAMETER_NAMES,
     ("initial",): tuple(INITIAL_DEFAULTS),
     ("integration",): tuple(INTEGRATION_DEFAULTS),
+    ("continuation",): CONTINUATION_KEYS,
 }
 KEY_HOME = {
     **{name: f"parameters.{name}" for name in PARAMETER_NAMES},

@@ -26,19 +26,34 @@ from vrsweep.config.axes import SweepAxes
 from vrsweep.config.report import Report
 from vrsweep.config.rules import CrossFieldRules
 from vrsweep.config.schema import (
-    AXIS_FORMS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config, Document, Integration,
+    AXIS_FORMS, CONTINUATION_DEFAULTS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config,
+    Continuation, Document, Integration,
 )
-from vrsweep.config.wording import did_you_mean, show
-from vrsweep.config.yaml import CyclicAlias, error_line, load_round_trip, parse_scalar, plain_data
+from vrsweep.config.wording import did_you_mean, dotted, show
+from vrsweep.config.yaml import (
+    MAX_EXPANDED_VALUES, CyclicAlias, TooManyValues, Unrepresentable, error_line, load_round_trip, parse_scalar,
+    plain_data, yaml_text,
+)
 from vrsweep.errors import ConfigError
 from vrsweep.numerics.model import PARAMETER_NAMES
+
+
+# A config is a few kB; a sweep listing every value of a long axis some hundred kB at most.
+MAX_CONFIG_BYTES = 2 ** 20
 
 
 def load_config(path, overrides=()) -> Config:
     """Read and validate the config file at ``path``; messages name the file as given."""
     name = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        with open(path, "rb") as file:  # bounded: /dev/zero or a huge file is not read to its end
+            raw = file.read(MAX_CONFIG_BYTES + 1)
+        if len(raw) > MAX_CONFIG_BYTES:
+            raise ConfigError([f"{name}: larger than {MAX_CONFIG_BYTES // 2 ** 20} MiB, not a config file"],
+                              source=name)
+        text = raw.decode("utf-8")
+        if "\r" in text:  # as read_text's universal newlines did
+            text = text.replace("\r\n", "\n").replace("\r", "\n")
     except FileNotFoundError:
         raise ConfigError([f"{name}: no such config file"], source=name) from None
     except IsADirectoryError:
@@ -51,9 +66,30 @@ def load_config(path, overrides=()) -> Config:
     return parse_config(text, source_name=name, overrides=overrides)
 
 
-def parse_config(text: str, source_name: str = "<string>", overrides=()) -> Config:
-    """Validate config ``text``; raise ConfigError listing every problem found."""
-    return _Validator(text, source_name, tuple(overrides)).run()
+def parse_config(text: str, source_name: str = "<string>", overrides=(), *, line_numbers=True) -> Config:
+    """Validate config ``text``; raise ConfigError listing every problem found.
+
+    ``line_numbers=False``: problems name the source and the field but no line (for text written
+    out from a Python dict, whose lines the user never saw).
+    """
+    return _Validator(text, source_name, tuple(overrides), line_numbers).run()
+
+
+def config_from_dict(data, source_name: str = "<dict>", overrides=()) -> Config:
+    """Validate a config given as a dict nested as the YAML is (``{"sweep": {"g": [5, 10]}}``).
+
+    The dict is written out as YAML text and validated as a file is, so every message is the one
+    a file would get; problems name ``source_name`` and the field, without a line (the text's
+    lines are not the user's).
+    """
+    if not isinstance(data, dict):
+        raise ConfigError([f"{source_name}: the config must be a mapping of sections, got {show(data)}"],
+                          source=source_name)
+    try:
+        text = yaml_text(data)
+    except Unrepresentable as error:
+        raise ConfigError([f"{source_name}: {dotted(error.path)}: {error}"], source=source_name) from None
+    return parse_config(text, source_name, overrides, line_numbers=False)
 
 
 def with_overrides(config: Config, overrides) -> Config:
@@ -101,6 +137,7 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
             axes=tuple(Axis(name, values, continuation) for name, (values, continuation, _) in axes.items()),
             integration=Integration(**document.integration.model_dump()),
             output=document.output,
+            continuation=_continuation(document.continuation),
             source_name=self.source,
             source_text=self.text,
             overrides=self.overrides,
@@ -132,6 +169,10 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
             data = plain_data(self.root)
         except CyclicAlias:
             self.report_raw((0, 1, ""), f"{self.source}:1: the YAML refers to itself through an alias")
+            return None
+        except TooManyValues:
+            self.report_raw((0, 1, ""), f"{self.source}:1: the YAML's aliases expand to more than "
+                                        f"{MAX_EXPANDED_VALUES} values; a config holds a few hundred")
             return None
         except RecursionError:
             self.report_raw((0, 1, ""), f"{self.source}:1: YAML nested too deeply to read")
@@ -207,6 +248,14 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
                 else:
                     self.report_pydantic(item, ())
             return None
+
+
+def _continuation(section):
+    if section is None:
+        return None
+    return Continuation(parameter=section.parameter, start=float(section.start), low=float(section.to[0]),
+                        high=float(section.to[1]),
+                        **{key: getattr(section, key) for key in CONTINUATION_DEFAULTS})
 
 
 def _override_targets():

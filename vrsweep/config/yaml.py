@@ -33,17 +33,33 @@ class CyclicAlias(Exception):
     pass
 
 
-def plain_data(node, _active=None):
-    """ruamel's tree as plain dict/list/float/int/str/bool (keys as str), keeping order."""
+# A config's whole tree, aliases expanded, holds a few hundred values; YAML aliases can make 1 kB
+# of text expand to 10^10 (ten levels of ten aliases). plain_data stops past this many values.
+MAX_EXPANDED_VALUES = 100_000
+
+
+class TooManyValues(Exception):
+    """The document, its aliases expanded, holds more than MAX_EXPANDED_VALUES values."""
+
+
+def plain_data(node, _active=None, _budget=None):
+    """ruamel's tree as plain dict/list/float/int/str/bool (keys as str), keeping order.
+
+    Raises CyclicAlias for a tree that contains itself, TooManyValues past MAX_EXPANDED_VALUES
+    values (aliases counted as many times as they are expanded)."""
     active = set() if _active is None else _active
+    budget = [MAX_EXPANDED_VALUES] if _budget is None else _budget
+    budget[0] -= 1
+    if budget[0] < 0:
+        raise TooManyValues
     if isinstance(node, (dict, list)):
         if id(node) in active:
             raise CyclicAlias
         active.add(id(node))
         try:
             if isinstance(node, dict):
-                return {key_text(key): plain_data(value, active) for key, value in node.items()}
-            return [plain_data(item, active) for item in node]
+                return {key_text(key): plain_data(value, active, budget) for key, value in node.items()}
+            return [plain_data(item, active, budget) for item in node]
         finally:
             active.discard(id(node))
     if isinstance(node, bool):
@@ -114,3 +130,47 @@ def error_line(error, text) -> int:
     if isinstance(error, ReaderError):
         return line_and_column(text, error.position)[0]
     return 1
+
+
+class Unrepresentable(Exception):
+    """A value of a dict config that YAML cannot hold; ``path`` says where (keys and indices)."""
+
+    def __init__(self, path, value):
+        self.path, self.value = tuple(path), value
+        super().__init__(f"must be a number, a string, true/false, a list or a mapping, got a "
+                         f"{type(value).__qualname__} ({show(value)})")
+
+
+def yaml_text(data) -> str:
+    """A dict nested as a config's YAML, written as YAML text that reads back to the same values.
+
+    Accepts what Python code naturally holds: numpy numbers and arrays (as numbers and lists),
+    tuples (as lists), paths (as strings). Floats are written by ruamel as ``repr`` does, so they
+    read back bit for bit; key order is kept (it is the order of a sweep's axes). Raises
+    :class:`Unrepresentable` for anything else (a set, an object).
+    """
+    import io
+
+    stream = io.StringIO()
+    YAML(typ="rt").dump(_yaml_ready(data, ()), stream)
+    return stream.getvalue()
+
+
+def _yaml_ready(value, path):
+    import os
+
+    import numpy as np
+
+    if isinstance(value, dict):
+        return {key_text(key): _yaml_ready(item, path + (key_text(key),)) for key, item in value.items()}
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_yaml_ready(item, path + (index,)) for index, item in enumerate(value)]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise Unrepresentable(path, value)

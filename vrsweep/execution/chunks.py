@@ -24,10 +24,30 @@ from vrsweep.config.grid import SHUFFLE_SEED, shard_of_points, shuffled_lines  #
 # windows, the effective model) double while they last less than this.
 GROW_CHUNK_BELOW_SECONDS = 0.25
 MAX_CHUNK_LINES = 8192
+# What a chunk holds in memory is its points' per-period records over the measurement window
+# (numerics/records.py: N_RECORD float64s per period; not imported, as that module loads numba and
+# `validate` must not): chunks never grow beyond CHUNK_RECORD_BYTES of them, and a chunk of one
+# line is the least a run can hold (estimate.memory_problem refuses a run where that cannot fit).
+RECORD_ROW_BYTES = 10 * 8
+CHUNK_RECORD_BYTES = 256 * 2 ** 20
+
+
+def point_record_bytes(integration) -> int:
+    """Bytes of per-period records one grid point holds while its chunk runs (the measurement
+    window's rows only: the transient's length costs no memory, see numerics/kernel.py)."""
+    return int(integration.measure_periods) * RECORD_ROW_BYTES
+
+
+def max_chunk_lines(integration, line_length) -> int:
+    """The most lines a chunk may hold: MAX_CHUNK_LINES, fewer when their records would pass
+    CHUNK_RECORD_BYTES, never fewer than one."""
+    line_bytes = max(1, line_length) * point_record_bytes(integration)
+    return max(1, min(MAX_CHUNK_LINES, CHUNK_RECORD_BYTES // line_bytes))
 
 
 def default_chunk_lines(threads, line_length):
-    """Enough lines per chunk to keep every thread busy and the progress bar moving."""
+    """Enough lines per chunk to keep every thread busy and the progress bar moving (callers
+    bound it by max_chunk_lines)."""
     return max(threads, (16 * threads) // max(1, line_length))
 
 

@@ -28,11 +28,12 @@ import threading
 import numpy as np
 
 from vrsweep.errors import InvalidArgument, RunFailed, VrsweepError
-from vrsweep.execution.chunks import count_statuses, default_chunk_lines, plan_lines
+from vrsweep.execution.chunks import count_statuses, default_chunk_lines, max_chunk_lines, plan_lines
 from vrsweep.config.grid import Grid
+from vrsweep.execution.threads import machine_cpus
 
 LOCAL_PREFIX = "local:"
-CONNECT_TIMEOUT = "30s"
+CONNECT_TIMEOUT = "10s"  # a scheduler answers in milliseconds; a port that is none may never
 INSTALL_HINT = ('pip install "vrsweep[dask]", or in a clone of vrsweep: pip install -e ".[dask]" '
                 '(or just pip install "dask[distributed]")')
 
@@ -43,8 +44,8 @@ def dask_executor(address, threads=None):
     address: a scheduler address (``tcp://host:8786``, a scheduler file is not supported) or
     ``local:N`` for a LocalCluster of N worker processes with ``threads`` (default 1) threads each.
     Checks the address and that dask.distributed is installed now, so a bad address fails
-    before any file is created (InvalidArgument; the run command words it as ``--dask ADDRESS``);
-    connects only when called.
+    before any file is created (InvalidArgument; the run command words it as ``--dask ADDRESS``),
+    and that a remote scheduler answers (VrsweepError, one line); connects again when called.
     """
     n_local = parse_local(address)
     try:
@@ -52,7 +53,11 @@ def dask_executor(address, threads=None):
     except ModuleNotFoundError:
         raise InvalidArgument("Dask address", address,
                               f"needs dask.distributed, which is not installed: {INSTALL_HINT}") from None
-    return DaskExecutor(address, threads, n_local)
+    executor = DaskExecutor(address, threads, n_local)
+    if n_local is None:
+        with executor._client():  # a scheduler that cannot be reached is known before any file is made
+            pass
+    return executor
 
 
 def parse_local(address):
@@ -66,6 +71,10 @@ def parse_local(address):
         n = 0
     if n < 1:
         raise InvalidArgument("Dask address", address, "expected local:N with N >= 1 workers (e.g. local:4)")
+    most = machine_cpus()
+    if n > most:  # each worker is a process with its own numba threads: more is only slower
+        raise InvalidArgument("Dask address", address,
+                              f"local:N starts N worker processes; this machine has {most} CPUs, so N <= {most}")
     return n
 
 
@@ -152,7 +161,8 @@ class DaskExecutor:
             if chunk_lines is None:
                 if not threads:  # chunks sized for the workers' threads: wait for one to know them
                     client.wait_for_workers(1)
-                chunk_lines = default_chunk_lines(threads or _largest_worker(client), plan.line_length)
+                chunk_lines = min(default_chunk_lines(threads or _largest_worker(client), plan.line_length),
+                                  max_chunk_lines(config.integration, plan.line_length))
             # All chunks are submitted at once and Dask balances them over the workers. Each result
             # is fetched and written as soon as it is ready, then dropped (the future is no longer
             # referenced), so results do not pile up on either side.
@@ -189,6 +199,9 @@ class DaskExecutor:
             # the scheduler's small HTTP server on any free local port, not on 8787 (which a
             # second run on the machine would find taken, and warn).
             # The workers ignore SIGINT (dask_setup, preloaded), so Ctrl-C reaches only this client.
+            # After a stop (SIGINT, SIGTERM) a worker busy in the kernel is killed at shutdown, as
+            # intended (its chunk is not saved and --resume computes it): no warning line for that.
+            _drop_messages("distributed.nanny", "Worker process still alive after")
             with LocalCluster(n_workers=self.n_local, threads_per_worker=self.threads or 1,
                               processes=True, dashboard_address=None,
                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
@@ -198,8 +211,12 @@ class DaskExecutor:
             return
         try:
             client = Client(self.address, timeout=CONNECT_TIMEOUT)
-        except (OSError, TimeoutError, ValueError) as error:
-            raise VrsweepError(f"cannot connect to the Dask scheduler at {self.address}: {error}") from None
+        except Exception as error:  # noqa: BLE001 - whatever the other end does, one line
+            # A port that is no Dask scheduler answers with bytes Dask reads as a frame length
+            # (a 3 EiB "message": MemoryError), or with nothing (a timeout), or closes (OSError).
+            reason = f"{type(error).__name__}: {error}" if not isinstance(error, (OSError, TimeoutError)) else str(error)
+            raise VrsweepError(f"cannot connect to a Dask scheduler at {self.address} ({reason.strip() or 'no answer'}); "
+                               "is it a scheduler's address, e.g. tcp://host:8786?") from None
         with client:
             yield client
 

@@ -20,7 +20,7 @@ from vrsweep.store.fileio import format_bytes  # noqa: F401
 
 # Wall time of one grid point over one slow period 2 pi/omega, on one thread, at rtol = 1e-9.
 # The original model resolves the fast forcing Omega, so it takes several times more steps.
-# Calibrated with `vrsweep run configs/paper_fig1.yaml --threads 1` (81 points x 200 periods at
+# Calibrated with `vrsweep run configs/fig1.yaml --threads 1` (81 points x 200 periods at
 # rtol 1e-9, 2-core workstation): 5.7 s user for the original model, 2.2 s for the effective one,
 # less ~1.5 s of start-up. Points with many impacts cost several times the mean.
 SECONDS_PER_POINT_PERIOD = {"original": 2.6e-4, "effective": 4e-5}
@@ -42,6 +42,9 @@ LYAPUNOV_COST = {"rk45": 1.15, "dop853": 1.85}
 BYTES_PER_DATASET = 2500
 BYTES_PER_DATASET_DIMENSION = 450
 BYTES_PER_CHUNK = 48
+# Coordinates (axes, strobe...) are single chunks with a checksum: each adds a chunk index
+# (a B-tree node, HDF5 1.8 format) of ~3 kB (measured: 3032 B per coordinate, h5py 3, HDF5 1.14).
+BYTES_PER_COORDINATE_CHUNK_INDEX = 3000
 CHUNK_BYTES = 4 * 1024  # store.CHUNK_TARGET_BYTES (not imported: store imports h5py)
 
 # Beyond either, `run` wants --allow-large.
@@ -54,6 +57,43 @@ class Estimate:
     n_points: int
     output_bytes: int
     seconds: float
+    memory_bytes: int = 0  # the per-period records the run holds at once (memory_bytes below)
+
+
+def memory_bytes(config, threads=None) -> int:
+    """Bytes of per-period records a run of ``config`` holds at once, per process: one chunk's
+    (chunks.default_chunk_lines within chunks.max_chunk_lines: at most CHUNK_RECORD_BYTES, at least one line)."""
+    from vrsweep.config.grid import Grid
+    from vrsweep.execution.chunks import default_chunk_lines, max_chunk_lines, point_record_bytes
+
+    threads = max(1, int(threads or available_threads()))
+    grid = Grid.from_config(config)
+    line_length = len(grid.axis_values[grid.continuation_axis]) if grid.continuation_axis is not None else 1
+    n_lines = max(1, config.n_runs // line_length)
+    lines = min(n_lines, default_chunk_lines(threads, line_length), max_chunk_lines(config.integration, line_length))
+    return lines * line_length * point_record_bytes(config.integration)
+
+
+def memory_limit() -> int:
+    """The most a run may hold: half the machine's physical memory (the rest is the system's,
+    numba's and the output's), or 4 GiB where the system does not say."""
+    import os
+
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2
+    except (ValueError, OSError, AttributeError):
+        return 4 * 2 ** 30
+
+
+def memory_problem(config, threads=None) -> str | None:
+    """Why the run cannot fit in this machine's memory (one line), or None. Not a matter of
+    --allow-large: a run past it would end in an allocation failure."""
+    held = memory_bytes(config, threads)
+    if held <= memory_limit():
+        return None
+    return (f"{config.source_name}: measure_periods = {config.integration.measure_periods} needs "
+            f"{format_bytes(held)} of per-period records at once, more than the {format_bytes(memory_limit())} "
+            f"this machine allows a run (half its memory): lower integration.measure_periods")
 
 
 def estimate(config, threads=None) -> Estimate:
@@ -69,7 +109,8 @@ def estimate(config, threads=None) -> Estimate:
     if integration.lyapunov:
         steps_factor *= LYAPUNOV_COST[method]
     seconds = n_points * periods * SECONDS_PER_POINT_PERIOD[config.model] * steps_factor / threads
-    return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds)
+    return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds,
+                    memory_bytes=memory_bytes(config, threads))
 
 
 def stored_arrays(config):
@@ -103,7 +144,8 @@ def stored_bytes(config) -> int:
     grid_dims = len(config.axes) + (config.n_runs != config.n_points)  # + direction
     n_datasets = len(arrays) + 1 + grid_dims + len(extra_dims)
     coordinates = 8 * (sum(len(axis.values) for axis in config.axes) + 64)
-    headers = n_datasets * BYTES_PER_DATASET + len(arrays) * grid_dims * BYTES_PER_DATASET_DIMENSION
+    headers = (n_datasets * BYTES_PER_DATASET + len(arrays) * grid_dims * BYTES_PER_DATASET_DIMENSION
+               + (grid_dims + len(extra_dims)) * BYTES_PER_COORDINATE_CHUNK_INDEX)
     return int(data + coordinates + chunks * BYTES_PER_CHUNK + headers
                + 2 * len(config.to_yaml()))  # the config is kept as text (root attribute and done's)
 
@@ -122,8 +164,11 @@ def size_problem(config, threads=None, allow="allow_large=True") -> str | None:
 
 
 def check_size(config, threads=None, allow_large: bool = False, allow="allow_large=True") -> Estimate:
-    """Raise ConfigError if the run is out of proportion (> 2 GB or > 24 h) and not allowed
-    (``allow``: how the caller allows it, as in size_problem)."""
+    """Raise ConfigError if the run cannot fit in memory (memory_problem), or is out of proportion
+    (> 2 GB or > 24 h) and not allowed (``allow``: how the caller allows it, as in size_problem)."""
+    memory = memory_problem(config, threads)
+    if memory is not None:  # whatever allow_large says
+        raise ConfigError([memory], source=config.source_name)
     problem = size_problem(config, threads, allow)
     if problem is not None and not allow_large:
         raise ConfigError([problem], source=config.source_name)

@@ -235,14 +235,16 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     grid = Grid.from_config(config)
     path = shard_output_path(config.output_path(output), shard)
     owned = owned_mask(grid, shard) if shard[1] > 1 else None
+    inputs = (config.source_name,) if os.path.isfile(config.source_name) else ()  # never written over
     if resume and path.exists():
         _refuse_results_of_older_steps(path)
         writer = ResultWriter.open_for_resume(path, _expected_config_text(path, config),
-                                              expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None)
+                                              expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None,
+                                              inputs=inputs)
     else:
         writer = ResultWriter.create(path, _axes(grid), _variable_specs(config),
                                      root_attributes(config, shard), overwrite=overwrite or resume,
-                                     owned_mask=owned)
+                                     owned_mask=owned, inputs=inputs)
     try:
         done = writer.done_mask().reshape(-1)
         n_owned = int(owned.sum()) if owned is not None else grid.n_points

@@ -4,6 +4,7 @@ time limit) for long commands (run, merge).
 No numerics and no I/O libraries here, so that any command can use it without importing numba.
 """
 
+import os
 import signal
 import sys
 import threading
@@ -64,3 +65,25 @@ class GracefulStop:
     def check(self):
         if self.signum is not None:
             raise Interrupted(self.signum)
+
+
+def _exit_interrupted(signum, frame):
+    # Nothing is written yet and nothing is held: say so in the one line every command uses, and
+    # leave with the shell's code for SIGINT, without unwinding an import half done.
+    newline = "\n" if sys.stderr.isatty() else ""
+    os.write(2, f"{newline}Interrupted (SIGINT)\n".encode())
+    os._exit(128 + signal.SIGINT)
+
+
+def exit_at_once_on_sigint() -> None:
+    """Ctrl-C while the command line starts (imports take ~0.3 s; a traceback from inside one is
+    what Python would print): exit 130 with one line. The command line calls
+    :func:`raise_on_sigint` once a command runs, where KeyboardInterrupt is handled (cli.py)."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, _exit_interrupted)
+
+
+def raise_on_sigint() -> None:
+    """Python's own SIGINT handling back (KeyboardInterrupt), if exit_at_once_on_sigint set it aside."""
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is _exit_interrupted:
+        signal.signal(signal.SIGINT, signal.default_int_handler)

@@ -18,6 +18,9 @@ DEFAULT_SAMPLES_PER_PERIOD = 200
 period holds 8 or 10 fast periods, so 200 samples give 20-25 per fast period: enough to draw the
 fast wiggle of Fig. 3-5. Impacts are stored exactly besides, and the plots insert them."""
 MAX_SAMPLES = 20_000_000  # per model: 320 MB of x and v; more is a typo, not a figure
+# A trajectory keeps every period's record, transient included (impacts per period are stored):
+# 80 bytes a period (numerics/records.py), 320 MB at most, as for the samples.
+MAX_PERIODS = 4_000_000
 
 SLOW_FLOW_STARTS = {
     "state": dict(rule="state", literal=False,
@@ -35,6 +38,10 @@ def sample_times(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD):
     if samples_per_period < 1:
         raise UsageError.naming("{samples_per_period} must be at least 1, got {value}", value=samples_per_period)
     n_periods = config.integration.transient_periods + config.integration.measure_periods
+    if n_periods > MAX_PERIODS:
+        raise UsageError.naming(
+            "{n_periods} slow periods (transient + measured) is more than {most} for one trajectory, which "
+            "keeps a record of every period: lower the run length", n_periods=n_periods, most=MAX_PERIODS)
     n_samples = n_periods * samples_per_period + 1
     if n_samples > MAX_SAMPLES:
         raise UsageError.naming(

@@ -23,7 +23,8 @@ from vrsweep.analysis.diagnostics import lyapunov_values, point_diagnostics
 from vrsweep.numerics.lines import RUN_LINES  # noqa: F401
 # Grid, the planner's names: imported from here by callers written before they moved.
 from vrsweep.execution.chunks import (  # noqa: F401
-    GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses, default_chunk_lines, plan_lines,
+    GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses, default_chunk_lines, max_chunk_lines,
+    plan_lines,
     shard_of_points, shuffled_lines,
 )
 from vrsweep.config.grid import DIRECTION_VALUES, Grid  # noqa: F401
@@ -46,7 +47,9 @@ class LineRunner:
         self.settings = integration_settings(config.integration)
         self.method = config.integration.method
         self.lyapunov = config.integration.lyapunov
-        self.n_periods = config.integration.transient_periods + config.integration.measure_periods
+        # Records are kept for the measurement window only (the kernel reuses one row through the
+        # transient): a point's memory does not grow with transient_periods.
+        self.n_record_rows = config.integration.measure_periods
 
     def run(self, lines, threads=None):
         """lines (n_lines, line_length) flat indices -> (flat_indices, values) for on_chunk."""
@@ -60,14 +63,14 @@ class LineRunner:
         # A line runs along a parameter axis only (continuation along x0 / v0 is refused), so
         # its first point's x0 / v0 is the whole line's.
         initial_states = self.grid.initial_states_at(self.config, lines[:, 0])
-        records = np.full((n_lines, line_length, self.n_periods, kernel.N_RECORD), np.nan)
+        records = np.full((n_lines, line_length, self.n_record_rows, kernel.N_RECORD), np.nan)
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
         with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
             RUN_LINES[self.method, self.lyapunov](coefficients, initial_states, self.settings, local_lines, records,
                                    summaries, statuses)
         values = point_values(
-            records.reshape(-1, self.n_periods, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
+            records.reshape(-1, self.n_record_rows, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
             statuses.reshape(-1), coefficients, self.config.integration)
         return flat, values
 
@@ -86,7 +89,9 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     plan = plan_lines(runner.grid, shard, done)
     lines = plan.lines
     adaptive = chunk_lines is None
-    chunk_lines = chunk_lines or default_chunk_lines(threads, plan.line_length)
+    largest_chunk = max_chunk_lines(config.integration, plan.line_length)  # the memory bound
+    chunk_lines = chunk_lines or min(default_chunk_lines(threads, plan.line_length), largest_chunk)
+    largest_chunk = max(chunk_lines, largest_chunk)
     counts = {}
     start = 0
     while start < len(lines):
@@ -94,7 +99,7 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
         flat, values = runner.run(lines[start:start + chunk_lines], threads)
         start += chunk_lines
         if adaptive and time.perf_counter() - began < GROW_CHUNK_BELOW_SECONDS:
-            chunk_lines = min(2 * chunk_lines, MAX_CHUNK_LINES)
+            chunk_lines = min(2 * chunk_lines, largest_chunk)
         count_statuses(counts, values["status"])
         if on_chunk is not None:
             on_chunk(flat, values)

@@ -25,7 +25,8 @@ def available_threads() -> int:
 
 def drop_unreadable_setting() -> None:
     """An unreadable NUMBA_NUM_THREADS ('abc', '0'): say so in one line and unset it, before numba
-    is imported. numba would ignore it too, but with a warning that prints a traceback."""
+    is imported (numba would ignore it too, but with a warning that prints a traceback); one above
+    the machine's CPU count: say so and lower it to that count."""
     value = os.environ.get("NUMBA_NUM_THREADS")
     if value is None or "numba" in sys.modules:
         return
@@ -37,3 +38,16 @@ def drop_unreadable_setting() -> None:
         del os.environ["NUMBA_NUM_THREADS"]
         sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={value!r} is not a whole number >= 1: ignored, "
                          f"using the {available_threads()} CPUs this process may run on\n")
+        return
+    # numba starts every thread at import: NUMBA_NUM_THREADS=100000 segfaults, larger values are
+    # killed for memory. More threads than the machine has CPUs is never faster: capped there.
+    most = machine_cpus()
+    if int(value.strip()) > most:
+        os.environ["NUMBA_NUM_THREADS"] = str(most)
+        sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={value.strip()} is more than the {most} CPUs of this "
+                         f"machine: using {most}\n")
+
+
+def machine_cpus() -> int:
+    """The machine's logical CPUs: the most threads (or local workers) vrsweep will start."""
+    return os.cpu_count() or 1

@@ -64,7 +64,7 @@ from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, rea
 )
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import (
-    apply_saltation, collapse_tangents, seed_tangents, tangent_derivative,
+    apply_saltation, collapse_tangents, record_monodromy, seed_tangents, tangent_derivative,
     tangents_out_of_range,
 )
 
@@ -104,7 +104,8 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     coefficients    (N_COEFFICIENTS,)        model.kernel_coefficients
     initial_state   (2,)                      x(0), v(0)
     settings        (N_SETTINGS,)            layout above
-    period_records  (n_periods, N_RECORD)    filled for every completed period
+    period_records  (n_rows, N_RECORD)       the last n_rows periods' records, measure_periods <= n_rows
+                                             <= n_periods (a sweep: measure_periods, a trajectory: all)
     summary         (N_SUMMARY,)             filled at the end; R, Qs, Qc NaN unless status OK
     sample_times    (n_samples,)             sorted times for dense samples (may be empty)
     samples         (n_samples, 2)           x, v at sample_times
@@ -120,7 +121,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
                       ORDER, N_STAGES, False, N_DYNAMIC,
                       np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -138,7 +139,7 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
                       False, N_DYNAMIC,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -155,7 +156,7 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -169,7 +170,40 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log)
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+
+
+@kernel_jit
+def integrate_rk45_monodromy(coefficients, initial_state, settings, period_records, summary,
+                             sample_times, samples, impact_log, stick_log, monodromy_log):
+    """integrate_rk45_lyapunov that also returns each period's tangent map (continuation).
+
+    monodromy_log (n_periods, 4): row k is the 2x2 matrix d y((k+1)T) / d y(kT) of period k,
+    row-major (tangent.record_monodromy); the saltation matrix at every impact is in it, a sticking
+    interval makes it zero. No renormalisation: one period's map stays far inside double range
+    for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
+    """
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
+                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
+                      np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
+
+
+@kernel_jit
+def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
+                               sample_times, samples, impact_log, stick_log, monodromy_log):
+    """integrate_rk45_monodromy with DOP853 steps."""
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
+                      rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
+                      dop853_accepted_step_factor, dop853_rejected_step_factor, True,
+                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
+                      np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
 
 
 # integration.method -> the kernel. Each is compiled (or loaded from the cache) on its first call,
@@ -178,6 +212,8 @@ INTEGRATORS = {"rk45": integrate_rk45, "dop853": integrate_dop853}
 METHODS = tuple(INTEGRATORS)
 # The same with the tangent vectors (integration.lyapunov: true).
 LYAPUNOV_INTEGRATORS = {"rk45": integrate_rk45_lyapunov, "dop853": integrate_dop853_lyapunov}
+# With each period's raw tangent map (continuation, numerics/shooting.py).
+MONODROMY_INTEGRATORS = {"rk45": integrate_rk45_monodromy, "dop853": integrate_dop853_monodromy}
 
 
 def integrator(method, lyapunov=False):
@@ -191,7 +227,7 @@ def integrator(method, lyapunov=False):
 def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, step, step_error, dense_output,
                accepted_factor, rejected_factor, hold_after_reject, initial_order, n_stages, tangents, n_dynamic,
                K, dense, coefficients, initial_state, settings, period_records, summary, sample_times, samples,
-               impact_log, stick_log):
+               impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
@@ -209,11 +245,19 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     end; or attempt a step, and if it is accepted, resolve an impact inside it (reach it with an
     exact step), feed the observers, and apply the restitution law or start sticking. A pass that
     reaches the period's end closes the period.
+
+    monodromy_log (n, 4): with tangents, the raw one-period tangent map of each of the first n
+    periods (record_monodromy); the tangent vectors then restart from the unit vectors every period
+    instead of being renormalised. Length 0 (every kernel but the *_monodromy ones): unused.
     """
     rtol = settings[RTOL]
     atol = settings[ATOL]
     n_transient = int(settings[TRANSIENT_PERIODS])
     n_periods = n_transient + int(settings[MEASURE_PERIODS])
+    # period_records may hold only the last rows (a sweep keeps the measurement window's, so its
+    # memory does not grow with the transient): period k is row max(k - first_row, 0), and the
+    # transient's periods before the kept rows all reuse row 0 (start_period resets it).
+    first_row = n_periods - period_records.shape[0]
     max_steps = settings[MAX_STEPS]
     max_impacts_per_period = settings[MAX_IMPACTS_PER_PERIOD]
     divergence_bound = settings[DIVERGENCE_BOUND]
@@ -263,7 +307,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     next_sample = emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
 
     while True:
-        record = period_records[period]
+        record = period_records[max(period - first_row, 0)]
         if stuck:
             # --- held at (Delta, 0) until the force lets go or the period ends ---
             t_release, scans = release_time(t, t_boundary, coefficients, stick_scan_step, max_steps - n_scans)
@@ -398,7 +442,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     h = _rebound_step(h, t, v_after, coefficients)
                 err_previous = 1.0
 
-            if tangents and tangents_out_of_range(y):
+            if tangents and monodromy_log.shape[0] == 0 and tangents_out_of_range(y):
                 # A strongly damped or stretched period would underflow or overflow them before
                 # its end: renormalise now, the period's record sums the logs.
                 add_tangent_growth(record, y)
@@ -412,16 +456,23 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                 break
 
         if t >= t_boundary:
+            raw = tangents and period < monodromy_log.shape[0]
+            if raw:
+                record_monodromy(monodromy_log[period], y)
             close_period(record, y, f, coefficients, tangents, stuck)
+            if raw and not stuck:
+                seed_tangents(y)  # the next period's map starts from the identity, not from Q
+                tangent_derivative(y, coefficients, f)
             period += 1
             if period == n_periods:
                 break
             t_boundary = (period + 1) * slow_period
-            start_period(period_records[period], y[X], tangents)
+            start_period(period_records[max(period - first_row, 0)], y[X], tangents)
 
     if stuck and n_sticks - 1 < stick_log.shape[0]:
         stick_log[n_sticks - 1, 1] = t
-    status = summarize(period_records, n_transient, n_periods, slow_period, coefficients[C], status, summary)
+    status = summarize(period_records, n_transient - first_row, n_periods - first_row, slow_period, coefficients[C],
+                       status, summary)
     summary[SUM_STEPS] = n_steps
     summary[SUM_REJECTED] = n_rejected
     summary[SUM_RHS] = n_rhs

@@ -1,6 +1,7 @@
 """What the kernel observes: the per-slow-period record, the run's summary, and the logs.
 
-One record row per slow period T = 2 pi / omega (transient included): impacts, the Fourier
+One record row per slow period T = 2 pi / omega (the caller chooses how many of the last periods
+are kept: a trajectory keeps all, transient included; a sweep only the measurement window): impacts, the Fourier
 quadratures of eq3.1-eq3.2, the stroboscopic state at t = nT, the period's extremes of x, time
 stuck, and the tangent vectors' log growth. The summary reduces the measurement window's rows
 to eq3.1-eq3.3 (R), the mean impacts per period and the Lyapunov exponents, and counts the work.
@@ -18,7 +19,7 @@ from vrsweep.numerics.state import QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import collapse_tangents, renormalise_tangents, tangent_derivative
 from vrsweep.results import Status
 
-# --- per-slow-period record, one row per period, transient included ---
+# --- per-slow-period record, one row per kept period (kernel.py: the last rows) ---
 REC_IMPACTS = 0     # impacts in the period
 REC_QS = 1          # integral of x sin(omega t) over the period
 REC_QC = 2          # integral of x cos(omega t) over the period

@@ -18,3 +18,10 @@ SETTING_DEFAULTS = {
 }
 SETTING_NAMES = tuple(SETTING_DEFAULTS)
 DEFAULT_METHOD = "rk45"  # the config schema's default of integration.method
+
+# Defaults of the config's continuation section (analysis/continuation.py, docs/continuation.md):
+# plain numbers here so that the config schema and the algorithm read the same ones.
+CONTINUATION_DEFAULTS = {
+    "max_points": 400, "initial_step": 0.05, "min_step": 1e-5, "max_step": 0.5, "newton_tolerance": 1e-8,
+    "max_newton_iterations": 12, "max_period": 16, "location_tolerance": 1e-6,
+}

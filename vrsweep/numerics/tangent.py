@@ -74,6 +74,19 @@ def apply_saltation(y, v_before, acceleration_before, acceleration_after, restit
         y[TANGENT + 2 * i + 1] = coupling * dx - restitution * dv
 
 
+@kernel_jit(inline="always")
+def record_monodromy(row, y):
+    """The 2x2 matrix whose columns are the two tangent vectors, row-major into row (4,).
+
+    Seeded with the unit vectors at a period's start (seed_tangents), it is that period's
+    tangent map, the saltation matrices of its impacts included (continuation's monodromy).
+    """
+    row[0] = y[TANGENT]
+    row[1] = y[TANGENT + 2]
+    row[2] = y[TANGENT + 1]
+    row[3] = y[TANGENT + 3]
+
+
 # Within a period the tangent vectors are renormalised early once a component leaves this range
 # (a damping of 30 over a slow period of 57 shrinks them by e^-1700, far below the smallest double).
 TANGENT_RANGE = 1e30

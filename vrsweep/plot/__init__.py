@@ -11,16 +11,21 @@ Sweep results (``vrsweep run``)
     ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
     ``lyapunov``     the largest Lyapunov exponent against the swept parameter, with the zero line;
                      ``bifurcation+lyapunov`` draws it under the bifurcation diagram, one x axis.
+Branch files (``vrsweep continue``)
+    R of the continued orbits against the parameter (stable solid, unstable dashed) with the
+    bifurcations marked and named, sweep files given after it on the same axes and the corrected
+    theory's branches (effective model); under it the moduli of the Floquet multipliers.
 Trajectories (``vrsweep simulate``)
     ``trajectory``   position, velocity and phase portrait, original above effective (Fig. 3-5).
     ``impacts``      impacts in each slow period against the period number (Fig. impact_no).
     ``slowflow``     the effective system against the slow-flow reconstruction (Fig. 6).
 
-Units: the paper's model is dimensionless, so every axis says ``[1]``. The gain R = |Q|/c of eq3.3
+Units: the paper's model is dimensionless (units "1"), so no axis shows a unit (a real unit in a
+file's attributes would be shown in brackets); the caption says so once. The gain R = |Q|/c of eq3.3
 and the analytic amplitude A of eq2.21 are different quantities (ERRATA 6): on a gain plot the
 analytic curves are A/c, on an amplitude plot (``amplitude=True``) the numbers are |Q| and A.
 
-Which R can be trusted (issue 5, README "Can R be trusted?"): trust is judged by R_err alone --
+Which R can be trusted (issue 5, docs/trust.md, "Can R be trusted?"): trust is judged by R_err alone --
 a point is drawn filled where R_err <= RELATIVE_ERROR_LIMIT of R and hollow where not -- and the
 kind of motion by ``period``: a circle where a period was found, a square where none was (chaos,
 quasi-periodic, a period above max_period, or a motion still settling; with a tiny R_err the last
@@ -33,6 +38,10 @@ file, ``select``: fixing axes through xarray, which points to trust), ``analytic
 branches and the resonance), ``sweeps`` (the sweep figures, ``map_figure`` for any variable with
 one value per grid point), ``lyapunov``, ``trajectories`` and ``basins``. This module dispatches: ``plot``
 draws what ``vrsweep plot`` draws.
+
+Every figure function takes the keyword arguments title, size, style (and the maps vmin, vmax):
+``labels.figure_options``. Font sizes are the style's (relative sizes only, never points), and
+``render`` writes the figure with its full description in the file's metadata.
 """
 
 from __future__ import annotations
@@ -44,8 +53,10 @@ from matplotlib.figure import Figure
 from vrsweep.errors import UsageError
 from vrsweep.plot.analytic import analytic_branches, resonance_positions
 from vrsweep.plot.basins import basin_figure, basin_plot
+from vrsweep.plot.branches import branch_figure, is_branch
 from vrsweep.plot.labels import (
-    KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, parameter_label,
+    KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, description, figure_options, metadata,
+    layout_note, parameter_label, parse_size, read_description, render, resolve_style,
 )
 from vrsweep.plot.lyapunov import lyapunov_figure
 from vrsweep.plot.selection import _grid_axes, _sweep_default, load, select
@@ -66,7 +77,8 @@ def default_kind(data) -> str:
     return _sweep_default(_grid_axes(data))
 
 
-def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None, var=None) -> Figure:
+def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None, var=None, *,
+         title=True, size=None, style=None, vmin=None, vmax=None) -> Figure:
     """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
 
     sources: a path, or a list of paths or of what ``load`` returned (a sweep's Dataset, from
@@ -75,15 +87,25 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     axis (or colour scale of a map), False for a linear one, None to choose (response plots: log
     when the values span two decades or more; maps: linear); periods: (first, last) slow periods
     of a trajectory to show; var: the stored variable a map shows (default R, or Q_amplitude with
-    ``amplitude``).
+    ``amplitude``). title, size, style: as every figure function takes them (``figure_options``):
+    False for no title at all (the description stays in ``description(fig)``, the file's metadata),
+    (width, height) in inches, a matplotlib style sheet's name or .mplstyle path; vmin, vmax: the
+    ends of a map's colour scale.
     """
     from vrsweep.store.trajectory_file import TrajectoryData
 
+    options = dict(title=title, size=size, style=style)
+    limits = dict(vmin=vmin, vmax=vmax)
     if isinstance(sources, (str, os.PathLike)):
         sources = [sources]
     if not sources:
         raise UsageError.naming("no file to plot")
     data = [load(s) if isinstance(s, (str, os.PathLike)) else s for s in sources]
+    if is_branch(data[0]):
+        # vrsweep continue's file, with sweep files drawn on the same axes
+        if any(is_branch(d) or not hasattr(d, "attrs") for d in data[1:]):
+            raise UsageError.naming("after a branch file come sweep files only (vrsweep run results)")
+        return branch_figure(data[0], data[1:], **options, **limits)
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
         raise UsageError.naming("plot sweep results and trajectory files separately")
@@ -99,10 +121,10 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
             raise UsageError.naming("{at}, {x_axis}, {amplitude} and {log}/{linear} are for sweep results, "
                                     "not trajectory files")
         if kind == "impacts":
-            return impacts_per_period_figure(data)
+            return impacts_per_period_figure(data, **options, **limits)
         if kind == "slowflow":
-            return slow_flow_figure(data[0], periods=periods)
-        return trajectory_figure(data[0], periods=periods)
+            return slow_flow_figure(data[0], periods=periods, **options, **limits)
+        return trajectory_figure(data[0], periods=periods, **options, **limits)
     if periods is not None:
         raise UsageError.naming("{periods} is for trajectory files (vrsweep simulate), not sweep results")
     ds = select(data[0], at or {})
@@ -116,18 +138,19 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if var is not None and amplitude:  # never ignored quietly
         raise UsageError.naming("{amplitude} maps Q_amplitude and {var} names the variable itself: give one of them")
     if kind == "response":
-        return response_figure(ds, amplitude=amplitude, x_axis=x_axis, log=log)
+        return response_figure(ds, amplitude=amplitude, x_axis=x_axis, log=log, **options, **limits)
     if kind == "map":
-        return map_figure(ds, var or ("Q_amplitude" if amplitude else "R"), x_axis=x_axis, log=bool(log))
+        return map_figure(ds, var or ("Q_amplitude" if amplitude else "R"), x_axis=x_axis, log=bool(log),
+                          **options, **limits)
     if kind == "impacts":
-        return impacts_figure(ds, x_axis=x_axis, log=bool(log))
+        return impacts_figure(ds, x_axis=x_axis, log=bool(log), **options, **limits)
     if log:  # never ignored quietly
         raise UsageError.naming("{log} is for response, map and impacts plots, not {kind} {value}", value=kind)
     if kind == "status":
-        return status_figure(ds, x_axis=x_axis)
+        return status_figure(ds, x_axis=x_axis, **options, **limits)
     if kind in ("lyapunov", "bifurcation+lyapunov"):
-        return lyapunov_figure(ds, x_axis=x_axis, bifurcation=kind == "bifurcation+lyapunov")
-    return bifurcation_figure(ds, x_axis=x_axis)
+        return lyapunov_figure(ds, x_axis=x_axis, bifurcation=kind == "bifurcation+lyapunov", **options, **limits)
+    return bifurcation_figure(ds, x_axis=x_axis, **options, **limits)
 
 
 __all__ = [
@@ -135,4 +158,5 @@ __all__ = [
     "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
+    "figure_options", "description", "metadata", "render", "layout_note", "read_description", "resolve_style", "parse_size",
 ]

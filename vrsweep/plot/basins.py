@@ -9,10 +9,11 @@ import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
-from vrsweep.plot.labels import MODEL_EQUATIONS, UNITS, UNITS_NOTE, _new_figure, _number, _title, _width
+from vrsweep.plot.labels import MODEL_EQUATIONS, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
@@ -25,14 +26,15 @@ BASIN_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple",
                  "tab:pink", "tab:olive", "tab:cyan", "gold")
 BASIN_FAILED = "black"        # a point whose integration failed (label -1)
 BASIN_NOT_COMPUTED = "white"  # an unfinished file's missing points
+OUTSIDE_PLANE = "0.9"         # around the swept plane, where the view widens to show an orbit
 
 
-def basin_plot(results, at=None) -> Figure:
+def basin_plot(results, at=None, **options) -> Figure:
     """``vrsweep plot FILE --kind basin``: the x0-v0 plane of one slice coloured by attractor.
 
     results: a path, or the Dataset of a sweep with x0 and/or v0 axes (``load``,
     ``vrsweep.open_results``); at: {axis: value} fixing every other axis with more than one value
-    (a slice's parameters).
+    (a slice's parameters); options: title, size, style (``figure_options``).
     """
     from vrsweep.store.trajectory_file import TrajectoryData
 
@@ -58,12 +60,18 @@ def basin_plot(results, at=None) -> Figure:
     for name, values in axes.items():  # a one-value axis needs no at
         if name not in at and name not in ("x0", "v0") and len(values) == 1:
             at[name] = str(values[0])
-    return basin_figure(select(data, at))
+    return basin_figure(select(data, at), **options)
 
 
+@figure_options
 def basin_figure(ds) -> Figure:
     """Attractor labels over the x0-v0 plane (or along x0 or v0), legend from the attractor table;
-    ``ds``: one slice of a sweep over the initial state (other axes fixed with ``select``)."""
+    ``ds``: one slice of a sweep over the initial state (other axes fixed with ``select``).
+
+    Each attractor's stroboscopic points x(nT), v(nT) -- of the first start in its basin, in grid
+    order -- are marked on the plane in its colour with a black edge: the orbit itself, in the
+    same section t = nT as the initial states (t = 0). Where they lie outside the swept plane the
+    view widens to show them and a dashed frame marks the plane."""
     view = _Sweep(ds)
     state_axes = [name for name in ("x0", "v0") if name in view.axes]
     if not state_axes:
@@ -97,7 +105,14 @@ def basin_figure(ds) -> Figure:
                       cmap=cmap, norm=norm)
         ax.set_yticks([])
     ax.set_xlabel(_state_label(x_axis))
+    outside = _mark_attractors(ax, ds, view, labels, colours, state_axes)
     handles = [_basin_handle(view, label, colours[label]) for label in range(count)]
+    if count and "strobe_x" in view.variables:
+        handles.append(Line2D([], [], marker="o", ls="", color="0.6", mec="k", mew=1.2, markersize=7,
+                              label="ringed dot: an attractor's points x(nT), v(nT) in its colour"))
+    if outside:
+        handles.append(Patch(facecolor=OUTSIDE_PLANE, edgecolor="k", ls="--",
+                             label="dashed frame: the swept plane; outside it, no start was tried"))
     n_failed = int(np.sum((labels < 0) & (status != Status.NOT_COMPUTED)))
     if n_failed:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_FAILED, markersize=9,
@@ -106,19 +121,76 @@ def basin_figure(ds) -> Figure:
     if n_missing:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_NOT_COMPUTED, markeredgecolor="0.5",
                               markersize=9, label=f"not computed ({n_missing} points)"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=1 if count <= 3 else 2, fontsize=8,
-               title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane", title_fontsize=8)
+    fig.legend(handles=handles, loc="outside lower center", ncols=_legend_columns(fig, 1 if count <= 4 else 2), fontsize="small",
+               title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane",
+               title_fontsize="small")
     found = f"{count} attractor{'s' if count != 1 else ''}"
     _title(fig, f"Basins of attraction in the plane of initial states: {found}",
            _basin_caption(view, _width(fig)))
     return fig
 
 
+def _mark_attractors(ax, ds, view, labels, colours, state_axes):
+    """Mark each attractor's stroboscopic points on the plane (or the strip); returns True when
+    some lie outside the swept plane, which then is framed and the view widened to show them."""
+    from matplotlib.patches import Rectangle
+
+    if "strobe_x" not in view.variables or "strobe_v" not in view.variables:
+        return False
+    dims = tuple(ds["attractor"].dims)
+    strobe = {"x0": ds["strobe_x"].transpose(*dims, ...).values, "v0": ds["strobe_v"].transpose(*dims, ...).values}
+    limits = {name: (float(np.min(view.axes[name])), float(np.max(view.axes[name]))) for name in state_axes}
+    drawn = {name: [] for name in state_axes}
+    flat_labels = np.asarray(labels).reshape(-1)
+    for label, colour in enumerate(colours):
+        members = np.flatnonzero(flat_labels == label)
+        if members.size == 0:
+            continue
+        first = np.unravel_index(members[0], np.shape(labels))  # attractor_x0/v0's start: first in grid order
+        points = {name: np.asarray(strobe[name][first], dtype=np.float64) for name in state_axes}
+        finite = np.logical_and.reduce([np.isfinite(points[name]) for name in state_axes])
+        if not finite.any():
+            continue
+        xs = points[state_axes[0]][finite]
+        ys = points[state_axes[1]][finite] if len(state_axes) == 2 else np.full(xs.shape, 0.5)
+        ax.plot(xs, ys, "o", ls="", color=colour, mec="k", mew=1.2, ms=7, zorder=5, gid=f"attractor {label}")
+        for name, values in zip(state_axes, (xs, ys)):
+            drawn[name].append(values)
+    outside = False
+    view_limits = []
+    for k, name in enumerate(state_axes):
+        values = np.concatenate(drawn[name]) if drawn[name] else np.array([])
+        low, high = limits[name]
+        cell = (high - low) / max(len(view.axes[name]) - 1, 1) / 2  # the plane reaches half a cell beyond
+        low, high = low - cell, high + cell
+        if values.size and (values.min() < low or values.max() > high):
+            outside = True
+            low, high = min(low, float(values.min())), max(high, float(values.max()))
+        view_limits.append((low, high))
+    if outside:  # widen the view to the orbits, and frame the plane the sweep covered
+        for (low, high), set_limits in zip(view_limits, (ax.set_xlim, ax.set_ylim)):
+            margin = 0.04 * (high - low)
+            set_limits(low - margin, high + margin)
+        name = state_axes[0]
+        (x_low, x_high) = limits[name]
+        x_cell = (x_high - x_low) / max(len(view.axes[name]) - 1, 1) / 2
+        if len(state_axes) == 2:
+            y_low, y_high = limits[state_axes[1]]
+            y_cell = (y_high - y_low) / max(len(view.axes[state_axes[1]]) - 1, 1) / 2
+        else:
+            y_low, y_high, y_cell = 0.0, 1.0, 0.5
+        ax.add_patch(Rectangle((x_low - x_cell, y_low - y_cell), x_high - x_low + 2 * x_cell,
+                               y_high - y_low + 2 * y_cell, fill=False, ec="k", lw=1.0, ls="--", zorder=4,
+                               gid="swept plane"))
+        ax.set_facecolor(OUTSIDE_PLANE)
+    return outside
+
+
 def _state_label(name):
     from vrsweep.numerics.model import INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS
 
     words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
-    return f"{words} {INITIAL_STATE_SYMBOLS[name]} {UNITS}"
+    return f"{words} {INITIAL_STATE_SYMBOLS[name]}"
 
 
 def _basin_handle(view, label, colour):
@@ -146,12 +218,5 @@ def _basin_caption(view, width):
         items += [f"{PARAMETER_SYMBOLS[name]} = {_number(parameters[name])}" for name in PARAMETER_NAMES]
         run = view.config.integration
         items.append(f"{run.transient_periods} transient + {run.measure_periods} measured slow periods")
-    items += [UNITS_NOTE] + ([_progress_note(view)] if not view.complete else [])
-    lines, line = [], ""
-    for item in items:
-        visible = len(item.replace("$", "").replace("\\", ""))
-        if line and len(line.replace("$", "").replace("\\", "")) + visible + 2 > width:
-            lines.append(line)
-            line = ""
-        line = f"{line},  {item}" if line else item
-    return "\n".join(lines + [line])
+    items += ["all quantities dimensionless"] + ([_progress_note(view)] if not view.complete else [])
+    return _wrap(items, width)

@@ -3,9 +3,17 @@ the caption of what is fixed, and the figure itself (matplotlib's Figure, no pyp
 
 from __future__ import annotations
 
+import contextvars
+import functools
+import inspect
 import os
+import re
+import warnings
+from pathlib import Path
 
 from matplotlib.figure import Figure
+
+from vrsweep.errors import UsageError
 
 from vrsweep.numerics.model import (
     INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_SYMBOLS,
@@ -24,8 +32,7 @@ per cent (R_err includes that offset); a chaotic one tens of per cent."""
 MAX_CURVES = 8          # more curves than this on one response plot is unreadable: ask for --at
 CURVES_NOT_MAP = 5      # a 2-axis sweep whose shorter axis has at most this many values: curves
 FINE_POINTS = 2001      # analytic curves are drawn on a grid this fine, not on the sweep's points
-UNITS = "[1]"           # dimensionless, like every quantity of the paper's model
-UNITS_NOTE = "[1] = dimensionless"
+DIMENSIONLESS = ("1", "")  # the paper's model is dimensionless: such axes show no unit at all
 
 MODEL_EQUATIONS = {"original": "original system eq2.1-eq2.2", "effective": "effective system eq2.10"}
 DIRECTION_NAMES = {1: "up", -1: "down"}
@@ -34,6 +41,7 @@ RELIABLE_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purpl
 FAILED_COLOUR = "tab:red"
 FAILED_ROW_HEIGHT = 0.035  # axes fraction per row of failed-point marks at the bottom edge
 MARKERS = {False: "o", True: "s"}  # period found: circle; none found (period 0): square
+LYAPUNOV_SYMBOL = "$\\lambda_1$"  # the largest Lyapunov exponent, on every figure that shows it
 LOG_SPAN = 100.0  # drawn values spanning this ratio (two decades) or more get a log axis
 
 
@@ -42,19 +50,27 @@ LOG_SPAN = 100.0  # drawn values spanning this ratio (two decades) or more get a
 # --------------------------------------------------------------------------------------------
 
 
+def units_suffix(units) -> str:
+    """' [s]' for a real unit; '' for none or a dimensionless one ("1"): an axis of the paper's
+    dimensionless model reads 'fast forcing amplitude $g$', never '... [1]'."""
+    if units is None:
+        return ""
+    units = units.decode() if isinstance(units, bytes) else str(units)
+    return "" if units.strip() in DIMENSIONLESS else f" [{units.strip()}]"
+
+
 def parameter_label(name: str, units=None) -> str:
-    """'fast forcing amplitude $g$ [1]' for a parameter, with its symbol and units (``units``: as
-    a file's coordinate says; default: the model's, dimensionless)."""
-    units = f"[{units}]" if units is not None else UNITS
+    """'fast forcing amplitude $g$' for a parameter, with its symbol and units (``units``: as a
+    file's coordinate says; default: the model's, dimensionless, so none shown)."""
     if name == "direction":
         return "continuation direction"
-    if name in INITIAL_STATE_LONG_NAMES:  # x0, v0: 'initial position $x(0)$ [1]'
+    if name in INITIAL_STATE_LONG_NAMES:  # x0, v0: 'initial position $x(0)$'
         words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
-        return f"{words} {INITIAL_STATE_SYMBOLS[name]} {units}"
+        return f"{words} {INITIAL_STATE_SYMBOLS[name]}{units_suffix(units)}"
     words = PARAMETER_LONG_NAMES.get(name, name)
     if words.endswith(" " + name):
         words = words[: -len(name) - 1]
-    return f"{words} {PARAMETER_SYMBOLS.get(name, name)} {units}"
+    return f"{words} {PARAMETER_SYMBOLS.get(name, name)}{units_suffix(units)}"
 
 
 def _symbol(name: str) -> str:
@@ -79,7 +95,13 @@ def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
                   for name in PARAMETER_NAMES if name not in swept]
         items += [f"x(0) = {_number(config.initial['x'])}", f"$\\dot{{x}}(0)$ = {_number(config.initial['v'])}",
                   f"{run.transient_periods} transient + {run.measure_periods} measured slow periods"]
-    items += [UNITS_NOTE] + ([extra] if extra else [])
+    items += ["all quantities dimensionless"] + ([extra] if extra else [])
+    return _wrap(items, width)
+
+
+def _wrap(items, width):
+    """Items joined by commas into lines of at most ``width`` visible characters (never broken
+    inside an item)."""
     lines, line = [], ""
     for item in items:
         visible = len(item.replace("$", "").replace("\\", ""))  # mathtext markup takes no room
@@ -103,14 +125,246 @@ def _parse_config(text):
         return None
 
 
+_REQUESTED_SIZE = contextvars.ContextVar("vrsweep_figure_size", default=None)
+
+
 def _new_figure(width, height):
-    return Figure(figsize=(width, height), layout="constrained")
+    """A figure of (width, height) inches, or of the size asked for through ``figure_options``
+    (made at that size from the start, so that captions wrap to it)."""
+    return Figure(figsize=_REQUESTED_SIZE.get() or (width, height), layout="constrained")
 
 
 def _title(fig, what, caption):
-    fig.suptitle(f"{what}\n{caption}", fontsize=8.5)
+    """The figure's title: what it shows, then the caption. Also kept as the figure's description
+    (``description``), which goes into the file's metadata even when the title is left off."""
+    fig.suptitle(f"{what}\n{caption}", fontsize="small")  # relative: follows the style's font size
+    fig._vrsweep_description = (what, caption)
+
+
+LEGEND_COLUMN_WIDTH = 2.6  # inches a column of legend entries needs at the legends' font size
+
+
+def _legend_columns(fig, wanted):
+    """``wanted`` legend columns, fewer (down to one) on a narrow figure, e.g. a journal column
+    (--size 3.4,2.6): a legend below the axes must not be wider than the figure."""
+    return max(1, min(wanted, int(fig.get_figwidth() // LEGEND_COLUMN_WIDTH)))
 
 
 def _width(fig):
-    """Characters of caption text that fit across ``fig`` at the title's font size."""
-    return int(fig.get_figwidth() * 15)
+    """Characters of caption text that fit across ``fig`` at the title's font size (the style's
+    'small'; a character is about 0.56 of the font size wide)."""
+    from matplotlib.font_manager import FontProperties
+
+    points = FontProperties(size="small").get_size_in_points()
+    return max(20, int(fig.get_figwidth() * 72.0 / (0.56 * points)))
+
+
+# --------------------------------------------------------------------------------------------
+# Options every figure takes: title, size, style (and vmin/vmax where there is a colour scale)
+# --------------------------------------------------------------------------------------------
+
+
+def resolve_style(style):
+    """A matplotlib style sheet's name (``matplotlib.style.available``, e.g. 'seaborn-v0_8-paper')
+    or the path of a .mplstyle file; UsageError naming ``style`` otherwise. None: no style."""
+    import matplotlib.style
+
+    if style is None:
+        return None
+    text = os.fspath(style)
+    if text in matplotlib.style.available or text == "default":
+        return text
+    if Path(text).expanduser().is_file():
+        path = str(Path(text).expanduser())
+        try:
+            with matplotlib.style.context(path):
+                pass
+        except (OSError, ValueError) as error:
+            raise UsageError.naming("{style} {value}: not a readable matplotlib style file ({reason})",
+                                    value=text, reason=str(error).splitlines()[0]) from None
+        return path
+    raise UsageError.naming("{style} {value}: no such matplotlib style sheet or file; the named styles are "
+                            "{names} (or give the path of a .mplstyle file)",
+                            value=text, names=", ".join(sorted(matplotlib.style.available)))
+
+
+def parse_size(text):
+    """'W,H' in inches -> (W, H), both positive; UsageError naming ``size`` otherwise."""
+    if isinstance(text, (tuple, list)):
+        parts = list(text)
+    else:
+        parts = str(text).replace("x", ",").split(",")
+    try:
+        width, height = (float(part) for part in parts)
+    except (TypeError, ValueError):
+        raise UsageError.naming("{size} {value}: expected WIDTH,HEIGHT in inches, e.g. 3.4,2.6",
+                                value=text) from None
+    if not (0.5 <= width <= 100 and 0.5 <= height <= 100):
+        raise UsageError.naming("{size} {value}: width and height must be between 0.5 and 100 inches",
+                                value=text)
+    return width, height
+
+
+def figure_options(function):
+    """Give a figure function the options every figure takes, as keyword arguments:
+
+    title: False leaves the figure without any title (no suptitle, no panel titles); the full
+        description stays in the figure's ``description`` (the file's metadata, see ``metadata``).
+    size: (width, height) in inches, or 'W,H'.
+    style: a matplotlib style sheet name or .mplstyle path; every artist is made under it, so fonts,
+        colours and line widths follow the style (the figure keeps it for ``render``).
+    vmin, vmax: the colour scale's limits, passed on to functions that draw one (maps); to any
+        other figure they are an error rather than quietly ignored.
+    """
+    takes_limits = "vmin" in inspect.signature(function).parameters
+
+    @functools.wraps(function)
+    def wrapper(*args, title=True, size=None, style=None, vmin=None, vmax=None, **kwargs):
+        import matplotlib.style
+
+        style = resolve_style(style)
+        size = parse_size(size) if size is not None else None
+        if takes_limits:
+            kwargs.update(vmin=vmin, vmax=vmax)
+        elif vmin is not None or vmax is not None:
+            raise UsageError.naming("{vmin} and {vmax} set the colour scale of a map; this figure has none")
+        token = _REQUESTED_SIZE.set(size) if size is not None else None
+        try:
+            with matplotlib.style.context(style or {}):
+                fig = function(*args, **kwargs)
+        finally:
+            if token is not None:
+                _REQUESTED_SIZE.reset(token)
+        if size is not None:
+            fig.set_size_inches(*size)  # a figure not made by _new_figure gets the size too
+        fig._vrsweep_style = style
+        if not title:
+            _drop_titles(fig)
+        return fig
+
+    return wrapper
+
+
+def _drop_titles(fig):
+    """No suptitle and no axes title of any kind (left, centre, right) anywhere on ``fig``."""
+    if fig._suptitle is not None:
+        fig._suptitle.remove()
+        fig._suptitle = None
+    for ax in fig.get_axes():
+        for loc in ("left", "center", "right"):
+            ax.set_title("", loc=loc)
+
+
+def description(fig) -> str:
+    """The figure's full title and caption as plain text (mathtext's $ and \\ dropped)."""
+    what, caption = getattr(fig, "_vrsweep_description", ("", ""))
+    text = f"{what}\n{caption}".strip()
+    for markup, plain in MATHTEXT_PLAIN.items():
+        text = text.replace(markup, plain)
+    return text.replace("$", "").replace("\\", "")
+
+
+MATHTEXT_PLAIN = {"\\dot{x}": "ẋ", "\\tilde\\omega": "ω̃", "\\gamma": "γ", "\\alpha": "α",
+                  "\\omega_0": "ω0", "\\omega": "ω", "\\Omega": "Ω", "\\Delta": "Δ", "\\lambda_1": "λ1",
+                  "\\pi": "π", "\\infty": "∞", "{": "", "}": ""}
+
+
+def metadata(fig, file_format) -> dict:
+    """The metadata matplotlib's savefig writes for ``file_format`` (png, pdf, svg): the figure's
+    title line as Title and its full description (title and caption) as Description (PNG, SVG) or
+    Subject (PDF, whose info dictionary has no Description)."""
+    from vrsweep._version import __version__
+
+    text = description(fig)
+    title = text.splitlines()[0] if text else ""
+    software = f"vrsweep {__version__}"
+    if file_format == "pdf":
+        return {"Title": title, "Subject": text.replace("\n", "; "), "Creator": software}
+    if file_format == "svg":
+        return {"Title": title, "Description": text, "Creator": software}
+    return {"Title": title, "Description": text, "Software": software}
+
+
+def render(fig, file_format, dpi) -> bytes:
+    """``fig`` as the bytes of a .png/.pdf/.svg file at ``dpi``, with its description in the
+    metadata, drawn under the style it was made with."""
+    import io
+
+    import matplotlib.style
+
+    image = io.BytesIO()
+    with matplotlib.style.context(getattr(fig, "_vrsweep_style", None) or {}), \
+            warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fig.savefig(image, format=file_format, dpi=dpi, metadata=metadata(fig, file_format))
+    # matplotlib's own warning names its internals; say what to do instead (layout_note).
+    fig._vrsweep_layout_note = TOO_SMALL if any("collapsed to zero" in str(w.message) for w in caught) else ""
+    for w in caught:
+        if "collapsed to zero" not in str(w.message):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return image.getvalue()
+
+
+TOO_SMALL = ("the figure is too small for its title, labels and legend, so they overlap the axes: "
+             "leave the title off or make the figure larger")
+
+
+def layout_note(fig) -> str:
+    """'' or why the last ``render`` of ``fig`` could not lay it out (too small for its texts)."""
+    return getattr(fig, "_vrsweep_layout_note", "")
+
+
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def read_description(path) -> dict:
+    """{'Title': ..., 'Description': ...} that ``render`` wrote into a figure file (.png, .pdf,
+    .svg); empty strings where the file holds none (a figure not made by vrsweep)."""
+    suffix = Path(path).suffix.lower()
+    found = {"Title": "", "Description": ""}
+    if suffix == ".png":
+        from PIL import Image
+
+        with Image.open(path) as image:
+            text = dict(getattr(image, "text", {}) or {})
+        found.update({key: text.get(key, "") for key in found})
+    elif suffix == ".svg":
+        text = Path(path).read_text(encoding="utf-8", errors="replace")
+        for key, tag in (("Title", "title"), ("Description", "description")):
+            match = re.search(rf"<dc:{tag}>(.*?)</dc:{tag}>", text, re.S)
+            if match:
+                import html
+
+                found[key] = html.unescape(match.group(1))
+    elif suffix == ".pdf":
+        data = Path(path).read_bytes()
+        for key, field in (("Title", b"Title"), ("Description", b"Subject")):
+            match = re.search(rb"/" + field + rb" \((.*?)(?<!\\)\)", data, re.S)
+            if match:
+                found[key] = _pdf_string(match.group(1))
+    return found
+
+
+def _pdf_string(raw: bytes) -> str:
+    """A PDF literal string as text: backslash escapes undone (matplotlib writes plain ASCII or
+    a UTF-16 string with a byte-order mark)."""
+    out, i = bytearray(), 0
+    while i < len(raw):
+        if raw[i:i + 1] == b"\\" and i + 1 < len(raw):
+            nxt = raw[i + 1:i + 2]
+            mapping = {b"n": b"\n", b"r": b"\r", b"t": b"\t", b"(": b"(", b")": b")", b"\\": b"\\"}
+            if nxt in mapping:
+                out += mapping[nxt]
+                i += 2
+                continue
+            if nxt.isdigit():
+                digits = raw[i + 1:i + 4]
+                octal = re.match(rb"[0-7]{1,3}", digits).group(0)
+                out.append(int(octal, 8))
+                i += 1 + len(octal)
+                continue
+        out += raw[i:i + 1]
+        i += 1
+    if out.startswith(b"\xfe\xff"):
+        return out[2:].decode("utf-16-be", errors="replace")
+    return out.decode("latin-1")

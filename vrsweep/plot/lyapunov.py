@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.labels import (
-    FAILED_COLOUR, FAILED_ROW_HEIGHT, RELIABLE_COLOURS, UNITS, _caption, _new_figure, _title, _width, parameter_label,
+    FAILED_COLOUR, FAILED_ROW_HEIGHT, LYAPUNOV_SYMBOL, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _point_classes, _progress_note, _span_grid, _Sweep,
@@ -18,10 +18,10 @@ from vrsweep.plot.sweeps import _draw_bifurcation, _draw_resonance_lines
 
 
 
-LYAPUNOV_SYMBOL = "$\\lambda_1$"
 STUCK_COLOUR = "tab:cyan"
 
 
+@figure_options
 def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     """The largest Lyapunov exponent against one swept parameter, with the zero line (issue 13).
 
@@ -77,7 +77,7 @@ def _draw_lyapunov(ax, view, x_axis):
         ax.plot(x[chaotic], exponent[chaotic], "o", ms=3.5, color=colour, ls="none", gid="chaotic",
                 label=None if k else f"{LYAPUNOV_SYMBOL} > 0 beyond its band: chaotic")
         calm = finite & ~chaotic
-        ax.plot(x[calm], exponent[calm], "o", ms=3.5, mfc="none", color=colour, ls="none", gid="not_chaotic",
+        ax.plot(x[calm], exponent[calm], "o", ms=3.5, mfc="none", mew=1.0, color=colour, ls="none", gid="not_chaotic",
                 label=None if k else "not chaotic: periodic (< 0) or quasi-periodic (= 0)")
         stuck = np.isneginf(exponent)
         n_stuck += int(np.sum(stuck))
@@ -92,11 +92,12 @@ def _draw_lyapunov(ax, view, x_axis):
     ax.axhline(0.0, color="k", lw=0.9, label=f"{LYAPUNOV_SYMBOL} = 0")
     _draw_resonance_lines(ax, view, x_axis, x)
     _span_grid(ax, x)
-    ax.set_ylabel(f"{LYAPUNOV_SYMBOL}, per unit time {UNITS}")
+    ax.set_ylabel(f"{LYAPUNOV_SYMBOL}, per unit time")
     ax.grid(alpha=0.3)
     # Below the axes: a legend inside would cover points (the exponent fills its whole range).
     handles, labels = ax.get_legend_handles_labels()
-    ax.figure.legend(handles, labels, fontsize=7.5, loc="outside lower center", ncol=3)
+    ax.figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",
+                      ncol=_legend_columns(ax.figure, 3))
     if not n_stuck:
         return ""
     points = "1 point" if n_stuck == 1 else f"{n_stuck} points"

@@ -1,6 +1,6 @@
 """What the sweep figures draw from: a Dataset with axes fixed by ``select`` (xarray's labelled
 selection, after a check that each value is on the grid), the curves to draw, which points to
-trust (README "Can R be trusted?") and which failed, and what part of the grid the file holds."""
+trust (docs/trust.md, "Can R be trusted?") and which failed, and what part of the grid the file holds."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from vrsweep.plot.labels import (
     CURVES_NOT_MAP, DIRECTION_NAMES, FAILED_COLOUR, FAILED_ROW_HEIGHT, RELATIVE_ERROR_LIMIT, _number, _parse_config,
 )
 from vrsweep.results import Status
+from vrsweep.store.reading import axis_index
 
 
 def load(path):
@@ -59,7 +60,7 @@ def select(ds, at: dict):
         if name not in axes:
             raise UsageError.naming("{at} {name}=...: {name} is not an axis of {path} (axes: {axes})",
                                     name=name, path=_path(ds), axes=", ".join(axes) or "none")
-        where[name] = _axis_index(name, np.asarray(axes[name], dtype=np.float64), wanted)
+        where[name] = axis_index(name, np.asarray(axes[name], dtype=np.float64), wanted)
     return ds.isel(where)
 
 
@@ -143,43 +144,6 @@ def _coordinate_text(name, value):
     return f"{PARAMETER_SYMBOLS.get(name, name)} = {_number(value)}"
 
 
-def _axis_index(name, values, wanted):
-    """Index of ``wanted`` on an axis; 'up'/'down' allowed for direction. Must match a grid value."""
-    if name == "direction":
-        words = {"up": 1.0, "down": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
-        key = str(wanted).strip().lower()
-        if key not in words:
-            raise UsageError.naming("{at} direction={value}: the direction is up or down (+1 or -1)", value=wanted)
-        wanted = words[key]
-    try:
-        wanted = float(wanted)
-    except ValueError:
-        raise UsageError.naming("{at} {name}={value}: not a number; {name} takes values {span}",
-                                name=name, value=wanted, span=_axis_span(values)) from None
-    index = int(np.argmin(np.abs(values - wanted)))
-    if abs(values[index] - wanted) > 1e-9 * max(1.0, abs(wanted)):
-        raise UsageError.naming("{at} {name}={value}: not a value of the axis {name}; {nearest} (axis: {span})",
-                                name=name, value=_number(wanted), nearest=_nearest_text(values, wanted),
-                                span=_axis_span(values))
-    return index
-
-
-def _nearest_text(values, wanted):
-    """'the nearest are 19.5 and 21' -- the grid values on either side of ``wanted``."""
-    below, above = values[values < wanted], values[values > wanted]
-    sides = ([_number(below.max())] if below.size else []) + ([_number(above.min())] if above.size else [])
-    if len(sides) == 2:
-        return f"the nearest are {sides[0]} and {sides[1]}"
-    return f"the nearest is {sides[0]}"
-
-
-def _axis_span(values):
-    """'81 values from 0 to 40', or the values themselves when there are few."""
-    if len(values) <= 6:
-        return ", ".join(_number(v) for v in values)
-    return f"{len(values)} values from {_number(np.min(values))} to {_number(np.max(values))}"
-
-
 def _choose_x_axis(view, x_axis, need_axes=None):
     axes = view.parameter_axes
     if not axes:
@@ -200,7 +164,7 @@ def _choose_x_axis(view, x_axis, need_axes=None):
 
 
 def _point_classes(view, x_axis, where):
-    """Masks along x_axis: (trusted, aperiodic, failed), the README's rule ("Can R be trusted?").
+    """Masks along x_axis: (trusted, aperiodic, failed), the rule of docs/trust.md, "Can R be trusted?".
 
     Trust is judged by R_err alone: R is trusted where R_err <= RELATIVE_ERROR_LIMIT of R. The
     kind of motion is what ``period`` says: period 0 (no period up to max_period) with a tiny

@@ -7,6 +7,7 @@ import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from vrsweep.errors import UsageError
 from vrsweep.numerics.model import PARAMETER_SYMBOLS
@@ -14,8 +15,8 @@ from vrsweep.plot.analytic import (
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
 )
 from vrsweep.plot.labels import (
-    FAILED_COLOUR, FINE_POINTS, LOG_SPAN, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS, UNITS,
-    _caption, _new_figure, _symbol, _title, _width, parameter_label,
+    FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
+    _caption, _legend_columns, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
@@ -29,12 +30,21 @@ from vrsweep.results import Status
 # --------------------------------------------------------------------------------------------
 
 
+LEGEND_CURVES = 3        # more curves over one other parameter than this: a colour scale, not a legend
+MAX_SCALED_CURVES = 16   # with a colour scale, curves stay apart up to this many
+CURVE_SCALE = "viridis"
+BARRIER_COLOUR = "0.35"
+BARRIER_DASHES = (0, (7, 2, 1.5, 2, 1.5, 2))  # dash-dot-dot: unlike the dotted joins, dashed unstable branches
+
+
+@figure_options
 def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     """R (or |Q|) against one axis with the analytic branches and the resonance (Fig. 1, Fig. 2).
 
-    Markers follow the README ("Can R be trusted?"): filled where R_err <= 10% of R (R can be
+    Markers follow docs/trust.md, "Can R be trusted?": filled where R_err <= 10% of R (R can be
     trusted), hollow where not; a circle where a period was found, a square where none was
-    (period 0); always in the curve's colour. Failed points (status not ok, R = NaN) are x marks
+    (period 0); always in the curve's colour. More than LEGEND_CURVES curves over one other
+    parameter take their colours from a scale of its value, with a colour bar, not a legend. Failed points (status not ok, R = NaN) are x marks
     along the bottom edge, one row per curve, and counted in the title.
 
     log: True/False for a logarithmic/linear response axis; None chooses: logarithmic when the
@@ -46,13 +56,34 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     name = "Q_amplitude" if amplitude else "R"
     view.require(name, "status")
     curves = view.curve_coordinates(x_axis)
-    if len(curves) > MAX_CURVES:
+    # Many curves over one other parameter: colours from a scale of its value, named by a colour
+    # bar, instead of a legend entry (and a resonance entry) per curve.
+    others = [n for n in view.axes if n != x_axis]
+    scale_axis = others[0] if len(curves) > LEGEND_CURVES and len(others) == 1 and others[0] != "direction" else None
+    if len(curves) > (MAX_SCALED_CURVES if scale_axis else MAX_CURVES):
         others = [n for n in view.parameter_axes if n != x_axis]
         raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
                                 "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 6.0)
     ax = fig.subplots()
+    if scale_axis is not None:
+        from matplotlib import colormaps
+        from matplotlib.cm import ScalarMappable
+        from matplotlib.colors import Normalize
+
+        scale_values = np.asarray(view.axes[scale_axis], dtype=np.float64)
+        scale_norm = Normalize(vmin=float(scale_values.min()), vmax=float(scale_values.max()))
+        scale_cmap = colormaps[CURVE_SCALE]
+        # The top of viridis is pale yellow, unreadable as a thin line on white: stop at 90 %.
+        curve_colour = [scale_cmap(0.9 * float(scale_norm(value))) for value in scale_values]
+        bar_cmap = ListedColormap(scale_cmap(np.linspace(0.0, 0.9, 256)))
+        fig.colorbar(ScalarMappable(norm=scale_norm, cmap=bar_cmap), ax=ax,
+                     label=parameter_label(scale_axis, ds[scale_axis].attrs.get("units")),
+                     ticks=scale_values if len(scale_values) <= 12 else None)
+    # The barrier level Delta (or Delta/c) is the same for every curve unless Delta or c is swept.
+    barrier_shared = not any(axis in ("Delta", "c") for axis in others)
+    barrier_drawn = False
     analytic_done = set()
     curve_handles, resonance_handles = [], []
     drawn = []  # every value on the response axis, to choose its scale
@@ -60,7 +91,8 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     symbol = "|Q|" if amplitude else "R"
     what = "numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)"
     for k, (where, label) in enumerate(curves):
-        colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
+        colour = (curve_colour[where[scale_axis]] if scale_axis is not None
+                  else RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)])
         y = view.along(name, x_axis, **where)
         trusted, aperiodic, failed = _point_classes(view, x_axis, where)
         shown = np.isfinite(y) & ~failed
@@ -77,8 +109,12 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
                         mfc=colour if trust else "none", ms=4 if trust else 4.5, mew=1.0, zorder=4,
                         gid=f"{'trusted' if trust else 'untrusted'} {'aperiodic' if no_period else 'periodic'}")
         _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
-        curve_handles.append(Line2D([], [], ls=":", lw=0.8, marker="o", color=colour, ms=4,
-                                    label=f"{what}{', ' + label if label else ''}"))
+        if scale_axis is None:
+            curve_handles.append(Line2D([], [], ls=":", lw=0.8, marker="o", color=colour, ms=4,
+                                        label=f"{what}{', ' + label if label else ''}"))
+        elif not curve_handles:
+            curve_handles.append(Line2D([], [], ls=":", lw=0.8, marker="o", color="0.3", ms=4,
+                                        label=f"{what}; colour: {_symbol(scale_axis)} (colour bar)"))
 
         # The analytic side depends on the parameters only, not on the continuation direction.
         parameter_where = {axis: index for axis, index in where.items() if axis != "direction"}
@@ -93,11 +129,20 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
         _draw_branches(ax, branches, colour)
         barrier = _fine_parameters(parameters, x_axis, fine)
         barrier_level = barrier["Delta"] if amplitude else barrier["Delta"] / barrier["c"]
-        ax.plot(fine, barrier_level, color=colour, lw=0.8, ls=(0, (1, 3)), zorder=1)
+        # Its own dash pattern (never the dotted line that joins a sweep's points) and, when every
+        # curve shares it (Delta and c not swept), drawn once in its own colour.
+        if not (barrier_shared and barrier_drawn):
+            ax.plot(fine, barrier_level, color=BARRIER_COLOUR if barrier_shared else colour, lw=1.0,
+                    ls=BARRIER_DASHES, zorder=1, gid="barrier")
+            barrier_drawn = True
         for position in resonance_positions(parameters, x_axis, fine):
             ax.axvline(position, color=colour, ls="-.", lw=0.9, zorder=1)
-            resonance_handles.append(Line2D([], [], color=colour, ls="-.", lw=0.9,
-                                            label=_resonance_label(x_axis, position)))
+            if scale_axis is None:
+                resonance_handles.append(Line2D([], [], color=colour, ls="-.", lw=0.9,
+                                                label=_resonance_label(x_axis, position)))
+            elif not resonance_handles:
+                resonance_handles.append(Line2D([], [], color="0.3", ls="-.", lw=0.9,
+                                                label="resonance (eq3.4), in the curve's colour"))
 
     analytic = "A" if amplitude else "A/c"
     error = "error" if amplitude else "$R_{err}$"  # R_err/R is also the relative error of |Q|
@@ -105,10 +150,10 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     handles.append(Line2D([], [], ls="none", marker="o", color="k", ms=4,
                           label=f"filled: {error} ≤ {RELATIVE_ERROR_LIMIT:.0%} of {symbol} (trusted)"))
     if kinds_seen["untrusted"]:
-        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=4.5,
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=4.5, mew=1.0,
                               label=f"hollow: {error} > {RELATIVE_ERROR_LIMIT:.0%} of {symbol} (window-dependent)"))
     if kinds_seen["aperiodic"]:
-        handles.append(Line2D([], [], ls="none", marker="s", mfc="none", mec="k", ms=4.5,
+        handles.append(Line2D([], [], ls="none", marker="s", mfc="none", mec="k", ms=4.5, mew=1.0,
                               label="square: no period found (period 0)"))
     failure_note = _failure_note(view, "along the bottom edge")
     if failure_note:
@@ -118,16 +163,17 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     if view.config is not None:
         handles.append(Line2D([], [], color="k", lw=1.3, label=f"analytic {analytic}, stable (corrected eq2.27)"))
         handles.append(Line2D([], [], color="k", lw=1.3, ls="--", label=f"analytic {analytic}, unstable"))
-        handles.append(Line2D([], [], color="k", lw=0.8, ls=(0, (1, 3)),
+        handles.append(Line2D([], [], color=BARRIER_COLOUR if barrier_shared else "k", lw=1.0,
+                              ls=BARRIER_DASHES,
                               label=f"{'A = Δ' if amplitude else 'A/c = Δ/c'}: above, the analytic motion "
                                     "crosses the barrier"))
     handles += resonance_handles
-    fig.legend(handles=handles, fontsize=7.5, loc="outside lower center", ncol=2)
+    fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
     ax.set_xlabel(parameter_label(x_axis))
     if amplitude:
-        ax.set_ylabel(f"amplitude $|Q|$ of x at $\\omega$, analytic $A$ {UNITS}")
+        ax.set_ylabel(f"amplitude $|Q|$ of x at $\\omega$, analytic $A$")
     else:
-        ax.set_ylabel(f"gain $R = |Q|/c$, analytic $A/c$ {UNITS}")
+        ax.set_ylabel(f"gain $R = |Q|/c$, analytic $A/c$")
     scale_note = ""
     span = _decades(drawn)
     if log is None:
@@ -159,8 +205,20 @@ def _decades(arrays):
 
 
 MAP_LABELS = {"R": "gain $R = |Q|/c$", "Q_amplitude": "amplitude $|Q|$",
-              "impacts_per_period": "mean impacts per slow period $2\\pi/\\omega$"}
+              "impacts_per_period": "mean impacts per slow period $2\\pi/\\omega$",
+              "lyapunov": f"{LYAPUNOV_SYMBOL}, per unit time"}
 LONG_NAME_IN_LABEL = 45  # characters of a variable's long_name that fit beside a colour bar
+CAP_PERCENTILE = 99      # a linear map's default top: one wild point must not wash out the map ...
+CAP_MARGIN = 0.1         # ... if the largest value is more than 10 % of the scale above it (else no cap)
+NO_VALUE_COLOUR = "0.35"  # an integer map's 'no period' / 'failed' value: dark grey, set apart
+NOT_COMPUTED_COLOUR = "0.85"  # the axes' background, seen where a cell has no value
+# Integer variables whose special values mean 'none' rather than a number (store/variables.py,
+# analysis/attractors.py): drawn grey and named on the colour bar.
+SPECIAL_VALUES = {"period": {0: "no period"}, "impacts_per_cycle": {-1: "no period"},
+                  "attractor": {-1: "failed"}}
+STATUS_COLOURS = {"not_computed": "0.85", "ok": "tab:green", "max_steps": "tab:orange", "diverged": "tab:red",
+                  "chatter_limit": "tab:purple", "step_too_small": "tab:brown", "non_finite": "k"}
+MAX_TICK_LABELS = 20  # an integer colour bar with more values labels every k-th only
 
 
 def mappable_variables(ds) -> list:
@@ -171,54 +229,184 @@ def mappable_variables(ds) -> list:
             if name not in ("done", "owned") and set(variable.dims) == axes and variable.dtype.kind in "iuf"]
 
 
-def _units_text(attrs):
-    """'[1]' from a variable's ``units`` attribute ('' for a flag variable, which has none)."""
-    units = attrs.get("units")
-    return f"[{units}]" if units is not None else ""
-
-
 def _variable_label(ds, name):
-    """The colour bar's label: what the variable is and its units, from the file's attributes."""
+    """The colour bar's label: what the variable is and its units, from the file's attributes
+    (dimensionless units are not shown)."""
     attrs = ds[name].attrs
     words = MAP_LABELS.get(name)
     if words is None:
         long_name = str(attrs.get("long_name", ""))
         words = name if not long_name or len(long_name) > LONG_NAME_IN_LABEL else f"{name}: {long_name}"
-    return f"{words} {_units_text(attrs)}".rstrip()
+    return f"{words}{units_suffix(attrs.get('units'))}"
 
 
-def _map_norm(values, log, counts=False):
-    """Colours from 0 (or the smallest value, if negative) to the 99th percentile of a float
-    variable (one wild point must not wash out the map), to the largest of a count or a label
-    (``counts``: an integer variable, its points not computed NaN here)."""
+def _flag_names(attrs):
+    """{value: meaning} of a CF flag variable (status), {} for any other."""
+    values, meanings = attrs.get("flag_values"), attrs.get("flag_meanings")
+    if values is None or meanings is None:
+        return {}
+    meanings = meanings.decode() if isinstance(meanings, bytes) else str(meanings)
+    return {int(v): m for v, m in zip(np.ravel(values), meanings.split())}
+
+
+def discrete_scale(name, values, attrs=None):
+    """The colour scale of an integer variable: one colour per value present, the values that mean
+    'none' (period 0, impacts_per_cycle -1: no period; attractor -1: failed) in grey and named.
+
+    values: the variable's values (any shape; NaN where not computed). Returns (cmap, norm, ticks,
+    tick_labels): a ListedColormap of exactly len(ticks) colours, a BoundaryNorm putting each
+    value present in its own colour, and where on a uniformly spaced colour bar to name each.
+    """
+    from matplotlib import colormaps
+
+    finite = np.asarray(values, dtype=np.float64)
+    present = np.unique(finite[np.isfinite(finite)]).astype(np.int64)
+    if present.size == 0:
+        present = np.array([0])
+    flags = _flag_names(attrs or {})
+    special = SPECIAL_VALUES.get(name, {})
+    ordinary = [v for v in present if v not in special and v not in flags]
+    # Qualitative colours without their greys, which belong to 'no period' and 'not computed'.
+    tab10 = [colormaps["tab10"](k) for k in range(10) if k != 7]
+    tab20 = [colormaps["tab20"](k) for k in range(20) if k not in (14, 15)]
+    if len(ordinary) <= len(tab10):
+        palette = tab10[: len(ordinary)]
+    elif len(ordinary) <= len(tab20):
+        palette = tab20[: len(ordinary)]
+    else:
+        palette = list(colormaps["viridis"](np.linspace(0.0, 1.0, len(ordinary))))
+    colours, labels = [], []
+    ordinary_colours = dict(zip(ordinary, palette))
+    for value in present:
+        if value in flags:
+            colours.append(STATUS_COLOURS.get(flags[value], "0.5"))
+            labels.append(flags[value])
+        elif value in special:
+            colours.append(NO_VALUE_COLOUR)
+            labels.append(f"{value}: {special[value]}")
+        else:
+            colours.append(ordinary_colours[value])
+            labels.append(str(value))
+    cmap = ListedColormap(colours)
+    edges = np.concatenate([[present[0] - 0.5], (present[:-1] + present[1:]) / 2.0, [present[-1] + 0.5]])
+    norm = BoundaryNorm(edges, cmap.N)
+    if len(present) > MAX_TICK_LABELS:  # every k-th value named, the special ones always
+        step = int(np.ceil(len(present) / MAX_TICK_LABELS))
+        labels = [text if (k % step == 0 or present[k] in special or present[k] in flags) else ""
+                  for k, text in enumerate(labels)]
+    # Ticks in the middle of each block (equal blocks: the colour bar's spacing="uniform").
+    return cmap, norm, list((edges[:-1] + edges[1:]) / 2.0), labels
+
+
+def continuous_scale(name, values, log=False, vmin=None, vmax=None):
+    """The colour scale of a float variable: (norm, cmap, extend, (short_note, long_note)).
+
+    Linear: from 0 (or the smallest value, if negative) to the CAP_PERCENTILE-th percentile, so one
+    wild point does not wash out the map (unless the largest value is within CAP_MARGIN of the
+    scale above it); a cap is stated, on the colour bar ('capped at 9.74 = 99th pct.; max 16.5')
+    and in the caption (``long_note``), and shown by the colour bar's arrow (``extend``).
+    lyapunov: a diverging scale symmetric about zero, -m..m with m the largest |lambda_1|.
+    log: from the smallest positive value. vmin/vmax replace either end (for lyapunov one of
+    them sets both, symmetric).
+    """
     from matplotlib.colors import LogNorm, Normalize
 
+    values = np.asarray(values, dtype=np.float64)
     finite = values[np.isfinite(values)]
-    low = min(0.0, float(finite.min())) if finite.size else 0.0
-    if not finite.size:
-        high = 1.0
-    elif counts:
-        high = float(finite.max())
+    cmap = "viridis"
+    note_top = ""
+    if name == "lyapunov" and not log:
+        cmap = "RdBu_r"  # the sign is the message: chaos above zero (red), periodic below (blue)
+        if vmin is None and vmax is None:
+            span = float(np.abs(finite).max()) if finite.size else 1.0
+            low, high = -(span or 1.0), (span or 1.0)
+        elif vmin is None or vmax is None:
+            span = abs(vmax if vmax is not None else vmin)
+            low, high = -span, span
+        else:
+            low, high = vmin, vmax
     else:
-        high = float(np.percentile(finite, 99))
-    if high <= low:
-        high = low + 1.0
-    positive = finite[finite > 0]
-    if log and positive.size:
-        return LogNorm(vmin=float(positive.min()), vmax=max(high, float(positive.min()) * 10)), finite
-    return Normalize(vmin=low, vmax=high), finite
+        low = min(0.0, float(finite.min())) if finite.size else 0.0
+        high = float(np.percentile(finite, CAP_PERCENTILE)) if finite.size else 1.0
+        if finite.size and float(finite.max()) > high + CAP_MARGIN * (high - low):
+            note_top = f"the {CAP_PERCENTILE}th percentile"
+        elif finite.size:
+            high = float(finite.max())  # the top is no outlier: no cap needed
+        if log:
+            positive = finite[finite > 0]
+            low = float(positive.min()) if positive.size else 1e-3
+            high = max(high, low * 10)
+        if vmin is not None:
+            low = vmin
+        if vmax is not None:
+            high, note_top = vmax, ("set" if finite.size and vmax < float(finite.max()) else "")
+        if high <= low:
+            if vmin is not None and vmax is not None:
+                raise UsageError.naming("{vmin} {low} and {vmax} {high}: the bottom of the colour scale must be "
+                                        "below its top", low=_number(vmin), high=_number(vmax))
+            high = low + 1.0 if vmax is None else high
+            low = low if vmax is None else high - 1.0
+        if log and low <= 0:
+            raise UsageError.naming("{vmin} {value}: a logarithmic colour scale starts above zero", value=_number(low))
+    norm = (LogNorm if log and name != "lyapunov" else Normalize)(vmin=low, vmax=high)
+    above = int(np.sum(finite > high))
+    below = int(np.sum(finite < low))
+    extend = {(False, False): "neither", (True, False): "max", (False, True): "min", (True, True): "both"}[
+        (above > 0, below > 0)]
+    long_notes, short_notes = [], []
+    if above:
+        percentile = note_top == f"the {CAP_PERCENTILE}th percentile"
+        cells = "1 cell" if above == 1 else f"{above} cells"
+        long_notes.append(f"capped at {_number(high)}{', ' + note_top if percentile else ''}: {cells} above, "
+                          f"up to {_number(float(finite.max()))}, in the top colour ▲")
+        short_notes.append(f"capped at {high:.3g}{f' = {CAP_PERCENTILE}th pct.' if percentile else ''}; "
+                           f"max {float(finite.max()):.3g}")
+    if below:
+        cells = "1 cell" if below == 1 else f"{below} cells"
+        long_notes.append(f"floored at {_number(low)}: {cells} below, down to {_number(float(finite.min()))} ▼")
+        short_notes.append(f"floored at {low:.3g}; min {float(finite.min()):.3g}")
+    return norm, cmap, extend, ("\n".join(short_notes), "; ".join(long_notes))
 
 
-def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
+def _cell_edges(centres):
+    """Edges of the cells pcolormesh(shading='nearest') draws around ``centres`` (n -> n + 1)."""
+    centres = np.asarray(centres, dtype=np.float64)
+    if centres.size == 1:
+        return np.array([centres[0] - 0.5, centres[0] + 0.5])
+    middles = (centres[:-1] + centres[1:]) / 2.0
+    return np.concatenate([[2 * centres[0] - middles[0]], middles, [2 * centres[-1] - middles[-1]]])
+
+
+def _hatch_cells(ax, xs, ys, mask, hatch="////"):
+    """Hatch the cells of ``mask`` (indexed [x, y]) of a nearest-shaded map; returns the collection."""
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Rectangle
+
+    x_edges, y_edges = _cell_edges(xs), _cell_edges(ys)
+    cells = [Rectangle((x_edges[i], y_edges[j]), x_edges[i + 1] - x_edges[i], y_edges[j + 1] - y_edges[j])
+             for i, j in zip(*np.nonzero(mask))]
+    collection = PatchCollection(cells, facecolor="none", edgecolor="0.15", linewidth=0.0, hatch=hatch,
+                                 gid="within_error_of_zero")
+    ax.add_collection(collection, autolim=False)
+    return collection
+
+
+@figure_options
+def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
     """A heat map of ``name`` over two axes with the resonance curve; untrusted R dotted, failed x.
 
     name: R, Q_amplitude, impacts_per_period or any other variable with one value per grid point
-    (``mappable_variables``); points not computed are grey. log: a logarithmic colour scale (from
-    the smallest positive value up). The legend goes below the maps, where it hides no cell.
+    (``mappable_variables``); points not computed are grey. An integer variable (period,
+    impacts_per_cycle, attractor, status...) gets one colour per value present, 'no period' set
+    apart in dark grey and named (``discrete_scale``); lyapunov a diverging scale symmetric about
+    zero, cells within their 95 % band of zero hatched; any other a continuous scale whose cap is
+    stated on the colour bar (``continuous_scale``). log: a logarithmic colour scale (from the
+    smallest positive value up). vmin, vmax: the ends of a continuous scale. The legend goes below
+    the maps, where it hides no cell. Also title, size, style (``figure_options``).
     """
     view = _Sweep(ds)
     x_axis, y_axis = _map_axes(view, x_axis)
-    if name in MAP_LABELS:
+    if name in MAP_LABELS and name != "lyapunov":
         view.require(name)  # the usual maps: a file without them is from an older vrsweep
     mappable = mappable_variables(ds)
     if name not in mappable:
@@ -229,45 +417,55 @@ def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
     axes = np.atleast_1d(fig.subplots(1, len(panels), squeeze=False)[0])
     label = _variable_label(ds, name)
     values = view.variables[name]
-    counts = values.dtype.kind != "f"
-    if counts:  # a count or a label: points not computed hold a fill value
+    integer = values.dtype.kind != "f"
+    if integer:  # a count or a label: points not computed hold a fill value
+        if log:
+            raise UsageError.naming("{log}: {var} {value} holds integers, drawn one colour per value", value=name)
+        if vmin is not None or vmax is not None:
+            raise UsageError.naming("{vmin} and {vmax} set a continuous colour scale; {var} {value} holds "
+                                    "integers, drawn one colour per value", value=name)
         values = np.where(np.asarray(ds["done"].values, dtype=bool), values, np.nan)
-    norm, finite = _map_norm(values, log, counts)
-    cmap = "viridis"
-    if name == "lyapunov" and not log and finite.size:
-        # The sign is the message (chaos above zero, periodic below): a diverging map centred on 0.
-        from matplotlib.colors import TwoSlopeNorm
-
-        span = max(float(np.abs(finite).max()), 1e-12)
-        norm = TwoSlopeNorm(vcenter=0.0, vmin=min(float(finite.min()), -1e-3 * span),
-                            vmax=max(float(finite.max()), 1e-3 * span))
-        cmap = "RdBu_r"
+        cmap, norm, ticks, tick_labels = discrete_scale(name, values, ds[name].attrs)
+        extend, cap_note, cap_caption = "neither", "", ""
+    else:
+        shown = np.where(np.isneginf(values), np.nan, values)  # -inf (stuck) has its own mark
+        norm, cmap, extend, (cap_note, cap_caption) = continuous_scale(name, shown, log=log, vmin=vmin, vmax=vmax)
     handles = {}
+    X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
     for ax, (where, panel_title) in zip(axes, panels):
         z = _as_x_y(view, name, x_axis, y_axis, where)
-        if ds[name].dtype.kind != "f":
+        if integer:
             z = np.where(_as_x_y(view, "done", x_axis, y_axis, where) > 0, z, np.nan)
-        ax.set_facecolor("0.8")  # NaN cells (not computed, or failed) show the background
+        ax.set_facecolor(NOT_COMPUTED_COLOUR)  # NaN cells (not computed, or failed) show the background
         minus_infinity = np.isneginf(z)  # lyapunov where the mass stuck: no colour can say -inf
         z = np.where(minus_infinity, np.nan, z)
         mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap,
                              norm=norm)
+        if name == "lyapunov" and "lyapunov_err" in view.variables:
+            error = _as_x_y(view, "lyapunov_err", x_axis, y_axis, where)
+            with np.errstate(invalid="ignore"):
+                near_zero = np.isfinite(z) & (np.abs(z) <= error)
+            if near_zero.any():
+                _hatch_cells(ax, view.axes[x_axis], view.axes[y_axis], near_zero)
+                handles["near_zero"] = Patch(facecolor="white", edgecolor="0.15", hatch="////",
+                                             label=f"hatched: |{LYAPUNOV_SYMBOL}| within its 95 % band "
+                                                   "(lyapunov_err) of zero")
         if minus_infinity.any():
-            X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
             ax.plot(X[minus_infinity], Y[minus_infinity], "v", color="k", mec="w", mew=0.5, ms=4.5, ls="none",
                     gid="minus_infinity")
             handles["minus_infinity"] = Line2D([], [], ls="none", marker="v", color="k", mec="w", mew=0.5,
-                                               label="−∞ (lyapunov: stuck on the barrier)")
-        bar = fig.colorbar(mesh, ax=ax, label=label + (" (log scale)" if log else ""),
-                           extend="max" if finite.size and finite.max() > norm.vmax else "neither")
-        if cmap == "RdBu_r":  # each half of the diverging scale gets its own ticks
-            ticks = np.unique(np.concatenate([np.linspace(norm.vmin, 0.0, 5), np.linspace(0.0, norm.vmax, 5)]))
-            bar.set_ticks(ticks, labels=[f"{tick:.3g}" for tick in ticks])
-        if counts and not log:
-            from matplotlib.ticker import MaxNLocator
-
-            bar.locator = MaxNLocator(integer=True)  # a period or a label has no value between integers
-            bar.update_ticks()
+                                               label=f"{LYAPUNOV_SYMBOL} = −∞: stuck on the barrier")
+        bar_label = label + (" (log scale)" if log else "") + (f"\n{cap_note}" if cap_note else "")
+        # spacing="uniform" (the default, said here because discrete_scale's ticks rely on it): an
+        # integer map's values get equal blocks on the colour bar, however far apart they are.
+        bar = fig.colorbar(mesh, ax=ax, label=bar_label, extend=extend, spacing="uniform")
+        if integer:
+            bar.set_ticks(ticks, labels=tick_labels)
+            bar.minorticks_off()
+        elif cmap == "RdBu_r":  # zero in the middle, ticks symmetric about it
+            ticks = np.linspace(norm.vmin, norm.vmax, 9) if norm.vmin == -norm.vmax else None
+            if ticks is not None:
+                bar.set_ticks(ticks, labels=[f"{tick:.2g}" for tick in ticks])
         resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
         if resonance is not None:
             handles["resonance"] = resonance
@@ -278,7 +476,6 @@ def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
                 trusted, _, f = _point_classes(view, x_axis, {**where, y_axis: j})
                 computed = view.along("status", x_axis, **where, **{y_axis: j}) == Status.OK
                 untrusted[:, j], failed[:, j] = computed & ~trusted, f
-            X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
             if untrusted.any():
                 ax.plot(X[untrusted], Y[untrusted], ".", color="white", ms=2.5, gid="untrusted")
                 handles["untrusted"] = Line2D(
@@ -291,17 +488,18 @@ def map_figure(ds, name="R", x_axis=None, log=False) -> Figure:
         ax.set_xlabel(parameter_label(x_axis, ds[x_axis].attrs.get("units")))
         ax.set_ylabel(parameter_label(y_axis, ds[y_axis].attrs.get("units")))
         if panel_title:
-            ax.set_title(panel_title, fontsize=9)
+            ax.set_title(panel_title, fontsize="medium")
     if handles:
-        legend = fig.legend(handles=list(handles.values()), fontsize=7, loc="outside lower center",
-                            ncol=len(handles), facecolor="0.3", framealpha=0.9)
+        legend = fig.legend(handles=list(handles.values()), fontsize="x-small", loc="outside lower center",
+                            ncol=_legend_columns(fig, min(len(handles), 3)), facecolor="0.3", framealpha=0.9)
         for text in legend.get_texts():
             text.set_color("white")
     notes = "; ".join(note for note in (_progress_note(view), _failure_note(view, "on its cell")
-                                        if name in ("R", "Q_amplitude") and "status" in view.variables else "")
+                                        if name in ("R", "Q_amplitude") and "status" in view.variables else "",
+                                        f"colour scale {cap_caption}" if cap_caption else "")
                       if note)
     grey = "not computed or failed" if ds[name].dtype.kind == "f" else "not computed"
-    _title(fig, f"{label.split(' [')[0]} over {_symbol(x_axis)} and {_symbol(y_axis)} (grey: no value: {grey})",
+    _title(fig, f"{label.splitlines()[0]} over {_symbol(x_axis)} and {_symbol(y_axis)} (light grey: no value: {grey})",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
@@ -311,7 +509,8 @@ def _as_x_y(view, name, x_axis, y_axis, where):
     return view.ds[name].isel(where).transpose(x_axis, y_axis).values.astype(np.float64)
 
 
-def impacts_figure(ds, x_axis=None, log=False) -> Figure:
+@figure_options
+def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
     """Mean impacts per slow period over the measurement window: a curve (1 axis) or a map (2).
 
     log: a logarithmic count axis (symmetric-log, so that zero counts stay on it) or colour scale.
@@ -319,7 +518,9 @@ def impacts_figure(ds, x_axis=None, log=False) -> Figure:
     view = _Sweep(ds)
     view.require("impacts_per_period")
     if len(view.parameter_axes) == 2 and x_axis is None and _sweep_default(view.axes) == "map":
-        return map_figure(ds, "impacts_per_period", log=log)
+        return map_figure(ds, "impacts_per_period", log=log, vmin=vmin, vmax=vmax)
+    if vmin is not None or vmax is not None:
+        raise UsageError.naming("{vmin} and {vmax} set the colour scale of a map; this is a curve")
     x_axis = _choose_x_axis(view, x_axis)
     curves = view.curve_coordinates(x_axis)
     if len(curves) > MAX_CURVES:
@@ -341,7 +542,7 @@ def impacts_figure(ds, x_axis=None, log=False) -> Figure:
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ls="none",
                 label="integration failed (no count)")
     ax.set_xlabel(parameter_label(x_axis))
-    ax.set_ylabel(f"mean impacts per slow period $2\\pi/\\omega$ {UNITS}")
+    ax.set_ylabel(f"mean impacts per slow period $2\\pi/\\omega$")
     if log:
         ax.set_yscale("symlog", linthresh=1.0)  # zero counts stay on the axis
         ax.set_ylim(-0.1, max(2.0, 1.5 * top))
@@ -350,7 +551,7 @@ def impacts_figure(ds, x_axis=None, log=False) -> Figure:
         ax.set_ylim(-0.04 * max(top, 1.0), 1.06 * max(top, 1.0))
     _span_grid(ax, x)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize="small", loc="best")
     notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
     _title(fig, f"Impacts per slow period against {PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
                 "(mean over the measurement window)",
@@ -358,6 +559,7 @@ def impacts_figure(ds, x_axis=None, log=False) -> Figure:
     return fig
 
 
+@figure_options
 def status_figure(ds, x_axis=None) -> Figure:
     """How each point ended (ok, max_steps, diverged, ...): a strip (1 axis) or a map (2 axes)."""
     view = _Sweep(ds)
@@ -377,11 +579,11 @@ def status_figure(ds, x_axis=None) -> Figure:
             z = _as_x_y(view, "status", x_axis, y_axis, where)
             mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap, norm=norm)
             bar = fig.colorbar(mesh, ax=ax, ticks=codes)
-            bar.ax.set_yticklabels(names, fontsize=7)
+            bar.ax.set_yticklabels(names, fontsize="x-small")
             ax.set_xlabel(parameter_label(x_axis))
             ax.set_ylabel(parameter_label(y_axis))
             if panel_title:
-                ax.set_title(panel_title, fontsize=9)
+                ax.set_title(panel_title, fontsize="medium")
     else:
         x_axis = _choose_x_axis(view, x_axis, need_axes=1)
         ax = fig.subplots()
@@ -396,14 +598,14 @@ def status_figure(ds, x_axis=None) -> Figure:
                        c=[colours[codes.index(s)] for s in status], marker=shapes[k % len(shapes)],
                        s=18, edgecolors="k", linewidths=0.3,
                        label=f"{label}: {_row_name(k, len(curves))}" if label else None)
-        ax.set_yticks(codes, names, fontsize=8)
+        ax.set_yticks(codes, names, fontsize="small")
         ax.set_ylim(min(codes) - 0.5, max(codes) + 0.5)
         _span_grid(ax, view.axes[x_axis])
         ax.set_xlabel(parameter_label(x_axis))
         ax.set_ylabel("status of the point")
         ax.grid(alpha=0.3)
         if len(curves) > 1:
-            fig.legend(fontsize=7.5, loc="outside lower center", ncol=min(len(curves), 4))
+            fig.legend(fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, min(len(curves), 4)))
     counts = {name: int(np.sum(view.variables["status"] == code)) for code, name in zip(codes, names)}
     summary = ", ".join(f"{n} {name}" for name, n in counts.items() if n)
     _title(fig, f"How each point's integration ended ({summary})",
@@ -421,6 +623,7 @@ def _row_name(k, n):
     return f"row {k + 1} of {n} from below"
 
 
+@figure_options
 def bifurcation_figure(ds, x_axis=None) -> Figure:
     """Stroboscopic x(nT) against one swept parameter, every sample a dot (issue 5)."""
     view = _Sweep(ds)
@@ -460,9 +663,9 @@ def _draw_bifurcation(ax, view, x_axis):
     if view.config is not None:
         ax.axhline(view.parameters()["Delta"], color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
     _span_grid(ax, x)  # the whole grid, even where every point failed
-    ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$ {UNITS}")
+    ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7.5, loc="best", markerscale=3)
+    ax.legend(fontsize="x-small", loc="best", markerscale=3)
     return failure_note
 
 

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
 from vrsweep.numerics.model import PARAMETER_NAMES
-from vrsweep.plot.labels import UNITS, _caption, _new_figure, _number, _parse_config, _title, _width
+from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _title, _width
 from vrsweep.results import Status
 
 
@@ -96,6 +96,7 @@ TRANSIENT_COLOUR = "0.65"
 STEADY_COLOUR = "tab:blue"
 
 
+@figure_options
 def trajectory_figure(data, periods=None) -> Figure:
     """Position, velocity and phase portrait; original above effective (Fig. 3-5).
 
@@ -125,18 +126,18 @@ def trajectory_figure(data, periods=None) -> Figure:
         if delta is not None:
             ax_x.axhline(delta, color="k", lw=0.8, ls="--")
             ax_phase.axvline(delta, color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
-        ax_phase.legend(fontsize=7, loc="lower left")
+        ax_phase.legend(fontsize="x-small", loc="best")
         status = "" if run.status == Status.OK else f" (stopped: {run.status.name.lower()})"
         for ax, what in ((ax_x, "position"), (ax_v, "velocity"), (ax_phase, "phase portrait")):
-            ax.set_title(f"({next(letters)}) {ROW_TITLES.get(run.model, run.model)}: {what}{status}", fontsize=9)
+            ax.set_title(f"({next(letters)}) {ROW_TITLES.get(run.model, run.model)}: {what}{status}", fontsize="small")
             ax.grid(alpha=0.3)
         for ax in (ax_x, ax_v):
-            ax.set_xlabel(f"time $t$ {UNITS}")
+            ax.set_xlabel(f"time $t$")
             ax.set_xlim(*window)
-        ax_x.set_ylabel(f"position $x$ {UNITS}")
-        ax_v.set_ylabel(f"velocity $\\dot{{x}}$ {UNITS}")
-        ax_phase.set_xlabel(f"position $x$ {UNITS}")
-        ax_phase.set_ylabel(f"velocity $\\dot{{x}}$ {UNITS}")
+        ax_x.set_ylabel(f"position $x$")
+        ax_v.set_ylabel(f"velocity $\\dot{{x}}$")
+        ax_phase.set_xlabel(f"position $x$")
+        ax_phase.set_ylabel(f"velocity $\\dot{{x}}$")
     samples = data.attrs.get("samples_per_period", "?")
     _title(fig, f"Trajectory at {_point_text(config)}, {_window_text(window, data)}: position, velocity, "
                 f"phase portrait ({samples} dense-output samples per slow period, impacts exact; dashed: barrier)",
@@ -145,6 +146,7 @@ def trajectory_figure(data, periods=None) -> Figure:
     return fig
 
 
+@figure_options
 def impacts_per_period_figure(datasets) -> Figure:
     """Impacts in each slow period against the period number, transient included (Fig. impact_no).
 
@@ -171,15 +173,15 @@ def impacts_per_period_figure(datasets) -> Figure:
                           label=f"mean over the measured periods: {mean:.2f}")
         letter = f"({'abcdefgh'[k]}) " if len(datasets) > 1 else ""
         ax.set_title(f"{letter}{_point_text(config)}  ·  {os.path.basename(data.path or '')}  ·  "
-                     f"{int(counts.sum())} impacts in {len(counts)} slow periods", fontsize=9)
-        ax.set_ylabel(f"impacts per slow period {UNITS}")
+                     f"{int(counts.sum())} impacts in {len(counts)} slow periods", fontsize="small")
+        ax.set_ylabel(f"impacts per slow period")
         top = max(1.0, float(counts.max(initial=0)))
         ax.set_ylim(-0.06 * top, 1.08 * top)  # room for the markers of 0 and of the largest count
         ax.yaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_xlim(0.5, len(counts) + 0.5)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7.5, loc="upper right")
-    axes[-1].set_xlabel(f"slow period number $n$ (period $T = 2\\pi/\\omega$) {UNITS}")
+        ax.legend(fontsize="x-small", loc="best")
+    axes[-1].set_xlabel(f"slow period number $n$ (period $T = 2\\pi/\\omega$)")
     config = configs[0]
     varying = {}
     if config is not None and len(datasets) > 1:
@@ -202,6 +204,7 @@ SLOW_FLOW_STYLES = {
 }
 
 
+@figure_options
 def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_literal")) -> Figure:
     """The effective system (numerical) against the first-order reconstruction eq2.21 (Fig. 6)."""
     if "effective" not in data.runs or not data.slow_flow:
@@ -235,17 +238,17 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
         ax_x.axhline(delta, color="k", lw=0.8, ls="-.", label="barrier $x = \\Delta$")
         ax_phase.axvline(delta, color="k", lw=0.8, ls="-.")
     for ax, what, letter in ((ax_x, "position", "a"), (ax_v, "velocity", "b"), (ax_phase, "phase portrait", "c")):
-        ax.set_title(f"({letter}) {what}", fontsize=9)
+        ax.set_title(f"({letter}) {what}", fontsize="small")
         ax.grid(alpha=0.3)
     for ax in (ax_x, ax_v):
-        ax.set_xlabel(f"time $t$ {UNITS}")
+        ax.set_xlabel(f"time $t$")
         ax.set_xlim(*window)
-    ax_x.set_ylabel(f"position $x$, $X$ {UNITS}")
-    ax_v.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$ {UNITS}")
-    ax_phase.set_xlabel(f"position $x$, $X$ {UNITS}")
-    ax_phase.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$ {UNITS}")
+    ax_x.set_ylabel(f"position $x$, $X$")
+    ax_v.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$")
+    ax_phase.set_xlabel(f"position $x$, $X$")
+    ax_phase.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$")
     handles, labels = ax_x.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=7.5)
+    fig.legend(handles, labels, loc="outside lower center", ncol=_legend_columns(fig, 2), fontsize="x-small")
     _title(fig, f"Effective system against the slow-flow reconstruction X = R cos(ωt + θ) (eq2.21) at "
                 f"{_point_text(config)}, {_window_text(window, data)}; the first-order theory ignores the barrier",
            _caption(data.path or "", config, "effective system eq2.10 and its slow flow", width=_width(fig)))

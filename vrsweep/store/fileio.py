@@ -3,7 +3,7 @@
 Everything vrsweep writes whole (result files, finished results, shard merges, trajectories,
 figures) is written beside its path and renamed into place (:func:`replacing`,
 :func:`atomic_write`), and every HDF5 file it opens goes through :func:`open_hdf5`. What a
-shared machine does to a run, and what happens then (README, "Long runs and clusters"):
+shared machine does to a run, and what happens then (docs/clusters.md, "Long runs and clusters"):
 
 - **A full disk or quota.** HDF5 cannot recover from a failed write: closing what it holds
   writes again, fails again, and the process crashes (at exit, or at the next HDF5 call). So the
@@ -338,6 +338,51 @@ def reserve_space(fd, length, offset=0) -> None:
 # --------------------------------------------------------------------------------------------
 # Output folders and temporary files
 # --------------------------------------------------------------------------------------------
+
+
+def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None) -> str:
+    """The one rule of what vrsweep may write at an output ``path`` (run, simulate, merge, plot,
+    init). Returns the path to write; raises UsageError (one line) otherwise.
+
+    - A symbolic link is followed, always and only once here: the file written, replaced or
+      resumed is the link's target, and the link stays a link (a dangling link: its target is
+      created). Callers write at the returned path, so every later step sees the same file.
+    - Only a regular file is ever replaced. A folder, a device, a pipe or a socket at the path is
+      refused, with or without ``overwrite``.
+    - An existing regular file is replaced only with ``overwrite`` (else ``exists_error()`` is
+      raised, or a generic message), and never when it is one of ``inputs`` (the config being
+      run, the files being merged or plotted), whatever the flags.
+    """
+    import stat
+
+    given = os.fspath(path)
+    target = os.path.realpath(given) if os.path.islink(given) else given
+    shown = given if target == given else f"{given} (a link to {target})"
+    for item in inputs:
+        item = os.fspath(item)
+        try:
+            same = os.path.exists(target) and os.path.exists(item) and os.path.samefile(item, target)
+        except OSError:
+            same = False
+        if same:
+            raise UsageError(f"output {shown} is {inputs_are} ({item}): choose another output")
+    try:
+        mode = os.stat(target).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return target  # nothing there to replace; prepare_output_directory judges the folder
+    except OSError as error:
+        raise UsageError(f"output {shown}: {error.strerror or error}") from None
+    if stat.S_ISDIR(mode):
+        raise UsageError(f"output {shown} is a directory")
+    if not stat.S_ISREG(mode):
+        raise UsageError(f"output {shown} is not a regular file (a device, a pipe or a socket): vrsweep "
+                         "writes and replaces regular files only; choose another output")
+    if not overwrite:
+        if exists_error is not None:
+            raise exists_error()
+        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
+                                {"overwrite": "overwrite=True"}, path=shown)
+    return target
 
 
 def prepare_output_directory(path) -> None:

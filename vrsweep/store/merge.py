@@ -31,7 +31,7 @@ from typing import Iterable
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
-from vrsweep.store.fileio import atomic_write, open_hdf5, prepare_output_directory, writing_hdf5
+from vrsweep.store.fileio import atomic_write, open_hdf5, output_target, prepare_output_directory, writing_hdf5
 from vrsweep.store.provenance import cf_attributes
 from vrsweep.store.layout import RESERVED_ROOT_ATTRS, add_extras, build_skeleton, creation_reserve
 from vrsweep.store.reader import StoredLayout, corrupt_error, open_checked
@@ -238,13 +238,10 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
     out_path = os.fspath(out_path)
     if not paths:
         raise UsageError("merge needs at least one shard file")
-    if os.path.lexists(out_path):
-        if any(os.path.exists(p) and os.path.samefile(p, out_path) for p in paths):
-            raise UsageError(f"output {out_path} is one of the shards being merged")
-        if not overwrite:
-            raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
-                                    ARGUMENT_WORDS, path=out_path)
-    prepare_output_directory(out_path)
+    given = out_path
+    out_path = output_target(out_path, overwrite=overwrite, inputs=paths, inputs_are="one of the shards being merged",
+                             exists_error=lambda: UsageError.naming(
+        "output {path} already exists: pass {overwrite} to replace it", ARGUMENT_WORDS, path=given))
 
     stop = stop or (lambda: None)
     return _merge([_Shard(path, stop) for path in paths], out_path, allow_missing)
@@ -252,6 +249,9 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
 
 def _merge(shards, out_path, allow_missing):
     ref, warnings = _check_one_run(shards)
+    # Only now that the inputs are known to be one run's: a folder made for a merge that is then
+    # refused would be left behind empty.
+    prepare_output_directory(out_path)
 
     # Which shard supplies each point: the first, in the order given, that has it done.
     shape = ref.shape

@@ -27,14 +27,22 @@ _command_line: str | None = None
 def record_command_line(args) -> None:
     """Remember the arguments of this ``vrsweep`` invocation, for ``history``."""
     global _command_line
-    _command_line = shlex.join(["vrsweep", *[str(a) for a in args]])
+    _command_line = shlex.join(["vrsweep", *[_utf8_text(a) for a in args]])
+
+
+def _utf8_text(argument) -> str:
+    """An argument as text HDF5 can store (UTF-8). Under LC_ALL=C, or for a file name that is not
+    UTF-8, Python holds its bytes as lone surrogates, which no UTF-8 attribute can take: the bytes
+    are read again as UTF-8 (a UTF-8 name under LC_ALL=C comes out as typed), and any that are not
+    are written as \\xNN escapes."""
+    return str(argument).encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 def command_line() -> str:
     """The recorded ``vrsweep ...`` command, or the Python program that called the library."""
     if _command_line is not None:
         return _command_line
-    return "python " + shlex.join(sys.argv) + " (vrsweep library)"
+    return "python " + shlex.join(_utf8_text(a) for a in sys.argv) + " (vrsweep library)"
 
 
 def utc_now() -> str:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 
 import h5py
+import numpy as np
 
 from vrsweep.errors import ResultFileError
 from vrsweep.store.fileio import open_hdf5
@@ -52,7 +53,7 @@ def open_checked(path, mode="r"):
         if "vrsweep_format_version" not in f.attrs:
             raise ResultFileError(f"{path} is an HDF5 file but not a vrsweep results file "
                                   "(no vrsweep_format_version attribute)")
-        version = int(decode(f.attrs["vrsweep_format_version"]))
+        version = _whole_number_attr(f, "vrsweep_format_version", path)
         if version > FORMAT_VERSION:
             raise ResultFileError(f"{path} was written by a newer vrsweep (format {version}; this "
                                   f"vrsweep reads format {FORMAT_VERSION}); upgrade vrsweep to read it")
@@ -61,6 +62,7 @@ def open_checked(path, mode="r"):
                                   f"vrsweep reads format {FORMAT_VERSION})")
         if "done" not in f or "point_variables" not in f["done"].attrs:
             raise ResultFileError(f"{path} is a vrsweep file but not a sweep result (no 'done' mask)")
+        check_structure(f, path)
     except ResultFileError:
         f.close()
         raise
@@ -68,6 +70,160 @@ def open_checked(path, mode="r"):
         f.close()
         raise corrupt_error(path, error) from None
     return f
+
+
+# Root attributes vrsweep reads back, and what they must be. Every other attribute is shown as it is.
+TEXT_ROOT_ATTRS = ("config", "model", "shard", "title", "history", "created", "vrsweep_version")
+# Bytes read at a time while checking checksums: the check costs one read of the file, not its size in memory.
+CHECK_BLOCK_BYTES = 64 * 2 ** 20
+
+
+def _whole_number_attr(f, name, path, allowed=None):
+    """The root attribute ``name`` as an int, or ResultFileError if it is not a whole number (in ``allowed``)."""
+    value = f.attrs[name]
+    if isinstance(value, np.ndarray) and value.shape == (1,):
+        value = value[0]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ResultFileError(f"{path} is corrupt: attribute {name} must be a whole number, got {_shown(value)}")
+    if allowed is not None and int(value) not in allowed:
+        raise ResultFileError(f"{path} is corrupt: attribute {name} must be one of "
+                              f"{', '.join(map(str, allowed))}, got {int(value)}")
+    return int(value)
+
+
+def _shown(value):
+    text = repr(decode(value) if not isinstance(value, np.ndarray) else value.tolist())
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _text_attr(obj, name, path, where="attribute"):
+    value = obj.attrs[name]
+    if isinstance(value, bytes):
+        try:
+            return value.decode("utf-8")
+        except UnicodeDecodeError:
+            pass
+    elif isinstance(value, str):
+        return value
+    raise ResultFileError(f"{path} is corrupt: {where} {name} must be text, got {_shown(value)}")
+
+
+def check_structure(f, path):
+    """Everything a reader relies on, checked once where the file is opened (ResultFileError, one
+    line, naming what is wrong): the root attributes vrsweep reads have their types; ``done`` spans
+    the grid of the axes it names; every axis is a non-empty 1-D array of finite numbers; every
+    dataset's dimensions have the lengths of their coordinates; a point variable has the type it is
+    written with; and every byte reads back through its checksum: of the coordinates always (axes
+    carry one in files of this version; older files' axes do not and are compared with their stored
+    config), of every dataset in a finished file (an unfinished checkpoint may hold a chunk cut by
+    a kill among points not yet done, which --resume writes again)."""
+    from vrsweep.store.variables import LYAPUNOV_VARIABLES, point_variables
+
+    complete = _whole_number_attr(f, "vrsweep_complete", path, allowed=(0, 1))
+    if "config" not in f.attrs:
+        raise ResultFileError(f"{path} is corrupt: attribute config (the config it was run from) is missing")
+    for name in TEXT_ROOT_ATTRS:
+        if name in f.attrs:
+            _text_attr(f, name, path)
+    if "shard" in f.attrs:
+        index, _, count = _text_attr(f, "shard", path).partition("/")
+        if not (index.isdigit() and count.isdigit()):
+            raise ResultFileError(f"{path} is corrupt: attribute shard must be I/N, got {_shown(f.attrs['shard'])}")
+    done = f["done"]
+    names = _text_attr(done, "point_variables", path, "attribute done.").split()
+    expected = {name: np.dtype(dtype) for name, dtype, _, _ in point_variables(_AnyIntegration) + LYAPUNOV_VARIABLES}
+    axis_names = scale_names(done) if done.ndim else ()
+    grid = None
+    if any(not f[name].fletcher32 for name in axis_names):
+        # A file written before axes had checksums: its config is all that can vouch for them.
+        grid = _grid_of(_text_attr(f, "config", path))
+        if grid is not None and (tuple(grid.axis_names) != axis_names or tuple(grid.shape) != done.shape):
+            grid = None  # not a config this check can compare with (a hand-made file)
+    for index, name in enumerate(axis_names):
+        axis = f[name]
+        if axis.ndim != 1 or axis.size == 0 or axis.dtype.kind != "f":
+            raise ResultFileError(f"{path} is corrupt: axis {name} must be a non-empty 1-D float array, "
+                                  f"got shape {axis.shape} of {axis.dtype}")
+        _read_through_checksums(axis, path, finite=True)
+        # The config fixes every axis value: a changed one (a bit flipped in a file whose axes
+        # have no checksum) would label every point with a wrong parameter value.
+        if grid is not None and not axis.fletcher32 and not np.array_equal(axis[()], grid.axis_values[index]):
+            raise ResultFileError(f"{path} is corrupt: axis {name} holds values other than those of the "
+                                  "config it was run from")
+    if done.dtype.kind not in "iub":
+        raise ResultFileError(f"{path} is corrupt: done must be integer flags, got {done.dtype}")
+    for name in names:
+        if name not in f or not isinstance(f[name], h5py.Dataset):
+            raise ResultFileError(f"{path} is corrupt: variable {name} is missing")
+        variable = f[name]
+        dtype = expected.get(name)
+        if (dtype is not None and variable.dtype != dtype) or variable.dtype.kind not in "iuf":
+            raise ResultFileError(f"{path} is corrupt: variable {name} is {variable.dtype}, "
+                                  f"expected {dtype or 'numbers'}")
+        dims = scale_names(variable) if variable.ndim else ()
+        has_extra = name in expected and name in _EXTRA_DIMENSIONED
+        if dims[:len(axis_names)] != axis_names or (name in expected and not has_extra
+                                                     and len(dims) != len(axis_names)):
+            raise ResultFileError(f"{path} is corrupt: variable {name} spans {_grid_words(dims, variable.shape)}, "
+                                  f"the grid is {_grid_words(axis_names, done.shape)}")
+    for name in f:
+        obj = f[name]
+        if not isinstance(obj, h5py.Dataset):
+            continue
+        if obj.ndim and not obj.is_scale:
+            for i, scale in enumerate(scale_names(obj)):
+                if scale not in f or f[scale].shape != (obj.shape[i],):
+                    raise ResultFileError(f"{path} is corrupt: {name} has {obj.shape[i]} values along {scale}, "
+                                          f"its coordinate has {f[scale].shape if scale in f else 'none'}")
+        # An unfinished checkpoint may hold a chunk cut by a kill -9 among points not yet done,
+        # which --resume writes again: only a finished file must read back whole. Coordinates are
+        # written whole when a file is created, so they are read in every file.
+        if complete or obj.is_scale:
+            _read_through_checksums(obj, path, finite=name in axis_names)
+
+
+def _grid_of(config_text):
+    """The Grid of a stored config, or None if this version cannot read that config (then the
+    file's own axes are checked without it)."""
+    from vrsweep.config import parse_config
+    from vrsweep.config.grid import Grid
+    from vrsweep.errors import ConfigError
+
+    try:
+        return Grid.from_config(parse_config(config_text, "<the stored config>"))
+    except ConfigError:
+        return None
+
+
+_EXTRA_DIMENSIONED = ("strobe_x", "strobe_v")
+
+
+def _grid_words(names, shape):
+    if not names:
+        return "a single point"
+    return " x ".join(f"{name} ({n})" for name, n in zip(names, shape))
+
+
+class _AnyIntegration:
+    """point_variables' argument for learning the variables' types: any strobe length does."""
+
+    strobe_periods = 1
+    lyapunov = False
+
+
+def _read_through_checksums(dataset, path, finite=False):
+    """Read every byte of ``dataset`` (block by block along its first axis): HDF5 checks each
+    chunk's checksum as it reads it, so damaged bytes are an error here, not numbers later."""
+    if dataset.ndim == 0:
+        dataset[()]
+        return
+    row_bytes = max(1, dataset.dtype.itemsize * int(np.prod(dataset.shape[1:], dtype=np.int64)))
+    step = max(1, CHECK_BLOCK_BYTES // row_bytes)
+    for start in range(0, dataset.shape[0], step):
+        block = dataset[start:start + step]
+        if finite and not np.all(np.isfinite(block)):
+            raise ResultFileError(f"{path} is corrupt: axis {dataset.name.lstrip('/')} holds a value that is not "
+                                  "a finite number")
 
 
 def corrupt_error(path, error):

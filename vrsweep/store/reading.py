@@ -1,6 +1,6 @@
 """Results in Python: any vrsweep file as a lazily read ``xarray.Dataset``.
 
-Every file vrsweep writes is netCDF-4 compatible HDF5 (docs/design.md, "Result files"), so xarray's
+Every file vrsweep writes is netCDF-4 compatible HDF5 (docs/design.md, "Sweep and shard files"), so xarray's
 h5netcdf backend reads it as it is; this module adds only what xarray cannot know:
 
 - which file it is (sweep, shard or trajectory) and a clear error for anything else;
@@ -21,7 +21,7 @@ import os
 
 import numpy as np
 
-from vrsweep.errors import ResultFileError
+from vrsweep.errors import ResultFileError, UsageError
 
 __all__ = ["open_results", "load_results", "status_names", "file_kind", "grid_axes", "point_variables", "derived_variables", "stored_variables", "open_groups"]
 
@@ -46,19 +46,22 @@ def _open_dataset(path, group=None, **kwargs):
 
 
 def file_kind(path) -> str:
-    """``"sweep"``, ``"shard"`` or ``"trajectory"``; ResultFileError for anything else."""
-    from vrsweep.store import trajectory_file
+    """``"sweep"``, ``"shard"``, ``"trajectory"`` or ``"branch"``; ResultFileError for anything else."""
+    from vrsweep.store import branch_file, trajectory_file
     from vrsweep.store.reader import open_checked
 
     if trajectory_file.is_trajectory_file(path):
         return "trajectory"
+    if branch_file.is_branch_file(path):
+        return "branch"
     with open_checked(path) as f:  # raises a ResultFileError that says what is wrong
         return "shard" if "shard" in f.attrs else "sweep"
 
 
 def _trajectory_groups(path):
-    from vrsweep.store.trajectory_file import _open
+    from vrsweep.store.trajectory_file import _open, check_trajectory
 
+    check_trajectory(path)  # one line for a damaged file, before xarray sees it
     with _open(path, "r") as f:
         runs = [name for name in ("original", "effective") if name in f]
         slow = [f"slow_flow/{name}" for name in f["slow_flow"]] if "slow_flow" in f else []
@@ -80,8 +83,9 @@ def open_results(path, group: str | None = None):
     Parameters
     ----------
     path : str or os.PathLike
-        A sweep file (``vrsweep run``), a shard file (``--shard I/N``, possibly unfinished) or a
-        trajectory file (``vrsweep simulate``).
+        A sweep file (``vrsweep run``), a shard file (``--shard I/N``, possibly unfinished), a
+        trajectory file (``vrsweep simulate``) or a branch file (``vrsweep continue``: dimension
+        ``point`` along the branches, store/branch_file.py).
     group : str, optional
         Trajectory files only: ``"original"``, ``"effective"`` or ``"slow_flow/<start>"``
         (``state``, ``paper``, ``paper_literal``). Default: the config's own model.
@@ -170,6 +174,53 @@ def load_results(path, group: str | None = None):
             from vrsweep.store.reader import corrupt_error
 
             raise corrupt_error(os.fspath(path), error) from None
+
+
+def axis_index(name, values, wanted):
+    """Index of ``wanted`` on an axis ({at} is how the caller names its choice); 'up'/'down'
+    allowed for direction. Must be a finite number on the grid: the nearest value would answer a
+    question that was not asked. Shared by plot's selection and continue's start."""
+    if name == "direction":
+        words = {"up": 1.0, "down": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
+        key = str(wanted).strip().lower()
+        if key not in words:
+            raise UsageError.naming("{at} direction={value}: the direction is up or down (+1 or -1)", value=wanted)
+        wanted = words[key]
+    given = wanted
+    try:
+        wanted = float(wanted)
+    except ValueError:
+        raise UsageError.naming("{at} {name}={value}: not a number; {name} takes values {span}",
+                                name=name, value=wanted, span=_axis_span(values)) from None
+    if not np.isfinite(wanted):  # nan, inf, 1e400: argmin would answer with the first value
+        raise UsageError.naming("{at} {name}={value}: not a finite number; {name} takes values {span}",
+                                name=name, value=given, span=_axis_span(values))
+    index = int(np.argmin(np.abs(values - wanted)))
+    if not abs(values[index] - wanted) <= 1e-9 * max(1.0, abs(wanted)):
+        raise UsageError.naming("{at} {name}={value}: not a value of the axis {name}; {nearest} (axis: {span})",
+                                name=name, value=_short(wanted), nearest=_nearest_text(values, wanted),
+                                span=_axis_span(values))
+    return index
+
+
+def _nearest_text(values, wanted):
+    """'the nearest are 19.5 and 21' -- the grid values on either side of ``wanted``."""
+    below, above = values[values < wanted], values[values > wanted]
+    sides = ([_short(below.max())] if below.size else []) + ([_short(above.min())] if above.size else [])
+    if len(sides) == 2:
+        return f"the nearest are {sides[0]} and {sides[1]}"
+    return f"the nearest is {sides[0]}"
+
+
+def _axis_span(values):
+    """'81 values from 0 to 40', or the values themselves when there are few."""
+    if len(values) <= 6:
+        return ", ".join(_short(v) for v in values)
+    return f"{len(values)} values from {_short(np.min(values))} to {_short(np.max(values))}"
+
+
+def _short(value) -> str:
+    return f"{value:.6g}"
 
 
 def grid_axes(ds) -> tuple:

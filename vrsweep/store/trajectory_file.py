@@ -51,9 +51,9 @@ import h5py
 import numpy as np
 
 from vrsweep import __version__
-from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.errors import ResultFileError
 from vrsweep.results import MESSAGES, Status
-from vrsweep.store.fileio import open_hdf5, write_bytes
+from vrsweep.store.fileio import open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "trajectory"
@@ -132,12 +132,7 @@ def root_attributes(config):
 
 def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
     """Write ``data`` to ``path`` atomically; refuse an existing file unless ``overwrite``."""
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise UsageError(f"output {path} is a directory")
-    if os.path.lexists(path) and not overwrite:
-        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
-                                {"overwrite": "overwrite=True"}, path=path)
+    path = output_target(path, overwrite=overwrite)  # fileio's one rule of what may be replaced
     attrs = {"vrsweep_file": FILE_KIND, "vrsweep_format_version": np.int32(FORMAT_VERSION),
              "vrsweep_complete": np.int32(1),
              "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -160,7 +155,7 @@ def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
 
 def _dimension(group, name, values, long_name):
     values = np.asarray(values)
-    scale = group.create_dataset(name, data=values, **(_COMPRESSION if values.size > 4096 else {}))
+    scale = group.create_dataset(name, data=values, **_storage(values))
     scale.make_scale(name)
     scale.attrs["units"] = "1"
     scale.attrs["long_name"] = long_name
@@ -168,12 +163,20 @@ def _dimension(group, name, values, long_name):
 
 
 # Time series compress about twofold and are written once: worth it. Short arrays stay plain.
+# Every dataset carries a checksum, so a flipped bit is an error when read, not a wrong figure.
 _COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+
+
+def _storage(values):
+    options = dict(_COMPRESSION) if values.size > 4096 else {}
+    if values.size:  # HDF5 filters need a chunked, non-empty dataset
+        options["fletcher32"] = True
+    return options
 
 
 def _variable(group, name, values, scale, long_name):
     values = np.asarray(values, dtype=np.float64)
-    ds = group.create_dataset(name, data=values, **(_COMPRESSION if values.size > 4096 else {}))
+    ds = group.create_dataset(name, data=values, **_storage(values))
     ds.dims[0].attach_scale(scale)
     ds.attrs["units"] = "1"
     ds.attrs["long_name"] = long_name
@@ -238,6 +241,43 @@ def is_trajectory_file(path) -> bool:
         return False  # unreadable: let the results reader say why
 
 
+def check_trajectory(path) -> None:
+    """Raise ResultFileError (one line) unless ``path`` is a trajectory file of this format whose
+    structure is sound: the one check every reader of trajectory files goes through."""
+    path = os.fspath(path)
+    try:
+        with _open(path, "r") as f:
+            _check_header(f, path)
+            for name in ("original", "effective"):
+                if name in f:
+                    _checked(f[name], MODEL_RUN_SERIES, path)
+            for group in (f["slow_flow"].values() if "slow_flow" in f else ()):
+                _checked(group, SLOW_FLOW_SERIES, path)
+    except ResultFileError:
+        raise
+    except (OSError, KeyError, ValueError, TypeError) as error:
+        raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
+
+
+def _check_header(f, path):
+    if _text(f.attrs.get("vrsweep_file", "")) != FILE_KIND:
+        raise ResultFileError(f"{path} is not a vrsweep trajectory file (written by vrsweep simulate)")
+    version = f.attrs.get("vrsweep_format_version", 0)
+    if isinstance(version, (bool, np.bool_)) or not isinstance(version, (int, np.integer)):
+        raise ResultFileError(f"{path} is corrupt: attribute vrsweep_format_version must be a whole "
+                              f"number, got {_text(version)!r}")
+    if version != FORMAT_VERSION:
+        raise ResultFileError(f"{path} has trajectory format {version}; this vrsweep reads format "
+                              f"{FORMAT_VERSION}")
+    _check_root(f, path)
+    for name in ("original", "effective"):
+        if name in f:
+            try:
+                Status(int(f[name].attrs["status"]))
+            except (KeyError, ValueError, TypeError):
+                raise _corrupt(path, f"/{name} has no valid status attribute") from None
+
+
 def read_trajectory(path) -> TrajectoryData:
     """Read a trajectory file, or raise ResultFileError with a one-line reason."""
     path = os.fspath(path)
@@ -245,24 +285,73 @@ def read_trajectory(path) -> TrajectoryData:
         raise ResultFileError(f"trajectory file not found: {path}")
     try:
         with _open(path, "r") as f:
-            if _text(f.attrs.get("vrsweep_file", "")) != FILE_KIND:
-                raise ResultFileError(f"{path} is not a vrsweep trajectory file (written by vrsweep simulate)")
-            version = int(f.attrs.get("vrsweep_format_version", 0))
-            if version != FORMAT_VERSION:
-                raise ResultFileError(f"{path} has trajectory format {version}; this vrsweep reads format "
-                                      f"{FORMAT_VERSION}")
+            _check_header(f, path)
             attrs = {key: _text(value) for key, value in f.attrs.items()}
-            runs = {name: _read_model_run(f[name]) for name in ("original", "effective") if name in f}
+            runs = {name: _read_model_run(_checked(f[name], MODEL_RUN_SERIES, path))
+                    for name in ("original", "effective") if name in f}
             slow_flow = {}
             if "slow_flow" in f:
-                slow_flow = {start: _read_slow_flow(group) for start, group in f["slow_flow"].items()}
+                slow_flow = {start: _read_slow_flow(_checked(group, SLOW_FLOW_SERIES, path))
+                             for start, group in f["slow_flow"].items()}
     except ResultFileError:
         raise
-    except (OSError, KeyError, ValueError) as error:
+    except (OSError, KeyError, ValueError, TypeError) as error:
         raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
     if not runs:
         raise ResultFileError(f"{path} holds no trajectory (no 'original' or 'effective' group)")
     return TrajectoryData(runs=runs, slow_flow=slow_flow, attrs=attrs, path=path)
+
+
+# The structure a reader relies on, checked once where the file is opened (as store/reader.py
+# checks sweep files): every series 1-D float64 (counts int64), the series of one dimension of
+# one length, the time axes finite and non-decreasing. Anything else is a one-line ResultFileError, never a
+# traceback in a figure.
+MODEL_RUN_SERIES = {"time": ("time", "x", "v"), "impact": ("impact_t", "impact_v_before", "impact_v_after"),
+                    "stick": ("stick_start", "stick_end"), "period": ("impacts_per_period", "strobe_x", "strobe_v")}
+SLOW_FLOW_SERIES = {"time": ("time", "x", "v", "R", "theta")}
+INTEGER_SERIES = {"impacts_per_period"}  # counts; every other series is float64
+
+
+def _corrupt(path, what):
+    return ResultFileError(f"{path} is corrupt: {what}")
+
+
+def _check_root(f, path):
+    for name in ("config", "model"):
+        if name in f.attrs and not isinstance(_text(f.attrs[name]), str):
+            raise _corrupt(path, f"attribute {name} must be text, got {_text(f.attrs[name])!r}")
+    if "samples_per_period" in f.attrs:
+        value = f.attrs["samples_per_period"]
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise _corrupt(path, f"attribute samples_per_period must be a whole number >= 1, got {_text(value)!r}")
+    if "slow_period" in f.attrs:
+        value = f.attrs["slow_period"]
+        if not isinstance(value, (float, np.floating)) or not np.isfinite(value) or value <= 0:
+            raise _corrupt(path, f"attribute slow_period must be a positive number, got {_text(value)!r}")
+
+
+def _checked(group, series, path):
+    """``group`` after checking that each set of ``series`` is 1-D float64 of one length; its time
+    axis, if any, finite and non-decreasing."""
+    for dimension, names in series.items():
+        length = None
+        for name in names:
+            where = f"{group.name}/{name}"
+            if name not in group or not isinstance(group[name], h5py.Dataset):
+                raise _corrupt(path, f"{where} is missing")
+            data = group[name]
+            kind = "iu" if name in INTEGER_SERIES else "f"
+            if data.ndim != 1 or data.dtype.kind not in kind or data.dtype.itemsize != 8:
+                wanted = "int64" if name in INTEGER_SERIES else "float64"
+                raise _corrupt(path, f"{where} must be a 1-D {wanted} series, found shape {data.shape} {data.dtype}")
+            if length is not None and data.shape[0] != length:
+                raise _corrupt(path, f"{where} has {data.shape[0]} values, the other {dimension} series {length}")
+            length = data.shape[0]
+        if dimension == "time":
+            time = group["time"][()]
+            if not np.all(np.isfinite(time)) or np.any(np.diff(time) < 0):
+                raise _corrupt(path, f"{group.name}/time must be finite and non-decreasing")
+    return group
 
 
 def _read_model_run(group) -> ModelRun:

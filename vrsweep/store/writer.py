@@ -31,7 +31,7 @@ import numpy as np
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.store.fileio import (
     check_still_at_path, close_without_writing, closed_without_writing_on_failure, fsync_path, identity,
-    lock_for_writing, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
+    lock_for_writing, output_target, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
     writing_hdf5,
 )
 from vrsweep.store.layout import (
@@ -133,22 +133,22 @@ class ResultWriter:
 
     @classmethod
     def create(cls, path, axes, variables, attrs, overwrite=False, owned_mask=None,
-               extra_coords=None):
+               extra_coords=None, inputs=()):
         """Create a result file with every variable pre-allocated; return a writer on it.
 
         axes: ``[(name, values)]`` (or ``(name, values, attrs)``) in sweep order; ``[]`` for one
         point. variables: ``VariableSpec`` list. attrs: root attributes, ``config`` required
         (``shard`` = "I/N" for a shard file, with ``owned_mask`` its points). extra_coords:
         optional ``{dim: (values, attrs)}`` for extra dimensions (default: an int32 index).
-        Refuses an existing ``path`` unless ``overwrite``.
+        Refuses an existing ``path`` unless ``overwrite``, and whatever fileio.output_target
+        refuses (anything but a regular file, one of ``inputs``); a symbolic link is followed.
         """
-        path = os.fspath(path)
-        if os.path.isdir(path):
-            raise UsageError(f"output {path} is a directory")
+        given = os.fspath(path)
+        path = output_target(given, overwrite=overwrite, inputs=inputs, inputs_are="the config being run",
+                             exists_error=lambda: UsageError.naming(
+            "output {path} already exists: pass {overwrite} to replace it, or {resume} to continue the run that "
+            "wrote it", ARGUMENT_WORDS, path=given))
         if os.path.lexists(path):
-            if not overwrite:
-                raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it, or "
-                                        "{resume} to continue the run that wrote it", ARGUMENT_WORDS, path=path)
             refuse_if_being_written(path)
         specs = [v if isinstance(v, VariableSpec) else VariableSpec(**v) for v in variables]
         reserve = creation_reserve(axes, specs, shard=owned_mask is not None)
@@ -172,7 +172,7 @@ class ResultWriter:
             raise
 
     @classmethod
-    def open_for_resume(cls, path, expected_config_text: str, expected_shard=None):
+    def open_for_resume(cls, path, expected_config_text: str, expected_shard=None, inputs=()):
         """Reopen an unfinished (or finished) result file to compute what is missing.
 
         Raises ResultFileError if it is not a vrsweep result file, is truncated, has another
@@ -183,6 +183,8 @@ class ResultWriter:
         if not os.path.exists(path):
             raise ResultFileError.naming("cannot resume: {path} does not exist ({start_afresh})", ARGUMENT_WORDS,
                                          path=path)
+        # A link: its target, as create does.
+        path = output_target(path, overwrite=True, inputs=inputs, inputs_are="the config being run")
         refuse_if_being_written(path, "resume")  # also where HDF5's own locking is switched off
         f = open_checked(path, "r+")
         try:

@@ -1,0 +1,335 @@
+"""The Python API (``vrsweep.sweep``, ``vrsweep.simulate``, ``vrsweep.theory``): the command line's
+numbers, files and messages, from a path, YAML text or a dict (issue 22, item 1).
+
+Tiny configs (a few points, a few slow periods): what is tested is that the API and the command
+line are the same computation, which a short window shows as well as a long one."""
+
+import json
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import vrsweep
+from vrsweep.config import load_config
+from vrsweep.errors import ConfigError, UsageError
+from vrsweep.execution.api import resolve_config, setting_text
+from vrsweep.store.reading import load_results
+
+SWEEP_TEXT = textwrap.dedent("""\
+    # two axes, four points, five slow periods each
+    parameters: {Omega: 4.0}
+    sweep:
+      g: [5.0, 10.0]
+      Omega: [4.0, 5.0]
+    integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 1}
+    """)
+SWEEP_DICT = {"parameters": {"Omega": 4.0},
+              "sweep": {"g": [5.0, 10.0], "Omega": [4.0, 5.0]},
+              "integration": {"transient_periods": 2, "measure_periods": 3, "strobe_periods": 1}}
+CONFIGS = Path(__file__).resolve().parent.parent / "vrsweep" / "examples"
+POINT_TEXT = "parameters: {g: 5.0}\nintegration: {transient_periods: 2, measure_periods: 3, strobe_periods: 1}\n"
+
+# When and by which command a file was written: the only attributes that may differ.
+WHEN_AND_HOW = ("created", "date_created", "history")
+
+
+@pytest.fixture(scope="module")
+def sweep_yaml(tmp_path_factory):
+    path = tmp_path_factory.mktemp("api") / "tiny.yaml"
+    path.write_text(SWEEP_TEXT)
+    return path
+
+
+@pytest.fixture(scope="module")
+def cli_file(sweep_yaml, invoke):
+    """The file ``vrsweep run`` writes for the tiny config."""
+    out = sweep_yaml.with_name("cli.h5")
+    result = invoke("run", str(sweep_yaml), "-o", str(out), "-q")
+    assert result.exit_code == 0, result.output
+    return out
+
+
+@pytest.fixture(scope="module")
+def api_dataset(sweep_yaml, cli_file):  # after the CLI's run: the kernel is compiled by then
+    return vrsweep.sweep(sweep_yaml, progress=False)
+
+
+def comparable(attrs, leave_out=()):
+    """Attributes as comparable values (arrays, such as flag_values, as dtype and bytes)."""
+    return {key: (np.asarray(value).dtype.str, np.asarray(value).tobytes()) if isinstance(value, np.ndarray)
+            else value for key, value in attrs.items() if key not in leave_out}
+
+
+def assert_same_dataset(a, b):
+    """Same variables, coordinates, dimensions, dtypes and values (bit for bit, NaN where NaN) and
+    the same attributes but when and how they were written."""
+    assert list(a.data_vars) == list(b.data_vars)
+    assert list(a.coords) == list(b.coords)
+    assert dict(a.sizes) == dict(b.sizes)
+    for name in [*a.coords, *a.data_vars]:
+        x, y = a[name], b[name]
+        assert x.dims == y.dims and x.dtype == y.dtype, name
+        assert x.values.tobytes() == y.values.tobytes(), name  # bit for bit, NaN payloads included
+        assert comparable(x.attrs) == comparable(y.attrs), name
+    assert comparable(a.attrs, WHEN_AND_HOW) == comparable(b.attrs, WHEN_AND_HOW)
+
+
+# -- sweep -----------------------------------------------------------------------------------
+
+
+def test_sweep_returns_the_command_lines_file_bit_for_bit(api_dataset, cli_file):
+    cli = load_results(cli_file)
+    assert_same_dataset(api_dataset, cli)
+    assert api_dataset["R"].dims == ("g", "Omega") and api_dataset["R"].shape == (2, 2)
+    assert np.isfinite(api_dataset["R"].values).all()
+    assert "source" not in api_dataset.encoding  # held in memory: no file behind it
+    assert api_dataset.attrs["vrsweep_file"] == "sweep"
+
+
+def test_a_dict_a_yaml_string_and_a_path_give_the_same_result(sweep_yaml, api_dataset):
+    assert resolve_config(SWEEP_DICT) == resolve_config(SWEEP_TEXT) == load_config(sweep_yaml)
+    assert_same_dataset(vrsweep.sweep(SWEEP_DICT, progress=False), api_dataset)
+    assert_same_dataset(vrsweep.sweep(SWEEP_TEXT, progress=False), api_dataset)
+    assert_same_dataset(vrsweep.sweep(str(sweep_yaml), progress=False), api_dataset)
+
+
+def test_a_dict_may_hold_numpy_arrays_and_tuples():
+    as_numpy = dict(SWEEP_DICT, sweep={"g": np.array([5.0, 10.0]), "Omega": (np.float64(4.0), 5)})
+    assert resolve_config(as_numpy) == resolve_config(SWEEP_DICT)
+
+
+def test_keyword_overrides_are_set_options(sweep_yaml, tmp_path, invoke, describe):
+    settings = ["g=7.5", "rtol=1e-08", "initial.x=0.5"]
+    out = tmp_path / "set.h5"
+    result = invoke("run", str(sweep_yaml), "-o", str(out), "-q", *[w for s in settings for w in ("--set", s)])
+    assert result.exit_code == 0, result.output
+    api = vrsweep.sweep(sweep_yaml, progress=False, g=7.5, rtol=1e-8, **{"initial.x": 0.5})
+    assert_same_dataset(api, load_results(out))
+    assert api["R"].dims == ("Omega",)  # g=7.5 fixed the swept g, as --set does
+
+    assert (resolve_config(sweep_yaml, dict(method="dop853", lyapunov=True, x0=0.25, max_steps=1000, model="effective"))
+            == load_config(sweep_yaml, ["method=dop853", "lyapunov=true", "x0=0.25", "max_steps=1000",
+                                        "model=effective"]))
+
+
+def test_an_override_is_the_text_set_takes_and_a_float_reads_back_bit_for_bit():
+    assert setting_text("g", 5) == "g=5" and setting_text("method", "dop853") == "method=dop853"
+    assert setting_text("lyapunov", True) == "lyapunov=true" and setting_text("g", "5") == "g=5"
+    assert setting_text("rtol", 1e-10) == "rtol=1e-10" and setting_text("g", np.float64(2.5)) == "g=2.5"
+    assert setting_text("g", float("inf")) == "g=.inf" and setting_text("max_steps", np.int64(7)) == "max_steps=7"
+    for value in (0.1 + 0.2, 1 / 3, 21.065_123_456_789_01, 5e-324):
+        assert resolve_config("sweep: {}\n", {"g": value}).parameters["g"] == value
+
+
+def test_output_writes_the_command_lines_file(sweep_yaml, cli_file, tmp_path, assert_same_result):
+    out = tmp_path / "api.h5"
+    ds = vrsweep.sweep(sweep_yaml, output=out, progress=False)
+    assert_same_result(out, cli_file)  # every dataset, attribute and chunk but the time written
+    assert_same_dataset(ds, load_results(cli_file))
+
+    with pytest.raises(UsageError) as error:
+        vrsweep.sweep(sweep_yaml, output=out, progress=False)
+    assert str(error.value) == (f"output {out} already exists: pass overwrite=True to replace it, or "
+                                "resume=True to continue the run that wrote it")
+    vrsweep.sweep(sweep_yaml, output=out, progress=False, overwrite=True)
+    assert_same_result(out, cli_file)
+    resumed = vrsweep.sweep(sweep_yaml, output=out, progress=False, resume=True)  # nothing left to do
+    assert_same_dataset(resumed, ds)
+
+
+def test_progress_false_prints_nothing_and_progress_true_draws_a_bar(sweep_yaml, api_dataset, capfd):
+    capfd.readouterr()
+    vrsweep.sweep(sweep_yaml, progress=False)
+    vrsweep.simulate(POINT_TEXT, samples_per_period=10)
+    vrsweep.theory(sweep_yaml)
+    assert capfd.readouterr() == ("", "")
+    vrsweep.sweep(sweep_yaml)
+    out, err = capfd.readouterr()
+    assert out == "" and "4/4" in err and "vrsweep" in err  # tqdm.auto: text on stderr outside Jupyter
+
+
+def test_the_bar_is_tqdm_auto_the_notebook_form_in_jupyter(sweep_yaml, api_dataset, monkeypatch):
+    """tqdm.auto picks tqdm.notebook's widget in a Jupyter kernel: the bar must come from it."""
+    import tqdm.auto
+
+    made = []
+
+    class Recording(tqdm.auto.tqdm):
+        def __init__(self, *args, **kwargs):
+            made.append(kwargs)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(tqdm.auto, "tqdm", Recording)
+    vrsweep.sweep(sweep_yaml)
+    assert len(made) == 1 and made[0]["total"] == 4
+
+
+def test_threads_are_checked_and_capped(sweep_yaml, api_dataset):
+    with pytest.raises(UsageError, match=r"^threads must be a whole number of at least 1, got 0$"):
+        vrsweep.sweep(sweep_yaml, threads=0)
+    with pytest.warns(RuntimeWarning, match=r"^threads=100000: numba can run \d+ threads? here"):
+        capped = vrsweep.sweep(sweep_yaml, threads=100_000, progress=False)
+    assert_same_dataset(capped, api_dataset)
+    assert_same_dataset(vrsweep.sweep(sweep_yaml, threads=1, progress=False), api_dataset)
+
+
+def test_many_failed_points_warn_with_the_setting_to_change(sweep_yaml, api_dataset):
+    with pytest.warns(RuntimeWarning, match=r"^4 of 4 points \(100%\) ended with max_steps: raise "
+                                            r"integration.max_steps \(now 10\), e.g. max_steps=100$"):
+        failed = vrsweep.sweep(sweep_yaml, max_steps=10, progress=False)
+    assert (failed.status.values != 0).all()
+
+
+def test_resume_needs_a_file_and_excludes_overwrite(sweep_yaml, tmp_path):
+    with pytest.raises(UsageError, match=r"^resume=True and overwrite=True exclude each other$"):
+        vrsweep.sweep(sweep_yaml, output=tmp_path / "x.h5", resume=True, overwrite=True)
+    with pytest.raises(UsageError, match=r"^resume=True continues the run in a file: give its output$"):
+        vrsweep.sweep(sweep_yaml, resume=True)
+
+
+# -- errors: the command line's messages -----------------------------------------------------
+
+
+def cli_problems(invoke, *args):
+    result = invoke(*args)
+    assert result.exit_code == 2, result.output
+    lines = [line.strip() for line in result.stderr.splitlines()]
+    return [line.removeprefix("Error: ") for line in lines if not line.endswith("problems:")]
+
+
+def test_a_bad_config_raises_the_command_lines_messages(tmp_path, invoke):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("parameters:\n  e: 1.5\nintegration: {lyapunov: yes, method: rk4}\n")
+    expected = cli_problems(invoke, "validate", str(bad), "--set", "rtol=abc")
+    assert len(expected) == 4, expected
+    with pytest.raises(ConfigError) as error:
+        vrsweep.sweep(bad, rtol="abc")
+    assert error.value.problems == expected
+    assert expected[0] == "%s:2: parameters.e: must be in (0, 1], got 1.5" % bad
+    assert expected[-1].startswith("--set rtol=abc: integration.rtol: must be a number")
+    with pytest.raises(ConfigError) as error:
+        vrsweep.theory(bad.read_text(), rtol="abc")  # YAML text: <string> and the same lines
+    assert error.value.problems == [problem.replace(str(bad), "<string>") for problem in expected]
+
+
+def test_a_bad_dict_names_the_field_without_a_line():
+    with pytest.raises(ConfigError) as error:
+        vrsweep.sweep({"parameters": {"e": 1.5, "gama": 0.2}, "integration": {"lyapunov": "yes"}})
+    assert error.value.problems == [
+        "<dict>: parameters.e: must be in (0, 1], got 1.5",
+        "<dict>: parameters.gama: unknown key (did you mean 'gamma'?) "
+        "(allowed: gamma, alpha, c, omega0, omega, Delta, e, g, Omega)",
+        "<dict>: integration.lyapunov: must be true or false, got 'yes'",
+    ]
+    with pytest.raises(ConfigError, match=r"^<dict>: sweep.g: must be a number, a string, true/false, a list or "
+                                          r"a mapping, got a set"):
+        vrsweep.theory({"sweep": {"g": {1.0, 2.0}}})
+    with pytest.raises(ConfigError, match="^missing.yaml: no such config file$"):
+        vrsweep.theory("missing.yaml")
+    with pytest.raises(ConfigError, match="^configs/missing: no such config file$"):
+        vrsweep.theory("configs/missing")  # one line without ':' is a path, not a YAML word
+    assert resolve_config("{sweep: {g: [5.0, 10.0]}}").axis_names == ("g",)  # one line of YAML
+    with pytest.raises(UsageError, match="^config must be a path, YAML text, a dict or a vrsweep Config, got int$"):
+        vrsweep.theory(3)
+
+
+def test_simulate_of_a_sweep_says_how_to_fix_a_point_in_pythons_words(sweep_yaml, invoke):
+    cli = cli_problems(invoke, "simulate", str(sweep_yaml), "-o", "never.h5")
+    with pytest.raises(UsageError) as error:
+        vrsweep.simulate(sweep_yaml)
+    # the command line's message, its "--set g=5" written as the keyword g=5
+    assert [str(error.value)] == [line.replace("--set ", "") for line in cli]
+    assert str(error.value).endswith("fix every swept parameter, e.g. g=5 Omega=4")
+    with pytest.raises(UsageError, match=r"^compare='effective' compares .* drop compare, or model='original'$"):
+        vrsweep.simulate(POINT_TEXT, model="effective", compare="effective")
+    with pytest.raises(UsageError, match=r"^compare 'original': must be None or one of 'effective'$"):
+        vrsweep.simulate(POINT_TEXT, compare="original")
+
+
+# -- simulate and theory ---------------------------------------------------------------------
+
+
+def test_simulate_returns_the_command_lines_trajectory(tmp_path, invoke):
+    config = tmp_path / "point.yaml"
+    config.write_text(POINT_TEXT)
+    out = tmp_path / "cli.h5"
+    result = invoke("simulate", str(config), "-o", str(out), "-q", "--samples-per-period", "10",
+                    "--compare", "effective")
+    assert result.exit_code == 0, result.output
+
+    groups = vrsweep.simulate(config, samples_per_period=10, compare="effective")
+    assert list(groups) == ["original", "effective", "slow_flow/state", "slow_flow/paper", "slow_flow/paper_literal"]
+    for group, dataset in groups.items():
+        assert_same_dataset(dataset, load_results(out, group))
+    alone = vrsweep.simulate(config, samples_per_period=10)
+    assert_same_dataset(alone, load_results(out, "original"))
+    assert alone["x"].dims == ("time",) and alone.sizes["time"] == 5 * 10 + 1
+    assert alone["x"].values[0] == 0.99 and alone["v"].values[0] == 0.5  # the initial state
+
+    kept = tmp_path / "api.h5"
+    vrsweep.simulate(config, output=kept, samples_per_period=10, compare="effective")
+    for group in groups:
+        assert_same_dataset(load_results(kept, group), load_results(out, group))
+
+
+def test_theory_is_what_theory_json_prints(sweep_yaml, invoke):
+    result = invoke("theory", str(sweep_yaml), "--json", "--set", "alpha=0.12")
+    assert result.exit_code == 0, result.output
+    rows = vrsweep.theory(sweep_yaml, alpha=0.12)
+    assert json.loads(json.dumps(rows)) == json.loads(result.stdout)
+    assert [row["Omega"] for row in rows] == [4.0, 5.0]
+
+
+# -- the package -----------------------------------------------------------------------------
+
+
+def test_the_functions_are_in_the_package_and_imported_only_when_used():
+    assert {"sweep", "simulate", "theory", "open_results"} <= set(dir(vrsweep)) and \
+        {"sweep", "simulate", "theory"} <= set(vrsweep.__all__)
+    from vrsweep import simulate, sweep, theory  # noqa: F401 -- the names import
+
+    script = textwrap.dedent("""\
+        import sys
+        import vrsweep
+        print(*sorted(name for name in ("vrsweep.execution.api", "xarray", "tqdm") if name in sys.modules))
+        vrsweep.theory
+        print("vrsweep.execution.api" in sys.modules)
+        """)
+    child = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300,
+                           env=dict(os.environ))
+    assert child.returncode == 0, child.stderr
+    assert child.stdout.splitlines() == ["", "True"], child.stdout
+
+
+# -- the guide -------------------------------------------------------------------------------
+
+GUIDE = Path(__file__).resolve().parent.parent / "docs" / "python-api.md"
+
+
+def guide_snippets():
+    return re.findall(r"```python\n(.*?)```", GUIDE.read_text(encoding="utf-8"), flags=re.S)
+
+
+def test_the_guide_shows_each_function_and_argument():
+    joined = "\n".join(guide_snippets())
+    for needle in ("vrsweep.sweep(", "vrsweep.simulate(", "vrsweep.theory(", "compare=\"effective\"", "output=",
+                   "except ConfigError", "progress=False", "Omega=5.0, rtol=1e-8"):
+        assert needle in joined, needle
+
+
+def test_every_snippet_of_the_guide_runs(tmp_path, monkeypatch):
+    """docs/python-api.md's python blocks, as written, in order, in one namespace (as a notebook
+    runs them), from a folder whose configs/ is the shipped examples'."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "configs").symlink_to(CONFIGS, target_is_directory=True)
+    namespace = {}
+    for number, code in enumerate(guide_snippets(), 1):
+        exec(compile(code, f"docs/python-api.md, snippet {number}", "exec"), namespace)
+    assert (tmp_path / "results" / "effective_map.h5").exists() and (tmp_path / "fig3_x.png").stat().st_size > 0
+    assert namespace["ds"].R.shape == (21, 2)

@@ -1,0 +1,327 @@
+"""Continuation of periodic orbits (analysis/continuation.py, numerics/shooting.py).
+
+Every check is against something independent of the kernel: SciPy's DOP853 with impact events
+(tests/reference.py) for the fixed points and the monodromy, Liouville's formula for the product
+of the multipliers, and simulations of the kind sweeps run for the stable branch and the folds.
+The case is the README's hysteresis example (effective model, gamma = alpha = 0.05, Omega = 4),
+followed in g: its small orbit, the Neimark-Sacker point where it is born, its fold, the unstable
+orbit beyond, and the grazing where that orbit starts to hit the barrier.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import simpson
+
+from reference import reference_trajectory
+from vrsweep.analysis import continuation
+from vrsweep.errors import VrsweepError
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
+from vrsweep.numerics.trajectory import settings_vector, simulate
+
+HYSTERESIS = dict(DEFAULT_PARAMETERS, gamma=0.05, alpha=0.05, Omega=4.0)
+SETTINGS = settings_vector(rtol=1e-10, atol=1e-12)
+SLOW_PERIOD = 2.0 * math.pi / HYSTERESIS["omega"]
+# The sweep grid of configs/hysteresis_effective.yaml: g from 21 to 27 in 25 points.
+GRID = np.linspace(21.0, 27.0, 25)
+
+
+def _problem(method="rk45", **options):
+    return continuation.ContinuationProblem(dict(HYSTERESIS, g=23.0), "effective", "g", SETTINGS, method,
+                                            dict(continuation.DEFAULTS, max_step=0.3, **options))
+
+
+@pytest.fixture(scope="module")
+def hysteresis_branch():
+    problem = _problem()
+    start = continuation.find_start(problem, [0.0, 0.0], 23.0, 200, 16)
+    branch, bifurcations = continuation.continue_branch(problem, start, 21.0, 27.0, 120)
+    return problem, branch, bifurcations
+
+
+@pytest.fixture(scope="module")
+def impacting_branch():
+    """The large orbit the down-sweep stays on: one impact per slow period."""
+    problem = _problem()
+    run = simulate(_coefficients(27.0), [0.0, 0.0], settings_vector(transient_periods=100, measure_periods=5))
+    start = continuation.find_start(problem, run.summary[[8, 9]], 24.0, 100, 16)
+    branch, bifurcations = continuation.continue_branch(problem, start, 21.0, 27.0, 30)
+    return problem, branch, bifurcations
+
+
+def _coefficients(g):
+    return kernel_coefficients(dict(HYSTERESIS, g=g), "effective")
+
+
+def _sample(orbits, count):
+    """About ``count`` orbits spread along the branch, both ends included."""
+    index = np.unique(np.linspace(0, len(orbits) - 1, count).round().astype(int))
+    return [orbits[i] for i in index]
+
+
+def _one_period(coefficients, state, k, max_step=np.inf):
+    """SciPy's stroboscopic map over the slow period [kT, (k+1)T] (the force is T-periodic)."""
+    run = reference_trajectory(coefficients, state[0], state[1], (k + 1) * SLOW_PERIOD, t0=k * SLOW_PERIOD,
+                               rtol=1e-12, atol=1e-14, max_step=max_step)
+    return np.array([run["x_final"], run["v_final"]]), run
+
+
+def _resolving_step(orbit):
+    """A SciPy step short enough to see the orbit's slowest impact (tests/reference.py). An impact
+    at speed u would have flown beyond the barrier for 2 u / a, where a = -x'' at the barrier is
+    below 0.3 here (wt2 Delta + alpha Delta^3 + c at g <= 27, eq2.11): a step of u is 6 times
+    shorter."""
+    return orbit.slowest_impact if orbit.impacts_per_period > 0 else np.inf
+
+
+def test_branch_has_stable_and_unstable_orbits_and_both_bifurcations(hysteresis_branch):
+    _, branch, bifurcations = hysteresis_branch
+    stable = [orbit.stable for orbit in branch.orbits]
+    assert any(stable) and not all(stable)
+    kinds = [b.kind for b in bifurcations]
+    assert "fold" in kinds and "neimark_sacker" in kinds
+
+
+@pytest.mark.slow
+def test_every_sampled_point_is_a_fixed_point_of_scipys_map(hysteresis_branch, impacting_branch):
+    _, branch, bifurcations = hysteresis_branch
+    orbits = _sample(branch.orbits, 8) + [b.orbit for b in bifurcations] + _sample(impacting_branch[1].orbits, 3)
+    assert any(orbit.impacts_per_period > 0 for orbit in orbits)
+    for orbit in orbits:
+        state = orbit.state
+        for k in range(orbit.periods):
+            state, _ = _one_period(_coefficients(orbit.parameter), state, k, _resolving_step(orbit))
+        scale = max(1.0, np.max(np.abs(orbit.state)))
+        assert np.max(np.abs(state - orbit.state)) < 1e-7 * scale, (orbit.parameter, orbit.stable)
+
+
+def _scipy_monodromy(orbit, step=1e-6):
+    """Product of central-difference Jacobians of SciPy's one-period maps along the orbit."""
+    coefficients = _coefficients(orbit.parameter)
+    monodromy = np.eye(2)
+    state = orbit.state
+    for k in range(orbit.periods):
+        jacobian = np.empty((2, 2))
+        for j in range(2):
+            shift = np.zeros(2)
+            shift[j] = step
+            jacobian[:, j] = (_one_period(coefficients, state + shift, k)[0]
+                              - _one_period(coefficients, state - shift, k)[0]) / (2.0 * step)
+        monodromy = jacobian @ monodromy
+        state = _one_period(coefficients, state, k)[0]
+    return monodromy
+
+
+def _away_from_grazing(orbits):
+    """The orbits where central differences of step 1e-6 measure the monodromy: next to a graze
+    the map has a square-root term in the penetration sigma = u^2 / (2 a) >= u^2 / 0.6 (u the slowest
+    impact, a as in _resolving_step), whose differences are off by (1e-6 / sigma)^2 relative;
+    u > 0.05 keeps that below 1e-7. A free orbit 1e-3 below the barrier stays free under them."""
+    return [o for o in orbits if (o.slowest_impact > 0.05 if o.impacts_per_period > 0
+                                  else o.x_max < HYSTERESIS["Delta"] - 1e-3)]
+
+
+@pytest.mark.slow
+def test_multipliers_match_scipy_central_differences(hysteresis_branch, impacting_branch):
+    # The impacting orbits check the saltation matrix too: the unstable ones beyond the graze
+    # (|mu| up to 5 here) and the stable ones of the down-sweep.
+    free = [o for o in _away_from_grazing(hysteresis_branch[1].orbits) if o.impacts_per_period == 0]
+    beyond = [o for o in _away_from_grazing(hysteresis_branch[1].orbits) if o.impacts_per_period > 0]
+    assert beyond, "the branch did not cross its graze"
+    for orbit in _sample(free, 3) + _sample(beyond, 2) + _sample(impacting_branch[1].orbits, 2):
+        reference = np.sort_complex(np.linalg.eigvals(_scipy_monodromy(orbit)))
+        computed = np.sort_complex(orbit.multipliers)
+        scale = max(1.0, np.max(np.abs(computed)))
+        assert np.max(np.abs(reference - computed)) < 1e-6 * scale, (orbit.parameter, reference, computed)
+
+
+def _liouville_determinant(orbit):
+    """exp(-int gamma (x^2 - mu) dt) over the orbit, times e^2 per impact (det of the saltation)."""
+    coefficients = _coefficients(orbit.parameter)
+    gamma, mu = HYSTERESIS["gamma"], coefficients[1]
+    log_det, impacts = 0.0, 0
+    state = orbit.state
+    for k in range(orbit.periods):
+        state, run = _one_period(coefficients, state, k)
+        solution = run["sol"]
+        impacts += len(run["impact_times"])
+        for t_start, t_end, _ in solution.segments:
+            t = np.linspace(t_start, t_end, 4001)
+            x = solution(t)[0]
+            log_det += -gamma * simpson(x * x - mu, x=t)
+    return math.exp(log_det) * HYSTERESIS["e"] ** (2 * impacts)
+
+
+@pytest.mark.slow
+def test_product_of_multipliers_obeys_liouville(hysteresis_branch, impacting_branch):
+    for orbit in _sample(hysteresis_branch[1].orbits, 3) + _sample(impacting_branch[1].orbits, 2):
+        product = np.prod(orbit.multipliers).real
+        assert product == pytest.approx(_liouville_determinant(orbit), rel=1e-7), orbit.parameter
+
+
+def _sweep(values, state, transient=100, measure=100, rtol=1e-10, atol=1e-12):
+    """What `vrsweep run` does along an axis with `continuation`: each point starts from the
+    previous one's final state. Returns (R, impacts per period, final states)."""
+    settings = settings_vector(rtol=rtol, atol=atol, transient_periods=transient, measure_periods=measure)
+    gains, impacts, finals = [], [], []
+    for g in values:
+        run = simulate(_coefficients(g), state, settings)
+        state = run.summary[[8, 9]]
+        gains.append(run.summary[0])
+        impacts.append(run.summary[4])
+        finals.append(state)
+    return np.array(gains), np.array(impacts), finals
+
+
+def _orbit_at(problem, branch, g, stable=True):
+    """The branch's orbit at exactly g (fixed-parameter Newton from the nearest point)."""
+    candidates = [o for o in branch.orbits if o.stable == stable]
+    nearest = min(candidates, key=lambda o: abs(o.parameter - g))
+    orbit, failure = continuation.correct(problem, np.array([nearest.state[0], nearest.state[1], g]),
+                                          nearest.periods)
+    assert failure is None, failure
+    return orbit
+
+
+@pytest.mark.slow
+def test_stable_points_equal_long_simulations_on_both_sides_of_the_loop(hysteresis_branch, impacting_branch):
+    large_start = simulate(_coefficients(27.0), [0.0, 0.0], settings_vector(transient_periods=100,
+                                                                             measure_periods=5)).summary[[8, 9]]
+    # The up-sweep of configs/hysteresis_effective.yaml: from rest at g = 21, each point from the last.
+    small_start = _sweep(GRID[GRID < 24.5], [0.0, 0.0])[2][-1]
+    for (problem, branch, _), start, g in ((hysteresis_branch, small_start, 24.5),
+                                           (impacting_branch, large_start, 24.5),
+                                           (impacting_branch, large_start, 23.0)):
+        orbit = _orbit_at(problem, branch, g)
+        assert orbit.stable
+        # The up-sweep lands on the small orbit, the down-sweep from g = 27 on the impacting
+        # one; the last transient is long enough for |mu|^n < 1e-9.
+        contraction = np.max(np.abs(orbit.multipliers))
+        transient = int(math.log(1e-9) / math.log(contraction)) + 1
+        gains, impacts, _ = _sweep([g], start, transient=transient, measure=20)
+        assert impacts[0] == orbit.impacts_per_period
+        assert gains[0] == pytest.approx(orbit.R, rel=1e-6)
+
+
+@pytest.mark.slow
+def test_fold_lies_where_the_up_sweep_jumps(hysteresis_branch):
+    """The up-sweep of configs/hysteresis_effective.yaml (from rest at g = 21, each point from the
+    last, 100 + 100 periods) leaves the small orbit at the first grid point past its end: the
+    located fold is within one grid step of that jump."""
+    _, _, bifurcations = hysteresis_branch
+    folds = [b.orbit.parameter for b in bifurcations if b.kind == "fold"]
+    _, impacts, _ = _sweep(GRID, [0.0, 0.0])
+    jumped = int(np.argmax(impacts > 0))  # the small orbit never impacts, the large one does
+    assert impacts[jumped] > 0 and np.all(impacts[:jumped] == 0)
+    grid_step = GRID[1] - GRID[0]
+    assert any(abs(GRID[jumped] - fold) <= grid_step for fold in folds), (folds, GRID[jumped])
+
+
+def test_neimark_sacker_point_has_a_unit_complex_pair(hysteresis_branch):
+    _, _, bifurcations = hysteresis_branch
+    torus = [b.orbit for b in bifurcations if b.kind == "neimark_sacker"]
+    assert torus
+    multipliers = torus[0].multipliers
+    assert abs(multipliers[0].imag) > 0.1
+    assert np.abs(multipliers) == pytest.approx([1.0, 1.0], abs=1e-5)
+
+
+def test_fold_has_a_unit_real_multiplier(hysteresis_branch):
+    _, _, bifurcations = hysteresis_branch
+    fold = [b.orbit for b in bifurcations if b.kind == "fold"][0]
+    assert np.min(np.abs(fold.multipliers - 1.0)) < 1e-5
+
+
+@pytest.mark.slow
+def test_dop853_branch_points_are_fixed_points():
+    problem = _problem("dop853")
+    start = continuation.find_start(problem, [0.0, 0.0], 24.0, 200, 16)
+    branch, _ = continuation.continue_branch(problem, start, 23.5, 24.5, 10)
+    for orbit in _sample(branch.orbits, 3):
+        state, _ = _one_period(_coefficients(orbit.parameter), orbit.state, 0)
+        assert np.max(np.abs(state - orbit.state)) < 1e-7
+
+
+def test_original_model_refuses_an_incommensurate_forcing():
+    with pytest.raises(VrsweepError, match="not a whole number"):
+        continuation.check_commensurate(dict(DEFAULT_PARAMETERS, g=5.0, Omega=4.3), "original", "g")
+
+
+def test_original_model_refuses_omega_as_the_parameter():
+    for name in ("Omega", "omega"):
+        with pytest.raises(VrsweepError, match="effective model"):
+            continuation.check_commensurate(dict(DEFAULT_PARAMETERS, g=5.0), "original", name)
+    continuation.check_commensurate(dict(HYSTERESIS, g=5.0, Omega=4.3), "effective", "Omega")
+
+
+@pytest.mark.slow
+def test_chaotic_start_is_a_clear_error():
+    # The original model at g = 5, Omega = 4 is chaotic (tests/reference.py: tolerance-dependent R).
+    problem = continuation.ContinuationProblem(dict(DEFAULT_PARAMETERS, g=5.0), "original", "g",
+                                               settings_vector(), "rk45", dict(continuation.DEFAULTS))
+    with pytest.raises(VrsweepError, match="no periodic orbit"):
+        continuation.find_start(problem, [0.99, 0.5], 5.0, 100, 8)
+
+
+# --- grazing ----------------------------------------------------------------------------------
+def _free_maximum(coefficients, state, periods):
+    """SciPy's largest x over the orbit without the barrier (Delta moved out of reach)."""
+    free = np.array(coefficients, dtype=float)
+    free[8] = 1e3
+    run = reference_trajectory(free, state[0], state[1], periods * SLOW_PERIOD, rtol=1e-12, atol=1e-14)
+    t = np.linspace(0.0, periods * SLOW_PERIOD, 200001)
+    x = run["sol"](t)[0]
+    k = int(np.argmax(x))
+    # Refine the sampled maximum by the parabola through its neighbours (spacing 6e-5: its error
+    # is far below the 1e-9 asked).
+    x0, x1, x2 = x[k - 1], x[k], x[k + 1]
+    return x1 + 0.125 * (x0 - x2) ** 2 / (2.0 * x1 - x0 - x2)
+
+
+def _graze_neighbours(branch, graze):
+    """The branch's orbits on either side of the graze: (last free one, first impacting one)."""
+    index = min(range(len(branch.orbits)), key=lambda i: abs(branch.orbits[i].parameter - graze.parameter))
+    window = branch.orbits[max(index - 3, 0):index + 4]
+    free = [o for o in window if o.impacts_per_period == 0]
+    impacting = [o for o in window if o.impacts_per_period > 0]
+    return (min(free, key=lambda o: abs(o.parameter - graze.parameter)),
+            min(impacting, key=lambda o: abs(o.parameter - graze.parameter)))
+
+
+@pytest.mark.slow
+def test_the_branch_crosses_its_graze_onto_impacting_orbits(hysteresis_branch):
+    """The unstable orbit beyond the fold grows until it touches the barrier; the branch goes on
+    through the graze onto the unstable orbits that hit it once per period (continuation.py,
+    grazing.py). Checked by SciPy: the grazing orbit's free maximum is Delta, and next to it the
+    free neighbour has no impact and the impacting one has one per period."""
+    _, branch, bifurcations = hysteresis_branch
+    grazes = [b.orbit for b in bifurcations if b.kind == "grazing"]
+    assert len(grazes) == 1
+    graze = grazes[0]
+    assert _free_maximum(_coefficients(graze.parameter), graze.state, graze.periods) == pytest.approx(
+        HYSTERESIS["Delta"], abs=1e-8)
+    free, impacting = _graze_neighbours(branch, graze)
+    for orbit, impacts in ((free, 0), (impacting, 1)):
+        state, run = _one_period(_coefficients(orbit.parameter), orbit.state, 0, _resolving_step(orbit))
+        assert len(run["impact_times"]) == impacts, (orbit.parameter, impacts)
+        assert np.max(np.abs(state - orbit.state)) < 1e-7 * max(1.0, np.max(np.abs(orbit.state)))
+    # The free unstable orbit exists above the graze only (it is born at the fold above), the
+    # impacting one below: the branch turns back at the graze no more than the normal form says.
+    assert free.parameter > graze.parameter > impacting.parameter
+    assert branch.ends["up"][0] == continuation.ENDED_RANGE
+
+
+@pytest.mark.slow
+def test_the_graze_is_found_alike_from_the_impacting_side(hysteresis_branch):
+    """Followed the other way, from an impacting orbit towards its graze, the branch locates the
+    same grazing orbit and goes on onto the free one."""
+    problem, branch, bifurcations = hysteresis_branch
+    graze = next(b.orbit for b in bifurcations if b.kind == "grazing")
+    start = next(o for o in branch.orbits if o.impacts_per_period > 0 and o.parameter < graze.parameter - 1.0)
+    orbits, found, _ = continuation.follow(problem, start, +1, 21.0, 27.0, 25)
+    reverse = [orbit for kind, orbit in found if kind == "grazing"]
+    assert len(reverse) == 1
+    tolerance = problem.options["location_tolerance"] * graze.parameter
+    assert reverse[0].parameter == pytest.approx(graze.parameter, abs=tolerance)
+    assert any(o.impacts_per_period == 0 and o.parameter > graze.parameter for o in orbits)

@@ -1,0 +1,289 @@
+"""Every code block of the user guide (docs/*.md) and the README runs, or is checked, here.
+
+- ```python blocks run as written, in order, page by page, each page in its own folder and
+  namespace (as a notebook runs its cells; docs/python-api.md is run by tests/test_api.py). A block
+  names the files it reads in its first comment lines, as the commands that make them
+  (``# vrsweep run configs/quickstart.yaml   (writes quickstart.h5)``); the test runs those
+  commands first, on shorter windows (``SHORT``), once per page.
+- ```yaml blocks are configs: each must load, and one that says it shows a shipped config
+  (``# configs/NAME.yaml: ...``) must be that config, but for its output file.
+- Every ``vrsweep ...`` command in a ```bash or ```text block, in inline code or in a shipped
+  config's comments names a real
+  command and only its real options (and ``--kind`` only its real kinds); every ```bash command that
+  names a shipped config runs as ``vrsweep validate`` with the same ``--set``s (nothing is
+  computed), and ``scripts/make_figures.py NAME`` names a real figure; and (slow) every page's
+  ```bash commands run in order, as a reader would type them, on 2 + 2 slow periods.
+
+A stale option, a renamed config, a config key that no longer exists or a snippet that no longer
+runs fails here, naming the page and the block.
+"""
+
+import glob
+import importlib.util
+from dataclasses import replace
+import os
+import re
+import shlex
+from pathlib import Path
+
+import click
+import pytest
+
+from vrsweep.cli import main
+from vrsweep.config import load_config, parse_config
+
+pytest.importorskip("xarray")
+
+ROOT = Path(__file__).resolve().parent.parent
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+SHORT = ("--set", "transient_periods=2", "--set", "measure_periods=2", "--set", "strobe_periods=2")
+FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
+
+
+def page_id(path):
+    return str(path.relative_to(ROOT))
+
+
+def code_blocks(path, language=None):
+    """[(language, code, line number)] of the fenced blocks of a Markdown file."""
+    text = path.read_text(encoding="utf-8")
+    blocks = [(m.group(1), m.group(2), text.count("\n", 0, m.start()) + 1) for m in FENCE.finditer(text)]
+    return [b for b in blocks if language is None or b[0] == language]
+
+
+def pages_with(language):
+    return [pytest.param(p, id=page_id(p)) for p in PAGES if code_blocks(p, language)]
+
+
+# --- python ---------------------------------------------------------------------------------
+
+def commands_in_header(code):
+    """The `vrsweep ...` commands of a block's first comment lines (a command ends at two spaces)."""
+    commands = []
+    for line in code.splitlines():
+        if not line.startswith("#"):
+            break
+        match = re.match(r"#\s+(vrsweep \S.*?)(?:\s{2,}.*)?$", line)
+        if match:
+            commands.append(shlex.split(match.group(1))[1:])
+    return commands
+
+
+# Pages whose python blocks a test of their own runs (and checks the results of): that test must
+# name the page, so it cannot drift away unseen.
+RUN_ELSEWHERE = {"docs/python-api.md": "tests/test_api.py"}
+
+
+def test_pages_run_elsewhere_are_run_there():
+    for page, test_file in RUN_ELSEWHERE.items():
+        if (ROOT / page).exists():
+            assert page in (ROOT / test_file).read_text(encoding="utf-8"), f"{test_file} no longer runs {page}"
+
+
+@pytest.mark.parametrize("page", [p for p in pages_with("python") if p.id not in RUN_ELSEWHERE])
+def test_python_blocks_run(page, tmp_path, monkeypatch, invoke):
+    """A page's blocks run in order in one namespace, as a notebook runs its cells."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    (tmp_path / "configs").symlink_to(ROOT / "configs")  # the blocks' commands name configs/...
+    done, namespace = set(), {}
+    try:
+        for number, (_, code, line) in enumerate(code_blocks(page, "python"), 1):
+            for words in commands_in_header(code):
+                if tuple(words) in done:
+                    continue
+                done.add(tuple(words))
+                extra = ["--quiet", "--overwrite", *SHORT] if words[0] == "run" else ["--overwrite"]
+                result = invoke(*words, *extra)
+                assert result.exit_code == 0, f"{page_id(page)}:{line}: vrsweep {shlex.join(words)}\n{result.output}"
+            exec(compile(code, f"{page_id(page)}:{line} (python block {number})", "exec"), namespace)
+    finally:
+        _end_of_notebook(namespace)
+
+
+def _end_of_notebook(namespace):
+    """Close what a page's blocks left open, as a notebook's kernel does when it stops: a lazily
+    read Dataset keeps its HDF5 file open, and a later test counts the files this process has open."""
+    import gc
+
+    import h5py
+    import xarray as xr
+
+    for value in namespace.values():
+        if isinstance(value, (xr.Dataset, xr.DataArray, h5py.File)):
+            value.close()
+    namespace.clear()
+    gc.collect()
+
+
+def test_the_python_pages_show_each_way_in():
+    joined = "\n".join(code for page in PAGES for _, code, _ in code_blocks(page, "python"))
+    for needle in ("vrsweep.open_results(", ".sel(Omega=4)", ".plot(", ".to_dataframe()", "h5py.File(",
+                   'group="effective"', "xr.open_dataset("):
+        assert needle in joined, needle
+
+
+# --- yaml -----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("page", pages_with("yaml"))
+def test_yaml_blocks_are_valid_configs(page):
+    for _, code, line in code_blocks(page, "yaml"):
+        config = parse_config(code, source_name=f"{page_id(page)}:{line}")  # ConfigError names the line
+        shown = re.match(r"#\s*(configs/[\w.]+\.yaml)\s*:", code)
+        if shown:
+            shipped = load_config(ROOT / shown.group(1))
+            assert replace(config, output=None) == replace(shipped, output=None), (
+                f"{page_id(page)}:{line}: the block says it shows {shown.group(1)}, but differs from it")
+
+
+# --- command lines ----------------------------------------------------------------------------
+
+def command_lines(path):
+    """(text, where, in_bash_block) of every `vrsweep ...` command the page shows: lines of bash
+    and text blocks (with their indented continuation lines) and inline code spans; in a shipped
+    config, its comment lines that are commands (`vrsweep init` copies them to users)."""
+    found = []
+    text = path.read_text(encoding="utf-8")
+    if path.suffix == ".yaml":
+        for number, line in enumerate(text.splitlines(), 1):
+            body = line.lstrip("#").strip()
+            if line.startswith("#") and body.startswith("vrsweep "):
+                found.append((body.split("  #")[0].strip(), f"{page_id(path)}:{number}", False))
+        return found
+    for language, code, line in code_blocks(path):
+        if language not in ("bash", "text", ""):
+            continue
+        lines = code.splitlines()
+        for index, body in enumerate(lines):
+            if not body.startswith("vrsweep "):
+                continue
+            command = body.split("  #")[0]
+            for more in lines[index + 1:]:
+                if not more.startswith(" "):
+                    break
+                command = command.rstrip() + ("" if command.rstrip().endswith("|") else " ") + more.strip()
+            found.append((command, f"{page_id(path)}:{line + 1 + index}", language == "bash"))
+    outside = FENCE.sub("", text)
+    for match in re.finditer(r"`(vrsweep [^`]+)`", outside):
+        found.append((match.group(1), f"{page_id(path)}: `{match.group(1)}`", False))
+    return found
+
+
+def _option_names(command):
+    names = {"--help", "-h"}
+    for param in command.params:
+        names.update(param.opts)
+        names.update(param.secondary_opts)
+    return names
+
+
+def _kinds():
+    (kind,) = [p for p in main.commands["plot"].params if p.name == "kind"]
+    return set(kind.type.choices)
+
+
+def _placeholder(word):
+    return word.isupper() or word in ("...", "…")
+
+
+CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("page", [pytest.param(p, id=page_id(p)) for p in PAGES + CONFIGS if command_lines(p)])
+def test_commands_name_real_options(page):
+    problems = []
+    for command, where, _ in command_lines(page):
+        words = [w.strip("[]()") for w in command.split()]
+        name = words[1]
+        if name.startswith("-"):
+            if name not in ("--version", "--help", "-h"):
+                problems.append(f"{where}: vrsweep has no option {name}")
+            continue
+        if _placeholder(name):  # vrsweep COMMAND --help
+            continue
+        if name not in main.commands:
+            looks_like_a_command = len(words) == 2 or re.match(r"-|.*\.(yaml|h5)$", words[2])
+            if looks_like_a_command:  # not prose such as `vrsweep 0.1.0 (numba ...)`
+                problems.append(f"{where}: no command {name!r}")
+            continue
+        options = _option_names(main.commands[name])
+        for index, word in enumerate(words[2:], 2):
+            option = word.split("=")[0].rstrip(",.;:")
+            if re.match(r"--?[a-zA-Z]", option) and option not in options:
+                problems.append(f"{where}: vrsweep {name} has no option {option}")
+            if option == "--kind" and index + 1 < len(words):
+                values = [v for v in words[index + 1].split("|") if v and not _placeholder(v)]
+                problems += [f"{where}: no --kind {v}" for v in values if v not in _kinds()]
+    assert not problems, problems
+
+
+@pytest.mark.parametrize("page", [pytest.param(p, id=page_id(p)) for p in PAGES
+                                  if any(bash for *_, bash in command_lines(p))])
+def test_bash_commands_on_shipped_configs_validate(page, invoke, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for command, where, bash in command_lines(page):
+        words = shlex.split(command)
+        if not bash or len(words) < 3 or words[1] not in ("run", "validate", "theory", "simulate"):
+            continue
+        config = ROOT / words[2]
+        if not config.is_file():
+            assert _placeholder(words[2]) or not words[2].startswith("configs/"), f"{where}: no {words[2]}"
+            continue
+        sets = [arg for i, arg in enumerate(words) if i > 0 and words[i - 1] == "--set"]
+        result = invoke("validate", config, *[x for s in sets for x in ("--set", s)])
+        assert result.exit_code == 0, f"{where}: {command}\n{result.output}"
+
+
+def bash_commands(path):
+    """The `vrsweep ...` commands of a page's ```bash blocks, in order, as word lists (a line's
+    `pip install . && vrsweep ...` gives its vrsweep part); none with a placeholder (CONFIG.yaml)."""
+    commands = []
+    for _, code, line in code_blocks(path, "bash"):
+        for body in code.splitlines():
+            for part in body.split("  #")[0].split("&&"):
+                words = shlex.split(part)
+                if words[:1] == ["vrsweep"] and not any(_placeholder(Path(w).stem) for w in words[1:]):
+                    commands.append((words[1:], f"{page_id(path)}:{line}"))
+    return commands
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [pytest.param(p, id=page_id(p)) for p in PAGES if bash_commands(p)])
+def test_bash_blocks_run(page, invoke, tmp_path, monkeypatch):
+    """A page's shell commands, run in order in one folder as a reader would type them, each sweep
+    on 2 + 2 slow periods: each must succeed (a file the next one reads, a plot, a merge...)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    (tmp_path / "configs").symlink_to(ROOT / "configs")
+    for words, where in bash_commands(page):
+        words = [match for w in words for match in (sorted(glob.glob(w)) if "*" in w else [w])]
+        extra = ["--quiet", *SHORT] if words[0] == "run" else []
+        result = invoke(*words, *extra)
+        assert result.exit_code == 0, f"{where}: vrsweep {shlex.join(words)}\n{result.output}"
+
+
+def test_make_figures_names_real_figures():
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "scripts" / "make_figures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    problems = []
+    for page in PAGES:
+        for match in re.finditer(r"python scripts/make_figures\.py((?: [\w+]+)*)", page.read_text(encoding="utf-8")):
+            problems += [f"{page_id(page)}: {name}" for name in match.group(1).split() if name not in module.COMMANDS]
+    assert not problems, f"make_figures.py has no figure: {problems}"
+    assert Path(ROOT / "docs" / "figures").is_dir()
+    missing = [f"{name}: {words[-1]}" for name, commands in module.COMMANDS.items() for words in commands
+               if words[0] == "plot" and not (ROOT / words[words.index("-o") + 1]).is_file()]
+    assert not missing, f"figures make_figures.py makes but the repository lacks: {missing}"
+
+
+def test_every_example_the_docs_name_is_shipped():
+    shipped = {p.stem for p in (ROOT / "configs").glob("*.yaml")}
+    named = set()
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        named |= {name for name in re.findall(r"configs/(\w+)\.yaml", text) if not name.isupper()}
+        named |= {name for name in re.findall(r"--example (\w+)", text) if not name.isupper()}
+    assert named - shipped == set(), f"named in the docs, not in configs/: {sorted(named - shipped)}"
+    assert os.path.isdir(ROOT / "configs")
+

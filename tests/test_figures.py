@@ -1,0 +1,338 @@
+"""Figures for papers (issue 22): --title/--no-title, --size, --style, --vmin/--vmax, integer maps on
+a discrete scale, lambda_1 on a scale symmetric about zero, stated caps, a colour scale for many
+curves, the attractors on basin plots. Checked through matplotlib's objects and the written files.
+
+The maps' values are set in a loaded Dataset (as a file could hold them), so that what must be
+drawn is known exactly; the numbers themselves are tested elsewhere."""
+
+import numpy as np
+import pytest
+from matplotlib.collections import PatchCollection, QuadMesh
+from matplotlib.colors import BoundaryNorm, to_rgba
+
+from vrsweep import plot
+from vrsweep.errors import UsageError
+from vrsweep.plot.basins import BASIN_COLOURS
+from vrsweep.plot.sweeps import NO_VALUE_COLOUR
+from vrsweep.store.reading import load_results
+
+PLANE = """\
+sweep:
+  g: {start: 0.0, stop: 55.0, num: 12}
+  Omega: {start: 3.0, stop: 6.0, num: 10}
+integration: {transient_periods: 3, measure_periods: 4, strobe_periods: 2, lyapunov: true}
+"""
+LINE = """\
+parameters: {Omega: 4.0}
+sweep:
+  g: {start: 0.0, stop: 30.0, num: 4, continuation: both}
+integration: {transient_periods: 3, measure_periods: 4, strobe_periods: 2}
+"""
+BASINS = """\
+parameters: {g: 5.0, Omega: 5.0}
+sweep:
+  x0: {start: -1.0, stop: 0.5, num: 3}
+  v0: {start: -1.0, stop: 1.0, num: 2}
+integration: {transient_periods: 10, measure_periods: 6, strobe_periods: 3}
+"""
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, invoke, write_config):
+    folder = tmp_path_factory.mktemp("figures")
+    made = {}
+    for name, text in (("plane", PLANE), ("line", LINE), ("basins", BASINS)):
+        out = folder / f"{name}.h5"
+        result = invoke("run", write_config(folder, text, name=f"{name}.yaml"), "-o", out, "--quiet")
+        assert result.exit_code == 0, result.output
+        made[name] = out
+    return made
+
+
+def _mesh(ax):
+    (mesh,) = [c for c in ax.collections if isinstance(c, QuadMesh)]
+    return mesh
+
+
+def _all_text(fig):
+    """Every piece of text drawn on the figure: titles, labels, tick labels, legends, colour bars."""
+    from matplotlib.text import Text
+
+    return [t.get_text() for t in fig.findobj(Text)]
+
+
+# --- integer maps: one colour per value present -------------------------------------------------
+
+
+def test_an_integer_map_has_exactly_one_colour_per_value_present(files):
+    ds = load_results(files["plane"])
+    pattern = np.resize([0, 1, 2, 5, 1], 12)  # along g; 0 = no period
+    ds["period"].values[...] = pattern[:, None]
+    fig = plot.map_figure(ds, "period")
+    mesh = _mesh(fig.axes[0])
+    assert isinstance(mesh.norm, BoundaryNorm)
+    assert mesh.cmap.N == 4 and len(mesh.norm.boundaries) == 5  # values 0, 1, 2, 5: four colours
+    drawn = np.asarray(mesh.get_array(), dtype=float).ravel()
+    colours = {tuple(mesh.cmap(mesh.norm(value))) for value in drawn}
+    assert len(colours) == 4
+    assert to_rgba(mesh.cmap(mesh.norm(0))) == to_rgba(NO_VALUE_COLOUR)  # 'no period' set apart in grey
+    # Equal values share a colour, different ones do not.
+    by_value = {value: tuple(mesh.cmap(mesh.norm(value))) for value in (0, 1, 2, 5)}
+    assert len(set(by_value.values())) == 4
+    bar_labels = [t.get_text() for t in fig.axes[1].get_yticklabels()]
+    assert bar_labels == ["0: no period", "1", "2", "5"]
+
+
+def test_the_other_integer_variables_name_their_special_values(files):
+    ds = load_results(files["plane"])
+    ds["impacts_per_cycle"].values[...] = np.resize([-1, 3, 3, 4, -1], 12)[:, None]
+    fig = plot.map_figure(ds, "impacts_per_cycle")
+    assert _mesh(fig.axes[0]).cmap.N == 3
+    assert [t.get_text() for t in fig.axes[1].get_yticklabels()] == ["-1: no period", "3", "4"]
+    ds["status"].values[...] = 0
+    ds["status"].values[0, 0] = 2
+    fig = plot.map_figure(ds, "status")
+    assert _mesh(fig.axes[0]).cmap.N == 2
+    assert [t.get_text() for t in fig.axes[1].get_yticklabels()] == ["ok", "diverged"]
+
+
+def test_an_integer_map_refuses_a_continuous_scale(files):
+    with pytest.raises(UsageError, match="^vmin and vmax set a continuous colour scale; var period holds integers"):
+        plot.plot(files["plane"], var="period", vmax=3)
+    with pytest.raises(UsageError, match="^log: var period holds integers"):
+        plot.plot(files["plane"], var="period", log=True)
+
+
+# --- lambda_1: a diverging scale symmetric about zero, values within their band marked ---------
+
+
+def test_the_lyapunov_scale_is_symmetric_about_zero_and_marks_values_within_their_band(files):
+    ds = load_results(files["plane"])
+    values = np.linspace(-0.5, 0.05, 120).reshape(12, 10)  # far from symmetric: 10 times more negative
+    errors = np.full((12, 10), 0.01)
+    values[2, 1], values[3, 3] = 0.004, -0.008  # within their band of zero
+    ds["lyapunov"].values[...] = values
+    ds["lyapunov_err"].values[...] = errors
+    fig = plot.map_figure(ds, "lyapunov")
+    norm = _mesh(fig.axes[0]).norm
+    assert norm.vmin == -norm.vmax == -0.5  # one slope for both signs
+    assert norm(0.0) == 0.5
+    assert fig.axes[1].get_ylabel().startswith("$\\lambda_1$")  # as on the 1-D figure
+    (hatched,) = [c for c in fig.axes[0].collections if isinstance(c, PatchCollection)]
+    assert hatched.get_gid() == "within_error_of_zero" and hatched.get_hatch()
+    expected = int(np.sum(np.abs(values) <= errors))
+    assert expected >= 2 and len(hatched.get_paths()) == expected
+    # vmax alone sets both ends; what lies beyond is said on the colour bar.
+    fig = plot.map_figure(ds, "lyapunov", vmax=0.2)
+    norm = _mesh(fig.axes[0]).norm
+    assert (norm.vmin, norm.vmax) == (-0.2, 0.2)
+    assert "floored at -0.2" in fig.axes[1].get_ylabel()
+
+
+# --- caps on a colour scale are stated -----------------------------------------------------------
+
+
+def test_a_capped_colour_scale_says_so_on_the_figure(files):
+    ds = load_results(files["plane"])
+    R = np.linspace(1.0, 9.7, 120).reshape(12, 10)
+    R[4, 3] = 16.5  # one wild point (of 120: above the 99th percentile)
+    ds["R"].values[...] = R
+    ds["R_err"].values[...] = 0.0
+    fig = plot.map_figure(ds, "R")
+    norm = _mesh(fig.axes[0]).norm
+    assert norm.vmax == pytest.approx(np.percentile(R, 99))
+    bar = fig.axes[1].get_ylabel()
+    assert "capped at" in bar and "99th pct." in bar and "max 16.5" in bar, bar
+    n_above = int(np.sum(R > np.percentile(R, 99)))  # 9.7 and 16.5: the percentile lies between them
+    assert f"the 99th percentile: {n_above} cells above, up to 16.5" in fig._suptitle.get_text()
+    # Chosen ends: the scale is the user's, and a cap is still stated.
+    fig = plot.map_figure(ds, "R", vmin=2.0, vmax=5.0, title=False)
+    norm = _mesh(fig.axes[0]).norm
+    assert (norm.vmin, norm.vmax) == (2.0, 5.0)
+    bar = fig.axes[1].get_ylabel()
+    assert "capped at 5" in bar and "floored at 2" in bar
+    assert any("capped at 5" in text for text in _all_text(fig))  # stated even without a title
+    # No outlier, no cap: the scale reaches the largest value and says nothing.
+    ds["R"].values[...] = np.linspace(1.0, 9.7, 120).reshape(12, 10)
+    fig = plot.map_figure(ds, "R")
+    assert _mesh(fig.axes[0]).norm.vmax == pytest.approx(9.7)
+    assert "capped" not in fig.axes[1].get_ylabel()
+
+
+def test_vmin_and_vmax_are_for_maps(files, tmp_path, invoke):
+    with pytest.raises(UsageError, match="^vmin and vmax set the colour scale of a map; this figure has none"):
+        plot.plot(files["line"], kind="bifurcation", vmax=1.0)
+    result = invoke("plot", files["line"], "--vmax", "1", "-o", tmp_path / "f.png")
+    assert result.exit_code == 2
+    assert result.output.strip().splitlines() == [
+        "Error: --vmin and --vmax set the colour scale of a map; this figure has none"]
+
+
+# --- titles, sizes, styles -----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["response", "map", "status", "bifurcation", "lyapunov", "impacts"])
+def test_no_title_leaves_no_title_anywhere(files, kind):
+    source = files["line"] if kind in ("response", "bifurcation", "status") else files["plane"]
+    at = {"Omega": "3"} if kind == "lyapunov" else None
+    fig = plot.plot(source, kind=kind, at=at, title=False)
+    assert fig._suptitle is None
+    assert all(ax.get_title(loc=loc) == "" for ax in fig.axes for loc in ("left", "center", "right"))
+    assert plot.description(fig).count("\n") >= 1  # the description is kept for the metadata
+    with_title = plot.plot(source, kind=kind, at=at)
+    assert with_title._suptitle is not None and with_title._suptitle.get_text()
+
+
+def test_no_title_on_basins_and_the_description_goes_into_the_png(files, tmp_path, invoke):
+    from PIL import Image
+
+    fig = plot.basin_plot(files["basins"], title=False)
+    assert fig._suptitle is None
+    out = tmp_path / "basins.png"
+    result = invoke("plot", files["basins"], "--no-title", "-o", out)
+    assert result.exit_code == 0, result.output
+    with Image.open(out) as image:
+        text = image.text
+    assert text["Title"].startswith("Basins of attraction")
+    assert "basins.h5" in text["Description"] and "g = 5" in text["Description"]
+
+
+def test_the_pdf_keeps_the_description_in_its_subject(files, tmp_path, invoke):
+    out = tmp_path / "f.pdf"
+    assert invoke("plot", files["line"], "--no-title", "-o", out).exit_code == 0
+    assert b"/Subject" in out.read_bytes()
+    found = plot.read_description(out)
+    assert found["Title"].startswith("Response gain R against g")
+    assert "line.h5" in found["Description"] and "γ = 0.22" in found["Description"]
+    result = invoke("info", out)  # and vrsweep info shows it
+    assert result.exit_code == 0 and "line.h5" in result.output and "Response gain R" in result.output
+
+
+@pytest.mark.parametrize("size, dpi, pixels", [("4,3", 100, (400, 300)), ("3.4,2.6", 300, (1020, 780))])
+def test_size_gives_the_requested_pixels_at_the_dpi(files, tmp_path, invoke, size, dpi, pixels):
+    import matplotlib.image
+
+    out = tmp_path / "f.png"
+    result = invoke("plot", files["line"], "--size", size, "--dpi", str(dpi), "-o", out)
+    assert result.exit_code == 0, result.output
+    height, width = matplotlib.image.imread(out).shape[:2]
+    assert (width, height) == pixels
+
+
+def test_a_bad_size_or_style_exits_2_with_one_line(files, tmp_path, invoke):
+    for args, start in ((("--style", "no-such-style"), "Error: --style no-such-style: no such matplotlib style"),
+                        (("--size", "4"), "Error: --size 4: expected WIDTH,HEIGHT in inches"),
+                        (("--size", "0,3"), "Error: --size 0,3: width and height must be between")):
+        result = invoke("plot", files["line"], *args, "-o", tmp_path / "f.png")
+        assert result.exit_code == 2, result.output
+        lines = result.output.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith(start), result.output
+        assert "Traceback" not in result.output
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_fonts_follow_the_style(files, tmp_path, invoke):
+    """No font size in points in the plotting code: a style's sizes reach every text."""
+    sheet = tmp_path / "big.mplstyle"
+    sheet.write_text("font.size: 20\naxes.labelsize: 20\nlegend.fontsize: 20\n")
+    small = plot.plot(files["line"])
+    big = plot.plot(files["line"], style=str(sheet))
+    assert big.axes[0].xaxis.label.get_size() == 20
+    assert big.legends[0].get_texts()[0].get_size() > 1.5 * small.legends[0].get_texts()[0].get_size()
+    assert big._suptitle.get_size() > 1.5 * small._suptitle.get_size()
+    named = plot.plot(files["line"], style="seaborn-v0_8-paper")
+    assert named.axes[0].xaxis.label.get_size() != small.axes[0].xaxis.label.get_size()
+    result = invoke("plot", files["line"], "--style", "seaborn-v0_8-paper", "-o", tmp_path / "f.png")
+    assert result.exit_code == 0, result.output
+
+
+def test_dimensionless_axes_show_no_unit(files):
+    for kind in ("response", "bifurcation"):
+        fig = plot.plot(files["line"], kind=kind)
+        labels = [ax.get_xlabel() + ax.get_ylabel() for ax in fig.axes]
+        assert not any("[1]" in label for label in labels), labels
+    fig = plot.plot(files["plane"], kind="map")
+    assert not any("[1]" in ax.get_xlabel() + ax.get_ylabel() for ax in fig.axes)
+
+
+# --- many curves, the barrier line, legends, basins -----------------------------------------------
+
+
+def test_many_curves_get_a_colour_scale_not_a_legend_entry_each(files):
+    fig = plot.plot(files["plane"], kind="response", log=False)
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert not any("Ω =" in text or "\\Omega$ =" in text for text in legend), legend
+    assert len(legend) <= 8
+    (bar,) = [ax for ax in fig.axes if ax is not fig.axes[0]]
+    assert "$\\Omega$" in bar.get_ylabel()
+    # Each curve's colour is the scale's colour of its Omega: ten values, ten colours.
+    joins = [line for line in fig.axes[0].get_lines() if line.get_linestyle() == ":"]
+    assert len({to_rgba(line.get_color()) for line in joins}) == 10
+
+
+def test_the_barrier_line_is_not_drawn_like_the_joins_of_a_sweep(files):
+    fig = plot.plot(files["line"], log=False)  # continuation up and down: the hysteresis figure
+    ax = fig.axes[0]
+    (barrier,) = [line for line in ax.get_lines() if line.get_gid() == "barrier"]
+    joins = [line for line in ax.get_lines() if line.get_linestyle() == ":"]
+    assert len(joins) == 2
+    for join in joins:  # neither the dash pattern nor the colour of a sweep's joins
+        assert barrier._dash_pattern != join._dash_pattern
+        assert to_rgba(barrier.get_color()) != to_rgba(join.get_color())
+
+
+def test_legends_inside_axes_find_their_own_place(files):
+    """No legend covers data: a legend inside the axes is placed by matplotlib ('best')."""
+    for source, kind in ((files["line"], "bifurcation"), (files["line"], "impacts")):
+        fig = plot.plot(source, kind=kind)
+        for ax in fig.axes:
+            legend = ax.get_legend()
+            if legend is not None:
+                assert legend._loc == 0, kind  # 0 is 'best'
+
+
+def test_basins_mark_each_attractors_stroboscopic_points(files):
+    ds = load_results(files["basins"])
+    fig = plot.basin_plot(files["basins"])
+    ax = fig.axes[0]
+    count = int(ds["attractor_count"].values)
+    labels = ds["attractor"].transpose("x0", "v0").values
+    assert count >= 1
+    x_limits, v_limits = ax.get_xlim(), ax.get_ylim()
+    for label in range(count):
+        i, j = np.argwhere(labels == label)[0]  # the first start of the basin, in grid order
+        xs = ds["strobe_x"].transpose("x0", "v0", ...).values[i, j]
+        vs = ds["strobe_v"].transpose("x0", "v0", ...).values[i, j]
+        (mark,) = [line for line in ax.get_lines() if line.get_gid() == f"attractor {label}"]
+        np.testing.assert_array_equal(mark.get_xdata(), xs)
+        np.testing.assert_array_equal(mark.get_ydata(), vs)
+        assert to_rgba(mark.get_markerfacecolor()) == to_rgba(BASIN_COLOURS[label])  # the basin's colour
+        # Every point is in view, even one outside the swept plane.
+        assert x_limits[0] <= xs.min() and xs.max() <= x_limits[1]
+        assert v_limits[0] <= vs.min() and vs.max() <= v_limits[1]
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert any("x(nT), v(nT)" in text for text in legend)
+
+
+def test_a_legend_below_the_axes_fits_a_journal_column(files):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    for source, kind in ((files["line"], "response"), (files["plane"], "map")):
+        fig = plot.plot(source, kind=kind, size=(3.4, 3.4), title=False, log=False if kind == "response" else None)
+        FigureCanvasAgg(fig).draw()
+        box = fig.legends[0].get_window_extent()
+        assert 0 <= box.x0 and box.x1 <= fig.bbox.width, (kind, box, fig.bbox.width)
+
+
+def test_the_svg_keeps_the_description(files, tmp_path, invoke):
+    out = tmp_path / "f.svg"
+    assert invoke("plot", files["plane"], "--var", "period", "--no-title", "-o", out).exit_code == 0
+    found = plot.read_description(out)
+    assert found["Title"].startswith("period over g and Ω") and "plane.h5" in found["Description"]
+
+
+def test_a_figure_too_small_for_its_texts_says_what_to_do(files, tmp_path, invoke):
+    result = invoke("plot", files["line"], "--size", "2,1.5", "-o", tmp_path / "f.png")
+    assert result.exit_code == 0, result.output
+    assert "Note: " in result.output and "too small for its title" in result.output
+    assert "--no-title, a larger --size" in result.output and "constrained_layout" not in result.output

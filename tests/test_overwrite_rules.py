@@ -1,0 +1,152 @@
+"""Issue 24, class 3: what an output path may be, decided in one place (store/fileio.output_target)
+for run, simulate, merge, plot and init.
+
+- Only a regular file is replaced, and only with --overwrite (plot replaces figures unasked, as
+  it always has); a folder, a pipe or a device at the path is refused with or without it.
+- An input of the command (the config being run, a file being merged or plotted) is never
+  written over, whatever the flags, also through a symbolic link.
+- A symbolic link is followed: the link's target is written (created, replaced or resumed) and the
+  link stays a link.
+"""
+
+import os
+import shutil
+import stat
+
+import h5py
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+CONFIG = """\
+model: effective
+sweep:
+  g: {start: 0, stop: 40, num: 3}
+integration: {transient_periods: 2, measure_periods: 16}
+"""
+POINT = """\
+model: effective
+parameters: {g: 5}
+integration: {transient_periods: 1, measure_periods: 2, strobe_periods: 1}
+"""
+KINDS = ["missing", "regular", "fifo", "folder", "link_to_regular", "dangling_link", "input", "link_to_input"]
+SUFFIX = {"run": ".h5", "simulate": ".h5", "merge": ".h5", "plot": ".png", "init": ".yaml"}
+OLD = b"old contents"
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    from click.testing import CliRunner
+
+    from vrsweep.cli import main
+
+    folder = tmp_path_factory.mktemp("inputs")
+    (folder / "sweep.yaml").write_text(CONFIG)
+    (folder / "point.yaml").write_text(POINT)
+    result = CliRunner().invoke(main, ["run", str(folder / "sweep.yaml"), "-o", str(folder / "good.h5"), "-q"])
+    assert result.exit_code == 0, result.output
+    return folder
+
+
+def _setup(tmp_path, inputs, command, kind):
+    """(the output path to give, the input files of the command) with the path made of ``kind``."""
+    work = tmp_path / "work"
+    work.mkdir()
+    config = work / ("point.yaml" if command == "simulate" else "sweep.yaml")
+    shutil.copy(inputs / config.name, config)
+    result = work / "good.h5"
+    shutil.copy(inputs / "good.h5", result)
+    command_inputs = {"run": [config], "simulate": [config], "merge": [result], "plot": [result], "init": []}[command]
+    out = work / f"out{SUFFIX[command]}"
+    target = work / f"target{SUFFIX[command]}"
+    if kind == "regular":
+        out.write_bytes(OLD)
+    elif kind == "fifo":
+        os.mkfifo(out)
+    elif kind == "folder":
+        out.mkdir()
+    elif kind == "link_to_regular":
+        target.write_bytes(OLD)
+        out.symlink_to(target.name)
+    elif kind == "dangling_link":
+        out.symlink_to(target.name)
+    elif kind == "input":
+        out = command_inputs[0]
+    elif kind == "link_to_input":
+        out.symlink_to(command_inputs[0].name)
+    return out, target, command_inputs
+
+
+def _args(command, out, command_inputs, overwrite):
+    flag = ["--overwrite"] if overwrite and command != "plot" else []
+    return {
+        "run": ["run", *command_inputs, "-o", out, "-q", *flag],
+        "simulate": ["simulate", *command_inputs, "-o", out, "-q", *flag],
+        "merge": ["merge", *command_inputs, "-o", out, "-q", *flag],
+        "plot": ["plot", *command_inputs, "-o", out],
+        "init": ["init", out, *flag],
+    }[command]
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(command=st.sampled_from(sorted(SUFFIX)), kind=st.sampled_from(KINDS), overwrite=st.booleans())
+def test_what_an_output_may_replace(tmp_path_factory, inputs, invoke, command, kind, overwrite):
+    if command == "init" and kind in ("input", "link_to_input", "folder"):
+        return  # init has no input; a folder is where init writes NAME.yaml (test_cli_init)
+    tmp_path = tmp_path_factory.mktemp(command)
+    out, target, command_inputs = _setup(tmp_path, inputs, command, kind)
+    before = {path: path.read_bytes() for path in command_inputs}
+    result = invoke(*_args(command, out, command_inputs, overwrite))
+    lines = result.output.strip().splitlines()
+    replaces = overwrite or command == "plot"
+    if command == "plot" and kind == "input":  # good.h5 is no figure's name: refused for its suffix first
+        assert result.exit_code == 2, result.output
+    elif kind in ("input", "link_to_input"):
+        assert result.exit_code == 2 and "choose another output" in result.output, result.output
+    elif kind == "fifo":
+        assert result.exit_code == 2 and "not a regular file" in result.output, result.output
+        assert stat.S_ISFIFO(os.lstat(out).st_mode)
+    elif kind == "folder":
+        assert result.exit_code == 2 and "is a directory" in result.output, result.output
+    elif kind in ("regular", "link_to_regular") and not replaces:
+        assert result.exit_code == 2 and "already exists" in result.output, result.output
+        assert (target if kind == "link_to_regular" else out).read_bytes() == OLD
+    else:
+        assert result.exit_code == 0, result.output
+        written = target if "link" in kind else out
+        assert written.read_bytes() != OLD and os.path.getsize(written) > 0
+        assert stat.S_ISREG(os.lstat(written).st_mode)
+        if "link" in kind:  # followed: the link stays a link, to the same target
+            assert os.path.islink(out) and os.readlink(out) == target.name
+    if result.exit_code == 2 and kind != "folder":  # click refuses a folder for -o with its usage lines
+        assert len(lines) == 1, result.output
+    for path, contents in before.items():  # inputs are never touched
+        assert path.read_bytes() == contents
+
+
+def test_run_never_replaces_its_own_config(tmp_path, invoke):
+    config = tmp_path / "one.yaml"
+    config.write_text(CONFIG)
+    result = invoke("run", config, "-o", config, "--overwrite")
+    assert result.exit_code == 2 and "is the config being run" in result.output
+    assert config.read_text() == CONFIG
+
+
+def test_resume_through_a_link_finishes_the_target_and_keeps_the_link(tmp_path, inputs, invoke):
+    partial = tmp_path / "partial.h5"
+    shutil.copy(inputs / "good.h5", partial)
+    with h5py.File(partial, "r+") as f:
+        expected_R = f["R"][()]
+        f["done"][1] = 0
+        f["R"][1] = np.nan
+        f.attrs["vrsweep_complete"] = np.int32(0)
+    link = tmp_path / "link.h5"
+    link.symlink_to(partial.name)
+    result = invoke("run", inputs / "sweep.yaml", "-o", link, "--resume", "-q")
+    assert result.exit_code == 0, result.output
+    assert os.path.islink(link) and os.readlink(link) == partial.name
+    with h5py.File(partial) as f:
+        assert int(f.attrs["vrsweep_complete"]) == 1
+        np.testing.assert_array_equal(f["R"][()], expected_R)  # the same point, the same bits

@@ -1,0 +1,564 @@
+"""Continuation of periodic orbits, stable and unstable, with their Floquet multipliers.
+
+An orbit of p slow periods is a fixed point of P^p, P the stroboscopic map y = (x, v) at
+t = 0 mod T (numerics/shooting.py). The branch is the curve F(y, lam) = P^p(y; lam) - y = 0 in
+(x, v, lam), followed by pseudo-arclength continuation (docs/design.md, "Continuation of periodic
+orbits", derives all of it):
+
+- predictor: z = z_k + s t_k, t_k the unit tangent (null vector of dF = [M - I | F_lam]);
+- corrector: Newton on [F(z); t_k . (z - z_pred)] = 0, the 3x3 Jacobian [[M - I, F_lam], [t_k]],
+  M the monodromy from the tangent equations through the saltation matrices;
+- F_lam by a forward difference in the parameter (why not the variational equation: see the
+  design doc; it only sets the Newton convergence rate and the predictor, never the converged
+  point, whose accuracy is the residual |F| alone);
+- the step s grows by STEP_GROWTH after an easy correction and halves after a failed one, within
+  [min_step, max_step];
+- Floquet multipliers: the eigenvalues of M; stable when both |mu| < 1.
+
+Bifurcations between consecutive points are detected by sign changes of test functions and
+located on the arc between them (the same corrector at a shorter step) by the Illinois variant of
+regula falsi until the parameter is known to location_tolerance (grazing: below):
+    fold             det(M - I)  (a real multiplier through +1)
+    period doubling  det(M + I)  (a real multiplier through -1)
+    Neimark-Sacker   det(M) - 1  while the multipliers are a complex pair
+    grazing          an orbit without impacts touches the barrier, or the one impact of an
+                     orbit slows to zero: located by Newton on the barrier-free map's fixed
+                     point with its largest x at Delta (grazing.py), when the corrector fails
+                     next to such an orbit or steps over the graze.
+
+At a graze the map has a square-root term and Newton from one side does not reach the other:
+the branch is carried across by grazing.py's normal form (cross_grazing). An orbit with other
+impacts besides the grazing one has no barrier-free map; there the graze is only bracketed (the
+impact count changes along the arc, or the corrector gives up next to it) and the branch beyond
+is searched for around it (switch_at_grazing); when none is found the branch ends with status
+"grazing".
+
+Nothing here raises on a numerical failure: a branch ends with a status and a one-line reason.
+Bad requests (a chaotic start, an incommensurate forcing) raise UsageError (exit code 2).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vrsweep.analysis import grazing
+from vrsweep.analysis.diagnostics import detect_period
+from vrsweep.errors import UsageError
+from vrsweep.numerics import kernel
+from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
+from vrsweep.numerics.shooting import periodic_map
+from vrsweep.numerics.trajectory import simulate
+from vrsweep.results import Status
+
+# The config's continuation section's defaults (docs/continuation.md).
+DEFAULTS = dict(CONTINUATION_DEFAULTS)
+STEP_GROWTH = 1.5
+# Damped Newton: a step that does not reduce |F| + |arclength condition| is halved this many times.
+MAX_HALVINGS = 6
+# Newton steps counted as an easy correction (the step may grow after it).
+EASY_NEWTON = 3
+# Relative size of the parameter's forward difference (F_lam).
+PARAMETER_DIFFERENCE = 1e-6
+# Periods integrated after the transient to detect the start's period.
+START_STROBE_PERIODS = 64
+# Loose on purpose: a weakly stable orbit (|mu| = 0.96 at the hysteresis example's g = 23) is still
+# 1e-4 from its fixed point after 200 periods; the period found is only Newton's candidate, and
+# Newton's convergence on P^p is what proves the orbit.
+START_PERIOD_TOLERANCE = 1e-3
+# Branch ends
+ENDED_RANGE = "left_range"
+ENDED_MAX_POINTS = "max_points"
+ENDED_NEWTON = "newton_failed"
+ENDED_STICKING = "sticking"
+ENDED_INTEGRATION = "integration_failed"
+ENDED_GRAZING = "grazing"
+POINT_FIELDS = ("parameter", "x", "v", "R", "Q_amplitude", "impacts_per_period", "x_max",
+                "slowest_impact", "residual", "newton_iterations")
+
+
+@dataclass
+class Orbit:
+    """One converged point of a branch: the fixed point y of P^p at parameter value lam."""
+    parameter: float
+    state: np.ndarray          # (2,)
+    periods: int
+    monodromy: np.ndarray      # (2, 2)
+    R: float
+    Q_amplitude: float
+    impacts_per_period: float
+    x_max: float
+    slowest_impact: float
+    residual: float            # |P^p(y) - y|, max norm
+    newton_iterations: int
+    parameter_derivative: np.ndarray = field(default=None)  # (2,) F_lam
+
+    @property
+    def multipliers(self):
+        """(2,) complex: the Floquet multipliers, larger modulus first."""
+        mu = np.linalg.eigvals(self.monodromy).astype(complex)
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+    @property
+    def stable(self):
+        return bool(np.all(np.abs(self.multipliers) < 1.0))
+
+    @property
+    def z(self):
+        return np.array([self.state[0], self.state[1], self.parameter])
+
+
+@dataclass
+class Branch:
+    """Orbits in order along the arc; status/reason say why the branch ends (each end)."""
+    periods: int
+    orbits: list
+    ends: dict  # "down"/"up" -> (status, reason)
+
+
+@dataclass
+class Bifurcation:
+    kind: str           # fold, period_doubling, neimark_sacker, grazing
+    orbit: Orbit
+    branch: int = 0
+
+
+@dataclass
+class ContinuationProblem:
+    """What is continued: the model's parameters (a mapping name -> value), the model, which
+    parameter moves, the kernel settings vector and the integration method."""
+    parameters: dict
+    model: str
+    parameter: str
+    settings: np.ndarray
+    method: str = "rk45"
+    options: dict = field(default_factory=lambda: dict(DEFAULTS))
+
+    def coefficients(self, value):
+        return kernel_coefficients(dict(self.parameters, **{self.parameter: value}), self.model)
+
+
+def check_commensurate(parameters, model, parameter):
+    """Refuse an original-model problem whose forcing is not periodic with the slow period.
+
+    The original model has the fast force g cos(Omega t): P is a map only when Omega/omega is a
+    whole number, and moving Omega or omega would leave that case at once.
+    """
+    if model != "original" or parameters.get("g", 0.0) == 0.0:
+        return
+    if parameter in ("Omega", "omega"):
+        raise UsageError.naming(
+            "{parameter} = {name} cannot be continued in the original model: its fast forcing is periodic "
+            "with the slow period only where Omega/omega is a whole number, which a moving {name} leaves "
+            "at once; continue {name} in the effective model (no fast force) instead",
+            {"parameter": "continuation.parameter"}, name=parameter)
+    ratio = parameters["Omega"] / parameters["omega"]
+    if abs(ratio - round(ratio)) > 1e-12 * ratio:
+        raise UsageError.naming(
+            "Omega/omega = {ratio} is not a whole number: the original model is then forced "
+            "quasi-periodically and has no periodic orbit of the stroboscopic map to continue "
+            "(choose {Omega} a multiple of omega, e.g. Omega = 4 with omega = 0.5)",
+            {"Omega": "parameters.Omega"}, ratio=f"{ratio:.6g}")
+
+
+def evaluate(problem, state, value, periods):
+    """P^p and its monodromy at (state, value): the shooting.OrbitMap."""
+    return periodic_map(problem.coefficients(value), state, problem.settings, periods, problem.method)
+
+
+def _failure(orbit_map):
+    """None, or (status, reason) when the map's integration cannot serve continuation."""
+    if orbit_map.status != Status.OK:
+        return ENDED_INTEGRATION, f"integration stopped: {orbit_map.status.name.lower()}"
+    if orbit_map.stuck_time > 0.0:
+        return ENDED_STICKING, "the orbit sticks to the barrier (its monodromy is singular there)"
+    return None
+
+
+def _parameter_derivative(problem, state, value, periods, end_state):
+    """F_lam = d P^p / d lam by a forward difference (module doc)."""
+    step = PARAMETER_DIFFERENCE * max(1.0, abs(value))
+    moved = evaluate(problem, state, value + step, periods)
+    if _failure(moved):
+        step = -step
+        moved = evaluate(problem, state, value + step, periods)
+    return (moved.end_state - end_state) / step
+
+
+def _orbit(problem, state, value, periods, orbit_map, residual, iterations, derivative=None):
+    return Orbit(parameter=float(value), state=np.array(state, dtype=float), periods=periods,
+                 monodromy=orbit_map.monodromy.copy(), R=orbit_map.R, Q_amplitude=orbit_map.Q_amplitude,
+                 impacts_per_period=orbit_map.impacts / periods, x_max=orbit_map.x_max,
+                 slowest_impact=orbit_map.slowest_impact, residual=residual, newton_iterations=iterations,
+                 parameter_derivative=derivative)
+
+
+def _tolerance(problem, state):
+    return problem.options["newton_tolerance"] * max(1.0, float(np.max(np.abs(state))))
+
+
+def correct(problem, z_guess, periods, tangent=None, z_predicted=None):
+    """Newton on F = 0, with the arclength condition tangent . (z - z_predicted) = 0 when tangent is
+    given, else at the fixed parameter z_guess[2]. Returns (Orbit, None) or (None, (status, reason))."""
+    z = np.array(z_guess, dtype=float)
+    failure = None
+    residual = np.inf
+    previous_z, previous_merit, last_step, halvings = None, np.inf, None, 0
+    for iteration in range(1, problem.options["max_newton_iterations"] + 1):
+        orbit_map = evaluate(problem, z[:2], z[2], periods)
+        failure = _failure(orbit_map)
+        residual_vector = orbit_map.end_state - z[:2]
+        arc_now = 0.0 if tangent is None else float(tangent @ (z - z_predicted))
+        merit = np.inf if failure else float(np.max(np.abs(residual_vector))) + abs(arc_now)
+        if previous_z is not None and not merit < previous_merit and halvings < MAX_HALVINGS:
+            # Damped Newton: near grazing the map is only piecewise smooth (the monodromy jumps
+            # where an impact appears), and a full step can land where the Jacobian no longer
+            # holds; halve it back towards the last iterate.
+            last_step *= 0.5
+            z = previous_z + last_step
+            halvings += 1
+            continue
+        if failure:
+            return None, failure
+        halvings = 0
+        previous_z, previous_merit = z.copy(), merit
+        residual = float(np.max(np.abs(residual_vector)))
+        jacobian_state = orbit_map.monodromy - np.eye(2)
+        if tangent is None:
+            if residual <= _tolerance(problem, z[:2]):
+                derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map.end_state)
+                return _orbit(problem, z[:2], z[2], periods, orbit_map, residual, iteration, derivative), None
+            try:
+                step = np.linalg.solve(jacobian_state, -residual_vector)
+            except np.linalg.LinAlgError:
+                return None, (ENDED_NEWTON, "singular Jacobian at the start (a fold?)")
+            last_step = np.concatenate([step, [0.0]])
+            z = z + last_step
+            continue
+        derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map.end_state)
+        arc = float(tangent @ (z - z_predicted))
+        if residual <= _tolerance(problem, z[:2]) and abs(arc) <= _tolerance(problem, z[:2]):
+            return _orbit(problem, z[:2], z[2], periods, orbit_map, residual, iteration, derivative), None
+        jacobian = np.zeros((3, 3))
+        jacobian[:2, :2] = jacobian_state
+        jacobian[:2, 2] = derivative
+        jacobian[2] = tangent
+        try:
+            step = np.linalg.solve(jacobian, -np.concatenate([residual_vector, [arc]]))
+        except np.linalg.LinAlgError:
+            return None, (ENDED_NEWTON, "singular extended Jacobian")
+        if not np.all(np.isfinite(step)):
+            return None, (ENDED_NEWTON, "non-finite Newton step")
+        last_step = step
+        z = z + step
+    iterations = problem.options["max_newton_iterations"]
+    return None, (ENDED_NEWTON, f"Newton did not converge in {iterations} iterations (residual {residual:.2g})")
+
+
+def tangent_of(orbit, previous=None):
+    """Unit null vector of [M - I | F_lam] (cross product of its two rows), oriented along previous."""
+    rows = np.zeros((2, 3))
+    rows[:, :2] = orbit.monodromy - np.eye(2)
+    rows[:, 2] = orbit.parameter_derivative
+    tangent = np.cross(rows[0], rows[1])
+    tangent /= np.linalg.norm(tangent)
+    if previous is not None and tangent @ previous < 0.0:
+        tangent = -tangent
+    return tangent
+
+
+# --- test functions ------------------------------------------------------------------------------
+def _fold_test(orbit):
+    return float(np.linalg.det(orbit.monodromy - np.eye(2)))
+
+
+def _doubling_test(orbit):
+    return float(np.linalg.det(orbit.monodromy + np.eye(2)))
+
+
+def _torus_test(orbit):
+    mu = orbit.multipliers
+    if abs(mu[0].imag) <= 1e-12 * max(1.0, abs(mu[0])):
+        return np.nan  # real multipliers: no Neimark-Sacker here
+    return float(np.linalg.det(orbit.monodromy) - 1.0)
+
+
+TEST_FUNCTIONS = {"fold": _fold_test, "period_doubling": _doubling_test, "neimark_sacker": _torus_test}
+
+
+def _locate(problem, start, tangent, step, kind, value_start, value_end, periods):
+    """The orbit on the arc from ``start`` (0 < s < step along tangent) where the test function of
+    ``kind`` vanishes, by Illinois regula falsi (grazing: bisection on the impact count), to
+    location_tolerance in the parameter. Returns the Orbit nearest the root, or None."""
+    tolerance = problem.options["location_tolerance"] * max(1.0, abs(start.parameter))
+    low, high = 0.0, step
+    f_low, f_high = value_start, value_end
+    best = None
+    side = 0
+    for _ in range(60):
+        if kind == "grazing":
+            s = 0.5 * (low + high)
+        else:
+            s = (low * f_high - high * f_low) / (f_high - f_low)
+            if not (low < s < high):
+                s = 0.5 * (low + high)
+        z_predicted = start.z + s * tangent
+        orbit, failure = correct(problem, z_predicted, periods, tangent, z_predicted)
+        if failure:
+            return best
+        best = orbit
+        if kind == "grazing":
+            value = orbit.impacts_per_period - value_start
+            value = -1.0 if value == 0 else 1.0
+        else:
+            value = TEST_FUNCTIONS[kind](orbit)
+        if value == 0.0:
+            return orbit
+        if np.sign(value) == np.sign(f_low):
+            low, f_low = s, value
+            if side == -1 and kind != "grazing":
+                f_high *= 0.5  # Illinois: the end that stays is halved
+            side = -1
+        else:
+            high, f_high = s, value
+            if side == 1 and kind != "grazing":
+                f_low *= 0.5
+            side = 1
+        # The parameter interval between the bracket's ends: tangent[2] * (high - low) to first order.
+        if abs(tangent[2]) * (high - low) <= tolerance or (high - low) <= 1e-14 * step:
+            break
+        if kind != "grazing" and abs(value) <= 1e-12:
+            break
+    return best
+
+
+def _detect(problem, previous, current, tangent, step, periods):
+    """Bifurcations on the arc between two consecutive orbits: a list of (kind, Orbit)."""
+    found = []
+    for kind, test in TEST_FUNCTIONS.items():
+        a, b = test(previous), test(current)
+        if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
+            orbit = _locate(problem, previous, tangent, step, kind, a, b, periods)
+            if orbit is not None:
+                found.append((kind, orbit))
+    if previous.impacts_per_period != current.impacts_per_period:
+        # The corrector stepped over a graze by itself: locate it on the barrier-free map where
+        # that map is the free side's, else by bisection on the impact count along the arc.
+        free_side = previous if previous.impacts_per_period < current.impacts_per_period else current
+        located = None
+        if grazing.crossable(previous) and grazing.crossable(current):
+            located = grazing.locate_graze(problem, free_side.z, periods, _tolerance(problem, free_side.state))
+        if located is not None and min(previous.parameter, current.parameter) <= located.z[2] <= max(
+                previous.parameter, current.parameter):
+            found.append(("grazing", _graze_orbit(problem, located)))
+        else:
+            orbit = _locate(problem, previous, tangent, step, "grazing", previous.impacts_per_period, 1.0, periods)
+            if orbit is not None:
+                found.append(("grazing", orbit))
+    return found
+
+
+def _graze_orbit(problem, located):
+    """The Orbit of a grazing.Graze (its free map's measures: the touch costs no impact)."""
+    return _orbit(problem, located.z[:2], located.z[2], located.periods, located.orbit_map, located.residual,
+                  located.iterations, located.jacobian[:2, 2].copy())
+
+
+def follow(problem, start, direction, lo, hi, max_points, progress=None):
+    """Orbits from ``start`` (excluded) in ``direction`` (+1: parameter increasing at first).
+
+    Returns (orbits, bifurcations [(kind, Orbit)], (status, reason)).
+    """
+    options = problem.options
+    tangent = tangent_of(start)
+    if tangent[2] * direction < 0.0:
+        tangent = -tangent
+    step = options["initial_step"]
+    current = start
+    orbits, bifurcations = [], []
+    tried_crossing = False  # from this ``current``
+    grazing_reason = None
+    while True:
+        if len(orbits) >= max_points:
+            return orbits, bifurcations, (ENDED_MAX_POINTS, f"{max_points} points reached")
+        z_predicted = current.z + step * tangent
+        orbit, failure = correct(problem, z_predicted, start.periods, tangent, z_predicted)
+        crossed = False
+        if failure is not None or _turned_back(current, orbit, tangent, step):
+            step *= 0.5
+            near = _near_grazing(problem, current)
+            if near and not tried_crossing and (grazing.crossable(current) or step < options["min_step"]):
+                # The square-root singularity of grazing: Newton from this side cannot reach the
+                # other (module doc); the graze is located and crossed from its normal form.
+                tried_crossing = True
+                graze, orbit, new_tangent, grazing_reason = cross_grazing(problem, current, tangent)
+                if graze is not None:
+                    bifurcations.append(("grazing", graze))
+                crossed = orbit is not None
+            if not crossed:
+                if step >= options["min_step"]:
+                    continue
+                if near:
+                    if grazing_reason is None and not tried_crossing:
+                        grazing_reason = "no branch beyond the graze was found"
+                    side = "touches the barrier" if current.impacts_per_period == 0 else "impacts at zero speed"
+                    reason = (f"the orbit {side} at {problem.parameter} = {current.parameter:.8g}; "
+                              f"{grazing_reason or 'no branch beyond the graze was found'}")
+                    return orbits, bifurcations, (ENDED_GRAZING, reason)
+                status, reason = failure or (ENDED_NEWTON, "the corrector keeps jumping to another branch")
+                reason = f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
+                return orbits, bifurcations, (status, reason)
+        else:
+            new_tangent = tangent_of(orbit, tangent)
+        if not lo <= orbit.parameter <= hi:
+            return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
+        if crossed:
+            step = options["initial_step"]
+        else:
+            bifurcations.extend(_detect(problem, current, orbit, tangent, step, start.periods))
+            if orbit.newton_iterations <= EASY_NEWTON:
+                step = min(step * STEP_GROWTH, options["max_step"])
+        orbits.append(orbit)
+        if progress is not None:
+            progress(orbit)
+        current, tangent = orbit, new_tangent
+        tried_crossing, grazing_reason = False, None
+
+
+def cross_grazing(problem, near, tangent):
+    """Locate the graze next to ``near`` (an Orbit on either side of it) and step across.
+
+    Returns (the grazing Orbit or None, the first Orbit beyond or None, its tangent, a one-line
+    reason when there is none). Orbits whose other impacts keep going through the graze have no
+    barrier-free map (grazing.py): for them the graze is only recorded where the corrector gave
+    up, and the branch beyond is searched for around it (switch_at_grazing).
+    """
+    periods = near.periods
+    if not grazing.crossable(near):
+        switched = switch_at_grazing(problem, near, tangent)
+        if switched is None:
+            return near, None, None, "no branch beyond the graze was found"
+        return near, switched[0], switched[1], None
+    located = grazing.locate_graze(problem, near.z, periods, _tolerance(problem, near.state))
+    if located is None:
+        return None, None, None, "the grazing orbit could not be located (Newton on the barrier-free map failed)"
+    graze = _graze_orbit(problem, located)
+    lengths = [problem.options["initial_step"] * factor for factor in CROSSING_DISTANCES]
+    if near.impacts_per_period == 0:
+        normal_form = grazing.impacting_direction(problem, located)
+        if normal_form is None:
+            return graze, None, None, "the orbit beyond the graze does not impact once, as its normal form needs"
+        direction, predictor, speed_scale = normal_form
+        candidates = [predictor(length / speed_scale) for length in lengths]
+        beyond = "impacting"
+    else:
+        direction = grazing.free_direction(located)
+        candidates = [located.z + length * direction for length in lengths]
+        beyond = "free"
+    for z_predicted in candidates:
+        orbit, failure = correct(problem, z_predicted, periods, direction, z_predicted)
+        if (failure is None and (orbit.impacts_per_period == 0) == (beyond == "free")
+                and (orbit.z - located.z) @ direction > 0.0):
+            return graze, orbit, tangent_of(orbit, direction), None
+    return graze, None, None, f"no {beyond} orbit converged beyond the graze"
+
+
+# An orbit is near grazing when its highest free maximum is this close to Delta (relative), or
+# its slowest impact this slow (relative to the orbit's speed scale max(1, |v|)).
+GRAZING_PROXIMITY = 1e-3
+# Arclength distances from a graze at which the branch beyond is looked for, relative to the
+# initial step: the first that converges onto the other side wins.
+CROSSING_DISTANCES = (1.0, 0.25, 0.0625, 0.015625)
+# Radii (in (x, v, parameter)) of the spheres of predictors searched for the branch beyond a graze.
+GRAZING_SEARCH_RADII = (1e-3, 4e-3, 1.6e-2)
+
+
+def _near_grazing(problem, orbit):
+    delta = problem.coefficients(orbit.parameter)[8]
+    scale = max(1.0, abs(delta))
+    if orbit.impacts_per_period == 0:
+        return delta - orbit.x_max < GRAZING_PROXIMITY * scale
+    # Reached with a speed v, an impact penetrates about v^2 / (2 a), a ~ 1: the same proximity.
+    return orbit.slowest_impact < np.sqrt(GRAZING_PROXIMITY * scale)
+
+
+def _search_directions():
+    """The 26 unit vectors towards the neighbours of a cube's centre (any direction is within 35
+    degrees of one of them)."""
+    directions = []
+    for i in (-1, 0, 1):
+        for j in (-1, 0, 1):
+            for k in (-1, 0, 1):
+                if (i, j, k) != (0, 0, 0):
+                    directions.append(np.array([i, j, k], dtype=float) / np.sqrt(i * i + j * j + k * k))
+    return directions
+
+
+def switch_at_grazing(problem, graze, tangent):
+    """The branch beyond a grazing orbit: (Orbit with another impact count, its tangent) or None.
+
+    Beyond a graze the map has a square-root term, F = A dz + C sqrt(sigma) (sigma the
+    penetration), so the continuing branch leaves the grazing point at a corner, in a direction
+    tangent to the grazing surface (docs/design.md). It is found by the arclength corrector on
+    planes at distance rho from the grazing point, normal to each of 26 directions. Best effort,
+    for the grazes grazing.py's normal form does not cover (an orbit with other impacts besides
+    the grazing one): Newton started on the wrong side of the graze sees the smooth side's
+    Jacobian only; when nothing is found the branch ends with status "grazing".
+    """
+    for radius in GRAZING_SEARCH_RADII:
+        for direction in _search_directions():
+            if direction @ tangent < -0.9:
+                continue  # straight back along the branch we came on
+            z_predicted = graze.z + radius * direction
+            orbit, failure = correct(problem, z_predicted, graze.periods, direction, z_predicted)
+            if failure is None and orbit.impacts_per_period != graze.impacts_per_period:
+                chord = orbit.z - graze.z
+                return orbit, tangent_of(orbit, chord / np.linalg.norm(chord))
+    return None
+
+
+def _turned_back(previous, orbit, tangent, step):
+    """A corrected point that went backwards or far off the predictor: a jump to another branch."""
+    chord = orbit.z - previous.z
+    return chord @ tangent <= 0.0 or np.linalg.norm(chord) > 3.0 * step
+
+
+def find_start(problem, initial_state, value, transient_periods, max_period):
+    """The orbit reached from ``initial_state`` at ``value``: integrate the transient, detect its
+    period p as sweeps do (diagnostics.detect_period) and converge Newton on P^p. Raises
+    UsageError for a non-periodic start or one above max_period."""
+    settings = np.array(problem.settings, dtype=float)
+    settings[kernel.TRANSIENT_PERIODS] = transient_periods
+    settings[kernel.MEASURE_PERIODS] = START_STROBE_PERIODS
+    run = simulate(problem.coefficients(value), initial_state, settings, method=problem.method)
+    if run.status != Status.OK:
+        raise UsageError.naming("the start at {name} = {value} failed to integrate: {status}",
+                                  name=problem.parameter, value=f"{value:g}", status=run.status.name.lower())
+    strobe = run.period_records[-START_STROBE_PERIODS:]
+    period = int(detect_period(strobe[None, :, kernel.REC_X], strobe[None, :, kernel.REC_V],
+                               max(max_period, 1), START_PERIOD_TOLERANCE)[0])
+    if period == 0:
+        raise UsageError.naming(
+            "no periodic orbit of at most {limit} slow periods at the start ({name} = {value}): the motion "
+            "is chaotic, quasi-periodic, of a longer period or not yet settled; try another start value "
+            "({from_key}), a longer transient (integration.transient_periods) or a larger {max_period}",
+            {"max_period": "continuation.max_period", "from_key": "continuation.from"},
+            limit=max_period, name=problem.parameter, value=f"{value:g}")
+    state = strobe[-1, [kernel.REC_X, kernel.REC_V]]
+    orbit, failure = correct(problem, np.array([state[0], state[1], value]), period)
+    if failure:
+        raise UsageError.naming("the start orbit of period {period} did not converge at {name} = {value}: "
+                                  "{reason}", period=period, name=problem.parameter, value=f"{value:g}",
+                                  reason=failure[1])
+    return orbit
+
+
+def continue_branch(problem, start, lo, hi, max_points=None, progress=None):
+    """The branch through ``start`` both ways within [lo, hi]. Returns (Branch, [Bifurcation])."""
+    max_points = problem.options["max_points"] if max_points is None else max_points
+    down, bif_down, end_down = follow(problem, start, -1, lo, hi, max_points // 2, progress)
+    up, bif_up, end_up = follow(problem, start, +1, lo, hi, max_points - max_points // 2, progress)
+    orbits = list(reversed(down)) + [start] + up
+    bifurcations = [Bifurcation(kind, orbit) for kind, orbit in bif_down + bif_up]
+    bifurcations.sort(key=lambda b: b.orbit.parameter)
+    return Branch(periods=start.periods, orbits=orbits, ends={"down": end_down, "up": end_up}), bifurcations

@@ -1,0 +1,192 @@
+"""Grazing: where a periodic orbit starts to hit the barrier, located exactly and crossed.
+
+At a grazing orbit the free motion touches x = Delta with zero velocity. The stroboscopic map
+P^p is continuous there but not smooth: on the impacting side an orbit whose free motion would
+have overshot the barrier by sigma hits it with speed u = sqrt(2 a sigma) (a = -x'' at the
+touch), and the map gains a term proportional to u, the square root of a distance. Newton started
+on the free side sees only the free map's Jacobian and does not cross into the square-root
+region, so vrsweep handles grazing with two tools (docs/design.md, "Grazing"):
+
+1. The barrier-free map P_free (the same oscillator with Delta -> infinity) is smooth through the
+   graze, and so is its orbit's largest x, x_max_free. The grazing orbit solves
+       P_free^p(y; lam) - y = 0,   Delta - x_max_free(y; lam) = 0
+   three equations in z = (x, v, lam), by Newton (locate_graze): the parameter of grazing is
+   known to the Newton tolerance, not to a continuation step.
+2. The branch beyond, from the normal form of the map at the graze (Nordmark's square-root map):
+   near z_g, with dz = z - z_g and the free side's linearisation,
+       F_impacting(z) = F_free(z) + C u + O(u^2),   u^2 = kappa sigma(z),
+       sigma(z) = x_max_free(z) - Delta = -gap(z)
+   C (2,) and kappa = 2a are measured from one probe orbit that penetrates by about
+   PROBE_PENETRATION (its impact speed u_1, its real and free maps: C = (P - P_free) / u_1,
+   kappa = u_1^2 / sigma_1). The impacting fixed points then satisfy, to first order,
+       [[M - I, F_lam], [grad gap]] dz = [-C u; -u^2 / kappa - gap(z_g)]
+   a line of orbits leaving the graze in the direction J^-1 [-C; 0] as u grows from 0: whether
+   lam grows or falls along it (the branch goes on, or folds back at a corner) is the sign of its
+   last component. The predictor at a small u is corrected by the ordinary arclength corrector on
+   the real map, where Newton's square-root basin is wide enough (it converges from sigma in
+   (0, 4 sigma*)). Coming the other way, from an impacting orbit whose one impact slows to zero,
+   the graze is located the same way and the free branch leaves it along the free tangent,
+   oriented away from the barrier.
+
+Both need the graze to involve every impact of the orbit: a non-impacting orbit that starts to
+hit, or an orbit with one impact per p periods that stops hitting. An orbit with other impacts
+besides the grazing one has no barrier-free map that keeps them; there the caller falls back on a
+search around the grazing point (continuation.switch_at_grazing).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vrsweep.numerics.model import DELTA
+from vrsweep.numerics.shooting import periodic_map
+from vrsweep.results import Status
+
+# Relative steps of the forward differences of the gap Delta - x_max_free in (x, v, lam): x_max
+# is the dense output's turning point, smooth in z to about the integration tolerance (1e-10
+# relative), so a step of 1e-6 gives its gradient to ~1e-4, which Newton and the predictor need
+# at most.
+GAP_DIFFERENCE = 1e-6
+# How far the probe orbit overshoots the barrier (relative to max(1, |Delta|)): deep enough that
+# its impact speed (~1e-3) stands well above the solver's noise, shallow enough that the O(sigma)
+# terms of the normal form stay 1e-3 of the square-root term.
+PROBE_PENETRATION = 1e-6
+MAX_GRAZE_ITERATIONS = 20
+
+
+@dataclass
+class Graze:
+    """A located grazing orbit and the free map's linearisation there.
+
+    z           (3,) x, v at t = 0 mod T and the parameter
+    periods     p
+    orbit_map   the free map's shooting.OrbitMap at z (no impact, x_max = Delta)
+    jacobian    (3, 3) [[M - I, F_lam], [grad gap]] of [F_free; gap] in (x, v, lam)
+    gap         Delta - x_max_free at z (within the Newton tolerance of 0)
+    residual    max |P_free^p(y) - y| at z
+    iterations  Newton iterations taken
+    """
+    z: np.ndarray
+    periods: int
+    orbit_map: object
+    jacobian: np.ndarray
+    gap: float
+    residual: float
+    iterations: int
+
+
+def free_coefficients(coefficients):
+    """The coefficient vector without the barrier (Delta -> infinity: the kernel never impacts)."""
+    free = np.array(coefficients, dtype=np.float64)
+    free[DELTA] = np.inf
+    return free
+
+
+def free_map(problem, state, value, periods):
+    """P_free^p at (state, value): shooting.OrbitMap of the oscillator without the barrier."""
+    return periodic_map(free_coefficients(problem.coefficients(value)), state, problem.settings, periods,
+                        problem.method)
+
+
+def barrier(problem, value):
+    return float(problem.coefficients(value)[DELTA])
+
+
+def _free_system(problem, z, periods):
+    """[F_free; gap] at z (3,) and the free OrbitMap, or (None, map) when it failed to integrate."""
+    orbit_map = free_map(problem, z[:2], z[2], periods)
+    if orbit_map.status != Status.OK:
+        return None, orbit_map
+    gap = barrier(problem, z[2]) - orbit_map.x_max
+    return np.array([*(orbit_map.end_state - z[:2]), gap]), orbit_map
+
+
+def _free_jacobian(problem, z, periods, value_at_z, orbit_map):
+    """(3, 3) Jacobian of [F_free; gap]: the monodromy for the state block, forward differences
+    for the parameter column and for the gap's row."""
+    jacobian = np.zeros((3, 3))
+    jacobian[:2, :2] = orbit_map.monodromy - np.eye(2)
+    for column in range(3):
+        step = GAP_DIFFERENCE * max(1.0, abs(z[column]))
+        moved = z.copy()
+        moved[column] += step
+        value, _ = _free_system(problem, moved, periods)
+        if value is None:
+            return None
+        difference = (value - value_at_z) / step
+        if column == 2:
+            jacobian[:2, 2] = difference[:2]
+        jacobian[2, column] = difference[2]
+    return jacobian
+
+
+def locate_graze(problem, z_guess, periods, tolerance):
+    """The grazing orbit near z_guess (3,): Newton on [P_free^p(y) - y; Delta - x_max_free] = 0
+    until every component is within ``tolerance``.
+
+    Returns a Graze, or None when Newton does not converge (no graze nearby, or the free motion
+    escapes where the real one impacts).
+    """
+    z = np.array(z_guess, dtype=float)
+    for iteration in range(1, MAX_GRAZE_ITERATIONS + 1):
+        value, orbit_map = _free_system(problem, z, periods)
+        if value is None:
+            return None
+        jacobian = _free_jacobian(problem, z, periods, value, orbit_map)
+        if jacobian is None:
+            return None
+        if np.max(np.abs(value)) <= tolerance:
+            return Graze(z=z, periods=periods, orbit_map=orbit_map, jacobian=jacobian, gap=float(value[2]),
+                         residual=float(np.max(np.abs(value[:2]))), iterations=iteration)
+        try:
+            step = np.linalg.solve(jacobian, -value)
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(step)):
+            return None
+        z = z + step
+    return None
+
+
+def impacting_direction(problem, graze):
+    """The normal form at the graze: (unit direction (3,) of the impacting branch as u grows,
+    predictor(u) -> z (3,), |dz/du| at u = 0), or None when the probe orbit does not impact once
+    as the normal form assumes."""
+    z_g = graze.z
+    gradient = graze.jacobian[2]
+    penetration = PROBE_PENETRATION * max(1.0, abs(barrier(problem, z_g[2])))
+    probe = z_g - (penetration + graze.gap) * gradient / (gradient @ gradient)
+    real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods,
+                        problem.method)
+    value, free = _free_system(problem, probe, graze.periods)
+    if value is None or real.status != Status.OK or real.impacts != 1 or not real.slowest_impact > 0.0:
+        return None
+    speed = real.slowest_impact
+    sigma = -value[2]
+    if not sigma > 0.0:
+        return None
+    jump = (real.end_state - free.end_state) / speed     # C
+    kappa = speed * speed / sigma                        # 2 a
+    try:
+        direction = np.linalg.solve(graze.jacobian, np.array([-jump[0], -jump[1], 0.0]))
+        curvature = np.linalg.solve(graze.jacobian, np.array([0.0, 0.0, -1.0 / kappa]))
+    except np.linalg.LinAlgError:
+        return None  # the graze is also a fold of the free map: a codimension-two point
+
+    def predictor(u):
+        return z_g + u * direction + (u * u + graze.gap * kappa) * curvature
+
+    return direction / np.linalg.norm(direction), predictor, np.linalg.norm(direction)
+
+
+def free_direction(graze):
+    """Unit tangent (3,) of the free branch at the graze, pointing away from the barrier."""
+    tangent = np.cross(graze.jacobian[0], graze.jacobian[1])
+    tangent /= np.linalg.norm(tangent)
+    return tangent if graze.jacobian[2] @ tangent > 0.0 else -tangent
+
+
+def crossable(orbit):
+    """True when every impact of ``orbit`` (a continuation.Orbit) takes part in its graze: it has
+    none, or one in its p periods, so the barrier-free map is the map of the graze's free side."""
+    return round(orbit.impacts_per_period * orbit.periods) in (0, 1)

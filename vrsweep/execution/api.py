@@ -1,0 +1,344 @@
+"""The Python API: ``vrsweep.sweep``, ``vrsweep.simulate`` and ``vrsweep.theory``.
+
+Each takes a config as a path, as YAML text, as a dict nested as the YAML is, or as a
+:class:`vrsweep.config.Config`, and settings as keyword arguments (``g=5``, ``method="dop853"``)
+that go through the same mechanism as the command line's ``--set NAME=VALUE``. Each computes
+exactly as its command does, through the same code:
+
+- :func:`sweep` runs :func:`vrsweep.execution.job.run_job`, the path of ``vrsweep run``, into a
+  file (a temporary one when no ``output`` is given) and reads it back whole with
+  :func:`vrsweep.store.reading.load_results`, so that the Dataset is the file, variable for
+  variable and bit for bit: one code path for the layout;
+- :func:`simulate` runs :func:`vrsweep.execution.simulate.simulate_point` and
+  :func:`vrsweep.store.trajectory_file.write_trajectory`, as ``vrsweep simulate`` does, and reads
+  the groups back the same way;
+- :func:`theory` returns :func:`vrsweep.analysis.theory.theory_rows`, what ``vrsweep theory
+  --json`` prints.
+
+Bad input raises the library's exceptions (:class:`vrsweep.errors.ConfigError`, ``UsageError``...)
+with the command line's messages; where a message names something the caller can change, it
+names the keyword argument (``overwrite=True``) instead of the flag.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+
+from vrsweep.errors import UsageError, VrsweepError
+from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
+
+__all__ = ["sweep", "simulate", "theory", "resolve_config", "setting_text"]
+
+# How the library's messages name what a caller of these functions can change.
+ARGUMENT_WORDS = {
+    "overwrite": "overwrite=True", "resume": "resume=True", "start_afresh": "run without resume=True",
+    "output": "output", "samples_per_period": "samples_per_period",
+    "compare_effective": "compare='effective'", "compare": "compare", "model_original": "model='original'",
+    "set": "",
+}
+
+COMPARE_CHOICES = ("effective",)
+
+
+@contextmanager
+def _python_wording():
+    """The library's errors raised in the block, worded for a caller of this module."""
+    try:
+        yield
+    except VrsweepError as error:
+        raise error.reworded(ARGUMENT_WORDS) from None
+
+
+# -- the config ------------------------------------------------------------------------------
+
+
+def setting_text(name: str, value) -> str:
+    """One keyword override as the ``NAME=VALUE`` text ``--set`` takes.
+
+    A string goes in as written, exactly as on the command line (``method="dop853"``, and
+    ``g="5"`` is ``--set g=5``); a number in the YAML spelling that reads back to the same float
+    bit for bit (``repr``; ``.inf`` and ``.nan`` for the non-finite ones, which are then refused
+    as the command line refuses them); True/False as ``true``/``false``; None as ``null``.
+    """
+    if isinstance(value, str):
+        text = value
+    elif isinstance(value, bool):
+        text = "true" if value else "false"
+    elif value is None:
+        text = "null"
+    elif isinstance(value, int) or (hasattr(value, "dtype") and getattr(value.dtype, "kind", "") in "iu"):
+        text = str(int(value))
+    else:
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            text = repr(value)  # refused by the validation as "not a YAML scalar" or a wrong type
+        else:
+            if math.isnan(number):
+                text = ".nan"
+            elif math.isinf(number):
+                text = ".inf" if number > 0 else "-.inf"
+            else:
+                text = repr(number)
+    return f"{name}={text}"
+
+
+def _looks_like_path(text: str) -> bool:
+    """One line that ends in .yaml/.yml, names a file, or cannot be a YAML mapping (no ``:``):
+    a path, so that a misspelt one is reported as a missing file, not as odd YAML."""
+    if "\n" in text or not text.strip():
+        return False
+    return (text.endswith((".yaml", ".yml")) or os.path.isfile(text)
+            or (":" not in text and not text.lstrip().startswith("{")))
+
+
+def resolve_config(config, overrides=None):
+    """``config`` (a path, YAML text, a dict nested as the YAML, or a Config) with ``overrides``
+    ({name: value}, as keyword arguments give them) applied, validated: a
+    :class:`vrsweep.config.Config`.
+
+    A ``str`` is a path when it is one line that ends in ``.yaml``/``.yml``, names an existing
+    file or holds no ``:`` (so cannot be a YAML mapping), and YAML text otherwise. Problems raise :class:`vrsweep.errors.ConfigError` with the
+    messages the command line prints: ``FILE:LINE: field: ...`` for a file, ``<string>:LINE:
+    ...`` for YAML text, ``<dict>: field: ...`` for a dict, ``--set NAME=VALUE: field: ...``
+    for an override.
+    """
+    from vrsweep.config import Config, config_from_dict, load_config, parse_config, with_overrides
+
+    settings = tuple(setting_text(name, value) for name, value in (overrides or {}).items())
+    if isinstance(config, Config):
+        return with_overrides(config, settings) if settings else config
+    if isinstance(config, os.PathLike):
+        return load_config(os.fspath(config), settings)
+    if isinstance(config, str):
+        if _looks_like_path(config):
+            return load_config(config, settings)
+        return parse_config(config, "<string>", settings)
+    if isinstance(config, dict):
+        return config_from_dict(config, "<dict>", settings)
+    raise UsageError.naming("{config} must be a path, YAML text, a dict or a vrsweep Config, got {kind}",
+                            kind=type(config).__name__)
+
+
+# -- sweep -----------------------------------------------------------------------------------
+
+
+def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, resume=False,
+          allow_large=False, **overrides):
+    """Sweep the response over the config's grid, as ``vrsweep run`` does; an ``xarray.Dataset``.
+
+    Parameters
+    ----------
+    config : str, os.PathLike, dict or vrsweep.config.Config
+        A config file, YAML text, or a dict nested as the YAML is
+        (``{"sweep": {"g": {"start": 0, "stop": 40, "num": 81}}}``).
+    output : str or os.PathLike, optional
+        Also keep the result in this HDF5 file (the file ``vrsweep run -o`` writes). Without it
+        nothing is left on disk: the run goes through a temporary file that is read back whole
+        and removed, and the config's own ``output`` key is not used.
+    threads : int, optional
+        Numba threads (default: all that numba may use here; more than that is lowered to it,
+        with a warning).
+    progress : bool
+        A progress bar (tqdm's notebook widget in Jupyter, text elsewhere, on stderr).
+    overwrite : bool
+        Replace an existing ``output``.
+    resume : bool
+        Continue an interrupted run into ``output`` (the file of ``vrsweep run``, written chunk
+        by chunk): compute only the points it lacks, as ``vrsweep run --resume``.
+    allow_large : bool
+        Run a grid whose estimated size or time is out of proportion (> 2 GB or > 24 h).
+    **overrides
+        Settings as ``--set NAME=VALUE`` takes them: a parameter (``g=5`` fixes a swept g and
+        removes its axis), an integration key (``rtol=1e-10``, ``method="dop853"``,
+        ``lyapunov=True``), ``x0``/``v0`` or ``model``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Loaded into memory (no file left open): the variables, coordinates and attributes of the
+        result file, one dimension per sweep axis in the config's order (``R``: shape
+        ``config.shape``). Attributes as the file's: ``config`` (the resolved YAML), versions,
+        provenance.
+
+    Raises
+    ------
+    vrsweep.errors.ConfigError
+        An invalid config or override, or a grid out of proportion without ``allow_large``.
+    vrsweep.errors.UsageError
+        ``output`` exists and ``overwrite`` is False, and the like.
+    """
+    from vrsweep.execution.estimate import check_size
+    from vrsweep.execution.job import run_job
+    from vrsweep.execution.threads import available_threads
+    from vrsweep.store.reading import load_results
+
+    resolved = resolve_config(config, overrides)
+    if resume and overwrite:
+        raise UsageError.naming("{resume} and {overwrite} exclude each other", ARGUMENT_WORDS)
+    if resume and output is None:
+        raise UsageError.naming("{resume} continues the run in a file: give its {output}", ARGUMENT_WORDS)
+    threads = _capped_threads(threads)
+    check_size(resolved, threads or available_threads(), allow_large)  # its message says allow_large=True
+    bars = []
+    factory = _progress_factory(resolved, bars) if progress else None
+    try:
+        with _python_wording():
+            if output is None:
+                with tempfile.TemporaryDirectory(prefix="vrsweep-") as folder:
+                    report = run_job(resolved, Path(folder) / "sweep.h5", threads=threads,
+                                     progress_factory=factory)
+                    dataset = load_results(report.output)
+                dataset.encoding.pop("source", None)  # the temporary file is gone
+            else:
+                report = run_job(resolved, output, threads=threads, overwrite=overwrite, resume=resume,
+                                 progress_factory=factory)
+                dataset = load_results(report.output)
+    finally:
+        for bar in bars:
+            bar.close()
+    for item in report.advice():
+        example = f", e.g. {item.setting}" if item.setting else ""
+        warnings.warn(f"{item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "
+                      f"{item.status.name.lower()}: {item.remedy}{example}", RuntimeWarning, stacklevel=2)
+    return dataset
+
+
+def _capped_threads(threads):
+    from vrsweep.execution.threads import available_threads
+
+    if threads is None:
+        return None
+    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+        raise UsageError.naming("{threads} must be a whole number of at least 1, got {value!r}", value=threads)
+    available = available_threads()
+    if threads > available:
+        warnings.warn(f"threads={threads}: numba can run {available} thread{'s' if available != 1 else ''} here "
+                      f"(NUMBA_NUM_THREADS or the CPUs this process may use); using {available}",
+                      RuntimeWarning, stacklevel=3)
+        return available
+    return threads
+
+
+# Measured as for `vrsweep run` (commands/run.py COMPILE_SECONDS).
+COMPILE_SECONDS = "about 30 s"
+
+
+def _progress_factory(config, bars):
+    """run_job's progress_factory: a tqdm.auto bar (a widget in Jupyter, text on stderr elsewhere),
+    whose label says when the kernel is being compiled first."""
+
+    def factory(total, already_done):
+        from tqdm.auto import tqdm
+
+        from vrsweep.numerics.lines import kernel_is_cached
+
+        label = "vrsweep"
+        integration = config.integration
+        if already_done < total and not kernel_is_cached(integration.method, integration.lyapunov):
+            label = f"vrsweep (compiling the numba kernel first, {COMPILE_SECONDS})"
+        bar = tqdm(total=total, initial=already_done, unit="pt", desc=label, dynamic_ncols=True)
+        bars.append(bar)
+        return bar.update
+
+    return factory
+
+
+# -- simulate --------------------------------------------------------------------------------
+
+
+def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare=None,
+             overwrite=False, **overrides):
+    """Integrate the config's single point densely, as ``vrsweep simulate`` does.
+
+    Parameters
+    ----------
+    config : str, os.PathLike, dict or vrsweep.config.Config
+        As for :func:`sweep`; it must describe one point: fix swept parameters with overrides
+        (``g=5``).
+    output : str or os.PathLike, optional
+        Also keep the trajectory file (``vrsweep simulate -o``) here; without it nothing is
+        written.
+    samples_per_period : int
+        Samples of x and v per slow period 2 pi/omega (from the solver's dense output).
+    compare : None or "effective"
+        ``"effective"``: also integrate the effective system (eq2.10) from the same initial state
+        and reconstruct it from the slow flow (eq2.21, eq2.24), as ``--compare effective``.
+    overwrite : bool
+        Replace an existing ``output``.
+    **overrides
+        As for :func:`sweep`.
+
+    Returns
+    -------
+    xarray.Dataset or dict of xarray.Dataset
+        Without ``compare``: the Dataset of the config's model (the group ``open_results``
+        opens by default): ``x``, ``v`` over ``time``; ``impact_t``, ``impact_v_before``,
+        ``impact_v_after`` over ``impact``; ``stick_start``, ``stick_end`` over ``stick``;
+        ``impacts_per_period``, ``strobe_x``, ``strobe_v`` over ``period``; the file's
+        attributes and the run's ``status``/``status_name``.
+        With ``compare="effective"``: a dict of every group of the file, ``{"original": ...,
+        "effective": ..., "slow_flow/state": ..., "slow_flow/paper": ...,
+        "slow_flow/paper_literal": ...}``, each a Dataset as above (a slow-flow group holds
+        ``x``, ``v``, ``R``, ``theta`` over ``time``). All loaded into memory.
+    """
+    from vrsweep.execution.simulate import check_single_point, simulate_point
+    from vrsweep.store.fileio import prepare_output_directory
+    from vrsweep.store.trajectory_file import write_trajectory
+
+    resolved = resolve_config(config, overrides)
+    if compare is not None and compare not in COMPARE_CHOICES:
+        raise UsageError.naming("{compare} {value}: must be None or one of {choices}",
+                                value=repr(compare), choices=", ".join(map(repr, COMPARE_CHOICES)))
+    with _python_wording():
+        check_single_point(resolved)  # before compiling anything
+        if output is not None:
+            path = Path(output)
+            if path.exists() and not overwrite:  # say so before integrating, not after
+                raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it", path=path)
+            prepare_output_directory(path)
+        data = simulate_point(resolved, samples_per_period, compare_effective=compare == "effective")
+        if output is not None:
+            write_trajectory(output, data, resolved, overwrite=overwrite)
+            return _trajectory_datasets(output, every_group=compare is not None)
+        with tempfile.TemporaryDirectory(prefix="vrsweep-") as folder:
+            path = Path(folder) / "trajectory.h5"
+            write_trajectory(path, data, resolved)
+            datasets = _trajectory_datasets(path, every_group=compare is not None)
+    for dataset in (datasets.values() if isinstance(datasets, dict) else [datasets]):
+        dataset.encoding.pop("source", None)
+    return datasets
+
+
+def _trajectory_datasets(path, every_group):
+    from vrsweep.store.reading import _trajectory_groups, load_results
+
+    if not every_group:
+        return load_results(path)
+    runs, slow, _ = _trajectory_groups(path)
+    return {group: load_results(path, group) for group in runs + slow}
+
+
+# -- theory ----------------------------------------------------------------------------------
+
+
+def theory(config, **overrides) -> list[dict]:
+    """The paper's analytic predictions for a config: what ``vrsweep theory --json`` prints.
+
+    One dict per Omega of the config (and per value of any other swept parameter that enters the
+    theory), with ``Omega``, ``g_res`` (eq3.4), ``wt2_range`` and ``K_range`` (eq2.11, eq2.12)
+    over the config's g or g axis, ``peak_g``, ``peak_amplitude``, ``peak_gain`` (the largest
+    stable amplitude of X and its gain A/c, ERRATA 6), ``notes`` and more: see
+    :func:`vrsweep.analysis.theory.theory_rows`. A value that does not exist (g_res when
+    alpha <= 0) is None. ``pandas.DataFrame(rows)`` makes a table of it.
+
+    ``config`` and ``overrides`` as for :func:`sweep`.
+    """
+    from vrsweep.analysis.theory import theory_rows
+
+    return theory_rows(resolve_config(config, overrides))

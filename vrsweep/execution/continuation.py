@@ -1,0 +1,68 @@
+"""A config's continuation section run: the start orbit, the branch both ways, the bifurcations.
+
+The algorithm is analysis/continuation.py; the file it makes is store/branch_file.py.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vrsweep.analysis import continuation
+from vrsweep.errors import UsageError
+from vrsweep.execution.sweep import integration_settings
+
+
+def problem_of(config):
+    """The ContinuationProblem of a config with a continuation section."""
+    section = config.continuation
+    if section is None:
+        raise UsageError.naming("{source} has no continuation section: add one, e.g.\n"
+                                "continuation: {{parameter: g, from: 23.0, to: [21.0, 27.0]}}",
+                                source=config.source_name)
+    continuation.check_commensurate(config.parameters, config.model, section.parameter)
+    parameters = dict(config.parameters, **{section.parameter: section.start})
+    return continuation.ContinuationProblem(parameters, config.model, section.parameter,
+                                            integration_settings(config.integration), config.integration.method,
+                                            section.options())
+
+
+def start_state_from_sweep(path, at):
+    """x, v at the end of the run of the grid point ``at`` ({axis: value}) of sweep file ``path``:
+    the point's attractor (its x_final, v_final), where the first orbit is looked for."""
+    from vrsweep.store.reading import axis_index, grid_axes, open_results
+
+    with open_results(path) as ds:
+        if ds.attrs.get("vrsweep_file") not in ("sweep", "shard"):
+            raise UsageError.naming("{path} is not a sweep file: {start} takes the results of vrsweep run",
+                                    path=str(path))
+        selection = {}
+        axes = grid_axes(ds)
+        for name, value in at.items():
+            if name not in axes:
+                raise UsageError.naming("{path} has no axis {name}; its axes: {axes}", path=str(path), name=name,
+                                        axes=", ".join(str(a) for a in axes))
+            selection[name] = axis_index(name, np.asarray(ds[name].values, dtype=np.float64), value)
+        point = ds[["x_final", "v_final"]].isel(selection)
+        for dim in list(point.dims):  # e.g. direction of a hysteresis sweep: its first
+            point = point.isel({dim: 0})
+        return np.array([float(point["x_final"]), float(point["v_final"])])
+
+
+def run_continuation(config, start_state=None, progress=None):
+    """The branch through the orbit found at the section's ``from``. Returns (branches, bifurcations).
+
+    start_state: (2,) where the transient starts (default: the config's initial state).
+    """
+    problem = problem_of(config)
+    section = config.continuation
+    if start_state is None:
+        start_state = np.array([config.initial["x"], config.initial["v"]])
+    if not section.low <= section.start <= section.high:
+        raise UsageError.naming("{start} = {value} lies outside {to} = [{low}, {high}]",
+                                {"start": "continuation.from", "to": "continuation.to"},
+                                value=section.start, low=section.low, high=section.high)
+    start = continuation.find_start(problem, start_state, section.start, config.integration.transient_periods,
+                                    section.max_period)
+    branch, bifurcations = continuation.continue_branch(problem, start, section.low, section.high,
+                                                        section.max_points, progress)
+    return [branch], bifurcations

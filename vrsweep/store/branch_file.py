@@ -1,0 +1,192 @@
+"""The branch file of ``vrsweep continue``: periodic orbits followed in one parameter.
+
+Layout (HDF5, flat; ``vrsweep.open_results`` opens it as one xarray Dataset)
+---------------------------------------------------------------------------
+root attributes: ``vrsweep_file = "branch"``, ``vrsweep_format_version``, ``vrsweep_complete``,
+``created``, ``config`` (the resolved YAML), ``model``, ``parameter`` (the continued one),
+``method``, CF globals (title, history, source, references, date_created), ``vrsweep_version``.
+
+    point (dim)                   index along the branches, in arc order within each branch
+    branch (point)                which branch the point is on (0, 1, ...)
+    parameter (point)             value of the continued parameter
+    x, v (point)                  the orbit's state at t = 0 mod T (T = 2 pi / omega)
+    periods (point)               p: the orbit closes after p slow periods
+    R, Q_amplitude (point)        eq3.3 and |Q| (eq3.1, eq3.2) over the orbit's p periods
+    impacts_per_period (point)
+    x_max (point)                 largest x over the orbit; barrier_distance = Delta - x_max
+    slowest_impact (point)        smallest impact velocity x'(-) (NaN without impacts)
+    multiplier (dim, 2)           the Floquet multipliers, larger modulus first
+    multiplier_real, multiplier_imag, multiplier_modulus (point, multiplier)
+    stable (point)                1 when both |mu| < 1
+    residual (point)              max |P^p(y) - y| at convergence
+    bifurcation (dim)             the located bifurcation points
+    bifurcation_kind (bifurcation)  fold, period_doubling, neimark_sacker, grazing
+    bifurcation_branch, bifurcation_parameter, bifurcation_x, bifurcation_v, bifurcation_R (bifurcation)
+    bifurcation_multiplier_real, bifurcation_multiplier_imag (bifurcation, multiplier)
+    branch_id (dim)               one entry per branch
+    branch_periods, branch_end_first_status, branch_end_first_reason, branch_end_last_status,
+    branch_end_last_reason (branch_id): why each branch stops at its first and last point
+    (statuses: left_range, max_points, newton_failed, sticking, integration_failed, grazing)
+
+Built in memory and written whole through ``fileio.write_bytes`` (atomic).
+"""
+
+from __future__ import annotations
+
+import datetime
+import io
+import os
+
+import h5py
+import numpy as np
+
+from vrsweep import __version__
+from vrsweep.errors import UsageError
+from vrsweep.store.fileio import open_hdf5, write_bytes
+from vrsweep.store.layout import FORMAT_VERSION
+
+FILE_KIND = "branch"
+
+_POINT_VARIABLES = {
+    # name: (long name, units)
+    "branch": ("branch number", "1"),
+    "parameter": ("continued parameter", "1"),
+    "x": ("position x at t = 0 mod T", "1"),
+    "v": ("velocity dx/dt at t = 0 mod T", "1"),
+    "periods": ("orbit period in slow periods T = 2 pi/omega", "1"),
+    "R": ("gain R = |Q|/c over the orbit (eq3.3)", "1"),
+    "Q_amplitude": ("response amplitude |Q| over the orbit (eq3.1, eq3.2)", "1"),
+    "impacts_per_period": ("impacts per slow period", "1"),
+    "x_max": ("largest x over the orbit", "1"),
+    "barrier_distance": ("distance Delta - x_max of the orbit from the barrier", "1"),
+    "slowest_impact": ("smallest impact velocity x'(-) of the orbit", "1"),
+    "stable": ("1 if both Floquet multipliers lie inside the unit circle", "1"),
+    "residual": ("Newton residual max |P^p(y) - y|", "1"),
+}
+
+
+def branch_arrays(branches, bifurcations, delta):
+    """Plain arrays from analysis.continuation's Branch and Bifurcation lists (see the layout)."""
+    points = {name: [] for name in _POINT_VARIABLES}
+    multipliers = []
+    for number, branch in enumerate(branches):
+        for orbit in branch.orbits:
+            values = dict(branch=number, parameter=orbit.parameter, x=orbit.state[0], v=orbit.state[1],
+                          periods=orbit.periods, R=orbit.R, Q_amplitude=orbit.Q_amplitude,
+                          impacts_per_period=orbit.impacts_per_period, x_max=orbit.x_max,
+                          barrier_distance=delta - orbit.x_max,
+                          slowest_impact=orbit.slowest_impact if np.isfinite(orbit.slowest_impact) else np.nan,
+                          stable=int(orbit.stable), residual=orbit.residual)
+            for name in points:
+                points[name].append(values[name])
+            multipliers.append(orbit.multipliers)
+    arrays = {name: np.asarray(values, dtype=np.int64 if name in ("branch", "periods", "stable") else np.float64)
+              for name, values in points.items()}
+    arrays["multipliers"] = np.asarray(multipliers, dtype=np.complex128).reshape(-1, 2)
+    table = dict(kind=[], branch=[], parameter=[], x=[], v=[], R=[], multipliers=[])
+    for bifurcation in bifurcations:
+        orbit = bifurcation.orbit
+        for key, value in (("kind", bifurcation.kind), ("branch", bifurcation.branch),
+                           ("parameter", orbit.parameter), ("x", orbit.state[0]), ("v", orbit.state[1]),
+                           ("R", orbit.R), ("multipliers", orbit.multipliers)):
+            table[key].append(value)
+    arrays["bifurcations"] = table
+    arrays["ends"] = [(branch.periods, branch.ends["down"], branch.ends["up"]) for branch in branches]
+    return arrays
+
+
+def write_branch(path, arrays, config, method, overwrite=False):
+    """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``."""
+    import numba
+
+    from vrsweep.store.provenance import cf_attributes
+
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        raise UsageError(f"output {path} is a directory")
+    if os.path.lexists(path) and not overwrite:
+        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
+                                {"overwrite": "overwrite=True"}, path=path)
+    parameter = config.continuation.parameter
+    attrs = {"vrsweep_file": FILE_KIND, "vrsweep_format_version": np.int32(FORMAT_VERSION),
+             "vrsweep_complete": np.int32(1),
+             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+             "config": config.to_yaml(), "model": config.model, "parameter": parameter, "method": method,
+             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
+             **cf_attributes(f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}")}
+    image = io.BytesIO()
+    with h5py.File(image, "w", track_order=True) as f:
+        for name, value in attrs.items():
+            f.attrs[name] = value
+        n_points = len(arrays["parameter"])
+        point = _dimension(f, "point", np.arange(n_points, dtype=np.int64), "point along the branch")
+        multiplier = _dimension(f, "multiplier", np.arange(2, dtype=np.int64),
+                                "Floquet multiplier number, larger modulus first")
+        for name, (long_name, units) in _POINT_VARIABLES.items():
+            _variable(f, name, arrays[name], (point,), long_name, units)
+        mu = arrays["multipliers"]
+        _variable(f, "multiplier_real", mu.real, (point, multiplier), "real part of the Floquet multiplier", "1")
+        _variable(f, "multiplier_imag", mu.imag, (point, multiplier), "imaginary part of the Floquet multiplier", "1")
+        _variable(f, "multiplier_modulus", np.abs(mu), (point, multiplier), "modulus of the Floquet multiplier", "1")
+        f["parameter"].attrs["long_name"] = f"continued parameter {parameter}"
+        table = arrays["bifurcations"]
+        bifurcation = _dimension(f, "bifurcation", np.arange(len(table["kind"]), dtype=np.int64),
+                                 "located bifurcation point")
+        _variable(f, "bifurcation_kind", np.asarray(table["kind"], dtype=object), (bifurcation,),
+                  "kind: fold, period_doubling, neimark_sacker or grazing", None)
+        for key, long_name in (("branch", "branch of the bifurcation point"),
+                               ("parameter", f"{parameter} at the bifurcation"),
+                               ("x", "position x at t = 0 mod T"), ("v", "velocity at t = 0 mod T"),
+                               ("R", "gain R of the orbit at the bifurcation")):
+            _variable(f, f"bifurcation_{key}", np.asarray(table[key], dtype=np.int64 if key == "branch" else float),
+                      (bifurcation,), long_name, "1")
+        bif_mu = np.asarray(table["multipliers"], dtype=np.complex128).reshape(-1, 2)
+        _variable(f, "bifurcation_multiplier_real", bif_mu.real, (bifurcation, multiplier),
+                  "real part of the Floquet multiplier at the bifurcation", "1")
+        _variable(f, "bifurcation_multiplier_imag", bif_mu.imag, (bifurcation, multiplier),
+                  "imaginary part of the Floquet multiplier at the bifurcation", "1")
+        ends = arrays["ends"]
+        branch_id = _dimension(f, "branch_id", np.arange(len(ends), dtype=np.int64), "branch number")
+        _variable(f, "branch_periods", np.asarray([e[0] for e in ends], dtype=np.int64), (branch_id,),
+                  "orbit period of the branch in slow periods", "1")
+        for side, index, where in (("first", 1, "its first point"), ("last", 2, "its last point")):
+            _variable(f, f"branch_end_{side}_status", np.asarray([e[index][0] for e in ends], dtype=object),
+                      (branch_id,), f"why the branch stops at {where}", None)
+            _variable(f, f"branch_end_{side}_reason", np.asarray([e[index][1] for e in ends], dtype=object),
+                      (branch_id,), f"why the branch stops at {where}, in words", None)
+    write_bytes(path, image.getvalue())
+
+
+def _dimension(group, name, values, long_name):
+    scale = group.create_dataset(name, data=np.asarray(values))
+    scale.make_scale(name)
+    scale.attrs["units"] = "1"
+    scale.attrs["long_name"] = long_name
+    return scale
+
+
+def _variable(group, name, values, scales, long_name, units):
+    values = np.asarray(values)
+    if values.dtype == object:
+        ds = group.create_dataset(name, data=values.astype(str).astype(object), dtype=h5py.string_dtype(),
+                                  shape=values.shape)
+    else:
+        ds = group.create_dataset(name, data=values)
+    for axis, scale in enumerate(scales):
+        ds.dims[axis].attach_scale(scale)
+    if units is not None:
+        ds.attrs["units"] = units
+    ds.attrs["long_name"] = long_name
+    return ds
+
+
+def is_branch_file(path) -> bool:
+    """True for an HDF5 file that says it is a vrsweep branch file; False for anything else."""
+    try:
+        if not os.path.isfile(path) or not h5py.is_hdf5(path):
+            return False
+        with open_hdf5(path, "r") as f:
+            kind = f.attrs.get("vrsweep_file", "")
+            return (kind.decode() if isinstance(kind, bytes) else kind) == FILE_KIND
+    except (OSError, ValueError):
+        return False
