@@ -20,6 +20,7 @@ import numpy as np
 from vrsweep.numerics.dop853_coefficients import A, C, D, E3, E5, N_STAGES, N_STAGES_EXTENDED
 from vrsweep.numerics.rk45 import (
     ERR_PREVIOUS_FLOOR, MAX_FACTOR, MIN_FACTOR, N_CONTROLLED, N_DYNAMIC, N_INTERPOLATED, PI_BETA, SAFETY,
+    growth_is_certain, growth_thresholds,
 )
 from vrsweep.numerics.jit import kernel_jit
 
@@ -134,6 +135,15 @@ def dop853_accepted_step_factor(err, err_previous):
         return MAX_FACTOR
     factor = SAFETY * err ** -PI_ALPHA * max(err_previous, ERR_PREVIOUS_FLOOR) ** PI_BETA
     return min(MAX_FACTOR, max(MIN_FACTOR, factor))
+
+
+DOP853_GROWTH_THRESHOLDS = growth_thresholds(PI_ALPHA, PI_BETA)
+
+
+@kernel_jit
+def dop853_certain_growth(err, err_previous):
+    """dop853_accepted_step_factor(err, err_previous) >= 1 is certain (rk45.growth_is_certain)."""
+    return growth_is_certain(err, err_previous, DOP853_GROWTH_THRESHOLDS)
 
 
 @kernel_jit

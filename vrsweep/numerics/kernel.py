@@ -31,14 +31,15 @@ import numpy as np
 
 from vrsweep.numerics import dop853
 from vrsweep.numerics.dop853 import (
-    dop853_accepted_step_factor, dop853_dense, dop853_error_norm, dop853_rejected_step_factor, dop853_step,
+    dop853_accepted_step_factor, dop853_certain_growth, dop853_dense, dop853_error_norm, dop853_rejected_step_factor,
+    dop853_step,
 )
 from vrsweep.numerics.impact import (
     IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, force_at_barrier, hermite_reach, locate_root,
     release_time,
 )
 from vrsweep.numerics.rk45 import (
-    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, dp54_dense, dp54_step,
+    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, certain_growth, dp54_dense, dp54_step,
     error_norm, initial_step, rejected_step_factor,
 )
 from vrsweep.numerics.jit import kernel_jit
@@ -117,7 +118,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
     return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth, rejected_step_factor, False,
                       ORDER, N_STAGES, False, N_DYNAMIC,
                       np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
@@ -135,8 +136,8 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     """
     return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_rotations, rotation_scratch, True,
                       dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
-                      dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES,
-                      False, N_DYNAMIC,
+                      dop853_certain_growth, dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1,
+                      dop853.N_STAGES, False, N_DYNAMIC,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
@@ -151,7 +152,7 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth, rejected_step_factor, False,
                       ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -165,7 +166,7 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
                       rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_rejected_step_factor, True,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
@@ -184,7 +185,7 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth, rejected_step_factor, False,
                       ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -198,7 +199,7 @@ def integrate_dop853_monodromy(coefficients, initial_state, settings, period_rec
     """integrate_rk45_monodromy with DOP853 steps."""
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
                       rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_rejected_step_factor, True,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
@@ -225,9 +226,9 @@ def integrator(method, lyapunov=False):
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
 def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, step, step_error, dense_output,
-               accepted_factor, rejected_factor, hold_after_reject, initial_order, n_stages, tangents, n_dynamic,
-               K, dense, coefficients, initial_state, settings, period_records, summary, sample_times, samples,
-               impact_log, stick_log, monodromy_log):
+               accepted_factor, certain_growth, rejected_factor, hold_after_reject, initial_order, n_stages, tangents,
+               n_dynamic, K, dense, coefficients, initial_state, settings, period_records, summary, sample_times,
+               samples, impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
@@ -235,7 +236,8 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     make_scratch(h_max, nodes); grid_steps rounds each step size down to grid_step's grid.
     step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic) fills K
     (K[n_stages] = f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled
-    error norm; dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch,
+    error norm; certain_growth(err, err_previous) is True only where accepted_factor's result is
+    certainly >= 1; dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch,
     n_dynamic) fills dense and returns its extra RHS count. tangents: the state carries the
     tangent vectors (state.py) and the right-hand sides integrate them; n_dynamic is the number of
     state components the right-hand sides read. K (rows, n_state) and dense (n_state, order) are
@@ -357,7 +359,14 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
                     break
                 continue
-            h_next = h_try * accepted_factor(err, err_previous)
+            # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
+            # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
+            if clipped and h >= h_max:
+                h_next = h  # h = max(h_next, h) below stays >= h_max whatever the factor
+            elif h_try >= h_max and certain_growth(err, err_previous):
+                h_next = h_try  # the factor is >= 1: h_try * factor >= h_max
+            else:
+                h_next = h_try * accepted_factor(err, err_previous)
             if retrying and hold_after_reject:
                 h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
             retrying = False
