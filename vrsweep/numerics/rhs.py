@@ -110,6 +110,8 @@ def rotation_scratch(h_max, nodes):
 @kernel_jit
 def grid_step(h, scratch):
     """The largest step size of the grid that is <= h; h itself below the grid (or if NaN)."""
+    if h >= scratch[STEP_GRID]:
+        return scratch[STEP_GRID]  # at the cap, as most steps are: what the search below returns
     if not (h >= scratch[STEP_GRID + N_STEP_LEVELS - 1]):
         return h
     k = int(math.ceil(STEP_LEVELS_PER_OCTAVE * math.log2(scratch[STEP_GRID] / h)))
