@@ -57,7 +57,7 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
     ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
     no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent_rhs,
-    oscillator_tangent_rhs_rotated, prepare_rotations, rotation_scratch,
+    oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations, rotation_scratch,
 )
 from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, read as kernel.*
     ATOL, DEFAULT_METHOD, DIVERGENCE_BOUND, MAX_IMPACTS_PER_PERIOD, MAX_STEPS, MEASURE_PERIODS, N_SETTINGS,
@@ -117,8 +117,9 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     cosines at every evaluation. Since version 0.2 steps are no longer capped at 1/8 of the
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth, rejected_step_factor, False,
+    return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_preparation, no_scratch, False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False,
                       ORDER, N_STAGES, False, N_DYNAMIC,
                       np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
@@ -134,7 +135,8 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
     library (oscillator_rhs).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_rotations, rotation_scratch, True,
+    return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_step_rotations, prepare_rotations,
+                      rotation_scratch, True,
                       dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
                       dop853_certain_growth, dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1,
                       dop853.N_STAGES, False, N_DYNAMIC,
@@ -151,8 +153,10 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth, rejected_step_factor, False,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_preparation, no_scratch,
+                      False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False,
                       ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -164,7 +168,8 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_step_rotations,
+                      prepare_rotations,
                       rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
@@ -184,8 +189,10 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     interval makes it zero. No renormalisation: one period's map stays far inside double range
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth, rejected_step_factor, False,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_preparation, no_scratch,
+                      False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False,
                       ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -197,7 +204,8 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_step_rotations,
+                      prepare_rotations,
                       rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
@@ -225,14 +233,15 @@ def integrator(method, lyapunov=False):
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
-def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, step, step_error, dense_output,
-               accepted_factor, certain_growth, rejected_factor, hold_after_reject, initial_order, n_stages, tangents,
-               n_dynamic, K, dense, coefficients, initial_state, settings, period_records, summary, sample_times,
-               samples, impact_log, stick_log, monodromy_log):
+def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_steps, nodes, step, step_error,
+               dense_output, accepted_factor, certain_growth, rejected_factor, hold_after_reject, initial_order,
+               n_stages, tangents, n_dynamic, K, dense, coefficients, initial_state, settings, period_records, summary,
+               sample_times, samples, impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
-    same at a step's stages, after prepare_step(t, h, coefficients, scratch), with scratch =
+    same at a step's stages, after prepare_step(t, h, coefficients, scratch) (before a dense output:
+    prepare_dense, which also prepares the dense output's extra stages), with scratch =
     make_scratch(h_max, nodes); grid_steps rounds each step size down to grid_step's grid.
     step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic) fills K
     (K[n_stages] = f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled
@@ -381,7 +390,7 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             # output and the exact test on it (find_crossing: Bernstein form).
             if (y_new[X] >= delta or y[X] >= delta
                     or hermite_reach(y[X], y[V], f[V], y_new[X], y_new[V], K[n_stages, V], h_try, delta) >= 0.0):
-                prepare_step(t, h_try, coefficients, scratch)
+                prepare_dense(t, h_try, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
                 dense_ready = True
@@ -399,8 +408,8 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     theta_turn = bracket[TURNING_POINT]
             h_taken = h_try
             if impact:
-                h_taken, spent = _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynamic,
-                                               t, y, f, h_try, delta, bracket, coefficients, K, y_new, dense,
+                h_taken, spent = _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages,
+                                               n_dynamic, t, y, f, h_try, delta, bracket, coefficients, K, y_new, dense,
                                                stage, scratch)
                 n_rhs += spent
                 dense_ready = True
@@ -409,13 +418,13 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             t_new = t_boundary if (clipped and not impact) else t + h_taken
             if next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_new:
                 if not dense_ready:
-                    prepare_step(t, h_taken, coefficients, scratch)
+                    prepare_dense(t, h_taken, coefficients, scratch)
                     n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                           n_dynamic)
                     dense_ready = True
                 next_sample = emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
             if y[V] * y_new[V] < 0.0 and not dense_ready:
-                prepare_step(t, h_taken, coefficients, scratch)
+                prepare_dense(t, h_taken, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
             update_extremes(record, dense, y, y_new, h_taken, theta_turn)
@@ -494,8 +503,8 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
 
 
 @kernel_jit(inline="always")
-def _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynamic, t, y, f, h_try, delta,
-                  bracket, coefficients, K, y_new, dense, stage, scratch):
+def _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages, n_dynamic, t, y, f, h_try,
+                  delta, bracket, coefficients, K, y_new, dense, stage, scratch):
     """Step exactly to the impact that find_crossing bracketed in the step [t, t + h_try].
 
     Locates it on the dense output, then reaches it with a step of the method's own order (not
@@ -519,7 +528,7 @@ def _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynam
         if not (0.0 < h_corrected <= h_try):
             break
         h_taken = h_corrected
-    prepare_step(t, h_taken, coefficients, scratch)
+    prepare_dense(t, h_taken, coefficients, scratch)
     n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch, n_dynamic)
     return h_taken, n_rhs
 
