@@ -255,3 +255,23 @@ def test_many_failed_points_name_the_setting_to_change(tmp_path, invoke, write_c
             "integration.max_steps (now 500), e.g. --set max_steps=5000") in result.output
     healthy = invoke("run", config, "-o", tmp_path / "ok.h5", "-q")
     assert "Warning" not in healthy.output
+
+
+def test_resume_refuses_a_file_of_an_older_version_and_names_it(tmp_path, invoke, write_config):
+    # vrsweep 0.2.0 decides impacts on each step's interpolant: points of 0.1.0 differ from it
+    import h5py
+
+    config = write_config(tmp_path, TINY)
+    out = tmp_path / "out.h5"
+    assert invoke("run", config, "-o", out, "-q").exit_code == 0
+    with h5py.File(out, "r+") as f:
+        f.attrs["vrsweep_version"] = "0.1.0"
+    before = out.read_bytes()
+    result = invoke("run", config, "-o", out, "--resume")
+    assert result.exit_code == 2
+    assert "vrsweep 0.1.0" in result.output and "--overwrite" in result.output
+    assert "Traceback" not in result.output
+    assert out.read_bytes() == before
+    assert invoke("run", config, "-o", out, "--resume", "-q").exit_code == 2
+    assert invoke("run", config, "-o", out, "--overwrite", "-q").exit_code == 0
+    assert invoke("run", config, "-o", out, "--resume", "-q").exit_code == 0  # its own version resumes

@@ -11,7 +11,7 @@ import pytest
 
 from vrsweep.numerics.impact import (
     BARRIER_SCAN_POINTS, IMPACT, N_BRACKET, NO_IMPACT, THETA_TOLERANCE, TURNING_POINT, UNRESOLVED, V, X,
-    find_crossing, locate_root,
+    bernstein_coefficients, find_crossing, locate_root,
 )
 from vrsweep.numerics.rk45 import dense_value
 
@@ -19,12 +19,14 @@ DELTA = 1.0
 DEGREE = 4  # dense outputs of DP5(4)'s shape (2, 4): x up to theta^4
 
 
-def motion(x_coefficients, h=0.5):
-    """(dense, y, y_new, h) of x(theta) = sum_k a_k theta^k (a_0 first), v = (1/h) dx/dtheta."""
-    a = np.zeros(DEGREE + 1)
+def motion(x_coefficients, h=0.5, degree=DEGREE):
+    """(dense, y, y_new, h) of x(theta) = sum_k a_k theta^k (a_0 first), v = (1/h) dx/dtheta.
+
+    degree: of the dense output's shape, 4 as DP5(4)'s, 7 as DOP853's."""
+    a = np.zeros(degree + 1)
     a[:len(x_coefficients)] = x_coefficients
-    b = np.array([(k + 1) * a[k + 1] for k in range(DEGREE)] + [0.0]) / h  # v(theta) coefficients
-    dense = np.empty((2, DEGREE))
+    b = np.array([(k + 1) * a[k + 1] for k in range(degree)] + [0.0]) / h  # v(theta) coefficients
+    dense = np.empty((2, degree))
     dense[X] = a[1:] / h
     dense[V] = b[1:] / h
     y = np.array([a[0], b[0]])
@@ -32,8 +34,8 @@ def motion(x_coefficients, h=0.5):
     return dense, y, y_new, h
 
 
-def crossing(x_coefficients, pushed=False, h=0.5):
-    dense, y, y_new, h = motion(x_coefficients, h)
+def crossing(x_coefficients, pushed=False, h=0.5, degree=DEGREE):
+    dense, y, y_new, h = motion(x_coefficients, h, degree)
     bracket = np.full(N_BRACKET, -7.0)
     verdict = find_crossing(dense, y, y_new, h, DELTA, pushed, bracket)
     return verdict, bracket, (dense, y, h)
@@ -57,11 +59,13 @@ def test_a_crossing_within_the_step_is_an_impact_located_to_rounding():
     assert dense_value(dense, y, h, theta, X) >= DELTA  # the located state is on the far side
 
 
-def test_a_turning_point_below_the_barrier_is_no_impact_and_is_kept():
-    # x = 0.5 + theta - theta^2: a maximum 0.75 < Delta at theta = 1/2 (v goes + to -)
+def test_a_turning_point_far_below_the_barrier_is_no_impact_proven_without_locating_it():
+    # x = 0.5 + theta - theta^2: a maximum 0.75 < Delta at theta = 1/2 (v goes + to -); its
+    # Bernstein coefficients (1/2, 1, 1/2) - Delta are all below zero, so nothing is located
+    # (records.update_extremes locates it for the period's x_max)
     verdict, bracket, _ = crossing([0.5, 1.0, -1.0])
     assert verdict == NO_IMPACT
-    assert bracket[TURNING_POINT] == pytest.approx(0.5, abs=1e-14)
+    assert np.isnan(bracket[TURNING_POINT])
 
 
 def test_a_step_that_stays_below_and_turns_nowhere_is_no_impact():
@@ -117,3 +121,141 @@ def test_resting_on_the_barrier_and_pushed_into_it_is_an_impact_at_the_start():
 def test_a_release_that_stays_on_the_barrier_to_rounding_is_no_impact():
     verdict, _, _ = crossing([1.0])  # x == Delta throughout, v = 0
     assert verdict == NO_IMPACT
+
+
+# --- long steps: the Bernstein test sees what the step's ends do not (issue 23) ------------------
+# Every case for both dense-output shapes (degree 4 as rk45's, 7 as dop853's); Delta = 1.
+every_shape = pytest.mark.parametrize("degree", [4, 7])
+
+
+def first_crossing(x_coefficients, degree):
+    """find_crossing's verdict and, for an impact, the located theta (as the kernel locates it)."""
+    verdict, bracket, (dense, y, h) = crossing(x_coefficients, degree=degree)
+    if verdict != IMPACT:
+        return verdict, None, (dense, y, h)
+    if bracket[0] < bracket[1]:
+        theta = locate_root(dense, y, h, X, DELTA, bracket[0], bracket[1])
+    else:
+        theta = bracket[1]
+    return verdict, theta, (dense, y, h)
+
+
+def below_before(dense, y, h, theta, points=2001):
+    """x < Delta on a fine grid of [0, theta): nothing earlier was skipped."""
+    grid = np.linspace(0.0, theta, points)[:-1]
+    return all(dense_value(dense, y, h, t, X) < DELTA for t in grid)
+
+
+# x - 1 = -(theta - 1/2)^2 (1 + 8 theta) = -1/4 - theta + 7 theta^2 - 8 theta^3: falls from 3/4 (v < 0),
+# turns at theta = 1/12, rises to touch the barrier at theta = 1/2 and falls to -5/4 (v < 0). Both
+# ends far below, both velocities negative: no end value or velocity sign shows the touch.
+TOUCH_INSIDE = [0.75, -1.0, 7.0, -8.0]
+
+
+@every_shape
+def test_a_touch_between_two_step_ends_far_below_the_barrier_is_an_impact(degree):
+    dense, y, y_new, h = motion(TOUCH_INSIDE, degree=degree)
+    assert y[X] == 0.75 and y_new[X] == -1.25 and y[V] < 0 and y_new[V] < 0
+    verdict, theta, _ = first_crossing(TOUCH_INSIDE, degree)
+    assert verdict == IMPACT
+    assert theta == pytest.approx(0.5, abs=1e-7)  # a double root: located to sqrt(rounding)
+
+
+@every_shape
+def test_a_near_miss_inside_a_long_step_is_no_impact_and_a_near_hit_is(degree):
+    miss = [TOUCH_INSIDE[0] - 2.0 ** -20] + TOUCH_INSIDE[1:]  # the maximum 2^-20 below the barrier
+    verdict, _, _ = first_crossing(miss, degree)
+    assert verdict == NO_IMPACT
+    hit = [TOUCH_INSIDE[0] + 2.0 ** -20] + TOUCH_INSIDE[1:]  # 2^-20 past it: a short excursion
+    verdict, theta, (dense, y, h) = first_crossing(hit, degree)
+    assert verdict == IMPACT
+    # the first crossing: x - 1 = -(theta - 1/2)^2 (1 + 8 theta) + 2^-20, just before 1/2
+    assert dense_value(dense, y, h, theta, X) == pytest.approx(DELTA, abs=1e-14)
+    assert 0.5 - 2e-3 < theta < 0.5
+    assert below_before(dense, y, h, theta)
+
+
+def _double_touch(shift):
+    """x - 1 = -16 (theta - 1/4)^2 (theta - 3/4)^2 + shift(theta): power coefficients, a_0 first."""
+    quartic = -16.0 * np.polynomial.polynomial.polymul([3 / 16, -1.0, 1.0], [3 / 16, -1.0, 1.0])
+    quartic[:len(shift)] += shift
+    quartic[0] += DELTA
+    return list(quartic)
+
+
+@every_shape
+def test_a_double_touch_inside_one_step_is_an_impact_at_the_first(degree):
+    # touches at 1/4 and 3/4, between ends 7/16 below the barrier
+    verdict, theta, (dense, y, h) = first_crossing(_double_touch([]), degree)
+    assert verdict == IMPACT
+    assert theta == pytest.approx(0.25, abs=1e-7)
+
+
+@every_shape
+def test_of_two_excursions_in_one_step_the_first_is_taken(degree):
+    # both maxima 2^-12 past the barrier: the crossing just before 1/4, not the one before 3/4
+    verdict, theta, (dense, y, h) = first_crossing(_double_touch([2.0 ** -12]), degree)
+    assert verdict == IMPACT
+    assert 0.25 - 0.02 < theta < 0.25
+    assert dense_value(dense, y, h, theta, X) == pytest.approx(DELTA, abs=1e-14)
+    assert below_before(dense, y, h, theta)
+
+
+@every_shape
+def test_a_near_miss_then_a_crossing_in_one_step_is_the_crossing(degree):
+    # shift 2^-12 (2 theta - 1): the first maximum 2^-13 short of the barrier, the second past it
+    verdict, theta, (dense, y, h) = first_crossing(_double_touch([-(2.0 ** -12), 2.0 ** -11]), degree)
+    assert verdict == IMPACT
+    assert 0.5 < theta < 0.75
+    assert dense_value(dense, y, h, theta, X) == pytest.approx(DELTA, abs=1e-14)
+    assert below_before(dense, y, h, theta)
+
+
+@every_shape
+def test_a_touch_at_the_step_end_is_an_impact_there(degree):
+    # x = 3/4 + theta/2 - theta^2/4 rises to the barrier at theta = 1 with v = 0 there
+    verdict, theta, (dense, y, h) = first_crossing([0.75, 0.5, -0.25], degree)
+    assert verdict == IMPACT and theta == 1.0
+    # and crossing it at the end, with speed: x = 3/4 + theta/4 (the end exactly on the barrier)
+    verdict, theta, _ = first_crossing([0.75, 0.25], degree)
+    assert verdict == IMPACT and theta == 1.0
+    # short of it at the end by 2^-30: no impact
+    verdict, _, _ = first_crossing([0.75 - 2.0 ** -30, 0.5, -0.25], degree)
+    assert verdict == NO_IMPACT
+
+
+@every_shape
+def test_far_below_the_barrier_is_proven_at_once(degree):
+    # oscillating far below (three turning points): every Bernstein coefficient is below Delta
+    dense, y, _, h = motion([0.0, 1.0, -6.0, 10.0, -5.0], degree=degree)
+    coefficients = np.empty(degree + 1)
+    bernstein_coefficients(dense, y, h, X, DELTA, coefficients)
+    assert coefficients.max() < 0.0
+    assert first_crossing([0.0, 1.0, -6.0, 10.0, -5.0], degree)[0] == NO_IMPACT
+
+
+@every_shape
+def test_bernstein_coefficients_are_those_of_the_polynomial(degree):
+    # the Bernstein form evaluated at any theta is the power form's value
+    from math import comb
+    x = [0.3, -0.7, 2.1, -1.1, 0.4, 0.05, -0.02, 0.01][:degree + 1]
+    dense, y, _, h = motion(x, degree=degree)
+    coefficients = np.empty(degree + 1)
+    assert bernstein_coefficients(dense, y, h, X, DELTA, coefficients) == degree
+    for theta in (0.0, 0.17, 0.5, 0.93, 1.0):
+        bernstein = sum(comb(degree, i) * theta ** i * (1 - theta) ** (degree - i) * coefficients[i]
+                        for i in range(degree + 1))
+        assert bernstein == pytest.approx(dense_value(dense, y, h, theta, X) - DELTA, abs=1e-14)
+
+
+def test_the_cheap_exclusion_bounds_a_closed_form_step_from_above():
+    # hermite_reach from the ends of x = 0.5 sin(t) over a step of 2 (a long step, a maximum
+    # inside): its estimate is above the true maximum 0.5, and it excludes a barrier at 0.7
+    # (0.2 above; its margin is generous at so long a step) but not one at 0.51
+    from vrsweep.numerics.impact import hermite_reach
+    t0, h = 0.4, 2.0
+    ends = [(0.5 * np.sin(t), 0.5 * np.cos(t), -0.5 * np.sin(t)) for t in (t0, t0 + h)]
+    (x0, v0, a0), (x1, v1, a1) = ends
+    assert hermite_reach(x0, v0, a0, x1, v1, a1, h, 0.0) >= 0.5
+    assert hermite_reach(x0, v0, a0, x1, v1, a1, h, 0.7) < 0.0
+    assert hermite_reach(x0, v0, a0, x1, v1, a1, h, 0.51) >= 0.0

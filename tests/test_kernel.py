@@ -141,6 +141,33 @@ def test_grazing_excursion_inside_one_step(overshoot, expect_impact, method):
     assert run.impacts[0, 2] == pytest.approx(-0.5 * run.impacts[0, 1], rel=1e-12)
 
 
+@pytest.mark.parametrize("overshoot, expect_impact", [(2e-3, True), (-2e-3, False)])
+@every_method
+def test_graze_inside_a_long_step_between_ends_far_below(overshoot, expect_impact, method):
+    # x = v0 sin t at rtol 1e-4: steps of 0.5 (rk45) to 1.1 (dop853) on average (no cap without
+    # fast forcing), while x is past the barrier only for |t - pi/2| < 0.063: the step around the
+    # peak has both ends far below it, and only the Bernstein test on its dense output sees the excursion (or
+    # proves that a peak 2e-3 short of the barrier stays below it).
+    Delta = 1.0
+    v0 = Delta * (1.0 + overshoot)
+    vector = coefficients(k=1.0, Delta=Delta, e=0.5, omega=0.25)  # slow period 8 pi: one peak first
+    run = simulate(vector, [0.0, v0], settings_vector(rtol=1e-4, atol=1e-6, transient_periods=0,
+                                                      measure_periods=1), method=method)
+    assert run.status == Status.OK
+    steps = run.summary[kernel.SUM_STEPS]
+    assert 8 * math.pi / steps > 0.3  # long steps: the mean step is over twice the excursion's duration
+    if not expect_impact:
+        assert len(run.impacts) == 0
+        return
+    t_impact = math.asin(Delta / v0)
+    v_impact = v0 * math.cos(t_impact)
+    assert len(run.impacts) >= 1
+    # a position error dx of the solver (~ rtol) moves the impact by about dx / v
+    tolerance = 10 * 1e-4 / v_impact
+    assert run.impacts[0, 0] == pytest.approx(t_impact, abs=tolerance)
+    assert run.impacts[0, 1] == pytest.approx(v_impact, abs=tolerance)
+
+
 # --- chatter and sticking -----------------------------------------------------------------------
 
 @every_method

@@ -25,7 +25,10 @@ from vrsweep.numerics.kernel import (
     N_STATE, no_preparation, no_scratch, oscillator_rhs, oscillator_rhs_rotated, prepare_rotations,
     rotation_scratch,
 )
+from vrsweep.numerics.impact import locate_root
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
+from vrsweep.numerics.records import N_RECORD, REC_X_MAX, REC_X_MIN, _inside_extremes
+from vrsweep.numerics.rhs import ROTATION, ROTATION_VALUES, prepare_step_rotations
 from vrsweep.results import Status
 from vrsweep.numerics.trajectory import settings_vector, simulate
 
@@ -295,3 +298,144 @@ def test_phases_rotated_from_step_to_step_stay_exact():
                              np.cos(big_omega * times), np.sin(big_omega * times)])
     # The library's own argument rounding at t ~ 1000 is Omega * ulp(t) ~ 5e-13.
     np.testing.assert_allclose(phases, exact, rtol=0, atol=4 * big_omega * np.spacing(1000.0) * RESYNC_STEPS)
+
+
+# --- issue 23, attempt 2: the same arithmetic, cheaper (each claim of bit-for-bit equality) -------
+
+@njit
+def _loop_dop853_step(t, y, f, h, coefficients, K, y_new, stage, scratch):
+    """DOP853's step as the tableau loop of version 0.2.0's first kernel (zeros skipped at run time)."""
+    n = y.shape[0]
+    for j in range(n):
+        K[0, j] = f[j]
+    for s in range(1, dop853.N_STAGES):
+        for j in range(2):
+            acc = 0.0
+            for r in range(s):
+                a = dop853.A_STAGES[s, r]
+                if a != 0.0:
+                    acc += a * K[r, j]
+            stage[j] = y[j] + h * acc
+        oscillator_rhs_rotated(t, h, s, dop853.C_STAGES[s], stage, coefficients, K[s], scratch)
+    for j in range(n):
+        acc = 0.0
+        for r in range(dop853.N_STAGES):
+            b = dop853.B_STAGES[r]
+            if b != 0.0:
+                acc += b * K[r, j]
+        y_new[j] = y[j] + h * acc
+    oscillator_rhs_rotated(t, h, dop853.N_STAGES, 1.0, y_new, coefficients, K[dop853.N_STAGES], scratch)
+
+
+@njit
+def _both_steps(coefficients, y, t, h, h_max):
+    scratch = rotation_scratch(h_max, dop853.C_STAGES)
+    prepare_rotations(t, h, coefficients, scratch)
+    f = np.empty(N_STATE)
+    oscillator_rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+    K1 = np.empty((dop853.N_STAGES_EXTENDED, N_STATE))
+    K2 = np.empty((dop853.N_STAGES_EXTENDED, N_STATE))
+    y1 = np.empty(N_STATE)
+    y2 = np.empty(N_STATE)
+    stage = np.empty(N_STATE)
+    dop853_step(oscillator_rhs_rotated, t, y, f, h, coefficients, K1, y1, stage, scratch, 2)
+    _loop_dop853_step(t, y, f, h, coefficients, K2, y2, stage, scratch)
+    return K1[:dop853.N_STAGES + 1], y1, K2[:dop853.N_STAGES + 1], y2
+
+
+def test_the_written_out_dop853_step_is_the_tableau_loop_bit_for_bit():
+    coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0, Omega=4.0), "original")
+    rng = np.random.default_rng(23)
+    for _ in range(200):
+        y = np.zeros(N_STATE)
+        y[:] = rng.uniform(-2.0, 2.0, N_STATE)
+        t, h = rng.uniform(0.0, 2500.0), rng.uniform(1e-4, 0.2)
+        K1, y1, K2, y2 = _both_steps(coefficients, y, t, h, 0.2)
+        assert y1.tobytes() == y2.tobytes() and K1.tobytes() == K2.tobytes()
+
+
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+def test_certain_growth_only_where_the_pi_factor_is_at_least_one(method):
+    """The kernel skips the PI factor (two pow) where certain_growth says it is >= 1: never wrongly."""
+    if method == "rk45":
+        certain, factor = integrator.certain_growth, integrator.accepted_step_factor
+    else:
+        certain, factor = dop853.dop853_certain_growth, dop853.dop853_accepted_step_factor
+    errs = np.concatenate([[0.0], np.geomspace(1e-12, 1.0, 400)])
+    previous = np.concatenate([[0.0, 1e-6], np.geomspace(1e-4, 1.0, 60)])
+    said = 0
+    for err in errs:
+        for err_previous in previous:
+            if certain(err, err_previous):
+                said += 1
+                assert factor(err, err_previous) >= 1.0, (err, err_previous)
+    # and it says so for most of the small errors of capped steps (the point of it)
+    assert said > 0.5 * errs.size * previous.size * (np.mean(errs < 1e-3))
+
+
+@njit
+def _turning_points(coefficients, h, n_steps):
+    """For n_steps DOP853 steps from varied states: (a turning point inside?, the skip test's answer,
+    the located turning point's x, the record's min and max)."""
+    scratch = rotation_scratch(h, dop853.C_STAGES)
+    K = np.empty((dop853.N_STAGES_EXTENDED, N_STATE))
+    dense = np.empty((N_STATE, dop853.DENSE_ORDER))
+    y = np.zeros(N_STATE)
+    y_new = np.empty(N_STATE)
+    stage = np.empty(N_STATE)
+    f = np.empty(N_STATE)
+    record = np.empty(N_RECORD)
+    out = np.empty((n_steps, 5))
+    for k in range(n_steps):
+        y[0] = -1.5 + 3.0 * ((k * 0.618034) % 1.0)
+        y[1] = -0.4 + 0.8 * ((k * 0.414214) % 1.0)
+        t = 0.37 * k
+        prepare_rotations(t, h, coefficients, scratch)
+        oscillator_rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+        dop853_step(oscillator_rhs_rotated, t, y, f, h, coefficients, K, y_new, stage, scratch, 2)
+        dop853_dense(oscillator_rhs_rotated, t, y, h, coefficients, K, y_new, dense, stage, scratch, 2)
+        # a period's extremes so far: around the step, some tight, some wide
+        record[REC_X_MIN] = min(y[0], y_new[0]) - 0.3 * ((k * 0.7548) % 1.0) ** 3
+        record[REC_X_MAX] = max(y[0], y_new[0]) + 0.3 * ((k * 0.5698) % 1.0) ** 3
+        turning = y[1] * y_new[1] < 0.0
+        x_turn = np.nan
+        if turning:
+            x_turn = dense_value(dense, y, h, locate_root(dense, y, h, 1, 0.0, 0.0, 1.0), 0)
+        out[k, 0] = 1.0 if turning else 0.0
+        out[k, 1] = 1.0 if _inside_extremes(record, dense, y, h) else 0.0
+        out[k, 2] = x_turn
+        out[k, 3] = record[REC_X_MIN]
+        out[k, 4] = record[REC_X_MAX]
+    return out
+
+
+def test_a_turning_point_is_skipped_only_where_it_cannot_change_the_extremes():
+    coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0, Omega=4.0), "original")
+    out = _turning_points(coefficients, 2 * math.pi / 4.0 / 8, 4000)
+    turning, skipped = out[:, 0] == 1.0, out[:, 1] == 1.0
+    x_turn, low, high = out[:, 2], out[:, 3], out[:, 4]
+    assert turning.sum() > 200 and (turning & skipped).sum() > 50 and (turning & ~skipped).sum() > 50
+    # where skipped, the turning point as update_extremes would locate it lies strictly inside the
+    # record: locating it would have changed nothing
+    inside = turning & skipped
+    assert np.all((low[inside] < x_turn[inside]) & (x_turn[inside] < high[inside]))
+
+
+@njit
+def _rotations_lazily(coefficients, t, h, h_max):
+    """The rotations prepare_step_rotations then prepare_rotations leave, and those of prepare_rotations."""
+    lazy = rotation_scratch(h_max, dop853.C_STAGES)
+    prepare_step_rotations(t, h, coefficients, lazy)
+    partial = lazy[ROTATION:ROTATION + 4 * (dop853.N_STAGES + 1)].copy()
+    prepare_rotations(t, h, coefficients, lazy)
+    full = rotation_scratch(h_max, dop853.C_STAGES)
+    prepare_rotations(t, h, coefficients, full)
+    return partial, lazy[ROTATION:ROTATION + ROTATION_VALUES], full[ROTATION:ROTATION + ROTATION_VALUES]
+
+
+@pytest.mark.parametrize("h", [0.0913, 2 * math.pi / 4.0 / 8])  # off the grid, and on it (the cap)
+def test_rotations_prepared_for_the_step_then_the_dense_output_are_those_prepared_at_once(h):
+    coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=10.0, Omega=4.0), "original")
+    partial, lazy, full = _rotations_lazily(coefficients, 12.3, h, 2 * math.pi / 4.0 / 8)
+    assert lazy.tobytes() == full.tobytes()
+    assert partial.tobytes() == full[:partial.size].tobytes()

@@ -125,3 +125,23 @@ def test_a_checkpoint_holding_the_old_text_of_another_config_refuses(tmp_path):
         run_job(other, out, threads=1, resume=True)
     assert "alpha: 0.125" in str(caught.value)
     assert out.read_bytes() == before
+
+
+@pytest.mark.parametrize("written_by", ["0.1.0", None])
+def test_a_checkpoint_of_a_version_whose_points_differ_refuses_naming_it(tmp_path, written_by):
+    # 0.2.0 decides impacts on each step's interpolant (issue 23): a 0.1.0 point differs from the
+    # same point now, so a file of 0.1.0 (or of an unknown version) is not continued
+    from vrsweep.execution.job import run_job
+
+    config = the_config()
+    out = tmp_path / "old.h5"
+    _run_interrupted(config, out)
+    with h5py.File(out, "r+") as f:
+        if written_by is None:
+            del f.attrs["vrsweep_version"]
+        else:
+            f.attrs["vrsweep_version"] = written_by
+    before = out.read_bytes()
+    with pytest.raises(ResultFileError, match="written by vrsweep " + (written_by or r"\(unknown version\)")):
+        run_job(config, out, threads=1, resume=True)
+    assert out.read_bytes() == before

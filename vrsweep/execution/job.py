@@ -237,6 +237,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     owned = owned_mask(grid, shard) if shard[1] > 1 else None
     inputs = (config.source_name,) if os.path.isfile(config.source_name) else ()  # never written over
     if resume and path.exists():
+        _refuse_results_of_older_steps(path)
         writer = ResultWriter.open_for_resume(path, _expected_config_text(path, config),
                                               expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None,
                                               inputs=inputs)
@@ -270,6 +271,47 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         extras.update(attractors)
     writer.finish(extra=extras, coords=coords)
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
+
+
+RESULTS_SINCE_VERSION = "0.2.0"
+"""The first version whose points this one reproduces: 0.2.0 decides impacts on each step's dense
+output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
+version differs (at the tolerance's level) from the same point computed now; one file must not
+mix them. Raise it whenever a change of the numerics changes results."""
+
+
+def _version_tuple(text):
+    try:
+        return tuple(int(part) for part in str(text).split(".")[:3])
+    except ValueError:
+        return None
+
+
+def _refuse_results_of_older_steps(path):
+    """ResultFileError if the file at ``path`` was written by a version whose points differ from
+    this version's (or by an unknown one); files this function cannot read are left to the writer."""
+    from vrsweep.errors import ResultFileError
+    from vrsweep.store.fileio import open_hdf5
+    from vrsweep.store.writer import ARGUMENT_WORDS
+
+    try:
+        with open_hdf5(path, "r") as h5file:
+            if "vrsweep_format_version" not in h5file.attrs:
+                return  # not a vrsweep file: the writer says so
+            written_by = h5file.attrs.get("vrsweep_version")
+    except Exception:  # noqa: BLE001 -- any failure here is reported by open_for_resume itself
+        return
+    if isinstance(written_by, bytes):
+        written_by = written_by.decode("utf-8", errors="replace")
+    found = _version_tuple(written_by) if written_by is not None else None
+    if found is not None and found >= _version_tuple(RESULTS_SINCE_VERSION):
+        return
+    raise ResultFileError.naming(
+        "cannot resume: {path} was written by vrsweep {written_by}, whose points differ from those of "
+        "vrsweep {version} (impacts are decided on each step's interpolant since {since}), so the two "
+        "cannot share a file; pass {overwrite} to compute it afresh", ARGUMENT_WORDS, path=path,
+        written_by=written_by if written_by is not None else "(unknown version)", version=__version__,
+        since=RESULTS_SINCE_VERSION)
 
 
 def _expected_config_text(path, config):

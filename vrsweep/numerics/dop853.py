@@ -20,6 +20,7 @@ import numpy as np
 from vrsweep.numerics.dop853_coefficients import A, C, D, E3, E5, N_STAGES, N_STAGES_EXTENDED
 from vrsweep.numerics.rk45 import (
     ERR_PREVIOUS_FLOOR, MAX_FACTOR, MIN_FACTOR, N_CONTROLLED, N_DYNAMIC, N_INTERPOLATED, PI_BETA, SAFETY,
+    growth_is_certain, growth_thresholds,
 )
 from vrsweep.numerics.jit import kernel_jit
 
@@ -42,38 +43,64 @@ E5_STAGES = np.ascontiguousarray(E5)
 D_ROWS = np.ascontiguousarray(D)
 
 
-@kernel_jit(inline="always")
-def _stage(rhs, t, y, h, coefficients, K, s, stage, scratch, n_dynamic):
-    """K[s] = rhs(t + c_s h, y + h sum_{r<s} a_sr K[r]): one stage, skipping the tableau's zeros.
+# --- the step, written out stage by stage ---------------------------------------------------------
+# dop853_step is generated below from the tableau: every weighted sum of stages is written out
+# with its nonzero coefficients as literals, in the order of the stages, which is the order in
+# which the loop over the tableau (skipping its zeros) added them, so the results are bit for bit
+# those of the loop. Written out, a step costs 107 instead of 126 ns (benchmarks/README.md,
+# issue 23 attempt 2): the loop tested every coefficient for zero at run time.
+# Generated functions have no source file for numba's cache; they are inlined into the kernels
+# (inline="always"), whose cache holds them, so they are compiled uncached themselves.
+
+
+def _weighted_sum(weights, rows):
+    """Source text of sum_r weights[r] K[rows[r], j] over the nonzero weights, as the loop summed."""
+    terms = [f"{float(w)!r} * K[{r}, j]" for r, w in zip(rows, weights) if w != 0.0]
+    return "(0.0 + " + " + ".join(terms) + ")"
+
+
+def _stage_source(s):
+    """Source lines of stage s: K[s] = rhs(t + c_s h, y + h sum_{r<s} a_sr K[r]).
 
     Only the components the right-hand side reads are formed (the first n_dynamic).
     """
-    for j in range(n_dynamic):
-        acc = 0.0
-        for r in range(s):
-            a = A_STAGES[s, r]
-            if a != 0.0:
-                acc += a * K[r, j]
-        stage[j] = y[j] + h * acc
-    rhs(t, h, s, C_STAGES[s], stage, coefficients, K[s], scratch)
+    return [
+        "    for j in range(n_dynamic):",
+        f"        stage[j] = y[j] + h * {_weighted_sum(A_STAGES[s, :s], range(s))}",
+        f"    rhs(t, h, {s}, {float(C_STAGES[s])!r}, stage, coefficients, K[{s}], scratch)",
+    ]
 
 
-@kernel_jit(inline="always")
-def dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic=N_DYNAMIC):
-    """One 8th-order step of size h from (t, y) with f = rhs(t, y); K[N_STAGES] = f(t + h, y_new)."""
-    n = y.shape[0]
-    for j in range(n):
-        K[0, j] = f[j]
-    for s in range(1, N_STAGES):
-        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch, n_dynamic)
-    for j in range(n):
-        acc = 0.0
-        for r in range(N_STAGES):
-            b = B_STAGES[r]
-            if b != 0.0:
-                acc += b * K[r, j]
-        y_new[j] = y[j] + h * acc
-    rhs(t, h, N_STAGES, C_STAGES[N_STAGES], y_new, coefficients, K[N_STAGES], scratch)
+def _generated(name, lines, namespace):
+    exec("\n".join(lines), namespace)  # noqa: S102 - source built above from the tableau only
+    return kernel_jit(namespace[name], inline="always", cache=False)
+
+
+_STEP_LINES = [
+    "def dop853_step(rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic=N_DYNAMIC):",
+    '    """One 8th-order step of size h from (t, y) with f = rhs(t, y); K[N_STAGES] = f(t + h, y_new)."""',
+    "    n = y.shape[0]",
+    "    for j in range(n):",
+    "        K[0, j] = f[j]",
+]
+for _s in range(1, N_STAGES):
+    _STEP_LINES += _stage_source(_s)
+_STEP_LINES += [
+    "    for j in range(n):",
+    f"        y_new[j] = y[j] + h * {_weighted_sum(B_STAGES, range(N_STAGES))}",
+    f"    rhs(t, h, {N_STAGES}, {float(C_STAGES[N_STAGES])!r}, y_new, coefficients, K[{N_STAGES}], scratch)",
+]
+dop853_step = _generated("dop853_step", _STEP_LINES, {"N_DYNAMIC": N_DYNAMIC})
+
+# The dense output's three extra stages (13..15), and the sums D K of its last four coefficient rows.
+_EXTRA_STAGE_LINES = ["def _extra_stages(rhs, t, y, h, coefficients, K, stage, scratch, n_dynamic):"]
+for _s in range(N_STAGES + 1, N_STAGES_EXTENDED):
+    _EXTRA_STAGE_LINES += _stage_source(_s)
+_extra_stages = _generated("_extra_stages", _EXTRA_STAGE_LINES, {})
+_D_ROW_LINES = ["def _d_rows(K, j):",
+                "    return (" + ", ".join(_weighted_sum(D_ROWS[q], range(N_STAGES_EXTENDED))
+                                          for q in range(D_ROWS.shape[0])) + ")"]
+_d_rows = _generated("_d_rows", _D_ROW_LINES, {})
 
 
 @kernel_jit
@@ -110,21 +137,19 @@ def dop853_accepted_step_factor(err, err_previous):
     return min(MAX_FACTOR, max(MIN_FACTOR, factor))
 
 
+DOP853_GROWTH_THRESHOLDS = growth_thresholds(PI_ALPHA, PI_BETA)
+
+
+@kernel_jit
+def dop853_certain_growth(err, err_previous):
+    """dop853_accepted_step_factor(err, err_previous) >= 1 is certain (rk45.growth_is_certain)."""
+    return growth_is_certain(err, err_previous, DOP853_GROWTH_THRESHOLDS)
+
+
 @kernel_jit
 def dop853_rejected_step_factor(err):
     """Shrink factor after a rejected step (err > 1), never growing."""
     return min(1.0, max(MIN_FACTOR, SAFETY * err ** -ERROR_EXPONENT))
-
-
-@kernel_jit(inline="always")
-def _d_row(q, K, j):
-    """sum_r D[q, r] K[r, j], skipping the zeros of D."""
-    acc = 0.0
-    for r in range(N_STAGES_EXTENDED):
-        d = D_ROWS[q, r]
-        if d != 0.0:
-            acc += d * K[r, j]
-    return acc
 
 
 @kernel_jit(inline="always")
@@ -139,17 +164,17 @@ def dop853_dense(rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch, n_
     multiplied out here into y + h theta sum_q dense[q] theta^q (no arrays: this runs at every
     impact and turning point).
     """
-    for s in range(N_STAGES + 1, N_STAGES_EXTENDED):
-        _stage(rhs, t, y, h, coefficients, K, s, stage, scratch, n_dynamic)
+    _extra_stages(rhs, t, y, h, coefficients, K, stage, scratch, n_dynamic)
     for j in range(N_INTERPOLATED):
         delta_y = y_new[j] - y[j]
         f0 = delta_y
         f1 = h * K[0, j] - delta_y
         f2 = 2.0 * delta_y - h * (K[N_STAGES, j] + K[0, j])
-        f3 = h * _d_row(0, K, j)
-        f4 = h * _d_row(1, K, j)
-        f5 = h * _d_row(2, K, j)
-        f6 = h * _d_row(3, K, j)
+        d3, d4, d5, d6 = _d_rows(K, j)
+        f3 = h * d3
+        f4 = h * d4
+        f5 = h * d5
+        f6 = h * d6
         # The nested form multiplied out (coefficients of theta^1 .. theta^7), over h.
         dense[j, 0] = (f0 + f1) / h
         dense[j, 1] = (f2 + f3 - f1) / h

@@ -2,7 +2,18 @@
 
 Roots are located on the step's continuous extension (integrator.dense_value) in the step
 fraction theta in [0, 1]; the kernel then reaches the impact state with an exact step.
+
+Whether a step that starts below the barrier reaches it is decided on the dense output's
+polynomial p(theta) - Delta in Bernstein form (docs/design.md, "Events on the interpolant"): a
+polynomial lies within the convex hull of its Bernstein coefficients, so all of them below zero
+proves that p stays below the barrier over the whole step, however long the step and however
+many turning points it holds. Otherwise the step is halved (de Casteljau) until each piece is
+either proven below, holds exactly one crossing (one sign change), or has one maximum (one sign
+change of the coefficients' differences), which is then located and compared with Delta. So a
+graze between two step ends far below the barrier is found, and a near miss is not an impact.
 """
+
+import math
 
 import numpy as np
 
@@ -19,9 +30,15 @@ MAX_ROOT_ITERATIONS = 200
 # a slow rebound can leave and come back within one step, with x(t + h) < Delta (a graze).
 BARRIER_SCAN_POINTS = 8
 NO_CROSSING = -1.0
-# find_crossing's bracket: (theta_low, theta_high, the turning point it located)
-N_BRACKET = 3
+# find_crossing's bracket: (theta_low, theta_high, the turning point it located), then room for the
+# step's Bernstein coefficients (so that the kernel's hot loop allocates nothing).
 TURNING_POINT = 2
+BERNSTEIN = 3                    # the step's coefficients, up to degree 8 (rk45: 4, dop853: 7)
+PIECE = BERNSTEIN + 9            # first_reach's workspace: the piece being examined,
+STACK_LOW = PIECE + 9            # the pieces still to examine (their start, depth, coefficients)
+STACK_DEPTH = STACK_LOW + 42     # (MAX_SUBDIVISIONS + 2 entries each)
+STACK = STACK_DEPTH + 42
+N_BRACKET = STACK + 42 * 9
 # find_crossing's verdicts.
 NO_IMPACT = 0
 IMPACT = 1
@@ -76,16 +93,221 @@ def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
     return NO_CROSSING
 
 
+# --- Bernstein form of the dense output ---------------------------------------------------------
+# BERNSTEIN_FROM_POWER[n, i, k] = C(i, k) / C(n, k): the i-th Bernstein coefficient of degree n of a
+# polynomial is sum_k BERNSTEIN_FROM_POWER[n, i, k] a_k, a_k its power-basis coefficients on [0, 1].
+MAX_DEGREE = 8
+BERNSTEIN_FROM_POWER = np.zeros((MAX_DEGREE + 1, MAX_DEGREE + 1, MAX_DEGREE + 1))
+for _n in range(MAX_DEGREE + 1):
+    for _i in range(_n + 1):
+        for _k in range(_i + 1):
+            BERNSTEIN_FROM_POWER[_n, _i, _k] = math.comb(_i, _k) / math.comb(_n, _k)
+# Halvings of a step before a piece that is neither proven below the barrier nor simple (one
+# crossing, or one maximum) is taken as touching it: 2^-40 of a step, far below THETA_TOLERANCE's
+# reach of any physical time scale; a polynomial that stays this close to Delta over so short a
+# piece without a crossing or a single maximum touches it to rounding.
+MAX_SUBDIVISIONS = 40
+# Rounding of Bernstein coefficients (and of halving them), relative to the sum of the magnitudes
+# of the polynomial's terms: a few units of the last place.
+BERNSTEIN_ROUNDING = 16 * 2.2e-16
+# hermite_reach's margin: this many times the accelerations' share of the quintic interpolant.
+HERMITE_MARGIN_FACTOR = 2.0
+
+
+@kernel_jit
+def bernstein_coefficients(dense, y, h, component, level, out):
+    """out[:n + 1] = the Bernstein coefficients over theta in [0, 1] of dense_value(...) - level.
+
+    dense (n_components, n): the continuous extension y + h theta sum_q dense[component, q] theta^q,
+    a polynomial of degree n in theta. Returns n.
+    """
+    n = dense.shape[1]
+    for i in range(n + 1):
+        acc = y[component] - level  # a_0, with BERNSTEIN_FROM_POWER[n, i, 0] = 1
+        for k in range(1, i + 1):
+            acc += BERNSTEIN_FROM_POWER[n, i, k] * (h * dense[component, k - 1])
+        out[i] = acc
+    return n
+
+
+@kernel_jit
+def _derivative_value(dense, h, theta, component):
+    """d/dtheta of the continuous extension at theta (Horner)."""
+    order = dense.shape[1]
+    acc = order * dense[component, order - 1]
+    for q in range(order - 2, -1, -1):
+        acc = acc * theta + (q + 1) * dense[component, q]
+    return h * acc
+
+
+@kernel_jit
+def locate_maximum(dense, y, h, component, theta_low, theta_high):
+    """The maximum of the component's polynomial in [theta_low, theta_high], where its derivative
+    goes from >= 0 to <= 0 exactly once (Illinois on the derivative). Returns theta."""
+    d_low = _derivative_value(dense, h, theta_low, component)
+    d_high = _derivative_value(dense, h, theta_high, component)
+    if d_low <= 0.0:
+        return theta_low
+    if d_high > 0.0:
+        return theta_high
+    if d_high == 0.0:
+        # A stationary point at the end (a minimum, say, with the maximum inside): keep the
+        # bracket's signs so that the root found is the one where the derivative turns negative.
+        d_high = -1e-300
+    side = 0
+    for _ in range(MAX_ROOT_ITERATIONS):
+        if theta_high - theta_low <= THETA_TOLERANCE:
+            break
+        theta = (theta_low * d_high - theta_high * d_low) / (d_high - d_low)
+        if not (theta_low < theta < theta_high):
+            theta = 0.5 * (theta_low + theta_high)
+        d_mid = _derivative_value(dense, h, theta, component)
+        if d_mid == 0.0:
+            return theta
+        if d_mid > 0.0:
+            theta_low, d_low = theta, d_mid
+            if side == -1:
+                d_high *= 0.5
+            side = -1
+        else:
+            theta_high, d_high = theta, d_mid
+            if side == 1:
+                d_low *= 0.5
+            side = 1
+    # The end with the larger value: the maximum is between them, to THETA_TOLERANCE.
+    if dense_value(dense, y, h, theta_low, component) > dense_value(dense, y, h, theta_high, component):
+        return theta_low
+    return theta_high
+
+
+@kernel_jit
+def _sign_changes(c, n):
+    """Sign changes in c[0..n], zeros counted as positive (reaching the level counts)."""
+    changes = 0
+    for i in range(n):
+        if (c[i] >= 0.0) != (c[i + 1] >= 0.0):
+            changes += 1
+    return changes
+
+
+@kernel_jit
+def _difference_shape(c, n):
+    """0: the differences c[i+1] - c[i] never change sign (monotone); 1: they go once from >= 0 to
+    < 0 (a single maximum); 2: anything else."""
+    changes = 0
+    rising = c[1] - c[0] >= 0.0
+    first_rising = rising
+    for i in range(1, n):
+        now = c[i + 1] - c[i] >= 0.0
+        if now != rising:
+            changes += 1
+            rising = now
+    if changes == 0:
+        return 0
+    if changes == 1 and first_rising:
+        return 1
+    return 2
+
+
+@kernel_jit
+def first_reach(dense, y, h, delta, coefficients, bracket):
+    """Does the dense output's x reach Delta in the step, from x(0) < Delta? Fills bracket.
+
+    coefficients: bernstein_coefficients of x - Delta over the step (n + 1,), already computed.
+    Returns IMPACT with bracket (theta_low, theta_high) holding the first crossing (x(theta_low)
+    < Delta <= x(theta_high), the values as dense_value computes them; theta_low == theta_high
+    for a touch taken at one theta), or NO_IMPACT. bracket[TURNING_POINT] is the located maximum
+    when the whole step has exactly one.
+
+    A piece is proven below the barrier when its largest coefficient is below -slack, the
+    rounding of the coefficients; within the slack (a touch to rounding), the decision is
+    dense_value's at the located maximum, as for any other maximum.
+    """
+    n = coefficients.shape[0] - 1
+    largest = coefficients[0]
+    size = abs(y[X]) + abs(delta)
+    for i in range(1, n + 1):
+        largest = max(largest, coefficients[i])
+        size += abs(h * dense[X, i - 1])
+    slack = BERNSTEIN_ROUNDING * size
+    if largest < -slack:
+        return NO_IMPACT  # proven below the barrier over the whole step (the usual case)
+    # Depth-first over halvings, left piece first, so the first crossing is the one found. The
+    # stack lives in the bracket array (no allocation in the kernel's loop): entry k's
+    # coefficients at STACK + 9 k.
+    piece = bracket[PIECE:PIECE + n + 1]
+    for i in range(n + 1):
+        bracket[STACK + i] = coefficients[i]
+    bracket[STACK_LOW] = 0.0
+    bracket[STACK_DEPTH] = 0.0
+    top = 1
+    while top > 0:
+        top -= 1
+        for i in range(n + 1):
+            piece[i] = bracket[STACK + 9 * top + i]
+        low = bracket[STACK_LOW + top]
+        depth = int(bracket[STACK_DEPTH + top])
+        width = 0.5 ** depth
+        high = low + width if depth > 0 else 1.0
+        largest = piece[0]
+        for i in range(1, n + 1):
+            largest = max(largest, piece[i])
+        if largest < -slack:
+            continue  # this piece is below the barrier
+        # x(low) < Delta here: the pieces to its left were all below.
+        if dense_value(dense, y, h, high, X) >= delta and (_sign_changes(piece, n) <= 1
+                                                            or depth >= MAX_SUBDIVISIONS):
+            bracket[0] = low
+            bracket[1] = high
+            return IMPACT  # one crossing in [low, high] (or a touch at high): locate_root's
+        shape = _difference_shape(piece, n)
+        if shape == 0:
+            continue  # monotone, with both ends below
+        if shape == 1 or depth >= MAX_SUBDIVISIONS:
+            theta_top = locate_maximum(dense, y, h, X, low, high)
+            if depth == 0 and shape == 1:
+                bracket[TURNING_POINT] = theta_top
+            if dense_value(dense, y, h, theta_top, X) >= delta - slack:  # a touch to rounding counts
+                bracket[0] = low
+                bracket[1] = theta_top
+                return IMPACT
+            continue  # its single maximum is below the barrier: a near miss
+        # Halve (de Casteljau at 1/2): the right half lower on the stack, so the left comes next.
+        right = top
+        left = top + 1
+        _halve(piece, n, bracket[STACK + 9 * left:STACK + 9 * left + n + 1],
+               bracket[STACK + 9 * right:STACK + 9 * right + n + 1])
+        bracket[STACK_LOW + right] = low + 0.5 * width
+        bracket[STACK_DEPTH + right] = depth + 1
+        bracket[STACK_LOW + left] = low
+        bracket[STACK_DEPTH + left] = depth + 1
+        top += 2
+    return NO_IMPACT
+
+
+@kernel_jit
+def _halve(c, n, left, right):
+    """de Casteljau at 1/2: the Bernstein coefficients c[0..n] of a piece -> those of its halves."""
+    for i in range(n + 1):
+        right[i] = c[i]
+    left[0] = right[0]
+    for level in range(1, n + 1):
+        for i in range(n - level + 1):
+            right[i] = 0.5 * (right[i] + right[i + 1])
+        left[level] = right[0]
+
+
 @kernel_jit
 def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     """Does x reach Delta within the step? If so, fill bracket = (theta_low, theta_high, .).
 
     bracket[TURNING_POINT] is the located maximum of x inside a step that starts below the
-    barrier with v > 0 and ends with v < 0 (NaN if none was located).
+    barrier and has exactly one (NaN if none was located); bracket[BERNSTEIN:] is workspace.
 
     Cases (the state can never be above Delta at a step's start):
-    - started below the barrier: x(t + h) >= Delta, or a grazing excursion past Delta that
-      returns below it within the step (a velocity sign change from + to -);
+    - started below the barrier: the first theta where the dense output's x reaches Delta, found
+      on its Bernstein form (first_reach): a crossing, or an excursion past Delta or a touch that
+      returns below it within the step, however many turning points the step holds;
     - started on the barrier (after a rebound or a release): scan interior points for the
       first return to Delta after leaving it.
     Returns IMPACT (bracket[0] has x < Delta), NO_IMPACT, or UNRESOLVED when the step is too
@@ -94,20 +316,15 @@ def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
     """
     bracket[TURNING_POINT] = np.nan
     if y[X] < delta:
-        if y_new[X] >= delta:
+        # The dense output's x - Delta in Bernstein form: proven below, or its first crossing.
+        n = bernstein_coefficients(dense, y, h, X, delta, bracket[BERNSTEIN:])
+        verdict = first_reach(dense, y, h, delta, bracket[BERNSTEIN:BERNSTEIN + n + 1], bracket)
+        if verdict == NO_IMPACT and y_new[X] >= delta:
+            # The step ends on or past the barrier while its polynomial, to rounding, does not.
             bracket[0] = 0.0
             bracket[1] = 1.0
             return IMPACT
-        if y[V] > 0.0 and y_new[V] < 0.0:
-            # A maximum of x inside the step: an impact if it reaches Delta. Kept in the bracket,
-            # so the step's extremes (records.update_extremes) need not locate it again.
-            theta_turn = locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
-            bracket[TURNING_POINT] = theta_turn
-            if dense_value(dense, y, h, theta_turn, X) >= delta:
-                bracket[0] = 0.0
-                bracket[1] = theta_turn
-                return IMPACT
-        return NO_IMPACT
+        return verdict
 
     # On the barrier: find where the mass has left it, then where it first comes back.
     theta_prev = 0.0
@@ -142,6 +359,33 @@ def find_crossing(dense, y, y_new, h, delta, pushed_into_barrier, bracket):
         return UNRESOLVED
     # x == Delta to rounding (a release where the force has only just turned) is no impact.
     return NO_IMPACT
+
+
+@kernel_jit
+def hermite_reach(x0, v0, a0, x1, v1, a1, h, level):
+    """A cheap estimate from above of max (x - level) over a step, from its ends alone.
+
+    The quintic Hermite interpolant of (x, v, a) at both ends, in Bernstein form (its largest
+    coefficient bounds it), plus twice its distance from the cubic Hermite one of (x, v) (the
+    term the accelerations add, an estimate of what the interpolant's higher terms can add). A
+    negative result lets the kernel skip the dense output of a step far below the barrier; the
+    decision itself is always first_reach's, on the dense output.
+    """
+    hv0 = h * v0
+    hv1 = h * v1
+    b1 = x0 + hv0 / 5.0
+    b2 = x0 + 0.4 * hv0 + h * h * a0 / 20.0
+    b3 = x1 - 0.4 * hv1 + h * h * a1 / 20.0
+    b4 = x1 - hv1 / 5.0
+    # the cubic Hermite interpolant's Bernstein coefficients, raised to degree 5 (the ends and
+    # b1, b4 are the same)
+    c1 = x0 + hv0 / 3.0
+    c2 = x1 - hv1 / 3.0
+    e2 = (x0 + 6.0 * c1 + 3.0 * c2) / 10.0
+    e3 = (3.0 * c1 + 6.0 * c2 + x1) / 10.0
+    margin = max(abs(b2 - e2), abs(b3 - e3))
+    top = max(max(x0, x1), max(max(b1, b2), max(b3, b4)))
+    return top + HERMITE_MARGIN_FACTOR * margin - level
 
 
 @kernel_jit

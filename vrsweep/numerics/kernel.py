@@ -31,13 +31,15 @@ import numpy as np
 
 from vrsweep.numerics import dop853
 from vrsweep.numerics.dop853 import (
-    dop853_accepted_step_factor, dop853_dense, dop853_error_norm, dop853_rejected_step_factor, dop853_step,
+    dop853_accepted_step_factor, dop853_certain_growth, dop853_dense, dop853_error_norm, dop853_rejected_step_factor,
+    dop853_step,
 )
 from vrsweep.numerics.impact import (
-    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, force_at_barrier, locate_root, release_time,
+    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, force_at_barrier, hermite_reach, locate_root,
+    release_time,
 )
 from vrsweep.numerics.rk45 import (
-    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, dp54_dense, dp54_step,
+    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, certain_growth, dp54_dense, dp54_step,
     error_norm, initial_step, rejected_step_factor,
 )
 from vrsweep.numerics.jit import kernel_jit
@@ -55,7 +57,7 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
     ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
     no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent_rhs,
-    oscillator_tangent_rhs_rotated, prepare_rotations, rotation_scratch,
+    oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations, rotation_scratch,
 )
 from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, read as kernel.*
     ATOL, DEFAULT_METHOD, DIVERGENCE_BOUND, MAX_IMPACTS_PER_PERIOD, MAX_STEPS, MEASURE_PERIODS, N_SETTINGS,
@@ -67,9 +69,17 @@ from vrsweep.numerics.tangent import (
     tangents_out_of_range,
 )
 
-# Largest step as a fraction of the shortest forcing period: a longer step could carry the
-# mass to the barrier and back between its ends with no sign change the event test can see.
-MAX_STEP_FRACTION = 1.0 / 8.0
+# Impacts are decided on each step's dense output in Bernstein form (impact.find_crossing), which
+# sees a graze between a step's ends however long the step: events need no step cap (up to version
+# 0.1 a step was capped at 1/8 of the shortest forcing period so that a graze showed as one turning
+# point). The caps that stay are for accuracy (benchmarks/README.md, "Steps without the cap"):
+# without them the controller lets local errors grow to the tolerance, and R, a Fourier component
+# about 1e-3 of x's size at g = 30, then needed rtol 1e-6 to 1e-7 and more steps than the capped
+# run at rtol 1e-4. With the fast forcing (g != 0): 1/8 of its period (1/6 left R 1.7e-3 off at
+# g = 30, rtol 1e-4). Without it (the effective model): 1/6 of the slow period (none left R 1.5e-5
+# off at g = 25, rtol 1e-4; 1/6 took 1404 steps for R within 8.5e-7, 1/8 1606).
+FAST_STEP_FRACTION = 1.0 / 8.0
+SLOW_STEP_FRACTION = 1.0 / 6.0
 # Sticking: the force at the barrier is scanned in steps of this fraction of the shortest period.
 STICK_SCAN_FRACTION = 1.0 / 64.0
 # The exact step to an impact is Newton-refined until x is this close to Delta (relative).
@@ -103,11 +113,13 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     impact_log      (n_impact_log, 3)        t, v before, v after, for the first impacts
     stick_log       (n_stick_log, 2)         start and end of the first sticking intervals
 
-    With Dormand-Prince 5(4) steps (integration.method: rk45, integrator.py).
-    The library's cosines at every evaluation, so results are those of earlier versions bit for bit.
+    With Dormand-Prince 5(4) steps (integration.method: rk45, integrator.py), the library's
+    cosines at every evaluation. Since version 0.2 steps are no longer capped at 1/8 of the
+    shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+    return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_preparation, no_scratch, False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False,
                       ORDER, N_STAGES, False, N_DYNAMIC,
                       np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
@@ -123,10 +135,11 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
     library (oscillator_rhs).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_rotations, rotation_scratch, True,
+    return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_step_rotations, prepare_rotations,
+                      rotation_scratch, True,
                       dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
-                      dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES,
-                      False, N_DYNAMIC,
+                      dop853_certain_growth, dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1,
+                      dop853.N_STAGES, False, N_DYNAMIC,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
@@ -140,8 +153,10 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_preparation, no_scratch,
+                      False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False,
                       ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -153,9 +168,10 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_step_rotations,
+                      prepare_rotations,
                       rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_rejected_step_factor, True,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
@@ -173,8 +189,10 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     interval makes it zero. No renormalisation: one period's map stays far inside double range
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, rejected_step_factor, False,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_preparation, no_scratch,
+                      False, DP54_C,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False,
                       ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -186,9 +204,10 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_step_rotations,
+                      prepare_rotations,
                       rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_rejected_step_factor, True,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
                       np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
@@ -214,18 +233,20 @@ def integrator(method, lyapunov=False):
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
-def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, step, step_error, dense_output,
-               accepted_factor, rejected_factor, hold_after_reject, initial_order, n_stages, tangents, n_dynamic,
-               K, dense, coefficients, initial_state, settings, period_records, summary, sample_times, samples,
-               impact_log, stick_log, monodromy_log):
+def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_steps, nodes, step, step_error,
+               dense_output, accepted_factor, certain_growth, rejected_factor, hold_after_reject, initial_order,
+               n_stages, tangents, n_dynamic, K, dense, coefficients, initial_state, settings, period_records, summary,
+               sample_times, samples, impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
-    same at a step's stages, after prepare_step(t, h, coefficients, scratch), with scratch =
+    same at a step's stages, after prepare_step(t, h, coefficients, scratch) (before a dense output:
+    prepare_dense, which also prepares the dense output's extra stages), with scratch =
     make_scratch(h_max, nodes); grid_steps rounds each step size down to grid_step's grid.
     step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic) fills K
     (K[n_stages] = f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled
-    error norm; dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch,
+    error norm; certain_growth(err, err_previous) is True only where accepted_factor's result is
+    certainly >= 1; dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch,
     n_dynamic) fills dense and returns its extra RHS count. tangents: the state carries the
     tangent vectors (state.py) and the right-hand sides integrate them; n_dynamic is the number of
     state components the right-hand sides read. K (rows, n_state) and dense (n_state, order) are
@@ -259,7 +280,9 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
     shortest_period = slow_period
     if coefficients[G] != 0.0:
         shortest_period = min(shortest_period, 2.0 * math.pi / coefficients[BIG_OMEGA])
-    h_max = MAX_STEP_FRACTION * shortest_period
+    h_max = SLOW_STEP_FRACTION * slow_period
+    if coefficients[G] != 0.0:
+        h_max = min(h_max, FAST_STEP_FRACTION * 2.0 * math.pi / coefficients[BIG_OMEGA])
     stick_scan_step = STICK_SCAN_FRACTION * shortest_period
 
     n_state = K.shape[1]
@@ -345,7 +368,14 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
                     break
                 continue
-            h_next = h_try * accepted_factor(err, err_previous)
+            # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
+            # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
+            if clipped and h >= h_max:
+                h_next = h  # h = max(h_next, h) below stays >= h_max whatever the factor
+            elif h_try >= h_max and certain_growth(err, err_previous):
+                h_next = h_try  # the factor is >= 1: h_try * factor >= h_max
+            else:
+                h_next = h_try * accepted_factor(err, err_previous)
             if retrying and hold_after_reject:
                 h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
             retrying = False
@@ -356,8 +386,11 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             impact = False
             dense_ready = False
             theta_turn = np.nan
-            if y_new[X] >= delta or y[X] >= delta or (y[V] > 0.0 and y_new[V] < 0.0):
-                prepare_step(t, h_try, coefficients, scratch)
+            # Every step that the ends alone cannot place far below the barrier gets its dense
+            # output and the exact test on it (find_crossing: Bernstein form).
+            if (y_new[X] >= delta or y[X] >= delta
+                    or hermite_reach(y[X], y[V], f[V], y_new[X], y_new[V], K[n_stages, V], h_try, delta) >= 0.0):
+                prepare_dense(t, h_try, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
                 dense_ready = True
@@ -375,8 +408,8 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
                     theta_turn = bracket[TURNING_POINT]
             h_taken = h_try
             if impact:
-                h_taken, spent = _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynamic,
-                                               t, y, f, h_try, delta, bracket, coefficients, K, y_new, dense,
+                h_taken, spent = _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages,
+                                               n_dynamic, t, y, f, h_try, delta, bracket, coefficients, K, y_new, dense,
                                                stage, scratch)
                 n_rhs += spent
                 dense_ready = True
@@ -385,13 +418,13 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
             t_new = t_boundary if (clipped and not impact) else t + h_taken
             if next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_new:
                 if not dense_ready:
-                    prepare_step(t, h_taken, coefficients, scratch)
+                    prepare_dense(t, h_taken, coefficients, scratch)
                     n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                           n_dynamic)
                     dense_ready = True
                 next_sample = emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
             if y[V] * y_new[V] < 0.0 and not dense_ready:
-                prepare_step(t, h_taken, coefficients, scratch)
+                prepare_dense(t, h_taken, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
             update_extremes(record, dense, y, y_new, h_taken, theta_turn)
@@ -470,8 +503,8 @@ def _integrate(rhs, stage_rhs, prepare_step, make_scratch, grid_steps, nodes, st
 
 
 @kernel_jit(inline="always")
-def _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynamic, t, y, f, h_try, delta,
-                  bracket, coefficients, K, y_new, dense, stage, scratch):
+def _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages, n_dynamic, t, y, f, h_try,
+                  delta, bracket, coefficients, K, y_new, dense, stage, scratch):
     """Step exactly to the impact that find_crossing bracketed in the step [t, t + h_try].
 
     Locates it on the dense output, then reaches it with a step of the method's own order (not
@@ -495,7 +528,7 @@ def _reach_impact(stage_rhs, prepare_step, step, dense_output, n_stages, n_dynam
         if not (0.0 < h_corrected <= h_try):
             break
         h_taken = h_corrected
-    prepare_step(t, h_taken, coefficients, scratch)
+    prepare_dense(t, h_taken, coefficients, scratch)
     n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch, n_dynamic)
     return h_taken, n_rhs
 

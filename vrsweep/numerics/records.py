@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from vrsweep.numerics.impact import locate_root
+from vrsweep.numerics.impact import BERNSTEIN_FROM_POWER, BERNSTEIN_ROUNDING, locate_root
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.rk45 import dense_value
 from vrsweep.numerics.state import QC_INTEGRAL, QS_INTEGRAL, V, X
@@ -74,12 +74,44 @@ def update_extremes(record, dense, y, y_new, h, theta_turn):
     if x_end > record[REC_X_MAX]:
         record[REC_X_MAX] = x_end
     if y[V] * y_new[V] < 0.0:
+        if theta_turn != theta_turn and _inside_extremes(record, dense, y, h):
+            return  # no value of the step's x can pass the period's extremes: nothing to locate
         theta = theta_turn if theta_turn == theta_turn else locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
         x_turn = dense_value(dense, y, h, theta, X)
         if x_turn < record[REC_X_MIN]:
             record[REC_X_MIN] = x_turn
         if x_turn > record[REC_X_MAX]:
             record[REC_X_MAX] = x_turn
+
+
+# Rounding of the Bernstein coefficients and of dense_value, relative to the size of x's terms:
+# four times impact.py's bound for the coefficients alone, so that a skipped turning point is one
+# whose computed value could not have changed the record either.
+EXTREMES_ROUNDING = 4.0 * BERNSTEIN_ROUNDING
+
+
+@kernel_jit
+def _inside_extremes(record, dense, y, h):
+    """True when the step's x(theta) stays strictly inside (REC_X_MIN, REC_X_MAX), proven on its
+    Bernstein coefficients (a polynomial lies within their range), with a margin for rounding.
+
+    Most turning points of a period are not its extremes (the fast forcing's wiggles): locating
+    them (locate_root, about 100 ns) would change nothing. dense (n_state, order) as dense_value's.
+    """
+    n = dense.shape[1]
+    size = abs(y[X])
+    for k in range(n):
+        size += abs(h * dense[X, k])
+    slack = EXTREMES_ROUNDING * size
+    low = record[REC_X_MIN] + slack
+    high = record[REC_X_MAX] - slack
+    for i in range(n + 1):
+        coefficient = y[X]
+        for k in range(1, i + 1):
+            coefficient += BERNSTEIN_FROM_POWER[n, i, k] * (h * dense[X, k - 1])
+        if not (low < coefficient < high):
+            return False
+    return True
 
 
 @kernel_jit

@@ -127,6 +127,41 @@ def accepted_step_factor(err, err_previous):
     return min(MAX_FACTOR, max(MIN_FACTOR, factor))
 
 
+# At the step cap the factor is not needed when it is certainly >= 1: the next step is at the cap
+# whatever its value (kernel.py). These are the largest errors for which SAFETY err^-alpha
+# max(err_previous, floor)^beta >= 1 holds for every err_previous in a bucket (err_previous >=
+# GROWTH_BUCKETS[i]), with a margin far above pow's rounding, so two pow calls (23 ns of a step)
+# are skipped on most capped steps with bit for bit the same steps.
+GROWTH_BUCKETS = (1e-1, 1e-2, 1e-3, ERR_PREVIOUS_FLOOR)
+
+
+def growth_thresholds(alpha, beta):
+    """The error below which the PI factor is >= 1, per bucket of GROWTH_BUCKETS."""
+    return tuple((SAFETY * low ** beta) ** (1.0 / alpha) * (1.0 - 1e-6) for low in GROWTH_BUCKETS)
+
+
+GROWTH_THRESHOLDS = growth_thresholds(PI_ALPHA, PI_BETA)
+
+
+@kernel_jit(inline="always")
+def growth_is_certain(err, err_previous, thresholds):
+    """True when SAFETY err^-alpha max(err_previous, floor)^beta >= 1 is certain, without pow."""
+    previous = max(err_previous, ERR_PREVIOUS_FLOOR)
+    if previous >= GROWTH_BUCKETS[0]:
+        return err <= thresholds[0]
+    if previous >= GROWTH_BUCKETS[1]:
+        return err <= thresholds[1]
+    if previous >= GROWTH_BUCKETS[2]:
+        return err <= thresholds[2]
+    return err <= thresholds[3]
+
+
+@kernel_jit
+def certain_growth(err, err_previous):
+    """accepted_step_factor(err, err_previous) >= 1 is certain (growth_is_certain)."""
+    return growth_is_certain(err, err_previous, GROWTH_THRESHOLDS)
+
+
 @kernel_jit
 def rejected_step_factor(err):
     """Shrink factor after a rejected step (err > 1): plain I control, never growing."""

@@ -62,8 +62,10 @@ def simulate(coefficients, initial_state, settings, sample_times=(), impact_capa
         records = np.full((n_periods, kernel.N_RECORD), np.nan)
         summary = np.full(kernel.N_SUMMARY, np.nan)
         samples = np.full((len(sample_times), 2), np.nan)
-        impacts = np.full((impact_capacity, 3), np.nan)
-        sticks = np.full((stick_capacity, 2), np.nan)
+        # The kernel writes every row it counts and only those rows are returned: left unset, a
+        # large log costs no page faults (np.full of bench_speed's 100 000 rows: 44 us a point).
+        impacts = np.empty((impact_capacity, 3))
+        sticks = np.empty((stick_capacity, 2))
         status = integrate(coefficients, initial_state, settings, records, summary,
                            sample_times, samples, impacts, sticks)
         n_impacts = int(summary[kernel.SUM_IMPACTS])
