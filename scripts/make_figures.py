@@ -131,15 +131,19 @@ COMMANDS = {
     "curves_original": [
         ["run", "configs/curves_original.yaml", "--overwrite"],
         *[["continue", f"configs/curves_branch_original_{branch}.yaml", "-o",
-           f"results/curves_branch_original_{branch}.h5", "--overwrite"] for branch in ("free", "p1", "p3")],
+           f"results/curves_branch_original_{branch}.h5", "--overwrite"] for branch in ("free", "p1", "p3", "p2")],
         *[["continue", f"results/curves_branch_original_{branch}.h5", "--point", "0", "--along", "Delta",
            "--to", "1.0", "3.0", "-o", f"results/curves_original_{branch}.h5", "--overwrite"]
           for branch in ("free", "p1", "p3")],
+        # The period doubling of the orbit of two periods wanders in g: its range is all of the map's.
+        ["continue", "results/curves_branch_original_p2.h5", "--point", "0", "--along", "Delta", "--to", "1.0", "3.0",
+         "--within", "0", "40", "-o", "results/curves_original_p2.h5", "--overwrite"],
         ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
-         "results/curves_original_p3.h5", "--var", "period", "-o", "docs/figures/curves_original.png"],
+         "results/curves_original_p3.h5", "results/curves_original_p2.h5", "--var", "period",
+         "-o", "docs/figures/curves_original.png"],
         ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
-         "results/curves_original_p3.h5", "--var", "impacts_per_period", "--vmax", "4",
-         "-o", "docs/figures/curves_original_impacts.png"],
+         "results/curves_original_p3.h5", "results/curves_original_p2.h5", "--var", "impacts_per_period",
+         "--vmax", "4", "-o", "docs/figures/curves_original_impacts.png"],
     ],
 }
 
