@@ -50,22 +50,16 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
+from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
 from vrsweep.store.branch_file import _dimension, _text, _variable, check_layout, has_file_kind
 from vrsweep.store.fileio import open_hdf5, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "curves"
 
-_POINT_VARIABLES = {
-    # name: (long name, units); the two parameters' variables go after "curve"
-    "x": ("position x at t = 0 mod T", "1"),
-    "v": ("velocity dx/dt at t = 0 mod T", "1"),
-    "periods": ("orbit period in slow periods T = 2 pi/omega", "1"),
-    "R": ("gain R = |Q|/c over the orbit (eq3.3)", "1"),
-    "impacts_per_period": ("impacts per slow period", "1"),
-    "barrier_distance": ("distance Delta - x_max of the orbit from the barrier", "1"),
-    "residual": ("Newton residual max |P^p(y) - y|", "1"),
-}
+# name: (long name, units), as in a branch file; the two parameters' variables go after "curve"
+_POINT_VARIABLES = {name: BRANCH_POINT_VARIABLES[name]
+                    for name in ("x", "v", "periods", "R", "impacts_per_period", "barrier_distance", "residual")}
 _INTEGER = ("curve", "periods")
 
 
