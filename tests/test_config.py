@@ -263,6 +263,21 @@ def test_override_a_parameter_integration_key_initial_and_model():
                                 "integration.measure_periods=50", "parameters.c=0.05")
 
 
+def test_override_of_the_continuation_section():
+    """--set continuation.KEY: one config serves several starts (docs/continuation.md, Fig. 1)."""
+    text = "continuation: {parameter: g, from: 17.86, to: [0.0, 40.0], max_step: 0.5}\n"
+    config = parse_config(text, overrides=["continuation.from=30", "continuation.to=18,40",
+                                           "continuation.max_step=0.05", "continuation.switch=true"])
+    section = config.continuation
+    assert (section.start, section.low, section.high, section.max_step, section.switch) == (30.0, 18.0, 40.0, 0.05, True)
+    assert only_problem(text, overrides=["continuation.to=18"]) == \
+        "--set continuation.to=18: expected LOW,HIGH, e.g. --set continuation.to=20,27"
+    assert only_problem(text, overrides=["continuation.max_step=-1"]) == \
+        "--set continuation.max_step=-1: continuation.max_step: must be > 0, got -1.0"
+    # max_period is an integration key too: without the section's name it stays the integration's
+    assert parse_config(text, overrides=["max_period=4"]).continuation.max_period == section.max_period
+
+
 def test_override_of_a_swept_parameter_removes_its_axis():
     config = parse_config(FIG1, overrides=["g=5"])
     assert config.axis_names == ("Omega",) and config.parameters["g"] == 5.0
@@ -290,7 +305,8 @@ def test_bad_overrides_are_reported_with_the_other_problems():
     assert found == [
         "fig1.yaml:3: parameters.omega: must be > 0, got 0.0",
         "--set gg=5: unknown name 'gg' (did you mean 'g'?) "
-        "(allowed: a parameter, an integration key, initial.x (or x0), initial.v (or v0) or model)",
+        "(allowed: a parameter, an integration key, initial.x (or x0), initial.v (or v0), model or "
+        "continuation.KEY)",
         "--set rtol=abc: integration.rtol: must be a number, got 'abc' (allowed: a number in (0, 1))",
         "--set g: expected NAME=VALUE, e.g. --set g=5",
         "--set g=[1: VALUE is not a YAML scalar (expected ',' or ']', but got '<stream end>')",

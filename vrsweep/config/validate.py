@@ -193,7 +193,8 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
             setting = str(setting)
             name, sep, value_text = setting.partition("=")
             name = name.strip()
-            allowed = "a parameter, an integration key, initial.x (or x0), initial.v (or v0) or model"
+            allowed = ("a parameter, an integration key, initial.x (or x0), initial.v (or v0), model or "
+                       "continuation.KEY")
             if not sep or not name:
                 self.report_raw(self.setting_order(setting), f"--set {setting}: expected NAME=VALUE, e.g. --set g=5")
                 continue
@@ -203,7 +204,14 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
                 self.report_raw(self.setting_order(setting), f"--set {setting}: unknown name {name!r}{hint} (allowed: {allowed})")
                 continue
             try:
-                value = parse_scalar(value_text)
+                if targets[name] == ("continuation", "to"):
+                    # The range is a pair: --set continuation.to=17.8,17.9
+                    parts = value_text.split(",")
+                    if len(parts) != 2:
+                        raise ValueError("expected LOW,HIGH, e.g. --set continuation.to=20,27")
+                    value = [parse_scalar(part) for part in parts]
+                else:
+                    value = parse_scalar(value_text)
             except ValueError as error:
                 self.report_raw(self.setting_order(setting), f"--set {setting}: {error}")
                 continue
@@ -266,4 +274,7 @@ def _override_targets():
         targets[name] = targets[f"parameters.{name}"] = ("parameters", name)
     for key in INTEGRATION_DEFAULTS:
         targets[key] = targets[f"integration.{key}"] = ("integration", key)
+    # Only with their section's name: max_period is an integration key too.
+    for key in ("parameter", "from", "to", "switch", *CONTINUATION_DEFAULTS):
+        targets[f"continuation.{key}"] = ("continuation", key)
     return targets
