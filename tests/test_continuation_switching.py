@@ -9,6 +9,7 @@ definition.
 """
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -179,3 +180,16 @@ def test_a_step_passes_the_doubling_only_when_its_chord_does():
     assert period_doubling._passes_by(np.array([-0.1, 0.0, 1.0]), np.array([0.1, 0.0, 1.0]), point)
     # the same sign change of x, a chord's length away from the doubling: not a return
     assert not period_doubling._passes_by(np.array([-0.1, 0.0, 1.2]), np.array([0.1, 0.0, 1.2]), point)
+
+
+def test_the_pitchfork_at_a_switched_branch_birth_is_no_fold(cascade):
+    """M^2 has the multiplier +1 where the 2p-branch is born, so its fold test changes sign there
+    (seen from g = 17.8335 with 200 points); only a fold away from the birth is the branch's own."""
+    problem, _, found, _ = cascade
+    doubling = _doubling(found)
+    tolerance = problem.options["location_tolerance"] * doubling.parameter
+    birth = SimpleNamespace(parameter=doubling.parameter + 2.0 * tolerance)
+    elsewhere = SimpleNamespace(parameter=doubling.parameter - 0.01)
+    kept = period_doubling.without_birth_folds(problem, doubling, [("fold", birth), ("fold", elsewhere),
+                                                                   ("period_doubling", birth)])
+    assert kept == [("fold", elsewhere), ("period_doubling", birth)]

@@ -140,6 +140,8 @@ def _back_on_the_p_branch(problem, doublings, periods):
     return stop, met
 
 
+# A fold of the 2p-branch this close to its doubling (in location tolerances) is the pitchfork.
+BIRTH_TOLERANCE = 10
 # Through the pitchfork, a step from amplitude a1 > 0 to a2 < 0 passes the doubling point at a
 # distance of second order in the a's; a chord that misses it by more than this fraction of its
 # length crossed a = 0 elsewhere.
@@ -189,7 +191,16 @@ def doubled_branch(problem, doubling, lo, hi, max_points, progress=None, doublin
                                                  orbit_map, residual, 0, doubling.parameter_derivative))
     branch = continuation.Branch(periods=2 * doubling.periods, orbits=orbits,
                                  ends={"down": back_end, "up": away_end})
-    return branch, back_bifurcations + away_bifurcations, met
+    return branch, without_birth_folds(problem, doubling, back_bifurcations + away_bifurcations), met
+
+
+def without_birth_folds(problem, doubling, bifurcations):
+    """``bifurcations`` [(kind, Orbit)] of the 2p-branch born at ``doubling`` without the "fold" at
+    its birth: there the 2p-orbit's monodromy M^2 has the multiplier +1 (the pitchfork), so
+    det(M - I) changes sign too; that is the doubling point itself, not a fold of the 2p-branch."""
+    birth = BIRTH_TOLERANCE * problem.options["location_tolerance"] * max(1.0, abs(doubling.parameter))
+    return [(kind, orbit) for kind, orbit in bifurcations
+            if not (kind == "fold" and abs(orbit.parameter - doubling.parameter) <= birth)]
 
 
 def _doublings(bifurcations, failures):
