@@ -92,6 +92,24 @@ COMMANDS = {
         ["plot", "results/continuation_hysteresis.h5", "results/hysteresis_effective.h5",
          "-o", "docs/figures/continuation_hysteresis.png"],
     ],
+    # Not in the paper: the original model's periodic orbits along g over Fig. 1 (issue 20): three
+    # starts of one config (the orbits of 2, 1 and 3 slow periods), over the Fig. 1 sweep.
+    "continuation_fig1": [
+        ["run", "configs/fig1.yaml", "--overwrite"],
+        ["continue", "configs/fig1_continue.yaml", "--overwrite"],
+        *[["continue", "configs/fig1_continue.yaml", "--set", f"continuation.from={start}",
+           "--set", "continuation.max_step=0.05", "--set", "continuation.max_points=800",
+           "-o", f"results/fig1_continue_{name}.h5", "--overwrite"] for name, start in (("p1", 30.0), ("p3", 12.0))],
+        ["plot", "results/fig1_continue_p1.h5", "results/fig1_continue_p3.h5", "results/fig1_continue.h5",
+         "results/fig1.h5", "-o", "docs/figures/continuation_fig1.png"],
+    ],
+    # Not in the paper: its period-doubling cascade at g = 17.833, between two of Fig. 1's points.
+    "continuation_cascade": [
+        ["run", "configs/fig1_cascade.yaml", "--overwrite"],
+        ["continue", "configs/fig1_cascade.yaml", "-o", "results/fig1_cascade_branches.h5", "--overwrite"],
+        ["plot", "results/fig1_cascade_branches.h5", "results/fig1_cascade.h5",
+         "-o", "docs/figures/continuation_cascade.png"],
+    ],
     # Not in the paper: basins of attraction of the bistable hysteresis example at g = 23 (issue 13).
     "basins_g23": [
         ["run", "configs/basins_g23.yaml", "-o", "results/basins_g23.h5", "--overwrite"],
