@@ -88,23 +88,17 @@ def describe(path) -> dict:
         if other is None:
             raise error from None
         return other
-    if kind == "branch":
+    if kind in ("branch", "curves"):
         from vrsweep.store.branch_file import check_branch
-
-        check_branch(path)  # a damaged file is one line, as every reader of it says
-        described = _describe_groups(path, kind)
-        if described is None:
-            raise ResultFileError(f"{path} is a vrsweep branch file this vrsweep cannot describe")
-        described["branches"] = _describe_branches(path)
-        return described
-    if kind == "curves":
         from vrsweep.store.curve_file import check_curves
 
-        check_curves(path)  # a damaged file is one line, as every reader of it says
+        check, describe = {"branch": (check_branch, _describe_branches),
+                           "curves": (check_curves, _describe_curves)}[kind]
+        check(path)  # a damaged file is one line, as every reader of it says
         described = _describe_groups(path, kind)
         if described is None:
-            raise ResultFileError(f"{path} is a vrsweep curves file this vrsweep cannot describe")
-        described["curves"] = _describe_curves(path)
+            raise ResultFileError(f"{path} is a vrsweep {kind} file this vrsweep cannot describe")
+        described["branches" if kind == "branch" else "curves"] = describe(path)
         return described
     if kind == "trajectory":
         from vrsweep.store.trajectory_file import check_trajectory, read_trajectory

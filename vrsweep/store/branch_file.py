@@ -152,12 +152,18 @@ def write_branch(path, arrays, config, method, overwrite=False):
         branch_id = _dimension(f, "branch_id", np.arange(len(ends), dtype=np.int64), "branch number")
         _variable(f, "branch_periods", np.asarray([e[0] for e in ends], dtype=np.int64), (branch_id,),
                   "orbit period of the branch in slow periods", "1")
-        for side, index, where in (("first", 1, "its first point"), ("last", 2, "its last point")):
-            _variable(f, f"branch_end_{side}_status", np.asarray([e[index][0] for e in ends], dtype=object),
-                      (branch_id,), f"why the branch stops at {where}", None)
-            _variable(f, f"branch_end_{side}_reason", np.asarray([e[index][1] for e in ends], dtype=object),
-                      (branch_id,), f"why the branch stops at {where}, in words", None)
+        _ends(f, "branch", branch_id, [e[1] for e in ends], [e[2] for e in ends])
     write_bytes(path, image.getvalue())
+
+
+def _ends(group, what, scale, first, last):
+    """``{what}_end_first/last_status/reason`` along ``scale``: why each branch or curve stops at
+    its first and last point. first, last: [(status, reason)], one per branch or curve."""
+    for side, stops, where in (("first", first, "its first point"), ("last", last, "its last point")):
+        _variable(group, f"{what}_end_{side}_status", np.asarray([stop[0] for stop in stops], dtype=object),
+                  (scale,), f"why the {what} stops at {where}", None)
+        _variable(group, f"{what}_end_{side}_reason", np.asarray([stop[1] for stop in stops], dtype=object),
+                  (scale,), f"why the {what} stops at {where}, in words", None)
 
 
 def _checksummed(values):

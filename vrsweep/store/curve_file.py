@@ -51,7 +51,7 @@ from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
-from vrsweep.store.branch_file import _dimension, _text, _variable, check_layout, has_file_kind
+from vrsweep.store.branch_file import _dimension, _ends, _text, _variable, check_layout, has_file_kind
 from vrsweep.store.fileio import open_hdf5, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
@@ -127,11 +127,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False):
                   "kind: fold, period_doubling or grazing", None)
         _variable(f, "curve_periods", np.asarray([c[1] for c in curves], dtype=np.int64), (curve_id,),
                   "orbit period of the curve in slow periods", "1")
-        for side, index, where in (("first", 2, "its first point"), ("last", 3, "its last point")):
-            _variable(f, f"curve_end_{side}_status", np.asarray([c[index][0] for c in curves], dtype=object),
-                      (curve_id,), f"why the curve stops at {where}", None)
-            _variable(f, f"curve_end_{side}_reason", np.asarray([c[index][1] for c in curves], dtype=object),
-                      (curve_id,), f"why the curve stops at {where}, in words", None)
+        _ends(f, "curve", curve_id, [c[2] for c in curves], [c[3] for c in curves])
         specials = arrays["specials"]
         special = _dimension(f, "special", np.arange(len(specials), dtype=np.int64), "codimension-two point")
         _variable(f, "special_kind", np.asarray([s[0] for s in specials], dtype=object), (special,),
