@@ -225,6 +225,21 @@ def test_a_touch_at_the_step_end_is_an_impact_there(degree):
 
 
 @every_shape
+def test_a_start_within_rounding_below_the_barrier_moving_away_is_no_impact(degree):
+    # x = 1 - 2^-51 - theta^2 / 4: at rest a few units of the last place below the barrier, then
+    # falling. The start is within the Bernstein rounding slack of Delta, but the step only moves
+    # away from it: no touch (found by hypothesis: taking it for an impact at v = 0 made the
+    # saltation divide by zero and the Lyapunov exponent NaN).
+    start = DELTA - 2.0 ** -51
+    verdict, _, _ = first_crossing([start, 0.0, -0.25], degree)
+    assert verdict == NO_IMPACT
+    # the same start rising by more than rounding, to 2^-40 past the barrier, is an impact
+    verdict, theta, (dense, y, h) = first_crossing([start, 2.0 ** -38, -(2.0 ** -39)], degree)
+    assert verdict == IMPACT and 0.0 < theta < 1.0
+    assert dense_value(dense, y, h, theta, X) >= DELTA
+
+
+@every_shape
 def test_far_below_the_barrier_is_proven_at_once(degree):
     # oscillating far below (three turning points): every Bernstein coefficient is below Delta
     dense, y, _, h = motion([0.0, 1.0, -6.0, 10.0, -5.0], degree=degree)

@@ -267,7 +267,12 @@ def first_reach(dense, y, h, delta, coefficients, bracket):
             theta_top = locate_maximum(dense, y, h, X, low, high)
             if depth == 0 and shape == 1:
                 bracket[TURNING_POINT] = theta_top
-            if dense_value(dense, y, h, theta_top, X) >= delta - slack:  # a touch to rounding counts
+            top_value = dense_value(dense, y, h, theta_top, X)
+            # A touch to rounding counts, unless the maximum is the step's start again (no rise
+            # above x(0) beyond rounding): that point was judged as the previous step's end, and
+            # a start within rounding of Delta that moves away (v <= 0) is no impact; taking it
+            # for one would divide the saltation by a zero speed.
+            if top_value >= delta or (top_value >= delta - slack and top_value - y[X] > slack):
                 bracket[0] = low
                 bracket[1] = theta_top
                 return IMPACT
