@@ -21,17 +21,18 @@ regula falsi until the parameter is known to location_tolerance (grazing: below)
     fold             det(M - I)  (a real multiplier through +1)
     period doubling  det(M + I)  (a real multiplier through -1)
     Neimark-Sacker   det(M) - 1  while the multipliers are a complex pair
-    grazing          an orbit without impacts touches the barrier, or the one impact of an
-                     orbit slows to zero: located by Newton on the barrier-free map's fixed
-                     point with its largest x at Delta (grazing.py), when the corrector fails
-                     next to such an orbit or steps over the graze.
+    grazing          a smooth maximum of x touches the barrier (the orbit gains an impact), or
+                     an impact slows to zero (it loses one): located by Newton on the fixed
+                     point of the map without that one impact, its largest x at Delta
+                     (grazing.py: no barrier, or the barrier transparent in a window around the
+                     touch, the orbit's other impacts kept), when the corrector fails next to
+                     such an orbit or steps over the graze (the impact count changes).
 
 At a graze the map has a square-root term and Newton from one side does not reach the other:
-the branch is carried across by grazing.py's normal form (cross_grazing). An orbit with other
-impacts besides the grazing one has no barrier-free map; there the graze is only bracketed (the
-impact count changes along the arc, or the corrector gives up next to it) and the branch beyond
-is searched for around it (switch_at_grazing); when none is found the branch ends with status
-"grazing".
+the branch is carried across by grazing.py's normal form (cross_grazing). Where no window fits
+(a touch at the stroboscopic section t = 0 mod pT) the graze is only bracketed and the branch
+beyond is searched for around it (switch_at_grazing); when none is found the branch ends with
+status "grazing".
 
 Nothing here raises on a numerical failure: a branch ends with a status and a one-line reason.
 Bad requests (a chaotic start, an incommensurate forcing) raise UsageError (exit code 2).
@@ -45,7 +46,7 @@ from vrsweep.analysis import grazing
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
-from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.numerics.model import DELTA, OMEGA, kernel_coefficients
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import simulate
@@ -92,6 +93,7 @@ class Orbit:
     residual: float            # |P^p(y) - y|, max norm
     newton_iterations: int
     parameter_derivative: np.ndarray = field(default=None)  # (2,) F_lam
+    free_x_max: float = -np.inf  # the largest smooth maximum of x (no impact there)
 
     @property
     def multipliers(self):
@@ -190,7 +192,7 @@ def _orbit(problem, state, value, periods, orbit_map, residual, iterations, deri
                  monodromy=orbit_map.monodromy.copy(), R=orbit_map.R, Q_amplitude=orbit_map.Q_amplitude,
                  impacts_per_period=orbit_map.impacts / periods, x_max=orbit_map.x_max,
                  slowest_impact=orbit_map.slowest_impact, residual=residual, newton_iterations=iterations,
-                 parameter_derivative=derivative)
+                 parameter_derivative=derivative, free_x_max=orbit_map.free_x_max)
 
 
 def _tolerance(problem, state):
@@ -332,8 +334,9 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
     return best
 
 
-def _detect(problem, previous, current, tangent, step, periods):
-    """Bifurcations on the arc between two consecutive orbits: a list of (kind, Orbit)."""
+def _detect(problem, previous, current, tangent, step, periods, graze=None):
+    """Bifurcations on the arc between two consecutive orbits: a list of (kind, Orbit).
+    graze: the graze between them that _graze_between located, if any."""
     found = []
     for kind, test in TEST_FUNCTIONS.items():
         a, b = test(previous), test(current)
@@ -341,21 +344,72 @@ def _detect(problem, previous, current, tangent, step, periods):
             orbit = _locate(problem, previous, tangent, step, kind, a, b, periods)
             if orbit is not None:
                 found.append((kind, orbit))
-    if previous.impacts_per_period != current.impacts_per_period:
-        # The corrector stepped over a graze by itself: locate it on the barrier-free map where
-        # that map is the free side's, else by bisection on the impact count along the arc.
-        free_side = previous if previous.impacts_per_period < current.impacts_per_period else current
-        located = None
-        if grazing.crossable(previous) and grazing.crossable(current):
-            located = grazing.locate_graze(problem, free_side.z, periods, _tolerance(problem, free_side.state))
-        if located is not None and min(previous.parameter, current.parameter) <= located.z[2] <= max(
-                previous.parameter, current.parameter):
-            found.append(("grazing", _graze_orbit(problem, located)))
-        else:
-            orbit = _locate(problem, previous, tangent, step, "grazing", previous.impacts_per_period, 1.0, periods)
-            if orbit is not None:
-                found.append(("grazing", orbit))
+    if graze is not None:
+        found.append(("grazing", _graze_orbit(problem, graze)))
+    elif previous.impacts_per_period != current.impacts_per_period:
+        # No map without the new impact (no room for a window): bisection on the impact count.
+        orbit = _locate(problem, previous, tangent, step, "grazing", previous.impacts_per_period, 1.0, periods)
+        if orbit is not None:
+            found.append(("grazing", orbit))
     return found
+
+
+def _graze_between(problem, previous, current):
+    """Where the corrector stepped from ``previous`` to an orbit with another impact count:
+    (the grazing.Graze located between them, or None, and whether the step is a jump).
+
+    A graze on the arc is located on the map without the impact that appeared (or went), from the
+    side without it, and must lie between the two parameters; when it does not, the corrector
+    jumped onto another branch that happens to lie near (next to a grazing corner, the stable
+    branch on the free side and the unstable one beyond are a square root apart), and the step is
+    refused; so is a step over two grazes at once (each is crossed and located on its own at a
+    shorter step). Without a window no graze can be located: the step stands, and _detect
+    brackets it. With the same impact count on both sides, a step from next to a graze that
+    passes the graze's parameter has jumped too: beyond a graze the orbit has one impact more or
+    less, so an orbit there with the same count belongs to another branch (the end of Fig. 1's
+    period-3 window, g = 17.796, has one 0.002 away).
+    """
+    if previous.impacts_per_period == current.impacts_per_period:
+        site = _graze_site(problem, previous, JUMP_PROXIMITY)
+        if site is None:
+            return None, False
+        located = grazing.locate_graze(problem, previous.z, previous.periods, _tolerance(problem, previous.state),
+                                       site[1])
+        passed = located is not None and (located.z[2] - previous.parameter) * (
+            current.parameter - located.z[2]) > 0.0
+        return None, passed
+    free_side, impacting_side = sorted((previous, current), key=lambda orbit: orbit.impacts_per_period)
+    if round((impacting_side.impacts_per_period - free_side.impacts_per_period) * free_side.periods) > 1:
+        return None, True
+    window = _new_impact_window(problem, free_side, impacting_side)
+    if window is False:
+        return None, False
+    located = grazing.locate_graze(problem, free_side.z, free_side.periods, _tolerance(problem, free_side.state),
+                                   window)
+    if located is None or not (min(previous.parameter, current.parameter) <= located.z[2]
+                               <= max(previous.parameter, current.parameter)):
+        return None, True
+    return located, False
+
+
+def _new_impact_window(problem, free_side, impacting_side):
+    """The window grazing.locate_graze takes for the one impact that ``impacting_side`` has and
+    ``free_side`` lacks (None: no barrier at all, 0 against 1 impact), or False when no window
+    fits."""
+    periods = free_side.periods
+    if free_side.impacts_per_period == 0:
+        return None
+    free_map = evaluate(problem, free_side.state, free_side.parameter, periods)
+    impacting_map = evaluate(problem, impacting_side.state, impacting_side.parameter, periods)
+    if _failure(free_map) or _failure(impacting_map):
+        return False
+    # The new impact: the one farthest in time from every impact of the free side.
+    orbit_period = periods * 2.0 * np.pi / problem.coefficients(free_side.parameter)[OMEGA]
+    gaps = np.abs(impacting_map.impact_times[:, None] - free_map.impact_times[None, :])
+    gaps = np.minimum(gaps, orbit_period - gaps).min(axis=1)
+    touch_time = float(impacting_map.impact_times[np.argmax(gaps)])
+    window = grazing.graze_window(problem, free_map, free_side.parameter, periods, touch_time)
+    return False if window is None else window
 
 
 def _graze_orbit(problem, located):
@@ -390,7 +444,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if failure is not None or _turned_back(current, orbit, tangent, step):
             step *= 0.5
             near = _near_grazing(problem, current)
-            if near and not tried_crossing and (grazing.crossable(current) or step < options["min_step"]):
+            if near and not tried_crossing and (_graze_site(problem, current) is not None
+                                                or step < options["min_step"]):
                 # The square-root singularity of grazing: Newton from this side cannot reach the
                 # other (module doc); the graze is located and crossed from its normal form.
                 tried_crossing = True
@@ -404,7 +459,9 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 if near:
                     if grazing_reason is None and not tried_crossing:
                         grazing_reason = "no branch beyond the graze was found"
-                    side = "touches the barrier" if current.impacts_per_period == 0 else "impacts at zero speed"
+                    side = ("touches the barrier" if current.impacts_per_period == 0
+                            or current.slowest_impact ** 2 > _barrier(problem, current) - current.free_x_max
+                            else "impacts at zero speed")
                     reason = (f"the orbit {side} at {problem.parameter} = {current.parameter:.8g}; "
                               f"{grazing_reason or 'no branch beyond the graze was found'}")
                     return orbits, bifurcations, (ENDED_GRAZING, reason)
@@ -412,6 +469,13 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 reason = f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
                 return orbits, bifurcations, (status, reason)
         else:
+            located, jumped = _graze_between(problem, current, orbit)
+            if jumped:
+                step *= 0.5
+                if step >= options["min_step"]:
+                    continue
+                return orbits, bifurcations, (ENDED_NEWTON, f"the corrector keeps jumping to another branch at "
+                                                            f"{problem.parameter} = {current.parameter:.8g}")
             new_tangent = tangent_of(orbit, tangent)
         ended = None if stop is None else stop(current, orbit)
         if ended is not None:
@@ -421,7 +485,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if crossed:
             step = options["initial_step"]
         else:
-            bifurcations.extend(_detect(problem, current, orbit, tangent, step, start.periods))
+            bifurcations.extend(_detect(problem, current, orbit, tangent, step, start.periods, located))
             if orbit.newton_iterations <= EASY_NEWTON:
                 step = min(step * STEP_GROWTH, options["max_step"])
         orbits.append(orbit)
@@ -435,35 +499,40 @@ def cross_grazing(problem, near, tangent):
     """Locate the graze next to ``near`` (an Orbit on either side of it) and step across.
 
     Returns (the grazing Orbit or None, the first Orbit beyond or None, its tangent, a one-line
-    reason when there is none). Orbits whose other impacts keep going through the graze have no
-    barrier-free map (grazing.py): for them the graze is only recorded where the corrector gave
-    up, and the branch beyond is searched for around it (switch_at_grazing).
+    reason when there is none). The map without the grazing impact is the barrier-free map, or
+    the map with the barrier transparent in a window around the touch where the orbit has other
+    impacts (grazing.graze_site); a touch with no room for a window is only recorded where the
+    corrector gave up, and the branch beyond is searched for around it (switch_at_grazing).
     """
     periods = near.periods
-    if not grazing.crossable(near):
+    site = _graze_site(problem, near)
+    if site is None:
         switched = switch_at_grazing(problem, near, tangent)
         if switched is None:
             return near, None, None, "no branch beyond the graze was found"
         return near, switched[0], switched[1], None
-    located = grazing.locate_graze(problem, near.z, periods, _tolerance(problem, near.state))
+    side, window = site
+    located = grazing.locate_graze(problem, near.z, periods, _tolerance(problem, near.state), window)
     if located is None:
-        return None, None, None, "the grazing orbit could not be located (Newton on the barrier-free map failed)"
+        free = "barrier-free" if window is None else "windowed"
+        return None, None, None, f"the grazing orbit could not be located (Newton on the {free} map failed)"
     graze = _graze_orbit(problem, located)
     lengths = [problem.options["initial_step"] * factor for factor in CROSSING_DISTANCES]
-    if near.impacts_per_period == 0:
+    impacts_near = round(near.impacts_per_period * periods)
+    if side == "free":
         normal_form = grazing.impacting_direction(problem, located)
         if normal_form is None:
-            return graze, None, None, "the orbit beyond the graze does not impact once, as its normal form needs"
+            return graze, None, None, "the orbit beyond the graze does not gain one impact, as its normal form needs"
         direction, predictor, speed_scale = normal_form
         candidates = [predictor(length / speed_scale) for length in lengths]
-        beyond = "impacting"
+        beyond, impacts_beyond = "impacting", impacts_near + 1
     else:
         direction = grazing.free_direction(located)
         candidates = [located.z + length * direction for length in lengths]
-        beyond = "free"
+        beyond, impacts_beyond = "free", impacts_near - 1
     for z_predicted in candidates:
         orbit, failure = correct(problem, z_predicted, periods, direction, z_predicted)
-        if (failure is None and (orbit.impacts_per_period == 0) == (beyond == "free")
+        if (failure is None and round(orbit.impacts_per_period * periods) == impacts_beyond
                 and (orbit.z - located.z) @ direction > 0.0):
             return graze, orbit, tangent_of(orbit, direction), None
     return graze, None, None, f"no {beyond} orbit converged beyond the graze"
@@ -472,6 +541,10 @@ def cross_grazing(problem, near, tangent):
 # An orbit is near grazing when its highest free maximum is this close to Delta (relative), or
 # its slowest impact this slow (relative to the orbit's speed scale max(1, |v|)).
 GRAZING_PROXIMITY = 1e-3
+# A step with the same impact count on both sides is checked for a graze passed in between (a
+# jump to another branch, _graze_between) when its first orbit is this close to one: ten times
+# GRAZING_PROXIMITY, as steps near such orbits are still up to 1e-2 long in g (Fig. 1's g = 17.79).
+JUMP_PROXIMITY = 1e-2
 # Arclength distances from a graze at which the branch beyond is looked for, relative to the
 # initial step: the first that converges onto the other side wins.
 CROSSING_DISTANCES = (1.0, 0.25, 0.0625, 0.015625)
@@ -479,13 +552,34 @@ CROSSING_DISTANCES = (1.0, 0.25, 0.0625, 0.015625)
 GRAZING_SEARCH_RADII = (1e-3, 4e-3, 1.6e-2)
 
 
+def _barrier(problem, orbit):
+    return float(problem.coefficients(orbit.parameter)[DELTA])
+
+
 def _near_grazing(problem, orbit):
-    delta = problem.coefficients(orbit.parameter)[8]
+    delta = _barrier(problem, orbit)
     scale = max(1.0, abs(delta))
     if orbit.impacts_per_period == 0:
         return delta - orbit.x_max < GRAZING_PROXIMITY * scale
-    # Reached with a speed v, an impact penetrates about v^2 / (2 a), a ~ 1: the same proximity.
-    return orbit.slowest_impact < np.sqrt(GRAZING_PROXIMITY * scale)
+    # Reached with a speed v, an impact penetrates about v^2 / (2 a), a ~ 1: the same proximity;
+    # or one of its smooth maxima is about to touch (an impact appears).
+    return (orbit.slowest_impact < np.sqrt(GRAZING_PROXIMITY * scale)
+            or delta - orbit.free_x_max < GRAZING_PROXIMITY * scale)
+
+
+def _graze_site(problem, orbit, proximity=GRAZING_PROXIMITY):
+    """grazing.graze_site of an orbit: (side, window) or None."""
+    delta = _barrier(problem, orbit)
+    scale = max(1.0, abs(delta))
+    if orbit.impacts_per_period == 0:
+        if delta - orbit.x_max >= proximity * scale:
+            return None  # no graze near: spare the kernel call
+    elif delta - orbit.free_x_max >= proximity * scale and orbit.slowest_impact ** 2 >= proximity * scale:
+        return None
+    orbit_map = evaluate(problem, orbit.state, orbit.parameter, orbit.periods)
+    if _failure(orbit_map):
+        return None
+    return grazing.graze_site(problem, orbit_map, orbit.parameter, orbit.periods, proximity)
 
 
 def _search_directions():

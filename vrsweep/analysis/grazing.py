@@ -29,9 +29,15 @@ orbits", its part on grazing):
    the graze is located the same way and the free branch leaves it along the free tangent,
    oriented away from the barrier.
 
-Both need the graze to involve every impact of the orbit: a non-impacting orbit that starts to
-hit, or an orbit with one impact per p periods that stops hitting. An orbit with other impacts
-besides the grazing one has no barrier-free map that keeps them; there the caller falls back on a
+Where the orbit has other impacts besides the grazing one (the impacting windows of Fig. 1, with
+8 to 10 impacts in 3 slow periods), "free" means free of the grazing impact alone: the barrier is
+made transparent in a short time window around the touch (numerics/settings.TRANSPARENT_FROM) and
+kept everywhere else, and x_max_free is the largest x inside that window (graze_window). The
+window is fixed while Newton moves the orbit; it is a quarter of the shortest forcing period
+either side at most and under half the time to the nearest other impact, so the touch stays in it
+and the other impacts out. A non-impacting orbit that starts to hit, or one whose only impact
+slows to zero, needs no window: the whole barrier goes (Delta = inf). A graze too close to the
+stroboscopic section t = 0 mod pT for a window has no such map; there the caller falls back on a
 search around the grazing point (continuation.switch_at_grazing).
 """
 
@@ -39,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrsweep.numerics.model import DELTA
+from vrsweep.numerics.model import BIG_OMEGA, DELTA, G, OMEGA
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.results import Status
 
@@ -53,6 +59,11 @@ GAP_DIFFERENCE = 1e-6
 # terms of the normal form stay 1e-3 of the square-root term.
 PROBE_PENETRATION = 1e-6
 MAX_GRAZE_ITERATIONS = 20
+# The transparent window either side of a touch: at most this share of the shortest forcing
+# period (a shallow excursion past Delta lasts ~ sqrt(penetration), far less) ...
+WINDOW_FORCING_SHARE = 0.25
+# ... and under this share of the time to the orbit's nearest other impact.
+WINDOW_IMPACT_SHARE = 0.45
 
 
 @dataclass
@@ -61,7 +72,9 @@ class Graze:
 
     z           (3,) x, v at t = 0 mod T and the parameter
     periods     p
-    orbit_map   the free map's shooting.OrbitMap at z (no impact, x_max = Delta)
+    window      (t_from, t_to): where the barrier is transparent, or None: no barrier at all
+    orbit_map   the free map's shooting.OrbitMap at z (no grazing impact; its x_max, or its
+                window_x_max with a window, = Delta)
     jacobian    (3, 3) [[M - I, F_lam], [grad gap]] of [F_free; gap] in (x, v, lam)
     gap         Delta - x_max_free at z (within the Newton tolerance of 0)
     residual    max |P_free^p(y) - y| at z
@@ -69,6 +82,7 @@ class Graze:
     """
     z: np.ndarray
     periods: int
+    window: object
     orbit_map: object
     jacobian: np.ndarray
     gap: float
@@ -83,26 +97,57 @@ def free_coefficients(coefficients):
     return free
 
 
-def free_map(problem, state, value, periods):
-    """P_free^p at (state, value): shooting.OrbitMap of the oscillator without the barrier."""
-    return periodic_map(free_coefficients(problem.coefficients(value)), state, problem.settings, periods,
-                        problem.method)
+def free_map(problem, state, value, periods, window=None):
+    """P_free^p at (state, value): shooting.OrbitMap of the oscillator without the barrier, or
+    with the barrier transparent in ``window`` (t_from, t_to) only."""
+    if window is None:
+        return periodic_map(free_coefficients(problem.coefficients(value)), state, problem.settings, periods,
+                            problem.method)
+    return periodic_map(problem.coefficients(value), state, problem.settings, periods, problem.method,
+                        transparent=window)
 
 
 def barrier(problem, value):
     return float(problem.coefficients(value)[DELTA])
 
 
-def _free_system(problem, z, periods):
+def free_top(orbit_map, window):
+    """x_max_free: the free map's largest x, in the window if there is one."""
+    return orbit_map.x_max if window is None else orbit_map.window_x_max
+
+
+def graze_window(problem, orbit_map, value, periods, touch_time):
+    """The transparent window around a touch at ``touch_time`` in [0, pT] of an orbit whose
+    OrbitMap is ``orbit_map`` (the impact there, if any, is left out of "other impacts"), or None
+    when the touch is too close to the stroboscopic section t = 0 mod pT for one."""
+    coefficients = problem.coefficients(value)
+    slow_period = 2.0 * np.pi / coefficients[OMEGA]
+    shortest = slow_period
+    if coefficients[G] != 0.0:
+        shortest = min(shortest, 2.0 * np.pi / coefficients[BIG_OMEGA])
+    half = WINDOW_FORCING_SHARE * shortest
+    orbit_period = periods * slow_period
+    others = orbit_map.impact_times
+    distances = np.abs(others - touch_time)
+    distances = np.minimum(distances, orbit_period - distances)  # the orbit is pT-periodic
+    distances = distances[distances > 1e-9 * orbit_period]       # the touch's own impact
+    if distances.size:
+        half = min(half, WINDOW_IMPACT_SHARE * float(np.min(distances)))
+    if touch_time - half < 0.0 or touch_time + half > orbit_period:
+        return None
+    return (touch_time - half, touch_time + half)
+
+
+def _free_system(problem, z, periods, window=None):
     """[F_free; gap] at z (3,) and the free OrbitMap, or (None, map) when it failed to integrate."""
-    orbit_map = free_map(problem, z[:2], z[2], periods)
+    orbit_map = free_map(problem, z[:2], z[2], periods, window)
     if orbit_map.status != Status.OK:
         return None, orbit_map
-    gap = barrier(problem, z[2]) - orbit_map.x_max
+    gap = barrier(problem, z[2]) - free_top(orbit_map, window)
     return np.array([*(orbit_map.end_state - z[:2]), gap]), orbit_map
 
 
-def _free_jacobian(problem, z, periods, value_at_z, orbit_map):
+def _free_jacobian(problem, z, periods, value_at_z, orbit_map, window):
     """(3, 3) Jacobian of [F_free; gap]: the monodromy for the state block, forward differences
     for the parameter column and for the gap's row."""
     jacobian = np.zeros((3, 3))
@@ -111,7 +156,7 @@ def _free_jacobian(problem, z, periods, value_at_z, orbit_map):
         step = GAP_DIFFERENCE * max(1.0, abs(z[column]))
         moved = z.copy()
         moved[column] += step
-        value, _ = _free_system(problem, moved, periods)
+        value, _ = _free_system(problem, moved, periods, window)
         if value is None:
             return None
         difference = (value - value_at_z) / step
@@ -121,23 +166,25 @@ def _free_jacobian(problem, z, periods, value_at_z, orbit_map):
     return jacobian
 
 
-def locate_graze(problem, z_guess, periods, tolerance):
+def locate_graze(problem, z_guess, periods, tolerance, window=None):
     """The grazing orbit near z_guess (3,): Newton on [P_free^p(y) - y; Delta - x_max_free] = 0
-    until every component is within ``tolerance``.
+    until every component is within ``tolerance``; the free map is barrier-free, or with the
+    barrier transparent in ``window`` only (graze_window).
 
     Returns a Graze, or None when Newton does not converge (no graze nearby, or the free motion
     escapes where the real one impacts).
     """
     z = np.array(z_guess, dtype=float)
     for iteration in range(1, MAX_GRAZE_ITERATIONS + 1):
-        value, orbit_map = _free_system(problem, z, periods)
+        value, orbit_map = _free_system(problem, z, periods, window)
         if value is None:
             return None
-        jacobian = _free_jacobian(problem, z, periods, value, orbit_map)
+        jacobian = _free_jacobian(problem, z, periods, value, orbit_map, window)
         if jacobian is None:
             return None
         if np.max(np.abs(value)) <= tolerance:
-            return Graze(z=z, periods=periods, orbit_map=orbit_map, jacobian=jacobian, gap=float(value[2]),
+            return Graze(z=z, periods=periods, window=window, orbit_map=orbit_map, jacobian=jacobian,
+                         gap=float(value[2]),
                          residual=float(np.max(np.abs(value[:2]))), iterations=iteration)
         try:
             step = np.linalg.solve(jacobian, -value)
@@ -151,18 +198,20 @@ def locate_graze(problem, z_guess, periods, tolerance):
 
 def impacting_direction(problem, graze):
     """The normal form at the graze: (unit direction (3,) of the impacting branch as u grows,
-    predictor(u) -> z (3,), |dz/du| at u = 0), or None when the probe orbit does not impact once
-    as the normal form assumes."""
+    predictor(u) -> z (3,), |dz/du| at u = 0), or None when the probe orbit does not gain exactly
+    one impact over the free map's, in the window, as the normal form assumes."""
     z_g = graze.z
     gradient = graze.jacobian[2]
     penetration = PROBE_PENETRATION * max(1.0, abs(barrier(problem, z_g[2])))
     probe = z_g - (penetration + graze.gap) * gradient / (gradient @ gradient)
     real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods,
                         problem.method)
-    value, free = _free_system(problem, probe, graze.periods)
-    if value is None or real.status != Status.OK or real.impacts != 1 or not real.slowest_impact > 0.0:
+    value, free = _free_system(problem, probe, graze.periods, graze.window)
+    if value is None or real.status != Status.OK or real.impacts != free.impacts + 1:
         return None
-    speed = real.slowest_impact
+    speed = _grazing_impact_speed(real, graze.window)
+    if not speed > 0.0:
+        return None
     sigma = -value[2]
     if not sigma > 0.0:
         return None
@@ -180,6 +229,14 @@ def impacting_direction(problem, graze):
     return direction / np.linalg.norm(direction), predictor, np.linalg.norm(direction)
 
 
+def _grazing_impact_speed(real, window):
+    """The speed of the one impact the real map has where the free map has none (NaN if not one)."""
+    if window is None:
+        return real.slowest_impact if real.impacts == 1 else np.nan
+    inside = (real.impact_times >= window[0]) & (real.impact_times < window[1])
+    return float(real.impact_speeds[inside][0]) if np.count_nonzero(inside) == 1 else np.nan
+
+
 def free_direction(graze):
     """Unit tangent (3,) of the free branch at the graze, pointing away from the barrier."""
     tangent = np.cross(graze.jacobian[0], graze.jacobian[1])
@@ -187,7 +244,29 @@ def free_direction(graze):
     return tangent if graze.jacobian[2] @ tangent > 0.0 else -tangent
 
 
-def crossable(orbit):
-    """True when every impact of ``orbit`` (a continuation.Orbit) takes part in its graze: it has
-    none, or one in its p periods, so the barrier-free map is the map of the graze's free side."""
-    return round(orbit.impacts_per_period * orbit.periods) in (0, 1)
+def graze_site(problem, orbit_map, value, periods, proximity):
+    """Which graze an orbit (its OrbitMap at parameter ``value``) is next to, if any:
+    (side, window), side "free" when one of its smooth maxima is about to touch the barrier (it
+    gains an impact beyond), "impacting" when its slowest impact is about to stop (it loses that
+    impact beyond), window as locate_graze takes it; or None (not within ``proximity``, relative
+    to max(1, |Delta|), or a touch too close to t = 0 mod pT for a window).
+
+    An impact at speed u penetrates about u^2 / (2 a), a ~ 1, so u^2 and the smooth maximum's
+    distance from Delta are compared on one scale; the nearer graze is taken.
+    """
+    delta = barrier(problem, value)
+    scale = max(1.0, abs(delta))
+    touch = (delta - orbit_map.free_x_max) / scale
+    stop = orbit_map.slowest_impact ** 2 / scale if orbit_map.impacts else np.inf
+    if not min(touch, stop) < proximity:
+        return None
+    if touch <= stop:
+        if orbit_map.impacts == 0:
+            return "free", None
+        window = graze_window(problem, orbit_map, value, periods, orbit_map.free_x_max_time)
+        return None if window is None else ("free", window)
+    if orbit_map.impacts == 1:
+        return "impacting", None
+    time = float(orbit_map.impact_times[np.argmin(orbit_map.impact_speeds)])
+    window = graze_window(problem, orbit_map, value, periods, time)
+    return None if window is None else ("impacting", window)

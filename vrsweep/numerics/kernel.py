@@ -39,8 +39,8 @@ from vrsweep.numerics.impact import (
     release_time,
 )
 from vrsweep.numerics.rk45 import (
-    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, certain_growth, dp54_dense, dp54_step,
-    error_norm, initial_step, rejected_step_factor,
+    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, certain_growth, dense_value, dp54_dense,
+    dp54_step, error_norm, initial_step, rejected_step_factor,
 )
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS  # noqa: F401 - read as kernel.ALPHA ...
@@ -49,8 +49,8 @@ from vrsweep.numerics.records import (  # noqa: F401 - the layouts, read as kern
     N_RECORD, N_SUMMARY, REC_IMPACTS, REC_LOG_AREA, REC_LOG_STRETCH, REC_QC, REC_QS, REC_STUCK_TIME,
     REC_V, REC_X, REC_X_MAX, REC_X_MIN, SUM_IMPACTS, SUM_IMPACTS_PER_PERIOD, SUM_LYAPUNOV,
     SUM_LYAPUNOV_SUM, SUM_QC, SUM_QS, SUM_Q_AMPLITUDE, SUM_R, SUM_REJECTED, SUM_RHS, SUM_STEPS,
-    SUM_STICKS, SUM_T_FINAL, SUM_V_FINAL, SUM_X_FINAL, add_tangent_growth, close_period, emit_samples,
-    emit_state, log_impact, log_stick_start, start_period, summarize, update_extremes,
+    SUM_FREE_X_MAX, SUM_FREE_X_MAX_TIME, SUM_STICKS, SUM_T_FINAL, SUM_V_FINAL, SUM_WINDOW_X_MAX, SUM_X_FINAL, add_tangent_growth, close_period,
+    emit_samples, emit_state, log_impact, log_stick_start, start_period, summarize, update_extremes, window_top,
 )
 from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as kernel.* by tests
     COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
@@ -61,7 +61,7 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
 )
 from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, read as kernel.*
     ATOL, DEFAULT_METHOD, DIVERGENCE_BOUND, MAX_IMPACTS_PER_PERIOD, MAX_STEPS, MEASURE_PERIODS, N_SETTINGS,
-    RTOL, SETTING_DEFAULTS, SETTING_NAMES, STICK_VELOCITY, TRANSIENT_PERIODS,
+    RTOL, SETTING_DEFAULTS, SETTING_NAMES, STICK_VELOCITY, TRANSIENT_PERIODS, TRANSPARENT_FROM, TRANSPARENT_TO,
 )
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import (
@@ -275,6 +275,14 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
     stick_velocity = settings[STICK_VELOCITY]
     delta = coefficients[DELTA]
     restitution = coefficients[E]
+    # The transparent window (grazing.py; NaN: none, and every comparison with it is False).
+    transparent_from = settings[TRANSPARENT_FROM]
+    transparent_to = settings[TRANSPARENT_TO]
+    window_x_max = -np.inf
+    # Continuation (the *_monodromy kernels) also wants the orbit's highest smooth maximum.
+    track_free_maxima = monodromy_log.shape[0] > 0
+    free_x_max = -np.inf
+    free_x_max_time = np.nan
 
     slow_period = 2.0 * math.pi / coefficients[OMEGA]
     shortest_period = slow_period
@@ -351,6 +359,13 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
             h_try = min(h, h_max)
             if grid_steps:
                 h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
+            # A step ends on each edge of the transparent window, so that each step is wholly
+            # inside it or outside (a sliver left before an edge is judged by its midpoint).
+            if t < transparent_from - _smallest_step(t, slow_period) and t + h_try > transparent_from:
+                h_try = transparent_from - t
+            elif t < transparent_to - _smallest_step(t, slow_period) and t + h_try > transparent_to:
+                h_try = transparent_to - t
+            transparent = transparent_from <= t + 0.5 * h_try < transparent_to
             clipped = False
             if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
                 h_try = t_boundary - t
@@ -388,7 +403,8 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
             theta_turn = np.nan
             # Every step that the ends alone cannot place far below the barrier gets its dense
             # output and the exact test on it (find_crossing: Bernstein form).
-            if (y_new[X] >= delta or y[X] >= delta
+            if not transparent and (
+                    y_new[X] >= delta or y[X] >= delta
                     or hermite_reach(y[X], y[V], f[V], y_new[X], y_new[V], K[n_stages, V], h_try, delta) >= 0.0):
                 prepare_dense(t, h_try, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
@@ -428,6 +444,14 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
             update_extremes(record, dense, y, y_new, h_taken, theta_turn)
+            if transparent:
+                window_x_max = window_top(window_x_max, dense, y, y_new, h_taken)
+            elif track_free_maxima and y[V] > 0.0 and y_new[V] < 0.0:  # dense is ready: see above
+                theta = locate_root(dense, y, h_taken, V, 0.0, 0.0, 1.0)
+                x_turn = dense_value(dense, y, h_taken, theta, X)
+                if x_turn > free_x_max:
+                    free_x_max = x_turn
+                    free_x_max_time = t + theta * h_taken
 
             # --- advance ---
             t = t_new
@@ -499,6 +523,9 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
     summary[SUM_T_FINAL] = t
     summary[SUM_IMPACTS] = n_impacts
     summary[SUM_STICKS] = n_sticks
+    summary[SUM_WINDOW_X_MAX] = window_x_max
+    summary[SUM_FREE_X_MAX] = free_x_max
+    summary[SUM_FREE_X_MAX_TIME] = free_x_max_time
     return status
 
 

@@ -48,7 +48,12 @@ SUM_IMPACTS = 11            # all impacts, transient included
 SUM_STICKS = 12             # sticking intervals
 SUM_LYAPUNOV = 13           # largest Lyapunov exponent over the window, per unit time (tangent.py)
 SUM_LYAPUNOV_SUM = 14       # sum of both exponents over the window, per unit time
-N_SUMMARY = 15
+SUM_WINDOW_X_MAX = 15        # largest x in the transparent window (settings.TRANSPARENT_FROM), -inf without one
+# The largest smooth maximum of x (v turns from + to -, no impact) and when (the *_monodromy
+# kernels only, -inf and NaN in the others): how close an impacting orbit is to gaining an impact.
+SUM_FREE_X_MAX = 16
+SUM_FREE_X_MAX_TIME = 17
+N_SUMMARY = 18
 
 
 @kernel_jit
@@ -82,6 +87,18 @@ def update_extremes(record, dense, y, y_new, h, theta_turn):
             record[REC_X_MIN] = x_turn
         if x_turn > record[REC_X_MAX]:
             record[REC_X_MAX] = x_turn
+
+
+@kernel_jit
+def window_top(top, dense, y, y_new, h):
+    """max(top, the step's largest x): its ends, and the maximum of x inside it when v turns
+    from + to - (dense holds the step's dense output then: the kernel computes it for every
+    turning point)."""
+    top = max(top, max(y[X], y_new[X]))
+    if y[V] > 0.0 and y_new[V] < 0.0:
+        theta = locate_root(dense, y, h, V, 0.0, 0.0, 1.0)
+        top = max(top, dense_value(dense, y, h, theta, X))
+    return top
 
 
 # Rounding of the Bernstein coefficients and of dense_value, relative to the size of x's terms:

@@ -8,7 +8,12 @@ validate`` starts in a fraction of a second; a Ctrl-C during numba's import was 
 # --- settings vector layout (float64), filled by execution.sweep.integration_settings ---
 RTOL, ATOL, TRANSIENT_PERIODS, MEASURE_PERIODS, MAX_STEPS, MAX_IMPACTS_PER_PERIOD, \
     DIVERGENCE_BOUND, STICK_VELOCITY = range(8)
-N_SETTINGS = 8
+# Not config settings: a time window [TRANSPARENT_FROM, TRANSPARENT_TO) in which the barrier is
+# transparent (no impact test, the motion passes it freely). analysis/grazing.py removes one
+# impact of a periodic orbit this way and keeps the others. NaN, as settings_vector leaves them
+# (every other caller): no window.
+TRANSPARENT_FROM, TRANSPARENT_TO = 8, 9
+N_SETTINGS = 10
 # Their config names (the config's integration section), in index order, and their defaults:
 # the config schema takes its defaults of these from here (config -> numerics, never back).
 SETTING_DEFAULTS = {

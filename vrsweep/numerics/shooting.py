@@ -31,6 +31,11 @@ class OrbitMap:
     x_max           largest x over the p periods (Delta when it impacts)
     slowest_impact  smallest impact velocity x'(-) over the p periods (inf without impacts)
     stuck_time      time held on the barrier in the p periods (sticking)
+    impact_times    (impacts,) when each impact happened, t in [0, pT]
+    impact_speeds   (impacts,) each impact's velocity x'(-)
+    window_x_max    largest x inside the transparent window (-inf without one)
+    free_x_max      largest smooth maximum of x (no impact there; -inf if none) and its time
+    free_x_max_time
     """
     status: Status
     end_state: np.ndarray
@@ -42,12 +47,19 @@ class OrbitMap:
     x_max: float
     slowest_impact: float
     stuck_time: float
+    impact_times: np.ndarray
+    impact_speeds: np.ndarray
+    window_x_max: float
+    free_x_max: float
+    free_x_max_time: float
 
 
-def periodic_map(coefficients, state, settings, periods, method="rk45", impact_capacity=1024):
+def periodic_map(coefficients, state, settings, periods, method="rk45", impact_capacity=1024, transparent=None):
     """P^periods from ``state`` (2,) at t = 0 with the kernel settings vector ``settings``.
 
     The settings' transient and measurement counts are replaced by 0 and ``periods``.
+    transparent: (t_from, t_to) within [0, pT], a window in which the barrier is transparent (the
+    map of the orbit without the impacts it would have there; grazing.py), or None.
     The impact log is grown and the run repeated if it overflows (the run is deterministic).
     """
     integrate = kernel.MONODROMY_INTEGRATORS[method]
@@ -56,6 +68,8 @@ def periodic_map(coefficients, state, settings, periods, method="rk45", impact_c
     settings = np.array(settings, dtype=np.float64)
     settings[kernel.TRANSIENT_PERIODS] = 0
     settings[kernel.MEASURE_PERIODS] = periods
+    if transparent is not None:
+        settings[kernel.TRANSPARENT_FROM], settings[kernel.TRANSPARENT_TO] = transparent
     while True:
         records = np.full((periods, kernel.N_RECORD), np.nan)
         summary = np.full(kernel.N_SUMMARY, np.nan)
@@ -83,4 +97,9 @@ def periodic_map(coefficients, state, settings, periods, method="rk45", impact_c
         x_max=float(np.max(records[:, kernel.REC_X_MAX])),
         slowest_impact=slowest,
         stuck_time=float(np.sum(records[:, kernel.REC_STUCK_TIME])),
+        impact_times=impacts[:n_impacts, 0].copy(),
+        impact_speeds=impacts[:n_impacts, 1].copy(),
+        window_x_max=float(summary[kernel.SUM_WINDOW_X_MAX]),
+        free_x_max=float(summary[kernel.SUM_FREE_X_MAX]),
+        free_x_max_time=float(summary[kernel.SUM_FREE_X_MAX_TIME]),
     )

@@ -19,7 +19,7 @@ def settings_vector(**settings):
     """The kernel's settings vector; unknown names are ignored (configs carry more keys)."""
     values = dict(DEFAULT_SETTINGS)
     values.update({k: v for k, v in settings.items() if k in _SETTING_INDEX})
-    vector = np.zeros(kernel.N_SETTINGS)
+    vector = np.full(kernel.N_SETTINGS, np.nan)  # the settings without a config name: unset
     for name, index in _SETTING_INDEX.items():
         vector[index] = values[name]
     return vector

@@ -1,0 +1,181 @@
+"""Grazes of orbits that keep other impacts (analysis/grazing.py's transparent window).
+
+The case is the end of Fig. 1's period-3 window (original model, Omega = 4, Delta = 1): the orbit
+of three slow periods gains impacts one at a time as g grows, 8 -> 9 near g = 17.617 and
+9 -> 10 near g = 17.650, each where one of its smooth maxima reaches the barrier while its other
+impacts go on. vrsweep locates each graze on the map with the barrier transparent in a window
+around the touch. SciPy checks each one with a map of its own: its DOP853 with impact events
+(tests/reference.py) up to the window, the barrier removed in it, the events again after it.
+The touch time comes from SciPy's own run of the branch's orbit next to the graze.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from reference import reference_trajectory
+from vrsweep.analysis import continuation
+from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.numerics.trajectory import settings_vector
+
+FIG1 = dict(gamma=0.22, alpha=0.1, c=0.04, omega0=0.1, omega=0.5, Delta=1.0, e=0.95, Omega=4.0)
+SLOW_PERIOD = 2.0 * math.pi / FIG1["omega"]
+PERIODS = 3
+# Half the window SciPy removes the barrier in: a quarter of the fast period, as grazing.py.
+HALF_WINDOW = 0.25 * 2.0 * math.pi / FIG1["Omega"]
+
+
+def _resolving_step(orbit):
+    """A SciPy step short enough to see the orbit's slowest impact: at speed u it flies past Delta
+    for ~2 u / a, with a ~ g ~ 17 here, so steps of u / 20 see it."""
+    return min(orbit.slowest_impact / 20.0, 0.05)
+
+
+def _coefficients(g, delta=FIG1["Delta"]):
+    return kernel_coefficients(dict(FIG1, g=g, Delta=delta), "original")
+
+
+def _problem(rtol):
+    return continuation.ContinuationProblem(dict(FIG1, g=17.7), "original", "g",
+                                            settings_vector(rtol=rtol, atol=rtol * 1e-2), "rk45",
+                                            dict(continuation.DEFAULTS, max_step=0.05))
+
+
+@pytest.fixture(scope="module")
+def window_end_branch():
+    """The period-3 orbit from g = 17.7 (10 impacts) down past both grazes."""
+    problem = _problem(1e-10)
+    start = continuation.find_start(problem, [0.99, 0.5], 17.7, 300, 8)
+    assert start.periods == PERIODS
+    orbits, found, end = continuation.follow(problem, start, -1, 17.55, 17.8, 40)
+    return problem, [start] + orbits, [orbit for kind, orbit in found if kind == "grazing"], end
+
+
+def _impacts(run):
+    return len(run["impact_times"])
+
+
+def _real(g, state, t0, t_end, max_step):
+    return reference_trajectory(_coefficients(g), state[0], state[1], t_end, t0=t0, rtol=1e-12, atol=1e-14,
+                                max_step=max_step)
+
+
+def _touch_time(orbit):
+    """When SciPy's run of ``orbit`` (on the free side of a graze) comes closest to the barrier
+    without hitting it: its highest smooth maximum, away from its impacts."""
+    run = _real(orbit.parameter, orbit.state, 0.0, PERIODS * SLOW_PERIOD, _resolving_step(orbit))
+    t = np.linspace(0.0, PERIODS * SLOW_PERIOD, 100001)
+    x = run["sol"](t)[0]
+    is_maximum = np.zeros_like(x, dtype=bool)
+    is_maximum[1:-1] = (x[1:-1] > x[:-2]) & (x[1:-1] >= x[2:])
+    if len(run["impact_times"]):
+        near_impact = np.min(np.abs(t[:, None] - run["impact_times"][None, :]), axis=1) < 0.05
+        is_maximum &= ~near_impact
+    k = int(np.argmax(np.where(is_maximum, x, -np.inf)))
+    return t[k]
+
+
+def _scipy_windowed_map(graze, touch_time):
+    """SciPy's map of three slow periods with the barrier removed within HALF_WINDOW of
+    touch_time: (end state (2,), impacts outside the window, largest x inside it)."""
+    g, state, max_step = graze.parameter, graze.state, _resolving_step(graze)
+    before = _real(g, state, 0.0, touch_time - HALF_WINDOW, max_step)
+    free = reference_trajectory(_coefficients(g, delta=1e3), before["x_final"], before["v_final"],
+                                touch_time + HALF_WINDOW, t0=touch_time - HALF_WINDOW, rtol=1e-12, atol=1e-14)
+    after = _real(g, [free["x_final"], free["v_final"]], touch_time + HALF_WINDOW, PERIODS * SLOW_PERIOD, max_step)
+    t = np.linspace(touch_time - HALF_WINDOW, touch_time + HALF_WINDOW, 100001)
+    x = free["sol"](t)[0]
+    k = int(np.argmax(x))
+    # The parabola through the sampled maximum and its neighbours (spacing 8e-6: its error is far
+    # below the 1e-8 asked).
+    x0, x1, x2 = x[k - 1], x[k], x[k + 1]
+    top = x1 + 0.125 * (x0 - x2) ** 2 / (2.0 * x1 - x0 - x2)
+    return np.array([after["x_final"], after["v_final"]]), _impacts(before) + _impacts(after), top
+
+
+def _neighbours(orbits, graze):
+    """The branch's orbits on either side of the graze: (nearest with fewer impacts, with more)."""
+    below = [o for o in orbits if o.impacts_per_period < graze.impacts_per_period + 0.5 / PERIODS]
+    above = [o for o in orbits if o.impacts_per_period > graze.impacts_per_period + 0.5 / PERIODS]
+    return (min(below, key=lambda o: abs(o.parameter - graze.parameter)),
+            min(above, key=lambda o: abs(o.parameter - graze.parameter)))
+
+
+@pytest.mark.slow
+def test_each_graze_with_other_impacts_is_located_and_crossed(window_end_branch):
+    """Both grazes are found, each between the orbits with one impact fewer and one more; the
+    branch goes on through both (it ends where it leaves the range, not at a graze)."""
+    _, orbits, grazes, end = window_end_branch
+    assert end[0] == continuation.ENDED_RANGE, end
+    assert len(grazes) == 2, [g.parameter for g in grazes]
+    counts = sorted(round(g.impacts_per_period * PERIODS) for g in grazes)
+    assert counts == [8, 9]  # the free sides' counts: 8 -> 9 and 9 -> 10
+    for graze in grazes:
+        fewer, more = _neighbours(orbits, graze)
+        assert round(more.impacts_per_period * PERIODS) == round(fewer.impacts_per_period * PERIODS) + 1
+        assert min(fewer.parameter, more.parameter) < graze.parameter < max(fewer.parameter, more.parameter)
+
+
+@pytest.mark.slow
+def test_scipy_confirms_each_graze_and_its_neighbours(window_end_branch):
+    """SciPy's own windowed map: from each located grazing state it returns to that state after
+    three slow periods (1e-7), with the free side's impacts outside the window, and its largest x
+    inside the window is Delta (1e-7). Next to the graze SciPy counts k impacts on one side, k + 1
+    on the other, and both neighbours are fixed points of its real map."""
+    _, orbits, grazes, _ = window_end_branch
+    for graze in grazes:
+        fewer, more = _neighbours(orbits, graze)
+        touch = _touch_time(fewer)
+        end_state, impacts, top = _scipy_windowed_map(graze, touch)
+        assert np.max(np.abs(end_state - graze.state)) < 1e-7 * max(1.0, np.max(np.abs(graze.state)))
+        assert impacts == round(graze.impacts_per_period * PERIODS)
+        assert top == pytest.approx(FIG1["Delta"], abs=1e-7)
+        for orbit in (fewer, more):
+            run = _real(orbit.parameter, orbit.state, 0.0, PERIODS * SLOW_PERIOD, _resolving_step(orbit))
+            assert _impacts(run) == round(orbit.impacts_per_period * PERIODS), orbit.parameter
+            end = np.array([run["x_final"], run["v_final"]])
+            assert np.max(np.abs(end - orbit.state)) < 1e-7 * max(1.0, np.max(np.abs(orbit.state)))
+
+
+@pytest.mark.slow
+def test_the_grazes_converge_with_the_tolerance(window_end_branch):
+    """At rtol 1e-12 the same grazes lie where rtol 1e-10 put them, to 1e-7 in g: located on the
+    windowed map to the Newton tolerance, not to a continuation step."""
+    _, orbits, grazes, _ = window_end_branch
+    problem = _problem(1e-12)
+    start, failure = continuation.correct(problem, orbits[0].z, PERIODS)
+    assert failure is None, failure
+    _, found, _ = continuation.follow(problem, start, -1, 17.55, 17.8, 40)
+    tight = sorted(orbit.parameter for kind, orbit in found if kind == "grazing")
+    assert tight == pytest.approx(sorted(g.parameter for g in grazes), abs=1e-7)
+
+
+@pytest.mark.slow
+def test_the_period3_window_ends_at_a_grazing_corner():
+    """Where Fig. 1's period-3 window ends (g = 17.796), the stable orbit with 10 impacts reaches a
+    graze from below in g and the corrector, unable to go on, hands over to the crossing: the
+    normal form on the windowed map carries the branch onto orbits with 11 impacts that turn back
+    to lower g, unstable (a grazing corner, where the up-sweep leaves the window). At rtol 1e-12:
+    at 1e-10 these 10- and 11-impact maps, with multipliers up to 1e2, are known to 1e-8 only.
+    SciPy: the graze is a fixed point of its windowed map touching Delta (1e-7), and the first
+    orbit beyond has 11 impacts and is a fixed point of its real map."""
+    problem = _problem(1e-12)
+    start = continuation.find_start(problem, [0.99, 0.5], 17.79, 300, 8)
+    assert round(start.impacts_per_period * PERIODS) == 10 and start.stable
+    orbits, found, _ = continuation.follow(problem, start, +1, 17.78, 17.8, 4)
+    orbits = [start] + orbits
+    grazes = [orbit for kind, orbit in found if kind == "grazing"]
+    assert len(grazes) == 1
+    graze = grazes[0]
+    fewer, more = _neighbours(orbits, graze)
+    assert round(more.impacts_per_period * PERIODS) == 11 and not more.stable
+    assert more.parameter < graze.parameter and fewer.parameter < graze.parameter  # the corner
+    end_state, impacts, top = _scipy_windowed_map(graze, _touch_time(fewer))
+    assert np.max(np.abs(end_state - graze.state)) < 1e-7 * max(1.0, np.max(np.abs(graze.state)))
+    assert impacts == 10
+    assert top == pytest.approx(FIG1["Delta"], abs=1e-7)
+    run = _real(more.parameter, more.state, 0.0, PERIODS * SLOW_PERIOD, _resolving_step(more))
+    assert _impacts(run) == 11
+    end = np.array([run["x_final"], run["v_final"]])
+    assert np.max(np.abs(end - more.state)) < 1e-7 * max(1.0, np.max(np.abs(more.state)))
