@@ -12,12 +12,17 @@ Then period-doubling branch switching (--switch) on the original model's cascade
 parameters (Omega = 4), rtol 1e-12, atol 1e-14 (docs/continuation.md): the period-2 branch over
 [17.8255, 17.87] from g = 17.86 and the period-4 branch switched at its doubling (g = 17.833),
 against a sweep point of the original model at the same settings.
+
+Last, grazes of orbits that keep other impacts (the transparent window, analysis/grazing.py):
+the period-3 orbit of Fig. 1's parameters at rtol 1e-10, from g = 17.7 (10 impacts in 3 periods)
+down over [17.55, 17.8] through its grazes 9 -> 10 and 8 -> 9, and locating one of them alone
+(Newton on the windowed map, from the orbit next to it).
 """
 
 import argparse
 import time
 
-from vrsweep.analysis import continuation, period_doubling
+from vrsweep.analysis import continuation, grazing, period_doubling
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import settings_vector, simulate
@@ -73,6 +78,7 @@ def main():
           f"{1e3 * whole:8.1f} ms   {whole / sweep_point:.2f}x  ({1e3 * whole / n:.2f} ms per point)")
     print("bifurcations:", ", ".join(f"{b.kind} g = {b.orbit.parameter:.6f}" for b in bifurcations))
     switching(method)
+    multi_impact(method)
 
 
 def switching(method):
@@ -95,6 +101,32 @@ def switching(method):
           f"({1e3 * whole / n:.2f} ms per point)")
     print(f"switched period-4 branch: {m} points     {1e3 * switched:8.1f} ms   {switched / sweep_point:.2f}x  "
           f"({1e3 * switched / m:.2f} ms per point)")
+
+
+def multi_impact(method):
+    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0, g=17.7)
+    settings = settings_vector(rtol=1e-10, atol=1e-12)
+    coefficients = kernel_coefficients(parameters, "original")
+    problem = continuation.ContinuationProblem(parameters, "original", "g", settings, method,
+                                               dict(continuation.DEFAULTS, max_step=0.05))
+    start = continuation.find_start(problem, [0.99, 0.5], 17.7, 300, 8)  # warm-up: compiles
+    sweep_point, _ = best_of(lambda: simulate(coefficients, start.state, settings, method=method))
+    whole, (orbits, found, _) = best_of(
+        lambda: continuation.follow(problem, start, -1, 17.55, 17.8, 40), repeats=1)
+    grazes = [orbit for kind, orbit in found if kind == "grazing"]
+    assert len(grazes) == 2, found
+    # The 9 -> 10 graze alone, from the 10-impact orbit next to it (its impact about to stop).
+    side, window = grazing.graze_site(problem, continuation.evaluate(problem, orbits[0].state, orbits[0].parameter, 3),
+                                      orbits[0].parameter, 3, 1.0)
+    locate, graze = best_of(lambda: grazing.locate_graze(problem, orbits[0].z, 3, 1e-8, window))
+    assert graze is not None
+    n = len(orbits)
+    print(f"original model, period-3 orbit, Omega = 4, method {method}, rtol 1e-10")
+    print(f"sweep point (100 + 100 periods)          {1e3 * sweep_point:8.2f} ms   1.00x")
+    print(f"branch through 2 grazes: {n} points      {1e3 * whole:8.1f} ms   {whole / sweep_point:.2f}x  "
+          f"(at g = {', '.join(f'{g.parameter:.6f}' for g in grazes)})")
+    print(f"one graze located ({side} side, window {window[1] - window[0]:.3f} long, {graze.iterations} Newton) "
+          f"{1e3 * locate:8.2f} ms   {locate / sweep_point:.2f}x")
 
 
 if __name__ == "__main__":

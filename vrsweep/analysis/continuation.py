@@ -354,7 +354,47 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
     return found
 
 
-def _graze_between(problem, previous, current):
+def _bends(before, previous, current):
+    """True when the response R at ``current`` is off the secant through ``before`` and
+    ``previous`` (carried along the arclength) by more than BEND_TOLERANCE * max(1, |R|): the step
+    was too long for the branch's curvature, or landed on another branch with the same impact
+    count (a coarse step at the end of Fig. 1's period-3 window passes two grazes and a fold at
+    once and lands on an orbit whose R is twice the secant's)."""
+    if before is None:
+        return False
+    span = np.linalg.norm(previous.z - before.z)
+    if not span > 0.0:
+        return False
+    ratio = np.linalg.norm(current.z - previous.z) / span
+    expected = previous.R + (previous.R - before.R) * ratio
+    return abs(current.R - expected) > BEND_TOLERANCE * max(1.0, abs(previous.R))
+
+
+def _gaps(problem, orbit):
+    """(distance of the highest smooth maximum below Delta, slowest impact speed): what reaches
+    0 at a graze of either kind."""
+    top = orbit.x_max if orbit.impacts_per_period == 0 else orbit.free_x_max
+    return _barrier(problem, orbit) - top, orbit.slowest_impact
+
+
+def _heading_for_graze(problem, before, previous, current):
+    """True when either gap of _gaps, extrapolated along the secant through ``before`` and
+    ``previous``, would be below zero at ``current``: the step may have passed a graze that the
+    previous orbit was not yet close to (long steps)."""
+    if before is None:
+        return False
+    span = np.linalg.norm(previous.z - before.z)
+    if not span > 0.0:
+        return False
+    ratio = np.linalg.norm(current.z - previous.z) / span
+    for gap_before, gap_previous in zip(_gaps(problem, before), _gaps(problem, previous)):
+        if np.isfinite(gap_before) and np.isfinite(gap_previous) and (
+                gap_previous + (gap_previous - gap_before) * ratio < 0.0):
+            return True
+    return False
+
+
+def _graze_between(problem, previous, current, before=None):
     """Where the corrector stepped from ``previous`` to an orbit with another impact count:
     (the grazing.Graze located between them, or None, and whether the step is a jump).
 
@@ -364,13 +404,16 @@ def _graze_between(problem, previous, current):
     branch on the free side and the unstable one beyond are a square root apart), and the step is
     refused; so is a step over two grazes at once (each is crossed and located on its own at a
     shorter step). Without a window no graze can be located: the step stands, and _detect
-    brackets it. With the same impact count on both sides, a step from next to a graze that
-    passes the graze's parameter has jumped too: beyond a graze the orbit has one impact more or
-    less, so an orbit there with the same count belongs to another branch (the end of Fig. 1's
-    period-3 window, g = 17.796, has one 0.002 away).
+    brackets it. With the same impact count on both sides, a step from next to a graze (or
+    heading for one: ``before``, the orbit before ``previous``, gives the trend) that passes the
+    graze's parameter has jumped too: beyond a graze the orbit has one impact more or less, so an
+    orbit there with the same count belongs to another branch (the end of Fig. 1's period-3
+    window, g = 17.796, has one 0.002 away).
     """
     if previous.impacts_per_period == current.impacts_per_period:
         site = _graze_site(problem, previous, JUMP_PROXIMITY)
+        if site is None and _heading_for_graze(problem, before, previous, current):
+            site = _graze_site(problem, previous, np.inf)
         if site is None:
             return None, False
         located = grazing.locate_graze(problem, previous.z, previous.periods, _tolerance(problem, previous.state),
@@ -434,6 +477,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
     current = start
     orbits, bifurcations = [], []
     tried_crossing = False  # from this ``current``
+    failed_crossing = False  # a crossing failed and the branch has stayed near that graze since
+    before = None  # the orbit before ``current``
     grazing_reason = None
     while True:
         if len(orbits) >= max_points:
@@ -444,20 +489,23 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if failure is not None or _turned_back(current, orbit, tangent, step):
             step *= 0.5
             near = _near_grazing(problem, current)
-            if near and not tried_crossing and (_graze_site(problem, current) is not None
-                                                or step < options["min_step"]):
+            if near and not (tried_crossing or failed_crossing) and (
+                    _graze_site(problem, current) is not None or step < options["min_step"]):
                 # The square-root singularity of grazing: Newton from this side cannot reach the
                 # other (module doc); the graze is located and crossed from its normal form.
                 tried_crossing = True
                 graze, orbit, new_tangent, grazing_reason = cross_grazing(problem, current, tangent)
                 if graze is not None:
-                    bifurcations.append(("grazing", graze))
+                    _record_graze(problem, bifurcations, graze)
                 crossed = orbit is not None
+                # The same graze, located again from a closer orbit, is crossed no better: the
+                # crossing starts from the located graze, not from here.
+                failed_crossing = not crossed
             if not crossed:
                 if step >= options["min_step"]:
                     continue
                 if near:
-                    if grazing_reason is None and not tried_crossing:
+                    if grazing_reason is None and not (tried_crossing or failed_crossing):
                         grazing_reason = "no branch beyond the graze was found"
                     side = ("touches the barrier" if current.impacts_per_period == 0
                             or current.slowest_impact ** 2 > _barrier(problem, current) - current.free_x_max
@@ -469,13 +517,16 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 reason = f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
                 return orbits, bifurcations, (status, reason)
         else:
-            located, jumped = _graze_between(problem, current, orbit)
+            located, jumped = _graze_between(problem, current, orbit, before)
             if jumped:
                 step *= 0.5
                 if step >= options["min_step"]:
                     continue
                 return orbits, bifurcations, (ENDED_NEWTON, f"the corrector keeps jumping to another branch at "
                                                             f"{problem.parameter} = {current.parameter:.8g}")
+            if _bends(before, current, orbit) and step * 0.5 >= options["min_step"]:
+                step *= 0.5
+                continue
             new_tangent = tangent_of(orbit, tangent)
         ended = None if stop is None else stop(current, orbit)
         if ended is not None:
@@ -484,15 +535,32 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
         if crossed:
             step = options["initial_step"]
+            current = None  # no secant through the graze's corner for the next step (_bends)
         else:
-            bifurcations.extend(_detect(problem, current, orbit, tangent, step, start.periods, located))
+            for kind, found in _detect(problem, current, orbit, tangent, step, start.periods, located):
+                if kind == "grazing":
+                    _record_graze(problem, bifurcations, found)
+                else:
+                    bifurcations.append((kind, found))
             if orbit.newton_iterations <= EASY_NEWTON:
                 step = min(step * STEP_GROWTH, options["max_step"])
         orbits.append(orbit)
         if progress is not None:
             progress(orbit)
-        current, tangent = orbit, new_tangent
-        tried_crossing, grazing_reason = False, None
+        before, current, tangent = current, orbit, new_tangent  # before is None after a crossing
+        tried_crossing = False
+        failed_crossing = failed_crossing and _near_grazing(problem, orbit)
+        if not failed_crossing:
+            grazing_reason = None
+
+
+def _record_graze(problem, bifurcations, graze):
+    """Append a grazing orbit unless the same graze (its parameter within location_tolerance) is
+    already there: the corrector can meet one graze several times as it closes in on it."""
+    tolerance = problem.options["location_tolerance"] * max(1.0, abs(graze.parameter))
+    if not any(kind == "grazing" and abs(orbit.parameter - graze.parameter) <= tolerance
+               for kind, orbit in bifurcations):
+        bifurcations.append(("grazing", graze))
 
 
 def cross_grazing(problem, near, tangent):
@@ -545,6 +613,9 @@ GRAZING_PROXIMITY = 1e-3
 # jump to another branch, _graze_between) when its first orbit is this close to one: ten times
 # GRAZING_PROXIMITY, as steps near such orbits are still up to 1e-2 long in g (Fig. 1's g = 17.79).
 JUMP_PROXIMITY = 1e-2
+# A step whose R leaves the secant of the last two points by this much (relative to max(1, |R|)) is
+# retried at half the length (_bends): smooth stretches of a branch leave it by ~(step/radius)^2.
+BEND_TOLERANCE = 0.1
 # Arclength distances from a graze at which the branch beyond is looked for, relative to the
 # initial step: the first that converges onto the other side wins.
 CROSSING_DISTANCES = (1.0, 0.25, 0.0625, 0.015625)
