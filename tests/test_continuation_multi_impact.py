@@ -16,8 +16,10 @@ import pytest
 
 from reference import reference_trajectory
 from vrsweep.analysis import continuation
+from vrsweep.analysis.diagnostics import detect_period
+from vrsweep.numerics import kernel
 from vrsweep.numerics.model import kernel_coefficients
-from vrsweep.numerics.trajectory import settings_vector
+from vrsweep.numerics.trajectory import settings_vector, simulate
 
 FIG1 = dict(gamma=0.22, alpha=0.1, c=0.04, omega0=0.1, omega=0.5, Delta=1.0, e=0.95, Omega=4.0)
 SLOW_PERIOD = 2.0 * math.pi / FIG1["omega"]
@@ -159,7 +161,8 @@ def test_the_period3_window_ends_at_a_grazing_corner():
     to lower g, unstable (a grazing corner, where the up-sweep leaves the window). At rtol 1e-12:
     at 1e-10 these 10- and 11-impact maps, with multipliers up to 1e2, are known to 1e-8 only.
     SciPy: the graze is a fixed point of its windowed map touching Delta (1e-7), and the first
-    orbit beyond has 11 impacts and is a fixed point of its real map."""
+    orbit beyond has 11 impacts and is a fixed point of its real map. And the corner is where an
+    up-sweep leaves the window, within one grid step."""
     problem = _problem(1e-12)
     start = continuation.find_start(problem, [0.99, 0.5], 17.79, 300, 8)
     assert round(start.impacts_per_period * PERIODS) == 10 and start.stable
@@ -179,3 +182,41 @@ def test_the_period3_window_ends_at_a_grazing_corner():
     assert _impacts(run) == 11
     end = np.array([run["x_final"], run["v_final"]])
     assert np.max(np.abs(end - more.state)) < 1e-7 * max(1.0, np.max(np.abs(more.state)))
+    # An up-sweep along the stable orbit (each point from the last one's final state, as
+    # `continuation: up`) leaves period 3 at the first grid point past the corner.
+    step = 2e-4
+    grid = 17.79 + step * np.arange(60)
+    left_at = _up_sweep_leaves_period3(grid, start.state)
+    assert graze.parameter < left_at <= graze.parameter + step
+
+
+def _up_sweep_leaves_period3(grid, state):
+    """The first g of ``grid`` where a sweep point started from the last one's end is not on an
+    orbit of three slow periods (diagnostics.detect_period, as sweeps detect it)."""
+    settings = settings_vector(rtol=1e-10, atol=1e-12, transient_periods=300, measure_periods=64)
+    for g in grid:
+        run = simulate(_coefficients(g), list(state), settings)
+        records = run.period_records[-64:]
+        period = int(detect_period(records[None, :, kernel.REC_X], records[None, :, kernel.REC_V], 16, 1e-6)[0])
+        if period != PERIODS:
+            return g
+        state = run.summary[[kernel.SUM_X_FINAL, kernel.SUM_V_FINAL]]
+    return np.inf
+
+
+def _orbit_at(z, R):
+    return continuation.Orbit(parameter=z[2], state=np.array(z[:2], dtype=float), periods=1,
+                              monodromy=np.eye(2), R=R, Q_amplitude=R, impacts_per_period=1.0, x_max=1.0,
+                              slowest_impact=1.0, residual=0.0, newton_iterations=1)
+
+
+def test_a_step_off_the_secant_of_r_is_refused_and_a_smooth_one_is_not():
+    """continuation._bends: R carried along the arclength on the secant of the last two points.
+    Equal steps of 0.1 in g: R on a line is accepted, R curving by (step/radius)^2 is accepted,
+    and R twice the secant's (a landing on another branch) is refused."""
+    before, previous = _orbit_at([0.0, 0.0, 17.6], 1.0), _orbit_at([0.0, 0.0, 17.7], 1.2)
+    assert not continuation._bends(before, previous, _orbit_at([0.0, 0.0, 17.8], 1.4))
+    assert not continuation._bends(before, previous, _orbit_at([0.0, 0.0, 17.8], 1.4 + 0.1 ** 2))
+    assert continuation._bends(before, previous, _orbit_at([0.0, 0.0, 17.8], 2.8))
+    # no secant yet (the first step, or the first after a crossing): nothing to compare with
+    assert not continuation._bends(None, previous, _orbit_at([0.0, 0.0, 17.8], 2.8))
