@@ -220,3 +220,39 @@ def test_a_step_off_the_secant_of_r_is_refused_and_a_smooth_one_is_not():
     assert continuation._bends(before, previous, _orbit_at([0.0, 0.0, 17.8], 2.8))
     # no secant yet (the first step, or the first after a crossing): nothing to compare with
     assert not continuation._bends(None, previous, _orbit_at([0.0, 0.0, 17.8], 2.8))
+
+
+def test_a_transparent_window_removes_the_impacts_inside_it_and_no_other():
+    """The kernel's transparent window (settings.TRANSPARENT_FROM/TO) on the README's hysteresis
+    example's impacting orbit (effective model, g = 23, one impact per slow period): a window
+    around its impact gives the barrier-free map (Delta = inf, another code path) to the
+    integration tolerance, with the window's largest x past Delta; a window away from the impact
+    changes nothing but the steps (the map to the tolerance, the impact kept)."""
+    from vrsweep.analysis.grazing import free_coefficients
+    from vrsweep.numerics.model import DEFAULT_PARAMETERS
+    from vrsweep.numerics.shooting import periodic_map
+
+    parameters = dict(DEFAULT_PARAMETERS, gamma=0.05, alpha=0.05, Omega=4.0, g=23.0)
+    coefficients = kernel_coefficients(parameters, "effective")
+    settings = settings_vector(rtol=1e-11, atol=1e-13, transient_periods=200, measure_periods=1)
+    run = simulate(kernel_coefficients(dict(parameters, g=27.0), "effective"), [0.0, 0.0], settings)
+    run = simulate(coefficients, run.summary[[kernel.SUM_X_FINAL, kernel.SUM_V_FINAL]], settings)
+    state = run.summary[[kernel.SUM_X_FINAL, kernel.SUM_V_FINAL]]
+    real = periodic_map(coefficients, state, settings, 1)
+    assert real.impacts == 1
+    period = 2.0 * math.pi / parameters["omega"]
+    touch = real.impact_times[0]
+    # The free motion stays past Delta from the impact at t = 0.50 to t = 3.32 (it hits at speed
+    # 0.32 and the slow force pulls back weakly): the window covers all of it, or none.
+    around = (touch - 0.3, touch + 3.2)
+    away = (touch + 0.5 * period - 0.5, touch + 0.5 * period + 0.5)
+    windowed = periodic_map(coefficients, state, settings, 1, transparent=around)
+    free = periodic_map(free_coefficients(coefficients), state, settings, 1)
+    assert windowed.impacts == 0 and free.impacts == 0
+    assert np.max(np.abs(windowed.end_state - free.end_state)) < 1e-9
+    assert windowed.window_x_max == pytest.approx(free.x_max, abs=1e-9)
+    assert windowed.window_x_max > parameters["Delta"]
+    elsewhere = periodic_map(coefficients, state, settings, 1, transparent=away)
+    assert elsewhere.impacts == 1
+    assert np.max(np.abs(elsewhere.end_state - real.end_state)) < 1e-9
+    assert elsewhere.window_x_max < parameters["Delta"]

@@ -278,6 +278,8 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
     # The transparent window (grazing.py; NaN: none, and every comparison with it is False).
     transparent_from = settings[TRANSPARENT_FROM]
     transparent_to = settings[TRANSPARENT_TO]
+    has_window = transparent_from == transparent_from and transparent_to == transparent_to
+    transparent = False
     window_x_max = -np.inf
     # Continuation (the *_monodromy kernels) also wants the orbit's highest smooth maximum.
     track_free_maxima = monodromy_log.shape[0] > 0
@@ -359,13 +361,14 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
             h_try = min(h, h_max)
             if grid_steps:
                 h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
-            # A step ends on each edge of the transparent window, so that each step is wholly
-            # inside it or outside (a sliver left before an edge is judged by its midpoint).
-            if t < transparent_from - _smallest_step(t, slow_period) and t + h_try > transparent_from:
-                h_try = transparent_from - t
-            elif t < transparent_to - _smallest_step(t, slow_period) and t + h_try > transparent_to:
-                h_try = transparent_to - t
-            transparent = transparent_from <= t + 0.5 * h_try < transparent_to
+            if has_window:
+                # A step ends on each edge of the transparent window, so that each step is wholly
+                # inside it or outside (a sliver left before an edge is judged by its midpoint).
+                if t < transparent_from - _smallest_step(t, slow_period) and t + h_try > transparent_from:
+                    h_try = transparent_from - t
+                elif t < transparent_to - _smallest_step(t, slow_period) and t + h_try > transparent_to:
+                    h_try = transparent_to - t
+                transparent = transparent_from <= t + 0.5 * h_try < transparent_to
             clipped = False
             if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
                 h_try = t_boundary - t
