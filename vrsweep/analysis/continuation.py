@@ -52,6 +52,8 @@ from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import simulate
 from vrsweep.results import Status
 
+# Coefficient vectors a ContinuationProblem keeps (cleared when full).
+COEFFICIENT_CACHE = 64
 # The config's continuation section's defaults (docs/continuation.md).
 DEFAULTS = dict(CONTINUATION_DEFAULTS)
 STEP_GROWTH = 1.5
@@ -125,19 +127,31 @@ class Bifurcation:
     branch: int = 0
 
 
-@dataclass
+@dataclass(frozen=True)
 class ContinuationProblem:
     """What is continued: the model's parameters (a mapping name -> value), the model, which
-    parameter moves, the kernel settings vector and the integration method."""
+    parameter moves, the kernel settings vector and the integration method. Frozen: its
+    coefficient vectors are kept (coefficients), so a changed problem is a new one
+    (dataclasses.replace)."""
     parameters: dict
     model: str
     parameter: str
     settings: np.ndarray
     method: str = "rk45"
     options: dict = field(default_factory=lambda: dict(DEFAULTS))
+    # The last coefficient vectors built: Newton, its parameter derivative and the graze checks ask
+    # for the same few values again and again, and building one costs ~30 us (a quarter of a
+    # whole branch's time at the hysteresis example). Read-only use: the kernel never writes it.
+    _built: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def coefficients(self, value):
-        return kernel_coefficients(dict(self.parameters, **{self.parameter: value}), self.model)
+        built = self._built.get(value)
+        if built is None:
+            if len(self._built) >= COEFFICIENT_CACHE:
+                self._built.clear()
+            built = self._built[value] = kernel_coefficients(dict(self.parameters, **{self.parameter: value}),
+                                                             self.model)
+        return built
 
 
 def check_commensurate(parameters, model, parameter):
@@ -377,6 +391,14 @@ def _gaps(problem, orbit):
     return _barrier(problem, orbit) - top, orbit.slowest_impact
 
 
+def _same_touch(window, other):
+    """Two windows (or None: no barrier at all) around the same touch: each one's centre inside
+    the other."""
+    if window is None or other is None:
+        return window is None and other is None
+    return other[0] < 0.5 * (window[0] + window[1]) < other[1] and window[0] < 0.5 * (other[0] + other[1]) < window[1]
+
+
 def _heading_for_graze(problem, before, previous, current):
     """True when either gap of _gaps, extrapolated along the secant through ``before`` and
     ``previous``, would be below zero at ``current``: the step may have passed a graze that the
@@ -394,7 +416,7 @@ def _heading_for_graze(problem, before, previous, current):
     return False
 
 
-def _graze_between(problem, previous, current, before=None):
+def _graze_between(problem, previous, current, before=None, memo=None):
     """Where the corrector stepped from ``previous`` to an orbit with another impact count:
     (the grazing.Graze located between them, or None, and whether the step is a jump).
 
@@ -408,7 +430,8 @@ def _graze_between(problem, previous, current, before=None):
     heading for one: ``before``, the orbit before ``previous``, gives the trend) that passes the
     graze's parameter has jumped too: beyond a graze the orbit has one impact more or less, so an
     orbit there with the same count belongs to another branch (the end of Fig. 1's period-3
-    window, g = 17.796, has one 0.002 away).
+    window, g = 17.796, has one 0.002 away). ``memo`` (a dict kept along the branch) holds the
+    graze such a check located last: the next steps towards the same touch reuse it.
     """
     if previous.impacts_per_period == current.impacts_per_period:
         site = _graze_site(problem, previous, JUMP_PROXIMITY)
@@ -416,8 +439,15 @@ def _graze_between(problem, previous, current, before=None):
             site = _graze_site(problem, previous, np.inf)
         if site is None:
             return None, False
-        located = grazing.locate_graze(problem, previous.z, previous.periods, _tolerance(problem, previous.state),
-                                       site[1])
+        memo = {} if memo is None else memo
+        known = memo.get("graze")
+        if (known is not None and memo.get("impacts") == previous.impacts_per_period
+                and _same_touch(known.window, site[1])):
+            located = known
+        else:
+            located = grazing.locate_graze(problem, previous.z, previous.periods,
+                                           _tolerance(problem, previous.state), site[1])
+            memo.update(graze=located, impacts=previous.impacts_per_period)
         passed = located is not None and (located.z[2] - previous.parameter) * (
             current.parameter - located.z[2]) > 0.0
         return None, passed
@@ -479,6 +509,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
     tried_crossing = False  # from this ``current``
     failed_crossing = False  # a crossing failed and the branch has stayed near that graze since
     before = None  # the orbit before ``current``
+    memo = {}  # the graze the last jump check located (_graze_between)
     grazing_reason = None
     while True:
         if len(orbits) >= max_points:
@@ -517,7 +548,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 reason = f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
                 return orbits, bifurcations, (status, reason)
         else:
-            located, jumped = _graze_between(problem, current, orbit, before)
+            located, jumped = _graze_between(problem, current, orbit, before, memo)
             if jumped:
                 step *= 0.5
                 if step >= options["min_step"]:
@@ -536,6 +567,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if crossed:
             step = options["initial_step"]
             current = None  # no secant through the graze's corner for the next step (_bends)
+            memo.clear()  # nor the graze just crossed for the next jump check
         else:
             for kind, found in _detect(problem, current, orbit, tangent, step, start.periods, located):
                 if kind == "grazing":
