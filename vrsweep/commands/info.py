@@ -173,13 +173,16 @@ def _format_curves(curves) -> list[str]:
         ranges = ", ".join(f"{name} from {_short(row[name][0])} to {_short(row[name][1])}" for name in names)
         lines.append(f"curve {row['curve']}:     {row['kind']}, period {row['periods']}, {row['points']} points, "
                      f"{ranges}")
-        for side in ("first", "last"):
-            status, reason = row[f"{side}_end"]
-            lines.append(f"  {side} end:   {status}: {reason}")
+        lines += _format_ends(row)
     for row in curves["specials"]:
         where = ", ".join(f"{name} = {row[name]:.8g}" for name in names)
         lines.append(f"special:     {row['kind']} at {where} (curve {row['curve']})")
     return lines
+
+
+def _format_ends(row) -> list[str]:
+    """Why a branch or curve stops, one line per end."""
+    return [f"  {side} end:   {row[f'{side}_end'][0]}: {row[f'{side}_end'][1]}" for side in ("first", "last")]
 
 
 def _format_branches(branches) -> list[str]:
@@ -190,9 +193,7 @@ def _format_branches(branches) -> list[str]:
     for row in branches["branches"]:
         lines.append(f"branch {row['branch']}:    period {row['periods']}, {row['points']} points "
                      f"({row['stable_points']} stable), {name} from {_short(row['min'])} to {_short(row['max'])}")
-        for side in ("first", "last"):
-            status, reason = row[f"{side}_end"]
-            lines.append(f"  {side} end:   {status}: {reason}")
+        lines += _format_ends(row)
     for row in branches["bifurcations"]:
         lines.append(f"bifurcation: {row['kind']} at {name} = {row['parameter']:.8g} (branch {row['branch']}, "
                      f"R = {_short(row['R'])})")
