@@ -20,23 +20,18 @@ down over [17.55, 17.8] through its grazes 9 -> 10 and 8 -> 9, and locating one 
 """
 
 import argparse
-import time
 
 from vrsweep.analysis import continuation, grazing, period_doubling
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import settings_vector, simulate
 
+if __package__:  # python -m benchmarks.NAME, or imported
+    from ._timing import best_of
+else:  # python benchmarks/NAME.py: this folder is first on sys.path
+    from _timing import best_of
+
 PARAMETERS = dict(DEFAULT_PARAMETERS, gamma=0.05, alpha=0.05, Omega=4.0, g=23.0)
-
-
-def best_of(function, repeats=3):
-    times = []
-    for _ in range(repeats):
-        start = time.thread_time()
-        result = function()
-        times.append(time.thread_time() - start)
-    return min(times), result
 
 
 def main():

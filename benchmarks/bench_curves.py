@@ -12,7 +12,6 @@ warm-up calls that compile (or load) every kernel.
 """
 
 import argparse
-import time
 
 import numpy as np
 
@@ -20,16 +19,12 @@ from vrsweep.analysis import continuation, curves
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.trajectory import settings_vector, simulate
 
+if __package__:  # python -m benchmarks.NAME, or imported
+    from ._timing import best_of
+else:  # python benchmarks/NAME.py: this folder is first on sys.path
+    from _timing import best_of
+
 PARAMETERS = dict(DEFAULT_PARAMETERS, gamma=0.05, alpha=0.05, Omega=4.0, g=24.0)
-
-
-def best_of(function, repeats=3):
-    times = []
-    for _ in range(repeats):
-        start = time.thread_time()
-        result = function()
-        times.append(time.thread_time() - start)
-    return min(times), result
 
 
 def main():

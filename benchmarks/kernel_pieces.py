@@ -9,7 +9,6 @@ The calling thread's CPU time, best of 7.
 
 import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +23,11 @@ from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients  # no
 from vrsweep.numerics.rhs import grid_step, oscillator_rhs, oscillator_rhs_rotated, prepare_rotations, rotation_scratch  # noqa: E402
 from vrsweep.numerics.state import N_STATE, V  # noqa: E402
 
+if __package__:  # python -m benchmarks.NAME, or imported
+    from ._timing import best_of
+else:  # python benchmarks/NAME.py: this folder is first on sys.path
+    from _timing import best_of
+
 N = 200_000
 
 
@@ -36,14 +40,23 @@ def time_pow(n, errs):
 
 
 @njit
-def time_step(n, coefficients, y, h, scratch):
+def _stepped(coefficients, y, h, scratch):
+    """The work arrays of one DOP853 step of ``h`` from ``y``, that step taken: K (stages, 4),
+    y_new (4,), stage (4,) and f (4,) = the RHS at y, which each piece below works on."""
     K = np.empty((dop853.N_STAGES_EXTENDED, N_STATE))
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     f = np.empty(N_STATE)
     oscillator_rhs(0.0, 0.0, -1, 0.0, y, coefficients, f, scratch)
-    acc = 0.0
     prepare_rotations(0.0, h, coefficients, scratch)
+    dop853_step(oscillator_rhs_rotated, 0.0, y, f, h, coefficients, K, y_new, stage, scratch, 2)
+    return K, y_new, stage, f
+
+
+@njit
+def time_step(n, coefficients, y, h, scratch):
+    K, y_new, stage, f = _stepped(coefficients, y, h, scratch)
+    acc = 0.0
     for i in range(n):
         dop853_step(oscillator_rhs_rotated, 0.0, y, f, h, coefficients, K, y_new, stage, scratch, 2)
         acc += y_new[0]
@@ -52,13 +65,7 @@ def time_step(n, coefficients, y, h, scratch):
 
 @njit
 def time_step_error(n, coefficients, y, h, scratch):
-    K = np.empty((dop853.N_STAGES_EXTENDED, N_STATE))
-    y_new = np.empty(N_STATE)
-    stage = np.empty(N_STATE)
-    f = np.empty(N_STATE)
-    oscillator_rhs(0.0, 0.0, -1, 0.0, y, coefficients, f, scratch)
-    prepare_rotations(0.0, h, coefficients, scratch)
-    dop853_step(oscillator_rhs_rotated, 0.0, y, f, h, coefficients, K, y_new, stage, scratch, 2)
+    K, y_new, _, _ = _stepped(coefficients, y, h, scratch)
     acc = 0.0
     for i in range(n):
         K[0, 0] += 1e-300
@@ -68,14 +75,8 @@ def time_step_error(n, coefficients, y, h, scratch):
 
 @njit
 def time_dense(n, coefficients, y, h, scratch):
-    K = np.empty((dop853.N_STAGES_EXTENDED, N_STATE))
+    K, y_new, stage, _ = _stepped(coefficients, y, h, scratch)
     dense = np.empty((N_STATE, dop853.DENSE_ORDER))
-    y_new = np.empty(N_STATE)
-    stage = np.empty(N_STATE)
-    f = np.empty(N_STATE)
-    oscillator_rhs(0.0, 0.0, -1, 0.0, y, coefficients, f, scratch)
-    prepare_rotations(0.0, h, coefficients, scratch)
-    dop853_step(oscillator_rhs_rotated, 0.0, y, f, h, coefficients, K, y_new, stage, scratch, 2)
     acc = 0.0
     for i in range(n):
         dop853_dense(oscillator_rhs_rotated, 0.0, y, h, coefficients, K, y_new, dense, stage, scratch, 2)
@@ -85,14 +86,8 @@ def time_dense(n, coefficients, y, h, scratch):
 
 @njit
 def time_locate(n, coefficients, y, h, scratch):
-    K = np.empty((dop853.N_STAGES_EXTENDED, N_STATE))
+    K, y_new, stage, _ = _stepped(coefficients, y, h, scratch)
     dense = np.empty((N_STATE, dop853.DENSE_ORDER))
-    y_new = np.empty(N_STATE)
-    stage = np.empty(N_STATE)
-    f = np.empty(N_STATE)
-    oscillator_rhs(0.0, 0.0, -1, 0.0, y, coefficients, f, scratch)
-    prepare_rotations(0.0, h, coefficients, scratch)
-    dop853_step(oscillator_rhs_rotated, 0.0, y, f, h, coefficients, K, y_new, stage, scratch, 2)
     dop853_dense(oscillator_rhs_rotated, 0.0, y, h, coefficients, K, y_new, dense, stage, scratch, 2)
     acc = 0.0
     for i in range(n):
@@ -126,13 +121,8 @@ def time_hermite(n, xs):
 
 
 def best(run):
-    run()
-    times = []
-    for _ in range(7):
-        start = time.thread_time()
-        run()
-        times.append(time.thread_time() - start)
-    return min(times) / N * 1e9
+    """ns per piece: the best of 7 timed calls of ``run`` (N pieces each), after one that compiles."""
+    return best_of(run, repeats=7, warm_up=True)[0] / N * 1e9
 
 
 def main():

@@ -30,6 +30,16 @@ def _invoke(*args, env=None):
     return result
 
 
+def _sweep_file(folder, text, name="sweep"):
+    """``vrsweep run -q`` on the config ``text`` (dedented), written as NAME.yaml in ``folder``:
+    (the config's path, the result file's path NAME.h5)."""
+    config = _write_config(folder, text, f"{name}.yaml")
+    path = folder / f"{name}.h5"
+    result = _invoke("run", config, "-o", path, "-q")
+    assert result.exit_code == 0, result.output
+    return config, path
+
+
 def _vrsweep_process(*args, **kwargs):
     """``vrsweep ARGS`` as a real subprocess (for kill -9 and signals), stderr piped."""
     command = [sys.executable, "-m", "vrsweep", *[str(a) for a in args]]
@@ -90,6 +100,12 @@ def write_config():
 def invoke():
     """invoke(*args, env=None) -> click's Result of ``vrsweep ARGS`` run in this process."""
     return _invoke
+
+
+@pytest.fixture(scope="session")
+def sweep_file():
+    """sweep_file(folder, text, name="sweep") -> (config, result) paths of ``vrsweep run`` on ``text``."""
+    return _sweep_file
 
 
 @pytest.fixture(scope="session")

@@ -65,6 +65,29 @@ def test_a_real_sigint_to_simulate(tmp_path):
     assert not out.exists() and list(tmp_path.iterdir()) == []  # no output, no temporary file
 
 
+def test_a_sigint_inside_code_that_exec_runs_still_exits_130(tmp_path):
+    """The race behind a rare exit by SIGINT (-2) after "Interrupted (SIGINT)": a signal that lands
+    while exec() runs a string (a dataclass or namedtuple being made, as numba's import does
+    often) raised a bare KeyboardInterrupt there, which CPython notes as unhandled though the
+    command line catches it, and `python -m` then kills itself with SIGINT at exit. Here the
+    signal lands inside exec'd code every time, under the command line's own SIGINT handling."""
+    package = tmp_path / "sigint_in_exec"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "__main__.py").write_text(
+        "import sys\n"
+        "from vrsweep.execution import signals\n"
+        "signals.exit_at_once_on_sigint()\n"
+        "signals.raise_on_sigint()  # as cli.py does once a command runs\n"
+        "try:\n"
+        "    exec('import os, signal\\nos.kill(os.getpid(), signal.SIGINT)\\nwhile True: pass')\n"
+        "except KeyboardInterrupt:\n"
+        "    sys.exit(130)\n")
+    process = subprocess.run([sys.executable, "-m", package.name], cwd=tmp_path, capture_output=True, text=True,
+                             timeout=60)
+    assert process.returncode == 130, process.stderr
+
+
 def test_a_reader_that_stops_reading_is_no_error(tmp_path):
     """`vrsweep validate CONFIG | head -0`: exit 141 (SIGPIPE's code), no "Error: Broken pipe"."""
     process = subprocess.Popen([sys.executable, "-m", "vrsweep", "validate", str(FIG3)],

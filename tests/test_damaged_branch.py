@@ -4,9 +4,6 @@ one line and exit 2 for a damaged file, never a traceback or a figure of wrong n
 
 The file is made from hand-built orbits: what is checked is the store, not the numerics."""
 
-import shutil
-
-import h5py
 import numpy as np
 import pytest
 
@@ -15,6 +12,8 @@ from vrsweep.analysis.continuation import Bifurcation, Branch, Orbit
 from vrsweep.config.validate import config_from_dict
 from vrsweep.errors import ResultFileError
 from vrsweep.store.branch_file import branch_arrays, write_branch
+
+from damaged import damaged_copy, flip_bit, one_line_error, refused_by_plot_and_info
 
 CONFIG = {"model": "effective", "parameters": {"gamma": 0.05, "alpha": 0.05},
           "continuation": {"parameter": "g", "from": 23.0, "to": [21.0, 27.0]}}
@@ -85,40 +84,21 @@ DAMAGES = {
 }
 
 
-def _one_line(result):
-    lines = [line for line in result.output.strip().splitlines() if line.strip()]
-    assert "Traceback" not in result.output, result.output
-    assert result.exit_code == 2, result.output
-    assert len(lines) == 1 and lines[0].startswith("Error: "), result.output
-    return lines[0]
-
-
 @pytest.mark.parametrize("damage", sorted(DAMAGES))
 def test_a_damaged_branch_file_is_one_line_everywhere(damage, branch, tmp_path, invoke):
     change, words = DAMAGES[damage]
-    path = tmp_path / "damaged.h5"
-    shutil.copy(branch, path)
-    with h5py.File(path, "r+") as f:
-        change(f)
-    for args in (("plot", path, "-o", tmp_path / "figure.png"), ("info", path)):
-        assert words in _one_line(invoke(*args)), args
-    assert not (tmp_path / "figure.png").exists()
+    path = damaged_copy(branch, tmp_path, change)
+    refused_by_plot_and_info(invoke, path, tmp_path, words)
     with pytest.raises(ResultFileError) as error:
         vrsweep.open_results(path)
     assert words in str(error.value)
 
 
 def test_a_flipped_bit_fails_its_checksum(branch, tmp_path, invoke):
-    path = tmp_path / "flipped.h5"
-    shutil.copy(branch, path)
-    with h5py.File(path, "r") as f:
-        variable = f["x"]
-        assert variable.fletcher32
-        chunk = variable.id.get_chunk_info(0)
-    data = bytearray(path.read_bytes())
-    data[chunk.byte_offset + chunk.size // 2] ^= 0x10
-    path.write_bytes(bytes(data))
-    assert "is truncated or corrupt" in _one_line(invoke("info", path))
+    path = damaged_copy(branch, tmp_path, None, "flipped.h5")
+    checksummed = flip_bit(path, "x")
+    assert checksummed
+    assert "is truncated or corrupt" in one_line_error(invoke("info", path))
 
 
 def test_an_undamaged_branch_file_reads_back(branch):

@@ -6,8 +6,6 @@ checksum (axes included in files of this version). So info, plot, run --resume a
 one line and exit 2 for the same damage, never a traceback, never numbers from a damaged file.
 """
 
-import shutil
-
 import h5py
 import numpy as np
 import pytest
@@ -16,6 +14,8 @@ from hypothesis import strategies as st
 
 from vrsweep.errors import ResultFileError
 from vrsweep.store.reader import open_checked
+
+from damaged import damaged_copy, flip_bit
 
 CONFIG = """\
 model: effective
@@ -31,18 +31,8 @@ HYPOTHESIS = settings(max_examples=6, deadline=None,
 
 
 @pytest.fixture(scope="module")
-def good(tmp_path_factory):
-    from click.testing import CliRunner
-
-    from vrsweep.cli import main
-
-    folder = tmp_path_factory.mktemp("damaged")
-    config = folder / "small.yaml"
-    config.write_text(CONFIG)
-    path = folder / "good.h5"
-    result = CliRunner().invoke(main, ["run", str(config), "-o", str(path), "-q"])
-    assert result.exit_code == 0, result.output
-    return config, path
+def good(tmp_path_factory, sweep_file):
+    return sweep_file(tmp_path_factory.mktemp("damaged"), CONFIG, "good")
 
 
 def _commands(config, path, out):
@@ -64,17 +54,12 @@ def _refused_everywhere(invoke, config, path, out, words="corrupt", which=None):
 
 def _damaged(good, tmp_path, change):
     config, path = good
-    copy = tmp_path / "damaged.h5"
-    shutil.copy(path, copy)
-    with h5py.File(copy, "r+") as f:
-        change(f)
-    return config, copy
+    return config, damaged_copy(path, tmp_path, change)
 
 
 def test_the_good_file_passes_every_command(good, tmp_path, invoke):
     config, path = good
-    copy = tmp_path / "copy.h5"
-    shutil.copy(path, copy)
+    copy = damaged_copy(path, tmp_path, None, "copy.h5")  # undamaged: a plain copy
     for command in _commands(config, copy, tmp_path):
         assert invoke(*command).exit_code == 0, command
     with h5py.File(copy) as f:  # new files carry a checksum on every axis
@@ -156,31 +141,18 @@ def test_a_non_finite_axis_value(good, tmp_path, invoke, axis, index, value, whi
     _refused_everywhere(invoke, config, path, tmp_path, "not a finite number", which)
 
 
-def _flip_bit(path, name, bit):
-    with h5py.File(path, "r") as f:
-        ds = f[name]
-        offset = ds.id.get_chunk_info(0).byte_offset if ds.chunks else ds.id.get_offset()
-        size = ds.id.get_chunk_info(0).size if ds.chunks else ds.id.get_storage_size()
-    byte, within = divmod(bit % (8 * size), 8)
-    with open(path, "r+b") as handle:
-        handle.seek(offset + byte)
-        original = handle.read(1)[0]
-        handle.seek(offset + byte)
-        handle.write(bytes([original ^ (1 << within)]))
-
-
 @HYPOTHESIS
 @given(name=st.sampled_from(AXES + ("R", "done", "strobe_x")), bit=st.integers(0, 10 ** 6), which=st.integers(0, 3))
 def test_a_flipped_bit_in_an_axis_or_a_variable(good, tmp_path, invoke, name, bit, which):
     config, path = _damaged(good, tmp_path, lambda f: None)
-    _flip_bit(path, name, bit)
+    flip_bit(path, name, bit)
     _refused_everywhere(invoke, config, path, tmp_path, which=which)
 
 
 def test_resume_on_a_finished_file_whose_R_fails_its_checksum(good, tmp_path, invoke):
     """Not "nothing left to compute": the damage is found where the file is opened."""
     config, path = _damaged(good, tmp_path, lambda f: None)
-    _flip_bit(path, "R", 77)
+    flip_bit(path, "R", 77)
     result = invoke("run", config, "-o", path, "--resume")
     assert result.exit_code == 2 and "corrupt" in result.output, result.output
     assert "nothing left" not in result.output

@@ -2,13 +2,12 @@
 (store/trajectory_file.read_trajectory), so plot and info give one line and exit 2 for a damaged
 file, never a traceback or a figure of wrong numbers."""
 
-import shutil
-
-import h5py
 import numpy as np
 import pytest
 
 from vrsweep.store.trajectory_file import read_trajectory
+
+from damaged import damaged_copy, flip_bit, one_line_error, refused_by_plot_and_info
 
 CONFIG = """\
 model: original
@@ -90,37 +89,17 @@ DAMAGES = {
 }
 
 
-def _one_line(result):
-    lines = [line for line in result.output.strip().splitlines() if line.strip()]
-    assert "Traceback" not in result.output, result.output
-    assert result.exit_code == 2, result.output
-    assert len(lines) == 1 and lines[0].startswith("Error: "), result.output
-    return lines[0]
-
-
 @pytest.mark.parametrize("damage", sorted(DAMAGES))
 def test_a_damaged_trajectory_is_one_line_in_plot_and_info(damage, trajectory, tmp_path, invoke):
     change, words = DAMAGES[damage]
-    path = tmp_path / "damaged.h5"
-    shutil.copy(trajectory, path)
-    with h5py.File(path, "r+") as f:
-        change(f)
-    for args in (("plot", path, "-o", tmp_path / "figure.png"), ("info", path)):
-        assert words in _one_line(invoke(*args)), args
-    assert not (tmp_path / "figure.png").exists()
+    refused_by_plot_and_info(invoke, damaged_copy(trajectory, tmp_path, change), tmp_path, words)
 
 
 def test_a_flipped_bit_in_a_series_fails_its_checksum(trajectory, tmp_path, invoke):
-    path = tmp_path / "flipped.h5"
-    shutil.copy(trajectory, path)
-    with h5py.File(path, "r") as f:
-        series = f["original/x"]
-        assert series.fletcher32
-        chunk = series.id.get_chunk_info(0)
-    data = bytearray(path.read_bytes())
-    data[chunk.byte_offset + chunk.size // 2] ^= 0x10
-    path.write_bytes(bytes(data))
-    assert "is truncated or corrupt" in _one_line(invoke("plot", path, "-o", tmp_path / "figure.png"))
+    path = damaged_copy(trajectory, tmp_path, None, "flipped.h5")
+    checksummed = flip_bit(path, "original/x")
+    assert checksummed
+    assert "is truncated or corrupt" in one_line_error(invoke("plot", path, "-o", tmp_path / "figure.png"))
 
 
 def test_an_undamaged_trajectory_reads_whole(trajectory):

@@ -28,17 +28,8 @@ SETTINGS = settings(max_examples=8, deadline=None,
 
 
 @pytest.fixture(scope="module")
-def sweep(tmp_path_factory):
-    from click.testing import CliRunner
-
-    from vrsweep.cli import main
-
-    folder = tmp_path_factory.mktemp("numbers")
-    config = folder / "sweep.yaml"
-    config.write_text(CONFIG)
-    result = CliRunner().invoke(main, ["run", str(config), "-o", str(folder / "sweep.h5"), "-q"])
-    assert result.exit_code == 0, result.output
-    return config, folder / "sweep.h5"
+def sweep(tmp_path_factory, sweep_file):
+    return sweep_file(tmp_path_factory.mktemp("numbers"), CONFIG)
 
 
 def _one_line_refusal(result):

@@ -94,11 +94,13 @@ def describe(path) -> dict:
 
         check, describe = {"branch": (check_branch, _describe_branches),
                            "curves": (check_curves, _describe_curves)}[kind]
-        check(path)  # a damaged file is one line, as every reader of it says
+        # A damaged file is one line, as every reader of it says. The check reads every array
+        # through its checksum; the summary is made from what it read, not from a second read.
+        checked = check(path)
         described = _describe_groups(path, kind)
         if described is None:
             raise ResultFileError(f"{path} is a vrsweep {kind} file this vrsweep cannot describe")
-        described["branches" if kind == "branch" else "curves"] = describe(path)
+        described["branches" if kind == "branch" else "curves"] = describe(*checked)
         return described
     if kind == "trajectory":
         from vrsweep.store.trajectory_file import check_trajectory, read_trajectory
@@ -114,60 +116,52 @@ def describe(path) -> dict:
     return _describe_sweep(path, load_results(path))
 
 
-def _describe_branches(path) -> dict:
+def _describe_branches(parameter, values) -> dict:
     """A branch file's continuation (vrsweep continue): per branch its points, stable points,
-    parameter range and ends; the bifurcation table."""
-    from vrsweep.store.reading import open_results
-
-    with open_results(path) as ds:
-        parameter = str(_plain(ds.attrs.get("parameter", "parameter")))
-        branch = np.asarray(ds["branch"].values)
-        values = np.asarray(ds["parameter"].values)
-        stable = np.asarray(ds["stable"].values)
-        rows = []
-        for number in np.asarray(ds["branch_id"].values):
-            mine = branch == number
-            rows.append({
-                "branch": int(number), "periods": int(ds["branch_periods"].values[number]),
-                "points": int(mine.sum()), "stable_points": int(stable[mine].sum()),
-                "min": _number(values[mine].min()) if mine.any() else None,
-                "max": _number(values[mine].max()) if mine.any() else None,
-                "first_end": [str(ds["branch_end_first_status"].values[number]),
-                              str(ds["branch_end_first_reason"].values[number])],
-                "last_end": [str(ds["branch_end_last_status"].values[number]),
-                             str(ds["branch_end_last_reason"].values[number])],
-            })
-        bifurcations = [{"kind": str(kind), "branch": int(b), "parameter": _number(p), "R": _number(r)}
-                        for kind, b, p, r in zip(ds["bifurcation_kind"].values, ds["bifurcation_branch"].values,
-                                                 ds["bifurcation_parameter"].values, ds["bifurcation_R"].values)]
-    return {"parameter": parameter, "branches": rows, "bifurcations": bifurcations}
+    parameter range and ends; the bifurcation table. parameter, values: what check_branch read."""
+    branch, continued, stable = values["branch"], values["parameter"], values["stable"]
+    rows = []
+    for number in values["branch_id"]:
+        mine = branch == number
+        rows.append({
+            "branch": int(number), "periods": int(values["branch_periods"][number]),
+            "points": int(mine.sum()), "stable_points": int(stable[mine].sum()),
+            "min": _number(continued[mine].min()) if mine.any() else None,
+            "max": _number(continued[mine].max()) if mine.any() else None,
+            "first_end": _end(values, "branch", "first", number),
+            "last_end": _end(values, "branch", "last", number),
+        })
+    bifurcations = [{"kind": _plain(kind), "branch": int(b), "parameter": _number(p), "R": _number(r)}
+                    for kind, b, p, r in zip(values["bifurcation_kind"], values["bifurcation_branch"],
+                                             values["bifurcation_parameter"], values["bifurcation_R"])]
+    return {"parameter": str(parameter), "branches": rows, "bifurcations": bifurcations}
 
 
-def _describe_curves(path) -> dict:
+def _describe_curves(names, values) -> dict:
     """A curves file (vrsweep continue BRANCH.h5 --point K --along NAME): per curve its kind,
-    period, points, both parameters' ranges and ends; the codimension-two points."""
-    from vrsweep.store.reading import open_results
+    period, points, both parameters' ranges and ends; the codimension-two points. names, values:
+    what check_curves read."""
+    curve = values["curve"]
+    rows = []
+    for number in values["curve_id"]:
+        mine = curve == number
+        row = {"curve": int(number), "kind": _plain(values["curve_kind"][number]),
+               "periods": int(values["curve_periods"][number]), "points": int(mine.sum()),
+               "first_end": _end(values, "curve", "first", number),
+               "last_end": _end(values, "curve", "last", number)}
+        for name in names:
+            along = values[name][mine]
+            row[name] = [_number(along.min()), _number(along.max())] if mine.any() else [None, None]
+        rows.append(row)
+    specials = [{"kind": _plain(kind), "curve": int(number),
+                 **{name: _number(values[f"special_{name}"][index]) for name in names}}
+                for index, (kind, number) in enumerate(zip(values["special_kind"], values["special_curve"]))]
+    return {"parameters": [str(name) for name in names], "curves": rows, "specials": specials}
 
-    with open_results(path) as ds:
-        names = [str(name) for name in np.atleast_1d(_plain(ds.attrs.get("parameter_names", [])))]
-        curve = np.asarray(ds["curve"].values)
-        rows = []
-        for number in np.asarray(ds["curve_id"].values):
-            mine = curve == number
-            row = {"curve": int(number), "kind": str(ds["curve_kind"].values[number]),
-                   "periods": int(ds["curve_periods"].values[number]), "points": int(mine.sum()),
-                   "first_end": [str(ds["curve_end_first_status"].values[number]),
-                                 str(ds["curve_end_first_reason"].values[number])],
-                   "last_end": [str(ds["curve_end_last_status"].values[number]),
-                                str(ds["curve_end_last_reason"].values[number])]}
-            for name in names:
-                values = np.asarray(ds[name].values)[mine]
-                row[name] = [_number(values.min()), _number(values.max())] if mine.any() else [None, None]
-            rows.append(row)
-        specials = [{"kind": str(kind), "curve": int(number),
-                     **{name: _number(ds[f"special_{name}"].values[index]) for name in names}}
-                    for index, (kind, number) in enumerate(zip(ds["special_kind"].values, ds["special_curve"].values))]
-    return {"parameters": names, "curves": rows, "specials": specials}
+
+def _end(values, what, side, number) -> list[str]:
+    """[status, reason]: why branch or curve ``number`` stops at its ``side`` ("first", "last")."""
+    return [_plain(values[f"{what}_end_{side}_{part}"][number]) for part in ("status", "reason")]
 
 
 def _format_curves(curves) -> list[str]:
@@ -179,13 +173,16 @@ def _format_curves(curves) -> list[str]:
         ranges = ", ".join(f"{name} from {_short(row[name][0])} to {_short(row[name][1])}" for name in names)
         lines.append(f"curve {row['curve']}:     {row['kind']}, period {row['periods']}, {row['points']} points, "
                      f"{ranges}")
-        for side in ("first", "last"):
-            status, reason = row[f"{side}_end"]
-            lines.append(f"  {side} end:   {status}: {reason}")
+        lines += _format_ends(row)
     for row in curves["specials"]:
         where = ", ".join(f"{name} = {row[name]:.8g}" for name in names)
         lines.append(f"special:     {row['kind']} at {where} (curve {row['curve']})")
     return lines
+
+
+def _format_ends(row) -> list[str]:
+    """Why a branch or curve stops, one line per end."""
+    return [f"  {side} end:   {row[f'{side}_end'][0]}: {row[f'{side}_end'][1]}" for side in ("first", "last")]
 
 
 def _format_branches(branches) -> list[str]:
@@ -196,9 +193,7 @@ def _format_branches(branches) -> list[str]:
     for row in branches["branches"]:
         lines.append(f"branch {row['branch']}:    period {row['periods']}, {row['points']} points "
                      f"({row['stable_points']} stable), {name} from {_short(row['min'])} to {_short(row['max'])}")
-        for side in ("first", "last"):
-            status, reason = row[f"{side}_end"]
-            lines.append(f"  {side} end:   {status}: {reason}")
+        lines += _format_ends(row)
     for row in branches["bifurcations"]:
         lines.append(f"bifurcation: {row['kind']} at {name} = {row['parameter']:.8g} (branch {row['branch']}, "
                      f"R = {_short(row['R'])})")

@@ -268,8 +268,11 @@ def check_layout(f, path, layout, kind):
     return values
 
 
-def check_branch(path) -> None:
-    """Raise ResultFileError (one line) unless ``path`` is a sound branch file of this format."""
+def check_branch(path) -> tuple[str, dict]:
+    """Raise ResultFileError (one line) unless ``path`` is a sound branch file of this format.
+
+    Returns what the check read, so that a reader needs no second pass over the file: the
+    continued parameter's name and {name: values} of every array of LAYOUT (text as bytes)."""
     path = os.fspath(path)
     try:
         with open_hdf5(path, "r") as f:
@@ -290,3 +293,4 @@ def check_branch(path) -> None:
         unknown = sorted({_text(v) for v in values[name]} - set(allowed))
         if unknown:
             raise ResultFileError(f"{path} is corrupt: {name} holds {unknown[0]!r}, not one of {', '.join(allowed)}")
+    return parameter, values

@@ -166,8 +166,12 @@ def layout(names):
     }
 
 
-def check_curves(path) -> None:
-    """Raise ResultFileError (one line) unless ``path`` is a sound curves file of this format."""
+def check_curves(path) -> tuple[list, dict]:
+    """Raise ResultFileError (one line) unless ``path`` is a sound curves file of this format.
+
+    Returns what the check read, so that a reader needs no second pass over the file: the two
+    parameters' names in order and {name: values} of every array of ``layout(names)`` (text as
+    bytes)."""
     path = os.fspath(path)
     try:
         with open_hdf5(path, "r") as f:
@@ -188,3 +192,4 @@ def check_curves(path) -> None:
         unknown = sorted({_text(v) for v in values[name]} - set(allowed))
         if unknown:
             raise ResultFileError(f"{path} is corrupt: {name} holds {unknown[0]!r}, not one of {', '.join(allowed)}")
+    return names, values
