@@ -54,6 +54,20 @@ def test_info_summarises_the_branch(branch_file, invoke):
     assert "bifurcation: fold at g = " in result.output
 
 
+def test_info_of_a_bifurcation_without_a_parameter_says_nan(branch_file, invoke, tmp_path):
+    # A file written elsewhere (or edited) may hold NaN where a located parameter belongs: info
+    # prints it as nan, as it prints every other missing number, not a traceback.
+    from damaged import damaged_copy
+
+    def forget_the_parameter(f):
+        f["bifurcation_parameter"][0] = np.nan
+
+    path = damaged_copy(branch_file[0], tmp_path, forget_the_parameter)
+    result = invoke("info", path)
+    assert result.exit_code == 0, result.output
+    assert " at g = nan (branch 0" in result.output
+
+
 def test_existing_output_is_refused(branch_file, invoke, tmp_path, write_config):
     path, _ = branch_file
     config = write_config(tmp_path, HYSTERESIS, "again.yaml")

@@ -175,7 +175,7 @@ def _format_curves(curves) -> list[str]:
                      f"{ranges}")
         lines += _format_ends(row)
     for row in curves["specials"]:
-        where = ", ".join(f"{name} = {row[name]:.8g}" for name in names)
+        where = ", ".join(f"{name} = {_precise(row[name])}" for name in names)
         lines.append(f"special:     {row['kind']} at {where} (curve {row['curve']})")
     return lines
 
@@ -195,7 +195,7 @@ def _format_branches(branches) -> list[str]:
                      f"({row['stable_points']} stable), {name} from {_short(row['min'])} to {_short(row['max'])}")
         lines += _format_ends(row)
     for row in branches["bifurcations"]:
-        lines.append(f"bifurcation: {row['kind']} at {name} = {row['parameter']:.8g} (branch {row['branch']}, "
+        lines.append(f"bifurcation: {row['kind']} at {name} = {_precise(row['parameter'])} (branch {row['branch']}, "
                      f"R = {_short(row['R'])})")
     return lines
 
@@ -543,3 +543,8 @@ def _count_width(summary) -> int:
 
 def _short(value) -> str:
     return format(value, "g") if isinstance(value, float) else str(value)
+
+
+def _precise(value) -> str:
+    """A located parameter to 8 digits; a missing one (NaN in the file, None here) as "nan"."""
+    return "nan" if value is None else format(value, ".8g")
