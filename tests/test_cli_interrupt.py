@@ -88,6 +88,36 @@ def test_a_sigint_inside_code_that_exec_runs_still_exits_130(tmp_path):
     assert process.returncode == 130, process.stderr
 
 
+def test_a_sigint_while_numba_compiles_exits_130_with_one_line(tmp_path):
+    """The other rare race: SIGINT while llvmlite calls back into Python as numba compiles (or
+    caches) a kernel. An exception cannot leave a ctypes callback (Python prints "Exception ignored
+    ..." and goes on, the Ctrl-C lost, exit 0). Here the signal lands inside a ctypes callback
+    while numba's compiler lock is held, every time."""
+    package = tmp_path / "sigint_in_compile"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "__main__.py").write_text(
+        "import ctypes, os, signal, sys\n"
+        "from numba.core.compiler_lock import global_compiler_lock\n"
+        "from vrsweep.execution import signals\n"
+        "signals.exit_at_once_on_sigint()\n"
+        "signals.raise_on_sigint()  # as cli.py does once a command runs\n"
+        "@ctypes.CFUNCTYPE(None)\n"
+        "def callback():\n"
+        "    os.kill(os.getpid(), signal.SIGINT)\n"
+        "    for _ in range(10 ** 6): pass\n"
+        "try:\n"
+        "    with global_compiler_lock:\n"
+        "        callback()\n"
+        "except KeyboardInterrupt:\n"
+        "    sys.exit(130)\n"
+        "sys.exit(0)\n")
+    process = subprocess.run([sys.executable, "-m", package.name], cwd=tmp_path, capture_output=True, text=True,
+                             timeout=60)
+    assert process.returncode == 130, process.stderr
+    assert process.stderr == "Interrupted (SIGINT)\n"
+
+
 def test_a_reader_that_stops_reading_is_no_error(tmp_path):
     """`vrsweep validate CONFIG | head -0`: exit 141 (SIGPIPE's code), no "Error: Broken pipe"."""
     process = subprocess.Popen([sys.executable, "-m", "vrsweep", "validate", str(FIG3)],

@@ -83,7 +83,25 @@ def exit_at_once_on_sigint() -> None:
         signal.signal(signal.SIGINT, _exit_interrupted)
 
 
+def _compiling() -> bool:
+    """numba holds its compiler lock in this thread: it compiles, or loads from its cache (read
+    from sys.modules: this module must not import numba)."""
+    lock_module = sys.modules.get("numba.core.compiler_lock")
+    if lock_module is None:
+        return False
+    try:
+        return bool(lock_module.global_compiler_lock.is_locked())
+    except Exception:  # noqa: BLE001 -- a numba without the lock's API: raise as usual
+        return False
+
+
 def _raise_interrupted(signum, frame):
+    if _compiling():
+        # llvmlite calls back into Python while numba compiles, and an exception cannot leave such a
+        # callback: Python would print "Exception ignored on calling ctypes callback function" with
+        # a traceback and go on, the Ctrl-C lost. Nothing is computed or written while a kernel
+        # compiles, so leave at once, as during start-up.
+        _exit_interrupted(signum, frame)
     # Interrupted, not Python's bare KeyboardInterrupt: when a bare one leaves code that exec() or
     # eval() runs from a string (dataclasses and namedtuples are made so, many while numba is
     # imported), CPython 3.11 notes an "unhandled Ctrl-C" even if a caller catches it, and
