@@ -76,14 +76,21 @@ def main():
     multi_impact(method)
 
 
-def switching(method):
-    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0, g=17.86)
-    settings = settings_vector(rtol=1e-12, atol=1e-14)
+def _original_model_at(g, rtol, max_step, max_period, method):
+    """(problem, the orbit found from the paper's start at g, a sweep point's time there): the
+    original model at Fig. 1's parameters (Omega = 4), continued in g."""
+    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0, g=g)
+    settings = settings_vector(rtol=rtol, atol=rtol * 1e-2)
     coefficients = kernel_coefficients(parameters, "original")
     problem = continuation.ContinuationProblem(parameters, "original", "g", settings, method,
-                                               dict(continuation.DEFAULTS, max_step=0.3))
-    start = continuation.find_start(problem, [0.99, 0.5], 17.86, 300, 16)  # warm-up: compiles
+                                               dict(continuation.DEFAULTS, max_step=max_step))
+    start = continuation.find_start(problem, [0.99, 0.5], g, 300, max_period)  # warm-up: compiles
     sweep_point, _ = best_of(lambda: simulate(coefficients, start.state, settings, method=method))
+    return problem, start, sweep_point
+
+
+def switching(method):
+    problem, start, sweep_point = _original_model_at(17.86, 1e-12, 0.3, 16, method)
     whole, (branch, bifurcations) = best_of(
         lambda: continuation.continue_branch(problem, start, 17.8255, 17.87, 40), repeats=1)
     switched, (branches, _, failures) = best_of(
@@ -99,13 +106,7 @@ def switching(method):
 
 
 def multi_impact(method):
-    parameters = dict(DEFAULT_PARAMETERS, Omega=4.0, g=17.7)
-    settings = settings_vector(rtol=1e-10, atol=1e-12)
-    coefficients = kernel_coefficients(parameters, "original")
-    problem = continuation.ContinuationProblem(parameters, "original", "g", settings, method,
-                                               dict(continuation.DEFAULTS, max_step=0.05))
-    start = continuation.find_start(problem, [0.99, 0.5], 17.7, 300, 8)  # warm-up: compiles
-    sweep_point, _ = best_of(lambda: simulate(coefficients, start.state, settings, method=method))
+    problem, start, sweep_point = _original_model_at(17.7, 1e-10, 0.05, 8, method)
     whole, (orbits, found, _) = best_of(
         lambda: continuation.follow(problem, start, -1, 17.55, 17.8, 40), repeats=1)
     grazes = [orbit for kind, orbit in found if kind == "grazing"]

@@ -71,21 +71,26 @@ def test_a_sigint_inside_code_that_exec_runs_still_exits_130(tmp_path):
     often) raised a bare KeyboardInterrupt there, which CPython notes as unhandled though the
     command line catches it, and `python -m` then kills itself with SIGINT at exit. Here the
     signal lands inside exec'd code every time, under the command line's own SIGINT handling."""
-    package = tmp_path / "sigint_in_exec"
-    package.mkdir()
-    (package / "__init__.py").write_text("")
-    (package / "__main__.py").write_text(
-        "import sys\n"
-        "from vrsweep.execution import signals\n"
-        "signals.exit_at_once_on_sigint()\n"
-        "signals.raise_on_sigint()  # as cli.py does once a command runs\n"
+    process = _under_the_command_lines_sigint(tmp_path, "sigint_in_exec", (
         "try:\n"
         "    exec('import os, signal\\nos.kill(os.getpid(), signal.SIGINT)\\nwhile True: pass')\n"
         "except KeyboardInterrupt:\n"
-        "    sys.exit(130)\n")
-    process = subprocess.run([sys.executable, "-m", package.name], cwd=tmp_path, capture_output=True, text=True,
-                             timeout=60)
+        "    sys.exit(130)\n"))
     assert process.returncode == 130, process.stderr
+
+
+def _under_the_command_lines_sigint(folder, name, code):
+    """Run ``code`` as `python -m NAME` with SIGINT handled as cli.py handles it once a command
+    runs (os, signal and sys imported); the finished subprocess."""
+    package = folder / name
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "__main__.py").write_text(
+        "import os, signal, sys\n"
+        "from vrsweep.execution import signals\n"
+        "signals.exit_at_once_on_sigint()\n"
+        "signals.raise_on_sigint()  # as cli.py does once a command runs\n" + code)
+    return subprocess.run([sys.executable, "-m", name], cwd=folder, capture_output=True, text=True, timeout=60)
 
 
 def test_a_sigint_while_numba_compiles_exits_130_with_one_line(tmp_path):
@@ -93,15 +98,9 @@ def test_a_sigint_while_numba_compiles_exits_130_with_one_line(tmp_path):
     caches) a kernel. An exception cannot leave a ctypes callback (Python prints "Exception ignored
     ..." and goes on, the Ctrl-C lost, exit 0). Here the signal lands inside a ctypes callback
     while numba's compiler lock is held, every time."""
-    package = tmp_path / "sigint_in_compile"
-    package.mkdir()
-    (package / "__init__.py").write_text("")
-    (package / "__main__.py").write_text(
-        "import ctypes, os, signal, sys\n"
+    process = _under_the_command_lines_sigint(tmp_path, "sigint_in_compile", (
+        "import ctypes\n"
         "from numba.core.compiler_lock import global_compiler_lock\n"
-        "from vrsweep.execution import signals\n"
-        "signals.exit_at_once_on_sigint()\n"
-        "signals.raise_on_sigint()  # as cli.py does once a command runs\n"
         "@ctypes.CFUNCTYPE(None)\n"
         "def callback():\n"
         "    os.kill(os.getpid(), signal.SIGINT)\n"
@@ -111,9 +110,7 @@ def test_a_sigint_while_numba_compiles_exits_130_with_one_line(tmp_path):
         "        callback()\n"
         "except KeyboardInterrupt:\n"
         "    sys.exit(130)\n"
-        "sys.exit(0)\n")
-    process = subprocess.run([sys.executable, "-m", package.name], cwd=tmp_path, capture_output=True, text=True,
-                             timeout=60)
+        "sys.exit(0)\n"))
     assert process.returncode == 130, process.stderr
     assert process.stderr == "Interrupted (SIGINT)\n"
 

@@ -374,14 +374,19 @@ def _bends(before, previous, current):
     was too long for the branch's curvature, or landed on another branch with the same impact
     count (a coarse step at the end of Fig. 1's period-3 window passes two grazes and a fold at
     once and lands on an orbit whose R is twice the secant's)."""
+    expected = _along_secant(before, previous, current, before.R if before else None, previous.R)
+    return expected is not None and abs(current.R - expected) > BEND_TOLERANCE * max(1.0, abs(previous.R))
+
+
+def _along_secant(before, previous, current, value_before, value_previous):
+    """A quantity's value at ``current`` on the secant through its values at ``before`` and
+    ``previous``, carried along the arclength in (x, v, parameter); None without a secant."""
     if before is None:
-        return False
+        return None
     span = np.linalg.norm(previous.z - before.z)
     if not span > 0.0:
-        return False
-    ratio = np.linalg.norm(current.z - previous.z) / span
-    expected = previous.R + (previous.R - before.R) * ratio
-    return abs(current.R - expected) > BEND_TOLERANCE * max(1.0, abs(previous.R))
+        return None
+    return value_previous + (value_previous - value_before) * np.linalg.norm(current.z - previous.z) / span
 
 
 def _gaps(problem, orbit):
@@ -405,14 +410,11 @@ def _heading_for_graze(problem, before, previous, current):
     previous orbit was not yet close to (long steps)."""
     if before is None:
         return False
-    span = np.linalg.norm(previous.z - before.z)
-    if not span > 0.0:
-        return False
-    ratio = np.linalg.norm(current.z - previous.z) / span
     for gap_before, gap_previous in zip(_gaps(problem, before), _gaps(problem, previous)):
-        if np.isfinite(gap_before) and np.isfinite(gap_previous) and (
-                gap_previous + (gap_previous - gap_before) * ratio < 0.0):
-            return True
+        if np.isfinite(gap_before) and np.isfinite(gap_previous):
+            expected = _along_secant(before, previous, current, gap_before, gap_previous)
+            if expected is not None and expected < 0.0:
+                return True
     return False
 
 
