@@ -61,8 +61,10 @@ STEP_GROWTH = 1.5
 MAX_HALVINGS = 6
 # Newton steps counted as an easy correction (the step may grow after it).
 EASY_NEWTON = 3
-# Relative size of the parameter's forward difference (F_lam).
+# Relative size of the parameter's forward difference (F_lam), and how many times it is tried
+# 100 times shorter when both directions straddle a graze.
 PARAMETER_DIFFERENCE = 1e-6
+PARAMETER_DIFFERENCE_TRIES = 3
 # Periods integrated after the transient to detect the start's period.
 START_STROBE_PERIODS = 64
 # Loose on purpose: a weakly stable orbit (|mu| = 0.96 at the hysteresis example's g = 23) is still
@@ -191,14 +193,26 @@ def _failure(orbit_map):
     return None
 
 
-def _parameter_derivative(problem, state, value, periods, end_state):
-    """F_lam = d P^p / d lam by a forward difference (module doc)."""
+def _parameter_derivative(problem, state, value, periods, orbit_map):
+    """F_lam = d P^p / d lam by a forward difference (module doc), on the same side of every
+    graze as the orbit: a difference whose other end gains or loses an impact measures the jump,
+    not the derivative (next to a graze an orbit can be 1e-6 from it in lam, the difference's own
+    size), so it is taken backwards, or shorter, until both ends have the same impacts."""
+    step = PARAMETER_DIFFERENCE * max(1.0, abs(value))
+    for _ in range(PARAMETER_DIFFERENCE_TRIES):
+        for direction in (1.0, -1.0):
+            moved = evaluate(problem, state, value + direction * step, periods)
+            if not _failure(moved) and moved.impacts == orbit_map.impacts:
+                return (moved.end_state - orbit_map.end_state) / (direction * step)
+        step *= 0.01
+    # Every difference straddles a graze (or fails): the forward one, as before; only the
+    # predictor and Newton's rate depend on it, never a converged point.
     step = PARAMETER_DIFFERENCE * max(1.0, abs(value))
     moved = evaluate(problem, state, value + step, periods)
     if _failure(moved):
         step = -step
         moved = evaluate(problem, state, value + step, periods)
-    return (moved.end_state - end_state) / step
+    return (moved.end_state - orbit_map.end_state) / step
 
 
 def _orbit(problem, state, value, periods, orbit_map, residual, iterations, derivative=None):
@@ -242,7 +256,7 @@ def correct(problem, z_guess, periods, tangent=None, z_predicted=None):
         jacobian_state = orbit_map.monodromy - np.eye(2)
         if tangent is None:
             if residual <= _tolerance(problem, z[:2]):
-                derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map.end_state)
+                derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map)
                 return _orbit(problem, z[:2], z[2], periods, orbit_map, residual, iteration, derivative), None
             try:
                 step = np.linalg.solve(jacobian_state, -residual_vector)
@@ -251,7 +265,7 @@ def correct(problem, z_guess, periods, tangent=None, z_predicted=None):
             last_step = np.concatenate([step, [0.0]])
             z = z + last_step
             continue
-        derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map.end_state)
+        derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map)
         arc = float(tangent @ (z - z_predicted))
         if residual <= _tolerance(problem, z[:2]) and abs(arc) <= _tolerance(problem, z[:2]):
             return _orbit(problem, z[:2], z[2], periods, orbit_map, residual, iteration, derivative), None
