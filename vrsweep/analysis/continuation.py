@@ -582,8 +582,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
         if crossed:
             step = options["initial_step"]
-            current = None  # no secant through the graze's corner for the next step (_bends)
-            memo.clear()  # nor the graze just crossed for the next jump check
+            memo.clear()  # the graze just crossed is no test of the next step's
         else:
             for kind, found in _detect(problem, current, orbit, tangent, step, start.periods, located):
                 if kind == "grazing":
@@ -595,7 +594,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         orbits.append(orbit)
         if progress is not None:
             progress(orbit)
-        before, current, tangent = current, orbit, new_tangent  # before is None after a crossing
+        # No secant through a graze's corner for the next step's _bends: the branch is not smooth there.
+        before, current, tangent = (None if crossed else current), orbit, new_tangent
         tried_crossing = False
         failed_crossing = failed_crossing and _near_grazing(problem, orbit)
         if not failed_crossing:
