@@ -322,7 +322,8 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
     location_tolerance in the parameter. Returns the Orbit nearest the root, or None."""
     tolerance = problem.options["location_tolerance"] * max(1.0, abs(start.parameter))
     low, high = 0.0, step
-    f_low, f_high = value_start, value_end
+    # grazing: -1 on the start's side (the same impact count), +1 beyond
+    f_low, f_high = (-1.0, 1.0) if kind == "grazing" else (value_start, value_end)
     best = None
     side = 0
     for _ in range(60):
