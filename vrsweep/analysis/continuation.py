@@ -316,51 +316,64 @@ def _torus_test(orbit):
 TEST_FUNCTIONS = {"fold": _fold_test, "period_doubling": _doubling_test, "neimark_sacker": _torus_test}
 
 
+def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, illinois=True):
+    """The point on an arc s in (0, step) where ``value_of`` changes sign, from its values f_low at
+    s = 0 and f_high at s = step: the Illinois variant of regula falsi (illinois=False: bisection).
+
+    point_at(s) -> (point, failure) corrects the arc's point at s onto the curve; value_of(point)
+    -> float; narrow(low, high, value) -> True once the bracket is narrow enough. Returns the
+    point where the value is 0, else the last point corrected (None before the first), stopping
+    at the first failure. Shared by branches (_locate) and bifurcation curves (curves.py).
+    """
+    low, high, side, best = 0.0, step, 0, None
+    for _ in range(iterations):
+        s = 0.5 * (low + high)
+        if illinois:
+            secant = (low * f_high - high * f_low) / (f_high - f_low)
+            if low < secant < high:
+                s = secant
+        point, failure = point_at(s)
+        if failure:
+            return best
+        best = point
+        value = value_of(point)
+        if value == 0.0:
+            return point
+        if np.sign(value) == np.sign(f_low):
+            low, f_low = s, value
+            if side == -1 and illinois:
+                f_high *= 0.5  # Illinois: the end that stays is halved
+            side = -1
+        else:
+            high, f_high = s, value
+            if side == 1 and illinois:
+                f_low *= 0.5
+            side = 1
+        if narrow(low, high, value):
+            break
+    return best
+
+
 def _locate(problem, start, tangent, step, kind, value_start, value_end, periods):
     """The orbit on the arc from ``start`` (0 < s < step along tangent) where the test function of
     ``kind`` vanishes, by Illinois regula falsi (grazing: bisection on the impact count), to
     location_tolerance in the parameter. Returns the Orbit nearest the root, or None."""
     tolerance = problem.options["location_tolerance"] * max(1.0, abs(start.parameter))
-    low, high = 0.0, step
-    # grazing: -1 on the start's side (the same impact count), +1 beyond
-    f_low, f_high = (-1.0, 1.0) if kind == "grazing" else (value_start, value_end)
-    best = None
-    side = 0
-    for _ in range(60):
-        if kind == "grazing":
-            s = 0.5 * (low + high)
-        else:
-            s = (low * f_high - high * f_low) / (f_high - f_low)
-            if not (low < s < high):
-                s = 0.5 * (low + high)
+
+    def point_at(s):
         z_predicted = start.z + s * tangent
-        orbit, failure = correct(problem, z_predicted, periods, tangent, z_predicted)
-        if failure:
-            return best
-        best = orbit
-        if kind == "grazing":
-            value = orbit.impacts_per_period - value_start
-            value = -1.0 if value == 0 else 1.0
-        else:
-            value = TEST_FUNCTIONS[kind](orbit)
-        if value == 0.0:
-            return orbit
-        if np.sign(value) == np.sign(f_low):
-            low, f_low = s, value
-            if side == -1 and kind != "grazing":
-                f_high *= 0.5  # Illinois: the end that stays is halved
-            side = -1
-        else:
-            high, f_high = s, value
-            if side == 1 and kind != "grazing":
-                f_low *= 0.5
-            side = 1
+        return correct(problem, z_predicted, periods, tangent, z_predicted)
+
+    def narrow(low, high, value):
         # The parameter interval between the bracket's ends: tangent[2] * (high - low) to first order.
-        if abs(tangent[2]) * (high - low) <= tolerance or (high - low) <= 1e-14 * step:
-            break
-        if kind != "grazing" and abs(value) <= 1e-12:
-            break
-    return best
+        return (abs(tangent[2]) * (high - low) <= tolerance or (high - low) <= 1e-14 * step
+                or (kind != "grazing" and abs(value) <= 1e-12))
+
+    if kind == "grazing":
+        # -1 on the start's side (the same impact count), +1 beyond
+        return locate_on_arc(point_at, lambda orbit: -1.0 if orbit.impacts_per_period == value_start else 1.0,
+                             step, -1.0, 1.0, narrow, 60, illinois=False)
+    return locate_on_arc(point_at, TEST_FUNCTIONS[kind], step, value_start, value_end, narrow, 60)
 
 
 def _detect(problem, previous, current, tangent, step, periods, graze=None):
@@ -555,9 +568,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 if near:
                     if grazing_reason is None and not (tried_crossing or failed_crossing):
                         grazing_reason = "no branch beyond the graze was found"
-                    side = ("touches the barrier" if current.impacts_per_period == 0
-                            or current.slowest_impact ** 2 > _barrier(problem, current) - current.free_x_max
-                            else "impacts at zero speed")
+                    touch, speed = _gaps(problem, current)
+                    side = "touches the barrier" if speed ** 2 > touch else "impacts at zero speed"
                     reason = (f"the orbit {side} at {problem.parameter} = {current.parameter:.8g}; "
                               f"{grazing_reason or 'no branch beyond the graze was found'}")
                     return orbits, bifurcations, (ENDED_GRAZING, reason)
@@ -676,26 +688,19 @@ def _barrier(problem, orbit):
     return float(problem.coefficients(orbit.parameter)[DELTA])
 
 
-def _near_grazing(problem, orbit):
-    delta = _barrier(problem, orbit)
-    scale = max(1.0, abs(delta))
-    if orbit.impacts_per_period == 0:
-        return delta - orbit.x_max < GRAZING_PROXIMITY * scale
-    # Reached with a speed v, an impact penetrates about v^2 / (2 a), a ~ 1: the same proximity;
-    # or one of its smooth maxima is about to touch (an impact appears).
-    return (orbit.slowest_impact < np.sqrt(GRAZING_PROXIMITY * scale)
-            or delta - orbit.free_x_max < GRAZING_PROXIMITY * scale)
+def _near_grazing(problem, orbit, proximity=GRAZING_PROXIMITY):
+    """A smooth maximum of x within proximity * max(1, |Delta|) of the barrier (an impact is about
+    to appear), or an impact slower than the root of that: reached with a speed v, an impact
+    penetrates about v^2 / (2 a), a ~ 1, so both are one scale (grazing.graze_site's)."""
+    touch, speed = _gaps(problem, orbit)
+    scale = max(1.0, abs(_barrier(problem, orbit)))
+    return touch < proximity * scale or speed ** 2 < proximity * scale
 
 
 def _graze_site(problem, orbit, proximity=GRAZING_PROXIMITY):
     """grazing.graze_site of an orbit: (side, window) or None."""
-    delta = _barrier(problem, orbit)
-    scale = max(1.0, abs(delta))
-    if orbit.impacts_per_period == 0:
-        if delta - orbit.x_max >= proximity * scale:
-            return None  # no graze near: spare the kernel call
-    elif delta - orbit.free_x_max >= proximity * scale and orbit.slowest_impact ** 2 >= proximity * scale:
-        return None
+    if not _near_grazing(problem, orbit, proximity):
+        return None  # no graze near: spare the kernel call
     orbit_map = evaluate(problem, orbit.state, orbit.parameter, orbit.periods)
     if _failure(orbit_map):
         return None

@@ -462,34 +462,20 @@ def _locate_impact_change(problem, kind, previous, tangent, step):
 
 def _locate_sign_change(problem, kind, previous, tangent, step, function, a, b):
     """Illinois regula falsi on the arc for a zero of ``function`` (CurvePoint -> float) with
-    values a at previous and b at s = step, to location_tolerance in z. The point nearest, or None."""
-    low, high, f_low, f_high, side, best = 0.0, step, a, b, 0, None
+    values a at previous and b at s = step, to location_tolerance in z (continuation.locate_on_arc).
+    The point nearest, or None; a non-finite value ends the search at its point."""
     tolerance = _location_tolerance(problem, previous.z)
-    for _ in range(40):
-        s = (low * f_high - high * f_low) / (f_high - f_low)
-        if not low < s < high:
-            s = 0.5 * (low + high)
+
+    def point_at(s):
         z_predicted = previous.z + s * tangent
-        point, failure = correct(problem, kind, z_predicted, previous.periods, tangent, z_predicted)
-        if failure:
-            return best
-        best = point
+        return correct(problem, kind, z_predicted, previous.periods, tangent, z_predicted)
+
+    def value_of(point):
         value = function(point)
-        if not np.isfinite(value) or value == 0.0:
-            return point
-        if np.sign(value) == np.sign(f_low):
-            low, f_low = s, value
-            if side == -1:
-                f_high *= 0.5
-            side = -1
-        else:
-            high, f_high = s, value
-            if side == 1:
-                f_low *= 0.5
-            side = 1
-        if high - low <= tolerance:
-            break
-    return best
+        return value if np.isfinite(value) else 0.0
+
+    return continuation.locate_on_arc(point_at, value_of, step, a, b, lambda low, high, value: high - low <= tolerance,
+                                      40)
 
 
 def _free_determinant(sign):

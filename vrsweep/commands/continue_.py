@@ -80,7 +80,6 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     from vrsweep.errors import UsageError
     from vrsweep.execution import continuation as execution
     from vrsweep.store.branch_file import branch_arrays, write_branch
-    from vrsweep.store.fileio import prepare_output_directory
 
     if bool(start_path) != bool(at):
         raise UsageError("--start and --at go together: --start SWEEP.h5 --at g=23")
@@ -92,13 +91,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     with flag_wording(flags):
         execution.problem_of(config)  # refuse a bad request before integrating anything
     path = config.output_path(output)
-    if path.exists() and not overwrite:
-        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
-    prepare_output_directory(path)
-    if not quiet:
-        from vrsweep.commands.options import say_cache_notice
-
-        say_cache_notice()
+    _prepare_output(path, overwrite, quiet)
     with flag_wording(flags):
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
         missed = []
@@ -138,7 +131,6 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
     from vrsweep.errors import UsageError
     from vrsweep.execution import curves as execution
     from vrsweep.store.curve_file import curve_arrays, write_curves
-    from vrsweep.store.fileio import prepare_output_directory
 
     if not point or along is None:
         raise UsageError(f"{path} is a branch file: say which bifurcation to follow in which parameter, "
@@ -150,13 +142,7 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
         requests = [execution.read_request(path, index, along, to, within) for index in point]
     name = "_".join(str(index) for index in point)
     path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{name}_{along}.h5")
-    if path.exists() and not overwrite:
-        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
-    prepare_output_directory(path)
-    if not quiet:
-        from vrsweep.commands.options import say_cache_notice
-
-        say_cache_notice()
+    _prepare_output(path, overwrite, quiet)
     with flag_wording(flags):
         curves, specials = [], []
         for request in requests:
@@ -182,3 +168,18 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
             click.echo(f"{special.kind} at {first} = {special.values[0]:.8g}, {second} = {special.values[1]:.8g} "
                        f"(curve {special.curve})", err=True)
         click.echo(f"-> {path}", err=True)
+
+
+def _prepare_output(path, overwrite, quiet):
+    """Refuse an existing output without --overwrite, make its folder, and say (unless quiet) that
+    the first run compiles the kernels: before any work, for branches and curves alike."""
+    from vrsweep.errors import UsageError
+    from vrsweep.store.fileio import prepare_output_directory
+
+    if path.exists() and not overwrite:
+        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
+    prepare_output_directory(path)
+    if not quiet:
+        from vrsweep.commands.options import say_cache_notice
+
+        say_cache_notice()

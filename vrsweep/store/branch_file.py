@@ -98,25 +98,39 @@ def branch_arrays(branches, bifurcations, delta):
     return arrays
 
 
-def write_branch(path, arrays, config, method, overwrite=False):
-    """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``."""
-    import numba
-
-    from vrsweep.store.provenance import cf_attributes
-
+def writable_output(path, overwrite):
+    """``path`` as a string, or UsageError: a directory, or an existing file without ``overwrite``
+    (branch and curves files alike)."""
     path = os.fspath(path)
     if os.path.isdir(path):
         raise UsageError(f"output {path} is a directory")
     if os.path.lexists(path) and not overwrite:
         raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
                                 {"overwrite": "overwrite=True"}, path=path)
+    return path
+
+
+def file_attributes(kind, config, method, title, **more):
+    """The file-level attributes of a branch or curves file: kind, format, provenance, CF."""
+    import numba
+
+    from vrsweep.store.provenance import cf_attributes
+
+    return {"vrsweep_file": kind, "vrsweep_format_version": np.int32(FORMAT_VERSION),
+            "vrsweep_complete": np.int32(1),
+            "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "config": config.to_yaml(), "model": config.model, **more, "method": method,
+            "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
+            **cf_attributes(title)}
+
+
+def write_branch(path, arrays, config, method, overwrite=False):
+    """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``."""
+    path = writable_output(path, overwrite)
     parameter = config.continuation.parameter
-    attrs = {"vrsweep_file": FILE_KIND, "vrsweep_format_version": np.int32(FORMAT_VERSION),
-             "vrsweep_complete": np.int32(1),
-             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-             "config": config.to_yaml(), "model": config.model, "parameter": parameter, "method": method,
-             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
-             **cf_attributes(f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}")}
+    attrs = file_attributes(FILE_KIND, config, method,
+                            f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}",
+                            parameter=parameter)
     image = io.BytesIO()
     with h5py.File(image, "w", track_order=True) as f:
         for name, value in attrs.items():

@@ -40,20 +40,19 @@ the layout, so a damaged file is one line.
 
 from __future__ import annotations
 
-import datetime
 import io
 import os
 
 import h5py
 import numpy as np
 
-from vrsweep import __version__
-from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
-from vrsweep.store.branch_file import _dimension, _ends, _text, _variable, check_layout, has_file_kind
+from vrsweep.store.branch_file import (
+    _dimension, _ends, _text, _variable, check_layout, file_attributes, has_file_kind, writable_output,
+)
 from vrsweep.store.fileio import open_hdf5, write_bytes
-from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "curves"
 
@@ -87,23 +86,10 @@ def write_curves(path, arrays, names, config, method, overwrite=False):
     """Write curve_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``.
 
     names: the two parameters in order; config: the Config whose resolved YAML is stored."""
-    import numba
-
-    from vrsweep.store.provenance import cf_attributes
-
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise UsageError(f"output {path} is a directory")
-    if os.path.lexists(path) and not overwrite:
-        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
-                                {"overwrite": "overwrite=True"}, path=path)
+    path = writable_output(path, overwrite)
     first, second = names
-    attrs = {"vrsweep_file": FILE_KIND, "vrsweep_format_version": np.int32(FORMAT_VERSION),
-             "vrsweep_complete": np.int32(1),
-             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-             "config": config.to_yaml(), "model": config.model, "method": method,
-             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
-             **cf_attributes(f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})")}
+    attrs = file_attributes(FILE_KIND, config, method,
+                            f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})")
     image = io.BytesIO()
     with h5py.File(image, "w", track_order=True) as f:
         for name, value in attrs.items():
