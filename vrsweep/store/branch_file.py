@@ -98,6 +98,14 @@ def branch_arrays(branches, bifurcations, delta):
     return arrays
 
 
+def _multipliers(f, mu, dims):
+    """The Floquet multipliers mu (n_points, 2), complex, as their real and imaginary parts and
+    moduli over ``dims`` (point, multiplier): branch and curves files alike."""
+    _variable(f, "multiplier_real", mu.real, dims, "real part of the Floquet multiplier", "1")
+    _variable(f, "multiplier_imag", mu.imag, dims, "imaginary part of the Floquet multiplier", "1")
+    _variable(f, "multiplier_modulus", np.abs(mu), dims, "modulus of the Floquet multiplier", "1")
+
+
 def writable_output(path, overwrite):
     """``path`` as a string, or UsageError: a directory, or an existing file without ``overwrite``
     (branch and curves files alike)."""
@@ -141,10 +149,7 @@ def write_branch(path, arrays, config, method, overwrite=False):
                                 "Floquet multiplier number, larger modulus first")
         for name, (long_name, units) in _POINT_VARIABLES.items():
             _variable(f, name, arrays[name], (point,), long_name, units)
-        mu = arrays["multipliers"]
-        _variable(f, "multiplier_real", mu.real, (point, multiplier), "real part of the Floquet multiplier", "1")
-        _variable(f, "multiplier_imag", mu.imag, (point, multiplier), "imaginary part of the Floquet multiplier", "1")
-        _variable(f, "multiplier_modulus", np.abs(mu), (point, multiplier), "modulus of the Floquet multiplier", "1")
+        _multipliers(f, arrays["multipliers"], (point, multiplier))
         f["parameter"].attrs["long_name"] = f"continued parameter {parameter}"
         table = arrays["bifurcations"]
         bifurcation = _dimension(f, "bifurcation", np.arange(len(table["kind"]), dtype=np.int64),

@@ -50,7 +50,7 @@ from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
 from vrsweep.store.branch_file import (
-    _dimension, _ends, _text, _variable, check_layout, file_attributes, has_file_kind, writable_output,
+    _dimension, _ends, _multipliers, _text, _variable, check_layout, file_attributes, has_file_kind, writable_output,
 )
 from vrsweep.store.fileio import open_hdf5, write_bytes
 
@@ -103,10 +103,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False):
             _variable(f, name, arrays[name], (point,), PARAMETER_LONG_NAMES[name], PARAMETER_UNITS[name])
         for name, (long_name, units) in _POINT_VARIABLES.items():
             _variable(f, name, arrays[name], (point,), long_name, units)
-        mu = arrays["multipliers"]
-        _variable(f, "multiplier_real", mu.real, (point, multiplier), "real part of the Floquet multiplier", "1")
-        _variable(f, "multiplier_imag", mu.imag, (point, multiplier), "imaginary part of the Floquet multiplier", "1")
-        _variable(f, "multiplier_modulus", np.abs(mu), (point, multiplier), "modulus of the Floquet multiplier", "1")
+        _multipliers(f, arrays["multipliers"], (point, multiplier))
         curves = arrays["curves"]
         curve_id = _dimension(f, "curve_id", np.arange(len(curves), dtype=np.int64), "curve number")
         _variable(f, "curve_kind", np.asarray([c[0] for c in curves], dtype=object), (curve_id,),
