@@ -127,7 +127,7 @@ def best(run):
 
 def main():
     coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, Omega=4.0, g=10.0), "original")
-    h_max = kernel.FAST_STEP_FRACTION * 2.0 * math.pi / coefficients[kernel.BIG_OMEGA]
+    h_max = coefficients[kernel.MAX_STEP]
     scratch = rotation_scratch(h_max, dop853.C_STAGES)
     # a state off the turning point, v changing sign inside the step (a turning point)
     y = np.zeros(N_STATE)

@@ -35,8 +35,8 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from vrsweep.numerics.model import (ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, OMEGA, STIFFNESS,
-                           kernel_coefficients)
+from vrsweep.numerics.model import (ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, N_COEFFICIENTS, OMEGA, STIFFNESS,
+                           fill_header, kernel_coefficients)
 
 # Points where the reference's R is tolerance-independent: test_reference.py::test_converged_points
 # checks |R(rtol 1e-10) - R(rtol 1e-12)| < 1e-7 R. All use the paper's parameters (Fig. 1:
@@ -81,18 +81,19 @@ def coefficient_vector(gamma=0.0, mu=1.0, stiffness=0.0, alpha=0.0, c=0.0, omega
     kernel_coefficients can only make stiffness = -omega0^2 (original) or wt2 (effective); the
     linear closed-form cases need any signed stiffness with gamma = alpha = 0.
     """
-    vec = np.empty(10)
+    vec = np.empty(N_COEFFICIENTS)
     vec[GAMMA], vec[MU], vec[STIFFNESS], vec[ALPHA] = gamma, mu, stiffness, alpha
     vec[C], vec[OMEGA], vec[G], vec[BIG_OMEGA] = c, omega, g, Omega
     vec[DELTA], vec[E] = Delta, e
+    fill_header(vec)  # the kernel's header (coefficients.py): T, step cap, the barrier
     return vec
 
 
 def _unpack(coefficients):
     """The coefficient vector as named Python floats (fast scalar arithmetic in the RHS)."""
     c = np.asarray(coefficients, dtype=np.float64)
-    if c.shape != (10,):
-        raise ValueError(f"expected one coefficient vector of shape (10,), got {c.shape}")
+    if c.shape != (N_COEFFICIENTS,):
+        raise ValueError(f"expected one coefficient vector of shape ({N_COEFFICIENTS},), got {c.shape}")
     return {name: float(c[i]) for name, i in (
         ("gamma", GAMMA), ("mu", MU), ("k", STIFFNESS), ("alpha", ALPHA), ("c", C),
         ("omega", OMEGA), ("g", G), ("Omega", BIG_OMEGA), ("Delta", DELTA), ("e", E))}

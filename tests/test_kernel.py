@@ -11,7 +11,7 @@ import pytest
 
 from vrsweep.numerics import kernel
 from vrsweep.numerics.model import (
-    ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, N_COEFFICIENTS, OMEGA, STIFFNESS, kernel_coefficients,
+    ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, N_COEFFICIENTS, OMEGA, STIFFNESS, fill_header, kernel_coefficients,
 )
 from vrsweep.results import Status
 from vrsweep.numerics.trajectory import settings_vector, simulate
@@ -28,6 +28,7 @@ def coefficients(gamma=0.0, mu=1.0, k=0.0, alpha=0.0, c=0.0, omega=0.5, g=0.0, O
     vector = np.zeros(N_COEFFICIENTS)
     vector[[GAMMA, MU, STIFFNESS, ALPHA, C, OMEGA, G, BIG_OMEGA, DELTA, E]] = \
         [gamma, mu, k, alpha, c, omega, g, Omega, Delta, e]
+    fill_header(vector)
     return vector
 
 

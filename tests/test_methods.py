@@ -22,7 +22,7 @@ from vrsweep.numerics import kernel
 from vrsweep.numerics.dop853 import dop853_dense, dop853_step
 from vrsweep.numerics.rk45 import DP54_C, dense_value, dp54_dense, dp54_step
 from vrsweep.numerics.kernel import (
-    N_STATE, no_preparation, no_scratch, oscillator_rhs, oscillator_rhs_rotated, prepare_rotations,
+    N_STATE, dop853_rotation_scratch, no_preparation, no_scratch, oscillator_rhs, oscillator_rhs_rotated, prepare_rotations,
     rotation_scratch,
 )
 from vrsweep.numerics.impact import locate_root
@@ -43,7 +43,7 @@ STEPPERS = {
 }
 STAGE_RHS = {
     "rk45": (oscillator_rhs, no_preparation, no_scratch, DP54_C),
-    "dop853": (oscillator_rhs_rotated, prepare_rotations, rotation_scratch, dop853.C_STAGES),
+    "dop853": (oscillator_rhs_rotated, prepare_rotations, dop853_rotation_scratch, dop853.C_STAGES),
 }
 assert set(STEPPERS) == set(kernel.INTEGRATORS)
 
@@ -68,7 +68,7 @@ def _fixed_steps(step, stage_rhs, prepare, make_scratch, nodes, k_rows, fsal_row
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     h = t_end / n_steps
-    scratch = make_scratch(h, nodes)
+    scratch = make_scratch(h)  # the method's own scratch (nodes: the method's, for the record)
     t = 0.0
     oscillator_rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
     for i in range(n_steps):
@@ -91,7 +91,7 @@ def _one_step_midpoint(step, dense_output, stage_rhs, prepare, make_scratch, nod
     y_new = np.empty(N_STATE)
     stage = np.empty(N_STATE)
     dense = np.empty((N_STATE, n_dense))
-    scratch = make_scratch(h, nodes)
+    scratch = make_scratch(h)  # the method's own scratch (nodes: the method's, for the record)
     oscillator_rhs(0.0, 0.0, -1, 0.0, y, coefficients, f, scratch)
     prepare(0.0, h, coefficients, scratch)
     step(stage_rhs, 0.0, y, f, h, coefficients, K, y_new, stage, scratch)

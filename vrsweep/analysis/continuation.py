@@ -46,7 +46,8 @@ from vrsweep.analysis import grazing
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
-from vrsweep.numerics.model import DELTA, OMEGA, kernel_coefficients
+from vrsweep.numerics.coefficients import PERIOD, barrier_position
+from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import simulate
@@ -507,7 +508,7 @@ def _new_impact_window(problem, free_side, impacting_side):
     if _failure(free_map) or _failure(impacting_map):
         return False
     # The new impact: the one farthest in time from every impact of the free side.
-    orbit_period = periods * 2.0 * np.pi / problem.coefficients(free_side.parameter)[OMEGA]
+    orbit_period = periods * problem.coefficients(free_side.parameter)[PERIOD]
     gaps = np.abs(impacting_map.impact_times[:, None] - free_map.impact_times[None, :])
     gaps = np.minimum(gaps, orbit_period - gaps).min(axis=1)
     touch_time = float(impacting_map.impact_times[np.argmax(gaps)])
@@ -685,7 +686,7 @@ GRAZING_SEARCH_RADII = (1e-3, 4e-3, 1.6e-2)
 
 
 def _barrier(problem, orbit):
-    return float(problem.coefficients(orbit.parameter)[DELTA])
+    return float(barrier_position(problem.coefficients(orbit.parameter)))
 
 
 def _near_grazing(problem, orbit, proximity=GRAZING_PROXIMITY):

@@ -76,7 +76,7 @@ Stroboscopic (Poincare) samples
 import numpy as np
 
 from vrsweep.numerics import kernel
-from vrsweep.numerics.model import C, OMEGA
+from vrsweep.numerics.coefficients import PERIOD, RESPONSE_SCALE
 from vrsweep.results import Status
 
 N_BATCHES = 10
@@ -204,7 +204,7 @@ def lyapunov_values(records, summaries, statuses, coefficients, integration, per
     ok = statuses == Status.OK
     lyapunov = summaries[:, kernel.SUM_LYAPUNOV].copy()
     lyapunov_err = np.full(len(lyapunov), np.nan)
-    slow_period = 2.0 * np.pi / coefficients[:, OMEGA]
+    slow_period = coefficients[:, PERIOD]
     measured = window_records(records, integration)
     for i in np.flatnonzero(ok):
         lyapunov_err[i] = lyapunov_error(measured[i, :, kernel.REC_LOG_STRETCH], slow_period[i],
@@ -224,8 +224,8 @@ def point_diagnostics(records, statuses, coefficients, integration):
     strobe_v[~ok] = np.nan
     period = detect_period(strobe_x, strobe_v, integration.max_period, integration.period_tolerance)
     period[~ok] = 0
-    slow_period = 2.0 * np.pi / coefficients[:, OMEGA]
-    r_err = batch_error(measured, slow_period, coefficients[:, C], period, ok)
+    slow_period = coefficients[:, PERIOD]
+    r_err = batch_error(measured, slow_period, coefficients[:, RESPONSE_SCALE], period, ok)
     impacts = measured[:, :, kernel.REC_IMPACTS]  # the last p <= strobe_periods // 2 periods are read
     impacts_per_cycle = np.full(len(period), -1, dtype=np.int64)
     for p in np.unique(period[period > 0]):

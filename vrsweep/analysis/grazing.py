@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrsweep.numerics.model import BIG_OMEGA, DELTA, G, OMEGA
+from vrsweep.numerics.coefficients import PERIOD, barrier_position, free_of_barriers, shortest_period
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.results import Status
 
@@ -92,9 +92,7 @@ class Graze:
 
 def free_coefficients(coefficients):
     """The coefficient vector without the barrier (Delta -> infinity: the kernel never impacts)."""
-    free = np.array(coefficients, dtype=np.float64)
-    free[DELTA] = np.inf
-    return free
+    return free_of_barriers(coefficients)
 
 
 def free_map(problem, state, value, periods, window=None):
@@ -108,7 +106,7 @@ def free_map(problem, state, value, periods, window=None):
 
 
 def barrier(problem, value):
-    return float(problem.coefficients(value)[DELTA])
+    return float(barrier_position(problem.coefficients(value)))
 
 
 def free_top(orbit_map, window):
@@ -121,10 +119,8 @@ def graze_window(problem, orbit_map, value, periods, touch_time):
     OrbitMap is ``orbit_map`` (the impact there, if any, is left out of "other impacts"), or None
     when the touch is too close to the stroboscopic section t = 0 mod pT for one."""
     coefficients = problem.coefficients(value)
-    slow_period = 2.0 * np.pi / coefficients[OMEGA]
-    shortest = slow_period
-    if coefficients[G] != 0.0:
-        shortest = min(shortest, 2.0 * np.pi / coefficients[BIG_OMEGA])
+    slow_period = coefficients[PERIOD]
+    shortest = shortest_period(coefficients)
     half = WINDOW_FORCING_SHARE * shortest
     orbit_period = periods * slow_period
     others = orbit_map.impact_times

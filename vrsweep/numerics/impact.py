@@ -19,7 +19,6 @@ import numpy as np
 
 from vrsweep.numerics.rk45 import dense_value
 from vrsweep.numerics.jit import kernel_jit
-from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, G, OMEGA, STIFFNESS
 from vrsweep.numerics.state import V, X
 
 
@@ -393,23 +392,12 @@ def hermite_reach(x0, v0, a0, x1, v1, a1, h, level):
     return top + HERMITE_MARGIN_FACTOR * margin - level
 
 
-@kernel_jit
-def force_at_barrier(t, coefficients):
-    """Acceleration of a mass resting at (Delta, 0): positive pushes it into the barrier.
-
-    The damping term vanishes with the velocity, so only stiffness and forcing remain.
-    """
-    delta = coefficients[DELTA]
-    return (coefficients[C] * np.cos(coefficients[OMEGA] * t)
-            + coefficients[G] * np.cos(coefficients[BIG_OMEGA] * t)
-            - coefficients[STIFFNESS] * delta - coefficients[ALPHA] * delta ** 3)
-
-
-@kernel_jit
-def release_time(t_start, t_limit, coefficients, scan_step, max_scans):
+@kernel_jit(inline="always")  # a function passed to a call numba does not inline is a dynamic global: no cache
+def release_time(barrier_force, barrier, t_start, t_limit, coefficients, scan_step, max_scans):
     """First t in (t_start, t_limit] where the force at the barrier stops pushing into it.
 
-    The force is an explicit function of t, so it is scanned in steps of ``scan_step``
+    barrier_force(t, coefficients, barrier): the model's acceleration of a mass at rest on that
+    barrier, positive into it. The force is an explicit function of t, so it is scanned in steps of ``scan_step``
     (a fraction of the shortest forcing period, so no sign change is stepped over) and the
     sign change is bisected to rounding. Returns (t, scans): t = t_limit + 1 if the mass stays
     stuck, NaN if ``max_scans`` scan intervals did not reach either (a fast forcing period
@@ -422,12 +410,12 @@ def release_time(t_start, t_limit, coefficients, scan_step, max_scans):
             return np.nan, scans
         scans += 1
         t_b = min(t_a + scan_step, t_limit)
-        if force_at_barrier(t_b, coefficients) <= 0.0:
+        if barrier_force(t_b, coefficients, barrier) <= 0.0:
             for _ in range(MAX_ROOT_ITERATIONS):
                 t_mid = 0.5 * (t_a + t_b)
                 if t_mid <= t_a or t_mid >= t_b:
                     break
-                if force_at_barrier(t_mid, coefficients) <= 0.0:
+                if barrier_force(t_mid, coefficients, barrier) <= 0.0:
                     t_b = t_mid
                 else:
                     t_a = t_mid

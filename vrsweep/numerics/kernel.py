@@ -35,8 +35,11 @@ from vrsweep.numerics.dop853 import (
     dop853_step,
 )
 from vrsweep.numerics.impact import (
-    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, force_at_barrier, hermite_reach, locate_root,
-    release_time,
+    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, hermite_reach, locate_root, release_time,
+)
+from vrsweep.numerics.coefficients import (
+    BARRIER, BARRIER_VALUES, MAX_BARRIERS, MAX_STEP, N_BARRIERS, PERIOD, POSITION, RESPONSE_FREQUENCY,
+    RESPONSE_SCALE, RESTITUTION, SCAN_STEP, SIDE,
 )
 from vrsweep.numerics.rk45 import (
     DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, certain_growth, dense_value, dp54_dense,
@@ -56,8 +59,9 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
     N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
     ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
-    no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent_rhs,
-    oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations, rotation_scratch,
+    dop853_rotation_scratch, force_at_barrier, no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent,
+    oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations,
+    rotation_scratch,
 )
 from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, read as kernel.*
     ATOL, DEFAULT_METHOD, DIVERGENCE_BOUND, MAX_IMPACTS_PER_PERIOD, MAX_STEPS, MEASURE_PERIODS, N_SETTINGS,
@@ -65,23 +69,17 @@ from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, rea
 )
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import (
-    apply_saltation, collapse_tangents, record_monodromy, seed_tangents, tangent_derivative,
-    tangents_out_of_range,
+    apply_saltation, collapse_tangents, record_monodromy, seed_tangents, tangents_out_of_range,
 )
 
 # Impacts are decided on each step's dense output in Bernstein form (impact.find_crossing), which
 # sees a graze between a step's ends however long the step: events need no step cap (up to version
 # 0.1 a step was capped at 1/8 of the shortest forcing period so that a graze showed as one turning
-# point). The caps that stay are for accuracy (benchmarks/README.md, "Steps without the cap"):
-# without them the controller lets local errors grow to the tolerance, and R, a Fourier component
-# about 1e-3 of x's size at g = 30, then needed rtol 1e-6 to 1e-7 and more steps than the capped
-# run at rtol 1e-4. With the fast forcing (g != 0): 1/8 of its period (1/6 left R 1.7e-3 off at
-# g = 30, rtol 1e-4). Without it (the effective model): 1/6 of the slow period (none left R 1.5e-5
-# off at g = 25, rtol 1e-4; 1/6 took 1404 steps for R within 8.5e-7, 1/8 1606).
-FAST_STEP_FRACTION = 1.0 / 8.0
-SLOW_STEP_FRACTION = 1.0 / 6.0
-# Sticking: the force at the barrier is scanned in steps of this fraction of the shortest period.
-STICK_SCAN_FRACTION = 1.0 / 64.0
+# point). The cap that stays, coefficients[MAX_STEP], is for accuracy (benchmarks/README.md, "Steps
+# without the cap"): without it the controller lets local errors grow to the tolerance, and R, a
+# Fourier component about 1e-3 of x's size at g = 30, then needed rtol 1e-6 to 1e-7 and more steps
+# than the capped run at rtol 1e-4. Each model sets its own (model.py's fractions of the forcing
+# periods for the paper's models; a written model's max_step).
 # The exact step to an impact is Newton-refined until x is this close to Delta (relative).
 IMPACT_POSITION_TOLERANCE = 1e-13
 IMPACT_NEWTON_ITERATIONS = 3
@@ -97,12 +95,15 @@ def _smallest_step(t, slow_period):
     return 4.0 * 2.2e-16 * max(abs(t), slow_period)
 
 
+# --- the paper's family (model.py, rhs.py), each method with and without the tangent vectors ------
+
 @kernel_jit
 def integrate_rk45(coefficients, initial_state, settings, period_records, summary,
                    sample_times, samples, impact_log, stick_log):
-    """Integrate one point over transient + measurement slow periods. Returns a Status code.
+    """Integrate one point over transient + measurement periods. Returns a Status code.
 
-    coefficients    (N_COEFFICIENTS,)        model.kernel_coefficients
+    coefficients    (n_coefficients,)        a model's vector: the header of coefficients.py, then
+                                              the model's block (model.kernel_coefficients)
     initial_state   (2,)                      x(0), v(0)
     settings        (N_SETTINGS,)            layout above
     period_records  (n_rows, N_RECORD)       the last n_rows periods' records, measure_periods <= n_rows
@@ -117,13 +118,9 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     cosines at every evaluation. Since version 0.2 steps are no longer capped at 1/8 of the
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs, no_preparation, no_preparation, no_scratch, False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False,
-                      ORDER, N_STAGES, False, N_DYNAMIC,
-                      np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return with_rk45(oscillator_rhs, oscillator_tangent, force_at_barrier, False,
+                     coefficients, initial_state, settings, period_records, summary,
+                     sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -135,14 +132,10 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
     library (oscillator_rhs).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs_rotated, prepare_step_rotations, prepare_rotations,
-                      rotation_scratch, True,
-                      dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
-                      dop853_certain_growth, dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1,
-                      dop853.N_STAGES, False, N_DYNAMIC,
-                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return with_dop853(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier,
+                       prepare_step_rotations, prepare_rotations, dop853_rotation_scratch, True, False,
+                       coefficients, initial_state, settings, period_records, summary,
+                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -153,30 +146,19 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_preparation, no_scratch,
-                      False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False,
-                      ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
-                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
-                      np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return with_rk45(oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, True,
+                     coefficients, initial_state, settings, period_records, summary,
+                     sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_step_rotations,
-                      prepare_rotations,
-                      rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
-                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
-                      np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return with_dop853(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier,
+                       prepare_step_rotations, prepare_rotations, dop853_rotation_scratch, True, True,
+                       coefficients, initial_state, settings, period_records, summary,
+                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -189,30 +171,19 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     interval makes it zero. No renormalisation: one period's map stays far inside double range
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, no_preparation, no_preparation, no_scratch,
-                      False, DP54_C,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False,
-                      ORDER, N_STAGES, True, N_STATE_WITH_TANGENTS,
-                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)),
-                      np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, monodromy_log)
+    return with_rk45(oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, True,
+                     coefficients, initial_state, settings, period_records, summary,
+                     sample_times, samples, impact_log, stick_log, monodromy_log)
 
 
 @kernel_jit
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_step_rotations,
-                      prepare_rotations,
-                      rotation_scratch, True, dop853.C_STAGES, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True, N_STATE_WITH_TANGENTS,
-                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)),
-                      np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, monodromy_log)
+    return with_dop853(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier,
+                       prepare_step_rotations, prepare_rotations, dop853_rotation_scratch, True, True,
+                       coefficients, initial_state, settings, period_records, summary,
+                       sample_times, samples, impact_log, stick_log, monodromy_log)
 
 
 # integration.method -> the kernel. Each is compiled (or loaded from the cache) on its first call,
@@ -230,19 +201,58 @@ def integrator(method, lyapunov=False):
     return (LYAPUNOV_INTEGRATORS if lyapunov else INTEGRATORS)[method]
 
 
+
+# --- a model's functions with a method: what every model's entry points call ---------------------
+# A model is its right-hand sides (rhs.py's signature), its tangent product tangent(t, y,
+# coefficients, dydt) (tangent.py) and barrier_force(t, coefficients, barrier), the acceleration of
+# a mass at rest on a barrier, positive into it; the paper's family passes rhs.py's, a written
+# model its generated ones (written.py). tangents: the state carries the tangent vectors and rhs
+# integrates them too.
+
+@kernel_jit(inline="always")
+def with_rk45(rhs, tangent, barrier_force, tangents, coefficients, initial_state, settings, period_records,
+              summary, sample_times, samples, impact_log, stick_log, monodromy_log):
+    """_integrate with Dormand-Prince 5(4) steps and the library's functions at every evaluation."""
+    n_state = N_STATE_WITH_TANGENTS if tangents else N_STATE
+    return _integrate(rhs, rhs, tangent, barrier_force, no_preparation, no_preparation, no_scratch, False,
+                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False,
+                      ORDER, N_STAGES, tangents,
+                      np.empty((N_STAGES + 1, n_state)), np.empty((n_state, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
+
+
+@kernel_jit(inline="always")
+def with_dop853(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, make_scratch, grid_steps,
+                tangents, coefficients, initial_state, settings, period_records, summary, sample_times, samples,
+                impact_log, stick_log, monodromy_log):
+    """_integrate with DOP853 steps; stage_rhs after prepare_step (see _integrate), or rhs itself with
+    no_preparation and no_scratch (grid_steps False) where the model has no prepared stages."""
+    n_state = N_STATE_WITH_TANGENTS if tangents else N_STATE
+    return _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, make_scratch, grid_steps,
+                      dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
+                      dop853_certain_growth, dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1,
+                      dop853.N_STAGES, tangents,
+                      np.empty((dop853.N_STAGES_EXTENDED, n_state)), np.empty((n_state, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
+
+
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
-def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_steps, nodes, step, step_error,
+def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, make_scratch, grid_steps, step, step_error,
                dense_output, accepted_factor, certain_growth, rejected_factor, hold_after_reject, initial_order,
-               n_stages, tangents, n_dynamic, K, dense, coefficients, initial_state, settings, period_records, summary,
+               n_stages, tangents, K, dense, coefficients, initial_state, settings, period_records, summary,
                sample_times, samples, impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
-    rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; stage_rhs the
+    rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; tangent and
+    barrier_force are the model's (with_rk45 says what they are); stage_rhs the
     same at a step's stages, after prepare_step(t, h, coefficients, scratch) (before a dense output:
     prepare_dense, which also prepares the dense output's extra stages), with scratch =
-    make_scratch(h_max, nodes); grid_steps rounds each step size down to grid_step's grid.
+    make_scratch(h_max); grid_steps rounds each step size down to grid_step's grid.
     step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic) fills K
     (K[n_stages] = f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled
     error norm; certain_growth(err, err_previous) is True only where accepted_factor's result is
@@ -261,6 +271,9 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
     periods (record_monodromy); the tangent vectors then restart from the unit vectors every period
     instead of being renormalised. Length 0 (every kernel but the *_monodromy ones): unused.
     """
+    # The state components the right-hand sides read: x, v (the quadratures are read by nobody),
+    # and the tangent vectors when they are integrated.
+    n_dynamic = N_STATE_WITH_TANGENTS if tangents else N_DYNAMIC
     rtol = settings[RTOL]
     atol = settings[ATOL]
     n_transient = int(settings[TRANSIENT_PERIODS])
@@ -273,8 +286,8 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
     max_impacts_per_period = settings[MAX_IMPACTS_PER_PERIOD]
     divergence_bound = settings[DIVERGENCE_BOUND]
     stick_velocity = settings[STICK_VELOCITY]
-    delta = coefficients[DELTA]
-    restitution = coefficients[E]
+    n_barriers = int(coefficients[N_BARRIERS])
+    response_frequency = coefficients[RESPONSE_FREQUENCY]
     # The transparent window (grazing.py; NaN: none, and every comparison with it is False).
     transparent_from = settings[TRANSPARENT_FROM]
     transparent_to = settings[TRANSPARENT_TO]
@@ -286,22 +299,17 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
     free_x_max = -np.inf
     free_x_max_time = np.nan
 
-    slow_period = 2.0 * math.pi / coefficients[OMEGA]
-    shortest_period = slow_period
-    if coefficients[G] != 0.0:
-        shortest_period = min(shortest_period, 2.0 * math.pi / coefficients[BIG_OMEGA])
-    h_max = SLOW_STEP_FRACTION * slow_period
-    if coefficients[G] != 0.0:
-        h_max = min(h_max, FAST_STEP_FRACTION * 2.0 * math.pi / coefficients[BIG_OMEGA])
-    stick_scan_step = STICK_SCAN_FRACTION * shortest_period
+    slow_period = coefficients[PERIOD]  # the stroboscopic period T
+    h_max = coefficients[MAX_STEP]
+    stick_scan_step = coefficients[SCAN_STEP]
 
     n_state = K.shape[1]
     y = np.zeros(n_state)
     y_new = np.empty(n_state)
     stage = np.empty(n_state)
     f = np.empty(n_state)
-    bracket = np.empty(N_BRACKET)
-    scratch = make_scratch(h_max, nodes)  # the stage right-hand side's own
+    brackets = np.empty((MAX_BARRIERS, N_BRACKET))  # find_crossing's, one per barrier
+    scratch = make_scratch(h_max)  # the stage right-hand side's own
 
     y[X] = initial_state[0]
     y[V] = initial_state[1]
@@ -320,6 +328,7 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
     n_scans = 0
     retrying = False
     stuck = False
+    stuck_at = 0  # the barrier that holds the mass while stuck
     status = Status.OK
 
     period = 0
@@ -331,14 +340,16 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
         record = period_records[max(period - first_row, 0)]
         if stuck:
             # --- held at (Delta, 0) until the force lets go or the period ends ---
-            t_release, scans = release_time(t, t_boundary, coefficients, stick_scan_step, max_steps - n_scans)
+            held_at = coefficients[BARRIER + BARRIER_VALUES * stuck_at + POSITION]
+            t_release, scans = release_time(barrier_force, stuck_at, t, t_boundary, coefficients, stick_scan_step,
+                                            max_steps - n_scans)
             n_scans += scans
             if t_release != t_release:
                 status = Status.MAX_STEPS  # the force scan has a budget of max_steps intervals too
                 break
             t_end = min(t_release, t_boundary)
-            _add_stuck_quadratures(y, delta, coefficients[OMEGA], t, t_end)
-            next_sample = emit_state(sample_times, samples, next_sample, t_end, delta, 0.0)
+            _add_stuck_quadratures(y, held_at, response_frequency, t, t_end)
+            next_sample = emit_state(sample_times, samples, next_sample, t_end, held_at, 0.0)
             record[REC_STUCK_TIME] += t_end - t
             t = t_end
             if t_release <= t_boundary:
@@ -400,36 +411,63 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
             err_previous = err
             h = max(h_next, h) if clipped else h_next
 
-            # --- does the step cross the barrier? ---
+            # --- does the step cross a barrier? ---
+            # A barrier below (SIDE -1) is the same problem seen in -x: its tests run on the mirrored
+            # step (_mirror), which keeps every theta; a barrier above multiplies by 1 (exact).
             impact = False
             dense_ready = False
             theta_turn = np.nan
-            # Every step that the ends alone cannot place far below the barrier gets its dense
-            # output and the exact test on it (find_crossing: Bernstein form).
-            if not transparent and (
-                    y_new[X] >= delta or y[X] >= delta
-                    or hermite_reach(y[X], y[V], f[V], y_new[X], y_new[V], K[n_stages, V], h_try, delta) >= 0.0):
-                prepare_dense(t, h_try, coefficients, scratch)
-                n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
-                                      n_dynamic)
-                dense_ready = True
-                pushed = y[X] >= delta and force_at_barrier(t, coefficients) > 0.0
-                verdict = find_crossing(dense, y, y_new, h_try, delta, pushed, bracket)
-                if verdict == UNRESOLVED:
-                    # Off the barrier and back within the first scan interval: look closer.
-                    h = h_try * UNRESOLVED_STEP_FACTOR
-                    if h <= _smallest_step(t, slow_period):
-                        status = Status.STEP_TOO_SMALL
-                        break
+            hit = -1  # the barrier the step meets first
+            unresolved = False
+            position = side = restitution = 1.0
+            for barrier in range(0 if transparent else n_barriers):
+                slot = BARRIER + BARRIER_VALUES * barrier
+                side = coefficients[slot + SIDE]
+                level = side * coefficients[slot + POSITION]
+                # Every step that the ends alone cannot place far from the barrier gets its dense
+                # output and the exact test on it (find_crossing: Bernstein form).
+                if not (side * y_new[X] >= level or side * y[X] >= level
+                        or hermite_reach(side * y[X], side * y[V], side * f[V], side * y_new[X], side * y_new[V],
+                                         side * K[n_stages, V], h_try, level) >= 0.0):
                     continue
-                impact = verdict == IMPACT
-                if not impact:
+                if not dense_ready:
+                    prepare_dense(t, h_try, coefficients, scratch)
+                    n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
+                                          n_dynamic)
+                    dense_ready = True
+                pushed = side * y[X] >= level and barrier_force(t, coefficients, barrier) > 0.0
+                bracket = brackets[barrier]
+                if side < 0.0:
+                    _mirror(y, y_new, dense)
+                verdict = find_crossing(dense, y, y_new, h_try, level, pushed, bracket)
+                if side < 0.0:
+                    _mirror(y, y_new, dense)
+                if verdict == UNRESOLVED:
+                    unresolved = True
+                    break
+                if verdict == IMPACT:
+                    if hit < 0 or bracket[1] < brackets[hit, 1]:
+                        hit = barrier
+                elif bracket[TURNING_POINT] == bracket[TURNING_POINT]:
                     theta_turn = bracket[TURNING_POINT]
+            if unresolved:
+                # Off the barrier and back within the first scan interval: look closer.
+                h = h_try * UNRESOLVED_STEP_FACTOR
+                if h <= _smallest_step(t, slow_period):
+                    status = Status.STEP_TOO_SMALL
+                    break
+                continue
+            impact = hit >= 0
+            if impact:
+                slot = BARRIER + BARRIER_VALUES * hit
+                side = coefficients[slot + SIDE]
+                position = coefficients[slot + POSITION]
+                restitution = coefficients[slot + RESTITUTION]
             h_taken = h_try
             if impact:
                 h_taken, spent = _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages,
-                                               n_dynamic, t, y, f, h_try, delta, bracket, coefficients, K, y_new, dense,
-                                               stage, scratch)
+                                               n_dynamic, t, y, f, h_try, position, side, brackets[hit], coefficients,
+                                               K, y_new, dense, stage, scratch)
                 n_rhs += spent
                 dense_ready = True
 
@@ -464,17 +502,24 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
 
             # --- the impact: restitution (eq2.2), or the start of sticking ---
             if impact:
-                y[X] = delta  # the exact step left it within IMPACT_POSITION_TOLERANCE
+                y[X] = position  # the exact step left it within IMPACT_POSITION_TOLERANCE
                 n_impacts += 1
                 record[REC_IMPACTS] += 1.0
-                record[REC_X_MAX] = delta
+                if side > 0.0:
+                    record[REC_X_MAX] = position
+                else:
+                    record[REC_X_MIN] = position
                 if record[REC_IMPACTS] > max_impacts_per_period:
                     status = Status.CHATTER_LIMIT
                     break
-                acceleration_before = f[V]
-                v_before, v_after, stuck = _restitution(y, t, coefficients, stick_velocity)
-                log_impact(impact_log, n_impacts, t, v_before, v_after)
+                # Speeds and accelerations into the barrier (side * ...): eq2.2 and the saltation
+                # matrix are written for a barrier above; seen in -x, one below is the same.
+                acceleration_before = side * f[V]
+                v_before, v_after, stuck = _restitution(y, t, coefficients, barrier_force, hit, side, restitution,
+                                                        stick_velocity)
+                log_impact(impact_log, n_impacts, t, side * v_before, side * v_after)
                 if stuck:
+                    stuck_at = hit
                     n_sticks = log_stick_start(stick_log, n_sticks, t)
                     if tangents:
                         collapse_tangents(y)
@@ -482,16 +527,16 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
                     rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
                     n_rhs += 1
                     if tangents:
-                        apply_saltation(y, v_before, acceleration_before, f[V], restitution)
-                        tangent_derivative(y, coefficients, f)  # f of the jumped tangent vectors
-                    h = _rebound_step(h, t, v_after, coefficients)
+                        apply_saltation(y, v_before, acceleration_before, side * f[V], restitution)
+                        tangent(t, y, coefficients, f)  # f of the jumped tangent vectors
+                    h = _rebound_step(h, t, v_after, coefficients, barrier_force, hit)
                 err_previous = 1.0
 
             if tangents and monodromy_log.shape[0] == 0 and tangents_out_of_range(y):
                 # A strongly damped or stretched period would underflow or overflow them before
                 # its end: renormalise now, the period's record sums the logs.
                 add_tangent_growth(record, y)
-                tangent_derivative(y, coefficients, f)
+                tangent(t, y, coefficients, f)
 
             if not (math.isfinite(y[X]) and math.isfinite(y[V])):
                 status = Status.NON_FINITE
@@ -504,10 +549,10 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
             raw = tangents and period < monodromy_log.shape[0]
             if raw:
                 record_monodromy(monodromy_log[period], y)
-            close_period(record, y, f, coefficients, tangents, stuck)
+            close_period(record, t, y, f, tangent, coefficients, tangents, stuck)
             if raw and not stuck:
                 seed_tangents(y)  # the next period's map starts from the identity, not from Q
-                tangent_derivative(y, coefficients, f)
+                tangent(t, y, coefficients, f)
             period += 1
             if period == n_periods:
                 break
@@ -516,8 +561,8 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
 
     if stuck and n_sticks - 1 < stick_log.shape[0]:
         stick_log[n_sticks - 1, 1] = t
-    status = summarize(period_records, n_transient - first_row, n_periods - first_row, slow_period, coefficients[C],
-                       status, summary)
+    status = summarize(period_records, n_transient - first_row, n_periods - first_row, slow_period,
+                       coefficients[RESPONSE_SCALE], status, summary)
     summary[SUM_STEPS] = n_steps
     summary[SUM_REJECTED] = n_rejected
     summary[SUM_RHS] = n_rhs
@@ -534,8 +579,9 @@ def _integrate(rhs, stage_rhs, prepare_step, prepare_dense, make_scratch, grid_s
 
 @kernel_jit(inline="always")
 def _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages, n_dynamic, t, y, f, h_try,
-                  delta, bracket, coefficients, K, y_new, dense, stage, scratch):
-    """Step exactly to the impact that find_crossing bracketed in the step [t, t + h_try].
+                  delta, side, bracket, coefficients, K, y_new, dense, stage, scratch):
+    """Step exactly to the impact that find_crossing bracketed in the step [t, t + h_try], at the
+    barrier x = delta on ``side`` (locate_root and Newton's step need no mirroring).
 
     Locates it on the dense output, then reaches it with a step of the method's own order (not
     the interpolant's), Newton-corrected onto x = Delta; leaves y_new, K and dense for that step.
@@ -552,7 +598,7 @@ def _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_
         step(stage_rhs, t, y, f, h_taken, coefficients, K, y_new, stage, scratch, n_dynamic)
         n_rhs += n_stages
         miss = y_new[X] - delta
-        if abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(delta)) or y_new[V] <= 0.0:
+        if abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(delta)) or side * y_new[V] <= 0.0:
             break
         h_corrected = h_taken - miss / y_new[V]
         if not (0.0 < h_corrected <= h_try):
@@ -564,33 +610,47 @@ def _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_
 
 
 @kernel_jit(inline="always")
-def _restitution(y, t, coefficients, stick_velocity):
-    """The impact law at x = Delta: v -> -e v (eq2.2), or sticking. Returns (v_before, v_after, stuck).
+def _restitution(y, t, coefficients, barrier_force, barrier, side, restitution, stick_velocity):
+    """The impact law at a barrier: v -> -e v (eq2.2), or sticking. Returns (v_before, v_after,
+    stuck), the speeds into the barrier (side * v).
 
     The mass sticks when chatter has died out (the rebound is slower than stick_velocity) and the
     force at rest on the barrier presses it there.
     """
-    v_before = max(y[V], 0.0)
-    v_after = -coefficients[E] * v_before  # eq2.2
-    stuck = -v_after < stick_velocity and force_at_barrier(t, coefficients) > 0.0
+    v_before = max(side * y[V], 0.0)
+    v_after = -restitution * v_before  # eq2.2
+    stuck = -v_after < stick_velocity and barrier_force(t, coefficients, barrier) > 0.0
     if stuck:
         v_after = 0.0
-    y[V] = v_after
+    y[V] = side * v_after
     return v_before, v_after, stuck
 
 
 @kernel_jit(inline="always")
-def _rebound_step(h, t, v_after, coefficients):
+def _rebound_step(h, t, v_after, coefficients, barrier_force, barrier):
     """The next step size after a rebound: a slow rebound against a force pushing back returns
     after about 2 |v| / a, so the step stays well inside that flight and its return is seen."""
-    push = force_at_barrier(t, coefficients)
+    push = barrier_force(t, coefficients, barrier)
     if push > 0.0:
         return min(h, REBOUND_STEP_FRACTION * 2.0 * -v_after / push)
     return h
 
 
 @kernel_jit
-def _add_stuck_quadratures(y, delta, omega, t_start, t_end):
-    """eq3.1, eq3.2 integrands over [t_start, t_end] with x = Delta held: in closed form."""
-    y[QS_INTEGRAL] += delta * (math.cos(omega * t_start) - math.cos(omega * t_end)) / omega
-    y[QC_INTEGRAL] += delta * (math.sin(omega * t_end) - math.sin(omega * t_start)) / omega
+def _add_stuck_quadratures(y, position, frequency, t_start, t_end):
+    """eq3.1, eq3.2 integrands over [t_start, t_end] with x = position held: in closed form."""
+    y[QS_INTEGRAL] += position * (math.cos(frequency * t_start) - math.cos(frequency * t_end)) / frequency
+    y[QC_INTEGRAL] += position * (math.sin(frequency * t_end) - math.sin(frequency * t_start)) / frequency
+
+
+@kernel_jit(inline="always")
+def _mirror(y, y_new, dense):
+    """x -> -x, v -> -v in a step's ends and dense output (a barrier below seen as one above).
+    Negation is exact: calling it twice restores every bit."""
+    y[X] = -y[X]
+    y[V] = -y[V]
+    y_new[X] = -y_new[X]
+    y_new[V] = -y_new[V]
+    for q in range(dense.shape[1]):
+        dense[X, q] = -dense[X, q]
+        dense[V, q] = -dense[V, q]

@@ -5,11 +5,6 @@ point's final state (vrsweep.execution.sweep plans them). Each line writes only 
 the output arrays, so the result does not depend on the thread count or the schedule.
 """
 
-import hashlib
-import os
-import sys
-from pathlib import Path
-
 import numpy as np
 from numba import prange
 
@@ -19,7 +14,7 @@ from vrsweep.results import Status
 
 
 @kernel_jit(inline="always")
-def _run_line(integrate, coefficients, initial_state, settings, line_points, records, summaries, statuses):
+def run_line(integrate, coefficients, initial_state, settings, line_points, records, summaries, statuses):
     """One line's points in order, each starting from the previous point's final state
     (the first from initial_state, (2,))."""
     state = initial_state.copy()
@@ -56,7 +51,7 @@ def run_lines_rk45(coefficients, initial_states, settings, lines, period_records
     statuses        (n_lines, line_length) int8
     """
     for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_rk45, coefficients, initial_states[line], settings, lines[line],
+        run_line(kernel.integrate_rk45, coefficients, initial_states[line], settings, lines[line],
                   period_records[line], summaries[line], statuses[line])
 
 
@@ -64,7 +59,7 @@ def run_lines_rk45(coefficients, initial_states, settings, lines, period_records
 def run_lines_dop853(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
     """run_lines_rk45 with the DOP853 kernel."""
     for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_dop853, coefficients, initial_states[line], settings, lines[line],
+        run_line(kernel.integrate_dop853, coefficients, initial_states[line], settings, lines[line],
                   period_records[line], summaries[line], statuses[line])
 
 
@@ -72,7 +67,7 @@ def run_lines_dop853(coefficients, initial_states, settings, lines, period_recor
 def run_lines_rk45_lyapunov(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
     """run_lines_rk45 with the tangent vectors (integration.lyapunov)."""
     for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_rk45_lyapunov, coefficients, initial_states[line], settings, lines[line],
+        run_line(kernel.integrate_rk45_lyapunov, coefficients, initial_states[line], settings, lines[line],
                   period_records[line], summaries[line], statuses[line])
 
 
@@ -80,7 +75,7 @@ def run_lines_rk45_lyapunov(coefficients, initial_states, settings, lines, perio
 def run_lines_dop853_lyapunov(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
     """run_lines_dop853 with the tangent vectors (integration.lyapunov)."""
     for line in prange(lines.shape[0]):
-        _run_line(kernel.integrate_dop853_lyapunov, coefficients, initial_states[line], settings, lines[line],
+        run_line(kernel.integrate_dop853_lyapunov, coefficients, initial_states[line], settings, lines[line],
                   period_records[line], summaries[line], statuses[line])
 
 
@@ -92,24 +87,5 @@ RUN_LINES = {("rk45", False): run_lines_rk45, ("dop853", False): run_lines_dop85
 
 def kernel_is_cached(method: str = "rk45", lyapunov: bool = False) -> bool:
     """Whether the sweep kernel of ``method`` (RUN_LINES[method, lyapunov]) has been compiled
-    into the cache already.
-
-    Looks for numba's index file of that function where numba puts it: in
-    ``numba_cache.cache_dir()``, under a sub-folder named after the source folder (numba.core.caching's get_suitable_cache_subpath),
-    named ``<module>.<function>-<first line>.py<XY>.nbi``, and not older than the source (numba
-    discards an index whose source has changed since). An index written on another CPU model
-    counts as cached although numba will compile again: the answer is a hint for the user, not a
-    promise.
-    """
-    if not numba_cache.enabled():
-        return False
-    source = Path(os.path.abspath(__file__))  # abspath, not resolve(): as numba does
-    subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
-    function = RUN_LINES[method, lyapunov].py_func
-    index = (numba_cache.cache_dir() / subfolder /
-             f"{source.stem}.{function.__qualname__}-{function.__code__.co_firstlineno}"
-             f".py{sys.version_info.major}{sys.version_info.minor}.nbi")
-    try:
-        return index.stat().st_mtime >= source.stat().st_mtime
-    except OSError:
-        return False
+    into the cache already (numba_cache.is_compiled: a hint for the user, not a promise)."""
+    return numba_cache.is_compiled(RUN_LINES[method, lyapunov])

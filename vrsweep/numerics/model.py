@@ -13,6 +13,11 @@ The kernel sees only the coefficient vector built here, so it knows nothing of w
 
 import numpy as np
 
+from vrsweep.numerics.coefficients import (
+    ABOVE, MAX_STEP, N_BARRIERS, N_HEADER, PERIOD, POSITION, RESPONSE_FREQUENCY, RESPONSE_SCALE, RESTITUTION,
+    SCAN_STEP, SIDE, STICK_SCAN_FRACTION, barrier_slot,
+)
+
 PARAMETER_NAMES = ("gamma", "alpha", "c", "omega0", "omega", "Delta", "e", "g", "Omega")
 
 # The paper's values (Fig. 1; Omega = 4).
@@ -52,9 +57,16 @@ AXIS_LONG_NAMES = {**PARAMETER_LONG_NAMES, **INITIAL_STATE_LONG_NAMES}
 
 MODELS = ("original", "effective")
 
-# Layout of the kernel's coefficient vector.
-GAMMA, MU, STIFFNESS, ALPHA, C, OMEGA, G, BIG_OMEGA, DELTA, E = range(10)
-N_COEFFICIENTS = 10
+# Layout of the kernel's coefficient vector: the header every model fills (coefficients.py),
+# then this family's block, read only by its right-hand sides (rhs.py, tangent.py, impact.py).
+GAMMA, MU, STIFFNESS, ALPHA, C, OMEGA, G, BIG_OMEGA, DELTA, E = range(N_HEADER, N_HEADER + 10)
+N_COEFFICIENTS = N_HEADER + 10
+
+# The largest step, as a share of a forcing period (kernel.py explains why steps are capped at all):
+# with the fast forcing (g != 0) 1/8 of its period (1/6 left R 1.7e-3 off at g = 30, rtol 1e-4);
+# without it (the effective model) 1/6 of the slow period (none left R 1.5e-5 off at g = 25).
+FAST_STEP_FRACTION = 1.0 / 8.0
+SLOW_STEP_FRACTION = 1.0 / 6.0
 
 
 def effective_stiffness(alpha, omega0, g, Omega):
@@ -95,4 +107,30 @@ def kernel_coefficients(parameters, model="original"):
         out[..., MU] = effective_damping_level(p["g"], p["Omega"])  # eq2.12
         out[..., STIFFNESS] = effective_stiffness(p["alpha"], p["omega0"], p["g"], p["Omega"])  # eq2.11
         out[..., G] = 0.0  # eq2.10: the fast forcing has been averaged out
+    fill_header(out)
     return out
+
+
+def fill_header(out):
+    """The kernel's header (coefficients.py) of the family's vectors: T = 2 pi / omega, R = |Q| / c
+    at omega (eq3.3), one barrier above at Delta with restitution e (eq2.2)."""
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        slow_period = 2.0 * np.pi / out[..., OMEGA]
+        fast = out[..., G] != 0.0
+        # Without the fast forcing (the effective model) Omega may be anything: left out.
+        fast_period = np.where(fast, 2.0 * np.pi / np.where(fast, out[..., BIG_OMEGA], 1.0), np.inf)
+        out[..., PERIOD] = slow_period
+        out[..., MAX_STEP] = np.where(fast, np.minimum(SLOW_STEP_FRACTION * slow_period,
+                                                       FAST_STEP_FRACTION * 2.0 * np.pi / np.where(
+                                                           fast, out[..., BIG_OMEGA], 1.0)),
+                                      SLOW_STEP_FRACTION * slow_period)
+        out[..., SCAN_STEP] = STICK_SCAN_FRACTION * np.minimum(slow_period, fast_period)
+    out[..., RESPONSE_FREQUENCY] = out[..., OMEGA]
+    out[..., RESPONSE_SCALE] = out[..., C]
+    out[..., N_BARRIERS] = 1.0
+    out[..., barrier_slot(0, POSITION)] = out[..., DELTA]
+    out[..., barrier_slot(0, SIDE)] = ABOVE
+    out[..., barrier_slot(0, RESTITUTION)] = out[..., E]
+    out[..., barrier_slot(1, POSITION)] = np.nan
+    out[..., barrier_slot(1, SIDE)] = ABOVE
+    out[..., barrier_slot(1, RESTITUTION)] = np.nan

@@ -189,3 +189,27 @@ def is_empty() -> bool:
         return True
     folder = cache_dir()
     return not folder.is_dir() or not any(folder.rglob("*.nbi"))
+
+
+def is_compiled(dispatcher) -> bool:
+    """Whether numba has cached a compiled version of ``dispatcher`` (a cached njit function).
+
+    Looks for numba's index file of that function where numba puts it: in :func:`cache_dir`, under
+    a sub-folder named after the source folder (numba.core.caching's get_suitable_cache_subpath),
+    named ``<module>.<function>-<first line>.py<XY>.nbi``, and not older than the source (numba
+    discards an index whose source has changed since). An index written on another CPU model
+    counts as cached although numba will compile again: the answer is a hint for the user, not a
+    promise.
+    """
+    if not enabled():
+        return False
+    function = dispatcher.py_func
+    source = Path(os.path.abspath(function.__code__.co_filename))  # abspath, not resolve(): as numba does
+    subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
+    index = (cache_dir() / subfolder /
+             f"{source.stem}.{function.__qualname__}-{function.__code__.co_firstlineno}"
+             f".py{sys.version_info.major}{sys.version_info.minor}.nbi")
+    try:
+        return index.stat().st_mtime >= source.stat().st_mtime
+    except OSError:
+        return False

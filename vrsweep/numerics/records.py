@@ -16,7 +16,7 @@ from vrsweep.numerics.impact import BERNSTEIN_FROM_POWER, BERNSTEIN_ROUNDING, lo
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.rk45 import dense_value
 from vrsweep.numerics.state import QC_INTEGRAL, QS_INTEGRAL, V, X
-from vrsweep.numerics.tangent import collapse_tangents, renormalise_tangents, tangent_derivative
+from vrsweep.numerics.tangent import collapse_tangents, renormalise_tangents
 from vrsweep.results import Status
 
 # --- per-slow-period record, one row per kept period (kernel.py: the last rows) ---
@@ -165,7 +165,7 @@ def log_stick_start(stick_log, n_sticks, t):
 
 
 @kernel_jit(inline="always")
-def close_period(record, y, f, coefficients, tangents, stuck):
+def close_period(record, t, y, f, tangent, coefficients, tangents, stuck):
     """At t = nT: record the period's quadratures and stroboscopic state, reset the quadratures,
     and renormalise the tangent vectors (tangent.py), recording their growth."""
     record[REC_QS] = y[QS_INTEGRAL]
@@ -179,7 +179,7 @@ def close_period(record, y, f, coefficients, tangents, stuck):
         if stuck:
             collapse_tangents(y)  # still on the barrier: the next period starts from zero
         else:
-            tangent_derivative(y, coefficients, f)  # f of the renormalised vectors
+            tangent(t, y, coefficients, f)  # f of the renormalised vectors
 
 
 @kernel_jit(inline="always")

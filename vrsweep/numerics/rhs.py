@@ -13,10 +13,11 @@ import math
 
 import numpy as np
 
+from vrsweep.numerics import dop853
 from vrsweep.numerics.jit import kernel_jit
-from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, G, GAMMA, MU, OMEGA, STIFFNESS
+from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, G, GAMMA, MU, OMEGA, STIFFNESS
 from vrsweep.numerics.state import QC_INTEGRAL, QS_INTEGRAL, V, X
-from vrsweep.numerics.tangent import tangent_derivative
+from vrsweep.numerics.tangent import apply_jacobian
 
 
 @kernel_jit
@@ -47,15 +48,40 @@ def _oscillator_derivative(y, coefficients, cos_slow, sin_slow, cos_fast, dydt):
     dydt[QC_INTEGRAL] = x * cos_slow
 
 
+@kernel_jit(inline="always")
+def oscillator_tangent(t, y, coefficients, dydt):
+    """dydt[tangent] = J u (tangent.py); the forcing does not enter J, so t is unused."""
+    x = y[X]
+    v = y[V]
+    gamma = coefficients[GAMMA]
+    # d(v')/dx and d(v')/dv of x'' = c cos + g cos - gamma (x^2 - mu) v - k x - alpha x^3
+    dv_dx = -(2.0 * gamma * x * v + coefficients[STIFFNESS] + 3.0 * coefficients[ALPHA] * x * x)
+    dv_dv = -gamma * (x * x - coefficients[MU])
+    apply_jacobian(y, dv_dx, dv_dv, dydt)
+
+
 @kernel_jit
 def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
     """oscillator_rhs and the variational equations of the tangent vectors (tangent.py)."""
     oscillator_rhs(t, h, node, c, y, coefficients, dydt, scratch)
-    tangent_derivative(y, coefficients, dydt)
+    oscillator_tangent(t + c * h, y, coefficients, dydt)
 
 
 @kernel_jit
-def no_scratch(h_max, nodes):
+def force_at_barrier(t, coefficients, barrier):
+    """Acceleration of a mass resting at (Delta, 0): positive pushes it into the barrier (the
+    family has one barrier, so ``barrier`` is 0).
+
+    The damping term vanishes with the velocity, so only stiffness and forcing remain.
+    """
+    delta = coefficients[DELTA]
+    return (coefficients[C] * np.cos(coefficients[OMEGA] * t)
+            + coefficients[G] * np.cos(coefficients[BIG_OMEGA] * t)
+            - coefficients[STIFFNESS] * delta - coefficients[ALPHA] * delta ** 3)
+
+
+@kernel_jit
+def no_scratch(h_max):
     return np.empty(0)
 
 
@@ -112,6 +138,12 @@ def rotation_scratch(h_max, nodes):
     for k in range(N_STEP_LEVELS):
         scratch[STEP_GRID + k] = h_max * 2.0 ** (-k / STEP_LEVELS_PER_OCTAVE)
     return scratch
+
+
+@kernel_jit
+def dop853_rotation_scratch(h_max):
+    """rotation_scratch for DOP853's nodes, the method whose stages rotate the phases."""
+    return rotation_scratch(h_max, dop853.C_STAGES)
 
 
 @kernel_jit
@@ -240,4 +272,4 @@ def oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
 def oscillator_tangent_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch):
     """oscillator_rhs_rotated and the variational equations of the tangent vectors (tangent.py)."""
     oscillator_rhs_rotated(t, h, node, c, y, coefficients, dydt, scratch)
-    tangent_derivative(y, coefficients, dydt)
+    oscillator_tangent(t, y, coefficients, dydt)

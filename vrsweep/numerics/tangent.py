@@ -3,10 +3,13 @@
 The largest exponent is the mean exponential growth rate of a tangent vector u = (dx, dv)
 carried along the trajectory (docs/design.md, "Lyapunov exponents", derives every formula):
 
-- between impacts, u' = J(x, v, t) u with the Jacobian of the flow
+- between impacts, u' = J(x, v, t) u with the Jacobian of the flow J = [[0, 1], [da/dx, da/dv]],
+  a = x'' the model's acceleration; for the paper's family
       J = [[0, 1], [-(2 gamma x v + k + 3 alpha x^2), -gamma (x^2 - mu)]]          (eq2.1, eq2.10)
+  (rhs.py), for a written model derived symbolically (written.py)
   integrated with the motion, in the same Runge-Kutta steps (kernel.py);
-- at an impact (x = Delta, v- > 0 -> v+ = -e v-, eq2.2) u jumps by the saltation matrix
+- at an impact (x = Delta, v- > 0 -> v+ = -e v-, eq2.2; a barrier below is the same seen in -x)
+  u jumps by the saltation matrix
       S = [[-e, 0], [(a+ + e a-) / v-, -e]],   det S = e^2,
   a- and a+ the accelerations just before and after the impact;
 - while stuck on the barrier the state is (Delta, 0) whatever it was before: the tangent map
@@ -23,19 +26,13 @@ State layout: state.py (TANGENT); per-period records: kernel.REC_LOG_STRETCH, RE
 import math
 
 from vrsweep.numerics.jit import kernel_jit
-from vrsweep.numerics.model import ALPHA, GAMMA, MU, STIFFNESS
 from vrsweep.numerics.state import N_TANGENT_VECTORS, TANGENT, V, X
 
 
 @kernel_jit(inline="always")
-def tangent_derivative(y, coefficients, dydt):
-    """dydt[tangent] = J(x, v) u for both tangent vectors (the forcing does not enter J)."""
-    x = y[X]
-    v = y[V]
-    gamma = coefficients[GAMMA]
-    # d(v')/dx and d(v')/dv of x'' = c cos + g cos - gamma (x^2 - mu) v - k x - alpha x^3
-    dv_dx = -(2.0 * gamma * x * v + coefficients[STIFFNESS] + 3.0 * coefficients[ALPHA] * x * x)
-    dv_dv = -gamma * (x * x - coefficients[MU])
+def apply_jacobian(y, dv_dx, dv_dv, dydt):
+    """dydt[tangent] = J u for both tangent vectors, J = [[0, 1], [dv_dx, dv_dv]]: the model's
+    right-hand side computes d(x'')/dx and d(x'')/dv at the state (rhs.py, a written model's)."""
     for i in range(N_TANGENT_VECTORS):
         dx = y[TANGENT + 2 * i]
         dv = y[TANGENT + 2 * i + 1]
