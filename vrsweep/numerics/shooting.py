@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrsweep.numerics import kernel
+from vrsweep.numerics.models import kernels_for
 from vrsweep.results import Status
 
 
@@ -54,15 +55,17 @@ class OrbitMap:
     free_x_max_time: float
 
 
-def periodic_map(coefficients, state, settings, periods, method="rk45", impact_capacity=1024, transparent=None):
+def periodic_map(coefficients, state, settings, periods, method="rk45", impact_capacity=1024, transparent=None,
+                 model="original"):
     """P^periods from ``state`` (2,) at t = 0 with the kernel settings vector ``settings``.
 
     The settings' transient and measurement counts are replaced by 0 and ``periods``.
     transparent: (t_from, t_to) within [0, pT], a window in which the barrier is transparent (the
     map of the orbit without the impacts it would have there; grazing.py), or None.
+    model: whose kernels (models.kernels_for), the model these coefficient vectors are of.
     The impact log is grown and the run repeated if it overflows (the run is deterministic).
     """
-    integrate = kernel.MONODROMY_INTEGRATORS[method]
+    integrate = kernels_for(model).monodromy(method)
     coefficients = np.ascontiguousarray(coefficients, dtype=np.float64)
     state = np.ascontiguousarray(state, dtype=np.float64)
     settings = np.array(settings, dtype=np.float64)

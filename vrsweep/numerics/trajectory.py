@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrsweep.numerics import kernel
+from vrsweep.numerics.models import kernels_for
 from vrsweep.results import Status
 
 _SETTING_INDEX = {name: index for index, name in enumerate(kernel.SETTING_NAMES)}
@@ -42,17 +43,19 @@ class Trajectory:
 
 
 def simulate(coefficients, initial_state, settings, sample_times=(), impact_capacity=4096,
-             stick_capacity=1024, method="rk45", lyapunov=False):
+             stick_capacity=1024, method="rk45", lyapunov=False, model="original"):
     """Integrate one point, keeping samples at ``sample_times`` and every impact and stick.
 
     ``method``: the integration method, a key of kernel.INTEGRATORS (rk45, dop853).
+    ``model``: whose kernels (models.kernels_for): the paper's family (its vectors say which member
+    it is, so the default serves both of its models) or a written model, whose vectors these are.
     ``lyapunov``: carry the tangent vectors too (tangent.py): the records then hold each period's
     REC_LOG_STRETCH and REC_LOG_AREA, the summary SUM_LYAPUNOV and SUM_LYAPUNOV_SUM.
 
     The logs grow and the run is repeated if they overflow: it is deterministic, so the
     second run is the same trajectory.
     """
-    integrate = kernel.integrator(method, lyapunov)
+    integrate = kernels_for(model).integrator(method, lyapunov)
     coefficients = np.ascontiguousarray(coefficients, dtype=np.float64)
     initial_state = np.ascontiguousarray(initial_state, dtype=np.float64)
     settings = np.ascontiguousarray(settings, dtype=np.float64)

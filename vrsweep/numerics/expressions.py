@@ -1,0 +1,206 @@
+"""The expression language of written models: parsed from Python's syntax tree through a whitelist.
+
+    numbers, the model's names (x, v, t and its parameters), pi,
+    + - * / ** and unary minus, parentheses,
+    sin cos tan exp log sqrt abs tanh sign min max
+
+A config is data and never runs code: the text is parsed (``ast.parse(mode="eval")``, which only
+builds a tree) and every node is checked against the whitelist before anything else looks at it;
+nothing is ever passed to ``eval``. Attributes, subscripts, calls of anything but the functions
+above, lambdas, comprehensions, strings, keywords and unknown names are each refused with the
+offending token. The same tree is then read three ways: :func:`names_in` (what it refers to),
+:func:`evaluate` (numpy, for the expressions of the parameters alone: period, barriers, response)
+and :func:`to_sympy` (the acceleration, whose derivatives written.py derives symbolically).
+
+Plain Python and numpy: the config layer checks expressions without importing sympy or numba.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+
+import numpy as np
+
+MAX_LENGTH = 2000   # characters: an equation of motion is a line, not a program
+MAX_DEPTH = 60      # nesting of the syntax tree (parentheses, operators, calls)
+MAX_EXPONENT = 64   # a constant power beyond this is a typo (and x**10**9 would never finish)
+
+FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs", "tanh", "sign", "min", "max")
+CONSTANTS = {"pi": math.pi}
+STATE_NAMES = ("x", "v", "t")
+RESERVED = frozenset(FUNCTIONS) | frozenset(CONSTANTS) | frozenset(STATE_NAMES)
+
+_BINARY = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
+_UNARY = {ast.USub: "-", ast.UAdd: "+"}
+
+
+class ExpressionError(ValueError):
+    """A problem with an expression, worded for one line after the field's name."""
+
+
+def parse(text, names) -> ast.expr:
+    """The checked syntax tree of ``text``, whose names must be in ``names`` (plus pi and the
+    functions); raises ExpressionError naming the offending token."""
+    if not isinstance(text, str):
+        raise ExpressionError(f"must be an expression written as a string, e.g. \"-2*zeta*v - x\", got {text!r}")
+    if not text.strip():
+        raise ExpressionError("must be an expression, got an empty string")
+    if len(text) > MAX_LENGTH:
+        raise ExpressionError(f"is longer than {MAX_LENGTH} characters")
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as error:
+        where = f" at character {error.offset}" if error.offset else ""
+        raise ExpressionError(f"is not a valid expression{where}: {text.strip()!r}") from None
+    except (ValueError, RecursionError, MemoryError):
+        raise ExpressionError("is not a valid expression (nested too deeply or holds a NUL character)") from None
+    _check(tree.body, frozenset(names), 0)
+    return tree.body
+
+
+def _token(node) -> str:
+    try:
+        text = ast.unparse(node)
+    except Exception:  # noqa: BLE001 - only for the message
+        text = type(node).__name__
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _check(node, names, depth):
+    if depth > MAX_DEPTH:
+        raise ExpressionError(f"is nested more than {MAX_DEPTH} deep")
+    if isinstance(node, ast.Constant):
+        if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
+            raise ExpressionError(f"may hold numbers but not {_token(node)} (only numbers, names and operators)")
+        if not math.isfinite(float(node.value)):
+            raise ExpressionError(f"holds a number too large for a double: {_token(node)}")
+        return
+    if isinstance(node, ast.Name):
+        if node.id in names or node.id in CONSTANTS:
+            return
+        if node.id in FUNCTIONS:
+            raise ExpressionError(f"uses the function {node.id} without calling it: write {node.id}(...)")
+        known = ", ".join(sorted(names)) or "none"
+        raise ExpressionError(f"refers to an unknown name {node.id!r} (known: {known}, pi)")
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
+        _check(node.left, names, depth + 1)
+        _check(node.right, names, depth + 1)
+        if isinstance(node.op, ast.Pow) and isinstance(node.right, ast.Constant) \
+                and abs(float(node.right.value)) > MAX_EXPONENT:
+            raise ExpressionError(f"has a power beyond {MAX_EXPONENT}: {_token(node)}")
+        return
+    if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
+        _check(node.operand, names, depth + 1)
+        return
+    if isinstance(node, ast.Call):
+        if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
+            raise ExpressionError(f"calls {_token(node.func)}, which is not one of the functions "
+                                  f"{', '.join(FUNCTIONS)}")
+        if node.keywords:
+            raise ExpressionError(f"passes a keyword to {node.func.id}: {_token(node)}")
+        wanted = 2 if node.func.id in ("min", "max") else 1
+        if len(node.args) != wanted or any(isinstance(arg, ast.Starred) for arg in node.args):
+            raise ExpressionError(f"calls {node.func.id} with {len(node.args)} argument(s), not {wanted}: "
+                                  f"{_token(node)}")
+        for arg in node.args:
+            _check(arg, names, depth + 1)
+        return
+    kind = {ast.Attribute: "an attribute", ast.Subscript: "a subscript", ast.Lambda: "a lambda",
+            ast.Compare: "a comparison", ast.BoolOp: "a logical operator", ast.IfExp: "a conditional",
+            ast.List: "a list", ast.Tuple: "a tuple", ast.Dict: "a mapping", ast.Set: "a set",
+            ast.ListComp: "a comprehension", ast.GeneratorExp: "a comprehension",
+            ast.DictComp: "a comprehension", ast.SetComp: "a comprehension", ast.JoinedStr: "a string",
+            ast.NamedExpr: "an assignment", ast.Await: "an await", ast.Starred: "a starred argument"}
+    what = next((word for cls, word in kind.items() if isinstance(node, cls)), "an operator")
+    if isinstance(node, ast.BinOp):
+        what = f"the operator {type(node.op).__name__}"
+    raise ExpressionError(f"may not hold {what}: {_token(node)} (only numbers, names, + - * / ** and the "
+                          f"functions {', '.join(FUNCTIONS)})")
+
+
+def names_in(tree) -> set[str]:
+    """The names an expression refers to (pi and the functions left out)."""
+    return {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)
+            and node.id not in CONSTANTS and not _is_function(tree, node)}
+
+
+def _is_function(tree, name_node):
+    return any(isinstance(node, ast.Call) and node.func is name_node for node in ast.walk(tree))
+
+
+def canonical(text) -> str:
+    """The expression as Python writes its tree back: the same text for the same expression
+    however it was spaced (cache keys, stored files)."""
+    return ast.unparse(ast.parse(text.strip(), mode="eval").body)
+
+
+_NUMPY_FUNCTIONS = {"sin": np.sin, "cos": np.cos, "tan": np.tan, "exp": np.exp, "log": np.log,
+                    "sqrt": np.sqrt, "abs": np.abs, "tanh": np.tanh, "sign": np.sign,
+                    "min": np.minimum, "max": np.maximum}
+
+
+def evaluate(tree, values):
+    """The expression's value with numpy, names from ``values`` (scalars or arrays, broadcast).
+    Invalid operations give NaN or inf (numpy's rules), never an exception."""
+    with np.errstate(all="ignore"):
+        return np.asarray(_evaluate(tree, values), dtype=np.float64)
+
+
+def _evaluate(node, values):
+    if isinstance(node, ast.Constant):
+        return float(node.value)
+    if isinstance(node, ast.Name):
+        return CONSTANTS[node.id] if node.id in CONSTANTS else np.asarray(values[node.id], dtype=np.float64)
+    if isinstance(node, ast.UnaryOp):
+        operand = _evaluate(node.operand, values)
+        return -operand if isinstance(node.op, ast.USub) else operand
+    if isinstance(node, ast.BinOp):
+        left, right = _evaluate(node.left, values), _evaluate(node.right, values)
+        op = type(node.op)
+        if op is ast.Add:
+            return np.add(left, right)
+        if op is ast.Sub:
+            return np.subtract(left, right)
+        if op is ast.Mult:
+            return np.multiply(left, right)
+        if op is ast.Div:
+            return np.divide(left, right)
+        return np.power(np.asarray(left, dtype=np.float64), right)
+    function = _NUMPY_FUNCTIONS[node.func.id]
+    return function(*(_evaluate(arg, values) for arg in node.args))
+
+
+def to_sympy(tree, symbols):
+    """The expression as a sympy expression, names -> ``symbols[name]`` (sympy is imported here,
+    only when a model is compiled)."""
+    import sympy
+
+    functions = {"sin": sympy.sin, "cos": sympy.cos, "tan": sympy.tan, "exp": sympy.exp, "log": sympy.log,
+                 "sqrt": sympy.sqrt, "abs": sympy.Abs, "tanh": sympy.tanh, "sign": sympy.sign,
+                 "min": sympy.Min, "max": sympy.Max}
+
+    def convert(node):
+        if isinstance(node, ast.Constant):
+            value = node.value
+            return sympy.Integer(value) if isinstance(value, int) else sympy.Float(repr(float(value)), 17)
+        if isinstance(node, ast.Name):
+            return sympy.pi if node.id == "pi" else symbols[node.id]
+        if isinstance(node, ast.UnaryOp):
+            operand = convert(node.operand)
+            return -operand if isinstance(node.op, ast.USub) else operand
+        if isinstance(node, ast.BinOp):
+            left, right = convert(node.left), convert(node.right)
+            op = type(node.op)
+            if op is ast.Add:
+                return left + right
+            if op is ast.Sub:
+                return left - right
+            if op is ast.Mult:
+                return left * right
+            if op is ast.Div:
+                return left / right
+            return left ** right
+        return functions[node.func.id](*(convert(arg) for arg in node.args))
+
+    return convert(tree)

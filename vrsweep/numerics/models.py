@@ -1,0 +1,78 @@
+"""Which compiled kernels and coefficient vectors a config's model uses: one entry for the
+paper's two models (model.py, kernel.py, lines.py) and for a written one (written.py, codegen.py).
+
+    kernels_for(model).coefficients(parameters)     (..., n) vectors: coefficients.py's header first
+    kernels_for(model).integrator(method, lyapunov)  one point (trajectory.simulate)
+    kernels_for(model).monodromy(method)             one point with each period's tangent map
+    kernels_for(model).run_lines(method, lyapunov)   the sweep's parallel lines
+
+``model`` is ``"original"``, ``"effective"`` or a written.WrittenModel (the config's ``model``).
+"""
+
+from __future__ import annotations
+
+from vrsweep.numerics import kernel, lines
+from vrsweep.numerics.model import MODELS, kernel_coefficients
+from vrsweep.numerics.written import WrittenModel
+
+
+class PaperKernels:
+    """The paper's family: eq2.1 (original) or eq2.10 (effective), hand-written right-hand sides."""
+
+    def __init__(self, name):
+        if name not in MODELS:
+            raise ValueError(f"model must be one of {MODELS} or a written model, not {name!r}")
+        self.name = name
+
+    def coefficients(self, parameters):
+        return kernel_coefficients(parameters, self.name)
+
+    def integrator(self, method, lyapunov=False):
+        return kernel.integrator(method, lyapunov)
+
+    def monodromy(self, method):
+        return kernel.MONODROMY_INTEGRATORS[method]
+
+    def run_lines(self, method, lyapunov=False):
+        return lines.RUN_LINES[method, lyapunov]
+
+    def is_cached(self, method, lyapunov=False):
+        return lines.kernel_is_cached(method, lyapunov)
+
+
+class WrittenKernels:
+    """A written model's generated module (codegen.py), imported on first use."""
+
+    def __init__(self, model: WrittenModel):
+        self.model = model
+
+    def coefficients(self, parameters):
+        from vrsweep.numerics.written import coefficients
+
+        return coefficients(self.model, parameters)
+
+    def _function(self, name):
+        from vrsweep.numerics import codegen
+
+        return getattr(codegen.compiled(self.model), name)
+
+    def integrator(self, method, lyapunov=False):
+        return self._function(f"integrate_{method}{'_lyapunov' if lyapunov else ''}")
+
+    def monodromy(self, method):
+        return self._function(f"integrate_{method}_monodromy")
+
+    def run_lines(self, method, lyapunov=False):
+        return self._function(f"run_lines_{method}{'_lyapunov' if lyapunov else ''}")
+
+    def is_cached(self, method, lyapunov=False):
+        from vrsweep.numerics import codegen
+
+        return codegen.is_cached(self.model, f"run_lines_{method}{'_lyapunov' if lyapunov else ''}")
+
+
+def kernels_for(model):
+    """The kernels of a config's model: a name of the paper's models, or a WrittenModel."""
+    if isinstance(model, WrittenModel):
+        return WrittenKernels(model)
+    return PaperKernels(model)
