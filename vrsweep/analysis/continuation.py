@@ -47,7 +47,7 @@ from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
 from vrsweep.numerics.coefficients import PERIOD, barrier_position
-from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import simulate
@@ -137,7 +137,7 @@ class ContinuationProblem:
     coefficient vectors are kept (coefficients), so a changed problem is a new one
     (dataclasses.replace)."""
     parameters: dict
-    model: str
+    model: object  # "original", "effective" or a written model (numerics.models.kernels_for)
     parameter: str
     settings: np.ndarray
     method: str = "rk45"
@@ -152,8 +152,8 @@ class ContinuationProblem:
         if built is None:
             if len(self._built) >= COEFFICIENT_CACHE:
                 self._built.clear()
-            built = self._built[value] = kernel_coefficients(dict(self.parameters, **{self.parameter: value}),
-                                                             self.model)
+            built = self._built[value] = kernels_for(self.model).coefficients(
+                dict(self.parameters, **{self.parameter: value}))
         return built
 
 
@@ -182,7 +182,8 @@ def check_commensurate(parameters, model, parameter):
 
 def evaluate(problem, state, value, periods):
     """P^p and its monodromy at (state, value): the shooting.OrbitMap."""
-    return periodic_map(problem.coefficients(value), state, problem.settings, periods, problem.method)
+    return periodic_map(problem.coefficients(value), state, problem.settings, periods, problem.method,
+                        model=problem.model)
 
 
 def _failure(orbit_map):
@@ -756,7 +757,7 @@ def find_start(problem, initial_state, value, transient_periods, max_period):
     settings = np.array(problem.settings, dtype=float)
     settings[kernel.TRANSIENT_PERIODS] = transient_periods
     settings[kernel.MEASURE_PERIODS] = START_STROBE_PERIODS
-    run = simulate(problem.coefficients(value), initial_state, settings, method=problem.method)
+    run = simulate(problem.coefficients(value), initial_state, settings, method=problem.method, model=problem.model)
     if run.status != Status.OK:
         raise UsageError.naming("the start at {name} = {value} failed to integrate: {status}",
                                   name=problem.parameter, value=f"{value:g}", status=run.status.name.lower())

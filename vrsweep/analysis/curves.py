@@ -65,6 +65,7 @@ from vrsweep.analysis import continuation, grazing
 from vrsweep.errors import UsageError
 from vrsweep.numerics import model as model_metadata
 from vrsweep.numerics.coefficients import barrier_position
+from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import ATOL, RTOL
 from vrsweep.numerics.shooting import periodic_map
 
@@ -111,7 +112,7 @@ class CurveProblem:
     (lam1: the branch's, lam2: the one along which the point moves), the kernel settings, the
     integration method and the continuation options (continuation.DEFAULTS' keys)."""
     parameters: dict
-    model: str
+    model: object  # "original", "effective" or a written model (numerics.models.kernels_for)
     names: tuple
     settings: np.ndarray
     method: str = "rk45"
@@ -124,8 +125,7 @@ class CurveProblem:
 
     def coefficients(self, values, free=False):
         """The kernel's coefficient vector at (lam1, lam2) = values; without the barrier if free."""
-        coefficients = model_metadata.kernel_coefficients(dict(self.parameters, **dict(zip(self.names, values))),
-                                                          self.model)
+        coefficients = kernels_for(self.model).coefficients(dict(self.parameters, **dict(zip(self.names, values))))
         return grazing.free_coefficients(coefficients) if free else coefficients
 
     def delta(self, values):
@@ -216,7 +216,8 @@ class SpecialPoint:
 
 # --- the augmented systems --------------------------------------------------------------------
 def _map(problem, z, periods, free):
-    return periodic_map(problem.coefficients(z[2:], free), z[:2], problem.settings, periods, problem.method)
+    return periodic_map(problem.coefficients(z[2:], free), z[:2], problem.settings, periods, problem.method,
+                        model=problem.model)
 
 
 def _failure(orbit_map):

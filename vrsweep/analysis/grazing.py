@@ -100,8 +100,9 @@ def free_map(problem, state, value, periods, window=None):
     with the barrier transparent in ``window`` (t_from, t_to) only."""
     if window is None:
         return periodic_map(free_coefficients(problem.coefficients(value)), state, problem.settings, periods,
-                            problem.method)
+                            problem.method, model=problem.model)
     return periodic_map(problem.coefficients(value), state, problem.settings, periods, problem.method,
+                        model=problem.model,
                         transparent=window)
 
 
@@ -200,8 +201,8 @@ def impacting_direction(problem, graze):
     gradient = graze.jacobian[2]
     penetration = PROBE_PENETRATION * max(1.0, abs(barrier(problem, z_g[2])))
     probe = z_g - (penetration + graze.gap) * gradient / (gradient @ gradient)
-    real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods,
-                        problem.method)
+    real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods, problem.method,
+                        model=problem.model)
     value, free = _free_system(problem, probe, graze.periods, graze.window)
     if value is None or real.status != Status.OK or real.impacts != free.impacts + 1:
         return None

@@ -87,7 +87,7 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
         if quiet:
             return None
         if already_done < total and (not dask_address or parse_local(dask_address)):
-            _say_if_compiling(config.integration.method, config.integration.lyapunov)  # a remote cluster's workers have caches of their own
+            _say_if_compiling(config.integration.method, config.integration.lyapunov, config.model)  # a remote cluster's workers have caches of their own
         if not sys.stderr.isatty():  # a batch log: lines, not a bar's redraws
             from vrsweep.execution.progress import ProgressLog
 
@@ -150,14 +150,14 @@ def _line_length(config):
 COMPILE_SECONDS = "about 30 s"
 
 
-def _say_if_compiling(method, lyapunov):
+def _say_if_compiling(method, lyapunov, model="original"):
     from vrsweep.commands.options import say_cache_notice
-    from vrsweep.numerics.lines import kernel_is_cached
+    from vrsweep.numerics.models import kernels_for
     from vrsweep.numerics.numba_cache import cache_dir, enabled
 
     say_cache_notice()
     if not enabled():
         click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, on every run: not cached)", err=True)
-    elif not kernel_is_cached(method, lyapunov):
+    elif not kernels_for(model).is_cached(method, lyapunov):
         click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, once: later runs load it from "
                    f"{cache_dir()})", err=True)

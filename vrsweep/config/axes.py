@@ -11,7 +11,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from vrsweep.config.report import without_missing_typos
-from vrsweep.config.schema import AXIS_DOMAINS, AXIS_FORMS, AXIS_NAMES, LinearAxis, ListAxis, ValuesAxis
+from vrsweep.config.schema import AXIS_FORMS, LinearAxis, ListAxis, ValuesAxis
 from vrsweep.config.wording import did_you_mean, show, show_number
 from vrsweep.numerics.model import INITIAL_STATE_AXES, INITIAL_STATE_KEYS
 
@@ -26,9 +26,9 @@ class SweepAxes:
             return axes  # None: no sweep; anything else was reported by validate_document
         for name, spec in sweep.items():
             path = ("sweep", name)
-            if name not in AXIS_NAMES:
-                self.report(path, f"not a parameter{did_you_mean(name, AXIS_NAMES)}",
-                            allowed=", ".join(AXIS_NAMES))
+            if name not in self.axis_names:
+                self.report(path, f"not a parameter{did_you_mean(name, self.axis_names)}",
+                            allowed=", ".join(self.axis_names))
                 continue
             if isinstance(spec, list):
                 model, data, kind = ListAxis, {"values": spec}, "list"
@@ -143,7 +143,7 @@ class SweepAxes:
 
     def check_values(self, name, path, values, indexed=False) -> bool:
         """Each swept value must obey its parameter's domain."""
-        domain = AXIS_DOMAINS[name]
+        domain = self.axis_domains[name]
         ok = True
         for index, value in enumerate(values):
             if not domain.contains(value):

@@ -34,9 +34,10 @@ def dump_config(config) -> str:
     swept = set(config.axis_names)
     document = CommentedMap()
     document.yaml_set_start_comment("vrsweep config, fully resolved: every default filled in, every --set applied.")
-    document["model"] = config.model
-    document["parameters"] = _block({name: float(config.parameters[name]) for name in PARAMETER_NAMES},
-                                    {name: f"sweep.{name}" for name in PARAMETER_NAMES if name in swept})
+    names = getattr(config.model, "parameter_names", PARAMETER_NAMES)
+    document["model"] = config.model if isinstance(config.model, str) else _model_node(config.model)
+    document["parameters"] = _block({name: float(config.parameters[name]) for name in names},
+                                    {name: f"sweep.{name}" for name in names if name in swept})
     document["initial"] = _block({key: float(config.initial[key]) for key in INITIAL_STATE_KEYS.values()},
                                  {key: f"sweep.{axis}" for axis, key in INITIAL_STATE_KEYS.items() if axis in swept})
     document["sweep"] = CommentedMap((axis.name, _axis_node(axis)) for axis in config.axes)
@@ -65,6 +66,31 @@ def dump_config(config) -> str:
     stream = io.StringIO()
     _dumper().dump(document, stream)
     return stream.getvalue()
+
+
+def _model_node(model):
+    """A written model (numerics.written.WrittenModel.as_data), expressions as quoted strings and
+    short mappings in flow style."""
+    node = CommentedMap()
+    for key, value in model.as_data().items():
+        if key in ("parameters", "symbols"):
+            value = CommentedMap((name, DoubleQuotedScalarString(item) if isinstance(item, str) else float(item))
+                                 for name, item in value.items())
+            value.fa.set_flow_style()
+        elif key == "barriers":
+            items = CommentedSeq()
+            for barrier in value:
+                entry = CommentedMap((k, DoubleQuotedScalarString(v)) for k, v in barrier.items())
+                entry.fa.set_flow_style()
+                items.append(entry)
+            value = items
+        elif key == "response":
+            value = CommentedMap((k, DoubleQuotedScalarString(v)) for k, v in value.items())
+            value.fa.set_flow_style()
+        else:
+            value = DoubleQuotedScalarString(value)
+        node[key] = value
+    return node
 
 
 def _block(values, swept):

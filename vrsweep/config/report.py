@@ -149,7 +149,7 @@ class Report:
         elif kind == "literal_error":
             choices = {("model",): MODELS, ("method",): METHODS}.get(path[-1:], CONTINUATIONS)
             if tuple(path[:2]) == ("continuation", "parameter"):
-                choices = PARAMETER_NAMES
+                choices = getattr(self, "parameter_names", PARAMETER_NAMES)
             hint = did_you_mean(value, choices) if isinstance(value, str) else ""
             self.report(path, f"must be one of {', '.join(choices)}, got {show(value)}{hint}")
         elif kind in ("model_type", "dict_type"):
@@ -173,6 +173,8 @@ class Report:
             self.report(path, item["msg"])
 
     def allowed_keys(self, parent):
+        if parent == ("parameters",):
+            return getattr(self, "parameter_names", PARAMETER_NAMES)
         if parent in ALLOWED_KEYS:
             return ALLOWED_KEYS[parent]
         if len(parent) == 2 and parent[0] == "sweep":
@@ -193,7 +195,7 @@ class Report:
         """What is allowed at ``path``, in words, for type errors."""
         if len(path) == 2:
             section, key = path
-            table = {"parameters": PARAMETER_DOMAINS, "initial": INITIAL_DOMAINS,
+            table = {"parameters": getattr(self, "parameter_domains", PARAMETER_DOMAINS), "initial": INITIAL_DOMAINS,
                      "integration": INTEGRATION_DOMAINS}.get(section, {})
             if key in table and table[key] != ANY:
                 return table[key].describe()

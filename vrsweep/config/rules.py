@@ -17,6 +17,7 @@ from vrsweep.config.schema import (
     integral_float_to_int,
 )
 from vrsweep.config.wording import show
+from vrsweep.config.models import check_written_model
 from vrsweep.numerics.model import DEFAULT_PARAMETERS
 
 
@@ -31,7 +32,9 @@ class CrossFieldRules:
 
         sweep = data.get("sweep") if isinstance(data.get("sweep"), dict) else {}
         x = _valid(initial, "x", INITIAL_DEFAULTS, INITIAL_DOMAINS)
-        if "x0" in sweep:
+        if not isinstance(self.model, str):
+            self.check_written_rules(parameters, initial, sweep, axes, x)
+        elif "x0" in sweep:
             if "x0" in axes:
                 self.check_x0_axis(axes["x0"][0], axes["Delta"][0] if "Delta" in axes else None,
                                    None if "Delta" in sweep else
@@ -67,6 +70,21 @@ class CrossFieldRules:
         for name in with_continuation[1:]:
             self.report(("sweep", name, "continuation"),
                         f"only one axis may have continuation, and sweep.{with_continuation[0]} has it")
+
+    def check_written_rules(self, parameters, initial, sweep, axes, x):
+        """A written model's rules at the grid's points (config/models.check_written_model), once
+        every value they read is valid on its own."""
+        fixed = {}
+        for name in self.parameter_names:
+            value = _valid(parameters, name, self.parameter_defaults, self.parameter_domains)
+            if value is None and name not in axes:
+                return  # reported at the parameter itself
+            fixed[name] = value
+        if any(name in sweep and name not in axes for name in self.parameter_names + ("x0",)):
+            return  # a broken axis is reported on its own
+        swept = {name: values for name, (values, _, _) in axes.items() if name in self.parameter_names}
+        swept_initial = {name: axes[name][0] for name in ("x0", "v0") if name in axes}
+        check_written_model(self.report, self.model, fixed, swept, {"x": x}, swept_initial)
 
     def blame(self, first, second, first_given, second_given) -> bool:
         """Whether a broken rule between two fields is reported at ``first`` (else at ``second``):

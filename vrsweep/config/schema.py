@@ -8,6 +8,7 @@ This module is the ONE source of defaults: the integration defaults here are the
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -213,11 +214,12 @@ class Config:
     """A validated config with every default filled in and every override applied.
 
     Equality compares content only (not the file name, text or overrides it came from), so
-    ``parse_config(c.to_yaml()) == c``. ``parameters`` holds all nine parameters; a swept one keeps
+    ``parse_config(c.to_yaml()) == c``. ``parameters`` holds all the model's parameters (the paper's
+    nine, or a written model's); a swept one keeps
     its fixed value there, which the sweep ignores (so does ``initial`` for a swept x0 or v0).
     """
 
-    model: str
+    model: Any  # "original", "effective", or a numerics.written.WrittenModel
     parameters: dict[str, float]
     initial: dict[str, float]
     axes: tuple[Axis, ...]
@@ -260,7 +262,17 @@ class Config:
         if len(grid.directions) == 2:  # the direction axis repeats the grid: one copy is enough
             flat = flat[..., 0]
         table = grid.parameters_at(self, flat.reshape(-1))
-        return {name: table[name].reshape(self.shape) for name in PARAMETER_NAMES}
+        return {name: table[name].reshape(self.shape) for name in self.parameter_names}
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """The model's parameters: the paper's nine, or a written model's in declared order."""
+        return getattr(self.model, "parameter_names", PARAMETER_NAMES)
+
+    @property
+    def written(self) -> bool:
+        """Whether the model is written in the config (not one of the paper's)."""
+        return not isinstance(self.model, str)
 
     def output_path(self, override=None) -> Path:
         """Where results go: ``override`` (the -o option) beats the config's ``output``, which beats
@@ -369,6 +381,23 @@ class Document(BaseModel):
     integration: _IntegrationModel = Field(default_factory=_IntegrationModel)
     output: Annotated[str, AfterValidator(_check_path)] | None = None
     continuation: _ContinuationModel | None = None
+
+
+@functools.lru_cache(maxsize=64)
+def written_document(parameters: tuple[tuple[str, float], ...]):
+    """Document for a written model (config/models.py checks its ``model`` mapping): its parameters
+    are the model's own, with the model's defaults, and any value (the model's rules are checked
+    at the grid's points); the continuation may follow any of them."""
+    fields = {name: (_number_type(ANY), default) for name, default in parameters}
+    parameters_model = create_model("WrittenParameters", __config__=_STRICT, **fields)
+    continuation_model = create_model(
+        "WrittenContinuation", __base__=_ContinuationModel,
+        parameter=(Literal[tuple(name for name, _ in parameters)] if parameters else str, ...))
+    return create_model(
+        "WrittenDocument", __base__=Document,
+        model=(Any, None),
+        parameters=(parameters_model, Field(default_factory=parameters_model)),
+        continuation=(continuation_model | None, None))
 
 
 _Continuation = Literal[CONTINUATIONS] | None

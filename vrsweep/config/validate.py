@@ -23,11 +23,12 @@ from ruamel.yaml.constructor import DuplicateKeyError
 from ruamel.yaml.error import YAMLError
 
 from vrsweep.config.axes import SweepAxes
+from vrsweep.config.models import ModelSection, parameter_defaults, parameter_domains, parameter_names
 from vrsweep.config.report import Report
 from vrsweep.config.rules import CrossFieldRules
 from vrsweep.config.schema import (
-    AXIS_FORMS, CONTINUATION_DEFAULTS, INITIAL_DEFAULTS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS, Axis, Config,
-    Continuation, Document, Integration,
+    AXIS_FORMS, CONTINUATION_DEFAULTS, INITIAL_DEFAULTS, INITIAL_DOMAINS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS,
+    Axis, Config, Continuation, Document, Integration, written_document,
 )
 from vrsweep.config.wording import did_you_mean, dotted, show
 from vrsweep.config.yaml import (
@@ -35,7 +36,7 @@ from vrsweep.config.yaml import (
     plain_data, yaml_text,
 )
 from vrsweep.errors import ConfigError
-from vrsweep.numerics.model import PARAMETER_NAMES
+from vrsweep.numerics.model import INITIAL_STATE_AXES, INITIAL_STATE_KEYS, PARAMETER_NAMES
 
 
 # A config is a few kB; a sweep listing every value of a long axis some hundred kB at most.
@@ -115,14 +116,21 @@ def same_config(stored_text: str, config: Config) -> bool:
     return stored == config
 
 
-class _Validator(Report, SweepAxes, CrossFieldRules):
+class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
     """One validation run: reads the YAML, applies overrides, collects problems, builds the Config."""
 
     # -- the run -----------------------------------------------------------------------------
 
     def run(self) -> Config:
-        settings = self.parse_overrides()
         data = self.read_yaml()
+        # The model decides which parameters there are: what --set may name, what the parameters
+        # section and the sweep may hold. So it is read first (from --set model=..., if given).
+        self.model = self.read_model(self.model_value(data))
+        if self.model is None:
+            self.parse_overrides()
+            self.fail_if_problems()  # a broken written model: its parameters are unknown
+        self.use_model(self.model)
+        settings = self.parse_overrides()
         if data is None:
             self.fail_if_problems()  # YAML syntax error: nothing more can be checked
         data = self.apply_overrides(data, settings)
@@ -131,8 +139,8 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
         self.check_across_fields(data, axes)
         self.fail_if_problems()
         return Config(
-            model=document.model,
-            parameters={name: float(getattr(document.parameters, name)) for name in PARAMETER_NAMES},
+            model=self.model,
+            parameters={name: float(getattr(document.parameters, name)) for name in self.parameter_names},
             initial={key: float(getattr(document.initial, key)) for key in INITIAL_DEFAULTS},
             axes=tuple(Axis(name, values, continuation) for name, (values, continuation, _) in axes.items()),
             integration=Integration(**document.integration.model_dump()),
@@ -142,6 +150,29 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
             source_text=self.text,
             overrides=self.overrides,
         )
+
+    # -- the model ---------------------------------------------------------------------------
+
+    def model_value(self, data):
+        """The config's ``model`` as given: from ``--set model=NAME`` if there is one, else the file's."""
+        for setting in self.overrides:
+            name, sep, value = str(setting).partition("=")
+            if sep and name.strip() == "model":
+                self.overridden[("model",)] = str(setting)
+                try:
+                    return parse_scalar(value)
+                except ValueError:
+                    return value
+        return data.get("model") if isinstance(data, dict) else None
+
+    def use_model(self, model):
+        """The names and domains every later check reads: the paper's, or the written model's."""
+        self.parameter_names = parameter_names(model)
+        self.parameter_domains = parameter_domains(model)
+        self.parameter_defaults = parameter_defaults(model)
+        self.axis_names = self.parameter_names + INITIAL_STATE_AXES
+        self.axis_domains = {**self.parameter_domains,
+                             **{axis: INITIAL_DOMAINS[key] for axis, key in INITIAL_STATE_KEYS.items()}}
 
     # -- YAML --------------------------------------------------------------------------------
 
@@ -187,7 +218,7 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
 
     def parse_overrides(self):
         """[(path, value, "NAME=VALUE")] for the good overrides; bad ones are reported."""
-        targets = _override_targets()
+        targets = _override_targets(self.parameter_names)
         settings = []
         for setting in self.overrides:
             setting = str(setting)
@@ -246,8 +277,11 @@ class _Validator(Report, SweepAxes, CrossFieldRules):
         # An empty section ("parameters:" with nothing under it) reads as null: treat it as {}.
         data = {key: ({} if value is None and key in ("parameters", "initial", "sweep", "integration")
                       else value) for key, value in data.items()}
+        if not isinstance(self.model, str):
+            data = {key: value for key, value in data.items() if key != "model"}  # read_model's
         try:
-            return Document.model_validate(data)
+            document = Document if isinstance(self.model, str) else written_document(self.model.parameters)
+            return document.model_validate(data)
         except ValidationError as error:
             for item in error.errors(include_url=False):
                 if item["loc"][:1] == ("sweep",) and item["type"] == "dict_type":
@@ -266,11 +300,11 @@ def _continuation(section):
                         **{key: getattr(section, key) for key in CONTINUATION_DEFAULTS})
 
 
-def _override_targets():
+def _override_targets(names=PARAMETER_NAMES):
     """--set NAME -> path in the document; both 'g' and 'parameters.g' spellings."""
     targets = {"model": ("model",), "initial.x": ("initial", "x"), "initial.v": ("initial", "v"),
                "x0": ("initial", "x"), "v0": ("initial", "v")}  # x0, v0: the names of the sweep axes
-    for name in PARAMETER_NAMES:
+    for name in names:
         targets[name] = targets[f"parameters.{name}"] = ("parameters", name)
     for key in INTEGRATION_DEFAULTS:
         targets[key] = targets[f"integration.{key}"] = ("integration", key)

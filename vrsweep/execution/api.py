@@ -236,11 +236,11 @@ def _progress_factory(config, bars):
     def factory(total, already_done):
         from tqdm.auto import tqdm
 
-        from vrsweep.numerics.lines import kernel_is_cached
+        from vrsweep.numerics.models import kernels_for
 
         label = "vrsweep"
         integration = config.integration
-        if already_done < total and not kernel_is_cached(integration.method, integration.lyapunov):
+        if already_done < total and not kernels_for(config.model).is_cached(integration.method, integration.lyapunov):
             label = f"vrsweep (compiling the numba kernel first, {COMPILE_SECONDS})"
         bar = tqdm(total=total, initial=already_done, unit="pt", desc=label, dynamic_ncols=True)
         bars.append(bar)

@@ -108,7 +108,10 @@ def estimate(config, threads=None) -> Estimate:
     steps_factor = METHOD_COST[method] * (REFERENCE_RTOL / integration.rtol) ** (1.0 / METHOD_ORDER[method])
     if integration.lyapunov:
         steps_factor *= LYAPUNOV_COST[method]
-    seconds = n_points * periods * SECONDS_PER_POINT_PERIOD[config.model] * steps_factor / threads
+    # A written model is costed as the original one (the steps a model takes depend on its time
+    # scales, which only a run measures): a rough guide, as any estimate before a run.
+    cost = SECONDS_PER_POINT_PERIOD.get(config.model if isinstance(config.model, str) else "original")
+    seconds = n_points * periods * cost * steps_factor / threads
     return Estimate(n_points=n_points, output_bytes=output_bytes, seconds=seconds,
                     memory_bytes=memory_bytes(config, threads))
 
@@ -124,7 +127,8 @@ def stored_arrays(config):
               for name, dtype, extra, _ in point_variables(config.integration)]
     arrays.append(("done", 1, []))
     one_point = {name: np.array([value], dtype=np.float64) for name, value in config.parameters.items()}
-    for name, (array, dims_suffix, _) in theory.analytic_columns(one_point).items():
+    columns = {} if config.written else theory.analytic_columns(one_point)  # the paper's theory only
+    for name, (array, dims_suffix, _) in columns.items():
         array = np.asarray(array)
         if name == "g_res":  # stored once per value of Omega (job._reduce_constant_axes), ~nothing
             continue

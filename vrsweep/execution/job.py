@@ -12,7 +12,7 @@ import numba
 import numpy as np
 
 from vrsweep import __version__
-from vrsweep.store.provenance import cf_attributes
+from vrsweep.store.provenance import cf_attributes, model_attributes
 from vrsweep.errors import InvalidArgument
 from vrsweep.results import Status
 from vrsweep.execution.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
@@ -139,20 +139,22 @@ def _axes(grid):
         if name == "direction":
             attrs = {"units": "1", "long_name": "continuation direction (+1: up the axis, -1: down)"}
         else:
-            attrs = {"units": AXIS_UNITS[name], "long_name": AXIS_LONG_NAMES[name]}
+            # a written model's parameter: dimensionless as the model is written (its own units)
+            attrs = {"units": AXIS_UNITS.get(name, "1"),
+                     "long_name": AXIS_LONG_NAMES.get(name, f"model parameter {name}")}
         axes.append((name, values, attrs))
     return axes
 
 
 def _title(config):
     axes = ", ".join(config.axis_names) if config.axes else "one point"
-    return f"vrsweep sweep of the {config.model} model over {axes}"
+    return f"vrsweep sweep of the {config.model} model over {axes}"  # a written model prints its name
 
 
 def root_attributes(config, shard=(0, 1)):
     attrs = {
         "config": config.to_yaml(),
-        "model": config.model,
+        **model_attributes(config.model),
         "vrsweep_version": __version__,
         "numba_version": numba.__version__,
         "numpy_version": np.__version__,
@@ -180,9 +182,12 @@ ANALYTIC_BLOCK_POINTS = 8192
 
 
 def analytic_extras(config, grid):
-    """The analytic side stored beside the numerical grid (issue 3): theory.analytic_columns."""
+    """The analytic side stored beside the numerical grid (issue 3): theory.analytic_columns. The
+    paper's theory is of the paper's model: a written model has none ({})."""
     from vrsweep.analysis import theory
 
+    if config.written:
+        return {}
     blocks = {}
     for start in range(0, grid.n_points, ANALYTIC_BLOCK_POINTS):
         flat = np.arange(start, min(start + ANALYTIC_BLOCK_POINTS, grid.n_points))

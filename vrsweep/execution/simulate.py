@@ -48,8 +48,15 @@ def sample_times(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD):
             "{n_periods} slow periods x {samples} samples per period = {n_samples} samples (more than {most}): "
             "lower {samples_per_period} or the run length", n_periods=n_periods, samples=samples_per_period,
             n_samples=n_samples, most=MAX_SAMPLES)
-    slow_period = 2.0 * np.pi / config.parameters["omega"]
-    return np.linspace(0.0, n_periods * slow_period, n_samples)
+    return np.linspace(0.0, n_periods * stroboscopic_period(config), n_samples)
+
+
+def stroboscopic_period(config) -> float:
+    """T at the config's fixed parameters: 2 pi / omega for the paper's models, a written model's period."""
+    from vrsweep.numerics.coefficients import PERIOD
+    from vrsweep.numerics.models import kernels_for
+
+    return float(kernels_for(config.model).coefficients(config.parameters)[PERIOD])
 
 
 def check_single_point(config):
@@ -67,7 +74,8 @@ def check_single_point(config):
 def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare_effective=False):
     """Integrate the single point of ``config``; returns TrajectoryData (not yet written)."""
     from vrsweep.numerics import trajectory
-    from vrsweep.numerics.model import kernel_coefficients
+    from vrsweep.numerics.models import kernels_for
+    from vrsweep.store.provenance import model_key
 
     check_single_point(config)
     if compare_effective and config.model == "effective":
@@ -78,18 +86,21 @@ def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compar
     settings = trajectory.settings_vector(**vars(config.integration))
     initial_state = np.array([config.initial["x"], config.initial["v"]])
 
+    if compare_effective and config.written:
+        raise UsageError.naming("{compare_effective} compares the paper's original model with its effective one "
+                                "(eq2.10); a written model has no effective model", {"compare": "compare_effective"})
     models = [config.model] + (["effective"] if compare_effective else [])
     runs = {}
     for model in models:
-        result = trajectory.simulate(kernel_coefficients(config.parameters, model), initial_state, settings, times,
-                                     method=config.integration.method)
-        runs[model] = _model_run(model, result)
+        result = trajectory.simulate(kernels_for(model).coefficients(config.parameters), initial_state, settings,
+                                     times, method=config.integration.method, model=model)
+        runs[model_key(model)] = _model_run(model_key(model), result)
 
     slow_flow = {}
     if "effective" in runs:
         slow_flow = slow_flow_runs(config.parameters, config.initial, times)
-    attrs = {"model": config.model, "samples_per_period": int(samples_per_period),
-             "slow_period": float(2.0 * np.pi / config.parameters["omega"])}
+    attrs = {"model": model_key(config.model), "samples_per_period": int(samples_per_period),
+             "slow_period": stroboscopic_period(config)}
     return TrajectoryData(runs=runs, slow_flow=slow_flow, attrs=attrs)
 
 

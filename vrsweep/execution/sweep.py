@@ -28,7 +28,7 @@ from vrsweep.execution.chunks import (  # noqa: F401
     shard_of_points, shuffled_lines,
 )
 from vrsweep.config.grid import DIRECTION_VALUES, Grid  # noqa: F401
-from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.numerics.models import kernels_for
 from vrsweep.results import Status
 from vrsweep.numerics.trajectory import settings_vector
 
@@ -47,6 +47,7 @@ class LineRunner:
         self.settings = integration_settings(config.integration)
         self.method = config.integration.method
         self.lyapunov = config.integration.lyapunov
+        self.kernels = kernels_for(config.model)
         # Records are kept for the measurement window only (the kernel reuses one row through the
         # transient): a point's memory does not grow with transient_periods.
         self.n_record_rows = config.integration.measure_periods
@@ -58,7 +59,7 @@ class LineRunner:
         n_lines, line_length = lines.shape
         flat = np.ascontiguousarray(lines, dtype=np.int64).reshape(-1)
         coefficients = np.ascontiguousarray(
-            kernel_coefficients(self.grid.parameters_at(self.config, flat), self.config.model))
+            self.kernels.coefficients(self.grid.parameters_at(self.config, flat)))
         local_lines = np.arange(flat.size, dtype=np.int64).reshape(n_lines, line_length)
         # A line runs along a parameter axis only (continuation along x0 / v0 is refused), so
         # its first point's x0 / v0 is the whole line's.
@@ -67,7 +68,7 @@ class LineRunner:
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
         with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-            RUN_LINES[self.method, self.lyapunov](coefficients, initial_states, self.settings, local_lines, records,
+            self.kernels.run_lines(self.method, self.lyapunov)(coefficients, initial_states, self.settings, local_lines, records,
                                    summaries, statuses)
         values = point_values(
             records.reshape(-1, self.n_record_rows, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.lines import Line2D
 
-from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
+from vrsweep.numerics.model import PARAMETER_NAMES
+from vrsweep.plot.labels import parameter_symbol
 from vrsweep.plot.selection import _limits
 
 
@@ -106,7 +107,7 @@ def resonance_positions(parameters, axis, values):
 def _resonance_label(axis, position):
     if axis == "g":
         return f"$g_{{res}}$ = {position:.3f} (eq3.4)"
-    return f"$\\tilde\\omega^2 = \\omega^2$ (eq3.4) at {PARAMETER_SYMBOLS.get(axis, axis)} = {position:.4g}"
+    return f"$\\tilde\\omega^2 = \\omega^2$ (eq3.4) at {parameter_symbol(axis)} = {position:.4g}"
 
 
 def _draw_resonance_curve(ax, view, x_axis, y_axis):
@@ -126,3 +127,11 @@ def _draw_resonance_curve(ax, view, x_axis, y_axis):
     ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
     return Line2D([], [], color="white", ls="--", lw=1.6,
                   label="$g_{res}(\\Omega)$: $\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
+
+
+def barrier_positions(config, parameters) -> list[float]:
+    """Where a written model's barriers are at ``parameters`` (name -> value)."""
+    from vrsweep.numerics.written import header_values
+
+    values = header_values(config.model, {name: parameters[name] for name in config.parameter_names})
+    return [float(values[f"barriers.{index}.position"]) for index in range(len(config.model.barriers))]

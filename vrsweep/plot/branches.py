@@ -10,9 +10,9 @@ import os
 import numpy as np
 from matplotlib.figure import Figure
 
-from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.analytic import _draw_branches, analytic_branches
 from vrsweep.plot.labels import (
+    parameter_symbol,
     _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
 )
 
@@ -54,7 +54,7 @@ def branch_figure(ds, sweeps=(), more_branches=()) -> Figure:
     every figure (title, size, style: ``labels.figure_options``). Branches are coloured by their
     period (in slow periods), the first file's first branch's period in BRANCH_COLOUR."""
     name = str(ds.attrs.get("parameter", "parameter"))
-    symbol = PARAMETER_SYMBOLS.get(name, name)
+    symbol = parameter_symbol(name)
     figure = _new_figure(7.5, 6.5)
     top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
     datasets = [ds, *more_branches]

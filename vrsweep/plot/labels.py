@@ -59,11 +59,32 @@ def units_suffix(units) -> str:
     return "" if units.strip() in DIMENSIONLESS else f" [{units.strip()}]"
 
 
+# The written model whose file is being drawn (numerics.written.WrittenModel), or None for the
+# paper's: its parameters are labelled by their names, or the LaTeX symbols its config gives.
+_WRITTEN_MODEL = contextvars.ContextVar("vrsweep_written_model", default=None)
+
+
+def use_model(model):
+    """Label parameters as ``model``'s (a written model, or a name of the paper's)."""
+    _WRITTEN_MODEL.set(None if isinstance(model, str) or model is None else model)
+
+
+def _written_symbol(name):
+    model = _WRITTEN_MODEL.get()
+    if model is None or name not in model.parameter_names:
+        return None
+    given = model.symbol(name)
+    return f"${given}$" if given else name
+
+
 def parameter_label(name: str, units=None) -> str:
     """'fast forcing amplitude $g$' for a parameter, with its symbol and units (``units``: as a
     file's coordinate says; default: the model's, dimensionless, so none shown)."""
     if name == "direction":
         return "continuation direction"
+    written = _written_symbol(name)
+    if written is not None:
+        return f"parameter {written}{units_suffix(units)}"
     if name in INITIAL_STATE_LONG_NAMES:  # x0, v0: 'initial position $x(0)$'
         words = INITIAL_STATE_LONG_NAMES[name].rsplit(" ", 1)[0]
         return f"{words} {INITIAL_STATE_SYMBOLS[name]}{units_suffix(units)}"
@@ -75,7 +96,10 @@ def parameter_label(name: str, units=None) -> str:
 
 def _symbol(name: str) -> str:
     """$g$ for a parameter, $x(0)$ for an initial state, the name itself otherwise."""
-    return PARAMETER_SYMBOLS.get(name) or INITIAL_STATE_SYMBOLS.get(name, name)
+    return _written_symbol(name) or PARAMETER_SYMBOLS.get(name) or INITIAL_STATE_SYMBOLS.get(name, name)
+
+
+parameter_symbol = _symbol
 
 
 def _number(value) -> str:
@@ -88,11 +112,13 @@ def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
     selected = dict(selected or {})
     items = [os.path.basename(path), MODEL_EQUATIONS.get(model, model)]
     if config is not None:
+        if config.written:
+            items[1] = f"{config.model.title}: x'' = {config.model.acceleration}"
         swept = ({axis.name for axis in config.axes} - set(selected)) | set(omit)
         parameters = dict(config.parameters, **selected)
         run = config.integration
-        items += [f"{PARAMETER_SYMBOLS[name]} = {_number(parameters[name])}"
-                  for name in PARAMETER_NAMES if name not in swept]
+        items += [f"{_symbol(name)} = {_number(parameters[name])}"
+                  for name in config.parameter_names if name not in swept]
         items += [f"x(0) = {_number(config.initial['x'])}", f"$\\dot{{x}}(0)$ = {_number(config.initial['v'])}",
                   f"{run.transient_periods} transient + {run.measure_periods} measured slow periods"]
     items += ["all quantities dimensionless"] + ([extra] if extra else [])

@@ -7,8 +7,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from vrsweep.errors import ResultFileError
-from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.labels import (
+    parameter_symbol,
     FAILED_COLOUR, FAILED_ROW_HEIGHT, LYAPUNOV_SYMBOL, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
 )
 from vrsweep.plot.selection import (
@@ -51,7 +51,7 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     notes = "; ".join(n for n in (_progress_note(view), failure_note, note) if n)
     what = (f"Bifurcation diagram (top) and largest Lyapunov exponent {LYAPUNOV_SYMBOL} (bottom)" if bifurcation
             else f"Largest Lyapunov exponent {LYAPUNOV_SYMBOL}")
-    _title(fig, f"{what} against {PARAMETER_SYMBOLS.get(x_axis, x_axis)}: "
+    _title(fig, f"{what} against {parameter_symbol(x_axis)}: "
                 f"{LYAPUNOV_SYMBOL} > 0 chaos, = 0 quasi-periodic, < 0 periodic",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig

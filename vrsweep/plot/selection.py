@@ -10,8 +10,8 @@ import os
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.labels import (
+    parameter_symbol, use_model,
     CURVES_NOT_MAP, DIRECTION_NAMES, FAILED_COLOUR, FAILED_ROW_HEIGHT, RELATIVE_ERROR_LIMIT, _number, _parse_config,
 )
 from vrsweep.results import Status
@@ -98,6 +98,7 @@ class _Sweep:
                          if coord.ndim == 0 and name != "direction"}
         self.config = _parse_config(ds.attrs.get("config", ""))
         self.model = str(ds.attrs.get("model", self.config.model if self.config else "original"))
+        use_model(self.config.model if self.config else None)  # a written model's parameter symbols
         self.complete = bool(ds.attrs.get("vrsweep_complete", 0))
         done = np.asarray(ds["done"].values)
         self.n_done, self.n_points = int(np.sum(done)), int(np.size(done))
@@ -141,7 +142,7 @@ class _Sweep:
 def _coordinate_text(name, value):
     if name == "direction":
         return f"sweep {DIRECTION_NAMES.get(int(value), value)}"
-    return f"{PARAMETER_SYMBOLS.get(name, name)} = {_number(value)}"
+    return f"{parameter_symbol(name)} = {_number(value)}"
 
 
 def _choose_x_axis(view, x_axis, need_axes=None):

@@ -10,11 +10,12 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from vrsweep.errors import UsageError
-from vrsweep.numerics.model import PARAMETER_SYMBOLS
 from vrsweep.plot.analytic import (
+    barrier_positions,
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
 )
 from vrsweep.plot.labels import (
+    parameter_symbol,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
     _caption, _legend_columns, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
 )
@@ -90,6 +91,8 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     kinds_seen = {"aperiodic": False, "untrusted": False}
     symbol = "|Q|" if amplitude else "R"
     what = "numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)"
+    if view.config is not None and view.config.written:
+        what = "numerical |Q|" if amplitude else "numerical R"
     for k, (where, label) in enumerate(curves):
         colour = (curve_colour[where[scale_axis]] if scale_axis is not None
                   else RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)])
@@ -119,7 +122,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
         # The analytic side depends on the parameters only, not on the continuation direction.
         parameter_where = {axis: index for axis, index in where.items() if axis != "direction"}
         key = tuple(sorted(parameter_where.items()))
-        if view.config is None or key in analytic_done:
+        if view.config is None or view.config.written or key in analytic_done:  # the paper's theory only
             continue
         analytic_done.add(key)
         parameters = view.parameters(**{axis: float(view.axes[axis][i]) for axis, i in parameter_where.items()})
@@ -160,7 +163,8 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
         handles.append(Line2D([], [], ls="none", marker="x", mew=1.5,
                               color=FAILED_COLOUR if len(curves) == 1 else "k",
                               label="× at the bottom edge: integration failed"))
-    if view.config is not None:
+    written = view.config is not None and view.config.written  # no analytic side: the paper's theory only
+    if view.config is not None and not written:
         handles.append(Line2D([], [], color="k", lw=1.3, label=f"analytic {analytic}, stable (corrected eq2.27)"))
         handles.append(Line2D([], [], color="k", lw=1.3, ls="--", label=f"analytic {analytic}, unstable"))
         handles.append(Line2D([], [], color=BARRIER_COLOUR if barrier_shared else "k", lw=1.0,
@@ -170,7 +174,11 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     handles += resonance_handles
     fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
     ax.set_xlabel(parameter_label(x_axis))
-    if amplitude:
+    if written:
+        response = view.config.model.as_data()["response"]
+        ax.set_ylabel(f"amplitude $|Q|$ of x at {response['frequency']}" if amplitude
+                      else f"gain $R = |Q|$ / {response['scale']}, $Q$ at frequency {response['frequency']}")
+    elif amplitude:
         ax.set_ylabel(f"amplitude $|Q|$ of x at $\\omega$, analytic $A$")
     else:
         ax.set_ylabel(f"gain $R = |Q|/c$, analytic $A/c$")
@@ -187,10 +195,11 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     _span_grid(ax, x)
     ax.grid(alpha=0.3, which="both" if log else "major")
     quantity = "amplitude |Q|" if amplitude else "gain R"
-    x_symbol = PARAMETER_SYMBOLS.get(x_axis, x_axis)
+    x_symbol = parameter_symbol(x_axis)
     notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note) if note)
-    _title(fig, f"Response {quantity} against {x_symbol}; analytic: first-order theory of the effective system "
-                f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})",
+    theory_note = ("" if written else "; analytic: first-order theory of the effective system "
+                   f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})")
+    _title(fig, f"Response {quantity} against {x_symbol}{theory_note}",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
@@ -553,7 +562,7 @@ def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small", loc="best")
     notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
-    _title(fig, f"Impacts per slow period against {PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
+    _title(fig, f"Impacts per slow period against {parameter_symbol(x_axis)} "
                 "(mean over the measurement window)",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
@@ -635,7 +644,7 @@ def bifurcation_figure(ds, x_axis=None) -> Figure:
     ax.set_xlabel(parameter_label(x_axis))
     notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
     _title(fig, "Bifurcation diagram: x sampled once per slow period against "
-                f"{PARAMETER_SYMBOLS.get(x_axis, x_axis)} "
+                f"{parameter_symbol(x_axis)} "
                 "(one dot per period: a period-p orbit shows p dots)",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
@@ -660,8 +669,11 @@ def _draw_bifurcation(ax, view, x_axis):
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ms=2.0, ls="none",
                 label="integration failed: no samples")  # ms x markerscale 3 = the drawn marks
     _draw_resonance_lines(ax, view, x_axis, x)
-    if view.config is not None:
+    if view.config is not None and not view.config.written:
         ax.axhline(view.parameters()["Delta"], color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
+    elif view.config is not None:
+        for index, position in enumerate(barrier_positions(view.config, view.parameters())):
+            ax.axhline(position, color="k", lw=0.8, ls="--", label="barrier" if index == 0 else None)
     _span_grid(ax, x)  # the whole grid, even where every point failed
     ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$")
     ax.grid(alpha=0.3)

@@ -70,3 +70,23 @@ def cf_attributes(title: str, history: str | None = None) -> dict:
         "references": REFERENCES,
         "date_created": now,
     }
+
+
+WRITTEN = "written"  # the ``model`` attribute and trajectory group of a model written in the config
+
+
+def model_key(model) -> str:
+    """What files call a model: ``original``, ``effective``, or ``written`` (whose equations are in
+    the ``model_definition`` attribute and in the stored config)."""
+    return model if isinstance(model, str) else WRITTEN
+
+
+def model_attributes(model) -> dict:
+    """The file attributes that say which model ran: ``model`` (model_key) and, for a written one,
+    ``model_name`` and ``model_definition`` (the model as the config writes it, JSON)."""
+    if isinstance(model, str):
+        return {"model": model}
+    import json
+
+    return {"model": WRITTEN, "model_name": model.title,
+            "model_definition": json.dumps(model.as_data(), sort_keys=False)}

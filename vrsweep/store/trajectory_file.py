@@ -124,8 +124,11 @@ def root_attributes(config):
 
     from vrsweep.store.provenance import cf_attributes
 
-    at = ", ".join(f"{name} = {config.parameters[name]:g}" for name in ("g", "Omega"))
-    return {"config": config.to_yaml(), "vrsweep_version": __version__,
+    from vrsweep.store.provenance import model_attributes
+
+    shown = ("g", "Omega") if isinstance(config.model, str) else config.parameter_names[:4]
+    at = ", ".join(f"{name} = {config.parameters[name]:g}" for name in shown)
+    return {"config": config.to_yaml(), "vrsweep_version": __version__, **model_attributes(config.model),
             "numba_version": numba.__version__, "numpy_version": np.__version__,
             **cf_attributes(f"vrsweep trajectory of the {config.model} model at {at}")}
 

@@ -1,0 +1,314 @@
+"""The config's ``model``: one of the paper's (``original``, ``effective``) or a model written out as
+data (docs/models.md), checked here into a numerics.written.WrittenModel.
+
+    model:
+      name: linear impact oscillator                  # optional: titles and files
+      acceleration: "-2*zeta*v - x + F*cos(omega*t + phi)"
+      parameters: {zeta: 0.05, F: 1.0, omega: 0.8, phi: 0.0, Delta: 1.2, r: 0.8}
+      symbols: {zeta: '\\zeta'}                       # optional: LaTeX for axis labels
+      barriers:                                        # zero, one or two
+        - {position: Delta, side: above, restitution: r}
+      period: "2*pi/omega"                             # the stroboscopic period T
+      response: {frequency: omega, scale: F}           # R = |Q| / scale at that frequency
+      max_step: "period/8"                             # optional: the step cap (accuracy of R)
+
+Every expression is checked by numerics.expressions (a whitelist over the syntax tree: a config
+never runs code). What needs the grid (a positive period, restitutions in [0, 1], barriers that
+do not overlap, a start between them) is checked once the axes are known (check_written_model).
+
+Methods of one validation run (vrsweep.config.validate._Validator), which provides ``report``.
+"""
+
+from __future__ import annotations
+
+import keyword
+import math
+
+import numpy as np
+
+from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, PARAMETER_DOMAINS
+from vrsweep.config.wording import did_you_mean, show
+from vrsweep.numerics import expressions
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, MODELS, PARAMETER_NAMES
+from vrsweep.numerics.written import SIDES, Barrier, WrittenModel
+
+MODEL_KEYS = ("name", "acceleration", "parameters", "symbols", "barriers", "period", "response", "max_step")
+REQUIRED_KEYS = ("acceleration", "parameters", "period", "response")
+BARRIER_KEYS = ("position", "side", "restitution")
+RESPONSE_KEYS = ("frequency", "scale")
+MAX_PARAMETERS = 64
+MAX_NAME_LENGTH = 200
+# A grid this large is checked point by point; a larger one along each axis through the fixed values.
+FULL_CHECK_POINTS = 1_000_000
+
+
+def parameter_names(model) -> tuple[str, ...]:
+    return model.parameter_names if isinstance(model, WrittenModel) else PARAMETER_NAMES
+
+
+def parameter_defaults(model) -> dict[str, float]:
+    return model.defaults if isinstance(model, WrittenModel) else dict(DEFAULT_PARAMETERS)
+
+
+def parameter_domains(model) -> dict:
+    """A written model's parameters may take any value; what they may not make (a negative
+    period, a restitution above one) is checked at the grid's points."""
+    if isinstance(model, WrittenModel):
+        return {name: ANY for name in model.parameter_names}
+    return PARAMETER_DOMAINS
+
+
+class ModelSection:
+    """Checks of ``model``: mixed into the validation run, which provides ``report``."""
+
+    def read_model(self, value):
+        """The config's model: a name of the paper's, a WrittenModel, or None after a problem."""
+        if value is None or isinstance(value, str):
+            name = "original" if value is None else value
+            if name not in MODELS:
+                self.report(("model",), f"must be one of {', '.join(MODELS)} or a mapping that writes a model out "
+                                        f"(docs/models.md), got {show(value)}{did_you_mean(name, MODELS)}")
+                return None
+            return name
+        if not isinstance(value, dict):
+            self.report(("model",), f"must be one of {', '.join(MODELS)} or a mapping that writes a model out, "
+                                    f"got {show(value)}")
+            return None
+        problems = len(self.problems)
+        for key in value:
+            if key not in MODEL_KEYS:
+                self.report(("model", key), f"unknown key{did_you_mean(str(key), MODEL_KEYS)}",
+                            allowed=", ".join(MODEL_KEYS))
+        for key in REQUIRED_KEYS:
+            if key not in value:
+                self.report(("model", key), "missing (a written model needs acceleration, parameters, period "
+                                            "and response)")
+        name = value.get("name")
+        if name is not None and not (isinstance(name, str) and 0 < len(name) <= MAX_NAME_LENGTH
+                                     and name.isprintable()):
+            self.report(("model", "name"), f"must be a line of text of at most {MAX_NAME_LENGTH} characters, "
+                                           f"got {show(name)}")
+        parameters = self._model_parameters(value.get("parameters"))
+        names = tuple(parameters) if parameters is not None else ()
+        symbols = self._model_symbols(value.get("symbols"), names)
+        acceleration = self._expression(value, ("acceleration",), names + expressions.STATE_NAMES, parameters)
+        barriers = self._model_barriers(value.get("barriers"), names, parameters)
+        period = self._expression(value, ("period",), names, parameters)
+        response = value.get("response")
+        frequency = scale = None
+        if response is not None and not isinstance(response, dict):
+            self.report(("model", "response"), f"must be a mapping {{frequency, scale}}, got {show(response)}")
+        elif isinstance(response, dict):
+            for key in response:
+                if key not in RESPONSE_KEYS:
+                    self.report(("model", "response", key), f"unknown key{did_you_mean(str(key), RESPONSE_KEYS)}",
+                                allowed=", ".join(RESPONSE_KEYS))
+            if "frequency" not in response:
+                self.report(("model", "response", "frequency"), "missing: the frequency of R's Fourier component")
+            frequency = self._expression(response, ("response", "frequency"), names, parameters)
+            scale = self._expression(response, ("response", "scale"), names, parameters, default="1")
+        max_step = self._expression(value, ("max_step",), names + ("period",), parameters)
+        if len(self.problems) > problems or parameters is None:
+            return None
+        return WrittenModel(acceleration=acceleration, parameters=tuple(parameters.items()), barriers=barriers,
+                            period=period, response_frequency=frequency, response_scale=scale, max_step=max_step,
+                            name=name, symbols=symbols)
+
+    def _model_parameters(self, value):
+        path = ("model", "parameters")
+        if value is None:
+            return None  # reported as missing
+        if not isinstance(value, dict):
+            self.report(path, f"must be a mapping of parameter name -> default value, got {show(value)}")
+            return None
+        if len(value) > MAX_PARAMETERS:
+            self.report(path, f"has {len(value)} parameters; at most {MAX_PARAMETERS}")
+            return None
+        parameters = {}
+        for name, default in value.items():
+            where = path + (name,)
+            reason = _bad_name(name)
+            if reason:
+                self.report(where, reason)
+                continue
+            if isinstance(default, bool) or not isinstance(default, (int, float)) \
+                    or not math.isfinite(float(default)):
+                self.report(where, f"must be a finite number (the parameter's default), got {show(default)}")
+                continue
+            parameters[name] = float(default)
+        return parameters if len(parameters) == len(value) else None
+
+    def _model_symbols(self, value, names):
+        if value is None:
+            return ()
+        if not isinstance(value, dict):
+            self.report(("model", "symbols"), f"must be a mapping of parameter name -> LaTeX, got {show(value)}")
+            return ()
+        symbols = []
+        for name, symbol in value.items():
+            if name not in names and name not in INITIAL_STATE_AXES:
+                self.report(("model", "symbols", name), f"not a parameter of the model{did_you_mean(str(name), names)}",
+                            allowed=", ".join(names))
+            elif not (isinstance(symbol, str) and 0 < len(symbol) <= MAX_NAME_LENGTH and symbol.isprintable()):
+                self.report(("model", "symbols", name), f"must be a short LaTeX string such as '\\\\zeta', got "
+                                                        f"{show(symbol)}")
+            else:
+                symbols.append((name, symbol))
+        return tuple(symbols)
+
+    def _model_barriers(self, value, names, parameters):
+        path = ("model", "barriers")
+        if value is None:
+            return ()
+        if not isinstance(value, list) or len(value) > 2:
+            self.report(path, f"must be a list of zero, one or two barriers, got {show(value)}",
+                        allowed="[{position, side: above|below, restitution}, ...]")
+            return ()
+        barriers = []
+        for index, item in enumerate(value):
+            where = path + (index,)
+            if not isinstance(item, dict):
+                self.report(where, f"must be a mapping {{position, side, restitution}}, got {show(item)}")
+                continue
+            for key in item:
+                if key not in BARRIER_KEYS:
+                    self.report(where + (key,), f"unknown key{did_you_mean(str(key), BARRIER_KEYS)}",
+                                allowed=", ".join(BARRIER_KEYS))
+            for key in BARRIER_KEYS:
+                if key not in item:
+                    self.report(where + (key,), "missing")
+            side = item.get("side")
+            if "side" in item and side not in SIDES:
+                self.report(where + ("side",), f"must be above (the mass stays at x <= position) or below "
+                                               f"(x >= position), got {show(side)}")
+            position = self._expression(item, ("barriers", index, "position"), names, parameters)
+            restitution = self._expression(item, ("barriers", index, "restitution"), names, parameters)
+            if position is not None and restitution is not None and side in SIDES:
+                barriers.append(Barrier(position, side, restitution))
+        if len(barriers) == 2 and barriers[0].side == barriers[1].side:
+            self.report(path + (1, "side"), f"two barriers on the same side ({barriers[0].side}): only the inner "
+                                            f"one could ever be met; give one above and one below")
+        return tuple(barriers)
+
+    def _expression(self, mapping, key_path, names, parameters, default=None):
+        """The canonical text of an expression at model.<key_path> (numbers are expressions too),
+        or ``default`` if absent; None after a problem (the caller counts the problems)."""
+        path = ("model",) + key_path
+        value = mapping.get(key_path[-1]) if isinstance(mapping, dict) else None
+        if value is None:
+            return default
+        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+            self.report(path, f"must be an expression (a string such as \"2*pi/omega\", or a number), "
+                              f"got {show(value)}")
+            return None
+        text = value if isinstance(value, str) else repr(float(value))
+        known = names if parameters is not None else None
+        try:
+            expressions.parse(text, known if known is not None else ())
+        except expressions.ExpressionError as error:
+            if known is None and "unknown name" in str(error):
+                return None  # the parameters themselves are broken: that is the problem reported
+            self.report(path, str(error))
+            return None
+        return expressions.canonical(text)
+
+
+def _bad_name(name) -> str | None:
+    if not isinstance(name, str) or not name.isidentifier() or not name.isascii():
+        return f"must be a name (letters, digits and _, not starting with a digit), got {show(name)}"
+    if keyword.iskeyword(name):
+        return f"{name} is a Python keyword and cannot name a parameter"
+    if name in expressions.RESERVED:
+        return (f"{name} is taken: x, v and t are the state and time, pi the constant, and "
+                f"{', '.join(expressions.FUNCTIONS)} the functions")
+    if name in INITIAL_STATE_AXES:
+        return f"{name} is taken: x0 and v0 are the initial-state axes of a sweep (basins)"
+    if len(name) > 40:
+        return f"is longer than 40 characters: {name[:40]}..."
+    return None
+
+
+def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, initial: dict, swept_initial: dict):
+    """The rules a written model's values must keep at every grid point (or along each axis through
+    the fixed values, for a grid beyond FULL_CHECK_POINTS): each reported once, at the model's field.
+
+    fixed: name -> the parameter's fixed value; axes: name -> values of the swept parameters;
+    initial: {"x", "v"} (None where invalid); swept_initial: x0 / v0 -> values.
+    """
+    from vrsweep.numerics.written import header_values
+
+    names = model.parameter_names
+    swept = [name for name in names if name in axes]
+    n_points = math.prod(len(axes[name]) for name in swept) if swept else 1
+    if n_points <= FULL_CHECK_POINTS:
+        grids = np.meshgrid(*(np.asarray(axes[name], dtype=np.float64) for name in swept), indexing="ij")
+        points = {name: fixed[name] for name in names}
+        points.update({name: grid.reshape(-1) for name, grid in zip(swept, grids)})
+        samples = [points]
+    else:
+        samples = [{**{n: fixed[n] for n in names}, name: np.asarray(axes[name], dtype=np.float64)} for name in swept]
+    for values in samples:
+        header = header_values(model, values)
+
+        def first_bad(array, good):
+            array = np.broadcast_to(np.asarray(array, dtype=np.float64), np.broadcast_shapes(
+                *(np.shape(v) for v in values.values()), np.shape(array)))
+            with np.errstate(invalid="ignore"):
+                bad = ~good(array)
+            if not bad.any():
+                return None
+            index = int(np.argmax(bad.reshape(-1)))
+            where = ", ".join(f"{name} = {show(float(np.broadcast_to(values[name], array.shape).reshape(-1)[index]))}"
+                              for name in names if np.ndim(values[name]) > 0)
+            return float(array.reshape(-1)[index]), (f" at {where}" if where else "")
+
+        rules = [(("period",), header["period"], lambda a: np.isfinite(a) & (a > 0), "must be > 0 and finite"),
+                 (("response", "frequency"), header["response.frequency"], lambda a: np.isfinite(a) & (a > 0),
+                  "must be > 0 and finite"),
+                 (("response", "scale"), header["response.scale"], lambda a: np.isfinite(a) & (a != 0),
+                  "must be finite and not 0 (R = |Q| / scale)"),
+                 (("max_step",), header["max_step"], lambda a: np.isfinite(a) & (a > 0), "must be > 0 and finite")]
+        for index in range(len(model.barriers)):
+            rules.append((("barriers", index, "position"), header[f"barriers.{index}.position"], np.isfinite,
+                          "must be finite"))
+            rules.append((("barriers", index, "restitution"), header[f"barriers.{index}.restitution"],
+                          lambda a: (a >= 0) & (a <= 1), "must be in [0, 1] (eq2.2: a rebound cannot gain energy)"))
+        failed = False
+        for key_path, array, good, message in rules:
+            found = first_bad(array, good)
+            if found is not None:
+                value, where = found
+                report(("model",) + key_path, f"{message}, got {show(value)}{where}")
+                failed = True
+        if failed:
+            return
+        if len(model.barriers) == 2:
+            above = next(i for i, b in enumerate(model.barriers) if b.side == "above")
+            below = 1 - above
+            gap = header[f"barriers.{above}.position"] - header[f"barriers.{below}.position"]
+            found = first_bad(gap, lambda a: a > 0)
+            if found is not None:
+                report(("model", "barriers", above, "position"),
+                       f"must lie above the barrier below (model.barriers.{below}), but the gap is "
+                       f"{show(found[0])}{found[1]}")
+                return
+        x_values = swept_initial.get("x0", initial.get("x"))
+        if x_values is None:
+            return
+        for index, barrier in enumerate(model.barriers):
+            position = header[f"barriers.{index}.position"]
+            x = np.asarray(x_values, dtype=np.float64)
+            if barrier.side == "above":
+                inside = (np.max(x) < position) if x.ndim else (x < position)
+            else:
+                inside = (np.min(x) > position) if x.ndim else (x > position)
+            found = first_bad(np.where(inside, 1.0, -1.0), lambda a: a > 0)
+            if found is not None:
+                field = "sweep.x0" if "x0" in swept_initial else "initial.x"
+                relation = "below" if barrier.side == "above" else "above"
+                report(("sweep", "x0") if "x0" in swept_initial else ("initial", "x"),
+                       f"must be {relation} model.barriers.{index} (the mass starts between its barriers), "
+                       f"got {field} = {show(float(np.max(x) if barrier.side == 'above' else np.min(x)))} and the "
+                       f"barrier at {show(float(np.broadcast_to(position, np.shape(position) or (1,)).reshape(-1)[0]))}"
+                       f"{found[1]}")
+                return
