@@ -19,7 +19,7 @@ from vrsweep.analysis import continuation
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import VrsweepError
 from vrsweep.numerics import kernel
-from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, MU, kernel_coefficients
 from vrsweep.numerics.trajectory import settings_vector, simulate
 
 HYSTERESIS = dict(DEFAULT_PARAMETERS, gamma=0.05, alpha=0.05, Omega=4.0)
@@ -141,7 +141,7 @@ def test_multipliers_match_scipy_central_differences(hysteresis_branch, impactin
 def _liouville_determinant(orbit):
     """exp(-int gamma (x^2 - mu) dt) over the orbit, times e^2 per impact (det of the saltation)."""
     coefficients = _coefficients(orbit.parameter)
-    gamma, mu = HYSTERESIS["gamma"], coefficients[1]
+    gamma, mu = HYSTERESIS["gamma"], coefficients[MU]
     log_det, impacts = 0.0, 0
     state = orbit.state
     for k in range(orbit.periods):

@@ -27,10 +27,14 @@ BASE = {"errors", "results", "_version"}
 ALLOWED = {
     "numerics": set(),
     "analysis": {"numerics"},
-    "config": {"numerics.model", "numerics.settings"},  # numba-free: reading a config must not import numba
+    # numba-free: reading a config must not import numba. numerics.expressions, written and
+    # coefficients are plain Python and numpy: a written model is checked without compiling it.
+    "config": {"numerics.model", "numerics.settings", "numerics.expressions", "numerics.written",
+               "numerics.coefficients"},
     "store": {"config", "analysis", "numerics.model"},  # numerics.model: parameter names and units only
     "execution": {"numerics", "analysis", "config", "store"},
-    "plot": {"analysis", "config", "store", "numerics.model"},  # model: parameter symbols for labels
+    # model: parameter symbols for labels; written: where a written model's barriers are drawn
+    "plot": {"analysis", "config", "store", "numerics.model", "numerics.written"},
     "commands": {"numerics", "analysis", "config", "store", "execution", "plot", "cli"},
 }
 # Top-level modules, each with the reason it is not in a layer.

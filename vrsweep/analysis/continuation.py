@@ -46,7 +46,7 @@ from vrsweep.analysis import grazing
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
-from vrsweep.numerics.coefficients import PERIOD, barrier_position
+from vrsweep.numerics.coefficients import PERIOD, grazing_barrier
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
@@ -687,7 +687,7 @@ GRAZING_SEARCH_RADII = (1e-3, 4e-3, 1.6e-2)
 
 
 def _barrier(problem, orbit):
-    return float(barrier_position(problem.coefficients(orbit.parameter)))
+    return grazing_barrier(problem.coefficients(orbit.parameter))
 
 
 def _near_grazing(problem, orbit, proximity=GRAZING_PROXIMITY):

@@ -64,7 +64,7 @@ import numpy as np
 from vrsweep.analysis import continuation, grazing
 from vrsweep.errors import UsageError
 from vrsweep.numerics import model as model_metadata
-from vrsweep.numerics.coefficients import barrier_position
+from vrsweep.numerics.coefficients import grazing_barrier
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import ATOL, RTOL
 from vrsweep.numerics.shooting import periodic_map
@@ -129,7 +129,7 @@ class CurveProblem:
         return grazing.free_coefficients(coefficients) if free else coefficients
 
     def delta(self, values):
-        return float(barrier_position(self.coefficients(values)))
+        return grazing_barrier(self.coefficients(values))
 
     def one_parameter(self, lam2):
         """The ContinuationProblem in lam1 at fixed lam2 (for the one-parameter test functions)."""

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vrsweep.numerics.coefficients import PERIOD, barrier_position, free_of_barriers, shortest_period
+from vrsweep.numerics.coefficients import PERIOD, free_of_barriers, grazing_barrier, shortest_period
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.results import Status
 
@@ -107,7 +107,7 @@ def free_map(problem, state, value, periods, window=None):
 
 
 def barrier(problem, value):
-    return float(barrier_position(problem.coefficients(value)))
+    return grazing_barrier(problem.coefficients(value))
 
 
 def free_top(orbit_map, window):

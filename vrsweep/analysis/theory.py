@@ -834,7 +834,13 @@ def theory_rows(config) -> list[dict]:
     parameter that enters the theory): g_res (eq3.4), wt2 and K (eq2.11, eq2.12) at the config's g
     or over its g axis, and the analytic peak -- the largest stable amplitude of X over the g axis,
     or over DEFAULT_G_POINTS values of 0..2 g_res when g is not swept. ``vrsweep theory`` prints
-    them (``--json``) or tabulates them."""
+    them (``--json``) or tabulates them. A written model has no such theory: UsageError."""
+    if not isinstance(config.model, str):
+        from vrsweep.errors import UsageError
+
+        raise UsageError.naming("{source} writes its own model ({model}); the analytic theory (eq2.10-eq3.4) is "
+                                "the paper's model's: run theory on a config with model: original or effective",
+                                source=config.source_name, model=str(config.model))
     axes = {axis.name: axis.values for axis in config.axes}
     row_axes = [name for name in config.axis_names if name in THEORY_PARAMETERS]
     ignored_axes = [name for name in config.axis_names if name in ("Delta", "e")]

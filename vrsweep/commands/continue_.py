@@ -96,7 +96,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
         missed = []
         branches, bifurcations = execution.run_continuation(config, start_state, failures=missed)
-        delta = config.parameters["Delta"]
+        delta = execution.barrier_of(config)
         # The stored config holds the start's value of the continued parameter, not its unused default.
         section = config.continuation
         config = dataclasses.replace(config, parameters={**config.parameters, section.parameter: section.start})

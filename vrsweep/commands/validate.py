@@ -12,7 +12,6 @@ from vrsweep.config import INTEGRATION_DEFAULTS, load_config
 from vrsweep.errors import ConfigError
 from vrsweep.execution.estimate import estimate, format_bytes, format_duration, memory_problem, size_problem
 from vrsweep.execution.threads import available_threads
-from vrsweep.numerics.model import PARAMETER_NAMES
 
 
 @click.command("validate")
@@ -35,7 +34,19 @@ def command(config_path, overrides, threads):
 
     click.echo(f"{config.source_name}: valid")
     click.echo(f"model:       {config.model}")
-    fixed = [f"{name}={config.parameters[name]:g}" for name in PARAMETER_NAMES if name not in config.axis_names]
+    if config.written:
+        model = config.model
+        click.echo(f"equation:    x'' = {model.acceleration}")
+        for index, barrier in enumerate(model.barriers):
+            keeps = "x <=" if barrier.side == "above" else "x >="
+            click.echo(f"{'barriers:' if index == 0 else '':<12} {barrier.side} at {barrier.position} ({keeps} it), "
+                       f"restitution {barrier.restitution}")
+        if not model.barriers:
+            click.echo("barriers:    none")
+        click.echo(f"period:      T = {model.period}; R = |Q| / {model.response_scale}, Q at frequency "
+                   f"{model.response_frequency}")
+    fixed = [f"{name}={config.parameters[name]:g}" for name in config.parameter_names
+             if name not in config.axis_names]
     click.echo(f"fixed:       {' '.join(fixed)}")
     initial = [f"{key}=swept ({axis})" if axis in config.axis_names else f"{key}={config.initial[key]:g}"
                for axis, key in (("x0", "x"), ("v0", "v"))]

@@ -28,7 +28,7 @@ import numpy as np
 
 from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, PARAMETER_DOMAINS
 from vrsweep.config.wording import did_you_mean, show
-from vrsweep.numerics import expressions
+import vrsweep.numerics.expressions as expressions
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, MODELS, PARAMETER_NAMES
 from vrsweep.numerics.written import SIDES, Barrier, WrittenModel
 
@@ -62,18 +62,11 @@ class ModelSection:
     """Checks of ``model``: mixed into the validation run, which provides ``report``."""
 
     def read_model(self, value):
-        """The config's model: a name of the paper's, a WrittenModel, or None after a problem."""
-        if value is None or isinstance(value, str):
-            name = "original" if value is None else value
-            if name not in MODELS:
-                self.report(("model",), f"must be one of {', '.join(MODELS)} or a mapping that writes a model out "
-                                        f"(docs/models.md), got {show(value)}{did_you_mean(name, MODELS)}")
-                return None
-            return name
+        """The config's model: a name of the paper's, a WrittenModel, or None after a problem in a
+        written one. Anything but a mapping is returned as it is: the document's schema checks it
+        (``must be one of original, effective``) with the other sections."""
         if not isinstance(value, dict):
-            self.report(("model",), f"must be one of {', '.join(MODELS)} or a mapping that writes a model out, "
-                                    f"got {show(value)}")
-            return None
+            return "original" if value is None else value
         problems = len(self.problems)
         for key in value:
             if key not in MODEL_KEYS:
@@ -289,7 +282,7 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
             found = first_bad(gap, lambda a: a > 0)
             if found is not None:
                 report(("model", "barriers", above, "position"),
-                       f"must lie above the barrier below (model.barriers.{below}), but the gap is "
+                       f"must lie above the barrier below (model.barriers[{below}]), but the gap is "
                        f"{show(found[0])}{found[1]}")
                 return
         x_values = swept_initial.get("x0", initial.get("x"))
@@ -307,7 +300,7 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
                 field = "sweep.x0" if "x0" in swept_initial else "initial.x"
                 relation = "below" if barrier.side == "above" else "above"
                 report(("sweep", "x0") if "x0" in swept_initial else ("initial", "x"),
-                       f"must be {relation} model.barriers.{index} (the mass starts between its barriers), "
+                       f"must be {relation} model.barriers[{index}] (the mass starts between its barriers), "
                        f"got {field} = {show(float(np.max(x) if barrier.side == 'above' else np.min(x)))} and the "
                        f"barrier at {show(float(np.broadcast_to(position, np.shape(position) or (1,)).reshape(-1)[0]))}"
                        f"{found[1]}")

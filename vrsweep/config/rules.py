@@ -18,6 +18,7 @@ from vrsweep.config.schema import (
 )
 from vrsweep.config.wording import show
 from vrsweep.config.models import check_written_model
+from vrsweep.numerics.written import WrittenModel
 from vrsweep.numerics.model import DEFAULT_PARAMETERS
 
 
@@ -32,7 +33,7 @@ class CrossFieldRules:
 
         sweep = data.get("sweep") if isinstance(data.get("sweep"), dict) else {}
         x = _valid(initial, "x", INITIAL_DEFAULTS, INITIAL_DOMAINS)
-        if not isinstance(self.model, str):
+        if isinstance(self.model, WrittenModel):
             self.check_written_rules(parameters, initial, sweep, axes, x)
         elif "x0" in sweep:
             if "x0" in axes:

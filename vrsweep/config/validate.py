@@ -37,6 +37,7 @@ from vrsweep.config.yaml import (
 )
 from vrsweep.errors import ConfigError
 from vrsweep.numerics.model import INITIAL_STATE_AXES, INITIAL_STATE_KEYS, PARAMETER_NAMES
+from vrsweep.numerics.written import WrittenModel
 
 
 # A config is a few kB; a sweep listing every value of a long axis some hundred kB at most.
@@ -127,7 +128,7 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
         # section and the sweep may hold. So it is read first (from --set model=..., if given).
         self.model = self.read_model(self.model_value(data))
         if self.model is None:
-            self.parse_overrides()
+            self.use_model(None)
             self.fail_if_problems()  # a broken written model: its parameters are unknown
         self.use_model(self.model)
         settings = self.parse_overrides()
@@ -277,10 +278,11 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
         # An empty section ("parameters:" with nothing under it) reads as null: treat it as {}.
         data = {key: ({} if value is None and key in ("parameters", "initial", "sweep", "integration")
                       else value) for key, value in data.items()}
-        if not isinstance(self.model, str):
+        written = isinstance(self.model, WrittenModel)
+        if written:
             data = {key: value for key, value in data.items() if key != "model"}  # read_model's
         try:
-            document = Document if isinstance(self.model, str) else written_document(self.model.parameters)
+            document = written_document(self.model.parameters) if written else Document
             return document.model_validate(data)
         except ValidationError as error:
             for item in error.errors(include_url=False):

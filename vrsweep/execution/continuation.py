@@ -26,6 +26,15 @@ def problem_of(config):
                                             section.options())
 
 
+def barrier_of(config) -> float:
+    """The barrier a branch file measures distances to: Delta, or a written model's first barrier above
+    (numerics.coefficients.grazing_barrier; +inf without one) at the config's parameters."""
+    from vrsweep.numerics.coefficients import grazing_barrier
+    from vrsweep.numerics.models import kernels_for
+
+    return grazing_barrier(kernels_for(config.model).coefficients(config.parameters))
+
+
 def start_state_from_sweep(path, at):
     """x, v at the end of the run of the grid point ``at`` ({axis: value}) of sweep file ``path``:
     the point's attractor (its x_final, v_final), where the first orbit is looked for."""

@@ -45,6 +45,17 @@ def barrier_position(coefficients, barrier=0):
     return coefficients[..., BARRIER + BARRIER_VALUES * barrier + POSITION]
 
 
+def grazing_barrier(coefficients):
+    """Where continuation looks for grazes (analysis/grazing.py measures the orbit's highest smooth
+    maximum against it): the first barrier above the mass, or +inf when a model has none above (its
+    branches then end where an impact appears or disappears at a barrier below)."""
+    coefficients = np.asarray(coefficients, dtype=np.float64)
+    for barrier in range(int(coefficients[N_BARRIERS])):
+        if coefficients[BARRIER + BARRIER_VALUES * barrier + SIDE] > 0.0:
+            return float(coefficients[BARRIER + BARRIER_VALUES * barrier + POSITION])
+    return np.inf
+
+
 def barrier_slot(barrier, value):
     """The index of one value (POSITION, SIDE, RESTITUTION) of barrier ``barrier``."""
     return BARRIER + BARRIER_VALUES * barrier + value

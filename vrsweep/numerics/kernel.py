@@ -75,11 +75,11 @@ from vrsweep.numerics.tangent import (
 # Impacts are decided on each step's dense output in Bernstein form (impact.find_crossing), which
 # sees a graze between a step's ends however long the step: events need no step cap (up to version
 # 0.1 a step was capped at 1/8 of the shortest forcing period so that a graze showed as one turning
-# point). The cap that stays, coefficients[MAX_STEP], is for accuracy (benchmarks/README.md, "Steps
-# without the cap"): without it the controller lets local errors grow to the tolerance, and R, a
-# Fourier component about 1e-3 of x's size at g = 30, then needed rtol 1e-6 to 1e-7 and more steps
-# than the capped run at rtol 1e-4. Each model sets its own (model.py's fractions of the forcing
-# periods for the paper's models; a written model's max_step).
+# point). The cap that stays, coefficients[MAX_STEP], is for accuracy (benchmarks/README.md,
+# "Steps without the cap"): without it the controller lets local errors grow to the tolerance,
+# and R, a Fourier component about 1e-3 of x's size at g = 30, then needed rtol 1e-6 to 1e-7 and
+# more steps than the capped run at rtol 1e-4. Each model sets its own (model.py's shares of the
+# forcing periods for the paper's models; a written model's max_step).
 # The exact step to an impact is Newton-refined until x is this close to Delta (relative).
 IMPACT_POSITION_TOLERANCE = 1e-13
 IMPACT_NEWTON_ITERATIONS = 3

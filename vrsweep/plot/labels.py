@@ -146,9 +146,11 @@ def _parse_config(text):
     if not text:
         return None
     try:
-        return parse_config(text, "<stored config>")
+        config = parse_config(text, "<stored config>")
     except ConfigError:
         return None
+    use_model(config.model)  # a written model's parameters are labelled by its own symbols
+    return config
 
 
 _REQUESTED_SIZE = contextvars.ContextVar("vrsweep_figure_size", default=None)

@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
-from vrsweep.numerics.model import PARAMETER_NAMES
+from vrsweep.plot.analytic import barrier_positions
 from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _title, _width
 from vrsweep.results import Status
 
@@ -24,12 +24,19 @@ def with_impacts(t, x, v, impacts, delta):
 
     Sampled on a fixed grid, a rebound would be drawn as a chord between the samples on either
     side of it; with the impact points in place, lines reach the barrier and jump there.
+    ``delta``: the barrier's position, or a list of (position, side) (a written model's barriers:
+    an impact moving up, v before > 0, is on the one above).
     """
-    if len(impacts) == 0 or delta is None:
+    if len(impacts) == 0 or delta is None or (isinstance(delta, list) and not delta):
         return t, x, v
     impact_t = impacts[:, 0]
+    if isinstance(delta, list):
+        sides = dict((side, position) for position, side in delta)
+        at = np.where(impacts[:, 1] > 0, sides.get("above", np.nan), sides.get("below", np.nan))
+    else:
+        at = np.full(len(impacts), delta)
     all_t = np.concatenate([t, impact_t, impact_t])
-    all_x = np.concatenate([x, np.full(len(impacts), delta), np.full(len(impacts), delta)])
+    all_x = np.concatenate([x, at, at])
     all_v = np.concatenate([v, impacts[:, 1], impacts[:, 2]])
     rank = np.concatenate([np.ones(len(t)), np.zeros(len(impacts)), np.full(len(impacts), 2.0)])
     order = np.lexsort((rank, all_t))
@@ -81,14 +88,26 @@ def _in_window(t, window, *arrays):
 def _point_text(config):
     if config is None:
         return ""
+    if config.written:
+        return ", ".join(f"{name} = {_number(config.parameters[name])}" for name in config.parameter_names[:4])
     return f"g = {_number(config.parameters['g'])}, Ω = {_number(config.parameters['Omega'])}"
+
+
+def _barriers(config):
+    """The barriers to draw: [(position, side)], the paper's one above at Delta or a written model's."""
+    if config is None:
+        return []
+    if not config.written:
+        return [(config.parameters["Delta"], "above")]
+    positions = barrier_positions(config, config.parameters)
+    return [(position, barrier.side) for position, barrier in zip(positions, config.model.barriers)]
 
 
 def _window_text(window, data):
     slow_period = float(data.attrs.get("slow_period", 0.0))
     if not slow_period:
         return f"t in [{window[0]:.4g}, {window[1]:.4g}]"
-    return f"slow periods {round(window[0] / slow_period) + 1}-{round(window[1] / slow_period)} of T = 2π/ω"
+    return f"periods {round(window[0] / slow_period) + 1}-{round(window[1] / slow_period)} of T = {slow_period:.4g}"
 
 
 ROW_TITLES = {"original": "original system (eq2.1-eq2.2)", "effective": "effective system (eq2.10)"}
@@ -104,7 +123,7 @@ def trajectory_figure(data, periods=None) -> Figure:
     transient (the config's transient_periods) is drawn grey, the rest blue.
     """
     config = _parse_config(data.config_text)
-    delta = config.parameters["Delta"] if config is not None else None
+    barriers = _barriers(config)
     window = _time_window(data, periods)
     slow_period = float(data.attrs.get("slow_period", 0.0))
     t_transient = config.integration.transient_periods * slow_period if config is not None else 0.0
@@ -113,7 +132,7 @@ def trajectory_figure(data, periods=None) -> Figure:
     grid = fig.subplots(len(runs), 3, squeeze=False)
     letters = iter("abcdef")
     for row, run in zip(grid, runs):
-        t, x, v = with_impacts(run.t, run.x, run.v, run.impacts, delta)
+        t, x, v = with_impacts(run.t, run.x, run.v, run.impacts, barriers)
         t, x, v = _in_window(t, window, x, v)
         ax_x, ax_v, ax_phase = row
         for part, colour, label in ((t <= t_transient, TRANSIENT_COLOUR, "transient"),
@@ -123,13 +142,16 @@ def trajectory_figure(data, periods=None) -> Figure:
             ax_x.plot(t[part], x[part], lw=0.4, color=colour)
             ax_v.plot(t[part], v[part], lw=0.4, color=colour)
             ax_phase.plot(x[part], v[part], lw=0.3, color=colour, label=label)
-        if delta is not None:
-            ax_x.axhline(delta, color="k", lw=0.8, ls="--")
-            ax_phase.axvline(delta, color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
+        for index, (position, _) in enumerate(barriers):
+            ax_x.axhline(position, color="k", lw=0.8, ls="--")
+            label = None if index else ("barrier $x = \\Delta$" if not config.written else "barrier")
+            ax_phase.axvline(position, color="k", lw=0.8, ls="--", label=label)
         ax_phase.legend(fontsize="x-small", loc="best")
         status = "" if run.status == Status.OK else f" (stopped: {run.status.name.lower()})"
         for ax, what in ((ax_x, "position"), (ax_v, "velocity"), (ax_phase, "phase portrait")):
-            ax.set_title(f"({next(letters)}) {ROW_TITLES.get(run.model, run.model)}: {what}{status}", fontsize="small")
+            row_title = config.model.title if config is not None and config.written else ROW_TITLES.get(run.model,
+                                                                                                         run.model)
+            ax.set_title(f"({next(letters)}) {row_title}: {what}{status}", fontsize="small")
             ax.grid(alpha=0.3)
         for ax in (ax_x, ax_v):
             ax.set_xlabel(f"time $t$")
@@ -185,7 +207,7 @@ def impacts_per_period_figure(datasets) -> Figure:
     config = configs[0]
     varying = {}
     if config is not None and len(datasets) > 1:
-        varying = {name: config.parameters[name] for name in PARAMETER_NAMES
+        varying = {name: config.parameters[name] for name in config.parameter_names
                    if any(c is not None and c.parameters[name] != config.parameters[name] for c in configs)}
     names = ", ".join(os.path.basename(data.path or "") for data in datasets)
     _title(fig, "Impacts in each slow period $2\\pi/\\omega$, transient included"

@@ -122,12 +122,12 @@ def file_attributes(kind, config, method, title, **more):
     """The file-level attributes of a branch or curves file: kind, format, provenance, CF."""
     import numba
 
-    from vrsweep.store.provenance import cf_attributes
+    from vrsweep.store.provenance import cf_attributes, model_attributes
 
     return {"vrsweep_file": kind, "vrsweep_format_version": np.int32(FORMAT_VERSION),
             "vrsweep_complete": np.int32(1),
             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-            "config": config.to_yaml(), "model": config.model, **more, "method": method,
+            "config": config.to_yaml(), **model_attributes(config.model), **more, "method": method,
             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
             **cf_attributes(title)}
 

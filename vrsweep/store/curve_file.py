@@ -100,7 +100,8 @@ def write_curves(path, arrays, names, config, method, overwrite=False):
                                 "Floquet multiplier number, larger modulus first")
         _variable(f, "curve", arrays["curve"], (point,), "curve number", "1")
         for name in names:
-            _variable(f, name, arrays[name], (point,), PARAMETER_LONG_NAMES[name], PARAMETER_UNITS[name])
+            _variable(f, name, arrays[name], (point,), PARAMETER_LONG_NAMES.get(name, f"model parameter {name}"),
+                      PARAMETER_UNITS.get(name, "1"))
         for name, (long_name, units) in _POINT_VARIABLES.items():
             _variable(f, name, arrays[name], (point,), long_name, units)
         _multipliers(f, arrays["multipliers"], (point, multiplier))
@@ -119,7 +120,8 @@ def write_curves(path, arrays, names, config, method, overwrite=False):
                   "curve of the codimension-two point", "1")
         for index, name in enumerate(names):
             _variable(f, f"special_{name}", np.asarray([s[2 + index] for s in specials], dtype=np.float64),
-                      (special,), f"{PARAMETER_LONG_NAMES[name]} at the codimension-two point", PARAMETER_UNITS[name])
+                      (special,), f"{PARAMETER_LONG_NAMES.get(name, name)} at the codimension-two point",
+                      PARAMETER_UNITS.get(name, "1"))
     write_bytes(path, image.getvalue())
 
 
@@ -159,7 +161,8 @@ def check_curves(path) -> tuple[list, dict]:
     try:
         with open_hdf5(path, "r") as f:
             names = [_text(name) for name in np.atleast_1d(f.attrs.get("parameter_names", []))]
-            if len(names) != 2 or not set(names) <= set(PARAMETER_NAMES) or names[0] == names[1]:
+            # a written model's parameters are any names (its stored config says which)
+            if len(names) != 2 or not all(name.isidentifier() for name in names) or names[0] == names[1]:
                 raise ResultFileError(f"{path} is corrupt: attribute parameter_names must name two parameters")
             values = check_layout(f, path, layout(names), FILE_KIND)
     except ResultFileError:

@@ -62,11 +62,11 @@ def file_kind(path) -> str:
 
 
 def _trajectory_groups(path):
-    from vrsweep.store.trajectory_file import _open, check_trajectory
+    from vrsweep.store.trajectory_file import RUN_GROUPS, _open, check_trajectory
 
     check_trajectory(path)  # one line for a damaged file, before xarray sees it
     with _open(path, "r") as f:
-        runs = [name for name in ("original", "effective") if name in f]
+        runs = [name for name in RUN_GROUPS if name in f]
         slow = [f"slow_flow/{name}" for name in f["slow_flow"]] if "slow_flow" in f else []
         root_attrs = {key: _plain(value) for key, value in f.attrs.items()}
     return runs, slow, root_attrs

@@ -244,6 +244,10 @@ def is_trajectory_file(path) -> bool:
         return False  # unreadable: let the results reader say why
 
 
+# The groups a trajectory file may hold: one per model run (provenance.model_key's names).
+RUN_GROUPS = ("original", "effective", "written")
+
+
 def check_trajectory(path) -> None:
     """Raise ResultFileError (one line) unless ``path`` is a trajectory file of this format whose
     structure is sound: the one check every reader of trajectory files goes through."""
@@ -251,7 +255,7 @@ def check_trajectory(path) -> None:
     try:
         with _open(path, "r") as f:
             _check_header(f, path)
-            for name in ("original", "effective"):
+            for name in RUN_GROUPS:
                 if name in f:
                     _checked(f[name], MODEL_RUN_SERIES, path)
             for group in (f["slow_flow"].values() if "slow_flow" in f else ()):
@@ -273,7 +277,7 @@ def _check_header(f, path):
         raise ResultFileError(f"{path} has trajectory format {version}; this vrsweep reads format "
                               f"{FORMAT_VERSION}")
     _check_root(f, path)
-    for name in ("original", "effective"):
+    for name in RUN_GROUPS:
         if name in f:
             try:
                 Status(int(f[name].attrs["status"]))
@@ -291,7 +295,7 @@ def read_trajectory(path) -> TrajectoryData:
             _check_header(f, path)
             attrs = {key: _text(value) for key, value in f.attrs.items()}
             runs = {name: _read_model_run(_checked(f[name], MODEL_RUN_SERIES, path))
-                    for name in ("original", "effective") if name in f}
+                    for name in RUN_GROUPS if name in f}
             slow_flow = {}
             if "slow_flow" in f:
                 slow_flow = {start: _read_slow_flow(_checked(group, SLOW_FLOW_SERIES, path))
@@ -301,7 +305,7 @@ def read_trajectory(path) -> TrajectoryData:
     except (OSError, KeyError, ValueError, TypeError) as error:
         raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
     if not runs:
-        raise ResultFileError(f"{path} holds no trajectory (no 'original' or 'effective' group)")
+        raise ResultFileError(f"{path} holds no trajectory (no 'original', 'effective' or 'written' group)")
     return TrajectoryData(runs=runs, slow_flow=slow_flow, attrs=attrs, path=path)
 
 

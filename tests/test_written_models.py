@@ -1,0 +1,382 @@
+"""Models written in the config: the expression language, the config's checks, and the numbers.
+
+Every numerical check compares vrsweep's generated kernel with something it does not share: a
+closed form (the two-sided oscillator's impact times and speeds, the Duffing oscillator's energy,
+the linear oscillator's grazing amplitude), the paper's hand-written kernel, or SciPy's solve_ivp
+with events (written here, with its own right-hand sides).
+"""
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy.integrate import solve_ivp
+
+from vrsweep.cli import main
+from vrsweep.config import load_config, parse_config
+from vrsweep.errors import ConfigError
+from vrsweep.numerics import expressions, kernel
+from vrsweep.numerics.models import kernels_for
+from vrsweep.numerics.trajectory import settings_vector, simulate
+from vrsweep.results import Status
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "vrsweep" / "examples"
+
+
+def example(name, **overrides):
+    config = load_config(EXAMPLES / f"{name}.yaml", [f"{k}={v}" for k, v in overrides.items()])
+    return config
+
+
+# --- the expression language: a whitelist over the syntax tree ---------------------------------
+
+NAMES = ("x", "v", "t", "a", "b")
+
+
+@pytest.mark.parametrize("text, values, expected", [
+    ("-2*a*v - x + b*cos(a*t + 1)", dict(a=0.3, b=2.0, x=0.5, v=-1.0, t=2.0),
+     -2 * 0.3 * -1.0 - 0.5 + 2.0 * math.cos(0.3 * 2.0 + 1)),
+    ("sqrt(abs(x)) + exp(-t) * tanh(v) - log(b) / tan(a)", dict(a=0.3, b=2.0, x=-4.0, v=0.5, t=1.0),
+     2.0 + math.exp(-1.0) * math.tanh(0.5) - math.log(2.0) / math.tan(0.3)),
+    ("min(x, v) + max(a, b) + sign(-v) * pi + x**3 - +a", dict(a=0.3, b=2.0, x=1.5, v=0.5, t=0.0),
+     0.5 + 2.0 - math.pi + 1.5 ** 3 - 0.3),
+])
+def test_expressions_evaluate_as_written(text, values, expected):
+    tree = expressions.parse(text, NAMES)
+    assert float(expressions.evaluate(tree, values)) == pytest.approx(expected, rel=1e-15)
+
+
+@pytest.mark.parametrize("text, token", [
+    ("__import__('os').system('true')", "__import__"),
+    ("x.real", "an attribute"),
+    ("x[0]", "a subscript"),
+    ("(lambda: 1)()", "lambda"),
+    ("[x for x in (1, 2)]", "a comprehension"),
+    ("'text'", "'text'"),
+    ("open", "unknown name 'open'"),
+    ("y + 1", "unknown name 'y'"),
+    ("sin", "without calling it"),
+    ("sin(x, v)", "2 argument(s), not 1"),
+    ("max(x)", "1 argument(s), not 2"),
+    ("x if v else t", "a conditional"),
+    ("x < v", "a comparison"),
+    ("x and v", "a logical operator"),
+    ("x // 2", "FloorDiv"),
+    ("x ** 1000", "power beyond"),
+    ("cos(x=1)", "keyword"),
+    ("True", "True"),
+    ("1e999", "too large"),
+    ("cos(" * 70 + "x" + ")" * 70, "nested"),
+    ("x + " * 1000 + "x", "longer than"),
+    ("", "empty"),
+    ("x +", "not a valid expression"),
+])
+def test_expressions_refuse_anything_but_the_whitelist(text, token):
+    with pytest.raises(expressions.ExpressionError, match=None) as caught:
+        expressions.parse(text, NAMES)
+    assert token in str(caught.value)
+
+
+def test_canonical_form_ignores_spacing():
+    assert expressions.canonical("-2*zeta*v-x") == expressions.canonical(" -2 * zeta*v -  x ")
+
+
+# --- the config: one line per problem, with the file, the line and the field --------------------
+
+MODEL = """\
+model:
+  acceleration: "-2*zeta*v - x + F*cos(omega*t)"
+  parameters: {zeta: 0.05, F: 1.0, omega: 0.8, Delta: 1.2, r: 0.8}
+  barriers:
+    - {position: Delta, side: above, restitution: r}
+  period: "2*pi/omega"
+  response: {frequency: omega, scale: F}
+initial: {x: 0.0, v: 0.0}
+"""
+
+
+def problems(text, overrides=()):
+    with pytest.raises(ConfigError) as caught:
+        parse_config(text, "m.yaml", overrides)
+    return caught.value.problems
+
+
+def test_a_written_model_is_read_with_its_parameters():
+    config = parse_config(MODEL + "sweep: {omega: [0.5, 1.0]}\n", "m.yaml", ["zeta=0.1"])
+    assert config.written
+    assert config.parameter_names == ("zeta", "F", "omega", "Delta", "r")
+    assert config.parameters["zeta"] == 0.1 and config.parameters["F"] == 1.0
+    assert parse_config(config.to_yaml()) == config  # stored configs read back as the same run
+
+
+@pytest.mark.parametrize("change, expected", [
+    (("F*cos(omega*t)", "G*cos(omega*t)"), "m.yaml:2: model.acceleration: refers to an unknown name 'G'"),
+    (("F*cos(omega*t)", "__import__('os')"), "m.yaml:2: model.acceleration: calls __import__"),
+    (("position: Delta", "position: Gap"), "m.yaml:5: model.barriers[0].position: refers to an unknown name 'Gap'"),
+    (("side: above", "side: up"), "m.yaml:5: model.barriers[0].side: must be above"),
+    (("2*pi/omega", "2*pi/x"), "m.yaml:6: model.period: refers to an unknown name 'x'"),
+    (("zeta: 0.05", "x: 0.05"), "m.yaml:3: model.parameters.x: x is taken"),
+    (("r: 0.8}", "r: 1.5}"), "m.yaml:5: model.barriers[0].restitution: must be in [0, 1]"),
+    (("omega: 0.8", "omega: -0.8"), "m.yaml:6: model.period: must be > 0 and finite, got -7.85"),
+    (("x: 0.0,", "x: 1.5,"), "m.yaml:8: initial.x: must be below model.barriers[0]"),
+    (("acceleration:", "acceleraton:"), "m.yaml:2: model.acceleraton: unknown key (did you mean 'acceleration'?)"),
+])
+def test_bad_models_name_the_file_line_and_field(change, expected):
+    found = problems(MODEL.replace(*change))
+    assert any(problem.startswith(expected) for problem in found), found
+
+
+def test_swept_values_are_checked_at_every_grid_point():
+    found = problems(MODEL + "sweep: {r: [0.5, 0.9, 1.2]}\n")
+    assert any("model.barriers[0].restitution: must be in [0, 1] (eq2.2: a rebound cannot gain energy), got 1.2 "
+               "at r = 1.2" in problem for problem in found), found
+
+
+def test_two_barriers_must_face_each_other_and_not_overlap():
+    two = MODEL.replace("    - {position: Delta, side: above, restitution: r}\n",
+                        "    - {position: Delta, side: above, restitution: r}\n"
+                        "    - {position: -Delta, side: below, restitution: r}\n")
+    assert parse_config(two, "m.yaml").model.barriers[1].side == "below"
+    same = two.replace("side: below", "side: above")
+    assert any("model.barriers[1].side: two barriers on the same side" in p for p in problems(same))
+    crossed = two.replace("Delta: 1.2", "Delta: -1.2").replace("x: 0.0,", "x: 0.0,")
+    assert any("must lie above the barrier below" in p for p in problems(crossed))
+
+
+def test_the_cli_refuses_a_bad_model_in_one_line_with_exit_2(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(MODEL.replace("F*cos(omega*t)", "F*cos(omega*t).real"))
+    result = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "out.h5")])
+    assert result.exit_code == 2
+    assert "bad.yaml:2: model.acceleration: may not hold an attribute" in result.output
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_the_paper_theory_is_refused_for_a_written_model(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text(MODEL)
+    result = CliRunner().invoke(main, ["theory", str(path)])
+    assert result.exit_code == 2, result.output
+    assert "written model" in result.output and "Traceback" not in result.output
+
+
+# --- numbers: closed forms ------------------------------------------------------------------
+
+def _run(config, method="rk45", lyapunov=False, periods=None, rtol=1e-11, parameters=None, **settings):
+    """One point of ``config``'s model; ``parameters`` override the config's without its checks
+    (an unforced run has R = |Q| / 0, which a config refuses)."""
+    model = config.model
+    coefficients = kernels_for(model).coefficients(dict(config.parameters, **(parameters or {})))
+    integration = dict(vars(config.integration), rtol=rtol, atol=rtol * 1e-2, **settings)
+    if periods is not None:
+        integration.update(transient_periods=0, measure_periods=periods)
+    vector = settings_vector(**{k: v for k, v in integration.items()
+                                if k in kernel.SETTING_NAMES})
+    return simulate(coefficients, [config.initial["x"], config.initial["v"]], vector, method=method,
+                    lyapunov=lyapunov, model=model)
+
+
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+def test_two_sided_impacts_match_the_closed_form(method):
+    """Undamped, unforced, started at x = 0 with speed v0: each flight from stop to stop takes
+    2 asin(Delta / A) with A^2 = Delta^2 + u^2 (energy), u the speed leaving a stop, which drops by
+    r at each impact; the first impact is at asin(Delta / v0). Both barriers, alternately."""
+    delta, r, v0 = 1.0, 0.9, 2.5
+    config = example("impact_two_sided", Delta=delta, r=r, omega=1.0, **{"initial.v": v0})
+    run = _run(config, method, periods=3, parameters=dict(zeta=0.0, F=0.0))
+    assert run.status == Status.OK
+    times, speeds = [math.asin(delta / v0)], [math.sqrt(v0 * v0 - delta * delta)]
+    while times[-1] < 3 * 2 * math.pi:
+        u = r * speeds[-1]
+        times.append(times[-1] + 2 * math.asin(delta / math.hypot(delta, u)))
+        speeds.append(u)
+    n = np.searchsorted(times, 3 * 2 * math.pi)
+    assert n >= 8 and len(run.impacts) == n
+    np.testing.assert_allclose(run.impacts[:, 0], times[:n], rtol=0, atol=1e-8)
+    signs = np.where(np.arange(n) % 2 == 0, 1.0, -1.0)  # up to +Delta first, then down to -Delta
+    np.testing.assert_allclose(run.impacts[:, 1], signs * np.array(speeds[:n]), rtol=0, atol=1e-8)
+    np.testing.assert_allclose(run.impacts[:, 2], -r * signs * np.array(speeds[:n]), rtol=0, atol=1e-8)
+
+
+def test_duffing_energy_is_conserved_through_elastic_impacts():
+    """zeta = F1 = F2 = 0, r = 1: H = v^2/2 + x^2/2 + beta x^4/4 is a constant of the motion, and an
+    elastic impact only flips v. Checked at every stroboscopic point and every impact."""
+    beta = 0.5
+    config = example("impact_duffing_two_forces", r=1.0, beta=beta, **{"initial.x": 0.2, "initial.v": 1.4})
+    run = _run(config, periods=20, parameters=dict(zeta=0.0, F1=0.0, F2=0.0))
+    assert run.status == Status.OK and len(run.impacts) >= 10
+
+    def energy(x, v):
+        return 0.5 * v * v + 0.5 * x * x + 0.25 * beta * x ** 4
+
+    start = energy(0.2, 1.4)
+    strobe = run.period_records
+    np.testing.assert_allclose(energy(strobe[:, kernel.REC_X], strobe[:, kernel.REC_V]), start, rtol=1e-8)
+    np.testing.assert_allclose(energy(config.parameters["Delta"], run.impacts[:, 1]), start, rtol=1e-8)
+    np.testing.assert_allclose(run.impacts[:, 2], -run.impacts[:, 1], rtol=1e-15)
+
+
+@pytest.mark.slow
+def test_continue_locates_the_linear_oscillators_graze_at_its_free_amplitude():
+    """The period-1 orbit continued in Delta from a barrier out of reach: it grazes where Delta
+    equals the free amplitude F / sqrt((1 - omega^2)^2 + (2 zeta omega)^2)."""
+    from vrsweep.execution.continuation import run_continuation
+
+    config = example("impact_linear")
+    p = config.parameters
+    amplitude = p["F"] / math.hypot(1 - p["omega"] ** 2, 2 * p["zeta"] * p["omega"])
+    _, bifurcations = run_continuation(config, None)
+    grazes = [b.orbit.parameter for b in bifurcations if b.kind == "grazing"]
+    assert len(grazes) == 1
+    assert abs(grazes[0] - amplitude) < 1e-6
+
+
+# --- numbers: the paper's system written out against the hand-written kernel -----------------
+
+PAPER_POINTS = [dict(g=30.0, Omega=4.0), dict(g=10.0, Omega=4.0)]  # period 1; period 3 with impacts
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+@pytest.mark.parametrize("point", PAPER_POINTS, ids=["g30", "g10"])
+def test_the_paper_written_out_gives_the_builtin_numbers(point, method):
+    written = example("paper_written", **point)
+    builtin = parse_config("model: original\n", "<builtin>", [f"{k}={v}" for k, v in point.items()])
+    settings = dict(rtol=1e-10, atol=1e-12, transient_periods=100, measure_periods=100)
+    vector = settings_vector(**settings)
+    a = simulate(kernels_for(written.model).coefficients(written.parameters), [0.99, 0.5], vector,
+                 method=method, lyapunov=method == "rk45", model=written.model)
+    b = simulate(kernels_for("original").coefficients(builtin.parameters), [0.99, 0.5], vector,
+                 method=method, lyapunov=method == "rk45")
+    assert a.status == b.status == Status.OK
+    assert a.summary[kernel.SUM_R] == pytest.approx(b.summary[kernel.SUM_R], rel=1e-6)
+    assert a.summary[kernel.SUM_IMPACTS_PER_PERIOD] == b.summary[kernel.SUM_IMPACTS_PER_PERIOD]
+    if method == "rk45":
+        assert a.summary[kernel.SUM_LYAPUNOV] == pytest.approx(b.summary[kernel.SUM_LYAPUNOV], abs=1e-6)
+
+
+# --- numbers: SciPy with events, written here ----------------------------------------------------
+
+def scipy_reference(acceleration, barriers, x0, v0, period, frequency, scale, n_transient, n_measure):
+    """R, impacts per period and the stroboscopic states of x'' = acceleration(t, x, v) with rigid
+    stops [(position, side, r)], by solve_ivp (DOP853, rtol 1e-12) with an event per stop."""
+    def rhs(t, y):
+        return [y[1], acceleration(t, y[0], y[1]), y[0] * math.sin(frequency * t), y[0] * math.cos(frequency * t)]
+
+    events = []
+    for position, side, _ in barriers:
+        def reach(t, y, position=position, side=side):
+            return side * (y[0] - position)
+        reach.terminal, reach.direction = True, 1.0
+        events.append(reach)
+    y = np.array([x0, v0, 0.0, 0.0])
+    t = 0.0
+    strobe, impacts, quadratures = [], 0, np.zeros(2)
+    for k in range(n_transient + n_measure):
+        y[2:] = 0.0
+        end = (k + 1) * period
+        while t < end:
+            solution = solve_ivp(rhs, (t, end), y, method="DOP853", rtol=1e-12, atol=1e-13, events=events)
+            t, y = solution.t[-1], solution.y[:, -1].copy()
+            if solution.status == 1:  # a stop reached: the impact law
+                hit = next(i for i, e in enumerate(solution.t_events) if len(e))
+                position, side, r = barriers[hit]
+                y[0], y[1] = position, -r * y[1]
+                impacts += k >= n_transient
+                if abs(y[1]) < 1e-9:
+                    raise AssertionError("the reference does not model sticking: choose another point")
+        if k >= n_transient:
+            quadratures += y[2:]
+            strobe.append(y[:2].copy())
+    window = n_measure * period
+    R = math.hypot(*(2.0 * quadratures / window)) / scale
+    return R, impacts / n_measure, np.array(strobe)
+
+
+def _period(strobe, tolerance=1e-6, longest=8):
+    for p in range(1, longest + 1):
+        if np.all(np.abs(strobe[p:] - strobe[:-p]) < tolerance * (1 + np.abs(strobe[p:]))):
+            return p
+    return 0
+
+
+SCIPY_CASES = {
+    "impact_linear": (dict(omega=1.0), lambda p: lambda t, x, v: -2 * p["zeta"] * v - x
+                      + p["F"] * math.cos(p["omega"] * t + p["phi"])),
+    "impact_two_sided": (dict(F=1.0), lambda p: lambda t, x, v: -2 * p["zeta"] * v - x
+                         + p["F"] * math.cos(p["omega"] * t)),
+    "impact_duffing_two_forces": (dict(phi=2.0), lambda p: lambda t, x, v: -2 * p["zeta"] * v - x - p["beta"] * x ** 3
+                                  + p["F1"] * math.cos(p["omega"] * t) + p["F2"] * math.cos(2 * p["omega"] * t + p["phi"])),
+    "paper_written": (dict(g=30.0), lambda p: lambda t, x, v: p["c"] * math.cos(p["omega"] * t)
+                      + p["g"] * math.cos(p["Omega"] * t) - p["gamma"] * (x * x - 1) * v + p["omega0"] ** 2 * x
+                      - p["alpha"] * x ** 3),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+@pytest.mark.parametrize("name", list(SCIPY_CASES))
+def test_reference_models_agree_with_scipy(name, method):
+    overrides, make = SCIPY_CASES[name]
+    config = example(name, **overrides)
+    p = config.parameters
+    model = config.model
+    values = kernels_for(model).coefficients(p)
+    from vrsweep.numerics.coefficients import PERIOD, RESPONSE_FREQUENCY, RESPONSE_SCALE
+    from vrsweep.numerics.written import header_values
+
+    header = header_values(model, p)
+    barriers = [(float(header[f"barriers.{i}.position"]), 1.0 if b.side == "above" else -1.0,
+                 float(header[f"barriers.{i}.restitution"])) for i, b in enumerate(model.barriers)]
+    n_transient, n_measure = 100, 40
+    R, impacts, strobe = scipy_reference(make(p), barriers, config.initial["x"], config.initial["v"],
+                                         values[PERIOD], values[RESPONSE_FREQUENCY], values[RESPONSE_SCALE],
+                                         n_transient, n_measure)
+    run = _run(config, method, rtol=1e-11, transient_periods=n_transient, measure_periods=n_measure)
+    assert run.status == Status.OK
+    ours = run.period_records[n_transient:, [kernel.REC_X, kernel.REC_V]]
+    assert _period(strobe) == _period(ours) > 0  # a periodic point, where both are converged
+    assert run.summary[kernel.SUM_IMPACTS_PER_PERIOD] == impacts
+    assert run.summary[kernel.SUM_R] == pytest.approx(R, rel=1e-7)
+
+
+# --- compiled once, and never stale --------------------------------------------------------------
+
+def test_a_second_run_of_the_same_model_compiles_nothing():
+    """The two-sided model's kernel, compiled by the closed-form test above (or here), is loaded
+    from numba's cache by a fresh process: no compilation, cache hits only."""
+    config = example("impact_two_sided", **{"initial.v": 2.5})
+    _run(config, periods=1)  # compiled (or loaded) in this process, so cached on disk
+    script = (
+        "from vrsweep.config import load_config\n"
+        "from vrsweep.numerics.models import kernels_for\n"
+        "from vrsweep.numerics.trajectory import settings_vector, simulate\n"
+        f"config = load_config({str(EXAMPLES / 'impact_two_sided.yaml')!r}, ['initial.v=2.5'])\n"
+        "kernels = kernels_for(config.model)\n"
+        "simulate(kernels.coefficients(config.parameters), [0.0, 2.5], settings_vector(rtol=1e-11, atol=1e-13,"
+        " transient_periods=0, measure_periods=1), model=config.model)\n"
+        "function = kernels.integrator('rk45')\n"
+        "print(sum(function.stats.cache_hits.values()), sum(function.stats.cache_misses.values()))\n"
+        "import sys; print('sympy' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["1", "0", "False"]  # loaded, not compiled; not even sympy imported
+
+
+def test_a_changed_equation_is_another_module():
+    """The generated module is keyed by what its code depends on: a changed acceleration (or its
+    parameters' order) is another file, so numba can never load the old equation's kernel."""
+    from vrsweep.numerics import codegen
+
+    base = example("impact_linear").model
+    changed = parse_config(MODEL.replace("- x +", "- 1.01*x +"), "m.yaml").model
+    reordered = parse_config(MODEL.replace("{zeta: 0.05, F: 1.0", "{F: 1.0, zeta: 0.05"), "m.yaml").model
+    names = {codegen.module_name(m) for m in (base, changed, reordered, parse_config(MODEL, "m.yaml").model)}
+    assert len(names) == 4
+    assert "1.01" in codegen.source(changed) and "1.01" not in codegen.source(parse_config(MODEL, "m.yaml").model)
+    same = parse_config(MODEL.replace("Delta: 1.2", "Delta: 1.5"), "m.yaml").model  # a default: header only
+    assert codegen.module_name(same) == codegen.module_name(parse_config(MODEL, "m.yaml").model)
