@@ -221,19 +221,42 @@ def test_duffing_energy_is_conserved_through_elastic_impacts():
     np.testing.assert_allclose(run.impacts[:, 2], -run.impacts[:, 1], rtol=1e-15)
 
 
-@pytest.mark.slow
-def test_continue_locates_the_linear_oscillators_graze_at_its_free_amplitude():
-    """The period-1 orbit continued in Delta from a barrier out of reach: it grazes where Delta
-    equals the free amplitude F / sqrt((1 - omega^2)^2 + (2 zeta omega)^2)."""
-    from vrsweep.execution.continuation import run_continuation
+def _free_amplitude(zeta, F, omega):
+    return F / np.hypot(1 - omega ** 2, 2 * zeta * omega)
 
-    config = example("impact_linear")
-    p = config.parameters
-    amplitude = p["F"] / math.hypot(1 - p["omega"] ** 2, 2 * p["zeta"] * p["omega"])
-    _, bifurcations = run_continuation(config, None)
-    grazes = [b.orbit.parameter for b in bifurcations if b.kind == "grazing"]
+
+@pytest.mark.slow
+def test_continue_locates_the_linear_oscillators_graze_and_follows_it_in_omega(tmp_path):
+    """The period-1 orbit continued in Delta from a barrier out of reach (the shipped example): it
+    grazes where Delta equals the free amplitude F / sqrt((1 - omega^2)^2 + (2 zeta omega)^2); the
+    graze followed in (Delta, omega) is that amplitude as a function of omega. From the command
+    line, so that the branch and curves files, info and plot are tried on a written model too."""
+    import h5py
+
+    import vrsweep
+
+    runner = CliRunner()
+    branch, curve = tmp_path / "branch.h5", tmp_path / "curve.h5"
+    result = runner.invoke(main, ["continue", str(EXAMPLES / "impact_linear.yaml"), "-o", str(branch)])
+    assert result.exit_code == 0, result.output
+    p = example("impact_linear").parameters
+    with h5py.File(branch, "r") as f:
+        kinds = [k.decode() if isinstance(k, bytes) else str(k) for k in f["bifurcation_kind"][()]]
+        grazes = f["bifurcation_parameter"][()][np.array(kinds) == "grazing"]
     assert len(grazes) == 1
-    assert abs(grazes[0] - amplitude) < 1e-6
+    assert abs(grazes[0] - _free_amplitude(p["zeta"], p["F"], p["omega"])) < 1e-6
+    point = kinds.index("grazing")
+    result = runner.invoke(main, ["continue", str(branch), "--point", str(point), "--along", "omega",
+                                  "--to", "0.7", "0.9", "-o", str(curve)])
+    assert result.exit_code == 0, result.output
+    with vrsweep.open_results(curve) as ds:
+        delta, omega = ds["Delta"].values, ds["omega"].values
+    assert len(omega) >= 10 and np.ptp(omega) > 0.1
+    np.testing.assert_allclose(delta, _free_amplitude(p["zeta"], p["F"], omega), rtol=0, atol=1e-6)
+    for path in (branch, curve):
+        assert runner.invoke(main, ["info", str(path)]).exit_code == 0
+    figure = runner.invoke(main, ["plot", str(branch), "-o", str(tmp_path / "branch.png")])
+    assert figure.exit_code == 0, figure.output
 
 
 # --- numbers: the paper's system written out against the hand-written kernel -----------------

@@ -141,11 +141,12 @@ def check_pair(parameters, model, names):
     """Refuse a pair the model cannot follow: the same parameter twice, an unknown one, or (original
     model) Omega or omega moving, or an incommensurate forcing (continuation.check_commensurate)."""
     first, second = names
+    known = getattr(model, "parameter_names", model_metadata.PARAMETER_NAMES)  # a written model's own
     for key, name in (("first", first), ("second", second)):
-        if name not in model_metadata.PARAMETER_NAMES:
+        if name not in known:
             raise UsageError.naming("{along} = {name} is not a parameter of the model; parameters: {names}",
                                     {"along": f"continuation.parameters ({key})"}, name=name,
-                                    names=", ".join(model_metadata.PARAMETER_NAMES))
+                                    names=", ".join(known))
     if first == second:
         raise UsageError.naming("{along} = {name} is the branch's own parameter: choose another one to move "
                                 "the point along", {"along": "along"}, name=second)

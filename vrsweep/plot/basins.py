@@ -12,8 +12,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.numerics.model import PARAMETER_NAMES, PARAMETER_SYMBOLS
-from vrsweep.plot.labels import MODEL_EQUATIONS, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width
+from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
@@ -215,7 +214,9 @@ def _basin_caption(view, width):
     items = [os.path.basename(view.path), MODEL_EQUATIONS.get(view.model, view.model)]
     if view.config is not None:
         parameters = view.parameters()
-        items += [f"{PARAMETER_SYMBOLS[name]} = {_number(parameters[name])}" for name in PARAMETER_NAMES]
+        if view.config.written:
+            items[1] = f"{view.config.model.title}: x'' = {view.config.model.acceleration}"
+        items += [f"{parameter_symbol(name)} = {_number(parameters[name])}" for name in view.config.parameter_names]
         run = view.config.integration
         items.append(f"{run.transient_periods} transient + {run.measure_periods} measured slow periods")
     items += ["all quantities dimensionless"] + ([_progress_note(view)] if not view.complete else [])
