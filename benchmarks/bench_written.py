@@ -73,7 +73,8 @@ def main():
     for label, model, parameters, x0, _ in POINTS:
         if model != "original":
             continue
-        written = load_config(EXAMPLE, [f"{name}={value}" for name, value in parameters.items()])
+        written = load_config(EXAMPLE, [f"{name}={value}" for name, value in parameters.items()]
+                              + [f"initial.x={x0}", f"initial.v={V0}"])
         for method in ("rk45", "dop853"):
             builtin_vector = kernels_for("original").coefficients(parameters)
             written_vector = kernels_for(written.model).coefficients(written.parameters)

@@ -403,3 +403,33 @@ def test_a_changed_equation_is_another_module():
     assert "1.01" in codegen.source(changed) and "1.01" not in codegen.source(parse_config(MODEL, "m.yaml").model)
     same = parse_config(MODEL.replace("Delta: 1.2", "Delta: 1.5"), "m.yaml").model  # a default: header only
     assert codegen.module_name(same) == codegen.module_name(parse_config(MODEL, "m.yaml").model)
+
+
+# --- the whole tool on a written model -------------------------------------------------------------
+
+@pytest.mark.slow
+def test_sweeps_shards_merge_lyapunov_and_overflow_on_a_written_model(tmp_path):
+    """The two-sided oscillator through the Python API and the command line: shards merged give the
+    whole run bit for bit, Lyapunov exponents come with it, and an overflowing point is a status."""
+    import vrsweep
+
+    text = (EXAMPLES / "impact_two_sided.yaml").read_text().replace(
+        "F: {start: 0.1, stop: 3.0, num: 59}", "F: [0.2, 1.0, 2.0, 1.0e300]")
+    config = tmp_path / "two.yaml"
+    config.write_text(text.replace("transient_periods: 200", "transient_periods: 50")
+                      .replace("measure_periods: 100", "measure_periods: 20"))
+    runner = CliRunner()
+    for shard in ("0/2", "1/2"):
+        result = runner.invoke(main, ["run", str(config), "--shard", shard, "-o", str(tmp_path / "s.h5")])
+        assert result.exit_code == 0, result.output
+    shards = sorted(str(p) for p in tmp_path.glob("s.shard*.h5"))
+    assert runner.invoke(main, ["merge", *shards, "-o", str(tmp_path / "merged.h5")]).exit_code == 0
+    whole = vrsweep.sweep(str(config), output=str(tmp_path / "whole.h5"), lyapunov=True)
+    with vrsweep.open_results(tmp_path / "merged.h5") as merged:
+        np.testing.assert_array_equal(merged["R"].values, whole["R"].values)
+        statuses = merged["status"].values
+        assert merged.attrs["model"] == "written" and "two-sided" in merged.attrs["model_name"]
+    assert list(statuses[:3]) == [Status.OK] * 3 and statuses[3] != Status.OK  # F = 1e300 overflows
+    assert np.all(np.isfinite(whole["lyapunov"].values[:3]))
+    info = runner.invoke(main, ["info", str(tmp_path / "merged.h5")])
+    assert info.exit_code == 0 and "model_definition" in info.output

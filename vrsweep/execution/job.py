@@ -20,7 +20,7 @@ from vrsweep.numerics.model import AXIS_LONG_NAMES, AXIS_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.config.grid import Grid
 from vrsweep.execution.sweep import run_sweep
-from vrsweep.store.variables import point_variables
+from vrsweep.store.variables import point_variables, written_model_words
 
 
 FAILURE_ADVICE_FRACTION = 0.03
@@ -129,8 +129,10 @@ def shard_output_path(path, shard):
 
 
 def _variable_specs(config):
-    return [VariableSpec(name=name, dtype=dtype, extra_dims=extra, attrs=attrs)
-            for name, dtype, extra, attrs in point_variables(config.integration)]
+    variables = point_variables(config.integration)
+    if config.written:
+        variables = written_model_words(variables, config.model)
+    return [VariableSpec(name=name, dtype=dtype, extra_dims=extra, attrs=attrs) for name, dtype, extra, attrs in variables]
 
 
 def _axes(grid):

@@ -48,6 +48,24 @@ def point_variables(integration):
     ] + (LYAPUNOV_VARIABLES if integration.lyapunov else [])
 
 
+def written_model_words(variables, model):
+    """``point_variables``' list with the long names of a written model (numerics.written): its
+    response's frequency and scale and its period T, not the paper's omega and c."""
+    words = {
+        "R": f"gain |Q|/({model.response_scale}) at the response frequency {model.response_frequency}",
+        "Qs": f"sine Fourier component of x at {model.response_frequency}",
+        "Qc": f"cosine Fourier component of x at {model.response_frequency}",
+        "Q_amplitude": f"amplitude |Q| = sqrt(Qs^2 + Qc^2) of x at {model.response_frequency} (same units as x)",
+        "impacts_per_period": f"mean number of impacts per period T = {model.period} (measurement window)",
+        "period": ("period of the stroboscopic samples in periods T, to period_tolerance (0: none up to "
+                   "max_period: chaotic, quasi-periodic, longer, or not yet converged)"),
+        "strobe_x": f"stroboscopic x at t = nT over the last periods (T = {model.period})",
+        "strobe_v": "stroboscopic velocity at t = nT over the last periods",
+    }
+    return [(name, dtype, extra, dict(attrs, long_name=words[name]) if name in words else attrs)
+            for name, dtype, extra, attrs in variables]
+
+
 # With integration.lyapunov (vrsweep.numerics.tangent). Time t is dimensionless, so a rate is too.
 LYAPUNOV_VARIABLES = [
     ("lyapunov", np.float64, (), {
