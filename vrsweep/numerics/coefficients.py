@@ -11,6 +11,8 @@ order for a written model, numerics/written.py):
     coefficients[RESPONSE_FREQUENCY]   w of R's Fourier component Q = (2/NT) int x e^{iwt} dt
     coefficients[RESPONSE_SCALE]       R = |Q| / scale (eq3.3: scale = c, the slow drive)
     coefficients[N_BARRIERS]           0, 1 or 2 rigid stops
+    coefficients[HARMONIC, HARMONIC + 1]   the frequencies whose cos and sin a dop853 step takes by
+                                       rotating the phases of its start (rhs.py), 0 where unused
     coefficients[BARRIER + 3 b + POSITION, SIDE, RESTITUTION]    barrier b: where it is, SIDE
                                        +1 (above: the mass stays at x <= position) or -1 (below:
                                        x >= position), and its coefficient of restitution
@@ -22,7 +24,9 @@ Plain Python, no numba: the config and execution layers fill it.
 import numpy as np
 
 PERIOD, MAX_STEP, SCAN_STEP, RESPONSE_FREQUENCY, RESPONSE_SCALE, N_BARRIERS = range(6)
-BARRIER = 6
+HARMONIC = 6
+N_HARMONICS = 2
+BARRIER = HARMONIC + N_HARMONICS
 POSITION, SIDE, RESTITUTION = range(3)
 BARRIER_VALUES = 3
 MAX_BARRIERS = 2

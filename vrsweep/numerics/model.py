@@ -14,7 +14,7 @@ The kernel sees only the coefficient vector built here, so it knows nothing of w
 import numpy as np
 
 from vrsweep.numerics.coefficients import (
-    ABOVE, MAX_STEP, N_BARRIERS, N_HEADER, PERIOD, POSITION, RESPONSE_FREQUENCY, RESPONSE_SCALE, RESTITUTION,
+    ABOVE, HARMONIC, MAX_STEP, N_BARRIERS, N_HEADER, PERIOD, POSITION, RESPONSE_FREQUENCY, RESPONSE_SCALE, RESTITUTION,
     SCAN_STEP, SIDE, STICK_SCAN_FRACTION, barrier_slot,
 )
 
@@ -128,6 +128,8 @@ def fill_header(out):
     out[..., RESPONSE_FREQUENCY] = out[..., OMEGA]
     out[..., RESPONSE_SCALE] = out[..., C]
     out[..., N_BARRIERS] = 1.0
+    out[..., HARMONIC] = out[..., OMEGA]  # the forcing's phases, rotated by dop853 (rhs.py)
+    out[..., HARMONIC + 1] = np.where(out[..., G] != 0.0, out[..., BIG_OMEGA], 0.0)
     out[..., barrier_slot(0, POSITION)] = out[..., DELTA]
     out[..., barrier_slot(0, SIDE)] = ABOVE
     out[..., barrier_slot(0, RESTITUTION)] = out[..., E]

@@ -47,9 +47,15 @@ class WrittenKernels:
         self.model = model
 
     def coefficients(self, parameters):
+        from vrsweep.numerics import codegen
+        from vrsweep.numerics.coefficients import HARMONIC, N_HEADER
         from vrsweep.numerics.written import coefficients
 
-        return coefficients(self.model, parameters)
+        vectors = coefficients(self.model, parameters)
+        # The frequencies whose phases dop853 rotates: found in the equation when it was generated.
+        vectors[..., HARMONIC:HARMONIC + 2] = codegen.compiled(self.model).harmonic_frequencies(
+            vectors[..., N_HEADER:])
+        return vectors
 
     def _function(self, name):
         from vrsweep.numerics import codegen

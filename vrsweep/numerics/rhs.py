@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from vrsweep.numerics import dop853
+from vrsweep.numerics.coefficients import HARMONIC
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, G, GAMMA, MU, OMEGA, STIFFNESS
 from vrsweep.numerics.state import QC_INTEGRAL, QS_INTEGRAL, V, X
@@ -178,9 +179,9 @@ def _grid_level(h, scratch):
 def _rotations(h, coefficients, scratch, out, first, last):
     """cos and sin of omega c h and Omega c h for the nodes first..last - 1, into scratch[out:out + 64]
     (4 values per node). A node with the same c as the one before (DOP853's FSAL node) is copied."""
-    omega = coefficients[OMEGA]
-    big_omega = coefficients[BIG_OMEGA]
-    fast = coefficients[G] != 0.0  # without the fast forcing Omega may be anything: leave it out
+    omega = coefficients[HARMONIC]
+    big_omega = coefficients[HARMONIC + 1]
+    fast = big_omega != 0.0  # without the fast forcing Omega may be anything: left out (0)
     for node in range(first, last):
         if node > 0 and scratch[NODES + node] == scratch[NODES + node - 1]:
             for k in range(4):
@@ -226,12 +227,12 @@ def _prepare(t, h, coefficients, scratch, n_nodes):
             scratch[SIN_FAST] = sin_fast
             scratch[ROTATED_STEPS] += 1.0
         else:
-            omega_t = coefficients[OMEGA] * t
+            omega_t = coefficients[HARMONIC] * t
             scratch[COS_SLOW] = math.cos(omega_t)
             scratch[SIN_SLOW] = math.sin(omega_t)
-            if coefficients[G] != 0.0:
-                scratch[COS_FAST] = math.cos(coefficients[BIG_OMEGA] * t)
-                scratch[SIN_FAST] = math.sin(coefficients[BIG_OMEGA] * t)
+            if coefficients[HARMONIC + 1] != 0.0:
+                scratch[COS_FAST] = math.cos(coefficients[HARMONIC + 1] * t)
+                scratch[SIN_FAST] = math.sin(coefficients[HARMONIC + 1] * t)
             scratch[ROTATED_STEPS] = 0.0
         scratch[PHASE_TIME] = t
     if h != scratch[PHASE_STEP]:

@@ -22,7 +22,7 @@ import numpy as np
 
 from vrsweep.numerics import expressions
 from vrsweep.numerics.coefficients import (
-    ABOVE, BELOW, MAX_BARRIERS, MAX_STEP, N_BARRIERS, N_HEADER, PERIOD, POSITION, RESPONSE_FREQUENCY,
+    ABOVE, BELOW, HARMONIC, MAX_BARRIERS, MAX_STEP, N_BARRIERS, N_HEADER, PERIOD, POSITION, RESPONSE_FREQUENCY,
     RESPONSE_SCALE, RESTITUTION, SCAN_STEP, SIDE, STICK_SCAN_FRACTION, barrier_slot,
 )
 
@@ -141,6 +141,10 @@ def coefficients(model: WrittenModel, parameters):
     out[..., RESPONSE_FREQUENCY] = header["response.frequency"]
     out[..., RESPONSE_SCALE] = header["response.scale"]
     out[..., N_BARRIERS] = len(model.barriers)
+    # The harmonics dop853 rotates are the generated module's to say (models.WrittenKernels):
+    # until then the response frequency alone, which every model's quadratures have.
+    out[..., HARMONIC] = header["response.frequency"]
+    out[..., HARMONIC + 1] = 0.0
     for index in range(MAX_BARRIERS):
         if index < len(model.barriers):
             out[..., barrier_slot(index, POSITION)] = header[f"barriers.{index}.position"]
