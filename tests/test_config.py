@@ -87,12 +87,15 @@ def test_a_string_is_not_silently_a_number():
     ("parameters:\n  e: 0\n", 2, ["parameters.e", "(0, 1]", "got 0"]),
     ("parameters:\n  omega: 0\n", 2, ["parameters.omega", "must be > 0"]),
     ("parameters:\n  Omega: -4\n", 2, ["parameters.Omega", "must be > 0"]),
-    ("integration:\n  rtol: 0\n", 2, ["integration.rtol", "(0, 1)"]),
-    ("integration:\n  rtol: 1\n", 2, ["integration.rtol", "(0, 1)"]),
-    ("integration:\n  atol: -1e-12\n", 2, ["integration.atol", "> 0"]),
+    ("integration:\n  rtol: 0\n", 2, ["integration.rtol", "[1e-14, 0.01]"]),
+    ("integration:\n  rtol: 1\n", 2, ["integration.rtol", "[1e-14, 0.01]"]),
+    ("integration:\n  rtol: 0.1\n", 2, ["integration.rtol", "[1e-14, 0.01]", "got 0.1"]),
+    ("integration:\n  atol: 0.5\n", 2, ["integration.atol", "(0, 0.01]"]),
+    ("integration:\n  period_tolerance: 10\n", 2, ["integration.period_tolerance", "(0, 0.001]"]),
+    ("integration:\n  atol: -1e-12\n", 2, ["integration.atol", "(0, 0.01]"]),
     ("integration:\n  divergence_bound: 0\n", 2, ["integration.divergence_bound", "> 0"]),
     ("integration:\n  stick_velocity: 0\n", 2, ["integration.stick_velocity", "> 0"]),
-    ("integration:\n  period_tolerance: 0\n", 2, ["integration.period_tolerance", "> 0"]),
+    ("integration:\n  period_tolerance: 0\n", 2, ["integration.period_tolerance", "(0, 0.001]"]),
     ("integration:\n  transient_periods: -1\n", 2, ["integration.transient_periods", "integer >= 0"]),
     ("integration:\n  transient_periods: 1.5\n", 2, ["integration.transient_periods", "must be an integer"]),
     ("integration:\n  measure_periods: 0\n", 2, ["integration.measure_periods", "integer >= 1"]),
@@ -307,7 +310,7 @@ def test_bad_overrides_are_reported_with_the_other_problems():
         "--set gg=5: unknown name 'gg' (did you mean 'g'?) "
         "(allowed: a parameter, an integration key, initial.x (or x0), initial.v (or v0), model or "
         "continuation.KEY)",
-        "--set rtol=abc: integration.rtol: must be a number, got 'abc' (allowed: a number in (0, 1))",
+        "--set rtol=abc: integration.rtol: must be a number, got 'abc' (allowed: a number in [1e-14, 0.01])",
         "--set g: expected NAME=VALUE, e.g. --set g=5",
         "--set g=[1: VALUE is not a YAML scalar (expected ',' or ']', but got '<stream end>')",
         "--set Omega=-1: parameters.Omega: must be > 0, got -1.0",
@@ -536,7 +539,7 @@ def valid_documents(draw):
             values = sorted(draw(st.lists(st.floats(low, 20), min_size=1, max_size=5, unique=True)))
             sweep[name] = values[::-1] if draw(st.booleans()) else values  # strictly monotonic, either way
     measure = draw(st.integers(1, 500))
-    integration = {"rtol": draw(st.floats(1e-14, 0.5)), "measure_periods": measure,
+    integration = {"rtol": draw(st.floats(1e-14, 1e-2)), "measure_periods": measure,
                    "transient_periods": draw(st.integers(0, 500)), "strobe_periods": draw(st.integers(1, measure))}
     document = {"model": draw(st.sampled_from(["original", "effective"])), "parameters": parameters,
                 "initial": {"x": x, "v": draw(finite)}, "sweep": sweep, "integration": integration}

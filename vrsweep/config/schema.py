@@ -99,8 +99,11 @@ INTEGRATION_DEFAULTS = {
     "period_tolerance": 1.0e-6, "lyapunov": False,
 }
 INTEGRATION_DOMAINS = {
-    "rtol": Domain(low=0.0, high=1.0),
-    "atol": _POSITIVE,
+    # Bounds where the settings mean what they say (docs/config.md): below 1e-14 a step's rounding
+    # is larger than the tolerance asked for; above 1e-2 the step controller's error estimate no
+    # longer bounds R's error (rtol 0.99 gave R 7e-4 off with an R_err of 3e-14).
+    "rtol": Domain(low=1e-14, high=1e-2, low_open=False, high_open=False),
+    "atol": Domain(low=0.0, high=1e-2, high_open=False),
     "transient_periods": Domain(low=0, low_open=False, high=_INT64_MAX, high_open=False, integer=True),
     "measure_periods": _COUNT,
     "max_steps": _COUNT,
@@ -109,7 +112,9 @@ INTEGRATION_DOMAINS = {
     "stick_velocity": _POSITIVE,
     "strobe_periods": _COUNT,       # must also be <= measure_periods: checked across fields
     "max_period": _COUNT,
-    "period_tolerance": _POSITIVE,
+    # A period is repetition of the stroboscopic state to this relative tolerance: at 10 a chaotic
+    # point (lambda1 = 0.23) passed as period 1; 1e-3 is far above any solver error asked for.
+    "period_tolerance": Domain(low=0.0, high=1e-3, high_open=False),
 }
 
 CONTINUATIONS = ("up", "down", "both")
