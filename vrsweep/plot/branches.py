@@ -98,8 +98,10 @@ def branch_figure(ds, sweeps=(), more_branches=()) -> Figure:
         top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=8, zorder=5, ls="none",
                  label=f"{label}, {symbol} = {at:.4f}")
         bottom.axvline(at, color="0.75", lw=0.8, zorder=0)
-    top.set_ylabel("gain $R = |Q|/c$")
-    what = f"Periodic orbits continued in {symbol} ({ds.attrs.get('model', '')} model)"
+    written = config is not None and config.written
+    top.set_ylabel(f"gain $R = |Q|$ / {config.model.response_scale}" if written else "gain $R = |Q|/c$")
+    model_words = config.model.title if written else f"{ds.attrs.get('model', '')} model"
+    what = f"Periodic orbits continued in {symbol} ({model_words})"
     path = str(ds.encoding.get("source", "") or ds.attrs.get("path", "") or "branch")
     _title(figure, what, _caption(os.path.basename(path), config, str(ds.attrs.get("model", "")), omit=(name,),
                                   width=_width(figure)))

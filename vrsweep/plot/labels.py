@@ -120,7 +120,8 @@ def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
         items += [f"{_symbol(name)} = {_number(parameters[name])}"
                   for name in config.parameter_names if name not in swept]
         items += [f"x(0) = {_number(config.initial['x'])}", f"$\\dot{{x}}(0)$ = {_number(config.initial['v'])}",
-                  f"{run.transient_periods} transient + {run.measure_periods} measured slow periods"]
+                  f"{run.transient_periods} transient + {run.measure_periods} measured "
+                  f"{'periods T' if config.written else 'slow periods'}"]
     items += ["all quantities dimensionless"] + ([extra] if extra else [])
     return _wrap(items, width)
 
