@@ -131,7 +131,9 @@ def test_a_single_point_run(tmp_path, info_json, invoke, run_quickstart):
 
 
 def test_a_vrsweep_file_without_a_grid_is_described(tmp_path, info_json, invoke):
-    """A trajectory (from ``simulate``) has no grid: info lists its attributes and datasets."""
+    """A vrsweep file of this format that is none of the kinds vrsweep writes (no vrsweep_file,
+    no grid): info lists its attributes and datasets, and says it does not know its kind rather
+    than guessing one (issue 35: "vrsweep 7")."""
     path = tmp_path / "trajectory.h5"
     with h5py.File(path, "w") as f:
         f.attrs["vrsweep_format_version"] = np.int32(FORMAT_VERSION)
@@ -143,10 +145,14 @@ def test_a_vrsweep_file_without_a_grid_is_described(tmp_path, info_json, invoke)
         samples.attrs.update({"units": "1", "long_name": "position x"})
     result = invoke("info", path)
     assert result.exit_code == 0, result.output
-    assert "vrsweep trajectory" in result.stdout and "effective" in result.stdout
+    assert "a vrsweep file of a kind this vrsweep does not know" in result.stdout and "effective" in result.stdout
     assert re.search(r"^  x\s+50\s+\[1\]\s+position x", result.stdout, re.MULTILINE), result.stdout
     summary = info_json(path)
-    assert summary["kind"] == "trajectory" and summary["points_total"] is None
+    assert summary["kind"] == "unknown" and summary["points_total"] is None
+    with h5py.File(path, "r+") as f:
+        f.attrs["vrsweep_file"] = np.int64(7)
+    first = invoke("info", path).stdout.splitlines()[0]
+    assert "does not know" in first and "vrsweep 7" not in first, first
     assert summary["variables"][0]["shape"] == [50]
 
 

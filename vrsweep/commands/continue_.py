@@ -61,8 +61,13 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     bifurcation K (a fold, period doubling or grazing) in the second parameter NAME, both ways
     within --to and --within, into a curves file (docs/commands.md).
     """
-    from vrsweep.store.branch_file import is_branch_file
+    from vrsweep.store.branch_file import check_branch, is_branch_file
+    from vrsweep.store.fileio import is_hdf5
 
+    if is_hdf5(config_path) and not is_branch_file(config_path):
+        # Not a config; a branch file whose kind cannot be read, or another HDF5 file: its reader
+        # says which, in one line.
+        check_branch(config_path)
     if is_branch_file(config_path):
         if switch:
             from vrsweep.errors import UsageError

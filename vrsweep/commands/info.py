@@ -23,6 +23,9 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError
 
+# The kind of a file of this format that is none of those this vrsweep writes (hand-made, or of a
+# later kind of output): described from its groups.
+UNKNOWN_KIND = "unknown"
 # Root attributes shown in their own lines (or not at all), not under "attributes".
 _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "config", "model",
                      "vrsweep_version", "numba_version", "numpy_version", "shard")
@@ -329,7 +332,9 @@ def _describe_groups(path, kind) -> dict | None:
     complete = attrs.get("vrsweep_complete")
     return {
         "path": os.fspath(path),
-        "kind": str(attrs.get("vrsweep_file", kind or "trajectory")),
+        # Without a kind (the caller's fallback) the file is none that this vrsweep reads, whatever its
+        # vrsweep_file says: "unknown", the attribute shown with the others.
+        "kind": kind or UNKNOWN_KIND,
         "format_version": int(version),
         "complete": None if complete is None else bool(complete),
         "shard": None,
@@ -407,6 +412,8 @@ def _plain(value):
         return None
     if isinstance(value, bytes):
         return value.decode("utf-8", "replace")
+    if isinstance(value, str):  # h5py's str of bytes that are not UTF-8 holds surrogates, which print fails on
+        return value.encode("utf-8", "surrogateescape").decode("utf-8", "replace")
     if isinstance(value, np.ndarray):
         return [_plain(v) for v in value.tolist()]
     if isinstance(value, np.generic):
@@ -441,7 +448,8 @@ def format_summary(summary, show_config=False) -> str:
         lines.append(f"points:      {progress}")
     else:
         state = {True: "complete", False: "NOT complete", None: "completeness not recorded"}[summary["complete"]]
-        lines.append(f"{summary['path']}: vrsweep {kind}, format {summary['format_version']}, {state}")
+        what = "a vrsweep file of a kind this vrsweep does not know" if kind == UNKNOWN_KIND else f"vrsweep {kind}"
+        lines.append(f"{summary['path']}: {what}, format {summary['format_version']}, {state}")
     if summary["model"]:
         lines.append(f"model:       {summary['model']}")
     if summary["points_total"] is not None:

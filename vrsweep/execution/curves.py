@@ -57,6 +57,9 @@ def read_request(path, point, along, to=None, within=None):
         state = np.array([float(ds["bifurcation_x"].values[point]), float(ds["bifurcation_v"].values[point])])
         config = parse_config(ds.attrs["config"], f"{path} (its config)", line_numbers=False)
         first = str(ds.attrs["parameter"])
+    if not np.all(np.isfinite([value, *state])):
+        raise UsageError.naming("{point} = {index} has no finite {name}, x and v in {path}: there is no point to "
+                                "start the curve from", {"point": "point"}, index=point, name=first, path=str(path))
     if kind not in curves.KINDS:
         raise UsageError.naming("{point} = {index} is a {kind} point: only fold, period_doubling and grazing "
                                 "points can be followed in two parameters", {"point": "point"}, index=point,

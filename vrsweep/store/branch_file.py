@@ -45,7 +45,7 @@ import numpy as np
 
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.store.fileio import open_hdf5, write_bytes
+from vrsweep.store.fileio import has_file_kind, open_hdf5, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "branch"
@@ -220,19 +220,6 @@ def is_branch_file(path) -> bool:
     return has_file_kind(path, FILE_KIND)
 
 
-def has_file_kind(path, kind) -> bool:
-    """True for an HDF5 file whose root attribute vrsweep_file is ``kind``; False for anything else
-    (shared with the curves file, store/curve_file.py)."""
-    try:
-        if not os.path.isfile(path) or not h5py.is_hdf5(path):
-            return False
-        with open_hdf5(path, "r") as f:
-            found = f.attrs.get("vrsweep_file", "")
-            return (found.decode() if isinstance(found, bytes) else found) == kind
-    except (OSError, ValueError):
-        return False
-
-
 # What check_branch expects: each array's dimensions and kind of number ("i" whole, "f" real,
 # "s" text). A file written by this version has all of them.
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling")
@@ -254,20 +241,71 @@ def _text(value):
     return value.decode() if isinstance(value, bytes) else value
 
 
+# The root attributes file_attributes writes as text (and a branch file's parameter): each must
+# be text where present, as every other attribute stored as text must be valid UTF-8.
+TEXT_ATTRS = ("created", "config", "model", "parameter", "method", "vrsweep_version", "numba_version", "numpy_version",
+              "Conventions", "title", "history", "source", "references", "date_created")
+
+
+def _is_text(value) -> bool:
+    """Whether ``value`` (bytes or str, as h5py reads text) is valid UTF-8 text."""
+    try:
+        (value.decode("utf-8") if isinstance(value, bytes) else value).encode("utf-8")
+    except (UnicodeError, AttributeError):
+        return False
+    return True
+
+
+def _attr_text(f, path, name, required=False, where="attribute "):
+    """Attribute ``name`` of ``f`` (the file, or a dataset with ``where`` "attribute NAME.") as
+    text, None when absent (unless ``required``); ResultFileError for anything but valid UTF-8
+    text: h5py hands undecodable bytes back as a str with surrogates, which would fail later, in
+    the middle of printing a summary."""
+    if name not in f.attrs:
+        if required:
+            raise ResultFileError(f"{path} is corrupt: {where}{name} is missing")
+        return None
+    value = f.attrs[name]
+    if not isinstance(value, (bytes, str)) or not _is_text(value):
+        raise ResultFileError(f"{path} is corrupt: {where}{name} must be text")
+    return _text(value)
+
+
+def _texts_are_text(obj, path, where, names=()):
+    """Every attribute of ``obj`` stored as text (and each of ``names``) is valid UTF-8: info
+    prints them all."""
+    for name in obj.attrs:
+        if name in names or isinstance(obj.attrs[name], (str, bytes)):
+            _attr_text(obj, path, name, where=where)
+
+
+def _whole(f, path, name, default):
+    value = f.attrs.get(name, default)
+    if isinstance(value, np.ndarray) and value.shape == (1,):
+        value = value[0]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ResultFileError(f"{path} is corrupt: attribute {name} must be a whole number")
+    return int(value)
+
+
 def check_layout(f, path, layout, kind):
     """Raise ResultFileError (one line) unless the open HDF5 file ``f`` holds every array of
     ``layout`` ({name: (dimensions, "i" | "f" | "s")}) with lengths that agree along each
-    dimension (a dimension's length is that of its own array), and every checksum holds (each
-    array is read whole). Returns {name: values} of the arrays read."""
-    if _text(f.attrs.get("vrsweep_file", "")) != kind:
+    dimension (a dimension's length is that of its own array, whose values count 0, 1, ...), its
+    root attributes of their types, and every checksum holds (each array is read whole). Returns
+    {name: values} of the arrays read."""
+    if _attr_text(f, path, "vrsweep_file") != kind:
         raise ResultFileError(f"{path} is not a vrsweep {kind} file")
-    version = f.attrs.get("vrsweep_format_version", 0)
-    if isinstance(version, (bool, np.bool_)) or not isinstance(version, (int, np.integer)):
-        raise ResultFileError(f"{path} is corrupt: attribute vrsweep_format_version must be a whole number")
+    version = _whole(f, path, "vrsweep_format_version", 0)
     if version != FORMAT_VERSION:
         raise ResultFileError(f"{path} has {kind} format {version}; this vrsweep reads format {FORMAT_VERSION}")
-    if f.attrs.get("vrsweep_complete", 0) != 1:
+    if _whole(f, path, "vrsweep_complete", 0) != 1:
         raise ResultFileError(f"{path} is incomplete: the run that wrote it did not finish")
+    _attr_text(f, path, "config", required=True)
+    _texts_are_text(f, path, "attribute ", TEXT_ATTRS)
+    # No array is read before its size is known to fit in the file: a damaged dataspace could
+    # otherwise claim any size and have it allocated (no array of these files is compressed).
+    file_bytes = os.path.getsize(path)
     values = {}
     for name, (dimensions, number) in layout.items():
         if name not in f or not isinstance(f[name], h5py.Dataset):
@@ -277,14 +315,76 @@ def check_layout(f, path, layout, kind):
         if data.ndim != len(dimensions) or data.dtype.kind not in wanted:
             raise ResultFileError(f"{path} is corrupt: {name} must be {'text' if number == 's' else 'numbers'} "
                                   f"over ({', '.join(dimensions)}), found shape {data.shape} {data.dtype}")
+        if data.size * data.dtype.itemsize > file_bytes:
+            raise ResultFileError(f"{path} is corrupt: {name} claims {data.size} values, more than the file holds")
+        _texts_are_text(data, path, f"attribute {name}.")
         values[name] = data[()]
+        if number == "s" and not all(_is_text(value) for value in values[name].reshape(-1)):
+            raise ResultFileError(f"{path} is corrupt: {name} must be text")
     for name, (dimensions, _) in layout.items():
         for axis, dimension in enumerate(dimensions):
             length = len(values[dimension])
             if values[name].shape[axis] != length:
                 raise ResultFileError(f"{path} is corrupt: {name} has {values[name].shape[axis]} values along "
                                       f"{dimension}, which has {length}")
+    for name, (dimensions, _) in layout.items():
+        # A dimension's values are its positions: readers index the other arrays with them.
+        if dimensions == (name,) and not np.array_equal(values[name], np.arange(len(values[name]))):
+            raise ResultFileError(f"{path} is corrupt: {name} must count 0, 1, ... along its dimension")
+    if len(values.get("multiplier", ())) != 2:
+        raise ResultFileError(f"{path} is corrupt: multiplier must have 2 values (the two Floquet multipliers)")
     return values
+
+
+def read_checked(path, read):
+    """``read(f)`` on the HDF5 file ``path`` opened for reading, with whatever HDF5 or h5py raise
+    for a damaged file (OSError, RuntimeError, KeyError, UnicodeDecodeError... depending on what
+    the damage hit) as one line: the one entry of check_branch and check_curves."""
+    path = os.fspath(path)
+    try:
+        with open_hdf5(path, "r") as f:
+            return read(f)
+    except ResultFileError:
+        raise
+    except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
+        from vrsweep.store.reader import corrupt_error
+
+        raise corrupt_error(path, error) from None
+
+
+def stored_config(path, text, required):
+    """The Config a file stores (its resolved YAML), with a continuation section when ``required``
+    (ResultFileError otherwise); when not required, None for one this version cannot read."""
+    from vrsweep.config import parse_config
+    from vrsweep.errors import ConfigError
+
+    try:
+        config = parse_config(text, f"{path} (its config)", line_numbers=False)
+    except ConfigError as error:
+        if not required:
+            return None
+        raise ResultFileError(f"{path} is corrupt: its config is not valid ({error.problems[0]})") from None
+    if required and config.continuation is None:
+        raise ResultFileError(f"{path} is corrupt: its config has no continuation section")
+    return config
+
+
+def check_values(path, values, config, what, finite):
+    """The checks branch and curves files share, on what check_layout read: the names of
+    ``finite`` hold finite numbers; ``{what}_periods`` (one per branch or curve) lies in 1 ..
+    continuation.max_period of ``config`` (when there is one) and every point's ``periods`` is
+    its branch's (curve's): an orbit's period sizes what is integrated from the file."""
+    for name in finite:
+        if not np.all(np.isfinite(values[name])):
+            raise ResultFileError(f"{path} is corrupt: {name} holds a value that is not a finite number")
+    periods = values[f"{what}_periods"]
+    limit = config.continuation.max_period if config is not None and config.continuation is not None else None
+    wrong = periods[(periods < 1) | (periods > (limit if limit is not None else np.inf))]
+    if wrong.size:
+        bound = f"1 to continuation.max_period = {limit}" if limit is not None else "at least 1"
+        raise ResultFileError(f"{path} is corrupt: {what}_periods must be {bound}, found {wrong[0]}")
+    if np.any(values["periods"] != periods[values[what]]):
+        raise ResultFileError(f"{path} is corrupt: periods differs from its {what}'s {what}_periods")
 
 
 def check_branch(path) -> tuple[str, dict]:
@@ -292,16 +392,16 @@ def check_branch(path) -> tuple[str, dict]:
 
     Returns what the check read, so that a reader needs no second pass over the file: the
     continued parameter's name and {name: values} of every array of LAYOUT (text as bytes)."""
+    from vrsweep.numerics.model import PARAMETER_NAMES
+
     path = os.fspath(path)
-    try:
-        with open_hdf5(path, "r") as f:
-            values = check_layout(f, path, LAYOUT, FILE_KIND)
-            parameter = _text(f.attrs.get("parameter", None))
-    except ResultFileError:
-        raise
-    except (OSError, KeyError, ValueError, TypeError) as error:
-        raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
-    if not isinstance(parameter, str) or not parameter:
+
+    def read(f):
+        values = check_layout(f, path, LAYOUT, FILE_KIND)
+        return _attr_text(f, path, "parameter"), _attr_text(f, path, "config"), _attr_text(f, path, "model"), values
+
+    parameter, text, model, values = read_checked(path, read)
+    if parameter not in PARAMETER_NAMES:
         raise ResultFileError(f"{path} is corrupt: attribute parameter must name the continued parameter")
     n_branches = len(values["branch_id"])
     for name in ("branch", "bifurcation_branch"):
@@ -312,4 +412,17 @@ def check_branch(path) -> tuple[str, dict]:
         unknown = sorted({_text(v) for v in values[name]} - set(allowed))
         if unknown:
             raise ResultFileError(f"{path} is corrupt: {name} holds {unknown[0]!r}, not one of {', '.join(allowed)}")
+    # continue BRANCH.h5 --point K computes from the stored config: it must be one this version
+    # runs, of the parameter and model the file says it continued.
+    config = stored_config(path, text, required=True)
+    if config.continuation.parameter != parameter:
+        raise ResultFileError(f"{path} is corrupt: attribute parameter is {parameter}, its config continues "
+                              f"{config.continuation.parameter}")
+    if model is not None and model != config.model:
+        raise ResultFileError(f"{path} is corrupt: attribute model is {model}, its config's model {config.model}")
+    if np.any((values["stable"] != 0) & (values["stable"] != 1)):
+        raise ResultFileError(f"{path} is corrupt: stable must be 0 or 1")
+    # The bifurcation table may hold NaN (a point located elsewhere without its parameter): info
+    # prints it as nan, and continue refuses to follow that point (execution/curves.read_request).
+    check_values(path, values, config, "branch", ("parameter", "x", "v"))
     return parameter, values

@@ -50,9 +50,10 @@ from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
 from vrsweep.store.branch_file import (
-    _dimension, _ends, _multipliers, _text, _variable, check_layout, file_attributes, has_file_kind, writable_output,
+    _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_values, file_attributes,
+    has_file_kind, read_checked, stored_config, writable_output,
 )
-from vrsweep.store.fileio import open_hdf5, write_bytes
+from vrsweep.store.fileio import write_bytes
 
 FILE_KIND = "curves"
 
@@ -158,17 +159,20 @@ def check_curves(path) -> tuple[list, dict]:
     parameters' names in order and {name: values} of every array of ``layout(names)`` (text as
     bytes)."""
     path = os.fspath(path)
-    try:
-        with open_hdf5(path, "r") as f:
-            names = [_text(name) for name in np.atleast_1d(f.attrs.get("parameter_names", []))]
-            # a written model's parameters are any names (its stored config says which)
-            if len(names) != 2 or not all(name.isidentifier() for name in names) or names[0] == names[1]:
-                raise ResultFileError(f"{path} is corrupt: attribute parameter_names must name two parameters")
-            values = check_layout(f, path, layout(names), FILE_KIND)
-    except ResultFileError:
-        raise
-    except (OSError, KeyError, ValueError, TypeError) as error:
-        raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
+
+    def read(f):
+        names = np.atleast_1d(f.attrs.get("parameter_names", []))
+        try:
+            names = [_text(name) for name in names]
+        except (UnicodeError, AttributeError):
+            names = []
+        # a written model's parameters are any names (its stored config says which)
+        if len(names) != 2 or not all(isinstance(name, str) and name.isidentifier() for name in names) \
+                or names[0] == names[1]:
+            raise ResultFileError(f"{path} is corrupt: attribute parameter_names must name two parameters")
+        return names, check_layout(f, path, layout(names), FILE_KIND), _attr_text(f, path, "config")
+
+    names, values, text = read_checked(path, read)
     n_curves = len(values["curve_id"])
     for name in ("curve", "special_curve"):
         if np.any((values[name] < 0) | (values[name] >= n_curves)):
@@ -178,4 +182,8 @@ def check_curves(path) -> tuple[list, dict]:
         unknown = sorted({_text(v) for v in values[name]} - set(allowed))
         if unknown:
             raise ResultFileError(f"{path} is corrupt: {name} holds {unknown[0]!r}, not one of {', '.join(allowed)}")
+    # Nothing is computed from a curves file: its config only labels the figure, and one this
+    # version cannot read is drawn without it.
+    check_values(path, values, stored_config(path, text, required=False), "curve",
+                 (*names, "x", "v", *(f"special_{name}" for name in names)))
     return names, values

@@ -88,6 +88,28 @@ def open_hdf5(path, mode="r", **kwargs) -> h5py.File:
     return h5py.File(path, mode, **kwargs)
 
 
+def is_hdf5(path) -> bool:
+    """True for a file whose bytes say HDF5 (whatever else is wrong with it); False for anything else."""
+    try:
+        return os.path.isfile(path) and h5py.is_hdf5(path)
+    except Exception:  # noqa: BLE001 - unreadable: then it is not for an HDF5 reader to say
+        return False
+
+
+def has_file_kind(path, kind) -> bool:
+    """True for an HDF5 file whose root attribute vrsweep_file is ``kind``; False for anything else
+    (branch, curves and trajectory files)."""
+    try:
+        if not is_hdf5(path):
+            return False
+        with open_hdf5(path, "r") as f:
+            found = f.attrs.get("vrsweep_file", "")
+            found = found.decode() if isinstance(found, bytes) else found
+            return isinstance(found, str) and found == kind  # not an array's elementwise answer
+    except Exception:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type; the
+        return False   # file's reader (open_checked, check_branch...) then says what is wrong
+
+
 # --------------------------------------------------------------------------------------------
 # Who else writes this file
 # --------------------------------------------------------------------------------------------

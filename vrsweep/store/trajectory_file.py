@@ -53,7 +53,7 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError
 from vrsweep.results import MESSAGES, Status
-from vrsweep.store.fileio import open_hdf5, output_target, write_bytes
+from vrsweep.store.fileio import has_file_kind, open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "trajectory"
@@ -235,13 +235,7 @@ def _open(path, mode):
 
 def is_trajectory_file(path) -> bool:
     """True for an HDF5 file that says it is a vrsweep trajectory; False for anything else."""
-    try:
-        if not os.path.isfile(path) or not h5py.is_hdf5(path):
-            return False
-        with _open(path, "r") as f:
-            return _text(f.attrs.get("vrsweep_file", "")) == FILE_KIND
-    except (OSError, ValueError):
-        return False  # unreadable: let the results reader say why
+    return has_file_kind(path, FILE_KIND)  # unreadable: False, and the results reader says why
 
 
 # The groups a trajectory file may hold: one per model run (provenance.model_key's names).

@@ -1,0 +1,388 @@
+"""Issue 35, class 1: branch and curves files held to the sweep file's standard. Every attribute
+and every dataset of each is damaged in the ways tests/test_damaged_structure.py damages a sweep
+file (a value of the wrong type, text that is not text, a dataset of the wrong shape or type, a
+flipped bit, overwritten metadata) and in the values a command acts on (branch_periods 0, -1,
+10**9; a config without a continuation). info, plot and continue each refuse it in one line with
+exit 2, before anything is computed: continue never reaches the numerics with a damaged file.
+
+The files are made from hand-built orbits and curve points (no kernel is compiled), and the
+numerics of continue are replaced by a stub that records that they were reached."""
+
+import h5py
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import vrsweep
+from vrsweep.analysis import curves
+from vrsweep.analysis.continuation import Bifurcation, Branch, Orbit
+from vrsweep.config.validate import config_from_dict
+from vrsweep.errors import ResultFileError
+from vrsweep.store import branch_file, curve_file
+
+from damaged import damaged_copy, flip_bit, one_line_error
+
+CONFIG = {"model": "effective", "parameters": {"gamma": 0.05, "alpha": 0.05},
+          "continuation": {"parameter": "g", "from": 23.0, "to": [21.0, 27.0]}}
+HYPOTHESIS = settings(max_examples=25, deadline=None,
+                      suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+
+
+def _orbit(g, stable):
+    return Orbit(parameter=g, state=np.array([0.1 * g, -0.2]), periods=1,
+                 monodromy=np.diag([0.5 if stable else 1.5, 0.3]), R=10.0 + g, Q_amplitude=0.4 + g / 100,
+                 impacts_per_period=0.0, x_max=0.8, slowest_impact=np.inf, residual=1e-11, newton_iterations=2)
+
+
+def _curve_point(g, Omega):
+    return curves.CurvePoint(kind="fold", values=np.array([g, Omega]), state=np.array([0.1, -0.2]), periods=1,
+                             monodromy=np.diag([1.0, 0.3]), R=10.0, impacts_per_period=0.0, x_max=0.8,
+                             barrier_distance=0.2, slowest_impact=np.inf, residual=1e-11, newton_iterations=2,
+                             jacobian=np.zeros((3, 4)))
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """{"branch": path, "curves": path}: one good file of each kind."""
+    folder = tmp_path_factory.mktemp("continuation_files")
+    config = config_from_dict(CONFIG)
+    orbits = [_orbit(g, g < 24.0) for g in np.linspace(22.0, 26.0, 9)]
+    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "g left [21, 27]"),
+                                                       "up": ("grazing", "the orbit touches the barrier")})]
+    branch_path = folder / "branch.h5"
+    branch_file.write_branch(branch_path, branch_file.branch_arrays(branches, [Bifurcation("fold", orbits[4])], 1.0),
+                             config, "rk45")
+    points = [_curve_point(24.0 + 0.1 * k, 3.9 + 0.05 * k) for k in range(5)]
+    curve = curves.Curve("fold", 1, points, {"first": ("left_range", "g left"), "last": ("max_points", "enough")})
+    names = ("g", "Omega")
+    curves_path = folder / "curves.h5"
+    curve_file.write_curves(curves_path, curve_file.curve_arrays([curve], [curves.SpecialPoint("cusp", points[2])],
+                                                                  names), names, config, "rk45")
+    return {"branch": branch_path, "curves": curves_path}
+
+
+class Reached(Exception):
+    """continue got as far as the numerics."""
+
+
+@pytest.fixture
+def no_numerics(monkeypatch):
+    def run_curve(request, progress=None):
+        raise Reached(request.periods)
+
+    monkeypatch.setattr("vrsweep.execution.curves.run_curve", run_curve)
+
+
+def _commands(kind, path, folder):
+    commands = [("info", path), ("plot", path, "-o", folder / "figure.png")]
+    if kind == "branch":
+        commands.append(("continue", path, "--point", "0", "--along", "Omega", "--to", "3", "5",
+                         "-o", folder / "curves_out.h5", "-q"))
+    return commands
+
+
+def _refused_everywhere(invoke, kind, path, folder, words=""):
+    """info, plot and (for a branch file) continue: one line naming the file (and ``words``),
+    exit 2, no figure, and continue stops before the numerics; open_results raises
+    ResultFileError."""
+    for command in _commands(kind, path, folder):
+        try:
+            line = one_line_error(invoke(*command))
+        except Reached:
+            pytest.fail(f"{command[0]} computed from a damaged file")
+        assert str(path) in line and words in line, (command, line)
+    assert not (folder / "figure.png").exists() and not (folder / "curves_out.h5").exists()
+    with pytest.raises(ResultFileError):
+        vrsweep.open_results(path).close()
+
+
+def _of_unknown_kind(invoke, kind, path, folder):
+    """A file whose vrsweep_file is gone or changed is no longer one that vrsweep knows: info
+    describes it as such (not as a trajectory, nor as a "vrsweep 7"); plot and continue refuse it
+    in one line."""
+    for command in _commands(kind, path, folder):
+        result = invoke(*command)
+        if command[0] == "info" and result.exit_code == 0:
+            first = result.output.splitlines()[0]
+            assert first.startswith(f"{path}: a vrsweep file of a kind this vrsweep does not know"), first
+        else:
+            assert str(path) in one_line_error(result), command
+
+
+def _read_or_refused(invoke, kind, path, folder):
+    """A damage that may land where nothing checks it (unused bytes, or an attribute's text, which
+    carries no checksum): each command either refuses the file in one line or reads it (continue:
+    reaches the numerics), never a traceback."""
+    for command in _commands(kind, path, folder):
+        try:
+            result = invoke(*command)
+        except Reached:
+            continue
+        if result.exit_code != 0:
+            one_line_error(result)
+        (folder / "figure.png").unlink(missing_ok=True)
+
+
+def test_the_good_files_pass(files, tmp_path, invoke, no_numerics):
+    for kind, good in files.items():
+        path = damaged_copy(good, tmp_path, None, f"{kind}.h5")
+        for command in _commands(kind, path, tmp_path):
+            if command[0] == "continue":
+                with pytest.raises(Reached):
+                    invoke(*command)
+            elif command[0] == "plot" and kind == "curves":  # a curves file is drawn over a map
+                assert "curves files go after the map" in one_line_error(invoke(*command))
+            else:
+                assert invoke(*command).exit_code == 0, command
+
+
+# -- attributes ------------------------------------------------------------------------------
+
+WRONG_VALUES = st.one_of(
+    st.integers(-2 ** 31, 2 ** 31 - 1), st.floats(allow_nan=True), st.booleans(),
+    st.text(st.characters(blacklist_characters="\x00", blacklist_categories=("Cs",)), max_size=8),
+    st.lists(st.integers(0, 9), min_size=2, max_size=4), st.binary(min_size=1, max_size=6))
+
+
+def _root_attributes(path):
+    with h5py.File(path, "r") as f:
+        return sorted(f.attrs)
+
+
+def _is_right(kind, name, value):
+    """Whether ``value`` is one the attribute ``name`` may hold (then it is not a damage)."""
+    if name == "vrsweep_format_version":
+        return type(value) is int and value == 1
+    if name == "vrsweep_complete":
+        return type(value) is int and value == 1
+    if name == "vrsweep_file":
+        return value == kind
+    if name in ("config", "parameter", "parameter_names", "model"):
+        return False  # any other value names another config, parameter or model than the file's
+    return isinstance(value, str)  # every other attribute vrsweep writes is text
+
+
+@HYPOTHESIS
+@given(kind=st.sampled_from(["branch", "curves"]), index=st.integers(0, 100), value=WRONG_VALUES)
+def test_every_root_attribute_of_the_wrong_kind(files, tmp_path, invoke, no_numerics, kind, index, value):
+    names = _root_attributes(files[kind])
+    name = names[index % len(names)]
+    if _is_right(kind, name, value):
+        return
+    if isinstance(value, bytes):
+        value = np.bytes_(b"\xff" + value)  # never UTF-8
+    stored = np.array(value) if isinstance(value, list) else value
+    path = damaged_copy(files[kind], tmp_path, lambda f: f.attrs.__setitem__(name, stored))
+    (_of_unknown_kind if name == "vrsweep_file" else _refused_everywhere)(invoke, kind, path, tmp_path)
+
+
+REQUIRED = ("vrsweep_file", "vrsweep_format_version", "vrsweep_complete", "config")
+
+
+@pytest.mark.parametrize("kind,name", [("branch", name) for name in (*REQUIRED, "parameter")]
+                         + [("curves", name) for name in (*REQUIRED, "parameter_names")])
+def test_a_missing_attribute(files, tmp_path, invoke, no_numerics, kind, name):
+    path = damaged_copy(files[kind], tmp_path, lambda f: f.attrs.__delitem__(name))
+    (_of_unknown_kind if name == "vrsweep_file" else _refused_everywhere)(invoke, kind, path, tmp_path)
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+def test_a_dataset_attribute_that_is_not_text(files, tmp_path, invoke, no_numerics, kind):
+    def change(f):
+        f["x"].attrs["long_name"] = np.bytes_(b"position \xe1")
+
+    path = damaged_copy(files[kind], tmp_path, change)
+    _refused_everywhere(invoke, kind, path, tmp_path, "attribute x.long_name must be text")
+
+
+def _set_config(text):
+    return lambda f: f.attrs.__setitem__("config", text)
+
+
+def _config_text(path):
+    with h5py.File(path, "r") as f:
+        return f.attrs["config"]
+
+
+CONFIG_DAMAGES = {
+    "no continuation": ("model: effective\n", "its config has no continuation section"),
+    "not a config": ("model: [\n", "its config is not valid"),
+    "another parameter": (None, "attribute parameter is Omega, its config continues g"),
+}
+
+
+@pytest.mark.parametrize("damage", sorted(CONFIG_DAMAGES))
+def test_a_branch_file_whose_config_cannot_drive_continue(files, tmp_path, invoke, no_numerics, damage):
+    text, words = CONFIG_DAMAGES[damage]
+    change = _set_config(text) if text else (lambda f: f.attrs.__setitem__("parameter", "Omega"))
+    path = damaged_copy(files["branch"], tmp_path, change)
+    _refused_everywhere(invoke, "branch", path, tmp_path, words)
+
+
+def test_a_branch_files_model_must_be_its_configs(files, tmp_path, invoke, no_numerics):
+    path = damaged_copy(files["branch"], tmp_path, lambda f: f.attrs.__setitem__("model", "original"))
+    _refused_everywhere(invoke, "branch", path, tmp_path, "attribute model is original")
+
+
+# -- values a command acts on ----------------------------------------------------------------
+
+
+def _rewrite(name, change):
+    """Change dataset ``name``'s values in place (its checksum rewritten with them)."""
+    def damage(f):
+        values = f[name][()]
+        change(values)
+        f[name][...] = values
+    return damage
+
+
+def _set(index, value):
+    def change(values):
+        values[index] = value
+    return change
+
+
+@pytest.mark.parametrize("periods", [0, -1, 10 ** 9, 17])
+def test_branch_periods_out_of_range(files, tmp_path, invoke, no_numerics, periods):
+    """continuation.max_period (16 by default) bounds every orbit continue computes: 0 crashed natively,
+    -1 gave a traceback, 10**9 tried to allocate 74.5 GiB."""
+    path = damaged_copy(files["branch"], tmp_path, _rewrite("branch_periods", _set(0, periods)))
+    _refused_everywhere(invoke, "branch", path, tmp_path,
+                        f"branch_periods must be 1 to continuation.max_period = 16, found {periods}")
+
+
+VALUE_DAMAGES = {
+    "branch": {
+        "periods off its branch's": ("periods", _set(3, 2), "periods differs from its branch's"),
+        "stable 2": ("stable", _set(0, 2), "stable must be 0 or 1"),
+        "a point that does not count": ("point", _set(2, 7), "point must count 0, 1, ..."),
+        "branch_id that does not count": ("branch_id", _set(0, 3), "branch_id must count"),
+        **{f"{name} not finite": (name, _set(0, value), f"{name} holds a value that is not a finite number")
+           for name, value in (("parameter", np.nan), ("x", np.inf), ("v", -np.inf))},
+    },
+    "curves": {
+        "curve_periods 0": ("curve_periods", _set(0, 0), "curve_periods must be 1 to continuation.max_period"),
+        "curve_periods 10**9": ("curve_periods", _set(0, 10 ** 9), "found 1000000000"),
+        "periods off its curve's": ("periods", _set(1, 3), "periods differs from its curve's"),
+        "special not finite": ("special_Omega", _set(0, np.nan), "special_Omega holds a value that is not a finite"),
+        "a parameter not finite": ("g", _set(4, np.inf), "g holds a value that is not a finite number"),
+        "curve_id that does not count": ("curve_id", _set(0, 1), "curve_id must count"),
+    },
+}
+
+
+@pytest.mark.parametrize("kind,damage", [(kind, damage) for kind in VALUE_DAMAGES for damage in VALUE_DAMAGES[kind]])
+def test_values_a_reader_relies_on(files, tmp_path, invoke, no_numerics, kind, damage):
+    name, change, words = VALUE_DAMAGES[kind][damage]
+    path = damaged_copy(files[kind], tmp_path, _rewrite(name, change))
+    _refused_everywhere(invoke, kind, path, tmp_path, words)
+
+
+def test_continue_refuses_a_bifurcation_without_its_numbers(files, tmp_path, invoke, no_numerics):
+    """info prints a NaN in the bifurcation table (tests/test_cli_continue.py); continue cannot start
+    a curve there."""
+    for name in ("bifurcation_parameter", "bifurcation_x", "bifurcation_v"):
+        path = damaged_copy(files["branch"], tmp_path, _rewrite(name, _set(0, np.nan)), f"{name}.h5")
+        assert invoke("info", path).exit_code == 0
+        line = one_line_error(invoke(*_commands("branch", path, tmp_path)[2]))
+        assert "--point = 0 has no finite g, x and v" in line, line
+
+
+# -- datasets --------------------------------------------------------------------------------
+
+
+def _datasets(path):
+    with h5py.File(path, "r") as f:
+        return sorted(name for name in f if isinstance(f[name], h5py.Dataset))
+
+
+def _replace(f, name, shape, dtype):
+    """Dataset ``name`` replaced by one of ``shape`` and ``dtype``, of zeros (text: 'abcd')."""
+    old = f[name]
+    attrs = {key: value for key, value in old.attrs.items() if key not in ("DIMENSION_LIST", "REFERENCE_LIST",
+                                                                           "CLASS", "NAME")}
+    if old.is_scale:
+        for other in f.values():  # detach it everywhere first: HDF5 keeps back references
+            for axis in range(other.ndim if isinstance(other, h5py.Dataset) and not other.is_scale else 0):
+                if any(scale.name == old.name for scale in other.dims[axis].values()):
+                    other.dims[axis].detach_scale(old)
+    del f[name]
+    data = np.zeros(shape, dtype=dtype) if dtype != "S4" else np.full(shape, b"abcd")
+    new = f.create_dataset(name, data=data)
+    new.attrs.update(attrs)
+
+
+def _expected(kind, path, name):
+    """(shape, kind of number) of dataset ``name`` in the good file."""
+    with h5py.File(path, "r") as f:
+        return f[name].shape, "s" if f[name].dtype.kind in "OSU" else f[name].dtype.kind
+
+
+@HYPOTHESIS
+@given(kind=st.sampled_from(["branch", "curves"]), index=st.integers(0, 100),
+       shape=st.lists(st.integers(0, 12), min_size=0, max_size=3),
+       dtype=st.sampled_from(["f8", "f4", "i8", "i1", "u2", "S4"]))
+def test_every_dataset_of_the_wrong_shape_or_type(files, tmp_path, invoke, no_numerics, kind, index, shape, dtype):
+    names = _datasets(files[kind])
+    name = names[index % len(names)]
+    shape_wanted, number = _expected(kind, files[kind], name)
+    if tuple(shape) == shape_wanted and (number == "s") == (dtype == "S4") and (number == "f") == (dtype[0] == "f"):
+        return  # the same shape and kind of value: a change of values, the other tests' business
+    path = damaged_copy(files[kind], tmp_path, lambda f: _replace(f, name, tuple(shape), dtype))
+    _refused_everywhere(invoke, kind, path, tmp_path)
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+def test_every_dataset_missing(files, tmp_path, invoke, no_numerics, kind):
+    for name in _datasets(files[kind]):
+        folder = tmp_path / name
+        folder.mkdir()
+        path = damaged_copy(files[kind], folder, lambda f: _replace(f, name, (), "f8") or f.__delitem__(name))
+        _refused_everywhere(invoke, kind, path, folder, f"{name} is missing")
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+def test_a_flipped_bit_in_every_checksummed_dataset(files, tmp_path, invoke, no_numerics, kind):
+    checked = 0
+    for name in _datasets(files[kind]):
+        folder = tmp_path / name
+        folder.mkdir()
+        path = damaged_copy(files[kind], folder, None)
+        if flip_bit(path, name):
+            _refused_everywhere(invoke, kind, path, folder, "is truncated or corrupt")
+            checked += 1
+    assert checked >= 20  # every numeric array carries a checksum
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+def test_overwritten_metadata_of_every_dataset(files, tmp_path, invoke, no_numerics, kind):
+    """Bytes inside a dataset's object header: HDF5 raises KeyError, RuntimeError or OSError
+    depending on what it was reading; each is the same one line."""
+    for name in _datasets(files[kind]):
+        folder = tmp_path / name
+        folder.mkdir()
+        with h5py.File(files[kind], "r") as f:
+            header = h5py.h5o.get_info(f[name].id).addr
+        path = damaged_copy(files[kind], folder, None)
+        with open(path, "r+b") as handle:
+            handle.seek(header + 16)
+            handle.write(b"\xff" * 32)
+        _refused_everywhere(invoke, kind, path, folder, "corrupt")
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(kind=st.sampled_from(["branch", "curves"]), where=st.floats(0.0, 1.0, exclude_max=True),
+       bit=st.integers(0, 7))
+def test_one_flipped_bit_anywhere(files, tmp_path, invoke, no_numerics, kind, where, bit):
+    """Anywhere in the file: refused in one line, or read; never a traceback, never a native crash."""
+    path = damaged_copy(files[kind], tmp_path, None)
+    size = path.stat().st_size
+    offset = int(where * size)
+    with open(path, "r+b") as handle:
+        handle.seek(offset)
+        original = handle.read(1)[0]
+        handle.seek(offset)
+        handle.write(bytes([original ^ (1 << bit)]))
+    _read_or_refused(invoke, kind, path, tmp_path)
