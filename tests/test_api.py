@@ -193,6 +193,32 @@ def test_resume_needs_a_file_and_excludes_overwrite(sweep_yaml, tmp_path):
         vrsweep.sweep(sweep_yaml, resume=True)
 
 
+FLAGS = [(vrsweep.sweep, name) for name in ("progress", "overwrite", "resume", "allow_large")] + [
+    (vrsweep.simulate, "overwrite")]
+
+
+@pytest.mark.parametrize("function,flag", FLAGS, ids=[f"{f.__name__}-{name}" for f, name in FLAGS])
+@pytest.mark.parametrize("value", ["no", "False", 1, 0, None, [True]])
+def test_a_flag_is_a_bool_and_nothing_else(sweep_yaml, tmp_path, function, flag, value):
+    """Issue 35: overwrite="no" replaced an existing file (any truthy value acted as True)."""
+    from vrsweep.errors import FlagTypeError
+
+    existing = tmp_path / "existing.h5"
+    existing.write_bytes(b"keep me")
+    config = SWEEP_TEXT if function is vrsweep.sweep else "parameters: {g: 5.0}\n"
+    with pytest.raises(TypeError, match=rf"^{flag} must be True or False, got {re.escape(repr(value))}$") as error:
+        function(config, output=existing, **{flag: value})
+    assert isinstance(error.value, UsageError) and isinstance(error.value, FlagTypeError)
+    assert existing.read_bytes() == b"keep me"
+
+
+def test_numpys_bools_are_bools(tmp_path):
+    existing = tmp_path / "existing.h5"
+    existing.write_bytes(b"keep me")
+    with pytest.raises(UsageError, match="already exists"):
+        vrsweep.simulate("parameters: {g: 5.0}\n", output=existing, overwrite=np.bool_(False))
+
+
 # -- errors: the command line's messages -----------------------------------------------------
 
 

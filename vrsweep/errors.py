@@ -94,6 +94,16 @@ class InvalidArgument(UsageError):
         return UsageError(f"{option} {self.value}: {self.problem}")
 
 
+class FlagTypeError(UsageError, TypeError):
+    """A library function's boolean flag given something other than True or False
+    (``overwrite="no"``): a TypeError, as Python's own argument checks raise, and a UsageError, as
+    every other bad argument of vrsweep's (exit 2). A truthy string would otherwise act as True."""
+
+    def __init__(self, argument, value):
+        self.argument, self.value = argument, value
+        super().__init__(f"{argument} must be True or False, got {value!r}")
+
+
 class RunFailed(VrsweepError):
     """A run stopped by a failure after the chunks finished so far were saved: resuming the run
     computes the rest. Exit 1, like any failure at run time."""

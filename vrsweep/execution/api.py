@@ -29,7 +29,7 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from vrsweep.errors import UsageError, VrsweepError
+from vrsweep.errors import FlagTypeError, UsageError, VrsweepError
 from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
 
 __all__ = ["sweep", "simulate", "theory", "resolve_config", "setting_text"]
@@ -178,6 +178,7 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
     from vrsweep.execution.threads import available_threads
     from vrsweep.store.reading import load_results
 
+    _check_flags(progress=progress, overwrite=overwrite, resume=resume, allow_large=allow_large)
     resolved = resolve_config(config, overrides)
     if resume and overwrite:
         raise UsageError.naming("{resume} and {overwrite} exclude each other", ARGUMENT_WORDS)
@@ -207,6 +208,16 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
         warnings.warn(f"{item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "
                       f"{item.status.name.lower()}: {item.remedy}{example}", RuntimeWarning, stacklevel=2)
     return dataset
+
+
+def _check_flags(**flags):
+    """FlagTypeError for the first flag that is not a bool (numpy's included): before anything is
+    read or written, as ``overwrite="no"`` would otherwise replace a file."""
+    import numpy as np
+
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise FlagTypeError(name, value)
 
 
 def _capped_threads(threads):
@@ -291,6 +302,7 @@ def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERI
     from vrsweep.store.fileio import prepare_output_directory
     from vrsweep.store.trajectory_file import write_trajectory
 
+    _check_flags(overwrite=overwrite)
     resolved = resolve_config(config, overrides)
     if compare is not None and compare not in COMPARE_CHOICES:
         raise UsageError.naming("{compare} {value}: must be None or one of {choices}",
