@@ -112,6 +112,43 @@ def test_config_without_the_section_is_refused(invoke, tmp_path, write_config):
     assert result.exit_code == 2 and "no continuation section" in result.output
 
 
+SECTIONS_CONTINUE_REFUSES = {
+    # issue 35: validate said "valid" to each; continue named --start for the first, and ran the
+    # second into a one-point branch that claimed left_range
+    "from outside to": (("from: 24.0", "from: 30.0"), "continuation.from = 30.0 lies outside continuation.to"),
+    "initial_step above max_step": (("max_step: 0.3", "max_step: 0.3\n  initial_step: 0.8"),
+                                    "continuation.initial_step = 0.8 must lie between continuation.min_step = "
+                                    "1e-05 and continuation.max_step = 0.3"),
+    "initial_step below min_step": (("max_step: 0.3", "max_step: 0.3\n  min_step: 0.01\n  initial_step: 0.001"),
+                                    "continuation.initial_step = 0.001 must lie between"),
+    "incommensurate forcing": (("model: effective", "model: original\nparameters: {g: 5.0, Omega: 4.3}"),
+                               "not a whole number"),
+}
+
+
+@pytest.mark.parametrize("damage", sorted(SECTIONS_CONTINUE_REFUSES))
+def test_validate_refuses_what_continue_refuses(invoke, tmp_path, write_config, damage):
+    (old, new), words = SECTIONS_CONTINUE_REFUSES[damage]
+    text = HYSTERESIS.replace(old, new)
+    if damage == "incommensurate forcing":
+        text = text.replace("parameters: {gamma: 0.05, alpha: 0.05, Omega: 4.0}\n", "")
+    config = write_config(tmp_path, text, "section.yaml")
+    for command in (("validate", config), ("continue", config, "-o", tmp_path / "x.h5")):
+        result = invoke(*command)
+        lines = result.output.strip().splitlines()
+        assert result.exit_code == 2 and len(lines) == 1, (command, result.output)
+        assert words in lines[0] and "--start" not in lines[0], (command, lines[0])
+    assert not (tmp_path / "x.h5").exists()
+
+
+def test_validate_describes_the_continuation(invoke, tmp_path, write_config):
+    result = invoke("validate", write_config(tmp_path, HYSTERESIS.replace("max_step: 0.3", "max_step: 0.3\n  switch: true"),
+                                             "ok.yaml"))
+    assert result.exit_code == 0, result.output
+    assert ("continuation: g from 24 within [23.5, 25.4]; steps 0.05 (1e-05 to 0.3), at most 400 points, periods "
+            "up to 16; the branches of 2p periods too (switch)") in result.output.splitlines()
+
+
 def test_plot_draws_the_branch_with_a_sweep(branch_file, invoke, tmp_path, write_config):
     path, _ = branch_file
     sweep_config = write_config(tmp_path, "model: effective\nparameters: {gamma: 0.05, alpha: 0.05, Omega: 4.0}\n"

@@ -1,7 +1,9 @@
 """``vrsweep validate CONFIG.yaml``: check a config and say what running it would mean.
 
-Prints the model, the axes, the grid size, the output path and an estimate of the output size and
-run time, without compiling or running anything (numba is never imported). Exit 0 for a valid
+Prints the model, the axes, the grid size, the continuation (a config's continuation section,
+checked as ``vrsweep continue`` checks it), the output path and an estimate of the output size and
+run time, without compiling or running anything (numba is imported only to check a continuation
+section's model rule, and compiles nothing). Exit 0 for a valid
 config, 2 with every problem listed for an invalid one.
 """
 
@@ -25,6 +27,8 @@ def command(config_path, overrides, threads):
     listed as FILE:LINE: field.path: message.
     """
     config = load_config(config_path, overrides)  # ConfigError -> every problem, exit 2 (cli.py)
+    if config.continuation is not None:
+        _check_continuation(config)
     announce_fixed_axes(config_path, overrides, config)
     threads = threads or available_threads()  # not capped: the run may be planned for another machine
     memory = memory_problem(config, threads)
@@ -64,6 +68,8 @@ def command(config_path, overrides, threads):
     click.echo(f"integration: {integration.method}, rtol={integration.rtol:g} atol={integration.atol:g}, "
                f"{integration.transient_periods} transient + {integration.measure_periods} measured "
                f"slow periods{_other_settings(integration)}")
+    if config.continuation is not None:
+        click.echo(f"continuation: {_describe_continuation(config.continuation)}")
     click.echo(f"output:      {config.output_path()}")
     duration = format_duration(guess.seconds)
     click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
@@ -73,6 +79,26 @@ def command(config_path, overrides, threads):
     if problem is not None:
         # A valid config, just a big one: `run` will ask for --allow-large.
         click.echo(f"warning:     {problem}")
+
+
+def _check_continuation(config):
+    """The continuation section refused as ``vrsweep continue`` refuses it (before integrating):
+    a config that validates is one that continue starts on."""
+    from vrsweep.errors import UsageError
+    from vrsweep.execution.continuation import check_section
+
+    try:
+        check_section(config)
+    except UsageError as error:
+        raise ConfigError([f"{config.source_name}: {error}"], source=config.source_name) from None
+
+
+def _describe_continuation(section) -> str:
+    """``g from 23 within [21, 27]; steps 0.05 (1e-05 to 0.5), at most 400 points, periods up to 16``."""
+    text = (f"{section.parameter} from {section.start:g} within [{section.low:g}, {section.high:g}]; "
+            f"steps {section.initial_step:g} ({section.min_step:g} to {section.max_step:g}), at most "
+            f"{section.max_points} points, periods up to {section.max_period}")
+    return text + ("; the branches of 2p periods too (switch)" if section.switch else "")
 
 
 # Always on the integration line, whatever their values; every other setting is named when it

@@ -7,19 +7,45 @@ from __future__ import annotations
 
 import numpy as np
 
-from vrsweep.analysis import continuation, period_doubling
 from vrsweep.errors import UsageError
-from vrsweep.execution.sweep import integration_settings
+
+# The section's keys as a refusal names them; "from_key", not "start": continue words its own
+# --start flag for the argument "start", and the config key is meant here.
+SECTION_WORDS = {"from_key": "continuation.from", "to": "continuation.to", "initial_step": "continuation.initial_step",
+                 "min_step": "continuation.min_step", "max_step": "continuation.max_step"}
 
 
-def problem_of(config):
-    """The ContinuationProblem of a config with a continuation section."""
+def check_section(config):
+    """Refuse (UsageError) a config whose continuation section ``continue`` cannot run, before
+    anything is integrated: for ``continue`` and ``validate`` alike. The numerics are imported only
+    for the model's own rule (commensurability), so that ``validate`` of a config without the
+    section never imports numba."""
     section = config.continuation
     if section is None:
         raise UsageError.naming("{source} has no continuation section: add one, e.g.\n"
                                 "continuation: {{parameter: g, from: 23.0, to: [21.0, 27.0]}}",
                                 source=config.source_name)
+    if not section.low <= section.start <= section.high:
+        raise UsageError.naming("{from_key} = {value} lies outside {to} = [{low}, {high}]", SECTION_WORDS,
+                                value=section.start, low=section.low, high=section.high)
+    # A first step beyond max_step was taken whole, and the branch ended after it claiming
+    # left_range; one below min_step ends the branch at its first failed correction.
+    if not section.min_step <= section.initial_step <= section.max_step:
+        raise UsageError.naming("{initial_step} = {value} must lie between {min_step} = {low} and {max_step} = "
+                                "{high}", SECTION_WORDS, value=f"{section.initial_step:g}",
+                                low=f"{section.min_step:g}", high=f"{section.max_step:g}")
+    from vrsweep.analysis import continuation
+
     continuation.check_commensurate(config.parameters, config.model, section.parameter)
+
+
+def problem_of(config):
+    """The ContinuationProblem of a config with a continuation section (check_section's refusals first)."""
+    from vrsweep.analysis import continuation
+    from vrsweep.execution.sweep import integration_settings
+
+    check_section(config)
+    section = config.continuation
     parameters = dict(config.parameters, **{section.parameter: section.start})
     return continuation.ContinuationProblem(parameters, config.model, section.parameter,
                                             integration_settings(config.integration), config.integration.method,
@@ -66,14 +92,12 @@ def run_continuation(config, start_state=None, progress=None, switch=None, failu
     failures: a list that receives (parameter, reason) for each period doubling where no branch of
     2p periods was found.
     """
+    from vrsweep.analysis import continuation, period_doubling
+
     problem = problem_of(config)
     section = config.continuation
     if start_state is None:
         start_state = np.array([config.initial["x"], config.initial["v"]])
-    if not section.low <= section.start <= section.high:
-        raise UsageError.naming("{start} = {value} lies outside {to} = [{low}, {high}]",
-                                {"start": "continuation.from", "to": "continuation.to"},
-                                value=section.start, low=section.low, high=section.high)
     start = continuation.find_start(problem, start_state, section.start, config.integration.transient_periods,
                                     section.max_period)
     branch, bifurcations = continuation.continue_branch(problem, start, section.low, section.high,
