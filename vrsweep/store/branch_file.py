@@ -392,7 +392,7 @@ def check_branch(path) -> tuple[str, dict]:
 
     Returns what the check read, so that a reader needs no second pass over the file: the
     continued parameter's name and {name: values} of every array of LAYOUT (text as bytes)."""
-    from vrsweep.numerics.model import PARAMETER_NAMES
+    from vrsweep.store.provenance import model_attributes
 
     path = os.fspath(path)
 
@@ -401,7 +401,7 @@ def check_branch(path) -> tuple[str, dict]:
         return _attr_text(f, path, "parameter"), _attr_text(f, path, "config"), _attr_text(f, path, "model"), values
 
     parameter, text, model, values = read_checked(path, read)
-    if parameter not in PARAMETER_NAMES:
+    if not parameter:
         raise ResultFileError(f"{path} is corrupt: attribute parameter must name the continued parameter")
     n_branches = len(values["branch_id"])
     for name in ("branch", "bifurcation_branch"):
@@ -418,8 +418,9 @@ def check_branch(path) -> tuple[str, dict]:
     if config.continuation.parameter != parameter:
         raise ResultFileError(f"{path} is corrupt: attribute parameter is {parameter}, its config continues "
                               f"{config.continuation.parameter}")
-    if model is not None and model != config.model:
-        raise ResultFileError(f"{path} is corrupt: attribute model is {model}, its config's model {config.model}")
+    expected = model_attributes(config.model)["model"]  # a written model's is not its name
+    if model is not None and model != expected:
+        raise ResultFileError(f"{path} is corrupt: attribute model is {model}, its config's model {expected}")
     if np.any((values["stable"] != 0) & (values["stable"] != 1)):
         raise ResultFileError(f"{path} is corrupt: stable must be 0 or 1")
     # The bifurcation table may hold NaN (a point located elsewhere without its parameter): info
