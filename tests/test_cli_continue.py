@@ -2,8 +2,10 @@
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 import vrsweep
+from vrsweep.cli import main
 
 HYSTERESIS = """\
 model: effective
@@ -147,6 +149,41 @@ def test_validate_describes_the_continuation(invoke, tmp_path, write_config):
     assert result.exit_code == 0, result.output
     assert ("continuation: g from 24 within [23.5, 25.4]; steps 0.05 (1e-05 to 0.3), at most 400 points, periods "
             "up to 16; the branches of 2p periods too (switch)") in result.output.splitlines()
+
+
+class Started(Exception):
+    """continue got past its announcements to the work itself."""
+
+
+@pytest.mark.parametrize("with_branch_file", [False, True])
+def test_an_empty_cache_says_that_continue_compiles(tmp_path, monkeypatch, invoke, write_config, with_branch_file):
+    """Issue 35: the first continue was silent for up to 3 minutes while numba compiled (sweeps say so)."""
+    def started(*args, **kwargs):
+        raise Started
+
+    monkeypatch.setattr("vrsweep.execution.continuation.run_continuation", started)
+    monkeypatch.setattr("vrsweep.execution.curves.run_curve", started)
+    args = ("continue", write_config(tmp_path, HYSTERESIS), "-o", tmp_path / "out.h5")
+    if with_branch_file:  # a hand-made branch file (tests/test_damaged_continuation_files.py)
+        from test_damaged_continuation_files import CONFIG, _orbit
+        from vrsweep.analysis.continuation import Bifurcation, Branch
+        from vrsweep.config.validate import config_from_dict
+        from vrsweep.store.branch_file import branch_arrays, write_branch
+
+        orbits = [_orbit(g, True) for g in np.linspace(22.0, 26.0, 5)]
+        branch = Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "out"), "up": ("left_range", "out")})
+        write_branch(tmp_path / "branch.h5", branch_arrays([branch], [Bifurcation("fold", orbits[2])], 1.0),
+                     config_from_dict(CONFIG), "rk45")
+        args = ("continue", tmp_path / "branch.h5", "--point", "0", "--along", "Omega", "--to", "3", "5",
+                "-o", tmp_path / "out.h5")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "empty-cache"))
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert isinstance(result.exception, Started)
+    assert result.stderr.startswith("Compiling the numba kernels of continuation (up to 3 minutes, once: later "
+                                    "runs load them from "), result.stderr
+    assert str(tmp_path / "empty-cache") in result.stderr
+    quiet = CliRunner().invoke(main, [str(a) for a in args] + ["-q"])
+    assert isinstance(quiet.exception, Started) and quiet.stderr == ""
 
 
 def test_plot_draws_the_branch_with_a_sweep(branch_file, invoke, tmp_path, write_config):

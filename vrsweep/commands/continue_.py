@@ -96,7 +96,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     with flag_wording(flags):
         execution.problem_of(config)  # refuse a bad request before integrating anything
     path = config.output_path(output)
-    _prepare_output(path, overwrite, quiet)
+    _prepare_output(path, overwrite, quiet, config)
     with flag_wording(flags):
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
         missed = []
@@ -147,7 +147,7 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
         requests = [execution.read_request(path, index, along, to, within) for index in point]
     name = "_".join(str(index) for index in point)
     path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{name}_{along}.h5")
-    _prepare_output(path, overwrite, quiet)
+    _prepare_output(path, overwrite, quiet, requests[0].config)
     with flag_wording(flags):
         curves, specials = [], []
         for request in requests:
@@ -175,7 +175,11 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
         click.echo(f"-> {path}", err=True)
 
 
-def _prepare_output(path, overwrite, quiet):
+# Measured with an empty cache on a loaded 2-core machine (issue 35: "silent for up to 3 minutes").
+COMPILE_DURATION = "up to 3 minutes"
+
+
+def _prepare_output(path, overwrite, quiet, config):
     """Refuse an existing output without --overwrite, make its folder, and say (unless quiet) that
     the first run compiles the kernels: before any work, for branches and curves alike."""
     from vrsweep.errors import UsageError
@@ -185,6 +189,17 @@ def _prepare_output(path, overwrite, quiet):
         raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
     prepare_output_directory(path)
     if not quiet:
-        from vrsweep.commands.options import say_cache_notice
+        from vrsweep.commands.options import say_if_compiling
 
-        say_cache_notice()
+        say_if_compiling(lambda: _kernels_cached(config), "the numba kernels of continuation", COMPILE_DURATION,
+                         "them")
+
+
+def _kernels_cached(config) -> bool:
+    """Whether the kernels a continuation integrates with are cached: the one-point integrator (the
+    start's transient) and the one with each period's tangent map (every orbit after)."""
+    from vrsweep.numerics.models import kernels_for
+    from vrsweep.numerics.numba_cache import is_compiled
+
+    kernels, method = kernels_for(config.model), config.integration.method
+    return is_compiled(kernels.integrator(method)) and is_compiled(kernels.monodromy(method))

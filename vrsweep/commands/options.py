@@ -32,6 +32,19 @@ def say_cache_notice():
         click.echo(f"Note: {message}", err=True)
 
 
+def say_if_compiling(is_cached, what="the numba kernel", duration="about 30 s", pronoun="it"):
+    """Say, before the work starts, that ``what`` compiles first when the cache lacks it
+    (``is_cached()``, a hint: numba_cache.is_compiled), or on every run when there is no cache:
+    a first run is otherwise silent for as long as numba takes (run, continue)."""
+    from vrsweep.numerics.numba_cache import cache_dir, enabled
+
+    say_cache_notice()
+    if not enabled():
+        click.echo(f"Compiling {what} ({duration}, on every run: not cached)", err=True)
+    elif not is_cached():
+        click.echo(f"Compiling {what} ({duration}, once: later runs load {pronoun} from {cache_dir()})", err=True)
+
+
 set_option = click.option(
     "--set", "overrides", multiple=True, metavar="NAME=VALUE",
     help="Override a parameter (fixing it if it is swept), an integration setting, "

@@ -151,13 +151,7 @@ COMPILE_SECONDS = "about 30 s"
 
 
 def _say_if_compiling(method, lyapunov, model="original"):
-    from vrsweep.commands.options import say_cache_notice
+    from vrsweep.commands.options import say_if_compiling
     from vrsweep.numerics.models import kernels_for
-    from vrsweep.numerics.numba_cache import cache_dir, enabled
 
-    say_cache_notice()
-    if not enabled():
-        click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, on every run: not cached)", err=True)
-    elif not kernels_for(model).is_cached(method, lyapunov):
-        click.echo(f"Compiling the numba kernel ({COMPILE_SECONDS}, once: later runs load it from "
-                   f"{cache_dir()})", err=True)
+    say_if_compiling(lambda: kernels_for(model).is_cached(method, lyapunov), duration=COMPILE_SECONDS)
