@@ -164,18 +164,11 @@ def test_an_empty_cache_says_that_continue_compiles(tmp_path, monkeypatch, invok
     monkeypatch.setattr("vrsweep.execution.continuation.run_continuation", started)
     monkeypatch.setattr("vrsweep.execution.curves.run_curve", started)
     args = ("continue", write_config(tmp_path, HYSTERESIS), "-o", tmp_path / "out.h5")
-    if with_branch_file:  # a hand-made branch file (tests/test_damaged_continuation_files.py)
-        from test_damaged_continuation_files import CONFIG, _orbit
-        from vrsweep.analysis.continuation import Bifurcation, Branch
-        from vrsweep.config.validate import config_from_dict
-        from vrsweep.store.branch_file import branch_arrays, write_branch
+    if with_branch_file:
+        from handmade import write_branch_file
 
-        orbits = [_orbit(g, True) for g in np.linspace(22.0, 26.0, 5)]
-        branch = Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "out"), "up": ("left_range", "out")})
-        write_branch(tmp_path / "branch.h5", branch_arrays([branch], [Bifurcation("fold", orbits[2])], 1.0),
-                     config_from_dict(CONFIG), "rk45")
-        args = ("continue", tmp_path / "branch.h5", "--point", "0", "--along", "Omega", "--to", "3", "5",
-                "-o", tmp_path / "out.h5")
+        args = ("continue", write_branch_file(tmp_path / "branch.h5"), "--point", "0", "--along", "Omega",
+                "--to", "3", "5", "-o", tmp_path / "out.h5")
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "empty-cache"))
     result = CliRunner().invoke(main, [str(a) for a in args])
     assert isinstance(result.exception, Started)

@@ -444,3 +444,28 @@ def test_curves_over_an_original_map_have_no_analytic_curves(tmp_path, invoke):
                          config=_stored_config(sweep).replace("e: 0.95", "e: 0.5"))
     refused = invoke("plot", sweep, moved, "-o", tmp_path / "o.png")
     assert refused.exit_code == 2 and "e = 0.5" in refused.output and "e = 0.95" in refused.output, refused.output
+
+
+BRANCH_OPTIONS = {  # issue 35: each was ignored, the same figure drawn
+    ("--kind", "map"): "--kind map: a branch file has one figure",
+    ("--kind", "basin"): "--kind basin is for sweep results with x0 / v0 axes, not branch files",
+    ("--at", "g=24"): "--at: a branch file has no axes to fix",
+    ("--var", "x"): "--var x: a branch file's figure is R along the branch",
+    ("--periods", "1:5"): "--periods is for trajectory files (vrsweep simulate), not branch files",
+    ("--x", "Omega"): "--x Omega: a branch file is drawn against its continued parameter",
+    ("--amplitude",): "--amplitude: a branch file's figure is the gain R",
+    ("--log",): "--log/--linear: a branch file's figure chooses its scales",
+    ("--linear",): "--log/--linear: a branch file's figure chooses its scales",
+}
+
+
+@pytest.mark.parametrize("option", sorted(BRANCH_OPTIONS), ids=" ".join)
+def test_a_branch_file_refuses_the_options_it_cannot_honour(tmp_path, invoke, option):
+    from damaged import one_line_error
+    from handmade import write_branch_file
+
+    path = write_branch_file(tmp_path / "branch.h5")
+    assert invoke("plot", path, "-o", tmp_path / "plain.png").exit_code == 0
+    line = one_line_error(invoke("plot", path, "-o", tmp_path / "figure.png", *option))
+    assert line.startswith(f"Error: {BRANCH_OPTIONS[option]}"), line
+    assert not (tmp_path / "figure.png").exists()

@@ -15,51 +15,20 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import vrsweep
-from vrsweep.analysis import curves
-from vrsweep.analysis.continuation import Bifurcation, Branch, Orbit
-from vrsweep.config.validate import config_from_dict
 from vrsweep.errors import ResultFileError
-from vrsweep.store import branch_file, curve_file
 
 from damaged import damaged_copy, flip_bit, one_line_error
+from handmade import write_branch_file, write_curves_file
 
-CONFIG = {"model": "effective", "parameters": {"gamma": 0.05, "alpha": 0.05},
-          "continuation": {"parameter": "g", "from": 23.0, "to": [21.0, 27.0]}}
 HYPOTHESIS = settings(max_examples=25, deadline=None,
                       suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-
-
-def _orbit(g, stable):
-    return Orbit(parameter=g, state=np.array([0.1 * g, -0.2]), periods=1,
-                 monodromy=np.diag([0.5 if stable else 1.5, 0.3]), R=10.0 + g, Q_amplitude=0.4 + g / 100,
-                 impacts_per_period=0.0, x_max=0.8, slowest_impact=np.inf, residual=1e-11, newton_iterations=2)
-
-
-def _curve_point(g, Omega):
-    return curves.CurvePoint(kind="fold", values=np.array([g, Omega]), state=np.array([0.1, -0.2]), periods=1,
-                             monodromy=np.diag([1.0, 0.3]), R=10.0, impacts_per_period=0.0, x_max=0.8,
-                             barrier_distance=0.2, slowest_impact=np.inf, residual=1e-11, newton_iterations=2,
-                             jacobian=np.zeros((3, 4)))
 
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """{"branch": path, "curves": path}: one good file of each kind."""
     folder = tmp_path_factory.mktemp("continuation_files")
-    config = config_from_dict(CONFIG)
-    orbits = [_orbit(g, g < 24.0) for g in np.linspace(22.0, 26.0, 9)]
-    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "g left [21, 27]"),
-                                                       "up": ("grazing", "the orbit touches the barrier")})]
-    branch_path = folder / "branch.h5"
-    branch_file.write_branch(branch_path, branch_file.branch_arrays(branches, [Bifurcation("fold", orbits[4])], 1.0),
-                             config, "rk45")
-    points = [_curve_point(24.0 + 0.1 * k, 3.9 + 0.05 * k) for k in range(5)]
-    curve = curves.Curve("fold", 1, points, {"first": ("left_range", "g left"), "last": ("max_points", "enough")})
-    names = ("g", "Omega")
-    curves_path = folder / "curves.h5"
-    curve_file.write_curves(curves_path, curve_file.curve_arrays([curve], [curves.SpecialPoint("cusp", points[2])],
-                                                                  names), names, config, "rk45")
-    return {"branch": branch_path, "curves": curves_path}
+    return {"branch": write_branch_file(folder / "branch.h5"), "curves": write_curves_file(folder / "curves.h5")}
 
 
 class Reached(Exception):

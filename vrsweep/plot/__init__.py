@@ -111,6 +111,8 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if is_branch(data[0]):
         # vrsweep continue's files (several: e.g. branches from several starts), then sweep files
         # drawn on the same axes
+        _refuse_for_branches(kind=kind, at=at, x_axis=x_axis, var=var, periods=periods, amplitude=amplitude,
+                             log=log)
         count = 1
         while count < len(data) and is_branch(data[count]):
             count += 1
@@ -164,6 +166,31 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if kind in ("lyapunov", "bifurcation+lyapunov"):
         return lyapunov_figure(ds, x_axis=x_axis, bifurcation=kind == "bifurcation+lyapunov", **options, **limits)
     return bifurcation_figure(ds, x_axis=x_axis, **options, **limits)
+
+
+# What a branch figure cannot do with each option it is given: one line each, never ignored quietly.
+_BRANCH_REFUSALS = {
+    "kind": "{kind} {value}: a branch file has one figure (R and the Floquet multipliers along the branch)",
+    "at": "{at}: a branch file has no axes to fix; its points lie along the branch",
+    "x_axis": "{x_axis} {value}: a branch file is drawn against its continued parameter",
+    "var": "{var} {value}: a branch file's figure is R along the branch; read other variables with "
+           "vrsweep.open_results",
+    "periods": "{periods} is for trajectory files (vrsweep simulate), not branch files",
+    "amplitude": "{amplitude}: a branch file's figure is the gain R; read Q_amplitude with vrsweep.open_results",
+    "log": "{log}/{linear}: a branch file's figure chooses its scales (the multipliers' panel turns "
+           "logarithmic by itself)",
+}
+
+
+# What each option is when it was not given (others: None; log=False is --linear, given).
+_NOT_GIVEN = {"amplitude": False, "at": {}}
+
+
+def _refuse_for_branches(**given):
+    """UsageError for the first option a branch figure cannot honour (given: {option: value})."""
+    for name, value in given.items():
+        if value is not None and value != _NOT_GIVEN.get(name):
+            raise UsageError.naming(_BRANCH_REFUSALS[name], value=value)
 
 
 def _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, limits):

@@ -40,6 +40,10 @@ def basin_plot(results, at=None, **options) -> Figure:
     data = load(results) if isinstance(results, (str, os.PathLike)) else results
     if isinstance(data, TrajectoryData):
         raise UsageError.naming("{kind} basin is for sweep results with x0 / v0 axes, not trajectory files")
+    kind = data.attrs.get("vrsweep_file")
+    if kind in ("branch", "curves"):  # no grid at all: _grid_axes would fail on their missing done mask
+        raise UsageError.naming("{kind} basin is for sweep results with x0 / v0 axes, not {file_kind} files",
+                                file_kind=kind)
     axes = _grid_axes(data)
     if "attractor" not in data.data_vars:
         path = _path(data)
