@@ -260,6 +260,8 @@ def write_curves(path, names, curves, specials=(), model="effective", config="")
     """A curves file as `vrsweep continue BRANCH.h5 --point K --along NAME` writes it (the agreed
     layout, store/curve_file.py), by h5py: curves = [(kind, {name: values})], specials =
     [(kind, curve, {name: value})]."""
+    from vrsweep.store.branch_file import seal_attributes
+
     strings = h5py.string_dtype()
     with h5py.File(path, "w") as f:
         f.attrs.update(vrsweep_file="curves", vrsweep_format_version=1, vrsweep_complete=1, model=model,
@@ -298,6 +300,7 @@ def write_curves(path, names, curves, specials=(), model="effective", config="")
         for name in names:
             variable(f"special_{name}", np.array([where[name] for _, _, where in specials], dtype=float),
                      ("special",))
+        seal_attributes(f)  # as this version writes them (a file without it is read with a note)
     return path
 
 

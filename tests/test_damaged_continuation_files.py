@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 
 import vrsweep
 from vrsweep.errors import ResultFileError
+from vrsweep.store import branch_file
 
 from damaged import damaged_copy, flip_bit, one_line_error
 from handmade import write_branch_file, write_curves_file
@@ -79,16 +80,18 @@ def _of_unknown_kind(invoke, kind, path, folder):
             assert str(path) in one_line_error(result), command
 
 
-def _read_or_refused(invoke, kind, path, folder):
-    """A damage that may land where nothing checks it (unused bytes, or an attribute's text, which
-    carries no checksum): each command either refuses the file in one line or reads it (continue:
-    reaches the numerics), never a traceback."""
+def _harmless_or_refused(invoke, kind, good, path, folder):
+    """A damage that may land where nothing is read (unused bytes): each command either refuses
+    the file in one line, or reads it as the good file (continue: reaches the numerics). Every
+    array and, from issue 35 on, every attribute carries a checksum: nothing else can change."""
     for command in _commands(kind, path, folder):
         try:
             result = invoke(*command)
         except Reached:
             continue
-        if result.exit_code != 0:
+        if result.exit_code == 0 and command[0] == "info":
+            assert result.output.replace(str(path), "") == invoke("info", good).output.replace(str(good), "")
+        elif result.exit_code != 0:
             one_line_error(result)
         (folder / "figure.png").unlink(missing_ok=True)
 
@@ -107,11 +110,24 @@ def test_the_good_files_pass(files, tmp_path, invoke, no_numerics):
 
 
 # -- attributes ------------------------------------------------------------------------------
+# Files of this version carry a checksum of every attribute (branch_file.ATTRIBUTES_CHECKSUM): any
+# change is refused as such. Files written before it are read as they are, with a note; their
+# attributes are still checked for what a reader needs of them, which the tests "unprotected" see.
 
 WRONG_VALUES = st.one_of(
     st.integers(-2 ** 31, 2 ** 31 - 1), st.floats(allow_nan=True), st.booleans(),
     st.text(st.characters(blacklist_characters="\x00", blacklist_categories=("Cs",)), max_size=8),
     st.lists(st.integers(0, 9), min_size=2, max_size=4), st.binary(min_size=1, max_size=6))
+UNPROTECTED_NOTE = "was written before attributes had checksums"
+
+
+def _unprotected(change=None):
+    """``change``, in a file as vrsweep wrote it before attributes had a checksum."""
+    def damage(f):
+        del f.attrs[branch_file.ATTRIBUTES_CHECKSUM]
+        if change is not None:
+            change(f)
+    return damage
 
 
 def _root_attributes(path):
@@ -120,7 +136,8 @@ def _root_attributes(path):
 
 
 def _is_right(kind, name, value):
-    """Whether ``value`` is one the attribute ``name`` may hold (then it is not a damage)."""
+    """Whether ``value`` is one the attribute ``name`` may hold in an unprotected file (then it is
+    not a damage a reader can see)."""
     if name == "vrsweep_format_version":
         return type(value) is int and value == 1
     if name == "vrsweep_complete":
@@ -133,45 +150,81 @@ def _is_right(kind, name, value):
 
 
 @HYPOTHESIS
-@given(kind=st.sampled_from(["branch", "curves"]), index=st.integers(0, 100), value=WRONG_VALUES)
-def test_every_root_attribute_of_the_wrong_kind(files, tmp_path, invoke, no_numerics, kind, index, value):
-    names = _root_attributes(files[kind])
+@given(kind=st.sampled_from(["branch", "curves"]), index=st.integers(0, 100), value=WRONG_VALUES,
+       protected=st.booleans())
+def test_every_root_attribute_changed(files, tmp_path, invoke, no_numerics, kind, index, value, protected):
+    names = [name for name in _root_attributes(files[kind]) if protected or name != branch_file.ATTRIBUTES_CHECKSUM]
     name = names[index % len(names)]
-    if _is_right(kind, name, value):
+    with h5py.File(files[kind], "r") as f:
+        if isinstance(value, type(f.attrs[name])) and value == f.attrs[name]:
+            return  # unchanged
+    if not protected and _is_right(kind, name, value):
         return
     if isinstance(value, bytes):
         value = np.bytes_(b"\xff" + value)  # never UTF-8
     stored = np.array(value) if isinstance(value, list) else value
-    path = damaged_copy(files[kind], tmp_path, lambda f: f.attrs.__setitem__(name, stored))
+    change = (lambda f: f.attrs.__setitem__(name, stored))
+    path = damaged_copy(files[kind], tmp_path, change if protected else _unprotected(change))
     (_of_unknown_kind if name == "vrsweep_file" else _refused_everywhere)(invoke, kind, path, tmp_path)
 
 
 REQUIRED = ("vrsweep_file", "vrsweep_format_version", "vrsweep_complete", "config")
 
 
+@pytest.mark.parametrize("protected", [True, False])
 @pytest.mark.parametrize("kind,name", [("branch", name) for name in (*REQUIRED, "parameter")]
                          + [("curves", name) for name in (*REQUIRED, "parameter_names")])
-def test_a_missing_attribute(files, tmp_path, invoke, no_numerics, kind, name):
-    path = damaged_copy(files[kind], tmp_path, lambda f: f.attrs.__delitem__(name))
+def test_a_missing_attribute(files, tmp_path, invoke, no_numerics, kind, name, protected):
+    change = lambda f: f.attrs.__delitem__(name)  # noqa: E731
+    path = damaged_copy(files[kind], tmp_path, change if protected else _unprotected(change))
     (_of_unknown_kind if name == "vrsweep_file" else _refused_everywhere)(invoke, kind, path, tmp_path)
 
 
 @pytest.mark.parametrize("kind", ["branch", "curves"])
-def test_a_dataset_attribute_that_is_not_text(files, tmp_path, invoke, no_numerics, kind):
-    def change(f):
-        f["x"].attrs["long_name"] = np.bytes_(b"position \xe1")
-
-    path = damaged_copy(files[kind], tmp_path, change)
+def test_a_dataset_attribute_changed(files, tmp_path, invoke, no_numerics, kind):
+    path = damaged_copy(files[kind], tmp_path, lambda f: f["x"].attrs.__setitem__("units", "m"))
+    _refused_everywhere(invoke, kind, path, tmp_path, "do not match their checksum")
+    not_text = _unprotected(lambda f: f["x"].attrs.__setitem__("long_name", np.bytes_(b"position \xe1")))
+    path = damaged_copy(files[kind], tmp_path, not_text, "unprotected.h5")
     _refused_everywhere(invoke, kind, path, tmp_path, "attribute x.long_name must be text")
+
+
+def _config_flipped(f):
+    """One bit of the stored config, gamma: 0.05 -> 0.07 (the issue's example)."""
+    f.attrs["config"] = f.attrs["config"].replace("gamma: 0.05", "gamma: 0.07")
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+def test_a_changed_config_is_refused(files, tmp_path, invoke, no_numerics, kind):
+    """Issue 35: one bit flipped in the stored config went unnoticed: info and the figure stated,
+    and continue --point computed at, parameters the numbers were not computed at."""
+    path = damaged_copy(files[kind], tmp_path, _config_flipped)
+    _refused_everywhere(invoke, kind, path, tmp_path, "do not match their checksum")
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+def test_a_bit_flipped_in_the_stored_config_on_disk(files, tmp_path, invoke, no_numerics, kind):
+    path = damaged_copy(files[kind], tmp_path, None)
+    data = bytearray(path.read_bytes())
+    offset = data.index(b"gamma: 0.05") + len("gamma: 0.0")
+    data[offset] ^= 0b10  # '5' -> '7', behind HDF5's back
+    path.write_bytes(bytes(data))
+    _refused_everywhere(invoke, kind, path, tmp_path, "do not match their checksum")
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+def test_a_file_without_the_checksum_opens_with_a_note(files, tmp_path, invoke, no_numerics, kind):
+    path = damaged_copy(files[kind], tmp_path, _unprotected())
+    result = invoke("info", path)
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines() == [f"Note: {path} {UNPROTECTED_NOTE}: its config and parameters are read "
+                                          "as they are, unprotected against damage"]
+    with vrsweep.open_results(path) as ds:
+        assert ds.attrs["vrsweep_file"] == kind
 
 
 def _set_config(text):
     return lambda f: f.attrs.__setitem__("config", text)
-
-
-def _config_text(path):
-    with h5py.File(path, "r") as f:
-        return f.attrs["config"]
 
 
 CONFIG_DAMAGES = {
@@ -185,12 +238,12 @@ CONFIG_DAMAGES = {
 def test_a_branch_file_whose_config_cannot_drive_continue(files, tmp_path, invoke, no_numerics, damage):
     text, words = CONFIG_DAMAGES[damage]
     change = _set_config(text) if text else (lambda f: f.attrs.__setitem__("parameter", "Omega"))
-    path = damaged_copy(files["branch"], tmp_path, change)
+    path = damaged_copy(files["branch"], tmp_path, _unprotected(change))
     _refused_everywhere(invoke, "branch", path, tmp_path, words)
 
 
 def test_a_branch_files_model_must_be_its_configs(files, tmp_path, invoke, no_numerics):
-    path = damaged_copy(files["branch"], tmp_path, lambda f: f.attrs.__setitem__("model", "original"))
+    path = damaged_copy(files["branch"], tmp_path, _unprotected(lambda f: f.attrs.__setitem__("model", "original")))
     _refused_everywhere(invoke, "branch", path, tmp_path, "attribute model is original")
 
 
@@ -345,7 +398,8 @@ def test_overwritten_metadata_of_every_dataset(files, tmp_path, invoke, no_numer
 @given(kind=st.sampled_from(["branch", "curves"]), where=st.floats(0.0, 1.0, exclude_max=True),
        bit=st.integers(0, 7))
 def test_one_flipped_bit_anywhere(files, tmp_path, invoke, no_numerics, kind, where, bit):
-    """Anywhere in the file: refused in one line, or read; never a traceback, never a native crash."""
+    """Anywhere in the file: refused in one line, or (unused bytes) read as the good file; never a
+    traceback, never a native crash, never other numbers or parameters."""
     path = damaged_copy(files[kind], tmp_path, None)
     size = path.stat().st_size
     offset = int(where * size)
@@ -354,4 +408,4 @@ def test_one_flipped_bit_anywhere(files, tmp_path, invoke, no_numerics, kind, wh
         original = handle.read(1)[0]
         handle.seek(offset)
         handle.write(bytes([original ^ (1 << bit)]))
-    _read_or_refused(invoke, kind, path, tmp_path)
+    _harmless_or_refused(invoke, kind, files[kind], path, tmp_path)

@@ -28,7 +28,7 @@ from vrsweep.errors import ResultFileError
 UNKNOWN_KIND = "unknown"
 # Root attributes shown in their own lines (or not at all), not under "attributes".
 _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "config", "model",
-                     "vrsweep_version", "numba_version", "numpy_version", "shard")
+                     "vrsweep_version", "numba_version", "numpy_version", "shard", "vrsweep_attributes_sha256")
 
 
 @click.command("info")

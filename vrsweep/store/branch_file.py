@@ -172,6 +172,7 @@ def write_branch(path, arrays, config, method, overwrite=False):
         _variable(f, "branch_periods", np.asarray([e[0] for e in ends], dtype=np.int64), (branch_id,),
                   "orbit period of the branch in slow periods", "1")
         _ends(f, "branch", branch_id, [e[1] for e in ends], [e[2] for e in ends])
+        seal_attributes(f)
     write_bytes(path, image.getvalue())
 
 
@@ -235,6 +236,73 @@ LAYOUT = {
     "branch_periods": (("branch_id",), "i"),
     **{f"branch_end_{side}_{what}": (("branch_id",), "s") for side in ("first", "last") for what in ("status", "reason")},
 }
+
+
+# The root attribute that holds the SHA-256 of all the others (attributes_digest): a flipped bit in
+# the stored config (gamma 0.05 -> 0.07) would otherwise go unnoticed, and info, the figure's
+# caption and continue --point would state and use parameters the numbers were not computed at.
+ATTRIBUTES_CHECKSUM = "vrsweep_attributes_sha256"
+_unprotected_said = set()
+
+
+def _canonical(value) -> bytes:
+    """``value`` as h5py reads an attribute back (str, bytes, numpy scalar or array), as bytes that
+    say its type and content: equal for equal attributes, whatever damage they hold."""
+    if isinstance(value, str):
+        return b"s" + value.encode("utf-8", "surrogateescape")
+    if isinstance(value, bytes):
+        return b"b" + value
+    value = np.asarray(value)
+    if value.dtype.kind == "O":
+        return b"o" + b"\0".join(_canonical(item) for item in value.reshape(-1))
+    return b"n" + value.dtype.str.encode() + repr(value.shape).encode() + value.tobytes()
+
+
+# HDF5's dimension-scale bookkeeping: references, i.e. addresses in the file, not content.
+_REFERENCES = ("DIMENSION_LIST", "REFERENCE_LIST")
+
+
+def attributes_digest(f) -> str:
+    """SHA-256 (hex) of every attribute of the open flat file ``f``, its root's (but
+    ATTRIBUTES_CHECKSUM) and each dataset's (units, long_name...; but _REFERENCES): names and
+    values, in name order."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    owners = [("", f)] + [(name, f[name]) for name in sorted(f) if isinstance(f[name], h5py.Dataset)]
+    for owner, obj in owners:
+        for name in sorted(obj.attrs):
+            if name not in (ATTRIBUTES_CHECKSUM, *_REFERENCES):
+                digest.update(f"{owner}/{name}".encode("utf-8", "surrogateescape") + b"\0"
+                              + _canonical(obj.attrs[name]) + b"\0")
+    return digest.hexdigest()
+
+
+def seal_attributes(f):
+    """Store the checksum of every attribute of ``f``, once all are written (branch and curves files)."""
+    f.attrs[ATTRIBUTES_CHECKSUM] = attributes_digest(f)
+
+
+def _check_attributes(f, path):
+    """ResultFileError when the attributes fail their checksum; a file written before they had one
+    (no ATTRIBUTES_CHECKSUM) passes (note_if_unprotected says so once it is found sound)."""
+    if ATTRIBUTES_CHECKSUM not in f.attrs:
+        return
+    stored = f.attrs[ATTRIBUTES_CHECKSUM]
+    if not isinstance(stored, (str, bytes)) or _text(stored) != attributes_digest(f):
+        raise ResultFileError(f"{path} is corrupt: its attributes (config, model, parameters, labels) do not "
+                              "match their checksum")
+
+
+def note_if_unprotected(path, protected):
+    """The note, once per file and process, that a sound file's attributes have no checksum (written
+    before they had one): after every check, so that a refused file is one line."""
+    if not protected and path not in _unprotected_said:
+        _unprotected_said.add(path)
+        from vrsweep.store.fileio import notice
+
+        notice(f"Note: {path} was written before attributes had checksums: its config and parameters are read "
+               "as they are, unprotected against damage")
 
 
 def _text(value):
@@ -333,6 +401,8 @@ def check_layout(f, path, layout, kind):
             raise ResultFileError(f"{path} is corrupt: {name} must count 0, 1, ... along its dimension")
     if len(values.get("multiplier", ())) != 2:
         raise ResultFileError(f"{path} is corrupt: multiplier must have 2 values (the two Floquet multipliers)")
+    # After the layout: an array replaced whole loses its attributes too, and its own message says more.
+    _check_attributes(f, path)
     return values
 
 
@@ -398,9 +468,10 @@ def check_branch(path) -> tuple[str, dict]:
 
     def read(f):
         values = check_layout(f, path, LAYOUT, FILE_KIND)
-        return _attr_text(f, path, "parameter"), _attr_text(f, path, "config"), _attr_text(f, path, "model"), values
+        return (_attr_text(f, path, "parameter"), _attr_text(f, path, "config"), _attr_text(f, path, "model"),
+                values, ATTRIBUTES_CHECKSUM in f.attrs)
 
-    parameter, text, model, values = read_checked(path, read)
+    parameter, text, model, values, protected = read_checked(path, read)
     if not parameter:
         raise ResultFileError(f"{path} is corrupt: attribute parameter must name the continued parameter")
     n_branches = len(values["branch_id"])
@@ -426,4 +497,5 @@ def check_branch(path) -> tuple[str, dict]:
     # The bifurcation table may hold NaN (a point located elsewhere without its parameter): info
     # prints it as nan, and continue refuses to follow that point (execution/curves.read_request).
     check_values(path, values, config, "branch", ("parameter", "x", "v"))
+    note_if_unprotected(path, protected)
     return parameter, values

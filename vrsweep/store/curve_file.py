@@ -50,8 +50,8 @@ from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
 from vrsweep.store.branch_file import (
-    _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_values, file_attributes,
-    has_file_kind, read_checked, stored_config, writable_output,
+    ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_values, file_attributes,
+    has_file_kind, note_if_unprotected, read_checked, seal_attributes, stored_config, writable_output,
 )
 from vrsweep.store.fileio import write_bytes
 
@@ -123,6 +123,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False):
             _variable(f, f"special_{name}", np.asarray([s[2 + index] for s in specials], dtype=np.float64),
                       (special,), f"{PARAMETER_LONG_NAMES.get(name, name)} at the codimension-two point",
                       PARAMETER_UNITS.get(name, "1"))
+        seal_attributes(f)
     write_bytes(path, image.getvalue())
 
 
@@ -170,9 +171,10 @@ def check_curves(path) -> tuple[list, dict]:
         if len(names) != 2 or not all(isinstance(name, str) and name.isidentifier() for name in names) \
                 or names[0] == names[1]:
             raise ResultFileError(f"{path} is corrupt: attribute parameter_names must name two parameters")
-        return names, check_layout(f, path, layout(names), FILE_KIND), _attr_text(f, path, "config")
+        return (names, check_layout(f, path, layout(names), FILE_KIND), _attr_text(f, path, "config"),
+                ATTRIBUTES_CHECKSUM in f.attrs)
 
-    names, values, text = read_checked(path, read)
+    names, values, text, protected = read_checked(path, read)
     n_curves = len(values["curve_id"])
     for name in ("curve", "special_curve"):
         if np.any((values[name] < 0) | (values[name] >= n_curves)):
@@ -186,4 +188,5 @@ def check_curves(path) -> tuple[list, dict]:
     # version cannot read is drawn without it.
     check_values(path, values, stored_config(path, text, required=False), "curve",
                  (*names, "x", "v", *(f"special_{name}" for name in names)))
+    note_if_unprotected(path, protected)
     return names, values
