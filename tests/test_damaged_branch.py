@@ -8,34 +8,15 @@ import numpy as np
 import pytest
 
 import vrsweep
-from vrsweep.analysis.continuation import Bifurcation, Branch, Orbit
-from vrsweep.config.validate import config_from_dict
 from vrsweep.errors import ResultFileError
-from vrsweep.store.branch_file import branch_arrays, write_branch
 
 from damaged import damaged_copy, flip_bit, one_line_error, refused_by_plot_and_info
-
-CONFIG = {"model": "effective", "parameters": {"gamma": 0.05, "alpha": 0.05},
-          "continuation": {"parameter": "g", "from": 23.0, "to": [21.0, 27.0]}}
-
-
-def _orbit(g, stable):
-    scale = 0.5 if stable else 1.5
-    return Orbit(parameter=g, state=np.array([0.1 * g, -0.2]), periods=1, monodromy=np.diag([scale, 0.3]),
-                 R=10.0 + g, Q_amplitude=0.4 + g / 100, impacts_per_period=0.0, x_max=0.8, slowest_impact=np.inf,
-                 residual=1e-11, newton_iterations=2)
+from handmade import write_branch_file
 
 
 @pytest.fixture(scope="module")
 def branch(tmp_path_factory):
-    orbits = [_orbit(g, g < 24.0) for g in np.linspace(22.0, 26.0, 9)]
-    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "g left [21, 27]"),
-                                                       "up": ("grazing", "the orbit touches the barrier")})]
-    bifurcations = [Bifurcation("fold", orbits[4])]
-    path = tmp_path_factory.mktemp("branch") / "good.h5"
-    config = config_from_dict(CONFIG)
-    write_branch(path, branch_arrays(branches, bifurcations, 1.0), config, "rk45")
-    return path
+    return write_branch_file(tmp_path_factory.mktemp("branch") / "good.h5")
 
 
 def _point_variable_too_short(f):
