@@ -472,3 +472,34 @@ def test_a_branch_file_refuses_the_options_it_cannot_honour(tmp_path, invoke, op
     line = one_line_error(invoke("plot", path, "-o", tmp_path / "figure.png", *option))
     assert line.startswith(f"Error: {BRANCH_OPTIONS[option]}"), line
     assert not (tmp_path / "figure.png").exists()
+
+
+STYLE_SHEETS = {  # issue 35: each printed 16-300 lines of matplotlib warnings, and drew anyway
+    "axes.facecolr: red\n": "line 1: 'axes.facecolr' is not a matplotlib setting",
+    "# a comment\naxes.facecolor: notacolour\n": "line 2: axes.facecolor: 'notacolour' does not look like a color",
+    "font.family: NoSuchFont\n": "line 1: font.family: no font 'NoSuchFont' is installed",
+}
+
+
+@pytest.mark.parametrize("sheet", sorted(STYLE_SHEETS))
+def test_a_bad_style_sheet_is_one_line(tmp_path, invoke, sheet):
+    from damaged import one_line_error
+    from handmade import write_branch_file
+
+    path = write_branch_file(tmp_path / "branch.h5")
+    style = tmp_path / "bad.mplstyle"
+    style.write_text(sheet)
+    line = one_line_error(invoke("plot", path, "-o", tmp_path / "figure.png", "--style", style))
+    assert line.startswith(f"Error: --style {style}: {STYLE_SHEETS[sheet]}"), line
+    assert not (tmp_path / "figure.png").exists()
+
+
+def test_a_good_style_sheet_draws_without_a_warning(tmp_path, invoke):
+    from handmade import write_branch_file
+
+    path = write_branch_file(tmp_path / "branch.h5")
+    style = tmp_path / "good.mplstyle"
+    style.write_text('font.family: serif  # a generic family\naxes.facecolor: "#eeeeee"\nlines.linewidth: 2\n')
+    result = invoke("plot", path, "-o", tmp_path / "figure.png", "--style", style)
+    assert result.exit_code == 0 and result.output.strip().splitlines() == [f"-> {tmp_path / 'figure.png'}"], \
+        result.output

@@ -205,6 +205,9 @@ def resolve_style(style):
         return text
     if Path(text).expanduser().is_file():
         path = str(Path(text).expanduser())
+        problem = _style_file_problem(path)
+        if problem:
+            raise UsageError.naming("{style} {value}: {problem}", value=text, problem=problem)
         try:
             with matplotlib.style.context(path):
                 pass
@@ -215,6 +218,53 @@ def resolve_style(style):
     raise UsageError.naming("{style} {value}: no such matplotlib style sheet or file; the named styles are "
                             "{names} (or give the path of a .mplstyle file)",
                             value=text, names=", ".join(sorted(matplotlib.style.available)))
+
+
+# font.family may name these, which matplotlib resolves through its own font lists.
+_GENERIC_FAMILIES = ("serif", "sans-serif", "sans", "cursive", "fantasy", "monospace")
+
+
+def _strip_comment(line) -> str:
+    """``line`` without its comment: from the first # outside double quotes (a colour "#eeeeee" is
+    a value), as matplotlib reads its style files."""
+    inside = False
+    for index, character in enumerate(line):
+        if character == '"':
+            inside = not inside
+        elif character == "#" and not inside:
+            return line[:index].strip()
+    return line.strip()
+
+
+def _style_file_problem(path) -> str | None:
+    """What is wrong with a .mplstyle file, in words, or None: an unknown key, a value matplotlib
+    refuses, a font.family that is not installed. matplotlib itself warns of each every time the
+    style is applied, and of a missing font at every text drawn: hundreds of lines for one mistake."""
+    import matplotlib
+    from matplotlib import font_manager
+
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as error:
+        return f"not a readable matplotlib style file ({error})"
+    installed = {font.name for font in font_manager.fontManager.ttflist}
+    for number, line in enumerate(lines, 1):
+        content = _strip_comment(line)
+        if not content:
+            continue
+        key, colon, value = content.partition(":")
+        key, value = key.strip(), value.strip().strip('"')
+        if not colon or key not in matplotlib.rcParams.validate:
+            return f"line {number}: {key!r} is not a matplotlib setting"
+        try:
+            checked = matplotlib.rcParams.validate[key](value)
+        except (ValueError, TypeError) as error:
+            return f"line {number}: {key}: {str(error).splitlines()[0]}"
+        if key == "font.family":
+            missing = [name for name in checked if name.lower() not in _GENERIC_FAMILIES and name not in installed]
+            if missing:
+                return f"line {number}: font.family: no font {missing[0]!r} is installed"
+    return None
 
 
 def parse_size(text):
