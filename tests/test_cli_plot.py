@@ -503,3 +503,18 @@ def test_a_good_style_sheet_draws_without_a_warning(tmp_path, invoke):
     result = invoke("plot", path, "-o", tmp_path / "figure.png", "--style", style)
     assert result.exit_code == 0 and result.output.strip().splitlines() == [f"-> {tmp_path / 'figure.png'}"], \
         result.output
+
+
+@pytest.mark.parametrize("limits", [dict(vmax=1e308), dict(vmin=-1e308), dict(vmin=-1e301, vmax=1e301),
+                                    dict(vmax=float("nan")), dict(vmin=float("-inf"))])
+def test_a_colour_scale_end_beyond_what_a_colour_bar_draws_is_one_line(limits):
+    """Issue 35: --vmax 1e308 printed a page of overflow RuntimeWarnings and drew a wrong colour bar.
+    Refused before the figure is made (the data is never looked at)."""
+    from vrsweep.errors import UsageError
+    from vrsweep.plot import curves_figure, map_figure
+
+    for figure in (map_figure, curves_figure):
+        args = (None,) if figure is map_figure else (None, [])
+        with pytest.raises(UsageError, match=r"the end of a colour scale must be a finite number of magnitude at "
+                                             r"most 1e\+300"):
+            figure(*args, **limits)

@@ -220,6 +220,8 @@ def resolve_style(style):
                             value=text, names=", ".join(sorted(matplotlib.style.available)))
 
 
+# The largest |vmin|, |vmax| a colour bar draws without overflowing (figure_options).
+LIMIT_MAGNITUDE = 1e300
 # font.family may name these, which matplotlib resolves through its own font lists.
 _GENERIC_FAMILIES = ("serif", "sans-serif", "sans", "cursive", "fantasy", "monospace")
 
@@ -304,6 +306,13 @@ def figure_options(function):
         style = resolve_style(style)
         size = parse_size(size) if size is not None else None
         if takes_limits:
+            for key, value in (("vmin", vmin), ("vmax", vmax)):
+                # matplotlib's colour bar does arithmetic on its ends (tick steps, bin middles): near
+                # the float64 limit it overflows, with a page of RuntimeWarnings and a wrong bar.
+                if value is not None and not abs(float(value)) <= LIMIT_MAGNITUDE:
+                    raise UsageError.naming("{" + key + "} {value}: the end of a colour scale must be a finite "
+                                            "number of magnitude at most {limit:g}", value=value,
+                                            limit=LIMIT_MAGNITUDE)
             kwargs.update(vmin=vmin, vmax=vmax)
         elif vmin is not None or vmax is not None:
             raise UsageError.naming("{vmin} and {vmax} set the colour scale of a map; this figure has none")
