@@ -3,10 +3,11 @@ and every dataset of each is damaged in the ways tests/test_damaged_structure.py
 file (a value of the wrong type, text that is not text, a dataset of the wrong shape or type, a
 flipped bit, overwritten metadata) and in the values a command acts on (branch_periods 0, -1,
 10**9; a config without a continuation). info, plot and continue each refuse it in one line with
-exit 2, before anything is computed: continue never reaches the numerics with a damaged file.
+exit 2, before anything is computed: continue never reaches the numerics with a damaged file. Any
+change of an attribute (the stored config's gamma 0.05 -> 0.07) fails the attributes' checksum.
 
-The files are made from hand-built orbits and curve points (no kernel is compiled), and the
-numerics of continue are replaced by a stub that records that they were reached."""
+The files are made from hand-built orbits and curve points (tests/handmade.py: no kernel is
+compiled), and the numerics of continue are replaced by a stub that records that they were reached."""
 
 import h5py
 import numpy as np
