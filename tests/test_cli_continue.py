@@ -149,6 +149,8 @@ def test_validate_describes_the_continuation(invoke, tmp_path, write_config):
     assert result.exit_code == 0, result.output
     assert ("continuation: g from 24 within [23.5, 25.4]; steps 0.05 (1e-05 to 0.3), at most 400 points, periods "
             "up to 16; the branches of 2p periods too (switch)") in result.output.splitlines()
+    fixed = next(line for line in result.output.splitlines() if line.startswith("fixed:"))
+    assert "Omega=4" in fixed and "g=" not in fixed  # g moves: its config value (0) is not used
 
 
 class Started(Exception):

@@ -49,8 +49,9 @@ def command(config_path, overrides, threads):
             click.echo("barriers:    none")
         click.echo(f"period:      T = {model.period}; R = |Q| / {model.response_scale}, Q at frequency "
                    f"{model.response_frequency}")
-    fixed = [f"{name}={config.parameters[name]:g}" for name in config.parameter_names
-             if name not in config.axis_names]
+    # The continued parameter is not fixed: its value in parameters is unused (continuation.from starts it).
+    moving = {*config.axis_names, *([config.continuation.parameter] if config.continuation else [])}
+    fixed = [f"{name}={config.parameters[name]:g}" for name in config.parameter_names if name not in moving]
     click.echo(f"fixed:       {' '.join(fixed)}")
     initial = [f"{key}=swept ({axis})" if axis in config.axis_names else f"{key}={config.initial[key]:g}"
                for axis, key in (("x0", "x"), ("v0", "v"))]
