@@ -175,7 +175,7 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
         click.echo(f"-> {path}", err=True)
 
 
-# Measured with an empty cache on a loaded 2-core machine (issue 35: "silent for up to 3 minutes").
+# As issue 35 measured it: the first continue, with an empty cache, was silent for up to 3 minutes.
 COMPILE_DURATION = "up to 3 minutes"
 
 
