@@ -93,12 +93,14 @@ def test_sweep_axis_continuation_key_still_means_hysteresis(write_config, tmp_pa
     assert config.axes[0].continuation == "both" and config.continuation is None
 
 
-def test_original_model_with_incommensurate_forcing_is_refused(invoke, tmp_path, write_config):
-    config = write_config(tmp_path, "parameters: {g: 5.0, Omega: 4.3}\n"
+@pytest.mark.parametrize("fixed_g", ["g: 5.0, ", ""])
+def test_original_model_with_incommensurate_forcing_is_refused(invoke, tmp_path, write_config, fixed_g):
+    # refused alike whether parameters.g is set or g is continued from its default 0 (issue 35)
+    config = write_config(tmp_path, "parameters: {" + fixed_g + "Omega: 4.3001}\n"
                                     "continuation: {parameter: g, from: 5.0, to: [4.0, 6.0]}\n", "q.yaml")
     result = invoke("continue", config, "-o", tmp_path / "q.h5")
     assert result.exit_code == 2
-    assert "not a whole number" in result.output and "parameters.Omega" in result.output
+    assert "is not a ratio p/q of whole numbers" in result.output and "parameters.Omega" in result.output
 
 
 def test_original_model_refuses_omega_as_parameter(invoke, tmp_path, write_config):
@@ -123,8 +125,8 @@ SECTIONS_CONTINUE_REFUSES = {
                                     "1e-05 and continuation.max_step = 0.3"),
     "initial_step below min_step": (("max_step: 0.3", "max_step: 0.3\n  min_step: 0.01\n  initial_step: 0.001"),
                                     "continuation.initial_step = 0.001 must lie between"),
-    "incommensurate forcing": (("model: effective", "model: original\nparameters: {g: 5.0, Omega: 4.3}"),
-                               "not a whole number"),
+    "incommensurate forcing": (("model: effective", "model: original\nparameters: {g: 5.0, Omega: 4.3001}"),
+                               "is not a ratio p/q of whole numbers"),
 }
 
 

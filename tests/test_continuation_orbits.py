@@ -245,9 +245,22 @@ def test_dop853_branch_points_are_fixed_points():
         assert np.max(np.abs(state - orbit.state)) < 1e-7
 
 
-def test_original_model_refuses_an_incommensurate_forcing():
-    with pytest.raises(VrsweepError, match="not a whole number"):
-        continuation.check_commensurate(dict(DEFAULT_PARAMETERS, g=5.0, Omega=4.3), "original", "g")
+@pytest.mark.parametrize("g", [5.0, 0.0])
+def test_the_forcing_rule_is_decided_from_the_values_continued(g):
+    """Issue 35: Omega/omega = 8.6 was refused when parameters.g was set and ran (a period-15 branch)
+    when g was continued from the config's default 0. Now both are the forcing of the values
+    continued: p/q with q within max_period repeats after q slow periods (accepted, orbits of
+    multiples of q), anything else never does (refused), whatever parameters.g says."""
+    parameters = dict(DEFAULT_PARAMETERS, g=g)
+    assert continuation.check_commensurate(dict(parameters, Omega=4.3), "original", "g") == 5  # 8.6 = 43/5
+    assert continuation.check_commensurate(dict(parameters, Omega=4.0), "original", "g") == 1  # 8
+    with pytest.raises(VrsweepError, match=r"Omega/omega = 8.6002 is not a ratio p/q of whole numbers with q at "
+                                           r"most continuation.max_period = 16"):
+        continuation.check_commensurate(dict(parameters, Omega=4.3001), "original", "g")
+    with pytest.raises(VrsweepError, match="q at most continuation.max_period = 4"):
+        continuation.check_commensurate(dict(parameters, Omega=4.3), "original", "g", max_period=4)
+    # without a fast force anywhere (g = 0, not continued) there is nothing to repeat
+    assert continuation.check_commensurate(dict(DEFAULT_PARAMETERS, g=0.0, Omega=4.3001), "original", "e") == 1
 
 
 def test_original_model_refuses_omega_as_the_parameter():

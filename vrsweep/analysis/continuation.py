@@ -38,6 +38,7 @@ Nothing here raises on a numerical failure: a branch ends with a status and a on
 Bad requests (a chaotic start, an incommensurate forcing) raise UsageError (exit code 2).
 """
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -157,27 +158,43 @@ class ContinuationProblem:
         return built
 
 
-def check_commensurate(parameters, model, parameter):
-    """Refuse an original-model problem whose forcing is not periodic with the slow period.
+# Omega/omega is p/q when it agrees with it to this (relative): a ratio typed as a decimal (8.6 =
+# 43/5) is p/q to roundoff, one that is not (8.6001) is off by far more.
+RATIO_TOLERANCE = 1e-12
 
-    The original model has the fast force g cos(Omega t): P is a map only when Omega/omega is a
-    whole number, and moving Omega or omega would leave that case at once.
-    """
-    if model != "original" or parameters.get("g", 0.0) == 0.0:
-        return
-    if parameter in ("Omega", "omega"):
-        raise UsageError.naming(
-            "{parameter} = {name} cannot be continued in the original model: its fast forcing is periodic "
-            "with the slow period only where Omega/omega is a whole number, which a moving {name} leaves "
-            "at once; continue {name} in the effective model (no fast force) instead",
-            {"parameter": "continuation.parameter"}, name=parameter)
+
+def check_commensurate(parameters, model, moving, max_period=CONTINUATION_DEFAULTS["max_period"]):
+    """The slow periods q after which the original model's fast forcing g cos(Omega t) repeats, 1
+    when there is none (another model, or g = 0 throughout); UsageError when it never repeats
+    within ``max_period`` slow periods, or when Omega or omega moves.
+
+    Decided from the values continued (``moving``: the parameter, or the names of a curve's two):
+    a continued g is a forcing whatever parameters.g says, so the same Omega/omega is accepted or
+    refused alike. Omega/omega = p/q in lowest terms repeats after q slow periods, and every
+    periodic orbit closes after a multiple of q (find_start asks for one)."""
+    from fractions import Fraction
+
+    moving = (moving,) if isinstance(moving, str) else tuple(moving)
+    if model != "original" or ("g" not in moving and parameters.get("g", 0.0) == 0.0):
+        return 1
+    for name in moving:
+        if name in ("Omega", "omega"):
+            raise UsageError.naming(
+                "{parameter} = {name} cannot be continued in the original model: its fast forcing repeats "
+                "only where Omega/omega is a ratio of whole numbers, which a moving {name} leaves at once; "
+                "continue {name} in the effective model (no fast force) instead",
+                {"parameter": "continuation.parameter"}, name=name)
     ratio = parameters["Omega"] / parameters["omega"]
-    if abs(ratio - round(ratio)) > 1e-12 * ratio:
+    fraction = Fraction(ratio).limit_denominator(max(int(max_period), 1))
+    if not abs(ratio - fraction) <= RATIO_TOLERANCE * abs(ratio):
         raise UsageError.naming(
-            "Omega/omega = {ratio} is not a whole number: the original model is then forced "
-            "quasi-periodically and has no periodic orbit of the stroboscopic map to continue "
-            "(choose {Omega} a multiple of omega, e.g. Omega = 4 with omega = 0.5)",
-            {"Omega": "parameters.Omega"}, ratio=f"{ratio:.6g}")
+            "Omega/omega = {ratio} is not a ratio p/q of whole numbers with q at most {max_period} = {limit}: "
+            "the original model's fast forcing then repeats after no orbit period continue looks for (it is "
+            "quasi-periodic), so there is no periodic orbit to continue; choose {Omega} with Omega/omega = p/q "
+            "(e.g. Omega = 4 with omega = 0.5: 8; Omega = 4.3: 43/5, orbits of multiples of 5 slow periods)",
+            {"Omega": "parameters.Omega", "max_period": "continuation.max_period"}, ratio=f"{ratio:.10g}",
+            limit=max_period)
+    return fraction.denominator
 
 
 def evaluate(problem, state, value, periods):
@@ -764,6 +781,13 @@ def find_start(problem, initial_state, value, transient_periods, max_period):
     strobe = run.period_records[-START_STROBE_PERIODS:]
     period = int(detect_period(strobe[None, :, kernel.REC_X], strobe[None, :, kernel.REC_V],
                                max(max_period, 1), START_PERIOD_TOLERANCE)[0])
+    # A forcing that repeats after q slow periods (Omega/omega = p/q) closes orbits only after a
+    # multiple of q: P^p of another p is no return map, and its fixed point no orbit.
+    forcing = check_commensurate(dict(problem.parameters, **{problem.parameter: value}), problem.model,
+                                 problem.parameter, max_period)
+    if period and period % forcing:
+        period = math.lcm(period, forcing)
+        period = period if period <= max_period else 0
     if period == 0:
         raise UsageError.naming(
             "no periodic orbit of at most {limit} slow periods at the start ({name} = {value}): the motion "

@@ -137,9 +137,10 @@ class CurveProblem:
                                                 self.names[0], self.settings, self.method, dict(self.options))
 
 
-def check_pair(parameters, model, names):
+def check_pair(parameters, model, names, max_period=continuation.DEFAULTS["max_period"]):
     """Refuse a pair the model cannot follow: the same parameter twice, an unknown one, or (original
-    model) Omega or omega moving, or an incommensurate forcing (continuation.check_commensurate)."""
+    model) Omega or omega moving, or a forcing that does not repeat within ``max_period`` slow
+    periods (continuation.check_commensurate, with both parameters moving)."""
     first, second = names
     known = getattr(model, "parameter_names", model_metadata.PARAMETER_NAMES)  # a written model's own
     for key, name in (("first", first), ("second", second)):
@@ -152,10 +153,10 @@ def check_pair(parameters, model, names):
                                 "the point along", {"along": "along"}, name=second)
     if model == "original" and second in ("Omega", "omega"):
         raise UsageError.naming(
-            "{along} = {name} cannot move in the original model: its fast forcing is periodic with the slow "
-            "period only where Omega/omega is a whole number, which a moving {name} leaves at once; follow "
+            "{along} = {name} cannot move in the original model: its fast forcing repeats only where "
+            "Omega/omega is a ratio of whole numbers, which a moving {name} leaves at once; follow "
             "the point in {name} in the effective model (no fast force) instead", {"along": "along"}, name=second)
-    continuation.check_commensurate(parameters, model, first)
+    continuation.check_commensurate(parameters, model, names, max_period)
 
 
 @dataclass

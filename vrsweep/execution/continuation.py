@@ -36,7 +36,7 @@ def check_section(config):
                                 low=f"{section.min_step:g}", high=f"{section.max_step:g}")
     from vrsweep.analysis import continuation
 
-    continuation.check_commensurate(config.parameters, config.model, section.parameter)
+    continuation.check_commensurate(config.parameters, config.model, section.parameter, section.max_period)
 
 
 def problem_of(config):

@@ -65,7 +65,7 @@ def read_request(path, point, along, to=None, within=None):
                                 "points can be followed in two parameters", {"point": "point"}, index=point,
                                 kind=kind)
     names = (first, along)
-    curves.check_pair(config.parameters, config.model, names)
+    curves.check_pair(config.parameters, config.model, names, config.continuation.max_period)
     section = config.continuation
     within = (section.low, section.high) if within is None else tuple(within)
     if to is None:
