@@ -118,9 +118,13 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     cosines at every evaluation. Since version 0.2 steps are no longer capped at 1/8 of the
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
-    return with_rk45(oscillator_rhs, oscillator_tangent, force_at_barrier, False,
-                     coefficients, initial_state, settings, period_records, summary,
-                     sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_preparation, no_preparation,
+                      no_scratch,
+                      False, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False, ORDER, N_STAGES, False,
+                      np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -132,10 +136,13 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
     library (oscillator_rhs).
     """
-    return with_dop853(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier,
-                       prepare_step_rotations, prepare_rotations, dop853_rotation_scratch, True, False,
-                       coefficients, initial_state, settings, period_records, summary,
-                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
+                      prepare_rotations, dop853_rotation_scratch, True, dop853_step, dop853_error_norm, dop853_dense,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
+                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, False,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -146,19 +153,26 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
-    return with_rk45(oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, True,
-                     coefficients, initial_state, settings, period_records, summary,
-                     sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_preparation,
+                      no_preparation, no_scratch,
+                      False, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False, ORDER, N_STAGES, True,
+                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return with_dop853(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier,
-                       prepare_step_rotations, prepare_rotations, dop853_rotation_scratch, True, True,
-                       coefficients, initial_state, settings, period_records, summary,
-                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
+                      prepare_rotations, dop853_rotation_scratch, True, dop853_step, dop853_error_norm, dop853_dense,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
+                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
@@ -171,19 +185,26 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     interval makes it zero. No renormalisation: one period's map stays far inside double range
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
-    return with_rk45(oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, True,
-                     coefficients, initial_state, settings, period_records, summary,
-                     sample_times, samples, impact_log, stick_log, monodromy_log)
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_preparation,
+                      no_preparation, no_scratch,
+                      False, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False, ORDER, N_STAGES, True,
+                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
 
 
 @kernel_jit
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
-    return with_dop853(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier,
-                       prepare_step_rotations, prepare_rotations, dop853_rotation_scratch, True, True,
-                       coefficients, initial_state, settings, period_records, summary,
-                       sample_times, samples, impact_log, stick_log, monodromy_log)
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
+                      prepare_rotations, dop853_rotation_scratch, True, dop853_step, dop853_error_norm, dop853_dense,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
+                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True,
+                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      coefficients, initial_state, settings, period_records, summary,
+                      sample_times, samples, impact_log, stick_log, monodromy_log)
 
 
 # integration.method -> the kernel. Each is compiled (or loaded from the cache) on its first call,
@@ -202,43 +223,6 @@ def integrator(method, lyapunov=False):
 
 
 
-# --- a model's functions with a method: what every model's entry points call ---------------------
-# A model is its right-hand sides (rhs.py's signature), its tangent product tangent(t, y,
-# coefficients, dydt) (tangent.py) and barrier_force(t, coefficients, barrier), the acceleration of
-# a mass at rest on a barrier, positive into it; the paper's family passes rhs.py's, a written
-# model its generated ones (written.py). tangents: the state carries the tangent vectors and rhs
-# integrates them too.
-
-@kernel_jit(inline="always")
-def with_rk45(rhs, tangent, barrier_force, tangents, coefficients, initial_state, settings, period_records,
-              summary, sample_times, samples, impact_log, stick_log, monodromy_log):
-    """_integrate with Dormand-Prince 5(4) steps and the library's functions at every evaluation."""
-    n_state = N_STATE_WITH_TANGENTS if tangents else N_STATE
-    return _integrate(rhs, rhs, tangent, barrier_force, no_preparation, no_preparation, no_scratch, False,
-                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False,
-                      ORDER, N_STAGES, tangents,
-                      np.empty((N_STAGES + 1, n_state)), np.empty((n_state, DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, monodromy_log)
-
-
-@kernel_jit(inline="always")
-def with_dop853(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, make_scratch, grid_steps,
-                tangents, coefficients, initial_state, settings, period_records, summary, sample_times, samples,
-                impact_log, stick_log, monodromy_log):
-    """_integrate with DOP853 steps; stage_rhs after prepare_step (see _integrate), or rhs itself with
-    no_preparation and no_scratch (grid_steps False) where the model has no prepared stages."""
-    n_state = N_STATE_WITH_TANGENTS if tangents else N_STATE
-    return _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, make_scratch, grid_steps,
-                      dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
-                      dop853_certain_growth, dop853_rejected_step_factor, True, dop853.ERROR_ESTIMATOR_ORDER + 1,
-                      dop853.N_STAGES, tangents,
-                      np.empty((dop853.N_STAGES_EXTENDED, n_state)), np.empty((n_state, dop853.DENSE_ORDER)),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, monodromy_log)
-
-
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
@@ -248,8 +232,10 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                sample_times, samples, impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
-    rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; tangent and
-    barrier_force are the model's (with_rk45 says what they are); stage_rhs the
+    rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; tangent(t, y,
+    coefficients, dydt) its tangent product J u (tangent.apply_jacobian) and barrier_force(t,
+    coefficients, b) the acceleration of a mass at rest on barrier b, positive into it: the paper's
+    family passes rhs.py's, a written model its generated ones (codegen.py); stage_rhs the
     same at a step's stages, after prepare_step(t, h, coefficients, scratch) (before a dense output:
     prepare_dense, which also prepares the dense output's extra stages), with scratch =
     make_scratch(h_max); grid_steps rounds each step size down to grid_step's grid.
