@@ -7,7 +7,6 @@ h = 1/8 of the fast period); the loop's result is summed so that nothing is opti
 The calling thread's CPU time, best of 7.
 """
 
-import math
 import sys
 from pathlib import Path
 

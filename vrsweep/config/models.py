@@ -29,7 +29,7 @@ import numpy as np
 from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, PARAMETER_DOMAINS
 from vrsweep.config.wording import did_you_mean, show
 import vrsweep.numerics.expressions as expressions
-from vrsweep.numerics.model import DEFAULT_PARAMETERS, MODELS, PARAMETER_NAMES
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, PARAMETER_NAMES
 from vrsweep.numerics.written import SIDES, Barrier, WrittenModel
 
 MODEL_KEYS = ("name", "acceleration", "parameters", "symbols", "barriers", "period", "response", "max_step")

@@ -42,7 +42,7 @@ from vrsweep.numerics.coefficients import (
     RESPONSE_SCALE, RESTITUTION, SCAN_STEP, SIDE,
 )
 from vrsweep.numerics.rk45 import (
-    DENSE_ORDER, DP54_C, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, certain_growth, dense_value, dp54_dense,
+    DENSE_ORDER, N_DYNAMIC, N_STAGES, ORDER, accepted_step_factor, certain_growth, dense_value, dp54_dense,
     dp54_step, error_norm, initial_step, rejected_step_factor,
 )
 from vrsweep.numerics.jit import kernel_jit

@@ -26,7 +26,7 @@ State layout: state.py (TANGENT); per-period records: kernel.REC_LOG_STRETCH, RE
 import math
 
 from vrsweep.numerics.jit import kernel_jit
-from vrsweep.numerics.state import N_TANGENT_VECTORS, TANGENT, V, X
+from vrsweep.numerics.state import N_TANGENT_VECTORS, TANGENT
 
 
 @kernel_jit(inline="always")

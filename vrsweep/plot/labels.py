@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import UsageError
 
 from vrsweep.numerics.model import (
-    INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_SYMBOLS,
+    INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_SYMBOLS,
 )
 
 

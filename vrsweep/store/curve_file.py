@@ -47,7 +47,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError
-from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_NAMES, PARAMETER_UNITS
+from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
 from vrsweep.store.branch_file import (
     ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_values, file_attributes,
