@@ -15,6 +15,8 @@ y(t + theta h) = y + h theta sum_q dense[q] theta^q, so the impact and observer 
 Modelled on scipy/integrate/_ivp/rk.py (class DOP853); coefficients in dop853_coefficients.py.
 """
 
+import math
+
 import numpy as np
 
 from vrsweep.numerics.dop853_coefficients import A, C, D, E3, E5, N_STAGES, N_STAGES_EXTENDED
@@ -125,7 +127,7 @@ def dop853_error_norm(K, h, y, y_new, rtol, atol):
         err3_sq += e3 * e3
     if err5_sq == 0.0 and err3_sq == 0.0:
         return 0.0
-    return abs(h) * err5_sq / np.sqrt((err5_sq + 0.01 * err3_sq) * N_CONTROLLED)
+    return abs(h) * err5_sq / math.sqrt((err5_sq + 0.01 * err3_sq) * N_CONTROLLED)
 
 
 @kernel_jit

@@ -89,6 +89,21 @@ REBOUND_STEP_FRACTION = 0.25
 UNRESOLVED_STEP_FACTOR = 0.125
 
 
+# Each method's constants for _integrate: (grid_steps, hold_after_reject, initial_order, n_stages).
+# grid_steps: step sizes are rounded down to the grid whose forcing rotations dop853's scratch
+# tabulates; hold_after_reject: Hairer's DOP853 lets no step grow right after a rejection;
+# initial_order: the order initial_step assumes; n_stages: the stages of a step (K[n_stages] is
+# the derivative at its end). DOP853_RULES: dop853 with the library's cosines at every stage (no
+# 68 kB rotation table: the GPU's, cuda.py).
+RK45_RULES = (False, False, ORDER, N_STAGES)
+DOP853_ROTATED_RULES = (True, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES)
+DOP853_RULES = (False, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES)
+# The rows of _integrate's vectors: the state y, the trial step's end y_new, a stage's state and
+# the derivative f = y'(t).
+Y_ROW, Y_NEW_ROW, STAGE_ROW, F_ROW = range(4)
+N_VECTORS = 4
+
+
 @kernel_jit
 def _smallest_step(t, slow_period):
     """A step this short no longer moves t by more than a few units of its last place."""
@@ -119,10 +134,9 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
     return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_preparation, no_preparation,
-                      no_scratch,
-                      False, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False, ORDER, N_STAGES, False,
-                      np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
+                      RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+                      rejected_step_factor, False, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
@@ -137,10 +151,11 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     library (oscillator_rhs).
     """
     return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
-                      prepare_rotations, dop853_rotation_scratch, True, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, False,
+                      prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
+                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, False,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE)), np.empty((MAX_BARRIERS, N_BRACKET)),
+                      dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
@@ -154,10 +169,10 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_preparation,
-                      no_preparation, no_scratch,
-                      False, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False, ORDER, N_STAGES, True,
+                      no_preparation, RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
+                      certain_growth, rejected_step_factor, True,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
@@ -167,10 +182,11 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
-                      prepare_rotations, dop853_rotation_scratch, True, dop853_step, dop853_error_norm, dop853_dense,
+                      prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)),
+                      dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
@@ -186,10 +202,10 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_preparation,
-                      no_preparation, no_scratch,
-                      False, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False, ORDER, N_STAGES, True,
+                      no_preparation, RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
+                      certain_growth, rejected_step_factor, True,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, monodromy_log)
 
@@ -199,10 +215,11 @@ def integrate_dop853_monodromy(coefficients, initial_state, settings, period_rec
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
-                      prepare_rotations, dop853_rotation_scratch, True, dop853_step, dop853_error_norm, dop853_dense,
+                      prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES, True,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)),
+                      dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, monodromy_log)
 
@@ -226,9 +243,9 @@ def integrator(method, lyapunov=False):
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
-def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, make_scratch, grid_steps, step, step_error,
-               dense_output, accepted_factor, certain_growth, rejected_factor, hold_after_reject, initial_order,
-               n_stages, tangents, K, dense, coefficients, initial_state, settings, period_records, summary,
+def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, rules, step, step_error,
+               dense_output, accepted_factor, certain_growth, rejected_factor, tangents, K, dense, vectors, brackets,
+               scratch, coefficients, initial_state, settings, period_records, summary,
                sample_times, samples, impact_log, stick_log, monodromy_log):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
@@ -238,15 +255,20 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     family passes rhs.py's, a written model its generated ones (codegen.py); stage_rhs the
     same at a step's stages, after prepare_step(t, h, coefficients, scratch) (before a dense output:
     prepare_dense, which also prepares the dense output's extra stages), with scratch =
-    make_scratch(h_max); grid_steps rounds each step size down to grid_step's grid.
+    the method's own (dop853_rotation_scratch(h_max), or no_scratch). rules = (grid_steps,
+    hold_after_reject, initial_order, n_stages), the method's constants (RK45_RULES ...): grid_steps
+    rounds each step size down to grid_step's grid.
     step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic) fills K
     (K[n_stages] = f(t + h, y_new)) and y_new; step_error(K, h, y, y_new, rtol, atol) is the scaled
     error norm; certain_growth(err, err_previous) is True only where accepted_factor's result is
     certainly >= 1; dense_output(stage_rhs, t, y, h, coefficients, K, y_new, dense, stage, scratch,
     n_dynamic) fills dense and returns its extra RHS count. tangents: the state carries the
     tangent vectors (state.py) and the right-hand sides integrate them; n_dynamic is the number of
-    state components the right-hand sides read. K (rows, n_state) and dense (n_state, order) are
-    the method's work arrays, their width the state's size.
+    state components the right-hand sides read. The work arrays are the caller's, so that the loop
+    allocates nothing and compiles for a GPU thread as it does for a CPU one (cuda.py): K (rows,
+    n_state) and dense (n_state, order), the method's; vectors (N_VECTORS, n_state), the state, the
+    trial state, a stage's state and the derivative (rows Y_ROW ...); brackets (MAX_BARRIERS,
+    N_BRACKET), find_crossing's, one per barrier.
 
     Each pass of the loop is one of: hold the mass on the barrier up to its release or the period's
     end; or attempt a step, and if it is accepted, resolve an impact inside it (reach it with an
@@ -279,23 +301,24 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     transparent_to = settings[TRANSPARENT_TO]
     has_window = transparent_from == transparent_from and transparent_to == transparent_to
     transparent = False
-    window_x_max = -np.inf
+    window_x_max = -math.inf
     # Continuation (the *_monodromy kernels) also wants the orbit's highest smooth maximum.
     track_free_maxima = monodromy_log.shape[0] > 0
-    free_x_max = -np.inf
-    free_x_max_time = np.nan
+    free_x_max = -math.inf
+    free_x_max_time = math.nan
 
     slow_period = coefficients[PERIOD]  # the stroboscopic period T
     h_max = coefficients[MAX_STEP]
     stick_scan_step = coefficients[SCAN_STEP]
 
+    grid_steps, hold_after_reject, initial_order, n_stages = rules
     n_state = K.shape[1]
-    y = np.zeros(n_state)
-    y_new = np.empty(n_state)
-    stage = np.empty(n_state)
-    f = np.empty(n_state)
-    brackets = np.empty((MAX_BARRIERS, N_BRACKET))  # find_crossing's, one per barrier
-    scratch = make_scratch(h_max)  # the stage right-hand side's own
+    y = vectors[Y_ROW]
+    y_new = vectors[Y_NEW_ROW]
+    stage = vectors[STAGE_ROW]
+    f = vectors[F_ROW]
+    for j in range(n_state):
+        y[j] = 0.0
 
     y[X] = initial_state[0]
     y[V] = initial_state[1]
@@ -304,7 +327,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     t = 0.0
     rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
     n_rhs = 1
-    h = initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, initial_order, scratch)
+    h = initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, initial_order, scratch, y_new, stage)
     n_rhs += 1
     err_previous = 1.0
     n_steps = 0
@@ -402,7 +425,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
             # step (_mirror), which keeps every theta; a barrier above multiplies by 1 (exact).
             impact = False
             dense_ready = False
-            theta_turn = np.nan
+            theta_turn = math.nan
             hit = -1  # the barrier the step meets first
             unresolved = False
             position = side = restitution = 1.0

@@ -26,16 +26,25 @@ def run_line(integrate, coefficients, initial_state, settings, line_points, reco
         status = integrate(coefficients[line_points[slot]], state, settings, records[slot], summaries[slot],
                            no_samples, no_sample_out, no_impacts, no_sticks)
         statuses[slot] = status
-        # The next point starts at its own t = 0 from this one's state at t = n T: in phase
-        # with the slow force (omega n T = 2 pi n), and with the fast one when n Omega / omega
-        # is a whole number (Omega = 4, omega = 0.5: 8 n); otherwise the fast phase restarts.
-        if status == Status.OK:
-            state[0] = summaries[slot, kernel.SUM_X_FINAL]
-            state[1] = summaries[slot, kernel.SUM_V_FINAL]
-        else:
-            # A failed point says nothing about where the next one starts: restart.
-            state[0] = initial_state[0]
-            state[1] = initial_state[1]
+        next_start(status, summaries[slot], initial_state, state)
+
+
+@kernel_jit(inline="always")
+def next_start(status, summary, initial_state, state):
+    """Where a line's next point starts (state, (2,)), after a point that ended with status and
+    summary: the CPU's lines (run_line) and the GPU's (cuda.py) alike.
+
+    The next point starts at its own t = 0 from this one's state at t = n T: in phase with the
+    slow force (omega n T = 2 pi n), and with the fast one when n Omega / omega is a whole number
+    (Omega = 4, omega = 0.5: 8 n); otherwise the fast phase restarts.
+    """
+    if status == Status.OK:
+        state[0] = summary[kernel.SUM_X_FINAL]
+        state[1] = summary[kernel.SUM_V_FINAL]
+    else:
+        # A failed point says nothing about where the next one starts: restart.
+        state[0] = initial_state[0]
+        state[1] = initial_state[1]
 
 
 @kernel_jit(parallel=True)

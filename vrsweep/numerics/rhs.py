@@ -76,8 +76,8 @@ def force_at_barrier(t, coefficients, barrier):
     The damping term vanishes with the velocity, so only stiffness and forcing remain.
     """
     delta = coefficients[DELTA]
-    return (coefficients[C] * np.cos(coefficients[OMEGA] * t)
-            + coefficients[G] * np.cos(coefficients[BIG_OMEGA] * t)
+    return (coefficients[C] * math.cos(coefficients[OMEGA] * t)
+            + coefficients[G] * math.cos(coefficients[BIG_OMEGA] * t)
             - coefficients[STIFFNESS] * delta - coefficients[ALPHA] * delta ** 3)
 
 

@@ -19,6 +19,8 @@ those stage values are formed) and only x and v are interpolated):
     dense             (n, DENSE_ORDER)     coefficients of the continuous extension
 """
 
+import math
+
 import numpy as np
 
 from vrsweep.numerics.jit import kernel_jit
@@ -115,7 +117,7 @@ def error_norm(K, h, y, y_new, rtol, atol):
         scale = atol + rtol * max(abs(y[j]), abs(y_new[j]))
         ratio = h * err / scale
         total += ratio * ratio
-    return np.sqrt(total / N_CONTROLLED)
+    return math.sqrt(total / N_CONTROLLED)
 
 
 @kernel_jit
@@ -201,8 +203,9 @@ def dense_value(dense, y, h, theta, component):
 
 
 @kernel_jit(inline="always")
-def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order, scratch):
-    """Starting step size (Hairer, Norsett & Wanner, vol. I, II.4, algorithm of 'hinit')."""
+def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order, scratch, y1, f1):
+    """Starting step size (Hairer, Norsett & Wanner, vol. I, II.4, algorithm of 'hinit').
+    y1, f1 (n,): work arrays (an Euler step's end and its derivative)."""
     n = y.shape[0]
     d0 = 0.0
     d1 = 0.0
@@ -210,20 +213,18 @@ def initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, order, scratch):
         scale = atol + rtol * abs(y[j])
         d0 += (y[j] / scale) ** 2
         d1 += (f[j] / scale) ** 2
-    d0 = np.sqrt(d0 / N_CONTROLLED)
-    d1 = np.sqrt(d1 / N_CONTROLLED)
+    d0 = math.sqrt(d0 / N_CONTROLLED)
+    d1 = math.sqrt(d1 / N_CONTROLLED)
     h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
     h0 = min(h0, h_max)
-    y1 = np.empty(n)
     for j in range(n):
         y1[j] = y[j] + h0 * f[j]
-    f1 = np.empty(n)
     rhs(t, h0, -1, 1.0, y1, coefficients, f1, scratch)
     d2 = 0.0
     for j in range(N_CONTROLLED):
         scale = atol + rtol * abs(y[j])
         d2 += ((f1[j] - f[j]) / scale) ** 2
-    d2 = np.sqrt(d2 / N_CONTROLLED) / h0
+    d2 = math.sqrt(d2 / N_CONTROLLED) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
     else:
