@@ -173,3 +173,15 @@ def test_only_the_commands_speak_in_command_line_flags():
                         continue
                     speaking.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno}: {flag}")
     assert not speaking, "\n".join(speaking)
+
+
+def test_only_numerics_and_execution_import_the_cuda_target():
+    """numba's CUDA target (numba.cuda, numba_cuda) is imported by the GPU's kernels (numerics/cuda.py)
+    and where a run decides whether it can use them (execution/device.py), nowhere else: the CLI
+    and the config work where the extra vrsweep[cuda] is not installed."""
+    pattern = re.compile(r"^\s*(from numba import cuda|import numba\.cuda|from numba\.cuda|import numba_cuda|"
+                         r"from numba_cuda)", re.MULTILINE)
+    offenders = [str(path.relative_to(PACKAGE)) for path in PACKAGE.rglob("*.py")
+                 if pattern.search(path.read_text()) and path.relative_to(PACKAGE).parts[0] not in
+                 ("numerics", "execution")]
+    assert offenders == []

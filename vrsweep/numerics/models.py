@@ -5,6 +5,7 @@ paper's two models (model.py, kernel.py, lines.py) and for a written one (writte
     kernels_for(model).integrator(method, lyapunov)  one point (trajectory.simulate)
     kernels_for(model).monodromy(method)             one point with each period's tangent map
     kernels_for(model).run_lines(method, lyapunov)   the sweep's parallel lines
+    kernels_for(model).gpu_lines(method, lyapunov)   the same call, run on an NVIDIA GPU (cuda.py)
 
 ``model`` is ``"original"``, ``"effective"`` or a written.WrittenModel (the config's ``model``).
 """
@@ -38,6 +39,11 @@ class PaperKernels:
 
     def is_cached(self, method, lyapunov=False):
         return lines.kernel_is_cached(method, lyapunov)
+
+    def gpu_lines(self, method, lyapunov=False):
+        from vrsweep.numerics import cuda
+
+        return cuda.DeviceLines(cuda.line_kernel(method, lyapunov, *cuda.paper_functions(lyapunov)))
 
 
 class WrittenKernels:
@@ -75,6 +81,12 @@ class WrittenKernels:
         from vrsweep.numerics import codegen
 
         return codegen.is_cached(self.model, f"run_lines_{method}{'_lyapunov' if lyapunov else ''}")
+
+    def gpu_lines(self, method, lyapunov=False):
+        from vrsweep.numerics import codegen, cuda
+
+        functions = cuda.written_functions(codegen.compiled(self.model), lyapunov)
+        return cuda.DeviceLines(cuda.line_kernel(method, lyapunov, *functions))
 
 
 def kernels_for(model):

@@ -1,0 +1,156 @@
+"""The GPU target (numerics/cuda.py, docs/gpu.md), tested without a GPU.
+
+- In numba's CUDA simulator the GPU's line kernel gives the CPU's results bit for bit with rk45
+  (the same source: kernel._integrate with the same functions), for the paper's model with and
+  without the tangent vectors, a written model with two barriers and a hysteresis line; dop853 on
+  the GPU evaluates the forcing by the library where the CPU rotates it, and agrees to the tolerance.
+- The kernel compiles to PTX for sm_90 (an H100 / H200) and ptxas assembles it: a change that
+  breaks the GPU build fails here, on a machine without one.
+- Asking for the GPU where there is none is one line and exit 2, before anything is written.
+
+Speed and agreement on a real card: benchmarks/gpu.py (benchmarks/README.md).
+"""
+
+import json
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vrsweep.numerics import kernel
+
+HERE = Path(__file__).resolve().parent
+EXAMPLES = HERE.parent / "vrsweep" / "examples"
+
+numba_cuda = pytest.importorskip("numba_cuda", reason="the extra vrsweep[cuda] (numba-cuda) is not installed")
+
+SMALL_MAP = """
+sweep:
+  g: {values: [5.0, 20.0, 30.0]}
+  Omega: {values: [3.5, 4.0]}
+"""
+HYSTERESIS_LINE = """
+sweep:
+  g: {start: 20.0, stop: 30.0, num: 3, continuation: up}
+"""
+
+
+def _simulated(tmp_path, text_or_path, method, lyapunov, line_length, transient_periods=4):
+    if isinstance(text_or_path, Path):
+        config = text_or_path
+    else:
+        config = tmp_path / "gpu.yaml"
+        config.write_text(textwrap.dedent(text_or_path))
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), str(config), method, lyapunov,
+                           str(line_length), str(transient_periods)], capture_output=True, text=True, env=env, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    return ({key: np.array(value, dtype=float) for key, value in result["cpu"].items()},
+            {key: np.array(value, dtype=float) for key, value in result["gpu"].items()})
+
+
+@pytest.mark.parametrize("case, config, method, lyapunov, line_length", [
+    ("original", SMALL_MAP, "rk45", "false", 1),
+    ("original, tangent vectors", SMALL_MAP, "rk45", "true", 1),
+    ("original, hysteresis line", HYSTERESIS_LINE, "rk45", "false", 3),
+    ("written, two barriers", EXAMPLES / "impact_two_sided.yaml", "rk45", "false", 1),
+])
+def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config, method, lyapunov, line_length):
+    if isinstance(config, Path):  # a written model's example: a few of its points
+        text = config.read_text().split("sweep:")[0] + "sweep:\n  F: {values: [0.3, 1.5, 2.5]}\n"
+        config = text
+    cpu, gpu = _simulated(tmp_path, config, method, lyapunov, line_length)
+    assert (cpu["statuses"] == 0).all(), cpu["statuses"]  # Status.OK: the comparison is of real runs
+    for key in ("statuses", "summaries", "records"):
+        np.testing.assert_array_equal(gpu[key], cpu[key], err_msg=f"{case}: {key}")
+
+
+def test_dop853_on_the_gpu_agrees_with_the_cpu_to_the_tolerance(tmp_path):
+    """The GPU's dop853 calls cos at every stage (no 68 kB rotation table per thread), so its steps
+    are not the CPU's: where the orbit is periodic in both runs, R agrees to the tolerance's level
+    and the period is the same; statuses agree everywhere."""
+    from vrsweep.analysis.diagnostics import detect_period
+
+    cpu, gpu = _simulated(tmp_path, SMALL_MAP + "integration: {rtol: 1.0e-10, atol: 1.0e-12}\n", "dop853", "false",
+                          1, transient_periods=100)
+    np.testing.assert_array_equal(gpu["statuses"], cpu["statuses"])
+
+    def periods(records):
+        strobe = records[:, 0, :, :]
+        return detect_period(strobe[:, :, kernel.REC_X], strobe[:, :, kernel.REC_V], 8, 1e-6)
+
+    period_cpu, period_gpu = periods(cpu["records"]), periods(gpu["records"])
+    periodic = (period_cpu > 0) & (period_gpu > 0)
+    assert periodic.sum() >= 3, (period_cpu, period_gpu)
+    np.testing.assert_array_equal(period_gpu[periodic], period_cpu[periodic])
+    r_cpu = cpu["summaries"][:, 0, kernel.SUM_R][periodic]
+    r_gpu = gpu["summaries"][:, 0, kernel.SUM_R][periodic]
+    # Two converged runs of an 8th-order method at rtol 1e-10: R (a Fourier component ~1e-3 of x
+    # at large g) agrees to 1e-6 relative (on an H100, 2000 periodic points at rtol 1e-9: 1e-7 at most).
+    np.testing.assert_allclose(r_gpu, r_cpu, rtol=1e-6)
+    assert not np.array_equal(r_gpu, r_cpu)  # the two really differ in their steps
+
+
+def _ptxas():
+    from cuda.pathfinder import find_nvidia_binary_utility
+
+    return find_nvidia_binary_utility("ptxas")
+
+
+def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path):
+    """compile_ptx for sm_90 without a GPU (vrsweep.numerics.cuda.compile_for), then ptxas: the
+    resource report names the kernel; its local memory is the work arrays' (about 8 kB: the
+    dop853 rotation table, 68 kB, must never come back into a thread)."""
+    from vrsweep.numerics import cuda
+
+    ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0))
+    assert ".target sm_90" in ptx
+    ptxas = _ptxas()
+    if ptxas is None:
+        pytest.skip("ptxas is not installed (cuda-toolkit[nvcc])")
+    source = tmp_path / "lines.ptx"
+    source.write_text(ptx)
+    done = subprocess.run([ptxas, "-arch=sm_90", "-v", str(source), "-o", str(tmp_path / "lines.cubin")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = done.stderr + done.stdout
+    entry = report[report.index("Compiling entry function"):]
+    frame = int(re.search(r"(\d+) bytes stack frame", entry).group(1))
+    registers = int(re.search(r"Used (\d+) registers", entry).group(1))
+    assert registers <= 255
+    assert frame < 16 * 1024, entry[:2000]
+
+
+def test_asking_for_the_gpu_where_there_is_none_is_one_line_and_exit_2(tmp_path, invoke, write_config):
+    from numba import cuda as numba_cuda_target
+
+    if numba_cuda_target.is_available():
+        pytest.skip("this machine has a GPU")
+    config = write_config(tmp_path, SMALL_MAP)
+    result = invoke("run", config, "-o", tmp_path / "out.h5", "--device", "cuda", "-q")
+    assert result.exit_code == 2, result.output
+    assert "integration.device: cuda:" in result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+    assert not (tmp_path / "out.h5").exists()  # checked before anything is written
+
+
+def test_integration_device_is_a_config_key(tmp_path, invoke, write_config):
+    config = write_config(tmp_path, SMALL_MAP + "integration: {device: tpu}\n")
+    result = invoke("validate", config)
+    assert result.exit_code == 2
+    assert "integration.device" in result.output and "cuda" in result.output
+
+
+def test_the_default_device_leaves_the_config_text_as_before():
+    from vrsweep.config import parse_config
+
+    config = parse_config(textwrap.dedent(SMALL_MAP))
+    assert config.integration.device == "cpu"
+    assert "device" not in config.to_yaml()  # files written before the key keep their text (resume)
+    assert "device: cuda" in parse_config(textwrap.dedent(SMALL_MAP) + "integration: {device: cuda}\n").to_yaml()

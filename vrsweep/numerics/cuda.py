@@ -1,0 +1,193 @@
+"""The sweep's lines on an NVIDIA GPU: kernel.py's loop compiled by numba-cuda, a thread per line.
+
+One numerics source for both targets. The CPU's lines (lines.py) and the GPU's call the same
+``kernel._integrate`` with the same method and model functions; numba compiles them for the
+CPU (njit, prange over lines) and, here, for CUDA: numba-cuda turns every njit function the loop
+calls into a device function. The loop allocates nothing: its work arrays come from its caller,
+which here are thread-local arrays of fixed size (cuda.local.array).
+
+What differs on the GPU, and why:
+
+- dop853 evaluates the forcing with the library's cosines at every stage (kernel.DOP853_RULES):
+  the CPU's rotation table (rhs.dop853_rotation_scratch) is 68 kB per point, far more than a
+  thread's registers; results agree with the CPU's dop853 to the tolerance, not bit for bit.
+- The CUDA compiler fuses a * b + c into one rounding (FMA), so even rk45 differs from the CPU in
+  the last bits: R agrees to ~1e-10 relative where the orbit is periodic (benchmarks/gpu.py).
+- Samples, impact and sticking logs and monodromy matrices stay on the CPU (trajectories and
+  continuation): a sweep's lines need none of them.
+
+Requires the optional extra ``vrsweep[cuda]`` (numba-cuda and the CUDA compiler libraries from
+the package index); importing this module without it raises ImportError, which the execution layer
+turns into one line for the user (execution/device.py). ``NUMBA_ENABLE_CUDASIM=1`` runs the same
+kernels in numba's CUDA simulator, on the CPU, for tests.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numba
+import numpy as np
+from numba import cuda, float64
+
+from vrsweep.numerics import dop853, kernel, rhs
+from vrsweep.numerics.coefficients import MAX_BARRIERS
+from vrsweep.numerics.dop853 import (
+    dop853_accepted_step_factor, dop853_certain_growth, dop853_dense, dop853_error_norm, dop853_rejected_step_factor,
+    dop853_step,
+)
+from vrsweep.numerics.impact import N_BRACKET
+from vrsweep.numerics.lines import next_start
+from vrsweep.numerics.rk45 import (
+    DENSE_ORDER, N_STAGES, accepted_step_factor, certain_growth, dp54_dense, dp54_step, error_norm,
+    rejected_step_factor,
+)
+from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS
+
+# Threads per block: one warp-multiple that leaves the compiler its registers (the loop needs
+# about 200 per thread); a block of 64 lets every multiprocessor hold several blocks.
+THREADS_PER_BLOCK = 64
+
+# method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
+# factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
+METHOD_PARTS = {
+    "rk45": (kernel.RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+             rejected_step_factor, N_STAGES + 1, DENSE_ORDER),
+    "dop853": (kernel.DOP853_RULES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
+               dop853_certain_growth, dop853_rejected_step_factor, dop853.N_STAGES_EXTENDED, dop853.DENSE_ORDER),
+}
+
+
+# The kernel's source: thread-local arrays need sizes that are constants when numba compiles, so
+# the method's and state's sizes are written into it (line_kernel) rather than read from variables.
+_LINE_KERNEL = """
+def run_lines(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+    line = cuda.grid(1)
+    if line >= lines.shape[0]:
+        return
+{simulator_prologue}    K = cuda.local.array(({k_rows}, {n_state}), float64)
+    dense = cuda.local.array(({n_state}, {dense_order}), float64)
+    vectors = cuda.local.array(({n_vectors}, {n_state}), float64)
+    brackets = cuda.local.array(({max_barriers}, {n_bracket}), float64)
+    scratch = cuda.local.array(1, float64)  # no_preparation reads none
+    state = cuda.local.array(2, float64)
+    # The observers a sweep does not use, as empty views (nothing is allocated for them).
+    no_samples = scratch[:0]
+    no_sample_values = vectors[:0, :2]
+    no_impacts = vectors[:0, :3]
+    no_sticks = vectors[:0, :2]
+    no_monodromy = vectors[:0, :4]
+    first = initial_states[line]
+    state[0] = first[0]
+    state[1] = first[1]
+    for slot in range(lines.shape[1]):
+        summary = summaries[line, slot]
+        status = _integrate(
+            model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
+            step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
+            brackets, scratch, coefficients[lines[line, slot]], state, settings, period_records[line, slot],
+            summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy)
+        statuses[line, slot] = status
+        next_start(status, summary, first, state)
+"""
+
+
+# In numba's CUDA simulator (tests) the kernel runs as Python, its arrays wrapped in the
+# simulator's own types: these are unwrapped to the numpy arrays beneath, so that the loop runs as
+# numba's CPU compile of the same source (the GPU's compile is tested by compiling it to PTX).
+_SIMULATOR_PROLOGUE = """\
+    coefficients, initial_states, settings, lines, period_records, summaries, statuses = [
+        argument._item._ary for argument in (coefficients, initial_states, settings, lines, period_records,
+                                             summaries, statuses)]
+"""
+
+
+@functools.lru_cache(maxsize=None)
+def line_kernel(method, tangents, model_rhs, tangent, barrier_force):
+    """The CUDA kernel that runs lines with ``method`` for a model's functions (kernel._integrate's
+    rhs, tangent and barrier_force; model_rhs with the tangent vectors when ``tangents``).
+
+    kernel[blocks, THREADS_PER_BLOCK](coefficients, initial_states, settings, lines,
+    period_records, summaries, statuses): lines.run_lines_rk45's arguments, one thread per line.
+    Compiled on its first launch (numba-cuda's dispatcher), once per process.
+    """
+    (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
+     dense_order) = METHOD_PARTS[method]
+    source = _LINE_KERNEL.format(
+        k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
+        n_vectors=kernel.N_VECTORS, max_barriers=MAX_BARRIERS, n_bracket=N_BRACKET, tangents=bool(tangents),
+        simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "")
+    namespace = {
+        "cuda": cuda, "float64": float64, "_integrate": kernel._integrate, "next_start": next_start,
+        "no_preparation": rhs.no_preparation, "RULES": rules, "step": step, "step_error": step_error,
+        "dense_output": dense_output, "accepted_factor": accepted_factor, "growth": growth,
+        "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
+        "barrier_force": barrier_force,
+    }
+    exec(compile(source, f"<vrsweep cuda line kernel {method}>", "exec"), namespace)
+    return cuda.jit(namespace["run_lines"])
+
+
+def paper_functions(tangents):
+    """The paper's family's (rhs, tangent, barrier_force) for line_kernel (rhs.py's)."""
+    model_rhs = rhs.oscillator_tangent_rhs if tangents else rhs.oscillator_rhs
+    return model_rhs, rhs.oscillator_tangent, rhs.force_at_barrier
+
+
+def written_functions(module, tangents):
+    """A written model's generated module's (rhs, tangent, barrier_force) (codegen.py)."""
+    return (module.tangent_rhs if tangents else module.rhs), module.tangent, module.barrier_force
+
+
+class DeviceLines:
+    """lines.run_lines_*'s call, run on the GPU: copies the chunk's arrays to the device, launches
+    a thread per line, and copies the outputs back into the caller's arrays (the same arrays the
+    CPU fills, so everything after the kernel is the CPU's code)."""
+
+    def __init__(self, kernel_):
+        self.kernel = kernel_
+
+    def __call__(self, coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+        n_lines = lines.shape[0]
+        if n_lines == 0:
+            return
+        stream = cuda.stream()
+        device_records = cuda.to_device(period_records, stream=stream)
+        device_summaries = cuda.to_device(summaries, stream=stream)
+        device_statuses = cuda.to_device(statuses, stream=stream)
+        blocks = math.ceil(n_lines / THREADS_PER_BLOCK)
+        self.kernel[blocks, THREADS_PER_BLOCK, stream](
+            cuda.to_device(np.ascontiguousarray(coefficients), stream=stream),
+            cuda.to_device(np.ascontiguousarray(initial_states), stream=stream),
+            cuda.to_device(np.ascontiguousarray(settings), stream=stream),
+            cuda.to_device(np.ascontiguousarray(lines), stream=stream),
+            device_records, device_summaries, device_statuses)
+        device_records.copy_to_host(period_records, stream=stream)
+        device_summaries.copy_to_host(summaries, stream=stream)
+        device_statuses.copy_to_host(statuses, stream=stream)
+        stream.synchronize()
+
+
+def compile_for(method, tangents, model_rhs, tangent, barrier_force, compute_capability=(9, 0)):
+    """The line kernel's PTX for a GPU of ``compute_capability``, compiled on a machine that may have
+    none (tests, and a look at the code before a GPU is at hand).
+
+    numba-cuda compiles the njit functions the kernel calls for the current device's compute
+    capability; without a device that lookup fails, so it is pointed at a stand-in for this one
+    call. Returns the PTX text (ptxas -v reports its registers and local memory).
+    """
+    import types
+    from unittest import mock
+
+    from numba import types as nb
+    from numba.cuda import compile_ptx
+    from numba.cuda import dispatcher as cuda_dispatcher
+
+    signature = (nb.float64[:, ::1], nb.float64[:, ::1], nb.float64[::1], nb.int64[:, ::1],
+                 nb.float64[:, :, :, ::1], nb.float64[:, :, ::1], nb.int8[:, ::1])
+    kernel_ = line_kernel(method, tangents, model_rhs, tangent, barrier_force)
+    stand_in = types.SimpleNamespace(compute_capability=tuple(compute_capability))
+    with mock.patch.object(cuda_dispatcher, "get_current_device", lambda: stand_in):
+        ptx, _ = compile_ptx(kernel_.py_func, signature, cc=tuple(compute_capability))
+    return ptx
