@@ -50,6 +50,11 @@ set_option = click.option(
     help="Override a parameter (fixing it if it is swept), an integration setting, "
          "initial.x/initial.v or model; repeatable. E.g. --set g=5 --set rtol=1e-10.",
 )
+device_option = click.option(
+    "--device", type=click.Choice(["cpu", "cuda"]), default=None,
+    help="Where the points are integrated: cpu (all cores) or cuda (an NVIDIA GPU; needs "
+         "pip install \"vrsweep[cuda]\"). Overrides integration.device; the same as --set device=...",
+)
 output_option = click.option(
     "-o", "--output", type=click.Path(dir_okay=False), default=None,
     help="Output file (overrides the config's 'output').",

@@ -6,7 +6,7 @@ import sys
 import click
 
 from vrsweep.commands.options import (
-    FiniteFloatRange, announce_fixed_axes, capped_threads, config_argument, flag_wording, output_option,
+    FiniteFloatRange, announce_fixed_axes, capped_threads, config_argument, device_option, flag_wording, output_option,
     overwrite_option, quiet_option, set_option, threads_option,
 )
 
@@ -17,6 +17,7 @@ PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
 @config_argument
 @output_option
 @threads_option
+@device_option
 @set_option
 @quiet_option
 @click.option("--resume", is_flag=True, help="Continue an interrupted run: compute only the missing points.")
@@ -30,7 +31,7 @@ PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
               metavar="SECONDS",
               help="When stderr is not a terminal (a batch job's log): a progress line every SECONDS "
                    "(points done, percent, points/s, ETA) instead of a progress bar.")
-def command(config_path, output, threads, overrides, quiet, resume, overwrite, shard, dask_address, allow_large,
+def command(config_path, output, threads, device, overrides, quiet, resume, overwrite, shard, dask_address, allow_large,
             progress_interval):
     """Sweep R (eq3.3) over the config's grid and write it to HDF5.
 
@@ -48,6 +49,8 @@ def command(config_path, output, threads, overrides, quiet, resume, overwrite, s
 
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
+    if device is not None:  # --device is --set device=... spelled as an option
+        overrides = (*overrides, f"integration.device={device}")
     config = load_config(config_path, overrides)
     announce_fixed_axes(config_path, overrides, config)
     requested_threads = threads

@@ -50,6 +50,8 @@ def dump_config(config) -> str:
         del integration["method"]
     if not integration["lyapunov"]:  # the same: named only when on
         del integration["lyapunov"]
+    if integration["device"] == "cpu":  # the same: named only when not the default
+        del integration["device"]
     document["integration"] = _block(integration, {})
     document["output"] = None if config.output is None else DoubleQuotedScalarString(config.output)
     if config.continuation is not None:  # only when present: configs without it keep their text

@@ -16,7 +16,7 @@ from ruamel.yaml.reader import ReaderError
 from vrsweep.numerics.model import PARAMETER_NAMES
 from vrsweep.config.schema import (
     ALLOWED_KEYS, ANY, AXIS_FORMS, KEY_HOME, LINEAR_KEYS, NUM_DOMAIN, VALUES_KEYS, CONTINUATIONS,
-    INITIAL_DOMAINS, INTEGRATION_DOMAINS, METHODS, PARAMETER_DOMAINS,
+    INITIAL_DOMAINS, INTEGRATION_DOMAINS, METHODS, DEVICES, PARAMETER_DOMAINS,
 )
 from vrsweep.config.wording import and_list, did_you_mean, dotted, show
 from vrsweep.config.yaml import key_text, line_and_column, compose
@@ -147,7 +147,7 @@ class Report:
         elif kind in ("out_of_range", "bad_path"):
             self.report(path, item["msg"])
         elif kind == "literal_error":
-            choices = {("model",): MODELS, ("method",): METHODS}.get(path[-1:], CONTINUATIONS)
+            choices = {("model",): MODELS, ("method",): METHODS, ("device",): DEVICES}.get(path[-1:], CONTINUATIONS)
             if tuple(path[:2]) == ("continuation", "parameter"):
                 choices = getattr(self, "parameter_names", PARAMETER_NAMES)
             hint = did_you_mean(value, choices) if isinstance(value, str) else ""

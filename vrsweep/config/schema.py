@@ -92,11 +92,14 @@ AXIS_DOMAINS = {**PARAMETER_DOMAINS, **{axis: INITIAL_DOMAINS[key] for axis, key
 
 # The integration methods (kernel.INTEGRATORS): rk45 is Dormand-Prince 5(4), dop853 Hairer's 8(5,3).
 METHODS = ("rk45", "dop853")
+# Where a sweep's points are integrated (docs/gpu.md): the CPU's cores, or an NVIDIA GPU through the
+# optional extra vrsweep[cuda]. Continuation and trajectories always run on the CPU.
+DEVICES = ("cpu", "cuda")
 
 # The kernel's own settings (rtol ... stick_velocity) default to the kernel's values.
 INTEGRATION_DEFAULTS = {
     "method": DEFAULT_METHOD, **KERNEL_SETTING_DEFAULTS, "strobe_periods": 16, "max_period": 8,
-    "period_tolerance": 1.0e-6, "lyapunov": False,
+    "period_tolerance": 1.0e-6, "lyapunov": False, "device": "cpu",
 }
 INTEGRATION_DOMAINS = {
     # Bounds where the settings mean what they say (docs/config.md): below 1e-14 a step's rounding
@@ -187,6 +190,7 @@ class Integration:
     max_period: int
     period_tolerance: float
     lyapunov: bool = False
+    device: str = "cpu"
 
 
 @dataclass(frozen=True)
@@ -358,7 +362,8 @@ _InitialModel = _section_model("Initial", INITIAL_DOMAINS, INITIAL_DEFAULTS)
 _IntegrationModel = create_model(
     "Integration", __base__=_section_model("NumericIntegration", INTEGRATION_DOMAINS, INTEGRATION_DEFAULTS),
     method=(Literal[METHODS], INTEGRATION_DEFAULTS["method"]),
-    lyapunov=(bool, INTEGRATION_DEFAULTS["lyapunov"]))
+    lyapunov=(bool, INTEGRATION_DEFAULTS["lyapunov"]),
+    device=(Literal[DEVICES], INTEGRATION_DEFAULTS["device"]))
 
 
 def _check_range_pair(value):

@@ -30,6 +30,15 @@ MAX_CHUNK_LINES = 8192
 # line is the least a run can hold (estimate.memory_problem refuses a run where that cannot fit).
 RECORD_ROW_BYTES = 10 * 8
 CHUNK_RECORD_BYTES = 256 * 2 ** 20
+# On a GPU (integration.device: cuda) a chunk is one launch, a thread per line: it must hold far more
+# lines than the card runs at once (an H100 holds about 34,000 threads of this kernel; the slowest
+# point of a launch holds it), so chunks start at GPU_FIRST_CHUNK_LINES and double up to
+# GPU_MAX_CHUNK_LINES while a launch lasts less than GPU_GROW_CHUNK_BELOW_SECONDS, their records
+# bounded by GPU_CHUNK_RECORD_BYTES (on the card and in the host's memory alike).
+GPU_FIRST_CHUNK_LINES = 2 ** 15
+GPU_MAX_CHUNK_LINES = 2 ** 19
+GPU_GROW_CHUNK_BELOW_SECONDS = 5.0
+GPU_CHUNK_RECORD_BYTES = 2 ** 30
 
 
 def point_record_bytes(integration) -> int:
@@ -38,11 +47,19 @@ def point_record_bytes(integration) -> int:
     return int(integration.measure_periods) * RECORD_ROW_BYTES
 
 
-def max_chunk_lines(integration, line_length) -> int:
+def max_chunk_lines(integration, line_length, gpu=False) -> int:
     """The most lines a chunk may hold: MAX_CHUNK_LINES, fewer when their records would pass
-    CHUNK_RECORD_BYTES, never fewer than one."""
+    CHUNK_RECORD_BYTES, never fewer than one (on a GPU: the GPU_* bounds)."""
     line_bytes = max(1, line_length) * point_record_bytes(integration)
+    if gpu:
+        return max(1, min(GPU_MAX_CHUNK_LINES, GPU_CHUNK_RECORD_BYTES // line_bytes))
     return max(1, min(MAX_CHUNK_LINES, CHUNK_RECORD_BYTES // line_bytes))
+
+
+def gpu_first_chunk_lines(line_length) -> int:
+    """A GPU run's first chunk: GPU_FIRST_CHUNK_LINES points' worth of lines (callers bound it by
+    max_chunk_lines)."""
+    return max(1, GPU_FIRST_CHUNK_LINES // max(1, line_length))
 
 
 def default_chunk_lines(threads, line_length):

@@ -70,7 +70,10 @@ def memory_bytes(config, threads=None) -> int:
     grid = Grid.from_config(config)
     line_length = len(grid.axis_values[grid.continuation_axis]) if grid.continuation_axis is not None else 1
     n_lines = max(1, config.n_runs // line_length)
-    lines = min(n_lines, default_chunk_lines(threads, line_length), max_chunk_lines(config.integration, line_length))
+    if config.integration.device == "cuda":  # a GPU's chunks grow to their bound (chunks.py)
+        lines = min(n_lines, max_chunk_lines(config.integration, line_length, gpu=True))
+    else:
+        lines = min(n_lines, default_chunk_lines(threads, line_length), max_chunk_lines(config.integration, line_length))
     return lines * line_length * point_record_bytes(config.integration)
 
 

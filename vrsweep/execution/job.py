@@ -239,6 +239,14 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     executor: optional callable with run_sweep's signature (e.g. the Dask backend).
     stop: optional GracefulStop; checked after each chunk is written (see GracefulStop).
     """
+    from vrsweep.execution.device import check_device
+
+    check_device(config.integration.device)  # before anything is written: no GPU, one line
+    if executor is not None and config.integration.device != "cpu":
+        from vrsweep.errors import UsageError
+
+        raise UsageError("integration.device: cuda runs in this process, not on Dask's workers: on GPU nodes "
+                         "run shards of the grid instead")
     grid = Grid.from_config(config)
     path = shard_output_path(config.output_path(output), shard)
     owned = owned_mask(grid, shard) if shard[1] > 1 else None

@@ -23,7 +23,8 @@ from vrsweep.analysis.diagnostics import lyapunov_values, point_diagnostics
 from vrsweep.numerics.lines import RUN_LINES  # noqa: F401
 # Grid, the planner's names: imported from here by callers written before they moved.
 from vrsweep.execution.chunks import (  # noqa: F401
-    GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses, default_chunk_lines, max_chunk_lines,
+    GPU_GROW_CHUNK_BELOW_SECONDS, GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses,
+    default_chunk_lines, gpu_first_chunk_lines, max_chunk_lines,
     plan_lines,
     shard_of_points, shuffled_lines,
 )
@@ -48,6 +49,13 @@ class LineRunner:
         self.method = config.integration.method
         self.lyapunov = config.integration.lyapunov
         self.kernels = kernels_for(config.model)
+        self.device = config.integration.device
+        if self.device == "cuda":
+            from vrsweep.execution.device import gpu_lines
+
+            self.run_lines = gpu_lines(self.kernels, self.method, self.lyapunov)
+        else:
+            self.run_lines = self.kernels.run_lines(self.method, self.lyapunov)
         # Records are kept for the measurement window only (the kernel reuses one row through the
         # transient): a point's memory does not grow with transient_periods.
         self.n_record_rows = config.integration.measure_periods
@@ -68,8 +76,7 @@ class LineRunner:
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
         with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-            self.kernels.run_lines(self.method, self.lyapunov)(coefficients, initial_states, self.settings, local_lines, records,
-                                   summaries, statuses)
+            self.run_lines(coefficients, initial_states, self.settings, local_lines, records, summaries, statuses)
         values = point_values(
             records.reshape(-1, self.n_record_rows, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
             statuses.reshape(-1), coefficients, self.config.integration)
@@ -90,16 +97,19 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     plan = plan_lines(runner.grid, shard, done)
     lines = plan.lines
     adaptive = chunk_lines is None
-    largest_chunk = max_chunk_lines(config.integration, plan.line_length)  # the memory bound
-    chunk_lines = chunk_lines or min(default_chunk_lines(threads, plan.line_length), largest_chunk)
+    gpu = runner.device == "cuda"
+    largest_chunk = max_chunk_lines(config.integration, plan.line_length, gpu=gpu)  # the memory bound
+    first_chunk = gpu_first_chunk_lines(plan.line_length) if gpu else default_chunk_lines(threads, plan.line_length)
+    chunk_lines = chunk_lines or min(first_chunk, largest_chunk)
     largest_chunk = max(chunk_lines, largest_chunk)
+    grow_below = GPU_GROW_CHUNK_BELOW_SECONDS if gpu else GROW_CHUNK_BELOW_SECONDS
     counts = {}
     start = 0
     while start < len(lines):
         began = time.perf_counter()
         flat, values = runner.run(lines[start:start + chunk_lines], threads)
         start += chunk_lines
-        if adaptive and time.perf_counter() - began < GROW_CHUNK_BELOW_SECONDS:
+        if adaptive and time.perf_counter() - began < grow_below:
             chunk_lines = min(2 * chunk_lines, largest_chunk)
         count_statuses(counts, values["status"])
         if on_chunk is not None:
