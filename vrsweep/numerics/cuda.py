@@ -1,4 +1,4 @@
-"""The sweep's lines on an NVIDIA GPU: kernel.py's loop compiled by numba-cuda, a thread per line.
+"""The sweep's lines on an NVIDIA GPU: kernel.py's loop compiled by numba-cuda, lines from a queue.
 
 One numerics source for both targets. The CPU's lines (lines.py) and the GPU's call the same
 ``kernel._integrate`` with the same method and model functions; numba compiles them for the
@@ -45,9 +45,21 @@ from vrsweep.numerics.rk45 import (
 )
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS
 
-# Threads per block: one warp-multiple that leaves the compiler its registers (the loop needs
-# about 200 per thread); a block of 64 lets every multiprocessor hold several blocks.
+# Threads per block: a block of 64 lets every multiprocessor hold several blocks of a kernel that
+# needs about 250 registers a thread.
 THREADS_PER_BLOCK = 64
+# The launch's shape (benchmarks/README.md, "GPU", for what each choice measured):
+# - QUEUE: threads take lines from a counter (cuda.atomic.add) until none is left, so a slow point
+#   holds one thread, not its whole launch; the launch then has QUEUE_BLOCKS_PER_SM blocks per
+#   multiprocessor (more than fit at once: the rest start as the first finish).
+# - SORT: a chunk's lines are handed out in the order of their parameters (lexicographic), so the
+#   threads of one warp integrate neighbouring points, whose paths through the loop (impacts,
+#   rejected steps) are alike; the sweep's shuffle spread them for the CPU's threads.
+# - MAX_REGISTERS: None leaves the compiler its choice (up to 255).
+QUEUE = True
+QUEUE_BLOCKS_PER_SM = 16
+SORT = True
+MAX_REGISTERS = None
 
 # method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
 # factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
@@ -62,10 +74,7 @@ METHOD_PARTS = {
 # The kernel's source: thread-local arrays need sizes that are constants when numba compiles, so
 # the method's and state's sizes are written into it (line_kernel) rather than read from variables.
 _LINE_KERNEL = """
-def run_lines(coefficients, initial_states, settings, lines, period_records, summaries, statuses):
-    line = cuda.grid(1)
-    if line >= lines.shape[0]:
-        return
+def run_lines(coefficients, initial_states, settings, lines, period_records, summaries, statuses, order, counter):
 {simulator_prologue}    K = cuda.local.array(({k_rows}, {n_state}), float64)
     dense = cuda.local.array(({n_state}, {dense_order}), float64)
     vectors = cuda.local.array(({n_vectors}, {n_state}), float64)
@@ -78,46 +87,60 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
     no_impacts = vectors[:0, :3]
     no_sticks = vectors[:0, :2]
     no_monodromy = vectors[:0, :4]
-    first = initial_states[line]
-    state[0] = first[0]
-    state[1] = first[1]
-    for slot in range(lines.shape[1]):
-        summary = summaries[line, slot]
-        status = _integrate(
-            model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
-            step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
-            brackets, scratch, coefficients[lines[line, slot]], state, settings, period_records[line, slot],
-            summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy)
-        statuses[line, slot] = status
-        next_start(status, summary, first, state)
+    position = {first_position}
+    while position < order.shape[0]:
+        line = order[position]
+        first = initial_states[line]
+        state[0] = first[0]
+        state[1] = first[1]
+        for slot in range(lines.shape[1]):
+            summary = summaries[line, slot]
+            status = _integrate(
+                model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
+                step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
+                brackets, scratch, coefficients[lines[line, slot]], state, settings, period_records[line, slot],
+                summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy)
+            statuses[line, slot] = status
+            next_start(status, summary, first, state)
+        position = {next_position}
 """
+# Where a thread starts and what it does next: a line from the queue's counter, or one line each.
+_POSITIONS = {
+    True: ("cuda.atomic.add(counter, 0, 1)", "cuda.atomic.add(counter, 0, 1)"),
+    False: ("cuda.grid(1)", "order.shape[0]"),
+}
 
 
 # In numba's CUDA simulator (tests) the kernel runs as Python, its arrays wrapped in the
 # simulator's own types: these are unwrapped to the numpy arrays beneath, so that the loop runs as
 # numba's CPU compile of the same source (the GPU's compile is tested by compiling it to PTX).
 _SIMULATOR_PROLOGUE = """\
-    coefficients, initial_states, settings, lines, period_records, summaries, statuses = [
+    coefficients, initial_states, settings, lines, period_records, summaries, statuses, order, counter = [
         argument._item._ary for argument in (coefficients, initial_states, settings, lines, period_records,
-                                             summaries, statuses)]
+                                             summaries, statuses, order, counter)]
 """
 
 
 @functools.lru_cache(maxsize=None)
-def line_kernel(method, tangents, model_rhs, tangent, barrier_force):
+def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None):
     """The CUDA kernel that runs lines with ``method`` for a model's functions (kernel._integrate's
     rhs, tangent and barrier_force; model_rhs with the tangent vectors when ``tangents``).
 
     kernel[blocks, THREADS_PER_BLOCK](coefficients, initial_states, settings, lines,
-    period_records, summaries, statuses): lines.run_lines_rk45's arguments, one thread per line.
-    Compiled on its first launch (numba-cuda's dispatcher), once per process.
+    period_records, summaries, statuses, order, counter): lines.run_lines_rk45's arguments, then
+    order (n_lines,), the lines in the order they are handed out, and counter (1,) int64, zero, the
+    queue's (queue: QUEUE by default). Compiled on its first launch, once per process.
     """
+    queue = QUEUE if queue is None else queue
+    max_registers = MAX_REGISTERS if max_registers is None else max_registers
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
      dense_order) = METHOD_PARTS[method]
+    first_position, next_position = _POSITIONS[bool(queue)]
     source = _LINE_KERNEL.format(
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
         n_vectors=kernel.N_VECTORS, max_barriers=MAX_BARRIERS, n_bracket=N_BRACKET, tangents=bool(tangents),
-        simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "")
+        simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
+        first_position=first_position, next_position=next_position)
     namespace = {
         "cuda": cuda, "float64": float64, "_integrate": kernel._integrate, "next_start": next_start,
         "no_preparation": rhs.no_preparation, "RULES": rules, "step": step, "step_error": step_error,
@@ -126,7 +149,11 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force):
         "barrier_force": barrier_force,
     }
     exec(compile(source, f"<vrsweep cuda line kernel {method}>", "exec"), namespace)
-    return cuda.jit(namespace["run_lines"])
+    # (numba's CUDA simulator has no registers to cap)
+    options = {"max_registers": max_registers} if max_registers and not numba.config.ENABLE_CUDASIM else {}
+    compiled = cuda.jit(**options)(namespace["run_lines"])
+    compiled.queue = bool(queue)
+    return compiled
 
 
 def paper_functions(tangents):
@@ -142,40 +169,57 @@ def written_functions(module, tangents):
 
 class DeviceLines:
     """lines.run_lines_*'s call, run on the GPU: copies the chunk's arrays to the device, launches
-    a thread per line, and copies the outputs back into the caller's arrays (the same arrays the
-    CPU fills, so everything after the kernel is the CPU's code)."""
+    the kernel, and copies the outputs back into the caller's arrays (the same arrays the CPU
+    fills, so everything after the kernel is the CPU's code). sort: SORT by default."""
 
-    def __init__(self, kernel_):
+    def __init__(self, kernel_, sort=None):
         self.kernel = kernel_
+        self.sort = SORT if sort is None else sort
+
+    def order(self, coefficients, initial_states, lines):
+        """The order the lines are handed out in: by their first point's parameters and start."""
+        if not self.sort:
+            return np.arange(lines.shape[0], dtype=np.int64)
+        keys = np.concatenate([coefficients[lines[:, 0]], initial_states], axis=1)
+        return np.lexsort(keys.T[::-1]).astype(np.int64)
+
+    def blocks(self, n_lines):
+        needed = math.ceil(n_lines / THREADS_PER_BLOCK)
+        if not self.kernel.queue:
+            return needed
+        multiprocessors = getattr(cuda.get_current_device(), "MULTIPROCESSOR_COUNT", 1)
+        return max(1, min(needed, QUEUE_BLOCKS_PER_SM * multiprocessors))
 
     def __call__(self, coefficients, initial_states, settings, lines, period_records, summaries, statuses):
         n_lines = lines.shape[0]
         if n_lines == 0:
             return
+        order = self.order(coefficients, initial_states, lines)
         stream = cuda.stream()
         device_records = cuda.to_device(period_records, stream=stream)
         device_summaries = cuda.to_device(summaries, stream=stream)
         device_statuses = cuda.to_device(statuses, stream=stream)
-        blocks = math.ceil(n_lines / THREADS_PER_BLOCK)
-        self.kernel[blocks, THREADS_PER_BLOCK, stream](
+        self.kernel[self.blocks(n_lines), THREADS_PER_BLOCK, stream](
             cuda.to_device(np.ascontiguousarray(coefficients), stream=stream),
             cuda.to_device(np.ascontiguousarray(initial_states), stream=stream),
             cuda.to_device(np.ascontiguousarray(settings), stream=stream),
             cuda.to_device(np.ascontiguousarray(lines), stream=stream),
-            device_records, device_summaries, device_statuses)
+            device_records, device_summaries, device_statuses,
+            cuda.to_device(order, stream=stream), cuda.to_device(np.zeros(1, dtype=np.int64), stream=stream))
         device_records.copy_to_host(period_records, stream=stream)
         device_summaries.copy_to_host(summaries, stream=stream)
         device_statuses.copy_to_host(statuses, stream=stream)
         stream.synchronize()
 
 
-def compile_for(method, tangents, model_rhs, tangent, barrier_force, compute_capability=(9, 0)):
+def compile_for(method, tangents, model_rhs, tangent, barrier_force, compute_capability=(9, 0), **options):
     """The line kernel's PTX for a GPU of ``compute_capability``, compiled on a machine that may have
     none (tests, and a look at the code before a GPU is at hand).
 
     numba-cuda compiles the njit functions the kernel calls for the current device's compute
     capability; without a device that lookup fails, so it is pointed at a stand-in for this one
-    call. Returns the PTX text (ptxas -v reports its registers and local memory).
+    call. Returns the PTX text (ptxas -v reports its registers and local memory; a register cap,
+    max_registers, is ptxas's -maxrregcount there).
     """
     import types
     from unittest import mock
@@ -185,8 +229,8 @@ def compile_for(method, tangents, model_rhs, tangent, barrier_force, compute_cap
     from numba.cuda import dispatcher as cuda_dispatcher
 
     signature = (nb.float64[:, ::1], nb.float64[:, ::1], nb.float64[::1], nb.int64[:, ::1],
-                 nb.float64[:, :, :, ::1], nb.float64[:, :, ::1], nb.int8[:, ::1])
-    kernel_ = line_kernel(method, tangents, model_rhs, tangent, barrier_force)
+                 nb.float64[:, :, :, ::1], nb.float64[:, :, ::1], nb.int8[:, ::1], nb.int64[::1], nb.int64[::1])
+    kernel_ = line_kernel(method, tangents, model_rhs, tangent, barrier_force, **options)
     stand_in = types.SimpleNamespace(compute_capability=tuple(compute_capability))
     with mock.patch.object(cuda_dispatcher, "get_current_device", lambda: stand_in):
         ptx, _ = compile_ptx(kernel_.py_func, signature, cc=tuple(compute_capability))

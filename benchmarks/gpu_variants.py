@@ -1,0 +1,96 @@
+"""The GPU kernel's launch shapes against each other and against the CPU, one run, one machine.
+
+    python benchmarks/gpu_variants.py [--points 65536] [--out DIR]
+
+numerics/cuda.py has three levers (its QUEUE, SORT and MAX_REGISTERS): a work queue, lines handed
+out in parameter order, and a register cap. This script times, on the first POINTS points of
+gpu.py's shuffled (g, Omega) map (rtol 1e-9, 100 + 100 periods):
+
+    A  one thread per line, shuffled order, the compiler's registers   (the first version)
+    C  the queue, parameter order, the compiler's registers             (the default)
+    D  C with at most 128 registers a thread
+
+for the original model with rk45 and the effective model with dop853 (each model's fastest method
+on the GPU in gpu.py's first run), and the CPU's best method (dop853, every core) on a sample, so
+that every ratio is of this one process. Checks that every variant gives the same statuses and R
+as variant A bit for bit (the order of the lines changes nothing in a line's arithmetic).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from gpu import INTEGRATION, coefficients_of, grid, log, run  # noqa: E402
+from vrsweep.numerics import cuda  # noqa: E402
+from vrsweep.numerics.models import kernels_for  # noqa: E402
+from vrsweep.numerics.trajectory import settings_vector  # noqa: E402
+
+VARIANTS = {"A": dict(queue=False, sort=False, max_registers=None),
+            "C": dict(queue=True, sort=True, max_registers=None),
+            "D": dict(queue=True, sort=True, max_registers=128)}
+CASES = [("original", "rk45", 2000), ("effective", "dop853", 8000)]  # model, GPU method, CPU sample
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--points", type=int, default=65536)
+    parser.add_argument("--out", default=os.environ.get("OUT", "."))
+    args = parser.parse_args()
+    settings = settings_vector(**INTEGRATION)
+    measure = INTEGRATION["measure_periods"]
+    results = {"card": str(getattr(cuda.cuda.get_current_device(), "name", "CUDA simulator")), "points": args.points}
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for model, method, cpu_sample in CASES:
+        kernels = kernels_for(model)
+        points = grid(1_000_000)[:args.points]
+        coefficients = coefficients_of(kernels, points)
+        row = results[f"{model} {method}"] = {}
+        cpu_lines = kernels.run_lines("dop853")
+        run(cpu_lines, coefficients[:16], settings, measure)  # compile
+        sample = coefficients[:cpu_sample]
+        elapsed, *_ = run(cpu_lines, sample, settings, measure)
+        row["cpu_dop853_points_per_s"] = len(sample) / elapsed
+        reference = None
+        functions = cuda.paper_functions(False)
+        for name, variant in VARIANTS.items():
+            compiled = cuda.line_kernel(method, False, *functions, queue=variant["queue"],
+                                        max_registers=variant["max_registers"])
+            lines = cuda.DeviceLines(compiled, sort=variant["sort"])
+            began = time.perf_counter()
+            run(lines, coefficients[:16], settings, measure)
+            compile_s = time.perf_counter() - began
+            elapsed, _, summaries, statuses = run(lines, coefficients, settings, measure)
+            try:
+                registers = list(compiled.get_regs_per_thread().values())
+                local = list(compiled.get_local_mem_per_thread().values())
+            except AttributeError:  # the CUDA simulator
+                registers = local = None
+            same = None
+            if reference is None:
+                reference = (summaries, statuses)
+            else:
+                same = bool(np.array_equal(statuses, reference[1])
+                            and np.array_equal(summaries, reference[0], equal_nan=True))
+            row[name] = {"points_per_s": args.points / elapsed, "seconds": elapsed, "compile_s": compile_s,
+                         "registers": registers, "local_bytes": local, "same_as_A": same}
+            row[name]["over_cpu_best"] = row[name]["points_per_s"] / row["cpu_dop853_points_per_s"]
+            log(f"{model:9s} {method:6s} {name}: {row[name]['points_per_s']:8.0f} pts/s "
+                f"({row[name]['over_cpu_best']:.2f}x CPU dop853 {row['cpu_dop853_points_per_s']:.0f}), "
+                f"regs {registers}, local {local}, compile {compile_s:.1f} s, same as A: {same}")
+            (out / "gpu_variants.json").write_text(json.dumps(results, indent=1))
+    log(json.dumps(results))
+
+
+if __name__ == "__main__":
+    main()
