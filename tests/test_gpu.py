@@ -34,6 +34,7 @@ sweep:
   g: {values: [5.0, 20.0, 30.0]}
   Omega: {values: [3.5, 4.0]}
 """
+BASIN_MAP = SMALL_MAP + "  x0: {values: [-0.5, 0.99]}\n"  # an initial-state axis, as basins have
 HYSTERESIS_LINE = """
 sweep:
   g: {start: 20.0, stop: 30.0, num: 3, continuation: up}
@@ -56,7 +57,7 @@ def _simulated(tmp_path, text_or_path, method, lyapunov, line_length, transient_
 
 
 @pytest.mark.parametrize("case, config, method, lyapunov, line_length", [
-    ("original", SMALL_MAP, "rk45", "false", 1),
+    ("original, with an initial-state axis", BASIN_MAP, "rk45", "false", 1),
     ("original, tangent vectors", SMALL_MAP, "rk45", "true", 1),
     ("original, hysteresis line", HYSTERESIS_LINE, "rk45", "false", 3),
     ("written, two barriers", EXAMPLES / "impact_two_sided.yaml", "rk45", "false", 1),
@@ -154,3 +155,28 @@ def test_the_default_device_leaves_the_config_text_as_before():
     assert config.integration.device == "cpu"
     assert "device" not in config.to_yaml()  # files written before the key keep their text (resume)
     assert "device: cuda" in parse_config(textwrap.dedent(SMALL_MAP) + "integration: {device: cuda}\n").to_yaml()
+
+
+def test_a_gpu_failing_during_a_run_is_the_runs_failure_in_one_line(monkeypatch):
+    """Out of device memory, a driver or launch error: RunFailed (exit 1), whose message the command
+    completes with what was saved; the chunks written before stay (the job's writer, as on the CPU)."""
+    from vrsweep.errors import RunFailed
+    from vrsweep.execution import device
+
+    class Failing:
+        def __init__(self, error):
+            self.error = error
+
+        def gpu_lines(self, method, lyapunov):
+            def lines(*arrays):
+                raise self.error
+            return lines
+
+    monkeypatch.setattr(device, "check_device", lambda name: None)
+    for error, words in ((MemoryError("cuMemAlloc results in CUDA_ERROR_OUT_OF_MEMORY"), "ran out of memory"),
+                         (RuntimeError("CUDA_ERROR_LAUNCH_FAILED\nmore lines"), "the GPU failed (RuntimeError: "
+                                                                              "CUDA_ERROR_LAUNCH_FAILED)")):
+        run_lines = device.gpu_lines(Failing(error), "rk45", False)
+        with pytest.raises(RunFailed) as caught:
+            run_lines()
+        assert words in str(caught.value) and "\n" not in str(caught.value)

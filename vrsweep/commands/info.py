@@ -398,6 +398,8 @@ def _integration(config) -> dict:
     settings = dataclasses.asdict(config.integration)
     if settings.get("method") == INTEGRATION_DEFAULTS["method"]:
         del settings["method"]
+    if settings.get("device") == INTEGRATION_DEFAULTS["device"]:  # named only when not the CPU
+        del settings["device"]
     return {name: _plain(value) for name, value in settings.items()}
 
 
@@ -464,7 +466,8 @@ def format_summary(summary, show_config=False) -> str:
         lines.append(f"fixed:       {fixed}")
     integration = summary["integration"]
     if integration:
-        keys = ("method", "rtol", "atol", "transient_periods", "measure_periods")  # method: only if not rk45
+        # method: only if not rk45; device: only if not the CPU
+        keys = ("method", "rtol", "atol", "transient_periods", "measure_periods", "device")
         lines.append("integration: " + " ".join(f"{k}={_short(integration[k])}" for k in keys if k in integration))
     if summary["status_counts"]:
         for index, row in enumerate(summary["status_counts"]):
