@@ -19,6 +19,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 if os.environ.get("PYTHONPATH") is None:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import numpy as np  # noqa: E402
+
 import vrsweep  # noqa: E402
 from bench_speed import POINTS, V0  # noqa: E402
 from vrsweep.numerics.model import kernel_coefficients  # noqa: E402
@@ -29,6 +31,9 @@ from vrsweep.numerics.trajectory import settings_vector, simulate  # noqa: E402
 # since (the transparent window's and the highest smooth maximum's, continuation's observers) are
 # -inf/NaN in a sweep, and comparing them would fail on the layout alone.
 COMPARED_SUMMARY = 15
+# Likewise the record's columns of 0.2.0 (impacts ... REC_LOG_AREA); the impact observables added
+# in 0.5.0 (REC_IMPACT_SPEED_MIN ...) are new columns, not changed ones.
+COMPARED_RECORD = 10
 
 
 def main():
@@ -41,7 +46,7 @@ def main():
             for rtol in (1e-4, 1e-6, 1e-9):
                 settings = settings_vector(rtol=rtol, atol=rtol * 1e-2, transient_periods=100, measure_periods=100)
                 run = simulate(coefficients, [x0, V0], settings, method=method)
-                for array in (run.summary[:COMPARED_SUMMARY], run.period_records):
+                for array in (run.summary[:COMPARED_SUMMARY], np.ascontiguousarray(run.period_records[:, :COMPARED_RECORD])):
                     point.update(array.tobytes())
                     total.update(array.tobytes())
         print(f"  {point.hexdigest()[:16]}  {label}")

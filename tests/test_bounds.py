@@ -96,8 +96,9 @@ def test_validate_counts_memory_and_run_refuses_what_cannot_fit(tmp_path, invoke
     config = write_config(tmp_path, SWEEP.format(n=40, transient=3_000_000, measure=100))
     done = invoke("validate", config, "--threads", 2)
     assert done.exit_code == 0, done.output
-    # A chunk of 16 x 2 = 32 of the 40 points x 100 periods x 80 bytes, whatever the transient.
-    assert "memory:      256.0 kB of per-period records held at once" in done.output, done.output
+    # A chunk of 16 x 2 = 32 of the 40 points x 100 periods x a record row, whatever the transient.
+    expected = 32 * 100 * chunks.RECORD_ROW_BYTES / 1000
+    assert f"memory:      {expected:.1f} kB of per-period records held at once" in done.output, done.output
     # measure_periods 1e11: 8 TB of records for one point. Refused by validate and by run, even
     # with --allow-large, in one line and before any file exists.
     huge = write_config(tmp_path, SWEEP.format(n=40, transient=0, measure=10 ** 11), name="huge.yaml")
@@ -185,8 +186,9 @@ def test_validate_states_the_memory_held(tmp_path, invoke, write_config):
     config = write_config(tmp_path, textwrap.dedent(SWEEP.format(n=3, transient=5, measure=1000)))
     done = invoke("validate", config, "--threads", 1)
     assert done.exit_code == 0, done.output
-    # 3 points (a chunk of max(1, 16) lines holds all three) x 1000 periods x 80 bytes.
-    assert "memory:      240.0 kB of per-period records held at once" in done.output, done.output
+    # 3 points (a chunk of max(1, 16) lines holds all three) x 1000 periods x a record row.
+    expected = 3 * 1000 * chunks.RECORD_ROW_BYTES / 1000
+    assert f"memory:      {expected:.1f} kB of per-period records held at once" in done.output, done.output
 
 
 @pytest.mark.parametrize("transient", [4_000_000, 10 ** 12])

@@ -213,8 +213,44 @@ def lyapunov_values(records, summaries, statuses, coefficients, integration, per
     return {"lyapunov": lyapunov, "lyapunov_err": lyapunov_err}
 
 
+def impact_observables(measured, ok, slow_period):
+    """What the impacts of the measurement window were, per point (NaN where not ok; speeds and
+    phases NaN where it had no impact):
+
+    impact_speed_min, _max, _mean  speeds into the barrier before eq2.2, |v-| (a grazing line on a
+                                   map: where impact_speed_min falls to zero, like a square root)
+    impact_phase                   circular mean of omega t mod 2 pi over the impacts, in [0, 2 pi)
+                                   (omega: the response frequency)
+    impact_phase_spread            circular standard deviation sqrt(-2 ln |mean of exp(i omega t)|):
+                                   0 when every impact falls at one phase
+    stuck_fraction                 fraction of the window's time the mass was stuck on a barrier
+
+    measured: (n_points, measure_periods, N_RECORD); ok: (n_points,) bool; slow_period (n_points,).
+    """
+    impacts = measured[:, :, kernel.REC_IMPACTS].sum(axis=1)
+    hit = ok & (impacts > 0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        speed_min = np.min(measured[:, :, kernel.REC_IMPACT_SPEED_MIN], axis=1)
+        speed_max = np.max(measured[:, :, kernel.REC_IMPACT_SPEED_MAX], axis=1)
+        speed_mean = measured[:, :, kernel.REC_IMPACT_SPEED_SUM].sum(axis=1) / impacts
+        cos_sum = measured[:, :, kernel.REC_IMPACT_COS].sum(axis=1)
+        sin_sum = measured[:, :, kernel.REC_IMPACT_SIN].sum(axis=1)
+        phase = np.mod(np.arctan2(sin_sum, cos_sum), 2.0 * np.pi)
+        resultant = np.minimum(np.hypot(cos_sum, sin_sum) / impacts, 1.0)
+        spread = np.sqrt(-2.0 * np.log(resultant))
+    stuck = measured[:, :, kernel.REC_STUCK_TIME].sum(axis=1) / (measured.shape[1] * slow_period)
+    values = {"impact_speed_min": speed_min, "impact_speed_max": speed_max, "impact_speed_mean": speed_mean,
+              "impact_phase": phase, "impact_phase_spread": spread}
+    for array in values.values():
+        array[~hit] = np.nan
+    stuck[~ok] = np.nan
+    values["stuck_fraction"] = stuck
+    return values
+
+
 def point_diagnostics(records, statuses, coefficients, integration):
-    """R_err, stroboscopic samples, period, impacts per cycle, x_min, x_max (NaN/0/-1 if failed)."""
+    """R_err, stroboscopic samples, period, impacts per cycle, x_min, x_max, the impact observables
+    (impact_observables) (NaN/0/-1 if failed)."""
     measured = window_records(records, integration)
     n_strobe = integration.strobe_periods  # <= measure_periods (config rule)
     ok = statuses == Status.OK
@@ -243,4 +279,5 @@ def point_diagnostics(records, statuses, coefficients, integration):
         "impacts_per_cycle": impacts_per_cycle,
         "x_min": x_min,
         "x_max": x_max,
+        **impact_observables(measured, ok, slow_period),
     }

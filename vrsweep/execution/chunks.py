@@ -28,7 +28,7 @@ MAX_CHUNK_LINES = 8192
 # (numerics/records.py: N_RECORD float64s per period; not imported, as that module loads numba and
 # `validate` must not): chunks never grow beyond CHUNK_RECORD_BYTES of them, and a chunk of one
 # line is the least a run can hold (estimate.memory_problem refuses a run where that cannot fit).
-RECORD_ROW_BYTES = 10 * 8
+RECORD_ROW_BYTES = 15 * 8
 CHUNK_RECORD_BYTES = 256 * 2 ** 20
 # On a GPU (integration.device: cuda) a chunk is one launch, a thread per line: it must hold far more
 # lines than the card runs at once (an H100 holds about 34,000 threads of this kernel; the slowest

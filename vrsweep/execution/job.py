@@ -269,7 +269,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         left = [n_owned - n_done]
 
         def on_chunk(flat_indices, values):
-            writer.write_points(flat_indices, values)
+            writer.write_points(flat_indices, _as_the_file_holds(values, writer.point_variables))
             left[0] -= len(flat_indices)
             if stop is not None and left[0] > 0:  # after the last chunk, finishing is better
                 stop.check()  # a stop asked for during the chunk takes effect now it is saved
@@ -286,6 +286,16 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         extras.update(attractors)
     writer.finish(extra=extras, coords=coords)
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
+
+
+def _as_the_file_holds(values, names):
+    """A chunk's values for a file that may predate some variables: a file of 0.4.0 or earlier, resumed,
+    has no impact observables (store.variables.IMPACT_VARIABLES), and keeps none; any other
+    difference is the writer's error to report."""
+    from vrsweep.store.variables import IMPACT_VARIABLES
+
+    optional = {name for name, *_ in IMPACT_VARIABLES}
+    return {name: value for name, value in values.items() if name in names or name not in optional}
 
 
 RESULTS_SINCE_VERSION = "0.2.0"

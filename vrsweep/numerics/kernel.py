@@ -50,10 +50,12 @@ from vrsweep.numerics.model import ALPHA, BIG_OMEGA, C, DELTA, E, G, GAMMA, MU, 
 from vrsweep.results import Status
 from vrsweep.numerics.records import (  # noqa: F401 - the layouts, read as kernel.REC_*, kernel.SUM_*
     N_RECORD, N_SUMMARY, REC_IMPACTS, REC_LOG_AREA, REC_LOG_STRETCH, REC_QC, REC_QS, REC_STUCK_TIME,
+    REC_IMPACT_COS, REC_IMPACT_SIN, REC_IMPACT_SPEED_MAX, REC_IMPACT_SPEED_MIN, REC_IMPACT_SPEED_SUM,
     REC_V, REC_X, REC_X_MAX, REC_X_MIN, SUM_IMPACTS, SUM_IMPACTS_PER_PERIOD, SUM_LYAPUNOV,
     SUM_LYAPUNOV_SUM, SUM_QC, SUM_QS, SUM_Q_AMPLITUDE, SUM_R, SUM_REJECTED, SUM_RHS, SUM_STEPS,
     SUM_FREE_X_MAX, SUM_FREE_X_MAX_TIME, SUM_STICKS, SUM_T_FINAL, SUM_V_FINAL, SUM_WINDOW_X_MAX, SUM_X_FINAL, add_tangent_growth, close_period,
-    emit_samples, emit_state, log_impact, log_stick_start, start_period, summarize, update_extremes, window_top,
+    emit_samples, emit_state, log_impact, log_stick_start, record_impact, start_period, summarize, update_extremes,
+    window_top,
 )
 from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as kernel.* by tests
     COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
@@ -527,6 +529,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                 v_before, v_after, stuck = _restitution(y, t, coefficients, barrier_force, hit, side, restitution,
                                                         stick_velocity)
                 log_impact(impact_log, n_impacts, t, side * v_before, side * v_after)
+                record_impact(record, v_before, response_frequency * t)
                 if stuck:
                     stuck_at = hit
                     n_sticks = log_stick_start(stick_log, n_sticks, t)

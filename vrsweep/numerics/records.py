@@ -30,7 +30,14 @@ REC_X_MAX = 6       # largest x in the period
 REC_STUCK_TIME = 7  # time spent stuck on the barrier in the period
 REC_LOG_STRETCH = 8  # log growth of the leading tangent vector over the period (NaN without tangents)
 REC_LOG_AREA = 9     # log growth of the tangent parallelogram's area (both exponents' sum)
-N_RECORD = 10
+# The period's impacts (record_impact): speeds into the barrier before eq2.2 (|v-|), and the phase
+# omega t of each at the response frequency, summed as cos and sin (circular statistics).
+REC_IMPACT_SPEED_MIN = 10  # slowest impact of the period, inf without one
+REC_IMPACT_SPEED_MAX = 11  # fastest impact of the period, 0 without one
+REC_IMPACT_SPEED_SUM = 12  # sum of the period's impact speeds
+REC_IMPACT_COS = 13        # sum of cos(omega t) over the period's impacts
+REC_IMPACT_SIN = 14        # sum of sin(omega t) over the period's impacts
+N_RECORD = 15
 
 # --- summary of a run ---
 SUM_R = 0                   # gain |Q| / c, eq3.3
@@ -144,6 +151,22 @@ def start_period(record, x, tangents):
     # Summed over the period's renormalisations (tangent.py); NaN in a run without tangent vectors.
     record[REC_LOG_STRETCH] = 0.0 if tangents else np.nan
     record[REC_LOG_AREA] = 0.0 if tangents else np.nan
+    record[REC_IMPACT_SPEED_MIN] = math.inf
+    record[REC_IMPACT_SPEED_MAX] = 0.0
+    record[REC_IMPACT_SPEED_SUM] = 0.0
+    record[REC_IMPACT_COS] = 0.0
+    record[REC_IMPACT_SIN] = 0.0
+
+
+@kernel_jit(inline="always")
+def record_impact(record, speed, phase):
+    """An impact of the period: its speed into the barrier (|v-| before eq2.2) and its phase
+    (response frequency x t; a grazing line on a map is where the slowest speed falls to zero)."""
+    record[REC_IMPACT_SPEED_MIN] = min(record[REC_IMPACT_SPEED_MIN], speed)
+    record[REC_IMPACT_SPEED_MAX] = max(record[REC_IMPACT_SPEED_MAX], speed)
+    record[REC_IMPACT_SPEED_SUM] += speed
+    record[REC_IMPACT_COS] += math.cos(phase)
+    record[REC_IMPACT_SIN] += math.sin(phase)
 
 
 @kernel_jit(inline="always")

@@ -41,6 +41,7 @@ def point_variables(integration):
             "units": "1", "long_name": "stroboscopic velocity at t = nT over the last slow periods"}),
         ("x_min", np.float64, (), {"units": "1", "long_name": "smallest x over the measurement window"}),
         ("x_max", np.float64, (), {"units": "1", "long_name": "largest x over the measurement window"}),
+        *IMPACT_VARIABLES,
         ("x_final", np.float64, (), {"units": "1", "long_name": "x at the end of the run"}),
         ("v_final", np.float64, (), {"units": "1", "long_name": "velocity at the end of the run"}),
         ("n_steps", np.int64, (), {"units": "1", "long_name": "Dormand-Prince step attempts"}),
@@ -64,6 +65,27 @@ def written_model_words(variables, model):
     }
     return [(name, dtype, extra, dict(attrs, long_name=words[name]) if name in words else attrs)
             for name, dtype, extra, attrs in variables]
+
+
+# The measurement window's impacts (vrsweep.analysis.diagnostics.impact_observables); NaN where it had
+# none. Speeds are |v| into the barrier before the impact law (eq2.2).
+IMPACT_VARIABLES = [
+    ("impact_speed_min", np.float64, (), {
+        "units": "1", "long_name": ("slowest impact speed |v-| over the measurement window (before eq2.2; falls to "
+                                    "zero like a square root at a grazing line)")}),
+    ("impact_speed_max", np.float64, (), {
+        "units": "1", "long_name": "fastest impact speed |v-| over the measurement window (before eq2.2)"}),
+    ("impact_speed_mean", np.float64, (), {
+        "units": "1", "long_name": "mean impact speed |v-| over the measurement window's impacts (before eq2.2)"}),
+    ("impact_phase", np.float64, (), {
+        "units": "rad", "long_name": ("circular mean of the impacts' phase omega t mod 2 pi at the response "
+                                      "frequency omega, in [0, 2 pi)")}),
+    ("impact_phase_spread", np.float64, (), {
+        "units": "rad", "long_name": ("circular standard deviation of the impacts' phase omega t "
+                                      "(0: every impact at one phase)")}),
+    ("stuck_fraction", np.float64, (), {
+        "units": "1", "long_name": "fraction of the measurement window's time the mass stuck on a barrier"}),
+]
 
 
 # With integration.lyapunov (vrsweep.numerics.tangent). Time t is dimensionless, so a rate is too.
