@@ -275,3 +275,32 @@ def test_resume_refuses_a_file_of_an_older_version_and_names_it(tmp_path, invoke
     assert invoke("run", config, "-o", out, "--resume", "-q").exit_code == 2
     assert invoke("run", config, "-o", out, "--overwrite", "-q").exit_code == 0
     assert invoke("run", config, "-o", out, "--resume", "-q").exit_code == 0  # its own version resumes
+
+
+def test_dry_run_times_a_sample_and_writes_nothing(tmp_path, invoke, write_config):
+    """--dry-run: an estimate measured on the grid's own points, its range, and no file."""
+    config = write_config(tmp_path, """
+        model: effective
+        sweep:
+          g: {start: 5.0, stop: 30.0, num: 40}
+        integration: {transient_periods: 4, measure_periods: 16}
+        output: out.h5
+        """)
+    result = invoke("run", config, "--dry-run", "--threads", 1)
+    assert result.exit_code == 0, result.output
+    estimate = next(line for line in result.output.splitlines() if line.startswith("estimate:"))
+    assert "of 40 points" in estimate and "points/s" in estimate and " to " in estimate
+    assert "cost model:" in result.output and "nothing was written" in result.output
+    assert not (tmp_path / "out.h5").exists() and not list(tmp_path.glob("*.h5"))
+
+
+def test_a_run_says_how_long_it_took_beside_the_estimate(tmp_path, invoke, write_config):
+    config = write_config(tmp_path, """
+        model: effective
+        sweep:
+          g: {values: [5.0, 10.0]}
+        integration: {transient_periods: 4, measure_periods: 16}
+        """)
+    result = invoke("run", config, "-o", tmp_path / "o.h5")
+    assert result.exit_code == 0, result.output
+    assert "time:" in result.output and "the cost model's estimate" in result.output

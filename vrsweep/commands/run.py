@@ -2,6 +2,7 @@
 
 import shlex
 import sys
+import time
 
 import click
 
@@ -27,12 +28,15 @@ PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
 @click.option("--dask", "dask_address", default=None, metavar="ADDRESS",
               help="Send chunks to a dask.distributed scheduler (or 'local:N' for a local cluster of N workers).")
 @click.option("--allow-large", is_flag=True, help="Run a grid whose estimated size or time is out of proportion.")
+@click.option("--dry-run", is_flag=True,
+              help="Write nothing: run a sample of the grid's points on this machine (a few seconds, after "
+                   "compiling) and print how long the whole run would take.")
 @click.option("--progress-interval", type=FiniteFloatRange(min=0), default=PROGRESS_INTERVAL, show_default=True,
               metavar="SECONDS",
               help="When stderr is not a terminal (a batch job's log): a progress line every SECONDS "
                    "(points done, percent, points/s, ETA) instead of a progress bar.")
 def command(config_path, output, threads, device, overrides, quiet, resume, overwrite, shard, dask_address, allow_large,
-            progress_interval):
+            dry_run, progress_interval):
     """Sweep R (eq3.3) over the config's grid and write it to HDF5.
 
     The file is written chunk by chunk: after Ctrl-C, a crash or a kill, --resume computes only
@@ -44,7 +48,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
     """
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
-    from vrsweep.execution.estimate import check_size
+    from vrsweep.execution.estimate import check_size, format_duration
     from vrsweep.execution.threads import available_threads
 
     if resume and overwrite:
@@ -82,7 +86,11 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
         workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
     # The size check is per process: a shard or a local Dask cluster shares the grid's time, while
     # a shard's file is still the whole grid's size (see store/layout.py).
-    check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large, allow="--allow-large")
+    guess = check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large or dry_run,
+                       allow="--allow-large")
+    if dry_run:
+        _dry_run(config, threads or available_threads(), shard_pair, guess, dask_address)
+        return
     bars = []
 
     def progress_factory(total, already_done):
@@ -102,6 +110,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
         bars.append(bar)
         return bar.update
 
+    began = time.perf_counter()
     try:
         with GracefulStop() as stop, flag_wording():
             report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
@@ -117,6 +126,8 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
             words += ["-o", output]
         for item in overrides:
             words += ["--set", item]
+        if device:
+            words += ["--device", device]
         if shard:
             words += ["--shard", shard]
         if dask_address:
@@ -135,10 +146,29 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
             bar.close()
     if not quiet:
         click.echo(report.summary_line(), err=True)
+        if report.n_run:
+            click.echo(f"time:        {format_duration(time.perf_counter() - began)} (the cost model's estimate: "
+                       f"{format_duration(guess.seconds * report.n_run / max(1, guess.n_points))}; "
+                       "--dry-run measures one)", err=True)
     for item in report.advice():  # even with --quiet: the file holds mostly failures
         example = f", e.g. --set {item.setting}" if item.setting else ""
         click.echo(f"Warning: {item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "
                    f"{item.status.name.lower()}: {item.remedy}{example}, and run again with --overwrite", err=True)
+
+
+def _dry_run(config, threads, shard, guess, dask_address):
+    """--dry-run: time a sample of the grid's lines here and say how long the run would take."""
+    from vrsweep.errors import UsageError
+    from vrsweep.execution.estimate import format_duration
+    from vrsweep.execution.timing import describe, measure, rough_and_measured_agree
+
+    if dask_address:
+        raise UsageError("--dry-run times this machine, not a Dask cluster's workers: leave out --dask")
+    _say_if_compiling(config.integration.method, config.integration.lyapunov, config.model)
+    timing = measure(config, threads, shard)
+    click.echo(f"estimate:    {describe(timing, threads, config.integration.device)}")
+    agreement = "" if rough_and_measured_agree(guess.seconds, timing) else " (more than 2x off: the measurement counts)"
+    click.echo(f"cost model:  {format_duration(guess.seconds)}{agreement}; nothing was written")
 
 
 def _line_length(config):
