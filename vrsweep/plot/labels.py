@@ -433,6 +433,25 @@ def read_description(path) -> dict:
     return found
 
 
+# What ``metadata`` writes into each format, as it lands in the file's bytes: a PNG's tEXt chunk
+# "Software", a PDF's /Creator, an SVG's dc:creator.
+_MADE_BY_VRSWEEP = re.compile(rb"Software\x00vrsweep \d|/Creator \(vrsweep \d|<dc:title>vrsweep \d")
+# A figure vrsweep wrote is well under this; a larger file is someone else's.
+_FIGURE_BYTES_AT_MOST = 256 * 1024 * 1024
+
+
+def made_by_vrsweep(path) -> bool:
+    """Whether the file at ``path`` is a figure vrsweep wrote (``render``'s metadata names vrsweep
+    as its software): such a file is replaced unasked, any other only when asked to."""
+    try:
+        if os.path.getsize(path) > _FIGURE_BYTES_AT_MOST:
+            return False
+        with open(path, "rb") as handle:
+            return _MADE_BY_VRSWEEP.search(handle.read()) is not None
+    except OSError:
+        return False
+
+
 def _pdf_string(raw: bytes) -> str:
     """A PDF literal string as text: backslash escapes undone (matplotlib writes plain ASCII or
     a UTF-16 string with a byte-order mark)."""
