@@ -10,7 +10,7 @@ FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
 FLAGS = {"at": "--at", "x_axis": "--x", "kind": "--kind", "amplitude": "--amplitude", "log": "--log",
          "linear": "--linear", "periods": "--periods", "var": "--var", "style": "--style", "size": "--size",
-         "vmin": "--vmin", "vmax": "--vmax", "title": "--title",
+         "vmin": "--vmin", "vmax": "--vmax", "title": "--title", "dpi": "--dpi",
          "finish": "'vrsweep run CONFIG --resume -o FILE'", "simulate_compare": "vrsweep simulate --compare effective"}
 
 
@@ -117,14 +117,16 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
         options = dict(title=title, size=size, style=style, vmin=vmin, vmax=vmax)
         path, file_format = _output(paths, output, kind, overwrite)
         figure = _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options)
+        # Rendered in memory, then written whole: a full disk leaves no half figure, and the
+        # message can say how many bytes the figure needs.
+        from vrsweep.plot import render
+
+        image = render(figure, file_format, dpi)
     except VrsweepError as error:
         raise error.reworded(FLAGS) from None
-    # Rendered in memory, then written whole: a full disk leaves no half figure, and the
-    # message can say how many bytes the figure needs.
-    from vrsweep.plot import render
     from vrsweep.store.fileio import write_bytes
 
-    write_bytes(path, render(figure, file_format, dpi))
+    write_bytes(path, image)
     from vrsweep.plot import layout_note
 
     if layout_note(figure):
