@@ -102,7 +102,10 @@ def open_results(path, group: str | None = None):
         attributes in ``ds.attrs``. A trajectory group's Dataset carries the file's root
         attributes too, its own (``status``, ``model``...) taking precedence.
     """
+    from vrsweep.errors import PathTypeError
 
+    if not isinstance(path, (str, bytes, os.PathLike)):  # bytes: os.fspath keeps it, as it always did
+        raise PathTypeError("path", path)
     path = os.fspath(path)
     kind = file_kind(path)
     if kind == "trajectory":
