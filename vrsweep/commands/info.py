@@ -293,7 +293,17 @@ def _describe_groups(path, kind) -> dict | None:
     reader's error."""
     from vrsweep.store.reading import open_groups
     from vrsweep.store import FORMAT_VERSION
+    from vrsweep.store.fileio import open_hdf5
+    from vrsweep.store.sealing import check_attributes_of_any_kind
 
+    try:
+        # A file described from its groups may be one whose kind was damaged: its checksum says so.
+        with open_hdf5(path, "r") as f:
+            check_attributes_of_any_kind(f, path)
+    except ResultFileError:
+        raise
+    except Exception:  # noqa: BLE001 - unreadable: the reader's error says why (below, or the caller's)
+        return None
     try:
         groups = open_groups(path)
     except ResultFileError:

@@ -238,71 +238,21 @@ LAYOUT = {
 }
 
 
-# The root attribute that holds the SHA-256 of all the others (attributes_digest): a flipped bit in
-# the stored config (gamma 0.05 -> 0.07) would otherwise go unnoticed, and info, the figure's
-# caption and continue --point would state and use parameters the numbers were not computed at.
-ATTRIBUTES_CHECKSUM = "vrsweep_attributes_sha256"
-_unprotected_said = set()
-
-
-def _canonical(value) -> bytes:
-    """``value`` as h5py reads an attribute back (str, bytes, numpy scalar or array), as bytes that
-    say its type and content: equal for equal attributes, whatever damage they hold."""
-    if isinstance(value, str):
-        return b"s" + value.encode("utf-8", "surrogateescape")
-    if isinstance(value, bytes):
-        return b"b" + value
-    value = np.asarray(value)
-    if value.dtype.kind == "O":
-        return b"o" + b"\0".join(_canonical(item) for item in value.reshape(-1))
-    return b"n" + value.dtype.str.encode() + repr(value.shape).encode() + value.tobytes()
-
-
-# HDF5's dimension-scale bookkeeping: references, i.e. addresses in the file, not content.
-_REFERENCES = ("DIMENSION_LIST", "REFERENCE_LIST")
-
-
-def attributes_digest(f) -> str:
-    """SHA-256 (hex) of every attribute of the open flat file ``f``, its root's (but
-    ATTRIBUTES_CHECKSUM) and each dataset's (units, long_name...; but _REFERENCES): names and
-    values, in name order."""
-    import hashlib
-
-    digest = hashlib.sha256()
-    owners = [("", f)] + [(name, f[name]) for name in sorted(f) if isinstance(f[name], h5py.Dataset)]
-    for owner, obj in owners:
-        for name in sorted(obj.attrs):
-            if name not in (ATTRIBUTES_CHECKSUM, *_REFERENCES):
-                digest.update(f"{owner}/{name}".encode("utf-8", "surrogateescape") + b"\0"
-                              + _canonical(obj.attrs[name]) + b"\0")
-    return digest.hexdigest()
-
-
-def seal_attributes(f):
-    """Store the checksum of every attribute of ``f``, once all are written (branch and curves files)."""
-    f.attrs[ATTRIBUTES_CHECKSUM] = attributes_digest(f)
+# Every attribute (the root's and each variable's) is covered by one checksum (store/sealing.py):
+# a flipped bit in the stored config (gamma 0.05 -> 0.07) would otherwise go unnoticed, and info,
+# the figure's caption and continue --point would state and use parameters the numbers were not
+# computed at.
+from vrsweep.store.sealing import (  # noqa: E402 - beside what it replaced; re-exported for curve_file
+    ATTRIBUTES_CHECKSUM, attributes_digest, note_if_unprotected, seal_attributes,
+)
 
 
 def _check_attributes(f, path):
     """ResultFileError when the attributes fail their checksum; a file written before they had one
-    (no ATTRIBUTES_CHECKSUM) passes (note_if_unprotected says so once it is found sound)."""
-    if ATTRIBUTES_CHECKSUM not in f.attrs:
-        return
-    stored = f.attrs[ATTRIBUTES_CHECKSUM]
-    if not isinstance(stored, (str, bytes)) or _text(stored) != attributes_digest(f):
-        raise ResultFileError(f"{path} is corrupt: its attributes (config, model, parameters, labels) do not "
-                              "match their checksum")
+    passes (note_if_unprotected says so once it is found sound)."""
+    from vrsweep.store.sealing import check_attributes
 
-
-def note_if_unprotected(path, protected):
-    """The note, once per file and process, that a sound file's attributes have no checksum (written
-    before they had one): after every check, so that a refused file is one line."""
-    if not protected and path not in _unprotected_said:
-        _unprotected_said.add(path)
-        from vrsweep.store.fileio import notice
-
-        notice(f"Note: {path} was written before attributes had checksums: its config and parameters are read "
-               "as they are, unprotected against damage")
+    check_attributes(f, path)
 
 
 def _text(value):
