@@ -53,7 +53,9 @@ def _copy(made, tmp_path, *names):
 
 
 def _one_error_line(result, code=2):
-    lines = result.output.strip().splitlines()
+    """The one "Error: " line of ``result`` (a file of an old version may be noted first as unprotected)."""
+    lines = [line for line in result.output.strip().splitlines()
+             if not (line.startswith("Note: ") and "before attributes had checksums" in line)]
     assert result.exit_code == code and len(lines) == 1 and lines[0].startswith("Error: "), result.output
     return lines[0]
 
@@ -146,12 +148,20 @@ def test_a_figure_that_cannot_be_written_leaves_nothing(made, tmp_path, invoke, 
 # ---------------------------------------------------------------------------------------------
 
 
-def _set_attr(path, name, value):
+def _set_attr(path, name, value, sealed=True):
+    """Set a root attribute as a file written that way would hold it: sealed again, or (``sealed``
+    False: a file of a version before attributes had a checksum) without a checksum."""
+    from damaged import reseal
+
     with h5py.File(path, "r+") as f:
         if value is None:
             del f.attrs[name]
         else:
             f.attrs[name] = value
+        if not sealed:
+            del f.attrs["vrsweep_attributes_sha256"]
+    if sealed:
+        reseal(path)
 
 
 OLD_VERSIONS = st.sampled_from(["0.1.0", "0.1.9", "0.0.1", "dev", None])
@@ -163,7 +173,7 @@ NEW_VERSIONS = st.sampled_from(["0.2.0", "0.3.0", "0.4.0", "1.0"])
 def test_merge_refuses_shards_of_versions_with_different_points(made, tmp_path_factory, invoke, old, new, which):
     tmp_path = tmp_path_factory.mktemp("versions")
     shards = _copy(made, tmp_path, "sweep.shard0of2.h5", "sweep.shard1of2.h5")
-    _set_attr(shards[which], "vrsweep_version", old)
+    _set_attr(shards[which], "vrsweep_version", old, sealed=False)  # written before attributes had a checksum
     _set_attr(shards[1 - which], "vrsweep_version", new)
     line = _one_error_line(invoke("merge", *shards, "-o", tmp_path / "merged.h5"))
     assert shards[which].name in line and "points differ" in line and "run the older shards again" in line, line
@@ -185,22 +195,33 @@ def test_merge_joins_shards_of_versions_with_the_same_points(made, tmp_path_fact
 def test_merge_of_two_old_shards_of_one_version_is_not_a_mix(made, tmp_path, invoke):
     shards = _copy(made, tmp_path, "sweep.shard0of2.h5", "sweep.shard1of2.h5")
     for shard in shards:
-        _set_attr(shard, "vrsweep_version", "0.1.0")
+        _set_attr(shard, "vrsweep_version", "0.1.0", sealed=False)
     result = invoke("merge", *shards, "-o", tmp_path / "merged.h5", "-q")
     assert result.exit_code == 0, result.output
 
 
-@SETTINGS
-@given(which=st.integers(0, 1), label=st.sampled_from(["0/2", "1/2", "0/3", "2/3", "1/1", "3/2", "0/1"]))
-def test_merge_refuses_a_shard_whose_label_does_not_name_its_points(made, tmp_path_factory, invoke, which, label):
-    tmp_path = tmp_path_factory.mktemp("label")
+@pytest.mark.parametrize("which", [0, 1])
+@pytest.mark.parametrize("sealed", [True, False])
+def test_merge_refuses_a_shard_whose_label_was_changed(made, tmp_path, invoke, which, sealed):
+    """Shard 0 of 2 relabelled 1/2 (or 1 relabelled 0/2): its owned mask is the other shard's.
+    Under a fresh checksum (or in a file written before attributes had one) the label is checked
+    against the run's own assignment of points."""
     shards = _copy(made, tmp_path, "sweep.shard0of2.h5", "sweep.shard1of2.h5")
-    if label == f"{which}/2":
-        return  # its own label
-    _set_attr(shards[which], "shard", label)
+    _set_attr(shards[which], "shard", f"{1 - which}/2", sealed=sealed)
     line = _one_error_line(invoke("merge", *shards, "-o", tmp_path / "merged.h5"))
-    assert shards[which].name in line and label in line, line
+    assert shards[which].name in line and f"says it is shard {1 - which}/2" in line, line
+    assert f"those of shard {which}/2" in line, line
     assert not (tmp_path / "merged.h5").exists()
+
+
+@pytest.mark.parametrize("name,value", [("shard", "1/2"), ("vrsweep_version", "0.1.0"), ("config", "sweep: {}\n"),
+                                        ("model", "effective")])
+def test_an_edited_attribute_of_a_shard_fails_its_checksum(made, tmp_path, invoke, name, value):
+    shards = _copy(made, tmp_path, "sweep.shard0of2.h5", "sweep.shard1of2.h5")
+    with h5py.File(shards[0], "r+") as f:
+        f.attrs[name] = value
+    line = _one_error_line(invoke("merge", *shards, "-o", tmp_path / "merged.h5"))
+    assert shards[0].name in line and "do not match their checksum" in line, line
 
 
 def test_merge_names_a_shard_whose_values_were_changed_under_a_fresh_checksum(made, tmp_path, invoke):
@@ -218,6 +239,7 @@ def test_resume_refuses_a_shard_of_an_older_version(made, tmp_path, invoke, writ
     (shard,) = _copy(made, tmp_path, "sweep.shard0of2.h5")
     with h5py.File(shard, "r+") as f:
         f.attrs["vrsweep_version"] = "0.1.0"
+        del f.attrs["vrsweep_attributes_sha256"]  # 0.1.0 wrote none
         f.attrs["vrsweep_complete"] = np.int32(0)
         f["done"][0, 0] = 0
     before = shard.read_bytes()
