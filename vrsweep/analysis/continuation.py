@@ -81,6 +81,9 @@ ENDED_NEWTON = "newton_failed"
 ENDED_STICKING = "sticking"
 ENDED_INTEGRATION = "integration_failed"
 ENDED_GRAZING = "grazing"
+# Stopped by a signal (progress raised KeyboardInterrupt): the orbits so far are kept and written,
+# the file marked incomplete (vrsweep continue; execution/signals.GracefulStop).
+ENDED_INTERRUPTED = "interrupted"
 POINT_FIELDS = ("parameter", "x", "v", "R", "Q_amplitude", "impacts_per_period", "x_max",
                 "slowest_impact", "residual", "newton_iterations")
 
@@ -587,7 +590,11 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 step = min(step * STEP_GROWTH, options["max_step"])
         orbits.append(orbit)
         if progress is not None:
-            progress(orbit)
+            try:
+                progress(orbit)
+            except KeyboardInterrupt as interrupt:  # a stop asked for: what is followed so far is kept
+                return orbits, bifurcations, (ENDED_INTERRUPTED, f"stopped by {interrupt or 'SIGINT'} at "
+                                                                 f"{problem.parameter} = {orbit.parameter:.8g}")
         # No secant through a graze's corner for the next step's _bends: the branch is not smooth there.
         before, current, tangent = (None if crossed else current), orbit, new_tangent
         tried_crossing = False
@@ -767,11 +774,23 @@ def find_start(problem, initial_state, value, transient_periods, max_period):
 
 
 def continue_branch(problem, start, lo, hi, max_points=None, progress=None):
-    """The branch through ``start`` both ways within [lo, hi]. Returns (Branch, [Bifurcation])."""
+    """The branch through ``start`` both ways within [lo, hi]. Returns (Branch, [Bifurcation]).
+
+    progress(orbit): called after each orbit; a KeyboardInterrupt it raises (a signal) ends the
+    branch there with ENDED_INTERRUPTED at both ends not reached, keeping the orbits followed."""
     max_points = problem.options["max_points"] if max_points is None else max_points
     down, bif_down, end_down = follow(problem, start, -1, lo, hi, max_points // 2, progress)
-    up, bif_up, end_up = follow(problem, start, +1, lo, hi, max_points - max_points // 2, progress)
+    if end_down[0] == ENDED_INTERRUPTED:  # stopped: the other way is not followed
+        up, bif_up, end_up = [], [], (ENDED_INTERRUPTED, "not followed: the run was stopped before")
+    else:
+        up, bif_up, end_up = follow(problem, start, +1, lo, hi, max_points - max_points // 2, progress)
     orbits = list(reversed(down)) + [start] + up
     bifurcations = [Bifurcation(kind, orbit) for kind, orbit in bif_down + bif_up]
     bifurcations.sort(key=lambda b: b.orbit.parameter)
     return Branch(periods=start.periods, orbits=orbits, ends={"down": end_down, "up": end_up}), bifurcations
+
+
+def interrupted(branch) -> bool:
+    """Whether a Branch was stopped by a signal (continue_branch's progress) before it ended."""
+    return any(end[0] == ENDED_INTERRUPTED for end in branch.ends.values())
+

@@ -460,6 +460,9 @@ def format_summary(summary, show_config=False) -> str:
         lines.append(f"points:      {progress}")
     else:
         state = {True: "complete", False: "NOT complete", None: "completeness not recorded"}[summary["complete"]]
+        if kind in ("branch", "curves") and summary["complete"] is False:
+            state += (f" (stopped by a signal: what it had followed; `vrsweep continue` again follows the whole "
+                      f"{'branch' if kind == 'branch' else 'curve'})")
         what = "a vrsweep file of a kind this vrsweep does not know" if kind == UNKNOWN_KIND else f"vrsweep {kind}"
         lines.append(f"{summary['path']}: {what}, format {summary['format_version']}, {state}")
     if summary["model"]:

@@ -173,6 +173,10 @@ def _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options
         if shard:
             click.echo(f"Note: {path_in} is shard {shard}: plotting its points only "
                        "(vrsweep merge joins the shards into the whole grid)", err=True)
+        elif not complete and not isinstance(loaded, TrajectoryData) and \
+                loaded.attrs.get("vrsweep_file") in ("branch", "curves"):
+            click.echo(f"Warning: {path_in} is a continuation stopped by a signal: plotting what it had "
+                       "followed (vrsweep continue again follows the whole of it)", err=True)
         elif not complete:
             click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
                        "(finish it with vrsweep run CONFIG --resume)", err=True)

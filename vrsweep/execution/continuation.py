@@ -88,6 +88,8 @@ def run_continuation(config, start_state=None, progress=None, switch=None, failu
     (analysis/period_doubling.py). Returns (branches, bifurcations); branch 0 is the first.
 
     start_state: (2,) where the transient starts (default: the config's initial state).
+    progress(orbit): called after each orbit; a KeyboardInterrupt it raises stops the continuation
+    there, keeping what is followed (each branch's unreached ends: "interrupted").
     failures: a list that receives (parameter, reason) for each period doubling where no branch of
     2p periods was found.
     """
@@ -101,7 +103,7 @@ def run_continuation(config, start_state=None, progress=None, switch=None, failu
                                     section.max_period)
     branch, bifurcations = continuation.continue_branch(problem, start, section.low, section.high,
                                                         section.max_points, progress)
-    if not (section.switch if switch is None else switch):
+    if not (section.switch if switch is None else switch) or continuation.interrupted(branch):
         return [branch], bifurcations
     branches, bifurcations, missed = period_doubling.switch_all(problem, branch, bifurcations, section.low, section.high,
                                                            section.max_points, section.max_period, progress)

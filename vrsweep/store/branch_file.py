@@ -118,27 +118,29 @@ def writable_output(path, overwrite):
     return path
 
 
-def file_attributes(kind, config, method, title, **more):
-    """The file-level attributes of a branch or curves file: kind, format, provenance, CF."""
+def file_attributes(kind, config, method, title, complete=True, **more):
+    """The file-level attributes of a branch or curves file: kind, format, provenance, CF.
+    ``complete`` False: the run was stopped by a signal, and the file holds what it had followed."""
     import numba
 
     from vrsweep.store.provenance import cf_attributes, model_attributes
 
     return {"vrsweep_file": kind, "vrsweep_format_version": np.int32(FORMAT_VERSION),
-            "vrsweep_complete": np.int32(1),
+            "vrsweep_complete": np.int32(1 if complete else 0),
             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "config": config.to_yaml(), **model_attributes(config.model), **more, "method": method,
             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
             **cf_attributes(title)}
 
 
-def write_branch(path, arrays, config, method, overwrite=False):
-    """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``."""
+def write_branch(path, arrays, config, method, overwrite=False, complete=True):
+    """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless
+    ``overwrite``. ``complete`` False: a continuation stopped by a signal (its ends "interrupted")."""
     path = writable_output(path, overwrite)
     parameter = config.continuation.parameter
     attrs = file_attributes(FILE_KIND, config, method,
                             f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}",
-                            parameter=parameter)
+                            complete=complete, parameter=parameter)
     image = io.BytesIO()
     with h5py.File(image, "w", track_order=True) as f:
         for name, value in attrs.items():
@@ -223,7 +225,8 @@ def is_branch_file(path) -> bool:
 
 # What check_branch expects: each array's dimensions and kind of number ("i" whole, "f" real,
 # "s" text). A file written by this version has all of them.
-STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling")
+STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
+            "interrupted")
 KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
 LAYOUT = {
     "point": (("point",), "i"), "multiplier": (("multiplier",), "i"), "bifurcation": (("bifurcation",), "i"),
@@ -317,8 +320,11 @@ def check_layout(f, path, layout, kind):
     version = _whole(f, path, "vrsweep_format_version", 0)
     if version != FORMAT_VERSION:
         raise ResultFileError(f"{path} has {kind} format {version}; this vrsweep reads format {FORMAT_VERSION}")
-    if _whole(f, path, "vrsweep_complete", 0) != 1:
-        raise ResultFileError(f"{path} is incomplete: the run that wrote it did not finish")
+    complete = _whole(f, path, "vrsweep_complete", 0)
+    if complete not in (0, 1):
+        raise ResultFileError(f"{path} is corrupt: attribute vrsweep_complete must be 0 or 1, found {complete}")
+    # 0: a run stopped by a signal wrote what it had followed (its ends say "interrupted"); a reader
+    # shows it as such (info, plot), and a curves file's only through its own writer, always 1.
     _attr_text(f, path, "config", required=True)
     _texts_are_text(f, path, "attribute ", TEXT_ATTRS)
     # No array is read before its size is known to fit in the file: a damaged dataspace could
@@ -351,6 +357,13 @@ def check_layout(f, path, layout, kind):
             raise ResultFileError(f"{path} is corrupt: {name} must count 0, 1, ... along its dimension")
     if len(values.get("multiplier", ())) != 2:
         raise ResultFileError(f"{path} is corrupt: multiplier must have 2 values (the two Floquet multipliers)")
+    # Only a branch stopped by a signal is written unfinished (its ends "interrupted"), and it says so.
+    stopped = any(_is_text(v) and _text(v) == "interrupted" for name in values
+                  if name.endswith(("_end_first_status", "_end_last_status")) for v in values[name].reshape(-1))
+    if complete != 1 and not stopped:
+        raise ResultFileError(f"{path} is incomplete: the run that wrote it did not finish")
+    if complete == 1 and stopped:
+        raise ResultFileError(f"{path} is corrupt: it ends interrupted in a file marked complete")
     # After the layout: an array replaced whole loses its attributes too, and its own message says more.
     _check_attributes(f, path)
     return values
