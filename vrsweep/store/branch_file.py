@@ -325,7 +325,8 @@ def check_layout(f, path, layout, kind):
         raise ResultFileError(f"{path} is corrupt: attribute vrsweep_complete must be 0 or 1, found {complete}")
     # 0: a run stopped by a signal wrote what it had followed (its ends say "interrupted"); a reader
     # shows it as such (info, plot), and a curves file's only through its own writer, always 1.
-    _attr_text(f, path, "config", required=True)
+    if not _attr_text(f, path, "config", required=True).strip():  # '' would read as a config of defaults
+        raise ResultFileError(f"{path} is corrupt: attribute config is empty")
     _texts_are_text(f, path, "attribute ", TEXT_ATTRS)
     # No array is read before its size is known to fit in the file: a damaged dataspace could
     # otherwise claim any size and have it allocated (no array of these files is compressed).
@@ -394,12 +395,22 @@ def stored_config(path, text, required):
     try:
         config = parse_config(text, f"{path} (its config)", line_numbers=False)
     except ConfigError as error:
-        if not required:
+        if not required and _is_mapping(text):  # a later version's config, say: the figure goes without it
             return None
         raise ResultFileError(f"{path} is corrupt: its config is not valid ({error.problems[0]})") from None
     if required and config.continuation is None:
         raise ResultFileError(f"{path} is corrupt: its config has no continuation section")
     return config
+
+
+def _is_mapping(text) -> bool:
+    """Whether ``text`` reads as a YAML mapping (what any version's config is), not '0' or a list."""
+    from vrsweep.config.yaml import load_round_trip
+
+    try:
+        return isinstance(load_round_trip(text, allow_duplicate_keys=True), dict)
+    except Exception:  # noqa: BLE001 - ruamel raises many kinds for text that is no YAML
+        return False
 
 
 def check_values(path, values, config, what, finite):
