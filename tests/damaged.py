@@ -53,3 +53,17 @@ def refused_by_plot_and_info(invoke, path, folder, words):
     for args in (("plot", path, "-o", folder / "figure.png"), ("info", path)):
         assert words in one_line_error(invoke(*args)), args
     assert not (folder / "figure.png").exists()
+
+
+def reseal(path):
+    """Seal the attributes of the vrsweep file ``path`` again after a test changed them by hand, as
+    its writer would have sealed them (store/sealing.py): a file as another run, shard or version
+    would have written it, not a damaged one."""
+    from vrsweep.store.sealing import SWEEP_UNSEALED, WHEN_AND_HOW, seal_attributes
+
+    with h5py.File(path, "r+") as f:
+        kind = f.attrs.get("vrsweep_file", "sweep")
+        kind = kind.decode() if isinstance(kind, bytes) else kind
+        skip = {"sweep": SWEEP_UNSEALED, "shard": SWEEP_UNSEALED, "trajectory": WHEN_AND_HOW}.get(kind, ())
+        seal_attributes(f, skip)
+

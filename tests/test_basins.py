@@ -398,6 +398,7 @@ def test_resume_adds_the_labels_to_a_finished_file_without_them(small_sweep, tmp
     with h5py.File(merged, "r+") as f:  # a file merged by a vrsweep that did not label
         for name in [n for n in f if n.startswith("attractor")]:
             del f[name]
+        del f.attrs["vrsweep_attributes_sha256"]  # nor had checksums of attributes
     result = invoke("plot", merged, "--kind", "basin", "-o", tmp_path / "x.png")
     assert result.exit_code == 2 and "--resume" in result.output
     run_ok("run", path, "--resume", "-o", merged, "--quiet")

@@ -199,6 +199,7 @@ def test_a_map_of_any_stored_variable(plane, tmp_path, name, invoke):
 
 def test_a_map_is_labelled_with_the_units_the_file_gives(plane, tmp_path):
     """Units come from the file's attributes, not from what vrsweep writes today."""
+    from damaged import reseal
     from vrsweep import plot
 
     copy = tmp_path / "units.h5"
@@ -206,6 +207,7 @@ def test_a_map_is_labelled_with_the_units_the_file_gives(plane, tmp_path):
     with h5py.File(copy, "r+") as f:
         f["x_min"].attrs["units"] = "mm"
         f["Omega"].attrs["units"] = "rad/s"
+    reseal(copy)  # as a writer that chose those units would have sealed them
     fig = plot.plot(copy, var="x_min")  # a variable to map asks for a map
     x_label, y_label, bar_label = fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel(), fig.axes[1].get_ylabel()
     assert x_label.endswith("$g$") and y_label.endswith("$\\Omega$ [rad/s]"), (x_label, y_label)

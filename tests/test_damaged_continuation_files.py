@@ -410,3 +410,13 @@ def test_one_flipped_bit_anywhere(files, tmp_path, invoke, no_numerics, kind, wh
         handle.seek(offset)
         handle.write(bytes([original ^ (1 << bit)]))
     _harmless_or_refused(invoke, kind, files[kind], path, tmp_path)
+
+
+@pytest.mark.parametrize("kind", ["branch", "curves"])
+@pytest.mark.parametrize("text", ["", "   \n", "0", "[1, 2]", "just words"])
+def test_a_stored_config_that_is_no_config_at_all(files, tmp_path, invoke, no_numerics, kind, text):
+    """In a file without the attributes' checksum (written before it): an empty config read as one
+    of defaults, and '0' (no mapping, so no later version's config either) was drawn without one."""
+    change = lambda f: f.attrs.__setitem__("config", text)  # noqa: E731
+    path = damaged_copy(files[kind], tmp_path, _unprotected(change))
+    _refused_everywhere(invoke, kind, path, tmp_path, "config")

@@ -82,11 +82,12 @@ def _run_interrupted(config, out):
 def _as_an_earlier_version_wrote_it(out):
     with h5py.File(out, "r+") as f:
         f.attrs["config"] = HAND_EMITTED
+        del f.attrs["vrsweep_attributes_sha256"]  # attributes had no checksum then
 
 
 def _contents(path):
     """Every dataset's bytes and every root attribute but when, how and as what text it was written."""
-    skip = ("created", "date_created", "history", "config")
+    skip = ("created", "date_created", "history", "config", "vrsweep_attributes_sha256")  # the last: of the text
     with h5py.File(path, "r") as f:
         attrs = {key: repr(value) for key, value in f.attrs.items() if key not in skip}
         data = {name: (ds.dtype.str, ds.shape, np.asarray(ds[()]).tobytes()) for name, ds in f.items()}

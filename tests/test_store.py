@@ -20,6 +20,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from damaged import reseal
 from vrsweep.commands.options import OUTPUT_FLAGS
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.store.reading import load_results, open_results
@@ -520,6 +521,7 @@ def write_shards(tmp_path, n_shards=3, axes=AXES_2D, skip=()):
                    finish=len(points) == owned.sum())
         with h5py.File(path, "r+") as f:  # label as the sweep would (before any resume)
             f.attrs["shard"] = f"{i + 1}/{n_shards}"
+        reseal(path)  # as the sweep's writer seals its labels (store/sealing.py)
         paths.append(path)
     return paths
 
@@ -594,6 +596,7 @@ def test_merge_names_a_foreign_shard(tmp_path):
     shards = write_shards(tmp_path)
     with h5py.File(shards[1], "r+") as f:
         f.attrs["config"] = CONFIG.replace("num: 5", "num: 6")
+    reseal(shards[1])  # a shard of another run, not a damaged one
     with pytest.raises(ResultFileError) as info:
         merge_results(shards, tmp_path / "merged.h5")
     message = str(info.value)
@@ -631,6 +634,7 @@ def test_merge_keeps_the_first_derived_variables_and_says_if_others_differ(tmp_p
         ds.dims[0].attach_scale(f["Omega"])
         for key in ("units", "long_name"):
             ds.attrs[key] = attrs[key]
+    reseal(shards[1])
     assert merge_results(shards, tmp_path / "merged2.h5").warnings == []
     # Shard 3's differ: kept from the first shard, with a warning naming both.
     with h5py.File(shards[2], "r+") as f:

@@ -52,6 +52,10 @@ class _Group(click.Group):
         except OSError as error:  # disk full, permission denied, ...: a message, not a traceback
             click.echo(f"Error: {error.strerror or error}: {error.filename or ''}".rstrip(": "), err=True)
             ctx.exit(1)
+        except MemoryError:  # a safety net: runs count what they hold first (estimate.memory_problem)
+            click.echo("Error: out of memory: this command needs more than the process may have; ask for less "
+                       "(a smaller grid, fewer measure_periods) or run where more memory is free", err=True)
+            ctx.exit(1)
         except KeyboardInterrupt as interrupt:
             # Not click's "Aborted!" and exit 1: one line and the shell's code for SIGINT, 128 + 2,
             # as `run` does (which handles its own, to say how to resume). Files are written to a

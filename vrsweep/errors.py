@@ -104,6 +104,18 @@ class FlagTypeError(UsageError, TypeError):
         super().__init__(f"{argument} must be True or False, got {value!r}")
 
 
+class PathTypeError(UsageError, TypeError):
+    """A library function's path argument given something other than a str or os.PathLike path
+    (``output=123``, ``output=b"o.h5"``): a TypeError, as Python's own argument checks raise, and a
+    UsageError (exit 2), raised before anything is computed."""
+
+    def __init__(self, argument, value):
+        self.argument, self.value = argument, value
+        hint = " (decode it: os.fsdecode)" if isinstance(value, bytes) else ""
+        super().__init__(f"{argument} must be a path (a str or an os.PathLike such as pathlib.Path), "
+                         f"got {type(value).__name__} {value!r}"[:300] + hint)
+
+
 class RunFailed(VrsweepError):
     """A run stopped by a failure after the chunks finished so far were saved: resuming the run
     computes the rest. Exit 1, like any failure at run time."""

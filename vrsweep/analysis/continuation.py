@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vrsweep.analysis import grazing
+from vrsweep.analysis.commensurate import RATIO_TOLERANCE, check_commensurate  # noqa: F401 - continuation's rule
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
@@ -80,6 +81,9 @@ ENDED_NEWTON = "newton_failed"
 ENDED_STICKING = "sticking"
 ENDED_INTEGRATION = "integration_failed"
 ENDED_GRAZING = "grazing"
+# Stopped by a signal (progress raised KeyboardInterrupt): the orbits so far are kept and written,
+# the file marked incomplete (vrsweep continue; execution/signals.GracefulStop).
+ENDED_INTERRUPTED = "interrupted"
 POINT_FIELDS = ("parameter", "x", "v", "R", "Q_amplitude", "impacts_per_period", "x_max",
                 "slowest_impact", "residual", "newton_iterations")
 
@@ -156,45 +160,6 @@ class ContinuationProblem:
             built = self._built[value] = kernels_for(self.model).coefficients(
                 dict(self.parameters, **{self.parameter: value}))
         return built
-
-
-# Omega/omega is p/q when it agrees with it to this (relative): a ratio typed as a decimal (8.6 =
-# 43/5) is p/q to roundoff, one that is not (8.6001) is off by far more.
-RATIO_TOLERANCE = 1e-12
-
-
-def check_commensurate(parameters, model, moving, max_period=CONTINUATION_DEFAULTS["max_period"]):
-    """The slow periods q after which the original model's fast forcing g cos(Omega t) repeats, 1
-    when there is none (another model, or g = 0 throughout); UsageError when it never repeats
-    within ``max_period`` slow periods, or when Omega or omega moves.
-
-    Decided from the values continued (``moving``: the parameter, or the names of a curve's two):
-    a continued g is a forcing whatever parameters.g says, so the same Omega/omega is accepted or
-    refused alike. Omega/omega = p/q in lowest terms repeats after q slow periods, and every
-    periodic orbit closes after a multiple of q (find_start asks for one)."""
-    from fractions import Fraction
-
-    moving = (moving,) if isinstance(moving, str) else tuple(moving)
-    if model != "original" or ("g" not in moving and parameters.get("g", 0.0) == 0.0):
-        return 1
-    for name in moving:
-        if name in ("Omega", "omega"):
-            raise UsageError.naming(
-                "{parameter} = {name} cannot be continued in the original model: its fast forcing repeats "
-                "only where Omega/omega is a ratio of whole numbers, which a moving {name} leaves at once; "
-                "continue {name} in the effective model (no fast force) instead",
-                {"parameter": "continuation.parameter"}, name=name)
-    ratio = parameters["Omega"] / parameters["omega"]
-    fraction = Fraction(ratio).limit_denominator(max(int(max_period), 1))
-    if not abs(ratio - fraction) <= RATIO_TOLERANCE * abs(ratio):
-        raise UsageError.naming(
-            "Omega/omega = {ratio} is not a ratio p/q of whole numbers with q at most {max_period} = {limit}: "
-            "the original model's fast forcing then repeats after no orbit period continue looks for (it is "
-            "quasi-periodic), so there is no periodic orbit to continue; choose {Omega} with Omega/omega = p/q "
-            "(e.g. Omega = 4 with omega = 0.5: 8; Omega = 4.3: 43/5, orbits of multiples of 5 slow periods)",
-            {"Omega": "parameters.Omega", "max_period": "continuation.max_period"}, ratio=f"{ratio:.10g}",
-            limit=max_period)
-    return fraction.denominator
 
 
 def evaluate(problem, state, value, periods):
@@ -625,7 +590,11 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 step = min(step * STEP_GROWTH, options["max_step"])
         orbits.append(orbit)
         if progress is not None:
-            progress(orbit)
+            try:
+                progress(orbit)
+            except KeyboardInterrupt as interrupt:  # a stop asked for: what is followed so far is kept
+                return orbits, bifurcations, (ENDED_INTERRUPTED, f"stopped by {interrupt or 'SIGINT'} at "
+                                                                 f"{problem.parameter} = {orbit.parameter:.8g}")
         # No secant through a graze's corner for the next step's _bends: the branch is not smooth there.
         before, current, tangent = (None if crossed else current), orbit, new_tangent
         tried_crossing = False
@@ -805,11 +774,23 @@ def find_start(problem, initial_state, value, transient_periods, max_period):
 
 
 def continue_branch(problem, start, lo, hi, max_points=None, progress=None):
-    """The branch through ``start`` both ways within [lo, hi]. Returns (Branch, [Bifurcation])."""
+    """The branch through ``start`` both ways within [lo, hi]. Returns (Branch, [Bifurcation]).
+
+    progress(orbit): called after each orbit; a KeyboardInterrupt it raises (a signal) ends the
+    branch there with ENDED_INTERRUPTED at both ends not reached, keeping the orbits followed."""
     max_points = problem.options["max_points"] if max_points is None else max_points
     down, bif_down, end_down = follow(problem, start, -1, lo, hi, max_points // 2, progress)
-    up, bif_up, end_up = follow(problem, start, +1, lo, hi, max_points - max_points // 2, progress)
+    if end_down[0] == ENDED_INTERRUPTED:  # stopped: the other way is not followed
+        up, bif_up, end_up = [], [], (ENDED_INTERRUPTED, "not followed: the run was stopped before")
+    else:
+        up, bif_up, end_up = follow(problem, start, +1, lo, hi, max_points - max_points // 2, progress)
     orbits = list(reversed(down)) + [start] + up
     bifurcations = [Bifurcation(kind, orbit) for kind, orbit in bif_down + bif_up]
     bifurcations.sort(key=lambda b: b.orbit.parameter)
     return Branch(periods=start.periods, orbits=orbits, ends={"down": end_down, "up": end_up}), bifurcations
+
+
+def interrupted(branch) -> bool:
+    """Whether a Branch was stopped by a signal (continue_branch's progress) before it ended."""
+    return any(end[0] == ENDED_INTERRUPTED for end in branch.ends.values())
+

@@ -75,6 +75,7 @@ ENDED_MAX_POINTS = "max_points"
 ENDED_NEWTON = "newton_failed"
 ENDED_INTEGRATION = "integration_failed"
 ENDED_STICKING = "sticking"
+ENDED_INTERRUPTED = continuation.ENDED_INTERRUPTED  # a signal: the points so far are kept
 GRAZING_MEETING = {"fold": "fold_grazing", "period_doubling": "period_doubling_grazing"}
 # An orbit within this distance of the barrier (relative to max(1, Delta)) is next to a graze
 # (or within the Jacobian's reach of it: _near_barrier).
@@ -570,7 +571,11 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
             return points, specials, end
         points.append(point)
         if progress is not None:
-            progress(point)
+            try:
+                progress(point)
+            except KeyboardInterrupt as interrupt:  # a stop asked for: what is followed so far is kept
+                return points, specials, (ENDED_INTERRUPTED, f"stopped by {interrupt or 'SIGINT'} at "
+                                                             f"{_where(problem, point)}")
         if point.newton_iterations <= EASY_NEWTON:
             step = min(step * STEP_GROWTH, options["max_step"])
         current, tangent = point, new_tangent
@@ -592,7 +597,10 @@ def continue_curve(problem, kind, start, ranges, max_points=None, progress=None)
     """The curve through ``start`` both ways within ``ranges``. Returns (Curve, [SpecialPoint])."""
     max_points = problem.options["max_points"] if max_points is None else max_points
     down, specials_down, end_down = follow(problem, kind, start, -1, ranges, max_points // 2, progress)
-    up, specials_up, end_up = follow(problem, kind, start, +1, ranges, max_points - max_points // 2, progress)
+    if end_down[0] == ENDED_INTERRUPTED:  # stopped: the other way is not followed
+        up, specials_up, end_up = [], [], (ENDED_INTERRUPTED, "not followed: the run was stopped before")
+    else:
+        up, specials_up, end_up = follow(problem, kind, start, +1, ranges, max_points - max_points // 2, progress)
     points = list(reversed(down)) + [start] + up
     specials = [SpecialPoint(special[0], special[1], values=special[2] if len(special) > 2 else None)
                 for special in specials_down + specials_up]

@@ -174,6 +174,9 @@ def doubled_branch(problem, doubling, lo, hi, max_points, progress=None, doublin
     ways = []
     for direction in (-1, +1):
         before = len(met)
+        if ways and ways[0][2][0] == continuation.ENDED_INTERRUPTED:  # stopped: the other way is not followed
+            ways.append(([], [], (continuation.ENDED_INTERRUPTED, "not followed: the run was stopped before"), []))
+            continue
         orbits, bifurcations, end = continuation.follow(problem, start, direction, lo, hi, max_points // 2,
                                                         progress, stop=stop)
         ways.append((orbits, bifurcations, end, met[before:]))
@@ -246,6 +249,10 @@ def switch_all(problem, branch, bifurcations, lo, hi, max_points, max_period, pr
                 continue
             number = len(branches)
             branches.append(switched)
+            if continuation.interrupted(switched):  # a signal: keep what is followed, switch no more
+                found.extend(continuation.Bifurcation(kind, orbit, number) for kind, orbit in detail)
+                pending.clear()
+                break
             reached.extend(met)
             new = [continuation.Bifurcation(kind, orbit, number) for kind, orbit in detail]
             found.extend(new)

@@ -97,16 +97,27 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
         execution.problem_of(config)  # refuse a bad request before integrating anything
     path = config.output_path(output)
     _prepare_output(path, overwrite, quiet, config)
-    with flag_wording(flags):
+    from vrsweep.analysis.continuation import interrupted
+    from vrsweep.execution.signals import GracefulStop
+
+    # SIGINT or SIGTERM stops the continuation at its next orbit, and what it has followed is
+    # written (marked incomplete); a second signal stops at once, keeping nothing.
+    with GracefulStop(announce=False) as stop, flag_wording(flags):
+        stop.announce_with(f"stopping at the next orbit: the branch followed so far will be written to {path}")
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
         missed = []
-        branches, bifurcations = execution.run_continuation(config, start_state, failures=missed)
+        branches, bifurcations = execution.run_continuation(config, start_state, failures=missed,
+                                                            progress=lambda orbit: stop.check())
+        stopped = any(interrupted(branch) for branch in branches)
         delta = execution.barrier_of(config)
         # The stored config holds the start's value of the continued parameter, not its unused default.
         section = config.continuation
         config = dataclasses.replace(config, parameters={**config.parameters, section.parameter: section.start})
         write_branch(path, branch_arrays(branches, bifurcations, delta), config, config.integration.method,
-                     overwrite=overwrite)
+                     overwrite=overwrite, complete=not stopped)
+    if stop.signum is not None:
+        _say_interrupted(stop.signum, path, sum(len(branch.orbits) for branch in branches), stopped, "orbits",
+                         "branch")
     if not quiet:
         name = config.continuation.parameter
         for number, branch in enumerate(branches):
@@ -148,16 +159,28 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
     name = "_".join(str(index) for index in point)
     path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{name}_{along}.h5")
     _prepare_output(path, overwrite, quiet, requests[0].config)
-    with flag_wording(flags):
+    from vrsweep.analysis.curves import ENDED_INTERRUPTED
+    from vrsweep.execution.signals import GracefulStop
+
+    # As for a branch: a signal stops at the next point, and the curves so far are written.
+    with GracefulStop(announce=False) as stop, flag_wording(flags):
+        stop.announce_with(f"stopping at the next point: the curves followed so far will be written to {path}")
         curves, specials = [], []
+        stopped = False
         for request in requests:
-            found, found_specials = execution.run_curve(request)
+            found, found_specials = execution.run_curve(request, progress=lambda point: stop.check())
             for special in found_specials:
                 special.curve = len(curves)
             curves += found
             specials += found_specials
+            stopped = any(end[0] == ENDED_INTERRUPTED for curve in found for end in curve.ends.values())
+            if stopped:
+                break  # the other --point requests are not followed
         write_curves(path, curve_arrays(curves, specials, request.names), request.names, request.config,
-                     request.config.integration.method, overwrite=overwrite)
+                     request.config.integration.method, overwrite=overwrite, complete=not stopped)
+    if stop.signum is not None:
+        _say_interrupted(stop.signum, path, sum(len(curve.points) for curve in curves), stopped, "points",
+                         "curves")
     if not quiet:
         first, second = request.names
         for number, curve in enumerate(curves):
@@ -177,6 +200,20 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
 
 # As issue 35 measured it: the first continue, with an empty cache, was silent for up to 3 minutes.
 COMPILE_DURATION = "up to 3 minutes"
+
+
+def _say_interrupted(signum, path, count, stopped, what, whole):
+    """The one line after a signal, and the exit code of the signal (128 + its number)."""
+    import signal
+    import sys
+
+    name = signal.Signals(signum).name
+    if stopped:
+        click.echo(f"Interrupted ({name}): the {count} {what} followed so far are in {path}, marked incomplete "
+                   f"(info and plot read it); run vrsweep continue again for the whole {whole}", err=True)
+    else:
+        click.echo(f"Interrupted ({name}) as the continuation finished: {path} is complete", err=True)
+    sys.exit(128 + signum)
 
 
 def _prepare_output(path, overwrite, quiet, config):

@@ -293,7 +293,17 @@ def _describe_groups(path, kind) -> dict | None:
     reader's error."""
     from vrsweep.store.reading import open_groups
     from vrsweep.store import FORMAT_VERSION
+    from vrsweep.store.fileio import open_hdf5
+    from vrsweep.store.sealing import check_attributes_of_any_kind
 
+    try:
+        # A file described from its groups may be one whose kind was damaged: its checksum says so.
+        with open_hdf5(path, "r") as f:
+            check_attributes_of_any_kind(f, path)
+    except ResultFileError:
+        raise
+    except Exception:  # noqa: BLE001 - unreadable: the reader's error says why (below, or the caller's)
+        return None
     try:
         groups = open_groups(path)
     except ResultFileError:
@@ -450,6 +460,9 @@ def format_summary(summary, show_config=False) -> str:
         lines.append(f"points:      {progress}")
     else:
         state = {True: "complete", False: "NOT complete", None: "completeness not recorded"}[summary["complete"]]
+        if kind in ("branch", "curves") and summary["complete"] is False:
+            state += (f" (stopped by a signal: what it had followed; `vrsweep continue` again follows the whole "
+                      f"{'branch' if kind == 'branch' else 'curve'})")
         what = "a vrsweep file of a kind this vrsweep does not know" if kind == UNKNOWN_KIND else f"vrsweep {kind}"
         lines.append(f"{summary['path']}: {what}, format {summary['format_version']}, {state}")
     if summary["model"]:

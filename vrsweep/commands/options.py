@@ -72,8 +72,10 @@ class FiniteFloatRange(click.FloatRange):
         return number
 
 
+# More threads than any machine has CPUs: a number past it is a typo, not a request to cap.
+MAX_THREADS = 65536
 threads_option = click.option(
-    "--threads", type=click.IntRange(min=1), default=None,
+    "--threads", type=click.IntRange(min=1, max=MAX_THREADS), default=None,
     help="Numba threads (default: all cores, or NUMBA_NUM_THREADS).",
 )
 quiet_option = click.option("--quiet", "-q", is_flag=True, help="No progress bar or summary.")

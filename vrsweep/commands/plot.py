@@ -1,6 +1,7 @@
 """vrsweep plot FILE.h5 [-o FIG.png|.pdf|.svg] [--kind ...]: a figure from a sweep or a trajectory;
 vrsweep plot MAP.h5 CURVES.h5 ...: bifurcation curves over a map."""
 
+import os
 from pathlib import Path
 
 import click
@@ -9,7 +10,7 @@ FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
 FLAGS = {"at": "--at", "x_axis": "--x", "kind": "--kind", "amplitude": "--amplitude", "log": "--log",
          "linear": "--linear", "periods": "--periods", "var": "--var", "style": "--style", "size": "--size",
-         "vmin": "--vmin", "vmax": "--vmax", "title": "--title",
+         "vmin": "--vmin", "vmax": "--vmax", "title": "--title", "dpi": "--dpi",
          "finish": "'vrsweep run CONFIG --resume -o FILE'", "simulate_compare": "vrsweep simulate --compare effective"}
 
 
@@ -62,6 +63,9 @@ def default_output(path, kind):
                    "the file's metadata (PNG/SVG Description, PDF Subject); vrsweep info FILE.h5 shows "
                    "the parameters.")
 @click.option("--size", default=None, metavar="W,H", help="Figure size in inches, e.g. --size 3.4,2.6.")
+@click.option("--overwrite", is_flag=True,
+              help="Replace an existing file at the figure's path that is not a figure vrsweep wrote "
+                   "(vrsweep's own figures are replaced without it).")
 @click.option("--style", default=None, metavar="NAME|FILE",
               help="A matplotlib style sheet (e.g. seaborn-v0_8-paper, ggplot) or a .mplstyle file: fonts, "
                    "colours and line widths follow it.")
@@ -69,8 +73,8 @@ def default_output(path, kind):
 @click.option("--vmax", type=float, default=None,
               help="Maps: the top of the colour scale (default: the 99th percentile, said on the colour "
                    "bar when it caps; lyapunov: symmetric about 0, --vmax alone sets both ends).")
-def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, dpi, title, size, style, vmin,
-            vmax):
+def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, dpi, title, size, overwrite, style,
+            vmin, vmax):
     """Draw a figure from a vrsweep file.
 
     \b
@@ -111,15 +115,18 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
 
     try:
         options = dict(title=title, size=size, style=style, vmin=vmin, vmax=vmax)
-        figure, path = _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, options)
+        path, file_format = _output(paths, output, kind, overwrite)
+        figure = _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options)
+        # Rendered in memory, then written whole: a full disk leaves no half figure, and the
+        # message can say how many bytes the figure needs.
+        from vrsweep.plot import render
+
+        image = render(figure, file_format, dpi)
     except VrsweepError as error:
         raise error.reworded(FLAGS) from None
-    # Rendered in memory, then written whole: a full disk leaves no half figure, and the
-    # message can say how many bytes the figure needs.
-    from vrsweep.plot import render
     from vrsweep.store.fileio import write_bytes
 
-    write_bytes(path, render(figure, path.suffix.lower()[1:], dpi))
+    write_bytes(path, image)
     from vrsweep.plot import layout_note
 
     if layout_note(figure):
@@ -127,19 +134,36 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     click.echo(f"-> {path}", err=True)
 
 
-def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, options):
+def _output(paths, output, kind, overwrite):
+    """(the path to write the figure at, its format png/pdf/svg): the format from the suffix of the
+    name given (a link's target may have any name), the path from fileio.output_target."""
+    from vrsweep.errors import UsageError
+    from vrsweep.plot.labels import made_by_vrsweep
+    from vrsweep.store.fileio import is_hdf5, output_target
+
+    given = Path(output) if output else default_output(paths[0], kind)
+    if given.suffix.lower() not in FORMATS:
+        raise UsageError(f"-o {given}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
+    # Never an input nor anything other than a regular file; a link is followed (output_target).
+    target = output_target(given, overwrite=True, inputs=paths, inputs_are="one of the files being plotted")
+    shown = str(given) if os.fspath(target) == os.fspath(given) else f"{given} (a link to {target})"
+    option = "-o " if output else "the default figure path "
+    if is_hdf5(target):  # results (a sweep, a branch...) are never replaced by a picture, asked or not
+        raise UsageError(f"{option}{shown} is an HDF5 file (results?): a figure never replaces one; "
+                         "choose another output")
+    # A figure vrsweep wrote is replaced unasked (a figure is redrawn often); any other file is
+    # someone's, and the default path in particular was never named by the user.
+    if os.path.exists(target) and not overwrite and not made_by_vrsweep(target):
+        raise UsageError(f"{option}{shown} already exists and is not a figure vrsweep wrote: pass --overwrite "
+                         "to replace it, or choose another output with -o")
+    return Path(target), given.suffix.lower()[1:]
+
+
+def _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options):
     from vrsweep import plot
     from vrsweep.errors import UsageError
     from vrsweep.store.trajectory_file import TrajectoryData
 
-    path = Path(output) if output else default_output(paths[0], kind)
-    if path.suffix.lower() not in FORMATS:
-        raise UsageError(f"-o {path}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
-    from vrsweep.store.fileio import output_target
-
-    # A figure is replaced without asking (as it always was), but never an input nor anything other
-    # than a regular file; a link is followed (fileio.output_target).
-    path = Path(output_target(path, overwrite=True, inputs=paths, inputs_are="one of the files being plotted"))
     data = [plot.load(p) for p in paths]
     for path_in, loaded in zip(paths, data):
         if isinstance(loaded, TrajectoryData):
@@ -149,6 +173,10 @@ def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
         if shard:
             click.echo(f"Note: {path_in} is shard {shard}: plotting its points only "
                        "(vrsweep merge joins the shards into the whole grid)", err=True)
+        elif not complete and not isinstance(loaded, TrajectoryData) and \
+                loaded.attrs.get("vrsweep_file") in ("branch", "curves"):
+            click.echo(f"Warning: {path_in} is a continuation stopped by a signal: plotting what it had "
+                       "followed (vrsweep continue again follows the whole of it)", err=True)
         elif not complete:
             click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
                        "(finish it with vrsweep run CONFIG --resume)", err=True)
@@ -167,6 +195,6 @@ def _figure(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
             raise UsageError("--kind basin draws one file; plot the others one at a time")
         if x_axis or amplitude or log or periods or var:
             raise UsageError("--x, --amplitude, --log, --periods and --var do not apply to --kind basin")
-        return plot.basin_plot(data[0], at=_parse_at(at_items), **options), path
+        return plot.basin_plot(data[0], at=_parse_at(at_items), **options)
     return plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis,
-                     log=log, periods=window, var=var, **options), path
+                     log=log, periods=window, var=var, **options)

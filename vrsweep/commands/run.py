@@ -49,13 +49,15 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
     from vrsweep.execution.estimate import check_size, format_duration
-    from vrsweep.execution.threads import available_threads
+    from vrsweep.execution.threads import available_threads, check_threading_layer
 
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
     if device is not None:  # --device is --set device=... spelled as an option
         overrides = (*overrides, f"integration.device={device}")
     config = load_config(config_path, overrides)
+    if not dask_address or dask_address.startswith("local:"):  # remote workers run their own numba
+        check_threading_layer()
     announce_fixed_axes(config_path, overrides, config)
     requested_threads = threads
     # A remote Dask worker's thread count is the worker's business; a local one's is this machine's.

@@ -141,6 +141,20 @@ class Unrepresentable(Exception):
                          f"{type(value).__qualname__} ({show(value)})")
 
 
+# A config is at most a few levels deep (model.parameters.NAME.range...); a dict nested deeper
+# than this holds no config, and writing it out would recurse until Python's stack is spent.
+MAX_NESTING = 64
+
+
+class NestedTooDeeply(Unrepresentable):
+    """A dict config nested deeper than MAX_NESTING, or that contains itself."""
+
+    def __init__(self, path, cycle=False):
+        self.path, self.value = tuple(path), None
+        Exception.__init__(self, "contains itself (a dict or list that holds itself)" if cycle else
+                           f"nested more than {MAX_NESTING} levels deep; a config is a few levels deep")
+
+
 def yaml_text(data) -> str:
     """A dict nested as a config's YAML, written as YAML text that reads back to the same values.
 
@@ -152,21 +166,30 @@ def yaml_text(data) -> str:
     import io
 
     stream = io.StringIO()
-    YAML(typ="rt").dump(_yaml_ready(data, ()), stream)
+    YAML(typ="rt").dump(_yaml_ready(data, (), set()), stream)
     return stream.getvalue()
 
 
-def _yaml_ready(value, path):
+def _yaml_ready(value, path, active):
     import os
 
     import numpy as np
 
-    if isinstance(value, dict):
-        return {key_text(key): _yaml_ready(item, path + (key_text(key),)) for key, item in value.items()}
+    if isinstance(value, (dict, list, tuple)):
+        if len(path) >= MAX_NESTING or id(value) in active:
+            raise NestedTooDeeply(path[:4], cycle=id(value) in active)
+        active.add(id(value))
+        try:
+            if isinstance(value, dict):
+                return {key_text(key): _yaml_ready(item, path + (key_text(key),), active) for key, item in value.items()}
+            return [_yaml_ready(item, path + (index,), active) for index, item in enumerate(value)]
+        finally:
+            active.discard(id(value))
     if isinstance(value, np.ndarray):
+        if value.ndim > MAX_NESTING:
+            raise NestedTooDeeply(path)
         value = value.tolist()
-    if isinstance(value, (list, tuple)):
-        return [_yaml_ready(item, path + (index,)) for index, item in enumerate(value)]
+        return _yaml_ready(value, path, active) if isinstance(value, list) else value
     if isinstance(value, np.generic):
         value = value.item()
     if isinstance(value, os.PathLike):

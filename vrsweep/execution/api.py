@@ -29,7 +29,7 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from vrsweep.errors import FlagTypeError, UsageError, VrsweepError
+from vrsweep.errors import FlagTypeError, PathTypeError, UsageError, VrsweepError
 from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
 
 __all__ = ["sweep", "simulate", "theory", "resolve_config", "setting_text"]
@@ -65,9 +65,11 @@ def setting_text(name: str, value) -> str:
     bit for bit (``repr``; ``.inf`` and ``.nan`` for the non-finite ones, which are then refused
     as the command line refuses them); True/False as ``true``/``false``; None as ``null``.
     """
+    import numpy as np
+
     if isinstance(value, str):
         text = value
-    elif isinstance(value, bool):
+    elif isinstance(value, (bool, np.bool_)):  # numpy's too: g=np.bool_(True) is no number 1.0
         text = "true" if value else "false"
     elif value is None:
         text = "null"
@@ -175,16 +177,18 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
     """
     from vrsweep.execution.estimate import check_size
     from vrsweep.execution.job import run_job
-    from vrsweep.execution.threads import available_threads
+    from vrsweep.execution.threads import available_threads, check_threading_layer
     from vrsweep.store.reading import load_results
 
     _check_flags(progress=progress, overwrite=overwrite, resume=resume, allow_large=allow_large)
+    _check_path("output", output)
     resolved = resolve_config(config, overrides)
     if resume and overwrite:
         raise UsageError.naming("{resume} and {overwrite} exclude each other", ARGUMENT_WORDS)
     if resume and output is None:
         raise UsageError.naming("{resume} continues the run in a file: give its {output}", ARGUMENT_WORDS)
     threads = _capped_threads(threads)
+    check_threading_layer()
     check_size(resolved, threads or available_threads(), allow_large)  # its message says allow_large=True
     bars = []
     factory = _progress_factory(resolved, bars) if progress else None
@@ -208,6 +212,16 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
         warnings.warn(f"{item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "
                       f"{item.status.name.lower()}: {item.remedy}{example}", RuntimeWarning, stacklevel=2)
     return dataset
+
+
+def _check_path(name, value):
+    """PathTypeError unless ``value`` is None or a path as str or os.PathLike giving str: before
+    anything is computed, as output=123 or output=b"o.h5" failed in pathlib, after the run."""
+    if value is None:
+        return
+    if isinstance(value, str) or (isinstance(value, os.PathLike) and isinstance(os.fspath(value), str)):
+        return
+    raise PathTypeError(name, value)
 
 
 def _check_flags(**flags):
@@ -303,6 +317,7 @@ def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERI
     from vrsweep.store.trajectory_file import write_trajectory
 
     _check_flags(overwrite=overwrite)
+    _check_path("output", output)
     resolved = resolve_config(config, overrides)
     if compare is not None and compare not in COMPARE_CHOICES:
         raise UsageError.naming("{compare} {value}: must be None or one of {choices}",

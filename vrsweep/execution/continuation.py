@@ -17,9 +17,8 @@ SECTION_WORDS = {"from_key": "continuation.from", "to": "continuation.to", "init
 
 def check_section(config):
     """Refuse (UsageError) a config whose continuation section ``continue`` cannot run, before
-    anything is integrated: for ``continue`` and ``validate`` alike. The numerics are imported only
-    for the model's own rule (commensurability), so that ``validate`` of a config without the
-    section never imports numba."""
+    anything is integrated: for ``continue`` and ``validate`` alike, without importing numba (the
+    model's rule, commensurability, is plain Python: analysis/commensurate.py)."""
     section = config.continuation
     if section is None:
         raise UsageError.naming("{source} has no continuation section: add one, e.g.\n"
@@ -34,9 +33,9 @@ def check_section(config):
         raise UsageError.naming("{initial_step} = {value} must lie between {min_step} = {low} and {max_step} = "
                                 "{high}", SECTION_WORDS, value=f"{section.initial_step:g}",
                                 low=f"{section.min_step:g}", high=f"{section.max_step:g}")
-    from vrsweep.analysis import continuation
+    from vrsweep.analysis.commensurate import check_commensurate  # plain Python: validate imports no numba
 
-    continuation.check_commensurate(config.parameters, config.model, section.parameter, section.max_period)
+    check_commensurate(config.parameters, config.model, section.parameter, section.max_period)
 
 
 def problem_of(config):
@@ -89,6 +88,8 @@ def run_continuation(config, start_state=None, progress=None, switch=None, failu
     (analysis/period_doubling.py). Returns (branches, bifurcations); branch 0 is the first.
 
     start_state: (2,) where the transient starts (default: the config's initial state).
+    progress(orbit): called after each orbit; a KeyboardInterrupt it raises stops the continuation
+    there, keeping what is followed (each branch's unreached ends: "interrupted").
     failures: a list that receives (parameter, reason) for each period doubling where no branch of
     2p periods was found.
     """
@@ -102,7 +103,7 @@ def run_continuation(config, start_state=None, progress=None, switch=None, failu
                                     section.max_period)
     branch, bifurcations = continuation.continue_branch(problem, start, section.low, section.high,
                                                         section.max_points, progress)
-    if not (section.switch if switch is None else switch):
+    if not (section.switch if switch is None else switch) or continuation.interrupted(branch):
         return [branch], bifurcations
     branches, bifurcations, missed = period_doubling.switch_all(problem, branch, bifurcations, section.low, section.high,
                                                            section.max_points, section.max_period, progress)

@@ -97,7 +97,8 @@ def problem_of(request):
 
 def run_curve(request, progress=None):
     """The curve through the request's point both ways. Returns ([Curve], [SpecialPoint]). A start
-    that does not converge raises UsageError saying why (there is nothing to follow)."""
+    that does not converge raises UsageError saying why (there is nothing to follow). progress(point):
+    called after each point; a KeyboardInterrupt it raises stops the curve there, keeping it."""
     problem = problem_of(request)
     start, failure = curves.start_point(problem, request.kind, request.state, request.values, request.periods)
     if failure is not None:

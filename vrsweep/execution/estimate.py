@@ -78,25 +78,87 @@ def memory_bytes(config, threads=None) -> int:
 
 
 def memory_limit() -> int:
-    """The most a run may hold: half the machine's physical memory (the rest is the system's,
-    numba's and the output's), or 4 GiB where the system does not say."""
+    """The most a run may hold (bytes): memory_allowance's."""
+    return memory_allowance()[0]
+
+
+def memory_allowance() -> tuple[int, str]:
+    """(the most a run may hold, in bytes; whose limit that is, in words): half of the smallest of
+    the machine's physical memory, the process's resource limits (``ulimit -v``, ``ulimit -d``) and
+    its cgroup's memory limit (a container's, a batch job's). The other half is the system's,
+    numba's and the output's. 4 GiB where none of them can be told."""
+    import os
+
+    found = []
+    try:
+        found.append((os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"), "this machine allows a run (half its memory)"))
+    except (ValueError, OSError, AttributeError):
+        pass
+    try:
+        import resource
+
+        for limit, words in ((resource.RLIMIT_AS, "ulimit -v"), (resource.RLIMIT_DATA, "ulimit -d")):
+            soft = resource.getrlimit(limit)[0]
+            if soft != resource.RLIM_INFINITY and soft > 0:
+                found.append((soft, f"this process may use (half its {words} limit)"))
+    except (ImportError, ValueError, OSError, AttributeError):
+        pass
+    cgroup = _cgroup_memory_limit()
+    if cgroup is not None:
+        found.append((cgroup, "this process's cgroup allows (half its memory limit)"))
+    if not found:
+        return 4 * 2 ** 30, "vrsweep allows a run where the memory cannot be told"
+    total, words = min(found, key=lambda item: item[0])
+    return total // 2, words
+
+
+def _cgroup_memory_limit():
+    """The memory limit of this process's cgroup (v2 memory.max, v1 memory.limit_in_bytes, the
+    smallest along its ancestors), or None where there is none or it cannot be read."""
     import os
 
     try:
-        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2
-    except (ValueError, OSError, AttributeError):
-        return 4 * 2 ** 30
+        with open("/proc/self/cgroup", encoding="utf-8") as handle:
+            lines = handle.read().splitlines()
+    except OSError:
+        return None
+    limits = []
+    for line in lines:
+        parts = line.split(":", 2)
+        if len(parts) != 3:
+            continue
+        _, controllers, path = parts
+        if controllers == "":
+            base, name = "/sys/fs/cgroup", "memory.max"
+        elif "memory" in controllers.split(","):
+            base, name = "/sys/fs/cgroup/memory", "memory.limit_in_bytes"
+        else:
+            continue
+        folder = path.strip("/")
+        for _ in range(64):  # up to the root, at most as deep as any cgroup tree
+            try:
+                with open(os.path.join(base, folder, name), encoding="ascii") as handle:
+                    text = handle.read().strip()
+                if text.isdigit() and int(text) < 2 ** 60:  # v1 says "no limit" with a huge number
+                    limits.append(int(text))
+            except (OSError, UnicodeDecodeError):
+                pass
+            if not folder:
+                break
+            folder = os.path.dirname(folder)
+    return min(limits) if limits else None
 
 
 def memory_problem(config, threads=None) -> str | None:
-    """Why the run cannot fit in this machine's memory (one line), or None. Not a matter of
-    --allow-large: a run past it would end in an allocation failure."""
+    """Why the run cannot fit in the memory this process may use (one line), or None. Not a
+    matter of --allow-large: a run past it would end in an allocation failure."""
     held = memory_bytes(config, threads)
-    if held <= memory_limit():
+    limit, whose = memory_allowance()
+    if held <= limit:
         return None
     return (f"{config.source_name}: measure_periods = {config.integration.measure_periods} needs "
-            f"{format_bytes(held)} of per-period records at once, more than the {format_bytes(memory_limit())} "
-            f"this machine allows a run (half its memory): lower integration.measure_periods")
+            f"{format_bytes(held)} of per-period records at once, more than the {format_bytes(limit)} "
+            f"{whose}: lower integration.measure_periods")
 
 
 def estimate(config, threads=None) -> Estimate:

@@ -298,25 +298,12 @@ def _as_the_file_holds(values, names):
     return {name: value for name, value in values.items() if name in names or name not in optional}
 
 
-RESULTS_SINCE_VERSION = "0.2.0"
-"""The first version whose points this one reproduces: 0.2.0 decides impacts on each step's dense
-output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
-version differs (at the tolerance's level) from the same point computed now; one file must not
-mix them. Raise it whenever a change of the numerics changes results."""
-
-
-def _version_tuple(text):
-    try:
-        return tuple(int(part) for part in str(text).split(".")[:3])
-    except ValueError:
-        return None
-
-
 def _refuse_results_of_older_steps(path):
     """ResultFileError if the file at ``path`` was written by a version whose points differ from
     this version's (or by an unknown one); files this function cannot read are left to the writer."""
     from vrsweep.errors import ResultFileError
     from vrsweep.store.fileio import open_hdf5
+    from vrsweep.store.provenance import RESULTS_SINCE_VERSION, same_results_as_now
     from vrsweep.store.writer import ARGUMENT_WORDS
 
     try:
@@ -328,8 +315,7 @@ def _refuse_results_of_older_steps(path):
         return
     if isinstance(written_by, bytes):
         written_by = written_by.decode("utf-8", errors="replace")
-    found = _version_tuple(written_by) if written_by is not None else None
-    if found is not None and found >= _version_tuple(RESULTS_SINCE_VERSION):
+    if same_results_as_now(written_by):
         return
     raise ResultFileError.naming(
         "cannot resume: {path} was written by vrsweep {written_by}, whose points differ from those of "

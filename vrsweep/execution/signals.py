@@ -53,13 +53,17 @@ class GracefulStop:
             signal.signal(signum, handler)
         self._previous.clear()
 
+    def announce_with(self, what):
+        """Announce the first signal with ``what`` happens next (instead of a sweep's chunk)."""
+        self.announce = what
+
     def _handle(self, signum, frame):
         if self.signum is not None:
             raise Interrupted(signum)
         self.signum = signum
         if self.announce:
-            sys.stderr.write(f"\n{signal.Signals(signum).name}: stopping once the chunk in progress is "
-                             "saved (send it again to stop at once)\n")
+            what = self.announce if isinstance(self.announce, str) else "stopping once the chunk in progress is saved"
+            sys.stderr.write(f"\n{signal.Signals(signum).name}: {what} (send it again to stop at once)\n")
             sys.stderr.flush()
 
     def check(self):

@@ -269,12 +269,67 @@ def _style_file_problem(path) -> str | None:
     return None
 
 
+def _usetex_problem(programs=("latex",)) -> str | None:
+    """With text.usetex on, the ``programs`` it runs (latex for any figure, dvipng too for a PNG)
+    that are not installed here, as a problem in words; None otherwise."""
+    import shutil
+
+    import matplotlib
+
+    if not matplotlib.rcParams["text.usetex"]:
+        return None
+    missing = [name for name in programs if shutil.which(name) is None]
+    if not missing:
+        return None
+    return (f"text.usetex is on, but {' and '.join(missing)} (which it runs for every label) "
+            f"{'is' if len(missing) == 1 else 'are'} not installed here; turn text.usetex off (mathtext draws "
+            "the same symbols without LaTeX)")
+
+
+def _settings_problem() -> str | None:
+    """What in the matplotlib settings in force (a style applied, or the user's matplotlibrc) no
+    figure can be drawn with, in words, or None: text.usetex without LaTeX installed (a traceback
+    from deep inside the drawing), a colour cycle with no colour (a ZeroDivisionError)."""
+    import matplotlib
+
+    problem = _usetex_problem()
+    if problem:
+        return problem
+    cycle = matplotlib.rcParams["axes.prop_cycle"]
+    if len(cycle) == 0 or ("color" in cycle.keys and not cycle.by_key()["color"]):
+        return "axes.prop_cycle holds no colour: a figure needs at least one"
+    return None
+
+
+# A PNG is drawn in memory, 4 bytes a pixel, before it is compressed: a canvas of at most this many
+# pixels (1 GB while drawn) and of sides at most Agg's own limit (2^16 pixels).
+MAX_PIXELS = 250_000_000
+MAX_SIDE_PIXELS = 65535
+
+
+def check_canvas(fig, file_format, dpi):
+    """UsageError naming ``size`` and ``dpi`` when a .png of ``fig`` at ``dpi`` would be larger than
+    MAX_PIXELS or MAX_SIDE_PIXELS a side (--size 40,40 --dpi 1200 asked for 48000^2 pixels, 9 GB).
+    A PDF or SVG is drawn as vectors: its size in pixels is not allocated."""
+    if file_format != "png":
+        return
+    width, height = (float(inches) * dpi for inches in fig.get_size_inches())
+    if width * height > MAX_PIXELS or max(width, height) > MAX_SIDE_PIXELS:
+        raise UsageError.naming(
+            "{size} and {dpi}: a {inches} in figure at {dots} dpi is {width:.0f} x {height:.0f} pixels, more than a "
+            "PNG may have here ({limit:.2g} pixels, at most {side} a side); lower {dpi} or {size}, or write a .pdf "
+            "or .svg", inches="x".join(f"{i:g}" for i in fig.get_size_inches()), dots=dpi, width=width,
+            height=height, limit=MAX_PIXELS, side=MAX_SIDE_PIXELS)
+
+
 def parse_size(text):
     """'W,H' in inches -> (W, H), both positive; UsageError naming ``size`` otherwise."""
     if isinstance(text, (tuple, list)):
         parts = list(text)
+    elif isinstance(text, str):
+        parts = text.split(",")  # not 3x2: an x is no separator anywhere else in vrsweep's options
     else:
-        parts = str(text).replace("x", ",").split(",")
+        parts = None
     try:
         width, height = (float(part) for part in parts)
     except (TypeError, ValueError):
@@ -319,6 +374,10 @@ def figure_options(function):
         token = _REQUESTED_SIZE.set(size) if size is not None else None
         try:
             with matplotlib.style.context(style or {}):
+                problem = _settings_problem()
+                if problem:
+                    where = "{style} {value}" if style else "matplotlib's settings (matplotlibrc)"
+                    raise UsageError.naming(where + ": {problem}", value=style, problem=problem)
                 fig = function(*args, **kwargs)
         finally:
             if token is not None:
@@ -380,10 +439,16 @@ def render(fig, file_format, dpi) -> bytes:
 
     import matplotlib.style
 
+    check_canvas(fig, file_format, dpi)
     image = io.BytesIO()
     with matplotlib.style.context(getattr(fig, "_vrsweep_style", None) or {}), \
             warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        problem = _usetex_problem(("latex", "dvipng")) if file_format == "png" else None
+        if problem:
+            style = getattr(fig, "_vrsweep_style", None)
+            where = "{style} {value}" if style else "matplotlib's settings (matplotlibrc)"
+            raise UsageError.naming(where + ": {problem}", value=style, problem=problem)
         fig.savefig(image, format=file_format, dpi=dpi, metadata=metadata(fig, file_format))
     # matplotlib's own warning names its internals; say what to do instead (layout_note).
     fig._vrsweep_layout_note = TOO_SMALL if any("collapsed to zero" in str(w.message) for w in caught) else ""
@@ -431,6 +496,25 @@ def read_description(path) -> dict:
             if match:
                 found[key] = _pdf_string(match.group(1))
     return found
+
+
+# What ``metadata`` writes into each format, as it lands in the file's bytes: a PNG's tEXt chunk
+# "Software", a PDF's /Creator, an SVG's dc:creator.
+_MADE_BY_VRSWEEP = re.compile(rb"Software\x00vrsweep \d|/Creator \(vrsweep \d|<dc:title>vrsweep \d")
+# A figure vrsweep wrote is well under this; a larger file is someone else's.
+_FIGURE_BYTES_AT_MOST = 256 * 1024 * 1024
+
+
+def made_by_vrsweep(path) -> bool:
+    """Whether the file at ``path`` is a figure vrsweep wrote (``render``'s metadata names vrsweep
+    as its software): such a file is replaced unasked, any other only when asked to."""
+    try:
+        if os.path.getsize(path) > _FIGURE_BYTES_AT_MOST:
+            return False
+        with open(path, "rb") as handle:
+            return _MADE_BY_VRSWEEP.search(handle.read()) is not None
+    except OSError:
+        return False
 
 
 def _pdf_string(raw: bytes) -> str:

@@ -118,27 +118,29 @@ def writable_output(path, overwrite):
     return path
 
 
-def file_attributes(kind, config, method, title, **more):
-    """The file-level attributes of a branch or curves file: kind, format, provenance, CF."""
+def file_attributes(kind, config, method, title, complete=True, **more):
+    """The file-level attributes of a branch or curves file: kind, format, provenance, CF.
+    ``complete`` False: the run was stopped by a signal, and the file holds what it had followed."""
     import numba
 
     from vrsweep.store.provenance import cf_attributes, model_attributes
 
     return {"vrsweep_file": kind, "vrsweep_format_version": np.int32(FORMAT_VERSION),
-            "vrsweep_complete": np.int32(1),
+            "vrsweep_complete": np.int32(1 if complete else 0),
             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "config": config.to_yaml(), **model_attributes(config.model), **more, "method": method,
             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
             **cf_attributes(title)}
 
 
-def write_branch(path, arrays, config, method, overwrite=False):
-    """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``."""
+def write_branch(path, arrays, config, method, overwrite=False, complete=True):
+    """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless
+    ``overwrite``. ``complete`` False: a continuation stopped by a signal (its ends "interrupted")."""
     path = writable_output(path, overwrite)
     parameter = config.continuation.parameter
     attrs = file_attributes(FILE_KIND, config, method,
                             f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}",
-                            parameter=parameter)
+                            complete=complete, parameter=parameter)
     image = io.BytesIO()
     with h5py.File(image, "w", track_order=True) as f:
         for name, value in attrs.items():
@@ -223,7 +225,8 @@ def is_branch_file(path) -> bool:
 
 # What check_branch expects: each array's dimensions and kind of number ("i" whole, "f" real,
 # "s" text). A file written by this version has all of them.
-STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling")
+STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
+            "interrupted")
 KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
 LAYOUT = {
     "point": (("point",), "i"), "multiplier": (("multiplier",), "i"), "bifurcation": (("bifurcation",), "i"),
@@ -238,71 +241,21 @@ LAYOUT = {
 }
 
 
-# The root attribute that holds the SHA-256 of all the others (attributes_digest): a flipped bit in
-# the stored config (gamma 0.05 -> 0.07) would otherwise go unnoticed, and info, the figure's
-# caption and continue --point would state and use parameters the numbers were not computed at.
-ATTRIBUTES_CHECKSUM = "vrsweep_attributes_sha256"
-_unprotected_said = set()
-
-
-def _canonical(value) -> bytes:
-    """``value`` as h5py reads an attribute back (str, bytes, numpy scalar or array), as bytes that
-    say its type and content: equal for equal attributes, whatever damage they hold."""
-    if isinstance(value, str):
-        return b"s" + value.encode("utf-8", "surrogateescape")
-    if isinstance(value, bytes):
-        return b"b" + value
-    value = np.asarray(value)
-    if value.dtype.kind == "O":
-        return b"o" + b"\0".join(_canonical(item) for item in value.reshape(-1))
-    return b"n" + value.dtype.str.encode() + repr(value.shape).encode() + value.tobytes()
-
-
-# HDF5's dimension-scale bookkeeping: references, i.e. addresses in the file, not content.
-_REFERENCES = ("DIMENSION_LIST", "REFERENCE_LIST")
-
-
-def attributes_digest(f) -> str:
-    """SHA-256 (hex) of every attribute of the open flat file ``f``, its root's (but
-    ATTRIBUTES_CHECKSUM) and each dataset's (units, long_name...; but _REFERENCES): names and
-    values, in name order."""
-    import hashlib
-
-    digest = hashlib.sha256()
-    owners = [("", f)] + [(name, f[name]) for name in sorted(f) if isinstance(f[name], h5py.Dataset)]
-    for owner, obj in owners:
-        for name in sorted(obj.attrs):
-            if name not in (ATTRIBUTES_CHECKSUM, *_REFERENCES):
-                digest.update(f"{owner}/{name}".encode("utf-8", "surrogateescape") + b"\0"
-                              + _canonical(obj.attrs[name]) + b"\0")
-    return digest.hexdigest()
-
-
-def seal_attributes(f):
-    """Store the checksum of every attribute of ``f``, once all are written (branch and curves files)."""
-    f.attrs[ATTRIBUTES_CHECKSUM] = attributes_digest(f)
+# Every attribute (the root's and each variable's) is covered by one checksum (store/sealing.py):
+# a flipped bit in the stored config (gamma 0.05 -> 0.07) would otherwise go unnoticed, and info,
+# the figure's caption and continue --point would state and use parameters the numbers were not
+# computed at.
+from vrsweep.store.sealing import (  # noqa: E402 - beside what it replaced; re-exported for curve_file
+    ATTRIBUTES_CHECKSUM, attributes_digest, note_if_unprotected, seal_attributes,
+)
 
 
 def _check_attributes(f, path):
     """ResultFileError when the attributes fail their checksum; a file written before they had one
-    (no ATTRIBUTES_CHECKSUM) passes (note_if_unprotected says so once it is found sound)."""
-    if ATTRIBUTES_CHECKSUM not in f.attrs:
-        return
-    stored = f.attrs[ATTRIBUTES_CHECKSUM]
-    if not isinstance(stored, (str, bytes)) or _text(stored) != attributes_digest(f):
-        raise ResultFileError(f"{path} is corrupt: its attributes (config, model, parameters, labels) do not "
-                              "match their checksum")
+    passes (note_if_unprotected says so once it is found sound)."""
+    from vrsweep.store.sealing import check_attributes
 
-
-def note_if_unprotected(path, protected):
-    """The note, once per file and process, that a sound file's attributes have no checksum (written
-    before they had one): after every check, so that a refused file is one line."""
-    if not protected and path not in _unprotected_said:
-        _unprotected_said.add(path)
-        from vrsweep.store.fileio import notice
-
-        notice(f"Note: {path} was written before attributes had checksums: its config and parameters are read "
-               "as they are, unprotected against damage")
+    check_attributes(f, path)
 
 
 def _text(value):
@@ -367,9 +320,13 @@ def check_layout(f, path, layout, kind):
     version = _whole(f, path, "vrsweep_format_version", 0)
     if version != FORMAT_VERSION:
         raise ResultFileError(f"{path} has {kind} format {version}; this vrsweep reads format {FORMAT_VERSION}")
-    if _whole(f, path, "vrsweep_complete", 0) != 1:
-        raise ResultFileError(f"{path} is incomplete: the run that wrote it did not finish")
-    _attr_text(f, path, "config", required=True)
+    complete = _whole(f, path, "vrsweep_complete", 0)
+    if complete not in (0, 1):
+        raise ResultFileError(f"{path} is corrupt: attribute vrsweep_complete must be 0 or 1, found {complete}")
+    # 0: a run stopped by a signal wrote what it had followed (its ends say "interrupted"); a reader
+    # shows it as such (info, plot), and a curves file's only through its own writer, always 1.
+    if not _attr_text(f, path, "config", required=True).strip():  # '' would read as a config of defaults
+        raise ResultFileError(f"{path} is corrupt: attribute config is empty")
     _texts_are_text(f, path, "attribute ", TEXT_ATTRS)
     # No array is read before its size is known to fit in the file: a damaged dataspace could
     # otherwise claim any size and have it allocated (no array of these files is compressed).
@@ -401,6 +358,13 @@ def check_layout(f, path, layout, kind):
             raise ResultFileError(f"{path} is corrupt: {name} must count 0, 1, ... along its dimension")
     if len(values.get("multiplier", ())) != 2:
         raise ResultFileError(f"{path} is corrupt: multiplier must have 2 values (the two Floquet multipliers)")
+    # Only a branch stopped by a signal is written unfinished (its ends "interrupted"), and it says so.
+    stopped = any(_is_text(v) and _text(v) == "interrupted" for name in values
+                  if name.endswith(("_end_first_status", "_end_last_status")) for v in values[name].reshape(-1))
+    if complete != 1 and not stopped:
+        raise ResultFileError(f"{path} is incomplete: the run that wrote it did not finish")
+    if complete == 1 and stopped:
+        raise ResultFileError(f"{path} is corrupt: it ends interrupted in a file marked complete")
     # After the layout: an array replaced whole loses its attributes too, and its own message says more.
     _check_attributes(f, path)
     return values
@@ -431,12 +395,22 @@ def stored_config(path, text, required):
     try:
         config = parse_config(text, f"{path} (its config)", line_numbers=False)
     except ConfigError as error:
-        if not required:
+        if not required and _is_mapping(text):  # a later version's config, say: the figure goes without it
             return None
         raise ResultFileError(f"{path} is corrupt: its config is not valid ({error.problems[0]})") from None
     if required and config.continuation is None:
         raise ResultFileError(f"{path} is corrupt: its config has no continuation section")
     return config
+
+
+def _is_mapping(text) -> bool:
+    """Whether ``text`` reads as a YAML mapping (what any version's config is), not '0' or a list."""
+    from vrsweep.config.yaml import load_round_trip
+
+    try:
+        return isinstance(load_round_trip(text, allow_duplicate_keys=True), dict)
+    except Exception:  # noqa: BLE001 - ruamel raises many kinds for text that is no YAML
+        return False
 
 
 def check_values(path, values, config, what, finite):

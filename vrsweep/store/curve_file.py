@@ -83,14 +83,16 @@ def curve_arrays(curves, specials, names):
     return arrays
 
 
-def write_curves(path, arrays, names, config, method, overwrite=False):
+def write_curves(path, arrays, names, config, method, overwrite=False, complete=True):
     """Write curve_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless ``overwrite``.
 
-    names: the two parameters in order; config: the Config whose resolved YAML is stored."""
+    names: the two parameters in order; config: the Config whose resolved YAML is stored;
+    ``complete`` False: a continuation stopped by a signal (its ends "interrupted")."""
     path = writable_output(path, overwrite)
     first, second = names
     attrs = file_attributes(FILE_KIND, config, method,
-                            f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})")
+                            f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})",
+                            complete=complete)
     image = io.BytesIO()
     with h5py.File(image, "w", track_order=True) as f:
         for name, value in attrs.items():
@@ -133,7 +135,7 @@ def is_curves_file(path) -> bool:
 
 
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "fold_grazing",
-            "period_doubling_grazing")
+            "period_doubling_grazing", "interrupted")
 KINDS = ("fold", "period_doubling", "grazing")
 SPECIAL_KINDS = ("fold_grazing", "period_doubling_grazing", "cusp")
 

@@ -17,7 +17,9 @@ Layout (netCDF-4 compatible; ``xarray.open_dataset(path, engine="h5netcdf")`` re
 - Shard files add the root attribute ``shard`` ("I/N") and ``owned`` (int8 over the axes).
 - Root attributes: ``vrsweep_format_version``, ``vrsweep_complete``, ``created`` (ISO 8601 UTC)
   and whatever the caller passes (``config``, ``vrsweep_version``, ``numba_version``,
-  ``numpy_version``...).
+  ``numpy_version``...), and ``vrsweep_attributes_sha256``: the checksum of every attribute but
+  ``vrsweep_complete`` and when and how the file was written (store/sealing.py), sealed again
+  whenever variables are added.
 
 Fill values
 -----------
@@ -39,11 +41,12 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.store.sealing import ATTRIBUTES_CHECKSUM, SWEEP_UNSEALED, seal_attributes
 
 FORMAT_VERSION = 1
 
 # Root attributes the store owns; callers may not set them.
-RESERVED_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created")
+RESERVED_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", ATTRIBUTES_CHECKSUM)
 # Attributes HDF5 dimension scales and netCDF-4 use internally; not shown to users.
 INTERNAL_ATTRS = frozenset(
     ["CLASS", "NAME", "REFERENCE_LIST", "DIMENSION_LIST", "_Netcdf4Dimid", "_Netcdf4Coordinates",
@@ -285,6 +288,7 @@ def build_skeleton(f, axes, specs, attrs, extra_coords, owned_mask):
             }, fill=0),
             grid_shape, axis_scales)
         owned[()] = owned_mask.astype(np.int8)
+    seal_attributes(f, SWEEP_UNSEALED)  # the config, the axes' and variables' labels (store/sealing.py)
     return grid_shape
 
 
@@ -335,6 +339,8 @@ def add_extras(f, extra, coords):
         for i, scale in enumerate(scales):
             ds.dims[i].attach_scale(scale)
         _write_attrs(ds, attrs or {}, array.dtype)
+    if extra:
+        seal_attributes(f, SWEEP_UNSEALED)  # the new variables' labels too
 
 
 def point_variables_of(f):

@@ -32,7 +32,7 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
 from vrsweep.store.fileio import atomic_write, open_hdf5, output_target, prepare_output_directory, writing_hdf5
-from vrsweep.store.provenance import cf_attributes
+from vrsweep.store.provenance import RESULTS_SINCE_VERSION, cf_attributes, same_results_as_now
 from vrsweep.store.layout import RESERVED_ROOT_ATTRS, add_extras, build_skeleton, creation_reserve
 from vrsweep.store.reader import StoredLayout, corrupt_error, open_checked
 from vrsweep.store.writer import ARGUMENT_WORDS as _WRITER_WORDS
@@ -350,12 +350,76 @@ def _check_one_run(shards):
     counts = {str(label).split("/")[-1] for label in labels}
     if len(counts) > 1:
         warnings.append(f"shard labels disagree on the number of shards: {', '.join(labels)}")
+    _refuse_mixed_results(shards, ref)
+    _check_shard_labels(shards, ref)
     for key in ("vrsweep_version", "numba_version", "numpy_version"):
         found = sorted({str(s.attrs.get(key)) for s in shards})
         if len(found) > 1:
             warnings.append(f"shards were written with different {key}: {', '.join(found)} "
                             f"(the merged file records {ref.attrs.get(key)})")
     return ref, warnings
+
+
+def _results_epoch(shard):
+    """The versions whose points a shard's are: "current" for RESULTS_SINCE_VERSION or later (they
+    all compute the same points), else the version it records (each earlier one its own)."""
+    written_by = shard.attrs.get("vrsweep_version")
+    return "current" if same_results_as_now(written_by) else str(written_by or "(unknown version)")
+
+
+def _refuse_mixed_results(shards, ref):
+    """ResultFileError when the shards were written by versions whose points differ (as --resume
+    refuses to continue such a file): one file must not mix them."""
+    epochs = {}
+    for s in shards:
+        epochs.setdefault(_results_epoch(s), s)
+    if len(epochs) < 2:
+        return
+    older = next(s for epoch, s in epochs.items() if epoch != "current") if "current" in epochs else \
+        next(s for s in epochs.values() if s is not ref)
+    other = epochs["current"] if "current" in epochs else ref
+    version = lambda s: s.attrs.get("vrsweep_version") or "an unknown version"  # noqa: E731
+    raise ResultFileError(
+        f"{older.path} was written by vrsweep {version(older)} and {other.path} by vrsweep {version(other)}, "
+        f"whose points differ (impacts are decided on each step's interpolant since {RESULTS_SINCE_VERSION}): "
+        "one file must not mix them; run the older shards again with this version")
+
+
+def _check_shard_labels(shards, ref):
+    """ResultFileError for a shard whose label I/N was changed from the shard it is: its ``owned``
+    mask is the run's own assignment (config.grid.shard_of_points) for shard J of N, J != I. It would
+    otherwise be merged, and named in messages, as shard I (its attributes' checksum catches an edit
+    too; this holds for files written before they had one). Masks that are no shard's of this
+    config (made by hand) are left to the merge's own checks."""
+    if not any(s.shard and s.has_owned for s in shards):
+        return
+    from vrsweep.config import parse_config
+    from vrsweep.config.grid import Grid, shard_of_points
+    from vrsweep.errors import ConfigError
+
+    try:
+        grid = Grid.from_config(parse_config(str(ref.attrs.get("config", "")), "<the stored config>"))
+    except ConfigError:
+        return  # a config this version cannot read: the layout checks are all there is
+    if grid.shape != ref.shape:
+        return
+    owners = {}
+    for s in shards:
+        if not s.shard or not s.has_owned:
+            continue
+        index, _, count = str(s.shard).partition("/")
+        index, count = int(index), int(count)  # reader.check_structure: digits/digits
+        if count < 1 or count > grid.n_points:
+            continue
+        if count not in owners:
+            owners[count] = shard_of_points(grid, count)
+        owned = s.read_mask("owned")
+        if np.array_equal(owned, owners[count] == index):
+            continue
+        actual = next((j for j in range(count) if np.array_equal(owned, owners[count] == j)), None)
+        if actual is not None:
+            raise ResultFileError(f"{s.path} says it is shard {s.shard}, but the points it owns are those of shard "
+                                  f"{actual}/{count} of this config: its shard attribute was changed")
 
 
 def _merge_variable(out, name, shards, supplier, may_duplicate, ref):

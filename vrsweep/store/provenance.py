@@ -90,3 +90,26 @@ def model_attributes(model) -> dict:
 
     return {"model": WRITTEN, "model_name": model.title,
             "model_definition": json.dumps(model.as_data(), sort_keys=False)}
+
+
+RESULTS_SINCE_VERSION = "0.2.0"
+"""The first version whose points this one reproduces: 0.2.0 decides impacts on each step's dense
+output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
+version differs (at the tolerance's level) from the same point computed now; one file must not
+mix them (a resume, a merge). Raise it whenever a change of the numerics changes results."""
+
+
+def version_tuple(text):
+    """'0.4.0' -> (0, 4, 0); None for anything that is not a version."""
+    try:
+        return tuple(int(part) for part in str(text).split(".")[:3])
+    except ValueError:
+        return None
+
+
+def same_results_as_now(written_by) -> bool:
+    """Whether points written by vrsweep ``written_by`` (a version, as text; None: unknown) are
+    those this version computes (RESULTS_SINCE_VERSION or later)."""
+    found = version_tuple(written_by) if written_by is not None else None
+    return found is not None and found >= version_tuple(RESULTS_SINCE_VERSION)
+

@@ -20,6 +20,7 @@ from vrsweep.store.fileio import open_hdf5
 from vrsweep.store.layout import (
     BOOKKEEPING, FORMAT_VERSION, VariableSpec, clean_attrs, decode, point_label, point_variables_of, scale_names,
 )
+from vrsweep.store.sealing import SWEEP_UNSEALED, check_attributes, note_if_unprotected
 
 # Chunk cache per open dataset: a scattered write (a shard's points) revisits the same chunks.
 RDCC_NBYTES = 32 * 1024 * 1024
@@ -180,6 +181,8 @@ def check_structure(f, path):
         # written whole when a file is created, so they are read in every file.
         if complete or obj.is_scale:
             _read_through_checksums(obj, path, finite=name in axis_names)
+    # After the structure: a variable replaced whole loses its attributes too, and its own message says more.
+    note_if_unprotected(path, check_attributes(f, path, SWEEP_UNSEALED))
 
 
 def _grid_of(config_text):

@@ -68,7 +68,8 @@ def _trajectory_groups(path):
     with _open(path, "r") as f:
         runs = [name for name in RUN_GROUPS if name in f]
         slow = [f"slow_flow/{name}" for name in f["slow_flow"]] if "slow_flow" in f else []
-        root_attrs = {key: _plain(value) for key, value in f.attrs.items()}
+        # The checksum is of the whole file (every group's attributes), not of one group's Dataset.
+        root_attrs = {key: _plain(value) for key, value in f.attrs.items() if key != "vrsweep_attributes_sha256"}
     return runs, slow, root_attrs
 
 
@@ -102,7 +103,10 @@ def open_results(path, group: str | None = None):
         attributes in ``ds.attrs``. A trajectory group's Dataset carries the file's root
         attributes too, its own (``status``, ``model``...) taking precedence.
     """
+    from vrsweep.errors import PathTypeError
 
+    if not isinstance(path, (str, bytes, os.PathLike)):  # bytes: os.fspath keeps it, as it always did
+        raise PathTypeError("path", path)
     path = os.fspath(path)
     kind = file_kind(path)
     if kind == "trajectory":

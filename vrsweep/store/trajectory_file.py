@@ -55,6 +55,7 @@ from vrsweep.errors import ResultFileError
 from vrsweep.results import MESSAGES, Status
 from vrsweep.store.fileio import has_file_kind, open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
+from vrsweep.store.sealing import ATTRIBUTES_CHECKSUM, WHEN_AND_HOW, check_attributes, note_if_unprotected, seal_attributes
 
 FILE_KIND = "trajectory"
 # --------------------------------------------------------------------------------------------
@@ -153,6 +154,7 @@ def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
             group = f.create_group("slow_flow", track_order=True)
             for start, run in data.slow_flow.items():
                 _write_slow_flow(group.create_group(start, track_order=True), run)
+        seal_attributes(f, WHEN_AND_HOW)  # the config, the runs' statuses, every label (store/sealing.py)
     write_bytes(path, image.getvalue())
 
 
@@ -254,10 +256,12 @@ def check_trajectory(path) -> None:
                     _checked(f[name], MODEL_RUN_SERIES, path)
             for group in (f["slow_flow"].values() if "slow_flow" in f else ()):
                 _checked(group, SLOW_FLOW_SERIES, path)
+            protected = check_attributes(f, path, WHEN_AND_HOW)  # after the structure: its messages say more
     except ResultFileError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as error:
         raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
+    note_if_unprotected(path, protected)
 
 
 def _check_header(f, path):
@@ -294,12 +298,15 @@ def read_trajectory(path) -> TrajectoryData:
             if "slow_flow" in f:
                 slow_flow = {start: _read_slow_flow(_checked(group, SLOW_FLOW_SERIES, path))
                              for start, group in f["slow_flow"].items()}
+            protected = check_attributes(f, path, WHEN_AND_HOW)
     except ResultFileError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as error:
         raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
     if not runs:
         raise ResultFileError(f"{path} holds no trajectory (no 'original', 'effective' or 'written' group)")
+    note_if_unprotected(path, protected)
+    attrs.pop(ATTRIBUTES_CHECKSUM, None)  # the file's bookkeeping, not the run's
     return TrajectoryData(runs=runs, slow_flow=slow_flow, attrs=attrs, path=path)
 
 
