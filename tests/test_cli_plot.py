@@ -258,11 +258,13 @@ integration: {transient_periods: 2, measure_periods: 4, strobe_periods: 2}
 """
 
 
-def write_curves(path, names, curves, specials=(), model="effective", config=""):
+def write_curves(path, names, curves, specials=(), model="effective", config=None):
     """A curves file as `vrsweep continue BRANCH.h5 --point K --along NAME` writes it (the agreed
     layout, store/curve_file.py), by h5py: curves = [(kind, {name: values})], specials =
-    [(kind, curve, {name: value})]."""
+    [(kind, curve, {name: value})]. config: the stored config's text (default: the model's alone)."""
     from vrsweep.store.branch_file import seal_attributes
+
+    config = f"model: {model}\n" if config is None else config
 
     strings = h5py.string_dtype()
     with h5py.File(path, "w") as f:
