@@ -60,7 +60,7 @@ def test_integration_line_names_every_setting_off_its_default():
 
     # fig1_lyapunov.yaml sets strobe_periods and lyapunov; every other setting changed by --set
     changed = {"max_steps": "1000", "max_impacts_per_period": "7", "divergence_bound": "500",
-               "stick_velocity": "0.001", "max_period": "4", "period_tolerance": "1e-05"}
+               "stick_velocity": "0.001", "max_period": "4", "period_tolerance": "1e-05", "device": "cuda"}
     args = [item for name, value in changed.items() for item in ("--set", f"{name}={value}")]
     result, output = invoke("validate", str(CONFIGS / "fig1_lyapunov.yaml"), *args)
     assert result.exit_code == 0, output

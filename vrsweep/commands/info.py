@@ -28,7 +28,8 @@ from vrsweep.errors import ResultFileError
 UNKNOWN_KIND = "unknown"
 # Root attributes shown in their own lines (or not at all), not under "attributes".
 _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "config", "model",
-                     "vrsweep_version", "numba_version", "numpy_version", "shard", "vrsweep_attributes_sha256")
+                     "vrsweep_version", "numba_version", "numpy_version", "shard", "vrsweep_attributes_sha256",
+                     "R_solver_err", "R_solver_err_points", "R_solver_err_rtol")
 
 
 @click.command("info")
@@ -247,6 +248,7 @@ def _describe_sweep(path, ds) -> dict:
         "fixed_parameters": _fixed_parameters(config, axis_names),
         "integration": _integration(config),
         "status_counts": _status_counts(ds, owned),
+        "solver_error": _solver_error(attrs),
         "attractors": _attractors(ds),
         "variables": variables,
         "created": attrs.get("created"),
@@ -254,6 +256,14 @@ def _describe_sweep(path, ds) -> dict:
         "attributes": _other_attributes(attrs),
         "config": attrs.get("config"),
     }
+
+
+def _solver_error(attrs):
+    """R's relative error due to the integration (execution/solver_error.py), or None (older files)."""
+    if "R_solver_err" not in attrs:
+        return None
+    return {"relative": _number(attrs["R_solver_err"]), "points": _plain(attrs.get("R_solver_err_points")),
+            "rtol": _number(attrs.get("R_solver_err_rtol", math.nan))}
 
 
 def _status_counts(ds, owned) -> list[dict]:
@@ -490,6 +500,15 @@ def format_summary(summary, show_config=False) -> str:
                 lines.append(f"{label:<12} {row['group']}: {row['status']}{meaning}")
             else:
                 lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
+    solver = summary.get("solver_error")
+    if solver:
+        if solver["relative"] is None:
+            lines.append("solver:      R's solver error not estimated (no periodic point to rerun; R_err says "
+                         "how far R is from converged)")
+        else:
+            lines.append(f"solver:      R's error from the integration about {solver['relative']:.1e} relative "
+                         f"({solver['points']} periodic points rerun at rtol {solver['rtol']:.0e}); "
+                         "add it to R_err for R's error bar")
     lines += _format_attractors(summary.get("attractors") or [])
     lines += _format_branches(summary.get("branches"))
     lines += _format_curves(summary.get("curves"))

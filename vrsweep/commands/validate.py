@@ -116,6 +116,8 @@ def _other_settings(integration) -> str:
             continue
         if isinstance(value, bool):
             changed.append(f"{key}={'true' if value else 'false'}")
+        elif isinstance(value, str):  # device
+            changed.append(f"{key}={value}")
         else:
             changed.append(f"{key}={value:g}")
     return f"; {' '.join(changed)}" if changed else ""

@@ -207,6 +207,19 @@ def analytic_extras(config, grid):
     return extras
 
 
+def solver_error_attributes(config, grid, shard, writer):
+    """R_solver_err and its sample's size and tolerance (execution/solver_error.py), measured on the
+    points this file holds (a shard's own)."""
+    from vrsweep.execution import solver_error
+
+    done = writer.done_mask().reshape(-1)
+    owned = writer.owned_mask()
+    if owned is not None:
+        done = done & owned.reshape(-1)
+    stored = {name: array.reshape(-1) for name, array in writer.read_variables(("R", "period", "status")).items()}
+    return solver_error.estimate(config, grid, shard, done, stored)
+
+
 def basin_extras(config, writer):
     """The attractor labels and table of a sweep with x0 / v0 axes (vrsweep.analysis.attractors); ({}, {})
     without. Reads the finished points back from the checkpoint the writer holds."""
@@ -284,7 +297,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     if shard[1] == 1:  # a shard sees part of each slice: the merge labels the whole grid
         attractors, coords = basin_extras(config, writer)
         extras.update(attractors)
-    writer.finish(extra=extras, coords=coords)
+    writer.finish(extra=extras, coords=coords, attributes=solver_error_attributes(config, grid, shard, writer))
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
 
 

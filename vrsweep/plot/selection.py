@@ -103,6 +103,9 @@ class _Sweep:
         done = np.asarray(ds["done"].values)
         self.n_done, self.n_points = int(np.sum(done)), int(np.size(done))
         self.shard = _text_attr(ds.attrs.get("shard"))
+        # R's relative error due to the integration (execution/solver_error.py); 0 in older files.
+        solver_error = _number_attr(ds.attrs.get("R_solver_err"))
+        self.solver_error = solver_error if solver_error is not None and np.isfinite(solver_error) else 0.0
 
     @property
     def parameter_axes(self):
@@ -167,7 +170,8 @@ def _choose_x_axis(view, x_axis, need_axes=None):
 def _point_classes(view, x_axis, where):
     """Masks along x_axis: (trusted, aperiodic, failed), the rule of docs/trust.md, "Can R be trusted?".
 
-    Trust is judged by R_err alone: R is trusted where R_err <= RELATIVE_ERROR_LIMIT of R. The
+    Trust is judged by R's error bar: R is trusted where R_err + R_solver_err |R| (the window's
+    variation and the solver's error, execution/solver_error.py) <= RELATIVE_ERROR_LIMIT of R. The
     kind of motion is what ``period`` says: period 0 (no period up to max_period) with a tiny
     R_err is a converged R of a motion that is long-periodic or still settling, not chaos.
     Failed points (status not ok) are neither; points not yet computed are in no mask.
@@ -182,10 +186,18 @@ def _point_classes(view, x_axis, where):
         R = view.along("R", x_axis, **where)
         R_err = view.along("R_err", x_axis, **where)
         with np.errstate(invalid="ignore"):
-            trusted = (R_err <= RELATIVE_ERROR_LIMIT * np.abs(R)) & ok
+            trusted = (R_err + view.solver_error * np.abs(R) <= RELATIVE_ERROR_LIMIT * np.abs(R)) & ok
     else:  # a file from before R_err: only the period can say anything
         trusted = ok & ~aperiodic
     return trusted, aperiodic, failed
+
+
+def _number_attr(value):
+    """A numeric attribute as a float, or None (absent, or not a number: a damaged file)."""
+    try:
+        return float(np.asarray(value).reshape(-1)[0]) if value is not None else None
+    except (TypeError, ValueError, IndexError):
+        return None
 
 
 def _failure_counts(view):

@@ -304,8 +304,9 @@ def scale_names(ds):
     return tuple(out)
 
 
-def add_extras(f, extra, coords):
-    """Add derived variables (``finish``) over existing or new dimensions; replaces same names."""
+def add_extras(f, extra, coords, attributes=None):
+    """Add derived variables (``finish``) over existing or new dimensions; replaces same names.
+    attributes: root attributes to set (or replace) with them."""
     coords = dict(coords or {})
     point_variables = set(point_variables_of(f))
     for name, item in (extra or {}).items():
@@ -339,7 +340,9 @@ def add_extras(f, extra, coords):
         for i, scale in enumerate(scales):
             ds.dims[i].attach_scale(scale)
         _write_attrs(ds, attrs or {}, array.dtype)
-    if extra:
+    for name, value in (attributes or {}).items():
+        f.attrs[name] = value
+    if extra or attributes:
         seal_attributes(f, SWEEP_UNSEALED)  # the new variables' labels too
 
 

@@ -274,7 +274,7 @@ def _merge(shards, out_path, allow_missing):
 
     point_dims = {d for n in ref.point_variables for d in ref.dims[n][len(ref.axes):]}
     extra_coords = {d: (ref.coords[d], ref.coord_attrs[d]) for d in ref.coords if d in point_dims}
-    root_attrs = _root_attributes(ref)
+    root_attrs = {**_root_attributes(ref), **_solver_error(shards)}
     axes = [(name, values, ref.coord_attrs[name]) for name, values in ref.axes.items()]
 
     specs = ref.variable_specs()
@@ -308,6 +308,18 @@ def _merge(shards, out_path, allow_missing):
         out_path=out_path, n_points=n_points, n_done=int(merged_done.sum()),
         n_missing=int(missing.size), missing_examples=examples, n_duplicated=int(duplicates.sum()),
         shards=[(s.path, s.shard, n) for s, n in zip(shards, n_done_by_shard)], warnings=warnings)
+
+
+def _solver_error(shards):
+    """R_solver_err of the merged file (execution/solver_error.py): the largest of the shards' bounds,
+    measured on all their samples' points together."""
+    found = [s.attrs for s in shards if "R_solver_err" in s.attrs]
+    if not found:
+        return {}
+    bounds = [float(a["R_solver_err"]) for a in found if np.isfinite(float(a["R_solver_err"]))]
+    return {"R_solver_err": max(bounds) if bounds else np.nan,
+            "R_solver_err_points": np.int64(sum(int(a.get("R_solver_err_points", 0)) for a in found)),
+            "R_solver_err_rtol": found[0].get("R_solver_err_rtol", np.nan)}
 
 
 def _root_attributes(ref):

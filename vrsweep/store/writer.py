@@ -276,8 +276,8 @@ class ResultWriter:
             raise failure from None
         self._done.reshape(-1)[idx] = True
 
-    def finish(self, extra=None, coords=None) -> None:
-        """Add derived variables, mark the file complete, and close it.
+    def finish(self, extra=None, coords=None, attributes=None) -> None:
+        """Add derived variables (and root ``attributes``), mark the file complete, and close it.
 
         extra: ``{name: (array, dims, attrs)}``; dims name sweep axes, extra dims, or new dims
         (given values in ``coords = {dim: (values, attrs)}``, else an int32 index). The work is
@@ -296,7 +296,7 @@ class ResultWriter:
                 _copy_open_file(self._fd, tmp, size)
                 with writing_hdf5(tmp, "r+", reserve=reserve, rdcc_nbytes=RDCC_NBYTES,
                                   rdcc_nslots=RDCC_NSLOTS) as f:
-                    add_extras(f, extra, coords)
+                    add_extras(f, extra, coords, attributes)
                     f.attrs.modify("vrsweep_complete", np.int32(1))  # in place: keeps attribute order
                 fsync_path(tmp)
         except BaseException:

@@ -1,0 +1,60 @@
+"""R's error due to the integration (execution/solver_error.py), stored with every run: it must
+bound R's real error, measured against a converged run, without being absurdly loose.
+
+The points are where a user found the error bar (R_err alone) three to eight orders of magnitude
+below the real error (issue 34): the original model at Omega = 5, g = 45 (a period-6 orbit) and at
+Omega = 4, g = 35 (period 1). Each is a one-point sweep at rtol 1e-4, 1e-6 and 1e-8 with both
+methods; the converged R is dop853 at rtol 1e-13, atol 1e-15 (rk45 at 1e-12 agrees with it to 1e-8
+relative at both points: benchmarks/accuracy_claims.py).
+"""
+
+import h5py
+import numpy as np
+import pytest
+
+from vrsweep.config import parse_config
+from vrsweep.execution.job import run_job
+from vrsweep.numerics import kernel
+from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
+from vrsweep.numerics.trajectory import settings_vector, simulate
+
+POINTS = {"period 6": dict(g=45.0, Omega=5.0), "period 1": dict(g=35.0, Omega=4.0)}
+PERIODS = 100
+LOOSE = 100.0  # the bound may exceed the real error by at most this factor (issue 34)
+
+
+def _converged(parameters):
+    coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, **parameters), "original")
+    settings = settings_vector(rtol=1e-13, atol=1e-15, transient_periods=PERIODS, measure_periods=PERIODS)
+    return simulate(coefficients, [0.99, 0.5], settings, method="dop853").summary[kernel.SUM_R]
+
+
+@pytest.fixture(scope="module")
+def converged():
+    return {name: _converged(parameters) for name, parameters in POINTS.items()}
+
+
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8])
+@pytest.mark.parametrize("point", sorted(POINTS))
+def test_the_stored_solver_error_bounds_rs_real_error(tmp_path, converged, point, rtol, method):
+    parameters = POINTS[point]
+    config = parse_config(f"""
+        model: original
+        parameters: {{g: {parameters['g']}, Omega: {parameters['Omega']}}}
+        integration: {{method: {method}, rtol: {rtol}, atol: {rtol / 100}, transient_periods: {PERIODS},
+                       measure_periods: {PERIODS}}}
+        """, "point.yaml")
+    run_job(config, tmp_path / "point.h5", threads=1)
+    with h5py.File(tmp_path / "point.h5", "r") as f:
+        r = float(f["R"][()])
+        relative = float(f.attrs["R_solver_err"])
+        assert f.attrs["R_solver_err_rtol"] == pytest.approx(rtol * 1e-3)
+        period = int(f["period"][()])
+    real = abs(r - converged[point])
+    if period == 0:  # not periodic at this tolerance: nothing to estimate, and it says so
+        assert np.isnan(relative)
+        return
+    bound = relative * abs(r)
+    assert real <= bound, f"R = {r}, converged {converged[point]}: real error {real:.2e} > bound {bound:.2e}"
+    assert bound <= LOOSE * max(real, 1e-13 * abs(r)), f"bound {bound:.2e} is over {LOOSE}x the real error {real:.2e}"
