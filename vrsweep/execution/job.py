@@ -217,7 +217,7 @@ def solver_error_attributes(config, grid, shard, writer):
     if owned is not None:
         done = done & owned.reshape(-1)
     stored = {name: array.reshape(-1) for name, array in writer.read_variables(("R", "period", "status")).items()}
-    return solver_error.estimate(config, grid, shard, done, stored)
+    return solver_error.estimate(config, grid, done, stored)
 
 
 def basin_extras(config, writer):

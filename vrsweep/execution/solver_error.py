@@ -3,8 +3,8 @@
 
 R_err measures how R varies over the measurement window; it knows nothing of the solver. At a
 loose rtol R can be off by orders of magnitude more than R_err says (docs/accuracy.md). So when a
-run finishes, the first periodic points of its own shuffled order (whole lines: a hysteresis
-line's points depend on each other) are run again at rtol and atol times TIGHTER, and
+run finishes, the periodic ones among the first points of the grid's shuffled order (whole lines:
+a hysteresis line's points depend on each other) are run again at rtol and atol times TIGHTER, and
 
     R_solver_err = max over the sample's periodic points of 2 |R - R_tight| / |R|
 
@@ -15,7 +15,9 @@ change of the steps, and R_err already says it is not converged (the tight run m
 period: then the difference is the run's error all the same). With no periodic point in the sample the
 attribute is NaN: nothing was estimated.
 
-Cost: SAMPLE_FRACTION of the points, at least SAMPLE_MIN and at most SAMPLE_POINTS, each about 2.5 to 4 times a point's
+The first points are the grid's, not a shard's: each shard reruns those it holds, and the merge's
+largest bound is the whole run's, bit for bit. Cost: SAMPLE_FRACTION of the points (at least
+SAMPLE_MIN, at most SAMPLE_POINTS), the periodic ones only, each about 2.5 to 4 times a point's
 cost (rk45 takes 1000^(1/5) = 4x the steps; dop853 1000^(1/8) = 2.4x): a few per cent of a
 large run.
 """
@@ -30,8 +32,8 @@ import numpy as np
 TIGHTER = 1e-3
 SMALLEST_RTOL = 1e-14        # config/schema.py's lower bound of rtol: a tighter one means nothing
 SAMPLE_FRACTION = 0.02
-SAMPLE_POINTS = 16
-SAMPLE_MIN = 2
+SAMPLE_POINTS = 32
+SAMPLE_MIN = 4
 SAFETY = 2.0
 
 
@@ -41,22 +43,20 @@ def tight_integration(integration):
     return dataclasses.replace(integration, rtol=rtol, atol=integration.atol * (rtol / integration.rtol))
 
 
-def sample_lines(grid, shard, done, periodic):
-    """The run's first lines in its shuffled order whose points are all done and periodic (only
-    those count): about SAMPLE_FRACTION of the done points, at least SAMPLE_MIN points' worth of
-    lines, at most SAMPLE_POINTS'."""
+def sample_lines(grid, done, periodic):
+    """The lines to rerun: of the grid's first lines in its shuffled order (SAMPLE_FRACTION of its
+    points, at least SAMPLE_MIN, at most SAMPLE_POINTS: the same lines for a whole run and for its
+    shards, so that merged shards carry the whole run's estimate), those this file holds done
+    (``done``: False outside a shard's own points) and periodic throughout."""
     from vrsweep.config.grid import shuffled_lines
 
-    lines = shuffled_lines(grid, *shard)
-    n_done = int(np.count_nonzero(done[lines]))
-    lines = lines[np.all(done[lines] & periodic[lines], axis=1)]
-    if not len(lines):
-        return lines
-    n_points = max(SAMPLE_MIN, min(SAMPLE_POINTS, math.ceil(SAMPLE_FRACTION * n_done)))
-    return lines[:max(1, n_points // lines.shape[1])]
+    lines = shuffled_lines(grid, 0, 1)
+    n_points = max(SAMPLE_MIN, min(SAMPLE_POINTS, math.ceil(SAMPLE_FRACTION * grid.n_points)))
+    first = lines[:max(1, math.ceil(n_points / lines.shape[1]))]
+    return first[np.all(done[first] & periodic[first], axis=1)]
 
 
-def estimate(config, grid, shard, done, stored):
+def estimate(config, grid, done, stored):
     """The root attributes R_solver_err (relative; NaN if not estimated), R_solver_err_points (the
     periodic points it was measured on) and R_solver_err_rtol (the tight rtol).
 
@@ -66,7 +66,7 @@ def estimate(config, grid, shard, done, stored):
 
     tight = tight_integration(config.integration)
     attributes = {"R_solver_err": math.nan, "R_solver_err_points": np.int64(0), "R_solver_err_rtol": tight.rtol}
-    lines = sample_lines(grid, shard, done, (stored["status"] == Status.OK) & (stored["period"] > 0))
+    lines = sample_lines(grid, done, (stored["status"] == Status.OK) & (stored["period"] > 0))
     if not len(lines):
         return attributes
     flat, values = LineRunner(dataclasses.replace(config, integration=tight)).run(lines)
