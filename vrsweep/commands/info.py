@@ -260,9 +260,10 @@ def _describe_sweep(path, ds) -> dict:
 
 def _solver_error(attrs):
     """R's relative error due to the integration (execution/solver_error.py), or None (older files)."""
-    if "R_solver_err" not in attrs:
+    if "R_solver_err_points" not in attrs:
         return None
-    return {"relative": _number(attrs["R_solver_err"]), "points": _plain(attrs.get("R_solver_err_points")),
+    relative = _number(attrs["R_solver_err"]) if "R_solver_err" in attrs else None
+    return {"relative": relative, "points": _plain(attrs.get("R_solver_err_points")),
             "rtol": _number(attrs.get("R_solver_err_rtol", math.nan))}
 
 

@@ -12,8 +12,8 @@ is stored as a root attribute: a relative error bound for R at every point of th
 2 covers R_tight's own error, which the benchmarks put at well under |R - R_tight| for a 1000x
 tighter tolerance (rk45: 1000^(5/6) times smaller; dop853 likewise). Only points periodic in the run count: a chaotic or quasi-periodic point's R changes with any
 change of the steps, and R_err already says it is not converged (the tight run may find another
-period: then the difference is the run's error all the same). With no periodic point in the sample the
-attribute is NaN: nothing was estimated.
+period: then the difference is the run's error all the same). With no periodic point in the sample
+there is no R_solver_err, and R_solver_err_points is 0: nothing was estimated.
 
 The first points are the grid's, not a shard's: each shard reruns those it holds, and the merge's
 largest bound is the whole run's, bit for bit. Cost: SAMPLE_FRACTION of the points (at least
@@ -57,7 +57,7 @@ def sample_lines(grid, done, periodic):
 
 
 def estimate(config, grid, done, stored):
-    """The root attributes R_solver_err (relative; NaN if not estimated), R_solver_err_points (the
+    """The root attributes R_solver_err (relative; absent if not estimated), R_solver_err_points (the
     periodic points it was measured on) and R_solver_err_rtol (the tight rtol).
 
     stored: the run's {"R", "period", "status"} over the whole grid (flat)."""
@@ -65,7 +65,9 @@ def estimate(config, grid, done, stored):
     from vrsweep.results import Status
 
     tight = tight_integration(config.integration)
-    attributes = {"R_solver_err": math.nan, "R_solver_err_points": np.int64(0), "R_solver_err_rtol": tight.rtol}
+    # R_solver_err itself only where it was measured (an attribute of NaN would make equal files
+    # compare unequal): its absence with R_solver_err_points = 0 says "not estimated".
+    attributes = {"R_solver_err_points": np.int64(0), "R_solver_err_rtol": tight.rtol}
     lines = sample_lines(grid, done, (stored["status"] == Status.OK) & (stored["period"] > 0))
     if not len(lines):
         return attributes

@@ -313,13 +313,15 @@ def _merge(shards, out_path, allow_missing):
 def _solver_error(shards):
     """R_solver_err of the merged file (execution/solver_error.py): the largest of the shards' bounds,
     measured on all their samples' points together."""
-    found = [s.attrs for s in shards if "R_solver_err" in s.attrs]
+    found = [s.attrs for s in shards if "R_solver_err_points" in s.attrs]
     if not found:
         return {}
-    bounds = [float(a["R_solver_err"]) for a in found if np.isfinite(float(a["R_solver_err"]))]
-    return {"R_solver_err": max(bounds) if bounds else np.nan,
-            "R_solver_err_points": np.int64(sum(int(a.get("R_solver_err_points", 0)) for a in found)),
-            "R_solver_err_rtol": found[0].get("R_solver_err_rtol", np.nan)}
+    merged = {"R_solver_err_points": np.int64(sum(int(a["R_solver_err_points"]) for a in found)),
+              "R_solver_err_rtol": found[0].get("R_solver_err_rtol", np.nan)}
+    bounds = [float(a["R_solver_err"]) for a in found if "R_solver_err" in a]
+    if bounds:  # absent where no shard measured one, as in a whole run's file
+        merged = {"R_solver_err": max(bounds), **merged}
+    return merged
 
 
 def _root_attributes(ref):
