@@ -310,7 +310,11 @@ def _describe_groups(path, kind) -> dict | None:
     try:
         # A file described from its groups may be one whose kind was damaged: its checksum says so.
         with open_hdf5(path, "r") as f:
-            check_attributes_of_any_kind(f, path)
+            # A file of another format may seal its attributes otherwise: the reader's error (a
+            # newer format: upgrade) comes first, as every other command says it.
+            version = f.attrs.get("vrsweep_format_version")
+            if isinstance(version, (int, np.integer)) and int(version) == FORMAT_VERSION:
+                check_attributes_of_any_kind(f, path)
     except ResultFileError:
         raise
     except Exception:  # noqa: BLE001 - unreadable: the reader's error says why (below, or the caller's)
