@@ -15,12 +15,16 @@ def _parse_at(values):
     at = {}
     for text in values:
         name, sep, value = text.partition("=")
+        name = name.strip()
         try:
-            at[name.strip()] = float(value)
+            number = float(value)
         except ValueError:
             sep = ""
-        if not sep or not name.strip():
+        if not sep or not name:
             raise click.BadParameter(f"expected AXIS=VALUE, e.g. g=23, got {text!r}", param_hint="--at")
+        if name in at:  # the later value was taken silently
+            raise click.BadParameter(f"{name} is named twice: one value per axis", param_hint="--at")
+        at[name] = number
     return at
 
 

@@ -23,6 +23,8 @@ def _parse_at(items):
         name, equals, value = item.partition("=")
         if not equals or not name.strip() or not value.strip():
             raise UsageError(f"--at {item}: expected NAME=VALUE, e.g. --at Omega=4")
+        if name.strip() in at:  # the later value was taken silently
+            raise UsageError(f"--at {name.strip()} is given twice: one value per axis")
         at[name.strip()] = value.strip()
     return at
 

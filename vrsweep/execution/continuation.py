@@ -71,6 +71,13 @@ def start_state_from_sweep(path, at):
                                     path=str(path))
         selection = {}
         axes = grid_axes(ds)
+        # Every sweep axis named: a point of a map is not a point of one of its axes (the first
+        # value of an axis left out was taken silently). A hysteresis sweep's direction: its first.
+        missing = [str(axis) for axis in axes if axis != "direction" and axis not in at]
+        if missing:
+            raise UsageError.naming("{path} sweeps {axes}: name its point on every axis, e.g. {at} {example}",
+                                    path=str(path), axes=", ".join(str(a) for a in axes if a != "direction"),
+                                    example=" ".join(f"{m}={float(ds[m].values[0]):g}" for m in missing))
         for name, value in at.items():
             if name not in axes:
                 raise UsageError.naming("{path} has no axis {name}; its axes: {axes}", path=str(path), name=name,

@@ -1,0 +1,43 @@
+"""--at names a point: every axis of a map once (issue 33, class 1's last example). Naming an axis
+twice took the later value silently, and naming one axis of two took the other's first value."""
+
+import textwrap
+
+import pytest
+
+MAP = """\
+    model: effective
+    sweep:
+      g: {values: [10.0, 20.0]}
+      Omega: {values: [4.0, 5.0]}
+    integration: {transient_periods: 4, measure_periods: 16}
+    continuation: {parameter: g, from: 10.0, to: [5.0, 30.0]}
+    """
+
+
+@pytest.fixture(scope="module")
+def a_map(tmp_path_factory, sweep_file):
+    folder = tmp_path_factory.mktemp("map")
+    return sweep_file(folder, textwrap.dedent(MAP), "map")
+
+
+@pytest.mark.parametrize("at, words", [
+    (["g=10"], ["sweeps g, Omega", "--at Omega=4"]),
+    (["Omega=4"], ["sweeps g, Omega", "--at g=10"]),
+    (["g=10", "g=20"], ["g is named twice"]),
+])
+def test_continue_from_a_map_needs_its_point_on_every_axis_once(a_map, tmp_path, invoke, at, words):
+    config, path = a_map
+    args = [item for value in at for item in ("--at", value)]
+    result = invoke("continue", config, "--start", path, *args, "-o", tmp_path / "branch.h5")
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output and all(word in result.output for word in words), result.output
+    assert not (tmp_path / "branch.h5").exists()
+
+
+def test_plot_refuses_an_axis_named_twice(a_map, tmp_path, invoke):
+    _, path = a_map
+    result = invoke("plot", path, "--kind", "response", "--at", "Omega=4", "--at", "Omega=5", "-o", tmp_path / "p.png")
+    assert result.exit_code == 2, result.output
+    assert "--at Omega is given twice" in result.output
+    assert not (tmp_path / "p.png").exists()
