@@ -148,24 +148,17 @@ def test_a_checkpoint_of_a_version_whose_points_differ_refuses_naming_it(tmp_pat
     assert out.read_bytes() == before
 
 
-def test_a_checkpoint_of_040_without_the_impact_observables_resumes_without_them(tmp_path, monkeypatch):
-    """vrsweep 0.4.0 wrote no impact_speed_min ... stuck_fraction; its checkpoint resumes and is
-    finished as it began (the points the same as a fresh run's), with none of them."""
-    from vrsweep.execution import job
-    from vrsweep.store import variables
-
-    config = the_config()
-    impact = {name for name, *_ in variables.IMPACT_VARIABLES}
-    as_040 = lambda integration: [v for v in variables.point_variables(integration) if v[0] not in impact]  # noqa: E731
-    with monkeypatch.context() as patch:
-        patch.setattr(job, "point_variables", as_040)
-        _run_interrupted(config, tmp_path / "old.h5")
+def test_a_checkpoint_of_050_refuses_naming_what_changed(tmp_path):
+    """0.6.0 measures R of quasi-periodic points by weighted Birkhoff averages and adds ``motion``:
+    a 0.5.0 checkpoint's points are not this version's, so it is not continued."""
     from vrsweep.execution.job import run_job
 
-    run_job(config, tmp_path / "old.h5", threads=1, resume=True)
-    run_job(config, tmp_path / "fresh.h5", threads=1)
-    with h5py.File(tmp_path / "old.h5", "r") as old, h5py.File(tmp_path / "fresh.h5", "r") as fresh:
-        assert not impact & set(old) and impact <= set(fresh)
-        assert old.attrs["vrsweep_complete"]
-        np.testing.assert_array_equal(old["R"][()], fresh["R"][()])
-        np.testing.assert_array_equal(old["status"][()], fresh["status"][()])
+    config = the_config()
+    out = tmp_path / "old.h5"
+    _run_interrupted(config, out)
+    with h5py.File(out, "r+") as f:
+        f.attrs["vrsweep_version"] = "0.5.0"
+    before = out.read_bytes()
+    with pytest.raises(ResultFileError, match="written by vrsweep 0.5.0.*weighted Birkhoff average since 0.6.0"):
+        run_job(config, out, threads=1, resume=True)
+    assert out.read_bytes() == before

@@ -32,3 +32,23 @@ FLAG_MEANINGS = " ".join(s.name.lower() for s in Status)
 
 def message(code: int) -> str:
     return MESSAGES[Status(int(code))]
+
+
+# The kind of motion a point settled into (vrsweep.analysis.motion decides it), stored as int8
+# ``motion`` with flag_values / flag_meanings like the status.
+class Motion(enum.IntEnum):
+    NONE = 0
+    PERIODIC = 1
+    QUASI_PERIODIC = 2
+    CHAOTIC = 3
+    NOT_SETTLED = 4
+
+
+MOTION_MEANINGS = " ".join(kind.name.lower() for kind in Motion)
+MOTION_DESCRIPTIONS = {
+    Motion.NONE: "failed or not computed",
+    Motion.PERIODIC: "periodic (period detected)",
+    Motion.QUASI_PERIODIC: "quasi-periodic (weighted averages converge)",
+    Motion.CHAOTIC: "chaotic (averages do not converge)",
+    Motion.NOT_SETTLED: "not settled (still dying away)",
+}

@@ -35,8 +35,9 @@ Stroboscopic (Poincare) samples
     3. Incomplete cycles. On a period-p orbit with m not a multiple of p, R over the window
        differs from the orbit's own R (its mean over whole cycles) by a fixed amount that no
        tolerance changes: at g = 10, Omega = 4 (period 3) R over 100 periods is 0.5444 and over
-       the last 99 it is 0.5356. |R(m periods) - R(whole cycles)| is added to R_err, so R_err
-       bounds R's distance from the long-time response in both cases.
+       the last 99 it is 0.5356. Since 0.6.0 R of a periodic point is its mean over the window's
+       last whole cycles (analysis/motion.py), the orbit's own R, which continuation computes too;
+       before, that offset was added to R_err instead.
 
     Why this estimator, from measurements (ensembles of 54 runs per point: rtol 1e-7 ... 1e-11
     times six x(0) perturbations of 1e-9, paper parameters, Omega = 4, 100 + 100 periods):
@@ -124,7 +125,7 @@ def _gain(sin_integral, cos_integral, duration, c):
 
 
 def r_error(sin_part, cos_part, slow_period, c, period):
-    """R_err of one point (module doc): jackknife half-width plus the incomplete-cycle term.
+    """R_err of one point (module doc): the jackknife half-width over batches of whole cycles.
 
     sin_part, cos_part: (m,) per-period Fourier integrals over the measurement window.
     Returns NaN when the window holds fewer than two cycles or c == 0 (R is then NaN too).
@@ -145,13 +146,7 @@ def r_error(sin_part, cos_part, slow_period, c, period):
     # Leave-one-out means of the batch integrals, each over (B - 1) batches.
     r_loo = _gain(qs.sum() - qs, qc.sum() - qc, (n_batches - 1) * batch_length * slow_period, c)
     variance = (n_batches - 1) / n_batches * np.sum((r_loo - r_loo.mean()) ** 2)
-    half_width = _T975.get(n_batches - 1, 1.96) * np.sqrt(variance)
-    if period > 0 and n_measured % unit:
-        whole = (n_measured // unit) * unit
-        r_window = _gain(sin_part.sum(), cos_part.sum(), n_measured * slow_period, c)
-        r_cycles = _gain(sin_part[-whole:].sum(), cos_part[-whole:].sum(), whole * slow_period, c)
-        half_width += abs(r_window - r_cycles)
-    return half_width
+    return _T975.get(n_batches - 1, 1.96) * np.sqrt(variance)
 
 
 def window_records(records, integration):

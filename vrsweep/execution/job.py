@@ -282,7 +282,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         left = [n_owned - n_done]
 
         def on_chunk(flat_indices, values):
-            writer.write_points(flat_indices, _as_the_file_holds(values, writer.point_variables))
+            writer.write_points(flat_indices, values)
             left[0] -= len(flat_indices)
             if stop is not None and left[0] > 0:  # after the last chunk, finishing is better
                 stop.check()  # a stop asked for during the chunk takes effect now it is saved
@@ -301,22 +301,12 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
 
 
-def _as_the_file_holds(values, names):
-    """A chunk's values for a file that may predate some variables: a file of 0.4.0 or earlier, resumed,
-    has no impact observables (store.variables.IMPACT_VARIABLES), and keeps none; any other
-    difference is the writer's error to report."""
-    from vrsweep.store.variables import IMPACT_VARIABLES
-
-    optional = {name for name, *_ in IMPACT_VARIABLES}
-    return {name: value for name, value in values.items() if name in names or name not in optional}
-
-
 def _refuse_results_of_older_steps(path):
     """ResultFileError if the file at ``path`` was written by a version whose points differ from
     this version's (or by an unknown one); files this function cannot read are left to the writer."""
     from vrsweep.errors import ResultFileError
     from vrsweep.store.fileio import open_hdf5
-    from vrsweep.store.provenance import RESULTS_SINCE_VERSION, same_results_as_now
+    from vrsweep.store.provenance import RESULTS_CHANGE, RESULTS_SINCE_VERSION, same_results_as_now
     from vrsweep.store.writer import ARGUMENT_WORDS
 
     try:
@@ -332,10 +322,10 @@ def _refuse_results_of_older_steps(path):
         return
     raise ResultFileError.naming(
         "cannot resume: {path} was written by vrsweep {written_by}, whose points differ from those of "
-        "vrsweep {version} (impacts are decided on each step's interpolant since {since}), so the two "
+        "vrsweep {version} ({change} since {since}), so the two "
         "cannot share a file; pass {overwrite} to compute it afresh", ARGUMENT_WORDS, path=path,
         written_by=written_by if written_by is not None else "(unknown version)", version=__version__,
-        since=RESULTS_SINCE_VERSION)
+        since=RESULTS_SINCE_VERSION, change=RESULTS_CHANGE)
 
 
 def _expected_config_text(path, config):

@@ -18,7 +18,8 @@ import numba
 import numpy as np
 
 from vrsweep.numerics import kernel
-from vrsweep.analysis.diagnostics import lyapunov_values, point_diagnostics
+from vrsweep.analysis.diagnostics import lyapunov_values, point_diagnostics, window_records
+from vrsweep.analysis.motion import motion_values
 # RUN_LINES: imported from here by callers written before the loops moved to numerics/lines.py.
 from vrsweep.numerics.lines import RUN_LINES  # noqa: F401
 # Grid, the planner's names: imported from here by callers written before they moved.
@@ -134,6 +135,9 @@ def point_values(records, summaries, statuses, coefficients, integration):
         "v_final": summaries[:, kernel.SUM_V_FINAL],
     }
     values.update(point_diagnostics(records, statuses, coefficients, integration))
+    lyapunov = None
     if integration.lyapunov:
-        values.update(lyapunov_values(records, summaries, statuses, coefficients, integration, values["period"]))
-    return values
+        lyapunov = lyapunov_values(records, summaries, statuses, coefficients, integration, values["period"])
+        values.update(lyapunov)
+    # The kind of motion; R by weighted averages where it is quasi-periodic (analysis/motion.py).
+    return motion_values(values, window_records(records, integration), statuses, coefficients, lyapunov)

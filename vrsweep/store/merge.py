@@ -32,7 +32,9 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
 from vrsweep.store.fileio import atomic_write, open_hdf5, output_target, prepare_output_directory, writing_hdf5
-from vrsweep.store.provenance import RESULTS_SINCE_VERSION, cf_attributes, same_results_as_now
+from vrsweep.store.provenance import (
+    RESULTS_CHANGE, RESULTS_SINCE_VERSION, cf_attributes, results_epoch, same_results_as_now,
+)
 from vrsweep.store.layout import RESERVED_ROOT_ATTRS, add_extras, build_skeleton, creation_reserve
 from vrsweep.store.reader import StoredLayout, corrupt_error, open_checked
 from vrsweep.store.writer import ARGUMENT_WORDS as _WRITER_WORDS
@@ -378,7 +380,9 @@ def _results_epoch(shard):
     """The versions whose points a shard's are: "current" for RESULTS_SINCE_VERSION or later (they
     all compute the same points), else the version it records (each earlier one its own)."""
     written_by = shard.attrs.get("vrsweep_version")
-    return "current" if same_results_as_now(written_by) else str(written_by or "(unknown version)")
+    if same_results_as_now(written_by):
+        return "current"
+    return results_epoch(written_by) or str(written_by or "(unknown version)")
 
 
 def _refuse_mixed_results(shards, ref):
@@ -395,7 +399,7 @@ def _refuse_mixed_results(shards, ref):
     version = lambda s: s.attrs.get("vrsweep_version") or "an unknown version"  # noqa: E731
     raise ResultFileError(
         f"{older.path} was written by vrsweep {version(older)} and {other.path} by vrsweep {version(other)}, "
-        f"whose points differ (impacts are decided on each step's interpolant since {RESULTS_SINCE_VERSION}): "
+        f"whose points differ ({RESULTS_CHANGE} since {RESULTS_SINCE_VERSION}): "
         "one file must not mix them; run the older shards again with this version")
 
 

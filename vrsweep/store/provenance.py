@@ -92,11 +92,18 @@ def model_attributes(model) -> dict:
             "model_definition": json.dumps(model.as_data(), sort_keys=False)}
 
 
-RESULTS_SINCE_VERSION = "0.2.0"
-"""The first version whose points this one reproduces: 0.2.0 decides impacts on each step's dense
+RESULT_EPOCHS = (
+    ("0.2.0", "impacts are decided on each step's interpolant"),
+    ("0.6.0", "R of a quasi-periodic point is a weighted Birkhoff average"),
+)
+"""The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
-version differs (at the tolerance's level) from the same point computed now; one file must not
-mix them (a resume, a merge). Raise it whenever a change of the numerics changes results."""
+version differs at the tolerance's level; 0.6.0 measures R (and R_err) of quasi-periodic points
+by weighted Birkhoff averages (analysis/motion.py) and adds ``motion``. Versions of one epoch
+compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
+a change of the numerics or of the estimators changes results."""
+RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
+"""The first version whose points this one reproduces, and what changed then."""
 
 
 def version_tuple(text):
@@ -107,9 +114,22 @@ def version_tuple(text):
         return None
 
 
+def results_epoch(written_by):
+    """The first version of the epoch (RESULT_EPOCHS) whose points vrsweep ``written_by`` (a
+    version, as text) computes; None for an unknown version or one before the first epoch."""
+    found = version_tuple(written_by) if written_by is not None else None
+    if found is None:
+        return None
+    epoch = None
+    for since, _ in RESULT_EPOCHS:
+        if found >= version_tuple(since):
+            epoch = since
+    return epoch
+
+
 def same_results_as_now(written_by) -> bool:
     """Whether points written by vrsweep ``written_by`` (a version, as text; None: unknown) are
     those this version computes (RESULTS_SINCE_VERSION or later)."""
-    found = version_tuple(written_by) if written_by is not None else None
-    return found is not None and found >= version_tuple(RESULTS_SINCE_VERSION)
+    return results_epoch(written_by) == RESULTS_SINCE_VERSION
+
 

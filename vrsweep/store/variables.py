@@ -7,14 +7,15 @@ in its long_name, so that a gain is never mistaken for an amplitude (ERRATA 6).
 
 import numpy as np
 
-from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES
+from vrsweep.results import FLAG_MEANINGS, FLAG_VALUES, MOTION_MEANINGS, Motion
 
 
 def point_variables(integration):
     """(name, dtype, extra_dims, attrs) for every per-point variable, in storage order."""
     strobe = (("strobe", integration.strobe_periods),)
     return [
-        ("R", np.float64, (), {"units": "1", "long_name": "gain |Q|/c at the slow frequency omega (eq3.3)"}),
+        ("R", np.float64, (), {"units": "1", "long_name": ("gain |Q|/c at the slow frequency omega (eq3.3); a weighted "
+                                                           "Birkhoff average where the motion is quasi-periodic")}),
         ("Qs", np.float64, (), {"units": "1", "long_name": "sine Fourier component of x at omega (eq3.1)"}),
         ("Qc", np.float64, (), {"units": "1", "long_name": "cosine Fourier component of x at omega (eq3.2)"}),
         ("Q_amplitude", np.float64, (), {
@@ -23,7 +24,9 @@ def point_variables(integration):
         ("R_err", np.float64, (), {
             "units": "1",
             "long_name": ("95% half-width of R: jackknife over 10 batches of whole periods (cycles) of the "
-                          "measurement window, plus R's offset from its whole-cycle value (vrsweep.analysis.diagnostics)")}),
+                          "measurement window, plus R's offset from its whole-cycle value (vrsweep.analysis.diagnostics); "
+                          "where the motion is quasi-periodic, the distance of R from either half's weighted "
+                          "average (vrsweep.analysis.motion)")}),
         ("impacts_per_period", np.float64, (), {
             "units": "1", "long_name": "mean number of impacts per slow period 2 pi/omega (measurement window)"}),
         ("status", np.int8, (), {
@@ -33,6 +36,10 @@ def point_variables(integration):
             "units": "1",
             "long_name": ("period of the stroboscopic samples in slow periods, to period_tolerance (0: none up to "
                           "max_period: chaotic, quasi-periodic, longer, or not yet converged)")}),
+        ("motion", np.int8, (), {
+            "long_name": ("kind of motion: periodic, quasi-periodic (weighted averages converge), chaotic, "
+                          "not settled; none where the point failed (vrsweep.analysis.motion)"),
+            "flag_values": np.array([int(kind) for kind in Motion], dtype=np.int8), "flag_meanings": MOTION_MEANINGS}),
         ("impacts_per_cycle", np.int64, (), {
             "units": "1", "long_name": "impacts in one cycle of the detected period (-1: no period)"}),
         ("strobe_x", np.float64, strobe, {
