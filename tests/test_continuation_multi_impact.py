@@ -141,6 +141,31 @@ def test_scipy_confirms_each_graze_and_its_neighbours(window_end_branch):
 
 
 @pytest.mark.slow
+def test_a_sweep_across_the_graze_sees_the_slowest_impact_fall_like_a_square_root(window_end_branch, tmp_path):
+    """Issue 31: on a map across a grazing line the smallest impact speed (impact_speed_min, a
+    sweep variable) falls to zero like sqrt(g - g_graze). A sweep just above the graze where the
+    tenth impact of the period-3 orbit appears (located by continuation, not by the sweep): the
+    log-log slope of the speed against the distance is 1/2 over three decades."""
+    import xarray as xr
+
+    import vrsweep
+
+    _, orbits, grazes, _ = window_end_branch
+    graze = max(grazes, key=lambda orbit: orbit.parameter)  # 9 -> 10 impacts as g grows
+    distance = np.array([1e-5, 1e-4, 1e-3, 1e-2])
+    config = {"model": "original", "parameters": FIG1, "initial": {"x": 0.99, "v": 0.5},
+              "sweep": {"g": (graze.parameter + distance).tolist()},
+              "integration": {"rtol": 1e-10, "atol": 1e-12, "transient_periods": 300, "measure_periods": 60}}
+    out = tmp_path / "graze.h5"
+    vrsweep.sweep(config, output=out, progress=False)
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        assert (ds["period"].values == PERIODS).all()
+        assert (np.round(ds["impacts_per_period"].values * PERIODS) == 10).all()
+        speed = ds["impact_speed_min"].values
+    slopes = np.diff(np.log(speed)) / np.diff(np.log(distance))
+    assert np.all(np.abs(slopes - 0.5) < 0.01), slopes
+
+
 def test_the_grazes_converge_with_the_tolerance(window_end_branch):
     """At rtol 1e-12 the same grazes lie where rtol 1e-10 put them, to 1e-7 in g: located on the
     windowed map to the Newton tolerance, not to a continuation step."""

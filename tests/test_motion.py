@@ -183,3 +183,22 @@ def test_periodic_and_chaotic_points_keep_the_plain_average(tmp_path, monkeypatc
         plain = _sweep(tmp_path, name + "_plain", config)
         for variable in ("R", "R_err", "Qs", "Qc"):
             np.testing.assert_array_equal(found[name][variable], plain[variable])
+
+
+def test_info_counts_the_kinds_of_motion(quasi_periodic, tmp_path, invoke, write_config):
+    config = write_config(tmp_path, """\
+        model: original
+        parameters: {Omega: 4.0}
+        sweep:
+          g: [5.0, 10.0, 30.0]
+        integration: {transient_periods: 100, measure_periods: 100}
+        """)
+    out = tmp_path / "kinds.h5"
+    assert invoke("run", config, "-o", out, "-q").exit_code == 0
+    lines = [line for line in invoke("info", out).output.splitlines() if line.startswith("motion:")]
+    # g = 5 chaotic (lambda1 > 0, docs/lyapunov.md), g = 10 period 3, g = 30 period 1
+    assert lines == ["motion:      2 periodic, 1 chaotic (docs/trust.md)"]
+    import json
+
+    summary = json.loads(invoke("info", out, "--json").output)
+    assert summary["motion_counts"] == {"periodic": 2, "chaotic": 1}

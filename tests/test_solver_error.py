@@ -8,30 +8,42 @@ methods; the converged R is dop853 at rtol 1e-13, atol 1e-15 (rk45 at 1e-12 agre
 relative at both points: benchmarks/accuracy_claims.py).
 """
 
+import math
+
 import h5py
 import numpy as np
 import pytest
 
 from vrsweep.config import parse_config
 from vrsweep.execution.job import run_job
+from vrsweep.analysis import motion
 from vrsweep.numerics import kernel
+from vrsweep.numerics.coefficients import PERIOD, RESPONSE_SCALE
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.trajectory import settings_vector, simulate
 
 POINTS = {"period 6": dict(g=45.0, Omega=5.0), "period 1": dict(g=35.0, Omega=4.0)}
+CYCLES = {"period 6": 6, "period 1": 1}
 PERIODS = 100
 LOOSE = 100.0  # the bound may exceed the real error by at most this factor (issue 34)
 
 
-def _converged(parameters):
+def _converged(parameters, periods=None):
+    """R of dop853 at rtol 1e-13 over the last whole cycles of ``periods`` (the point's period) of
+    the window, as sweeps take it; or, periods None, by weighted averages (analysis/motion.py)."""
     coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, **parameters), "original")
     settings = settings_vector(rtol=1e-13, atol=1e-15, transient_periods=PERIODS, measure_periods=PERIODS)
-    return simulate(coefficients, [0.99, 0.5], settings, method="dop853").summary[kernel.SUM_R]
+    records = simulate(coefficients, [0.99, 0.5], settings, method="dop853").period_records[-PERIODS:]
+    if periods is None:
+        return motion.quasi_periodic_gain(records[np.newaxis], coefficients[np.newaxis])["R"][0]
+    whole = records[PERIODS % periods:]
+    return (2.0 * np.hypot(whole[:, kernel.REC_QS].sum(), whole[:, kernel.REC_QC].sum())
+            / (len(whole) * coefficients[PERIOD] * coefficients[RESPONSE_SCALE]))
 
 
 @pytest.fixture(scope="module")
 def converged():
-    return {name: _converged(parameters) for name, parameters in POINTS.items()}
+    return {name: _converged(parameters, CYCLES[name]) for name, parameters in POINTS.items()}
 
 
 @pytest.mark.parametrize("method", ["rk45", "dop853"])
@@ -60,3 +72,23 @@ def test_the_stored_solver_error_bounds_rs_real_error(tmp_path, converged, point
     bound = relative * abs(r)
     assert real <= bound, f"R = {r}, converged {converged[point]}: real error {real:.2e} > bound {bound:.2e}"
     assert bound <= LOOSE * max(real, 1e-13 * abs(r)), f"bound {bound:.2e} is over {LOOSE}x the real error {real:.2e}"
+
+
+def test_a_run_without_a_periodic_point_reruns_its_quasi_periodic_ones(tmp_path):
+    """Omega/omega irrational (3 + sqrt(2)/2 over 0.5), g = 25: a quasi-periodic point
+    (test_motion.py) stands in for the periodic ones, and its bound covers R's real error against
+    dop853 at rtol 1e-13 (R by weighted averages in both)."""
+    parameters = dict(g=25.0, Omega=3.0 + 0.5 * math.sqrt(2.0))
+    config = parse_config(f"""
+        model: original
+        parameters: {{g: {parameters['g']}, Omega: {parameters['Omega']!r}}}
+        integration: {{rtol: 1.0e-6, atol: 1.0e-8, transient_periods: {PERIODS}, measure_periods: {PERIODS}}}
+        """, "point.yaml")
+    run_job(config, tmp_path / "qp.h5", threads=1)
+    with h5py.File(tmp_path / "qp.h5", "r") as f:
+        assert int(f["motion"][()]) == motion.Motion.QUASI_PERIODIC
+        r, r_err = float(f["R"][()]), float(f["R_err"][()])
+        points, relative = int(f.attrs["R_solver_err_points"]), float(f.attrs["R_solver_err"])
+    assert points == 1
+    real = abs(r - _converged(parameters))
+    assert real <= relative * abs(r) + r_err

@@ -248,6 +248,7 @@ def _describe_sweep(path, ds) -> dict:
         "fixed_parameters": _fixed_parameters(config, axis_names),
         "integration": _integration(config),
         "status_counts": _status_counts(ds, owned),
+        "motion_counts": _motion_counts(ds, owned),
         "solver_error": _solver_error(attrs),
         "attractors": _attractors(ds),
         "variables": variables,
@@ -288,6 +289,22 @@ def _status_counts(ds, owned) -> list[dict]:
             meaning = None
         counts.append({"status": name, "code": code, "points": int(n), "meaning": meaning})
     return counts
+
+
+def _motion_counts(ds, owned) -> dict:
+    """Points per kind of motion (0.6.0 on) over the computed points this file owns, by the
+    file's own flag_meanings; {} for files without ``motion``."""
+    if "motion" not in ds or "status" not in ds:
+        return {}
+    from vrsweep.results import Status
+
+    computed = np.asarray(ds["status"].values)[owned] != Status.NOT_COMPUTED
+    motion = np.asarray(ds["motion"].values)[owned][computed]
+    attrs = ds["motion"].attrs
+    names = dict(zip((int(v) for v in np.atleast_1d(attrs.get("flag_values", []))),
+                     str(attrs.get("flag_meanings", "")).split()))
+    return {names.get(int(code), f"unknown code {int(code)}"): int(n)
+            for code, n in zip(*np.unique(motion, return_counts=True))}
 
 
 def _attractors(ds) -> list[dict]:
@@ -505,14 +522,18 @@ def format_summary(summary, show_config=False) -> str:
                 lines.append(f"{label:<12} {row['group']}: {row['status']}{meaning}")
             else:
                 lines.append(f"{label:<12} {row['points']:>{_count_width(summary)}} {row['status']}{meaning}")
+    motions = summary.get("motion_counts")
+    if motions:
+        lines.append("motion:      " + ", ".join(f"{n} {name.replace('_', '-')}" for name, n in motions.items())
+                     + " (docs/trust.md)")
     solver = summary.get("solver_error")
     if solver:
         if solver["relative"] is None:
-            lines.append("solver:      R's solver error not estimated (no periodic point to rerun; R_err says "
-                         "how far R is from converged)")
+            lines.append("solver:      R's solver error not estimated (no periodic or quasi-periodic point to "
+                         "rerun; R_err says how far R is from converged)")
         else:
             lines.append(f"solver:      R's error from the integration about {solver['relative']:.1e} relative "
-                         f"({solver['points']} periodic points rerun at rtol {solver['rtol']:.0e}); "
+                         f"({solver['points']} converged points rerun at rtol {solver['rtol']:.0e}); "
                          "add it to R_err for R's error bar")
     lines += _format_attractors(summary.get("attractors") or [])
     lines += _format_branches(summary.get("branches"))

@@ -216,7 +216,7 @@ def solver_error_attributes(config, grid, shard, writer):
     owned = writer.owned_mask()
     if owned is not None:
         done = done & owned.reshape(-1)
-    stored = {name: array.reshape(-1) for name, array in writer.read_variables(("R", "period", "status")).items()}
+    stored = {name: array.reshape(-1) for name, array in writer.read_variables(("R", "period", "status", "motion")).items()}
     return solver_error.estimate(config, grid, done, stored)
 
 

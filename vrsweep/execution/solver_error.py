@@ -10,10 +10,14 @@ a hysteresis line's points depend on each other) are run again at rtol and atol 
 
 is stored as a root attribute: a relative error bound for R at every point of the file. The factor
 2 covers R_tight's own error, which the benchmarks put at well under |R - R_tight| for a 1000x
-tighter tolerance (rk45: 1000^(5/6) times smaller; dop853 likewise). Only points periodic in the run count: a chaotic or quasi-periodic point's R changes with any
-change of the steps, and R_err already says it is not converged (the tight run may find another
-period: then the difference is the run's error all the same). With no periodic point in the sample
-there is no R_solver_err, and R_solver_err_points is 0: nothing was estimated.
+tighter tolerance (rk45: 1000^(5/6) times smaller; dop853 likewise). Only points periodic in the
+run count: a chaotic point's R changes with any change of the steps, and R_err already says it is
+not converged (the tight run may find another period: then the difference is the run's error all
+the same). Where the sample holds no periodic point, its quasi-periodic points (analysis/motion.py)
+count instead, as on a map of the original model at an Omega/omega that is no small ratio: their
+R converges too, and the difference then also holds the two runs' averaging errors (each within
+its R_err), so the bound can only be wider. With neither there is no R_solver_err, and
+R_solver_err_points is 0: nothing was estimated.
 
 The first points are the grid's, not a shard's: each shard reruns those it holds, and the merge's
 largest bound is the whole run's, bit for bit. Cost: SAMPLE_FRACTION of the points (at least
@@ -60,23 +64,28 @@ def estimate(config, grid, done, stored):
     """The root attributes R_solver_err (relative; absent if not estimated), R_solver_err_points (the
     periodic points it was measured on) and R_solver_err_rtol (the tight rtol).
 
-    stored: the run's {"R", "period", "status"} over the whole grid (flat)."""
+    stored: the run's {"R", "period", "status", "motion"} over the whole grid (flat)."""
     from vrsweep.execution.sweep import LineRunner
-    from vrsweep.results import Status
+    from vrsweep.results import Motion, Status
 
     tight = tight_integration(config.integration)
     # R_solver_err itself only where it was measured (an attribute of NaN would make equal files
     # compare unequal): its absence with R_solver_err_points = 0 says "not estimated".
     attributes = {"R_solver_err_points": np.int64(0), "R_solver_err_rtol": tight.rtol}
-    lines = sample_lines(grid, done, (stored["status"] == Status.OK) & (stored["period"] > 0))
+    ok = stored["status"] == Status.OK
+    converged = ok & (stored["period"] > 0)
+    lines = sample_lines(grid, done, converged)
+    if not len(lines):
+        converged = ok & (stored["motion"] == Motion.QUASI_PERIODIC)
+        lines = sample_lines(grid, done, converged)
     if not len(lines):
         return attributes
     flat, values = LineRunner(dataclasses.replace(config, integration=tight)).run(lines)
     r, r_tight = stored["R"][flat], values["R"]
-    # Periodic in the run (sample_lines chose such points); whatever the tight run found: a period
+    # Converged in the run (sample_lines chose such points); whatever the tight run found: a period
     # that changes with the tolerance is itself the run's error (rk45 at rtol 1e-4 made a period-6
     # orbit of Omega = 5, g = 45 another orbit, R 11 % off).
-    same = ((stored["status"][flat] == Status.OK) & (values["status"] == Status.OK) & (stored["period"][flat] > 0)
+    same = ((stored["status"][flat] == Status.OK) & (values["status"] == Status.OK) & converged[flat]
             & np.isfinite(r) & (r != 0) & np.isfinite(r_tight))
     if same.any():
         attributes["R_solver_err"] = float(SAFETY * np.max(np.abs(r[same] - r_tight[same]) / np.abs(r[same])))

@@ -14,8 +14,9 @@ def point_variables(integration):
     """(name, dtype, extra_dims, attrs) for every per-point variable, in storage order."""
     strobe = (("strobe", integration.strobe_periods),)
     return [
-        ("R", np.float64, (), {"units": "1", "long_name": ("gain |Q|/c at the slow frequency omega (eq3.3); a weighted "
-                                                           "Birkhoff average where the motion is quasi-periodic")}),
+        ("R", np.float64, (), {"units": "1", "long_name": ("gain |Q|/c at the slow frequency omega (eq3.3): over the last "
+                                                           "whole cycles where periodic, a weighted Birkhoff average "
+                                                           "where quasi-periodic")}),
         ("Qs", np.float64, (), {"units": "1", "long_name": "sine Fourier component of x at omega (eq3.1)"}),
         ("Qc", np.float64, (), {"units": "1", "long_name": "cosine Fourier component of x at omega (eq3.2)"}),
         ("Q_amplitude", np.float64, (), {
@@ -24,9 +25,9 @@ def point_variables(integration):
         ("R_err", np.float64, (), {
             "units": "1",
             "long_name": ("95% half-width of R: jackknife over 10 batches of whole periods (cycles) of the "
-                          "measurement window, plus R's offset from its whole-cycle value (vrsweep.analysis.diagnostics); "
-                          "where the motion is quasi-periodic, the distance of R from either half's weighted "
-                          "average (vrsweep.analysis.motion)")}),
+                          "measurement window (vrsweep.analysis.diagnostics); where the motion is quasi-periodic, "
+                          "the largest distance of R from the weighted average of half or three quarters of the "
+                          "window (vrsweep.analysis.motion)")}),
         ("impacts_per_period", np.float64, (), {
             "units": "1", "long_name": "mean number of impacts per slow period 2 pi/omega (measurement window)"}),
         ("status", np.int8, (), {
@@ -60,7 +61,8 @@ def written_model_words(variables, model):
     """``point_variables``' list with the long names of a written model (numerics.written): its
     response's frequency and scale and its period T, not the paper's omega and c."""
     words = {
-        "R": f"gain |Q|/({model.response_scale}) at the response frequency {model.response_frequency}",
+        "R": (f"gain |Q|/({model.response_scale}) at the response frequency {model.response_frequency}: over the "
+              "last whole cycles where periodic, a weighted Birkhoff average where quasi-periodic"),
         "Qs": f"sine Fourier component of x at {model.response_frequency}",
         "Qc": f"cosine Fourier component of x at {model.response_frequency}",
         "Q_amplitude": f"amplitude |Q| = sqrt(Qs^2 + Qc^2) of x at {model.response_frequency} (same units as x)",
