@@ -35,8 +35,8 @@ def test_valid_config_prints_the_plan(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     result, output = invoke("validate", str(CONFIGS / "map_g_Omega.yaml"), "--threads", "4")
     assert result.exit_code == 0, output
-    for words in ("valid", "model:       original", "g: 41 values from 0 to 60", "Omega: 7 values from 3 to 6",
-                  "287 points (41 x 7)", "results/map_g_Omega.h5", "on 4 threads", "estimate:"):
+    for words in ("valid", "model:       original", "g: 31 values from 0 to 60", "Omega: 12 values from 3 to 6",
+                  "372 points (31 x 12)", "results/map_g_Omega.h5", "on 4 threads", "estimate:"):
         assert words in output, (words, output)
 
 

@@ -202,3 +202,32 @@ def test_info_counts_the_kinds_of_motion(quasi_periodic, tmp_path, invoke, write
 
     summary = json.loads(invoke("info", out, "--json").output)
     assert summary["motion_counts"] == {"periodic": 2, "chaotic": 1}
+
+
+def test_forcing_periods_from_the_coefficient_header():
+    from vrsweep.analysis.diagnostics import forcing_periods
+    from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
+
+    omegas = [4.0, 4.3, float(np.linspace(3.0, 6.0, 12)[2]), QUASI_PERIODIC_POINTS[0][1]]
+    coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=np.full(4, 10.0), Omega=np.array(omegas)), "original")
+    # Omega/omega = 8, 43/5, 78/11, irrational; no fast force (g = 0): the slow one alone, q = 1
+    assert list(forcing_periods(coefficients, 50)) == [1, 5, 11, 0]
+    assert list(forcing_periods(coefficients, 10)) == [1, 5, 0, 0]
+    no_fast = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=0.0, Omega=omegas[3]), "original")
+    assert list(forcing_periods(no_fast[np.newaxis], 50)) == [1]
+
+
+def test_a_motion_locked_to_a_forcing_of_11_periods_is_periodic_beyond_max_period(tmp_path):
+    # Omega/omega = 78/11 (Omega = 39/11, a value of linspace(3, 6, 12)): the fast force repeats
+    # after 11 slow periods, and at g = 40 the motion is locked to it (7 1/11 impacts a period).
+    # max_period is 8, the forcing's period is found all the same, and R is over whole cycles
+    omega = float(np.linspace(3.0, 6.0, 12)[2])
+    config = {"model": "original", "parameters": {"Omega": omega}, "sweep": {"g": [40.0]},
+              "integration": {"transient_periods": 100, "measure_periods": 100}}
+    values = _sweep(tmp_path, "locked", config)
+    assert values["period"][0] == 11 and values["motion"][0] == Motion.PERIODIC
+    assert values["impacts_per_cycle"][0] == 78
+    assert values["R_err"][0] < 1e-9 * values["R"][0]
+    config["integration"]["measure_periods"] = 99  # 9 whole cycles: the kernel's own window mean
+    whole = _sweep(tmp_path, "whole", config)
+    assert whole["R"][0] == pytest.approx(values["R"][0], rel=1e-8)

@@ -92,3 +92,28 @@ def test_a_run_without_a_periodic_point_reruns_its_quasi_periodic_ones(tmp_path)
     assert points == 1
     real = abs(r - _converged(parameters))
     assert real <= relative * abs(r) + r_err
+
+
+def test_a_periodic_point_whose_tight_run_does_not_settle_is_left_out(tmp_path):
+    """The original model at g = 22, Omega = 60/11 (a natural grid's value): at rtol 1e-9 a chaotic
+    transient settles on a period-11 orbit within the transient, at 1e-12 it has not within the
+    window. That is the transient's doing, not the solver's: the point is not counted, and with
+    no other point nothing is estimated (a map with it had R_solver_err 0.27 and no trusted cell)."""
+    omega = float(np.linspace(3.0, 6.0, 12)[9])
+    config = parse_config(f"""
+        model: original
+        parameters: {{g: 22.0, Omega: {omega!r}}}
+        integration: {{transient_periods: {PERIODS}, measure_periods: {PERIODS}}}
+        """, "point.yaml")
+    run_job(config, tmp_path / "unsettled.h5", threads=1)
+    with h5py.File(tmp_path / "unsettled.h5", "r") as f:
+        assert int(f["period"][()]) == 11
+        assert int(f.attrs["R_solver_err_points"]) == 0 and "R_solver_err" not in f.attrs
+    tight = parse_config(f"""
+        model: original
+        parameters: {{g: 22.0, Omega: {omega!r}}}
+        integration: {{rtol: 1.0e-12, atol: 1.0e-14, transient_periods: {PERIODS}, measure_periods: {PERIODS}}}
+        """, "tight.yaml")
+    run_job(tight, tmp_path / "tight.h5", threads=1)
+    with h5py.File(tmp_path / "tight.h5", "r") as f:
+        assert int(f["period"][()]) == 0  # the premise: the tight run has not settled

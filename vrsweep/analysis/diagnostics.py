@@ -77,7 +77,7 @@ Stroboscopic (Poincare) samples
 import numpy as np
 
 from vrsweep.numerics import kernel
-from vrsweep.numerics.coefficients import PERIOD, RESPONSE_SCALE
+from vrsweep.numerics.coefficients import HARMONIC, N_HARMONICS, PERIOD, RESPONSE_SCALE
 from vrsweep.results import Status
 
 N_BATCHES = 10
@@ -117,6 +117,53 @@ def detect_period(strobe_x, strobe_v, max_period, tolerance):
         period[repeats] = p
         smallest_before = np.minimum(smallest_before, residual)
     return period
+
+
+# Omega/omega (or any forcing frequency over the response's) counts as p/q when it agrees with
+# it to this, relative: a grid value typed as a decimal is p/q to roundoff (analysis/commensurate.py).
+RATIO_TOLERANCE = 1e-12
+
+
+def forcing_periods(coefficients, longest):
+    """The number q of periods T after which every forcing of each point repeats, from the
+    frequencies in the coefficient header (HARMONIC: omega and Omega for the paper's models, a
+    written model's too): each h T / (2 pi) must be a ratio p/q with q <= ``longest``, and q is
+    the least common multiple of their q. 0 where none repeats so soon. (n_points,) int64."""
+    from fractions import Fraction
+    from math import lcm
+
+    header = coefficients[:, [PERIOD] + [HARMONIC + k for k in range(N_HARMONICS)]]
+    periods = np.zeros(len(coefficients), dtype=np.int64)
+    rows, inverse = np.unique(header, axis=0, return_inverse=True)  # a map has few distinct rows
+    for k, (slow_period, *frequencies) in enumerate(rows):
+        q = 1
+        for frequency in frequencies:
+            if frequency == 0.0:
+                continue
+            ratio = frequency * slow_period / (2.0 * np.pi)
+            fraction = Fraction(ratio).limit_denominator(max(int(longest), 1))
+            if not abs(ratio - fraction) <= RATIO_TOLERANCE * abs(ratio):
+                q = 0
+                break
+            q = lcm(q, fraction.denominator)
+        periods[inverse.reshape(-1) == k] = q if q <= longest else 0
+    return periods
+
+
+def forcing_period_detected(measured, period, forcing, max_period, tolerance):
+    """``period`` with the forcing's period q filled in where none up to max_period was found but
+    the window's stroboscopic states repeat after q (> max_period) periods: the forcing repeats
+    only after q periods, so a motion locked to it has no shorter period (Omega/omega = 78/11:
+    period 11, beyond the default max_period 8). Tested on the last max(2q, 16) periods of the
+    window with detect_period's rules (every smaller lag 100 times worse)."""
+    m = measured.shape[1]
+    found = np.array(period, copy=True)
+    for q in np.unique(forcing[(period == 0) & (forcing > max_period) & (2 * forcing <= m)]):
+        rows = np.flatnonzero((period == 0) & (forcing == q))
+        n = min(m, max(2 * int(q), 16))
+        lag = detect_period(measured[rows, m - n:, kernel.REC_X], measured[rows, m - n:, kernel.REC_V], int(q), tolerance)
+        found[rows[lag == q]] = q
+    return found
 
 
 def _gain(sin_integral, cos_integral, duration, c):
@@ -255,6 +302,8 @@ def point_diagnostics(records, statuses, coefficients, integration):
     strobe_v[~ok] = np.nan
     period = detect_period(strobe_x, strobe_v, integration.max_period, integration.period_tolerance)
     period[~ok] = 0
+    forcing = forcing_periods(coefficients, measured.shape[1] // 2)
+    period = forcing_period_detected(measured, period, forcing, integration.max_period, integration.period_tolerance)
     slow_period = coefficients[:, PERIOD]
     r_err = batch_error(measured, slow_period, coefficients[:, RESPONSE_SCALE], period, ok)
     impacts = measured[:, :, kernel.REC_IMPACTS]  # the last p <= strobe_periods // 2 periods are read

@@ -16,8 +16,9 @@ not converged (the tight run may find another period: then the difference is the
 the same). Where the sample holds no periodic point, its quasi-periodic points (analysis/motion.py)
 count instead, as on a map of the original model at an Omega/omega that is no small ratio: their
 R converges too, and the difference then also holds the two runs' averaging errors (each within
-its R_err), so the bound can only be wider. With neither there is no R_solver_err, and
-R_solver_err_points is 0: nothing was estimated.
+its R_err), so the bound can only be wider. A periodic point whose tight run settles on no period
+is left out (estimate: a transient, not the solver). With none left there is no R_solver_err,
+and R_solver_err_points is 0: nothing was estimated.
 
 The first points are the grid's, not a shard's: each shard reruns those it holds, and the merge's
 largest bound is the whole run's, bit for bit. Cost: SAMPLE_FRACTION of the points (at least
@@ -85,8 +86,15 @@ def estimate(config, grid, done, stored):
     # Converged in the run (sample_lines chose such points); whatever the tight run found: a period
     # that changes with the tolerance is itself the run's error (rk45 at rtol 1e-4 made a period-6
     # orbit of Omega = 5, g = 45 another orbit, R 11 % off).
+    # A periodic point whose tight run found no period at all did not settle there: a chaotic
+    # transient that one run's window caught on an orbit and the other's did not (measured: the
+    # original model at g = 22, Omega = 60/11, period 11 at rtol 1e-9, still chaotic at 1e-12,
+    # R 3.01 against 3.42). That difference is the transient's, which no tolerance removes
+    # (docs/trust.md, "What R_err cannot see"), not the solver's; counted, one such point would
+    # put every point of a map beyond trust.
+    unsettled = (stored["period"][flat] > 0) & (values["period"] == 0)
     same = ((stored["status"][flat] == Status.OK) & (values["status"] == Status.OK) & converged[flat]
-            & np.isfinite(r) & (r != 0) & np.isfinite(r_tight))
+            & ~unsettled & np.isfinite(r) & (r != 0) & np.isfinite(r_tight))
     if same.any():
         attributes["R_solver_err"] = float(SAFETY * np.max(np.abs(r[same] - r_tight[same]) / np.abs(r[same])))
         attributes["R_solver_err_points"] = np.int64(same.sum())
