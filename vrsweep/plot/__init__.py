@@ -61,7 +61,7 @@ from vrsweep.plot.branches import branch_figure, is_branch
 from vrsweep.plot.curves import curves_figure, is_curves
 from vrsweep.plot.labels import (
     KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, description, figure_options, metadata,
-    layout_note, parameter_label, parse_size, read_description, render, resolve_style,
+    layout_note, legend_note, parameter_label, parse_size, read_description, render, resolve_style,
 )
 from vrsweep.plot.lyapunov import lyapunov_figure
 from vrsweep.plot.selection import _grid_axes, _sweep_default, load, select
@@ -83,7 +83,8 @@ def default_kind(data) -> str:
 
 
 def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None, var=None, *,
-         title=True, size=None, style=None, vmin=None, vmax=None) -> Figure:
+         title=True, size=None, style=None, vmin=None, vmax=None, xlim=None, ylim=None, legend=None, zoom=None,
+         table=False) -> Figure:
     """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
 
     sources: a path, or a list of paths or of what ``load`` returned (a sweep's Dataset, from
@@ -95,11 +96,14 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     ``amplitude``). title, size, style: as every figure function takes them (``figure_options``):
     False for no title at all (the description stays in ``description(fig)``, the file's metadata),
     (width, height) in inches, a matplotlib style sheet's name or .mplstyle path; vmin, vmax: the
-    ends of a map's colour scale.
+    ends of a map's colour scale; xlim, ylim: (low, high) of the main panel's axes (and of every
+    panel showing the same quantity); legend: 'best', 'outside' or 'none' (``figure_options``).
+    Branch files only: zoom ('bifurcations', 'none'; default: by itself when the bifurcations span
+    under 1 % of the axis) and table (the bifurcations in a table below the figure).
     """
     from vrsweep.store.trajectory_file import TrajectoryData
 
-    options = dict(title=title, size=size, style=style)
+    options = dict(title=title, size=size, style=style, xlim=xlim, ylim=ylim, legend=legend)
     limits = dict(vmin=vmin, vmax=vmax)
     if isinstance(sources, (str, os.PathLike)):
         sources = [sources]
@@ -120,7 +124,11 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
             raise UsageError.naming("after the branch files come sweep files only (vrsweep run results)")
         if len({str(d.attrs.get("parameter")) for d in data[:count]}) > 1:
             raise UsageError.naming("branch files drawn together must continue the same parameter")
-        return branch_figure(data[0], data[count:], more_branches=data[1:count], **options, **limits)
+        return branch_figure(data[0], data[count:], more_branches=data[1:count], zoom=zoom, table=table, **options,
+                             **limits)
+    if zoom is not None or table:  # never ignored quietly
+        raise UsageError.naming("{zoom} and {table} are for branch files (vrsweep continue), whose bifurcations "
+                                "they show")
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
         raise UsageError.naming("plot sweep results and trajectory files separately")
@@ -220,5 +228,5 @@ __all__ = [
     "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
-    "figure_options", "description", "metadata", "render", "layout_note", "read_description", "resolve_style", "parse_size",
+    "figure_options", "description", "metadata", "render", "layout_note", "legend_note", "read_description", "resolve_style", "parse_size",
 ]
