@@ -52,8 +52,9 @@ def default_output(path, kind):
                    "direction=up|down for a two-way continuation).")
 @click.option("--x", "x_axis", default=None, metavar="NAME", help="The swept parameter on the horizontal axis.")
 @click.option("--var", default=None, metavar="NAME",
-              help="--kind map: the stored variable to map, any one per grid point (e.g. R_err, period, "
-                   "impacts_per_period, x_min, attractor); default R (|Q| with --amplitude).")
+              help="The stored variable to draw, any one per grid point (e.g. R_err, period, impact_speed_min, "
+                   "x_min, attractor): mapped over two axes (--kind map), drawn against one (--kind response, the "
+                   "default for one axis); default R (|Q| with --amplitude).")
 @click.option("--log/--linear", "log", default=None,
               help="Logarithmic (or linear) response axis; on maps, colour scale. Default: response "
                    "plots choose log when the values span two decades or more, maps are linear.")
@@ -99,7 +100,8 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     Sweep results (vrsweep run), --kind:
       response     R (or |Q| with --amplitude) against the axis, with the analytic
                    branches (stable solid, unstable dashed) and g_res -- default for
-                   one axis, or two axes when one has at most 5 values (one curve each)
+                   one axis, or two axes when one has at most 5 values (one curve each);
+                   --var NAME draws any stored variable (impact_speed_min, x_max...)
       map          heat map over two axes with g_res(Omega) drawn on it -- default for two axes;
                    --var NAME maps any stored variable (R_err, period, x_min...)
       impacts      mean impacts per slow period

@@ -6,6 +6,8 @@ Sweep results (``vrsweep run``)
                      (stable solid, unstable dashed) in the same units and the resonance g_res
                      (eq3.4) marked. Fig. 1 and Fig. 2 of the paper.
     ``map``          a heat map over two swept parameters with the resonance curve drawn over it.
+    ``var``          any stored variable (impact_speed_min, x_max, period...): mapped over two axes,
+                     drawn against one (``variable_figure``).
     ``impacts``      mean impacts per slow period against the axis (or as a map).
     ``status``       how each point's integration ended.
     ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
@@ -67,6 +69,7 @@ from vrsweep.plot.lyapunov import lyapunov_figure
 from vrsweep.plot.selection import _grid_axes, _sweep_default, load, select
 from vrsweep.plot.sweeps import (
     bifurcation_figure, impacts_figure, map_figure, mappable_variables, response_figure, status_figure,
+    variable_figure,
 )
 from vrsweep.plot.trajectories import (
     impacts_per_period_figure, parse_periods, slow_flow_figure, slow_periods_in, trajectory_figure, with_impacts,
@@ -151,15 +154,20 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if periods is not None:
         raise UsageError.naming("{periods} is for trajectory files (vrsweep simulate), not sweep results")
     ds = select(data[0], at or {})
-    # After at, a fixed axis no longer counts; a variable to map asks for a map.
-    kind = kind or ("map" if var is not None else _sweep_default(_grid_axes(ds)))
+    # After at, a fixed axis no longer counts; a variable is mapped over two axes, drawn against one.
+    parameter_axes = [name for name in _grid_axes(ds) if name != "direction"]
+    kind = kind or ("map" if var is not None and len(parameter_axes) >= 2 else
+                    "response" if var is not None else _sweep_default(_grid_axes(ds)))
     if kind not in SWEEP_KINDS:
         raise UsageError.naming("{kind} {value} is for trajectory files (vrsweep simulate); a sweep result "
                                 "takes {kinds}", value=kind, kinds=", ".join(SWEEP_KINDS))
-    if var is not None and kind != "map":
-        raise UsageError.naming("{var} is for {kind} map, not {kind} {value}", value=kind)
+    if var is not None and kind not in ("map", "response"):
+        raise UsageError.naming("{var} is for {kind} map and {kind} response (against one axis), not {kind} {value}",
+                                value=kind)
     if var is not None and amplitude:  # never ignored quietly
         raise UsageError.naming("{amplitude} maps Q_amplitude and {var} names the variable itself: give one of them")
+    if kind == "response" and var is not None:
+        return variable_figure(ds, var, x_axis=x_axis, log=log, **options, **limits)
     if kind == "response":
         return response_figure(ds, amplitude=amplitude, x_axis=x_axis, log=log, **options, **limits)
     if kind == "map":
@@ -225,7 +233,7 @@ def _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, 
 
 __all__ = [
     "curves_figure", "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "LOG_SPAN", "load", "default_kind", "plot",
-    "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
+    "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "variable_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
     "figure_options", "description", "metadata", "render", "layout_note", "legend_note", "read_description", "resolve_style", "parse_size",

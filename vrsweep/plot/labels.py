@@ -14,6 +14,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
+from vrsweep.plot import layout
 
 from vrsweep.numerics.model import (
     INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_SYMBOLS,
@@ -170,13 +171,8 @@ def _title(fig, what, caption):
     fig._vrsweep_description = (what, caption)
 
 
-LEGEND_COLUMN_WIDTH = 2.6  # inches a column of legend entries needs at the legends' font size
-
-
-def _legend_columns(fig, wanted):
-    """``wanted`` legend columns, fewer (down to one) on a narrow figure, e.g. a journal column
-    (--size 3.4,2.6): a legend below the axes must not be wider than the figure."""
-    return max(1, min(wanted, int(fig.get_figwidth() // LEGEND_COLUMN_WIDTH)))
+# A legend's columns on a narrow figure: layout.legend_columns (there, as layout re-makes legends).
+from vrsweep.plot.layout import LEGEND_COLUMN_WIDTH, legend_columns as _legend_columns  # noqa: E402
 
 
 def _width(fig):
@@ -358,8 +354,6 @@ def figure_options(function):
         figure's own place, moved inside when below it would leave the panels under half the
         figure (``layout.arrange``).
     """
-    from vrsweep.plot import layout
-
     takes_limits = "vmin" in inspect.signature(function).parameters
     takes_xlim = "xlim" in inspect.signature(function).parameters
 

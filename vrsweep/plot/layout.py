@@ -26,6 +26,9 @@ LEGEND_PLACES = ("best", "outside", "none")
 AXES_SHARE = 0.5
 MARGIN = 0.05  # of the data's span, on each side, when a panel is refitted to a zoomed range
 MAX_LABEL_LINES = 3
+SHORT = 3.75             # inches: a figure lower than this, or narrower than NARROW, is small (``small``)
+NARROW = 5.0             # inches: a figure narrower than this is laid out with the margins of a journal column ...
+NARROW_PAD = 1.5 / 72.0  # ... 1.5 pt around each panel
 
 
 def parse_limits(text, option):
@@ -43,6 +46,16 @@ def parse_limits(text, option):
     if not low < high:
         raise UsageError.naming("{" + option + "} {value}: LOW must be below HIGH", value=text)
     return low, high
+
+
+LEGEND_COLUMN_WIDTH = 2.6  # inches a column of legend entries needs at the legends' font size
+
+
+def legend_columns(fig, wanted):
+    """``wanted`` legend columns, fewer (down to one) on a narrow figure, e.g. a journal column
+    (--size 3.4,2.6): a legend below the axes must not be wider than the figure (``arrange``
+    widens it again where its entries are short)."""
+    return max(1, min(wanted, int(fig.get_figwidth() // LEGEND_COLUMN_WIDTH)))
 
 
 def data_axes(fig):
@@ -77,7 +90,8 @@ def apply_limits(fig, xlim=None, ylim=None):
 
 def fit_y_to_view(ax):
     """Vertical limits around the lines' points inside the horizontal limits (lines in data
-    coordinates only: marks along an edge or across the axes are placed in axes coordinates).
+    coordinates only: marks along an edge or across the axes are placed in axes coordinates; the
+    theory's curves drawn for comparison left out, they may reach far beyond the data).
     Nothing changes on a panel with no such points (a map, a status strip)."""
     from matplotlib.collections import QuadMesh
 
@@ -86,7 +100,7 @@ def fit_y_to_view(ax):
     low, high = sorted(ax.get_xlim())
     found = []
     for line in ax.get_lines():
-        if line.get_transform() != ax.transData or not line.get_visible():
+        if line.get_transform() != ax.transData or not line.get_visible() or getattr(line, "_vrsweep_context", False):
             continue
         x = np.asarray(line.get_xdata(), dtype=float)
         y = np.asarray(line.get_ydata(), dtype=float)
@@ -167,10 +181,8 @@ def place_legend(fig, where):
     if where == "best":
         main.legend(handles, labels, loc="best", fontsize=fontsize, markerscale=markerscale, **style)
     else:
-        from vrsweep.plot.labels import _legend_columns
-
         fig.legend(handles, labels, loc="outside lower center", fontsize=fontsize, markerscale=markerscale,
-                   ncol=_legend_columns(fig, 2), **style)
+                   ncol=legend_columns(fig, 2), **style)
 
 
 # --------------------------------------------------------------------------------------------
@@ -234,7 +246,9 @@ def fit_labels(fig):
             if length <= room:
                 continue
             original = " ".join(text.split("\n"))
-            for lines in range(len(text.split("\n")) + 1, MAX_LABEL_LINES + 1):
+            # A colour bar's label takes its lines from the panels' width: two at most, then smaller.
+            most = 2 if hasattr(ax, "_colorbar") else MAX_LABEL_LINES
+            for lines in range(len(text.split("\n")) + 1, most + 1):
                 label.set_text(_rewrap(original, lines))
                 extent = label.get_window_extent(renderer)
                 if (extent.height if vertical else extent.width) <= room:
@@ -250,33 +264,79 @@ def fit_labels(fig):
 
 
 def axes_share(fig, renderer=None):
-    """The share of the figure's area its panels take (colour bars not counted)."""
+    """The share of the figure's area its axes take (panels and colour bars; not a table)."""
     renderer = renderer or renderer_of(fig)
     area = sum(ax.get_window_extent(renderer).width * ax.get_window_extent(renderer).height
-               for ax in data_axes(fig))
+               for ax in fig.axes if ax.axison)
     return area / (fig.bbox.width * fig.bbox.height)
 
 
 def arrange(fig, legend=None):
-    """After ``legend`` was placed as asked: labels fitted to their axes; a legend below the panels
-    given as many columns as fit across the figure; with no legend place asked, one that still
-    leaves the panels under AXES_SHARE of the figure moved inside the main panel (at one journal
-    column a branch's legend of eleven entries below took two thirds of the height); tags on the
-    curves (a branch's F1, PD1...) moved apart. Returns a note in words when it moved the legend,
-    '' otherwise."""
+    """``_arrange`` with matplotlib's warning that the layout collapsed kept back: ``render`` draws
+    the figure again and turns that warning into a note of what to do (``labels.layout_note``)."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        note = _arrange(fig, legend)
+    for warning in caught:
+        if "collapsed to zero" not in str(warning.message):
+            warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
+    return note
+
+
+def small(fig):
+    """Whether ``fig`` is a figure for a journal column or smaller: its legend may move (``arrange``)."""
+    width, height = fig.get_size_inches()
+    return width < NARROW or height < SHORT
+
+
+def _arrange(fig, legend=None):
+    """After ``legend`` was placed as asked: a legend below the panels given as many columns as fit
+    across the figure; with no legend place asked, one that still leaves the panels under
+    AXES_SHARE of the figure (a small one, ``small``) moved inside the main panel if it fits there with room to spare
+    (at one journal column a branch's legend of eleven entries below took two thirds of the
+    height), and left off if it does not; labels fitted to their axes; tags on the curves (a
+    branch's F1, PD1...) moved apart. Returns a note in words when it moved or left off the
+    legend, '' otherwise."""
+    engine = fig.get_layout_engine()
+    if fig.get_figwidth() < NARROW and engine is not None and hasattr(engine, "set"):
+        engine.set(w_pad=NARROW_PAD, h_pad=NARROW_PAD)  # constrained layout's 3 pt around each panel, halved
+    labels = {label: label.get_text() for ax in fig.axes for label in (ax.xaxis.label, ax.yaxis.label)}
     fit_labels(fig)
     note = ""
     if fig.legends:
         _widen(fig.legends[0], fig)
-        if legend is None and axes_share(fig) < AXES_SHARE:
+        if legend is None and small(fig) and axes_share(fig) < AXES_SHARE:
+            count = len(fig.legends[0].get_texts())
             place_legend(fig, "best")
+            main = data_axes(fig)[0]
+            _compact(main)
+            if _fits_inside(main):
+                note = "the legend went inside the axes, where it leaves them half the figure"
+            else:
+                place_legend(fig, "none")
+                note = (f"the legend ({count} entries) is left off: below the axes it would leave them under half "
+                        "the figure, inside it would cover them")
+            for label, text in labels.items():  # wrapped for the old layout: fitted again to the new
+                label.set_text(text)
             fit_labels(fig)
-            note = "the legend went inside the axes, where it leaves them half the figure"
     for ax in data_axes(fig):
         if ax.get_legend() is not None:
             _compact(ax)
         _separate_tags(ax)
     return note
+
+
+LEGEND_COVERS_AT_MOST = 0.5  # of the main panel's area, for a legend moved inside it
+
+
+def _fits_inside(ax):
+    """Whether ``ax``'s legend lies within the panel and covers at most LEGEND_COVERS_AT_MOST of it."""
+    renderer = renderer_of(ax.figure)
+    box, panel = ax.get_legend().get_window_extent(renderer), ax.get_window_extent(renderer)
+    inside = panel.x0 - 1 <= box.x0 and box.x1 <= panel.x1 + 1 and panel.y0 - 1 <= box.y0 and box.y1 <= panel.y1 + 1
+    return inside and box.width * box.height <= LEGEND_COVERS_AT_MOST * panel.width * panel.height
 
 
 def _remake(legend, fig, **changes):
@@ -296,7 +356,7 @@ def _remake(legend, fig, **changes):
 def _widen(legend, fig):
     """A legend below the panels in as many columns as fit across the figure (fewer rows: more
     height for the panels); entries are short, so a column needs far less than the 2.6 in
-    ``labels._legend_columns`` allows when it cannot measure."""
+    ``legend_columns`` allows when it cannot measure."""
     renderer = renderer_of(fig)
     original = legend._ncols
     for columns in range(len(legend.get_texts()), original, -1):
@@ -312,7 +372,7 @@ def _compact(ax):
     """A legend inside a panel with short entries, in two columns when it has many: half the height."""
     legend = ax.get_legend()
     texts = [text.get_text() for text in legend.get_texts()]
-    if len(texts) >= 5 and max(len(text) for text in texts) <= 24 and legend._ncols == 1:
+    if texts and len(texts) >= 5 and max(len(text) for text in texts) <= 24 and legend._ncols == 1:
         _remake(legend, ax.figure, ncol=2, handlelength=1.5, columnspacing=0.8)
 
 
