@@ -149,8 +149,9 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     write_bytes(path, image)
     from vrsweep.plot import layout_note, legend_note
 
-    if legend_note(figure):
-        click.echo(f"Note: {path}: {legend_note(figure)} (--legend outside or none to choose)", err=True)
+    if legend_note(figure):  # the other places, never the one it took
+        places = "outside or best to draw it" if "left off" in legend_note(figure) else "outside or none to choose"
+        click.echo(f"Note: {path}: {legend_note(figure)} (--legend {places})", err=True)
     if layout_note(figure):
         # Only what was not already done: --no-title given is never advised again.
         advice = ("--no-title, " if title else "") + "a larger --size" + (", --legend none" if legend != "none" else "")
