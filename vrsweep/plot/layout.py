@@ -372,7 +372,7 @@ def _compact(ax):
     """A legend inside a panel with short entries, in two columns when it has many: half the height."""
     legend = ax.get_legend()
     texts = [text.get_text() for text in legend.get_texts()]
-    if texts and len(texts) >= 5 and max(len(text) for text in texts) <= 24 and legend._ncols == 1:
+    if texts and len(texts) >= 5 and max(len(text) for text in texts) <= 28 and legend._ncols == 1:
         _remake(legend, ax.figure, ncol=2, handlelength=1.5, columnspacing=0.8)
 
 
