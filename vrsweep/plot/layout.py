@@ -293,16 +293,17 @@ def small(fig):
 
 def _arrange(fig, legend=None):
     """After ``legend`` was placed as asked: a legend below the panels given as many columns as fit
-    across the figure; with no legend place asked, one that still leaves the panels under
-    AXES_SHARE of the figure (a small one, ``small``) moved inside the main panel if it fits there with room to spare
-    (at one journal column a branch's legend of eleven entries below took two thirds of the
-    height), and left off if it does not; labels fitted to their axes; tags on the curves (a
-    branch's F1, PD1...) moved apart. Returns a note in words when it moved or left off the
-    legend, '' otherwise."""
+    across the figure; on a small figure (``small``) with no legend place asked, one that still
+    leaves the panels under AXES_SHARE of the figure moved inside the main panel if it fits there
+    with room to spare (at one journal column a branch's legend of eleven entries below took two
+    thirds of the height), and left off if it does not; labels fitted to their axes; tags on the
+    curves (a branch's F1, PD1...) moved apart. Returns a note in words when it moved or left off
+    the legend, '' otherwise."""
     engine = fig.get_layout_engine()
     if fig.get_figwidth() < NARROW and engine is not None and hasattr(engine, "set"):
         engine.set(w_pad=NARROW_PAD, h_pad=NARROW_PAD)  # constrained layout's 3 pt around each panel, halved
-    labels = {label: label.get_text() for ax in fig.axes for label in (ax.xaxis.label, ax.yaxis.label)}
+    labels = {label: (label.get_text(), label.get_fontsize())
+              for ax in fig.axes for label in (ax.xaxis.label, ax.yaxis.label)}
     fit_labels(fig)
     note = ""
     if fig.legends:
@@ -318,11 +319,12 @@ def _arrange(fig, legend=None):
                 place_legend(fig, "none")
                 note = (f"the legend ({count} entries) is left off: below the axes it would leave them under half "
                         "the figure, inside it would cover them")
-            for label, text in labels.items():  # wrapped for the old layout: fitted again to the new
+            for label, (text, size) in labels.items():  # wrapped for the old layout: fitted again to the new
                 label.set_text(text)
+                label.set_fontsize(size)
             fit_labels(fig)
     for ax in data_axes(fig):
-        if ax.get_legend() is not None:
+        if ax.get_legend() is not None and small(fig):
             _compact(ax)
         _separate_tags(ax)
     return note
