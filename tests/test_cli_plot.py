@@ -221,8 +221,8 @@ def test_an_unknown_map_variable_lists_the_ones_the_file_has(plane, tmp_path, in
     assert line.startswith(f"Error: --var nope: {plane} has no such variable with one value per grid point; "
                            "it has R, Qs, Qc, Q_amplitude, R_err, impacts_per_period, status, period, "), line
     assert "x_min" in line and "strobe_x" not in line  # strobe_x has a value per sample, not per point
-    # --var is for maps only, and names the variable itself.
-    for args, words in ((("--kind", "status"), "--var is for --kind map, not --kind status"),
+    # --var is for maps and curves against one axis only, and names the variable itself.
+    for args, words in ((("--kind", "status"), "--var is for --kind map and --kind response (against one axis), not --kind status"),
                         (("--amplitude",), "--amplitude maps Q_amplitude and --var names the variable itself")):
         result = invoke("plot", plane, "--var", "R_err", *args, "-o", tmp_path / "f.png")
         assert result.exit_code == 2 and words in result.output, result.output

@@ -318,7 +318,8 @@ def test_a_legend_below_the_axes_fits_a_journal_column(files):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     for source, kind in ((files["line"], "response"), (files["plane"], "map")):
-        fig = plot.plot(source, kind=kind, size=(3.4, 3.4), title=False, log=False if kind == "response" else None)
+        fig = plot.plot(source, kind=kind, size=(3.4, 3.4), title=False, log=False if kind == "response" else None,
+                        legend="outside")  # by default a legend this large is left off at this size
         FigureCanvasAgg(fig).draw()
         box = fig.legends[0].get_window_extent()
         assert 0 <= box.x0 and box.x1 <= fig.bbox.width, (kind, box, fig.bbox.width)

@@ -135,9 +135,13 @@ def _describe_branches(parameter, values) -> dict:
             "first_end": _end(values, "branch", "first", number),
             "last_end": _end(values, "branch", "last", number),
         })
-    bifurcations = [{"kind": _plain(kind), "branch": int(b), "parameter": _number(p), "R": _number(r)}
-                    for kind, b, p, r in zip(values["bifurcation_kind"], values["bifurcation_branch"],
-                                             values["bifurcation_parameter"], values["bifurcation_R"])]
+    from vrsweep.store.branch_file import bifurcation_tags
+
+    # The tag (F1, PD1, G1...) is the one the branch figure writes beside the point.
+    tags = bifurcation_tags(_plain(kind) for kind in values["bifurcation_kind"])
+    bifurcations = [{"kind": _plain(kind), "tag": tag, "branch": int(b), "parameter": _number(p), "R": _number(r)}
+                    for kind, tag, b, p, r in zip(values["bifurcation_kind"], tags, values["bifurcation_branch"],
+                                                  values["bifurcation_parameter"], values["bifurcation_R"])]
     return {"parameter": str(parameter), "branches": rows, "bifurcations": bifurcations}
 
 
@@ -199,7 +203,8 @@ def _format_branches(branches) -> list[str]:
                      f"({row['stable_points']} stable), {name} from {_short(row['min'])} to {_short(row['max'])}")
         lines += _format_ends(row)
     for row in branches["bifurcations"]:
-        lines.append(f"bifurcation: {row['kind']} at {name} = {_precise(row['parameter'])} (branch {row['branch']}, "
+        lines.append(f"bifurcation: {row['kind']} at {name} = {_precise(row['parameter'])} ({row['tag']} on the "
+                     f"figure, branch {row['branch']}, "
                      f"R = {_short(row['R'])})")
     return lines
 

@@ -10,7 +10,8 @@ FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
 FLAGS = {"at": "--at", "x_axis": "--x", "kind": "--kind", "amplitude": "--amplitude", "log": "--log",
          "linear": "--linear", "periods": "--periods", "var": "--var", "style": "--style", "size": "--size",
-         "vmin": "--vmin", "vmax": "--vmax", "title": "--title", "dpi": "--dpi",
+         "vmin": "--vmin", "vmax": "--vmax", "title": "--title", "dpi": "--dpi", "xlim": "--xlim", "ylim": "--ylim",
+         "legend": "--legend", "zoom": "--zoom", "table": "--table",
          "finish": "'vrsweep run CONFIG --resume -o FILE'", "simulate_compare": "vrsweep simulate --compare effective"}
 
 
@@ -51,8 +52,9 @@ def default_output(path, kind):
                    "direction=up|down for a two-way continuation).")
 @click.option("--x", "x_axis", default=None, metavar="NAME", help="The swept parameter on the horizontal axis.")
 @click.option("--var", default=None, metavar="NAME",
-              help="--kind map: the stored variable to map, any one per grid point (e.g. R_err, period, "
-                   "impacts_per_period, x_min, attractor); default R (|Q| with --amplitude).")
+              help="The stored variable to draw, any one per grid point (e.g. R_err, period, impact_speed_min, "
+                   "x_min, attractor): mapped over two axes (--kind map), drawn against one (--kind response, the "
+                   "default for one axis); default R (|Q| with --amplitude).")
 @click.option("--log/--linear", "log", default=None,
               help="Logarithmic (or linear) response axis; on maps, colour scale. Default: response "
                    "plots choose log when the values span two decades or more, maps are linear.")
@@ -75,15 +77,31 @@ def default_output(path, kind):
 @click.option("--vmax", type=float, default=None,
               help="Maps: the top of the colour scale (default: the 99th percentile, said on the colour "
                    "bar when it caps; lyapunov: symmetric about 0, --vmax alone sets both ends).")
+@click.option("--xlim", default=None, metavar="LOW,HIGH",
+              help="The horizontal axis from LOW to HIGH (every panel with the same axis; the vertical axes "
+                   "refit to the data in view unless --ylim is given), e.g. --xlim 17.82,17.84.")
+@click.option("--ylim", default=None, metavar="LOW,HIGH",
+              help="The vertical axis of the main panel from LOW to HIGH (and of every panel with the same axis).")
+@click.option("--legend", type=click.Choice(["best", "outside", "none"]), default=None,
+              help="Where the legend goes: inside the main panel where it hides least (best), below the "
+                   "panels (outside), or nowhere (none). Default: each figure's own place, inside when "
+                   "below it would leave the panels under half the figure.")
+@click.option("--zoom", type=click.Choice(["bifurcations", "none"]), default=None,
+              help="Branch files: narrow the parameter axis to where the bifurcations are (bifurcations), or "
+                   "never (none). Default: zoomed when they span under 1 %% of the axis, said on the figure.")
+@click.option("--table", is_flag=True,
+              help="Branch files: list the bifurcations (tag, kind, parameter, R, branch) in a table below the "
+                   "figure, which grows by a row each.")
 def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var, dpi, title, size, overwrite, style,
-            vmin, vmax):
+            vmin, vmax, xlim, ylim, legend, zoom, table):
     """Draw a figure from a vrsweep file.
 
     \b
     Sweep results (vrsweep run), --kind:
       response     R (or |Q| with --amplitude) against the axis, with the analytic
                    branches (stable solid, unstable dashed) and g_res -- default for
-                   one axis, or two axes when one has at most 5 values (one curve each)
+                   one axis, or two axes when one has at most 5 values (one curve each);
+                   --var NAME draws any stored variable (impact_speed_min, x_max...)
       map          heat map over two axes with g_res(Omega) drawn on it -- default for two axes;
                    --var NAME maps any stored variable (R_err, period, x_min...)
       impacts      mean impacts per slow period
@@ -116,9 +134,9 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     from vrsweep.errors import VrsweepError
 
     try:
-        options = dict(title=title, size=size, style=style, vmin=vmin, vmax=vmax)
+        options = dict(title=title, size=size, style=style, vmin=vmin, vmax=vmax, xlim=xlim, ylim=ylim, legend=legend)
         path, file_format = _output(paths, output, kind, overwrite)
-        figure = _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options)
+        figure = _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options, zoom, table)
         # Rendered in memory, then written whole: a full disk leaves no half figure, and the
         # message can say how many bytes the figure needs.
         from vrsweep.plot import render
@@ -129,10 +147,15 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     from vrsweep.store.fileio import write_bytes
 
     write_bytes(path, image)
-    from vrsweep.plot import layout_note
+    from vrsweep.plot import layout_note, legend_note
 
+    if legend_note(figure):  # the other places, never the one it took
+        places = "outside or best to draw it" if "left off" in legend_note(figure) else "outside or none to choose"
+        click.echo(f"Note: {path}: {legend_note(figure)} (--legend {places})", err=True)
     if layout_note(figure):
-        click.echo(f"Note: {path}: {layout_note(figure)} (--no-title, a larger --size)", err=True)
+        # Only what was not already done: --no-title given is never advised again.
+        advice = ("--no-title, " if title else "") + "a larger --size" + (", --legend none" if legend != "none" else "")
+        click.echo(f"Note: {path}: {layout_note(figure)} ({advice})", err=True)
     click.echo(f"-> {path}", err=True)
 
 
@@ -161,7 +184,7 @@ def _output(paths, output, kind, overwrite):
     return Path(target), given.suffix.lower()[1:]
 
 
-def _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options):
+def _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options, zoom=None, table=False):
     from vrsweep import plot
     from vrsweep.errors import UsageError
     from vrsweep.store.trajectory_file import TrajectoryData
@@ -195,8 +218,8 @@ def _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options
     if kind == "basin":
         if len(data) > 1:
             raise UsageError("--kind basin draws one file; plot the others one at a time")
-        if x_axis or amplitude or log or periods or var:
-            raise UsageError("--x, --amplitude, --log, --periods and --var do not apply to --kind basin")
+        if x_axis or amplitude or log or periods or var or zoom or table:
+            raise UsageError("--x, --amplitude, --log, --periods, --var, --zoom and --table do not apply to --kind basin")
         return plot.basin_plot(data[0], at=_parse_at(at_items), **options)
     return plot.plot(data, kind=kind, amplitude=amplitude, at=_parse_at(at_items), x_axis=x_axis,
-                     log=log, periods=window, var=var, **options)
+                     log=log, periods=window, var=var, zoom=zoom, table=table, **options)

@@ -6,6 +6,8 @@ Sweep results (``vrsweep run``)
                      (stable solid, unstable dashed) in the same units and the resonance g_res
                      (eq3.4) marked. Fig. 1 and Fig. 2 of the paper.
     ``map``          a heat map over two swept parameters with the resonance curve drawn over it.
+    ``var``          any stored variable (impact_speed_min, x_max, period...): mapped over two axes,
+                     drawn against one (``variable_figure``).
     ``impacts``      mean impacts per slow period against the axis (or as a map).
     ``status``       how each point's integration ended.
     ``bifurcation``  the stroboscopic x(nT) against the swept parameter, every sample a dot.
@@ -61,12 +63,13 @@ from vrsweep.plot.branches import branch_figure, is_branch
 from vrsweep.plot.curves import curves_figure, is_curves
 from vrsweep.plot.labels import (
     KINDS, LOG_SPAN, RELATIVE_ERROR_LIMIT, SWEEP_KINDS, TRAJECTORY_KINDS, description, figure_options, metadata,
-    layout_note, parameter_label, parse_size, read_description, render, resolve_style,
+    layout_note, legend_note, parameter_label, parse_size, read_description, render, resolve_style,
 )
 from vrsweep.plot.lyapunov import lyapunov_figure
 from vrsweep.plot.selection import _grid_axes, _sweep_default, load, select
 from vrsweep.plot.sweeps import (
     bifurcation_figure, impacts_figure, map_figure, mappable_variables, response_figure, status_figure,
+    variable_figure,
 )
 from vrsweep.plot.trajectories import (
     impacts_per_period_figure, parse_periods, slow_flow_figure, slow_periods_in, trajectory_figure, with_impacts,
@@ -83,7 +86,8 @@ def default_kind(data) -> str:
 
 
 def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, periods=None, var=None, *,
-         title=True, size=None, style=None, vmin=None, vmax=None) -> Figure:
+         title=True, size=None, style=None, vmin=None, vmax=None, xlim=None, ylim=None, legend=None, zoom=None,
+         table=False) -> Figure:
     """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
 
     sources: a path, or a list of paths or of what ``load`` returned (a sweep's Dataset, from
@@ -95,11 +99,14 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     ``amplitude``). title, size, style: as every figure function takes them (``figure_options``):
     False for no title at all (the description stays in ``description(fig)``, the file's metadata),
     (width, height) in inches, a matplotlib style sheet's name or .mplstyle path; vmin, vmax: the
-    ends of a map's colour scale.
+    ends of a map's colour scale; xlim, ylim: (low, high) of the main panel's axes (and of every
+    panel showing the same quantity); legend: 'best', 'outside' or 'none' (``figure_options``).
+    Branch files only: zoom ('bifurcations', 'none'; default: by itself when the bifurcations span
+    under 1 % of the axis) and table (the bifurcations in a table below the figure).
     """
     from vrsweep.store.trajectory_file import TrajectoryData
 
-    options = dict(title=title, size=size, style=style)
+    options = dict(title=title, size=size, style=style, xlim=xlim, ylim=ylim, legend=legend)
     limits = dict(vmin=vmin, vmax=vmax)
     if isinstance(sources, (str, os.PathLike)):
         sources = [sources]
@@ -120,7 +127,11 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
             raise UsageError.naming("after the branch files come sweep files only (vrsweep run results)")
         if len({str(d.attrs.get("parameter")) for d in data[:count]}) > 1:
             raise UsageError.naming("branch files drawn together must continue the same parameter")
-        return branch_figure(data[0], data[count:], more_branches=data[1:count], **options, **limits)
+        return branch_figure(data[0], data[count:], more_branches=data[1:count], zoom=zoom, table=table, **options,
+                             **limits)
+    if zoom is not None or table:  # never ignored quietly
+        raise UsageError.naming("{zoom} and {table} are for branch files (vrsweep continue), whose bifurcations "
+                                "they show")
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
         raise UsageError.naming("plot sweep results and trajectory files separately")
@@ -143,15 +154,20 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if periods is not None:
         raise UsageError.naming("{periods} is for trajectory files (vrsweep simulate), not sweep results")
     ds = select(data[0], at or {})
-    # After at, a fixed axis no longer counts; a variable to map asks for a map.
-    kind = kind or ("map" if var is not None else _sweep_default(_grid_axes(ds)))
+    # After at, a fixed axis no longer counts; a variable is mapped over two axes, drawn against one.
+    parameter_axes = [name for name in _grid_axes(ds) if name != "direction"]
+    kind = kind or ("map" if var is not None and len(parameter_axes) >= 2 else
+                    "response" if var is not None else _sweep_default(_grid_axes(ds)))
     if kind not in SWEEP_KINDS:
         raise UsageError.naming("{kind} {value} is for trajectory files (vrsweep simulate); a sweep result "
                                 "takes {kinds}", value=kind, kinds=", ".join(SWEEP_KINDS))
-    if var is not None and kind != "map":
-        raise UsageError.naming("{var} is for {kind} map, not {kind} {value}", value=kind)
+    if var is not None and kind not in ("map", "response"):
+        raise UsageError.naming("{var} is for {kind} map and {kind} response (against one axis), not {kind} {value}",
+                                value=kind)
     if var is not None and amplitude:  # never ignored quietly
         raise UsageError.naming("{amplitude} maps Q_amplitude and {var} names the variable itself: give one of them")
+    if kind == "response" and var is not None:
+        return variable_figure(ds, var, x_axis=x_axis, log=log, **options, **limits)
     if kind == "response":
         return response_figure(ds, amplitude=amplitude, x_axis=x_axis, log=log, **options, **limits)
     if kind == "map":
@@ -217,8 +233,8 @@ def _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, 
 
 __all__ = [
     "curves_figure", "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "LOG_SPAN", "load", "default_kind", "plot",
-    "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
+    "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "variable_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
-    "figure_options", "description", "metadata", "render", "layout_note", "read_description", "resolve_style", "parse_size",
+    "figure_options", "description", "metadata", "render", "layout_note", "legend_note", "read_description", "resolve_style", "parse_size",
 ]

@@ -78,8 +78,9 @@ def _draw_branches(ax, branches, colour):
         for end in range(1, len(x) + 1):
             if end == len(x) or stable[end] != stable[start]:
                 stop = min(end + 1, len(x))
-                ax.plot(x[start:stop], y[start:stop], color=colour, lw=1.3,
-                        ls="-" if stable[start] else "--", zorder=2)
+                (line,) = ax.plot(x[start:stop], y[start:stop], color=colour, lw=1.3,
+                                  ls="-" if stable[start] else "--", zorder=2)
+                line._vrsweep_context = True  # the theory, not data: a zoom fits the data (layout.fit_y_to_view)
                 start = end
 
 

@@ -10,11 +10,14 @@ import os
 import numpy as np
 from matplotlib.figure import Figure
 
+from vrsweep.errors import UsageError
 from vrsweep.plot.analytic import _draw_branches, analytic_branches
+from vrsweep.plot.layout import fit_y_to_view
 from vrsweep.plot.labels import (
     parameter_symbol,
     _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
 )
+from vrsweep.store.branch_file import TAG_PREFIXES, bifurcation_tags
 
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
                        "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing")}
@@ -48,74 +51,67 @@ def _stored_parameters(ds):
 
 
 @figure_options
-def branch_figure(ds, sweeps=(), more_branches=()) -> Figure:
+def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=None) -> Figure:
     """The figure (two panels, one x axis) of branch Dataset ``ds`` (and of the branch Datasets
     ``more_branches``, of the same parameter) with sweep Datasets ``sweeps``; takes the options of
-    every figure (title, size, style: ``labels.figure_options``). Branches are coloured by their
-    period (in slow periods), the first file's first branch's period in BRANCH_COLOUR."""
+    every figure (title, size, style, xlim, ylim, legend: ``labels.figure_options``). Branches are
+    coloured by their period (in slow periods), the first file's first branch's period in
+    BRANCH_COLOUR. Each bifurcation is tagged on the curve (F1, PD1, NS1, G1: ``bifurcation_tags``,
+    the tags ``vrsweep info`` lists), one legend entry per kind.
+
+    zoom: 'bifurcations' narrows the parameter axis to where the bifurcations are, 'none' never;
+    None does so when they span under ZOOM_SPAN of the branch's range (a cascade within 0.05 of a
+    25-wide axis), saying so on the figure. An ``xlim`` given overrides either. table: a table of
+    the bifurcations (tag, kind, parameter, R, branch) below the panels.
+    """
+    if zoom not in ZOOM_CHOICES:
+        raise UsageError.naming("{zoom} {value}: one of {choices}", value=zoom,
+                                choices=", ".join(c for c in ZOOM_CHOICES if c))
     name = str(ds.attrs.get("parameter", "parameter"))
-    symbol = parameter_symbol(name)
-    figure = _new_figure(7.5, 6.5)
-    top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
     datasets = [ds, *more_branches]
     values = np.concatenate([np.asarray(d["parameter"].values) for d in datasets])
-    gain = np.concatenate([np.asarray(d["R"].values) for d in datasets])
-    stable = np.concatenate([np.asarray(d["stable"].values).astype(bool) for d in datasets])
-    modulus = np.concatenate([np.asarray(d["multiplier_modulus"].values).reshape(-1, 2) for d in datasets])
-    periods = np.concatenate([np.asarray(d["periods"].values) for d in datasets])
-    # One number per (file, branch): the branches of every file in turn.
-    offsets = np.cumsum([0] + [len(d["branch_id"]) for d in datasets[:-1]])
-    branch = np.concatenate([np.asarray(d["branch"].values) + offset for d, offset in zip(datasets, offsets)])
-    colours = _period_colours(periods)
-    config = _stored_parameters(ds)
-    if config is not None and config.model == "effective" and values.size:
-        low, high = values.min(), values.max()
-        span = high - low or 1.0
-        fine = np.linspace(low - 0.05 * span, high + 0.05 * span, FINE_POINTS)
-        _draw_branches(top, analytic_branches(config.parameters, name, fine, gain=True), "0.6")
-        top.plot([], [], color="0.6", label="theory (corrected), stable / unstable")
-    for number in np.unique(branch):
-        mine = branch == number
-        colour = colours[int(periods[mine][0])] if mine.any() else BRANCH_COLOUR
-        for piece, is_stable in _runs(values[mine], stable[mine]):
-            style = "-" if is_stable else "--"
-            top.plot(values[mine][piece], gain[mine][piece], color=colour, ls=style, lw=1.8, zorder=3)
-            for k in range(2):
-                bottom.plot(values[mine][piece], modulus[mine][piece, k], color=f"C{k}", ls=style, lw=1.4)
-    top.plot([], [], color=BRANCH_COLOUR, lw=1.8, label="continuation: stable")
-    top.plot([], [], color=BRANCH_COLOUR, lw=1.8, ls="--", label="continuation: unstable")
-    if len(colours) > 1:
-        for period, colour in colours.items():
-            top.plot([], [], color=colour, lw=1.8, label=f"period {period} T")
-    for sweep_number, sweep in enumerate(sweeps):
-        _draw_sweep(top, sweep, name, sweep_number)
-    kinds = [str(kind) for d in datasets for kind in d["bifurcation_kind"].values]
+    kinds = [_text(kind) for d in datasets for kind in d["bifurcation_kind"].values]
     places = np.concatenate([np.asarray(d["bifurcation_parameter"].values, dtype=float) for d in datasets])
     heights = np.concatenate([np.asarray(d["bifurcation_R"].values, dtype=float) for d in datasets])
-    for kind, at, R in zip(kinds, places, heights):
-        marker, label = BIFURCATION_MARKERS.get(kind, ("x", kind))
-        # Named in the legend, not beside the point: a fold and a grazing often lie close together.
-        top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=8, zorder=5, ls="none",
-                 label=f"{label}, {symbol} = {at:.4f}")
-        bottom.axvline(at, color="0.75", lw=0.8, zorder=0)
+    numbers = np.concatenate([np.asarray(d["bifurcation_branch"].values) for d in datasets])
+    tags = bifurcation_tags(kinds)
+    figure = _new_figure(7.5, 6.5)
+    if table and kinds:
+        # The table takes rows of its own below the panels: the figure grows by them, the panels keep their size.
+        width, height = figure.get_size_inches()
+        figure.set_size_inches(width, height + TABLE_ROW_INCHES * (len(kinds) + 1.5))
+        figure._vrsweep_grown = True  # figure_options keeps the height added
+        top, bottom, table_axes = figure.subplots(3, 1, height_ratios=(2.2, 1.0, _table_ratio(figure, len(kinds))),
+                                                  gridspec_kw=dict(hspace=0.0))
+        bottom.sharex(top)
+        top.tick_params(labelbottom=False)
+    else:
+        top, bottom = figure.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
+        table_axes = None
+    config = _stored_parameters(ds)
+    _draw_branch_lines(top, bottom, datasets, values, config, name)
+    for sweep_number, sweep in enumerate(sweeps):
+        _draw_sweep(top, sweep, name, sweep_number)
+    window, zoom_note = _zoom_window(values, places, zoom, xlim, name)
+    if window is not None:
+        top.set_xlim(*window)
+        for ax in (top, bottom):
+            fit_y_to_view(ax)
+    _mark_bifurcations(top, bottom, kinds, places, heights, tags)
     written = config is not None and config.written
     top.set_ylabel(f"gain $R = |Q|$ / {config.model.response_scale}" if written else "gain $R = |Q|/c$")
     model_words = config.model.title if written else f"{ds.attrs.get('model', '')} model"
-    what = f"Periodic orbits continued in {symbol} ({model_words})"
+    what = f"Periodic orbits continued in {parameter_symbol(name)} ({model_words})"
     path = str(ds.encoding.get("source", "") or ds.attrs.get("path", "") or "branch")
     _title(figure, what, _caption(os.path.basename(path), config, str(ds.attrs.get("model", "")), omit=(name,),
                                   width=_width(figure)))
-    bottom.axhline(1.0, color="k", lw=0.8, label="unit circle $|\\mu| = 1$")
-    bottom.plot([], [], color="C0", label="$|\\mu_1|$")
-    bottom.plot([], [], color="C1", label="$|\\mu_2|$")
-    positive = modulus[modulus > 0.0]
-    if positive.size and positive.max() / positive.min() > LOG_SPAN:
-        bottom.set_yscale("log")  # a strongly unstable or strongly damped branch spans decades
-        # Below ROUNDOFF_SPAN of the largest, a modulus is the eigenvalue solver's roundoff
-        # (e.g. the second multiplier of P^4 when det P ~ 1e-8), not worth a dozen decades.
-        bottom.set_ylim(bottom=max(positive.min(), positive.max() / ROUNDOFF_SPAN) / 2.0)
-    bottom.set_ylabel("Floquet $|\\mu|$")
     bottom.set_xlabel(parameter_label(name))
+    if zoom_note:  # in the corner of the multipliers' panel, where the legend never goes
+        bottom.text(0.99, 0.96, zoom_note, transform=bottom.transAxes, ha="right", va="top", fontsize="xx-small",
+                    color="0.2", gid="zoom note", zorder=6,
+                    bbox=dict(facecolor="white", edgecolor="none", alpha=0.8, pad=1.0))
+    if table_axes is not None:
+        _bifurcation_table(table_axes, tags, kinds, places, heights, numbers, name)
     # One legend below both panels: inside, it covered the branch on a journal-column figure.
     handles, labels = [], []
     for ax in (top, bottom):
@@ -125,6 +121,139 @@ def branch_figure(ds, sweeps=(), more_branches=()) -> Figure:
     figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",
                   ncol=_legend_columns(figure, 3))
     return figure
+
+
+ZOOM_CHOICES = (None, "bifurcations", "none")
+ZOOM_SPAN = 0.01      # bifurcations spanning under 1 % of the branch's range: zoom on them by itself
+ZOOM_MARGIN = 0.25    # the zoomed window reaches this share of the bifurcations' span past each end ...
+ZOOM_AT_LEAST = 0.002  # ... and at least this share of the branch's range (one bifurcation, or a tight cascade)
+TABLE_ROW_INCHES = 0.17
+
+
+def _text(value) -> str:
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def _zoom_window(values, places, zoom, xlim, name):
+    """((low, high), note) of the parameter axis, or (None, '') to show the whole branch."""
+    if xlim is not None:
+        return xlim, ""
+    places = places[np.isfinite(places)]
+    if zoom == "none" or places.size == 0 or values.size < 2:
+        return None, ""
+    low, high = float(np.nanmin(values)), float(np.nanmax(values))
+    whole = high - low
+    span = float(places.max() - places.min())
+    if whole <= 0 or (zoom is None and (places.size < 2 or span >= ZOOM_SPAN * whole)):
+        return None, ""
+    pad = max(ZOOM_MARGIN * span, ZOOM_AT_LEAST * whole)
+    window = (float(places.min()) - pad, float(places.max()) + pad)
+    symbol = parameter_symbol(name)
+    return window, f"zoomed on the bifurcations; the branch: {symbol} from {low:.6g} to {high:.6g}"
+
+
+def _draw_branch_lines(top, bottom, datasets, values, config, name):
+    """R along each branch (top) and the multipliers' moduli (bottom), stable solid, unstable
+    dashed, each branch in its period's colour; the theory's branches for the effective model."""
+    gain = np.concatenate([np.asarray(d["R"].values) for d in datasets])
+    stable = np.concatenate([np.asarray(d["stable"].values).astype(bool) for d in datasets])
+    modulus = np.concatenate([np.asarray(d["multiplier_modulus"].values).reshape(-1, 2) for d in datasets])
+    periods = np.concatenate([np.asarray(d["periods"].values) for d in datasets])
+    # One number per (file, branch): the branches of every file in turn.
+    offsets = np.cumsum([0] + [len(d["branch_id"]) for d in datasets[:-1]])
+    branch = np.concatenate([np.asarray(d["branch"].values) + offset for d, offset in zip(datasets, offsets)])
+    colours = _period_colours(periods)
+    if config is not None and config.model == "effective" and values.size:
+        low, high = values.min(), values.max()
+        span = high - low or 1.0
+        fine = np.linspace(low - 0.05 * span, high + 0.05 * span, FINE_POINTS)
+        _draw_branches(top, analytic_branches(config.parameters, name, fine, gain=True), "0.6")
+        top.plot([], [], color="0.6", label="theory (corrected)")
+    for number in np.unique(branch):
+        mine = branch == number
+        colour = colours[int(periods[mine][0])] if mine.any() else BRANCH_COLOUR
+        for piece, is_stable in _runs(values[mine], stable[mine]):
+            style = "-" if is_stable else "--"
+            top.plot(values[mine][piece], gain[mine][piece], color=colour, ls=style, lw=1.8, zorder=3)
+            for k in range(2):
+                bottom.plot(values[mine][piece], modulus[mine][piece, k], color=f"C{k}", ls=style, lw=1.4)
+    top.plot([], [], color="k", lw=1.8, label="stable (dashed: unstable)")
+    if len(colours) > 1:
+        for period, colour in colours.items():
+            top.plot([], [], color=colour, lw=4, label=f"period {period} T")
+    # The unit circle's level: a multiplier crossing it is a bifurcation. |mu_1| is C0, |mu_2| C1
+    # (said by the axis label, not by two legend entries).
+    bottom.axhline(1.0, color="k", lw=0.8)
+    positive = modulus[modulus > 0.0]
+    if positive.size and positive.max() / positive.min() > LOG_SPAN:
+        bottom.set_yscale("log")  # a strongly unstable or strongly damped branch spans decades
+        # Below ROUNDOFF_SPAN of the largest, a modulus is the eigenvalue solver's roundoff
+        # (e.g. the second multiplier of P^4 when det P ~ 1e-8), not worth a dozen decades.
+        bottom.set_ylim(bottom=max(positive.min(), positive.max() / ROUNDOFF_SPAN) / 2.0)
+    bottom.set_ylabel("Floquet $|\\mu|$")
+
+
+TAG_LEVELS = 3          # tags of nearby bifurcations are staggered over this many heights
+TAG_STEP_POINTS = 7.0   # between two heights
+TAG_CHARACTER = 0.012   # axes fraction a tag's character takes (about; at the tags' font size)
+
+
+def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
+    """Each bifurcation marked and tagged beside its point (below it in the upper half of the
+    panel, above it in the lower); nearby tags staggered in height; one legend entry per kind."""
+    low, high = top.get_xlim()
+    bottom_y, top_y = top.get_ylim()
+    last_place, level = -np.inf, 0
+    order = np.argsort(places)
+    for index in order:
+        kind, at, R, tag = kinds[index], places[index], heights[index], tags[index]
+        marker, _ = BIFURCATION_MARKERS.get(kind, ("x", kind))
+        top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=6, zorder=5, ls="none", gid=f"bifurcation {tag}")
+        bottom.axvline(at, color="0.75", lw=0.8, zorder=0)
+        fraction = (at - low) / (high - low) if high > low else 0.5
+        if not 0.0 <= fraction <= 1.0:
+            continue  # outside the zoom: no tag
+        level = (level + 1) % TAG_LEVELS if fraction - last_place < TAG_CHARACTER * (len(tag) + 1) else 0
+        last_place = fraction
+        upper = (R - bottom_y) / (top_y - bottom_y) > 0.5 if top_y > bottom_y else False
+        offset = (5.0 + TAG_STEP_POINTS * level) * (-1 if upper else 1)
+        note = top.annotate(tag, (at, R), xytext=(0, offset), textcoords="offset points", ha="center",
+                            va="top" if upper else "bottom", fontsize="xx-small", annotation_clip=True,
+                            gid=f"tag {tag}", arrowprops=dict(arrowstyle="-", lw=0.5, color="0.4", shrinkA=0,
+                                                                shrinkB=4))
+        note._vrsweep_tag = True  # moved apart from its neighbours once the layout is done (layout.arrange)
+    for kind in dict.fromkeys(kinds):
+        marker, words = BIFURCATION_MARKERS.get(kind, ("x", kind))
+        prefix = TAG_PREFIXES.get(kind, kind)
+        top.plot([], [], marker=marker, color="k", mfc="w", mew=1.2, ms=6, ls="none", label=f"{prefix}: {words}")
+    # Room above and below the curve for the tags (the panel otherwise ends at the curve's extremes).
+    if kinds:
+        span = top_y - bottom_y
+        if top.get_yscale() == "log":
+            top.set_ylim(bottom_y / 1.3, top_y * 1.3)
+        else:
+            top.set_ylim(bottom_y - 0.12 * span, top_y + 0.12 * span)
+
+
+def _table_ratio(figure, rows):
+    """The table's share of the panels' height ratios (2.2 and 1.0), for ``rows`` rows."""
+    height = figure.get_figheight()
+    table_inches = TABLE_ROW_INCHES * (rows + 1.5)
+    return 3.2 * table_inches / max(height - table_inches, 0.5)
+
+
+def _bifurcation_table(ax, tags, kinds, places, heights, numbers, name):
+    """The bifurcations as a table (tag, kind, parameter to the digits stored, R, branch)."""
+    ax.axis("off")
+    rows = [[tag, BIFURCATION_MARKERS.get(kind, ("x", kind))[1], f"{at:.8g}", f"{R:.5g}", str(int(number))]
+            for tag, kind, at, R, number in zip(tags, kinds, places, heights, numbers)]
+    table = ax.table(cellText=rows, colLabels=["", "bifurcation", parameter_symbol(name), "R", "branch"],
+                     loc="upper center", cellLoc="left", edges="horizontal")
+    table.auto_set_font_size(False)
+    from matplotlib.font_manager import FontProperties
+
+    table.set_fontsize(FontProperties(size="x-small").get_size_in_points())
+    table.auto_set_column_width(list(range(5)))
 
 
 # Colours of the periods after the first (BRANCH_COLOUR); C0/C1 are the multipliers' panel's,

@@ -14,6 +14,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
+from vrsweep.plot import layout
 
 from vrsweep.numerics.model import (
     INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_SYMBOLS,
@@ -170,13 +171,8 @@ def _title(fig, what, caption):
     fig._vrsweep_description = (what, caption)
 
 
-LEGEND_COLUMN_WIDTH = 2.6  # inches a column of legend entries needs at the legends' font size
-
-
-def _legend_columns(fig, wanted):
-    """``wanted`` legend columns, fewer (down to one) on a narrow figure, e.g. a journal column
-    (--size 3.4,2.6): a legend below the axes must not be wider than the figure."""
-    return max(1, min(wanted, int(fig.get_figwidth() // LEGEND_COLUMN_WIDTH)))
+# A legend's columns on a narrow figure: layout.legend_columns (there, as layout re-makes legends).
+from vrsweep.plot.layout import LEGEND_COLUMN_WIDTH, legend_columns as _legend_columns  # noqa: E402
 
 
 def _width(fig):
@@ -351,15 +347,29 @@ def figure_options(function):
         colours and line widths follow the style (the figure keeps it for ``render``).
     vmin, vmax: the colour scale's limits, passed on to functions that draw one (maps); to any
         other figure they are an error rather than quietly ignored.
+    xlim, ylim: (low, high) or 'LOW,HIGH', the main panel's axis limits and those of every panel
+        showing the same quantity (``layout.apply_limits``); a function that takes ``xlim`` itself
+        (a branch figure, which zooms on its own unless told where) is given it too.
+    legend: 'best' (inside the main panel), 'outside' (below the panels) or 'none'; None: each
+        figure's own place, moved inside when below it would leave the panels under half the
+        figure (``layout.arrange``).
     """
     takes_limits = "vmin" in inspect.signature(function).parameters
+    takes_xlim = "xlim" in inspect.signature(function).parameters
 
     @functools.wraps(function)
-    def wrapper(*args, title=True, size=None, style=None, vmin=None, vmax=None, **kwargs):
+    def wrapper(*args, title=True, size=None, style=None, vmin=None, vmax=None, xlim=None, ylim=None,
+                legend=None, **kwargs):
         import matplotlib.style
 
         style = resolve_style(style)
         size = parse_size(size) if size is not None else None
+        xlim, ylim = layout.parse_limits(xlim, "xlim"), layout.parse_limits(ylim, "ylim")
+        if legend is not None and legend not in layout.LEGEND_PLACES:
+            raise UsageError.naming("{legend} {value}: one of {places}", value=legend,
+                                    places=", ".join(layout.LEGEND_PLACES))
+        if takes_xlim:
+            kwargs["xlim"] = xlim
         if takes_limits:
             for key, value in (("vmin", vmin), ("vmax", vmax)):
                 # matplotlib's colour bar does arithmetic on its ends (tick steps, bin middles): near
@@ -379,14 +389,19 @@ def figure_options(function):
                     where = "{style} {value}" if style else "matplotlib's settings (matplotlibrc)"
                     raise UsageError.naming(where + ": {problem}", value=style, problem=problem)
                 fig = function(*args, **kwargs)
+                if size is not None and not getattr(fig, "_vrsweep_grown", False):
+                    fig.set_size_inches(*size)  # a figure not made by _new_figure gets the size too
+                fig._vrsweep_style = style
+                fig._vrsweep_title = bool(title)
+                if not title:
+                    _drop_titles(fig)
+                layout.apply_limits(fig, None if takes_xlim else xlim, ylim)
+                layout.place_legend(fig, legend)
+                # Under the style: labels are measured in the fonts they are drawn in.
+                fig._vrsweep_legend_note = layout.arrange(fig, legend)
         finally:
             if token is not None:
                 _REQUESTED_SIZE.reset(token)
-        if size is not None:
-            fig.set_size_inches(*size)  # a figure not made by _new_figure gets the size too
-        fig._vrsweep_style = style
-        if not title:
-            _drop_titles(fig)
         return fig
 
     return wrapper
@@ -451,20 +466,30 @@ def render(fig, file_format, dpi) -> bytes:
             raise UsageError.naming(where + ": {problem}", value=style, problem=problem)
         fig.savefig(image, format=file_format, dpi=dpi, metadata=metadata(fig, file_format))
     # matplotlib's own warning names its internals; say what to do instead (layout_note).
-    fig._vrsweep_layout_note = TOO_SMALL if any("collapsed to zero" in str(w.message) for w in caught) else ""
+    fig._vrsweep_layout_note = "too small" if any("collapsed to zero" in str(w.message) for w in caught) else ""
     for w in caught:
         if "collapsed to zero" not in str(w.message):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return image.getvalue()
 
 
-TOO_SMALL = ("the figure is too small for its title, labels and legend, so they overlap the axes: "
-             "leave the title off or make the figure larger")
+TOO_SMALL = "the figure is too small for its {texts}, so they overlap the axes: {advice}"
 
 
 def layout_note(fig) -> str:
-    """'' or why the last ``render`` of ``fig`` could not lay it out (too small for its texts)."""
-    return getattr(fig, "_vrsweep_layout_note", "")
+    """'' or why the last ``render`` of ``fig`` could not lay it out (too small for its texts), with
+    what to do about it -- never to leave off a title that is already off."""
+    if not getattr(fig, "_vrsweep_layout_note", ""):
+        return ""
+    if getattr(fig, "_vrsweep_title", True):
+        return TOO_SMALL.format(texts="title, labels and legend", advice="leave the title off or make the figure larger")
+    return TOO_SMALL.format(texts="labels and legend", advice="make the figure larger or leave the legend off")
+
+
+def legend_note(fig) -> str:
+    """'' or where the legend went when its own place would have left the panels under half the
+    figure (``layout.arrange``)."""
+    return getattr(fig, "_vrsweep_legend_note", "")
 
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")

@@ -45,21 +45,26 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     Markers follow docs/trust.md, "Can R be trusted?": filled where R_err <= 10% of R (R can be
     trusted), hollow where not; a circle where a period was found, a square where none was
     (period 0); always in the curve's colour. More than LEGEND_CURVES curves over one other
-    parameter take their colours from a scale of its value, with a colour bar, not a legend. Failed points (status not ok, R = NaN) are x marks
-    along the bottom edge, one row per curve, and counted in the title.
+    parameter take their colours from a scale of its value, with a colour bar, not a legend.
+    Failed points (status not ok, R = NaN) are x marks along the bottom edge, one row per curve,
+    and counted in the title.
 
     log: True/False for a logarithmic/linear response axis; None chooses: logarithmic when the
     drawn values (numerical and analytic) span LOG_SPAN or more -- the analytic gain A/c reaches
     ~50 with the paper's parameters while the numerical R may go down to 0.01.
+
+    In pieces: ``_curve_colours`` (a legend's colours, or a colour scale), ``_draw_measured``
+    (each curve's points by trust and kind), ``_draw_analytic`` (the theory's branches, the
+    barrier's level, the resonance), ``_response_legend`` and ``_response_axes`` (labels, scale).
     """
     view = _Sweep(ds)
     x_axis = _choose_x_axis(view, x_axis)
     name = "Q_amplitude" if amplitude else "R"
     view.require(name, "status")
     curves = view.curve_coordinates(x_axis)
+    others = [n for n in view.axes if n != x_axis]
     # Many curves over one other parameter: colours from a scale of its value, named by a colour
     # bar, instead of a legend entry (and a resonance entry) per curve.
-    others = [n for n in view.axes if n != x_axis]
     scale_axis = others[0] if len(curves) > LEGEND_CURVES and len(others) == 1 and others[0] != "direction" else None
     if len(curves) > (MAX_SCALED_CURVES if scale_axis else MAX_CURVES):
         others = [n for n in view.parameter_axes if n != x_axis]
@@ -68,86 +73,128 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 6.0)
     ax = fig.subplots()
-    if scale_axis is not None:
-        from matplotlib import colormaps
-        from matplotlib.cm import ScalarMappable
-        from matplotlib.colors import Normalize
-
-        scale_values = np.asarray(view.axes[scale_axis], dtype=np.float64)
-        scale_norm = Normalize(vmin=float(scale_values.min()), vmax=float(scale_values.max()))
-        scale_cmap = colormaps[CURVE_SCALE]
-        # The top of viridis is pale yellow, unreadable as a thin line on white: stop at 90 %.
-        curve_colour = [scale_cmap(0.9 * float(scale_norm(value))) for value in scale_values]
-        bar_cmap = ListedColormap(scale_cmap(np.linspace(0.0, 0.9, 256)))
-        fig.colorbar(ScalarMappable(norm=scale_norm, cmap=bar_cmap), ax=ax,
-                     label=parameter_label(scale_axis, ds[scale_axis].attrs.get("units")),
-                     ticks=scale_values if len(scale_values) <= 12 else None)
+    colour_of = _curve_colours(fig, ax, ds, view, scale_axis)
+    written = view.config is not None and view.config.written  # no analytic side: the paper's theory only
+    what = ("numerical |Q|" if amplitude else "numerical R") if written else \
+        ("numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)")
     # The barrier level Delta (or Delta/c) is the same for every curve unless Delta or c is swept.
-    barrier_shared = not any(axis in ("Delta", "c") for axis in others)
-    barrier_drawn = False
-    analytic_done = set()
-    curve_handles, resonance_handles = [], []
-    drawn = []  # every value on the response axis, to choose its scale
+    analytic = _Analytic(barrier_shared=not any(axis in ("Delta", "c") for axis in others))
+    curve_handles, drawn = [], []  # drawn: every value on the response axis, to choose its scale
     kinds_seen = {"aperiodic": False, "untrusted": False}
-    symbol = "|Q|" if amplitude else "R"
-    what = "numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)"
-    if view.config is not None and view.config.written:
-        what = "numerical |Q|" if amplitude else "numerical R"
     for k, (where, label) in enumerate(curves):
-        colour = (curve_colour[where[scale_axis]] if scale_axis is not None
-                  else RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)])
-        y = view.along(name, x_axis, **where)
-        trusted, aperiodic, failed = _point_classes(view, x_axis, where)
-        shown = np.isfinite(y) & ~failed
-        drawn.append(y[shown])
-        ax.plot(x, y, color=colour, lw=0.8, ls=":", zorder=3)
-        for no_period in (False, True):
-            for trust in (True, False):
-                mask = shown & (aperiodic == no_period) & (trusted == trust)
-                if not mask.any():
-                    continue
-                kinds_seen["aperiodic"] |= no_period
-                kinds_seen["untrusted"] |= not trust
-                ax.plot(x[mask], y[mask], MARKERS[no_period], color=colour, mec=colour,
-                        mfc=colour if trust else "none", ms=4 if trust else 4.5, mew=1.0, zorder=4,
-                        gid=f"{'trusted' if trust else 'untrusted'} {'aperiodic' if no_period else 'periodic'}")
-        _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
+        colour = colour_of(k, where)
+        drawn.append(_draw_measured(ax, view, name, x_axis, x, where, colour, k, len(curves), kinds_seen))
         if scale_axis is None:
             curve_handles.append(Line2D([], [], ls=":", lw=0.8, marker="o", color=colour, ms=4,
                                         label=f"{what}{', ' + label if label else ''}"))
         elif not curve_handles:
             curve_handles.append(Line2D([], [], ls=":", lw=0.8, marker="o", color="0.3", ms=4,
                                         label=f"{what}; colour: {_symbol(scale_axis)} (colour bar)"))
+        if view.config is not None and not written:
+            drawn += _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic)
+    failure_note = _failure_note(view, "along the bottom edge")
+    handles = _response_legend(curve_handles, kinds_seen, failure_note, len(curves), amplitude,
+                               analytic if view.config is not None and not written else None)
+    fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
+    scale_note = _response_axes(ax, view, x_axis, x, drawn, amplitude, log)
+    quantity = "amplitude |Q|" if amplitude else "gain R"
+    notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note) if note)
+    theory_note = ("" if written else "; analytic: first-order theory of the effective system "
+                   f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})")
+    _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
+           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
+    return fig
 
-        # The analytic side depends on the parameters only, not on the continuation direction.
-        parameter_where = {axis: index for axis, index in where.items() if axis != "direction"}
-        key = tuple(sorted(parameter_where.items()))
-        if view.config is None or view.config.written or key in analytic_done:  # the paper's theory only
-            continue
-        analytic_done.add(key)
-        parameters = view.parameters(**{axis: float(view.axes[axis][i]) for axis, i in parameter_where.items()})
-        fine = np.linspace(x.min(), x.max(), FINE_POINTS)
-        branches = analytic_branches(parameters, x_axis, fine, gain=not amplitude)
-        drawn += [branch_y for _, branch_y, _ in branches]
-        _draw_branches(ax, branches, colour)
-        barrier = _fine_parameters(parameters, x_axis, fine)
-        barrier_level = barrier["Delta"] if amplitude else barrier["Delta"] / barrier["c"]
-        # Its own dash pattern (never the dotted line that joins a sweep's points) and, when every
-        # curve shares it (Delta and c not swept), drawn once in its own colour.
-        if not (barrier_shared and barrier_drawn):
-            ax.plot(fine, barrier_level, color=BARRIER_COLOUR if barrier_shared else colour, lw=1.0,
-                    ls=BARRIER_DASHES, zorder=1, gid="barrier")
-            barrier_drawn = True
-        for position in resonance_positions(parameters, x_axis, fine):
-            ax.axvline(position, color=colour, ls="-.", lw=0.9, zorder=1)
-            if scale_axis is None:
-                resonance_handles.append(Line2D([], [], color=colour, ls="-.", lw=0.9,
-                                                label=_resonance_label(x_axis, position)))
-            elif not resonance_handles:
-                resonance_handles.append(Line2D([], [], color="0.3", ls="-.", lw=0.9,
-                                                label="resonance (eq3.4), in the curve's colour"))
 
-    analytic = "A" if amplitude else "A/c"
+def _curve_colours(fig, ax, ds, view, scale_axis):
+    """colour(k, where) of curve k: the legend's colours in turn, or with ``scale_axis`` a colour
+    from a scale of that axis' value, named by a colour bar."""
+    if scale_axis is None:
+        return lambda k, where: RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    scale_values = np.asarray(view.axes[scale_axis], dtype=np.float64)
+    scale_norm = Normalize(vmin=float(scale_values.min()), vmax=float(scale_values.max()))
+    scale_cmap = colormaps[CURVE_SCALE]
+    # The top of viridis is pale yellow, unreadable as a thin line on white: stop at 90 %.
+    colours = [scale_cmap(0.9 * float(scale_norm(value))) for value in scale_values]
+    bar_cmap = ListedColormap(scale_cmap(np.linspace(0.0, 0.9, 256)))
+    fig.colorbar(ScalarMappable(norm=scale_norm, cmap=bar_cmap), ax=ax,
+                 label=parameter_label(scale_axis, ds[scale_axis].attrs.get("units")),
+                 ticks=scale_values if len(scale_values) <= 12 else None)
+    return lambda k, where: colours[where[scale_axis]]
+
+
+def _draw_measured(ax, view, name, x_axis, x, where, colour, k, n_curves, kinds_seen):
+    """One curve's points: joined by a dotted line, marked by trust (filled or hollow) and kind
+    (circle: a period; square: none), failed points along the bottom edge. Returns the values
+    drawn; records in ``kinds_seen`` which kinds of mark appeared (for the legend)."""
+    y = view.along(name, x_axis, **where)
+    trusted, aperiodic, failed = _point_classes(view, x_axis, where)
+    shown = np.isfinite(y) & ~failed
+    ax.plot(x, y, color=colour, lw=0.8, ls=":", zorder=3)
+    for no_period in (False, True):
+        for trust in (True, False):
+            mask = shown & (aperiodic == no_period) & (trusted == trust)
+            if not mask.any():
+                continue
+            kinds_seen["aperiodic"] |= no_period
+            kinds_seen["untrusted"] |= not trust
+            ax.plot(x[mask], y[mask], MARKERS[no_period], color=colour, mec=colour,
+                    mfc=colour if trust else "none", ms=4 if trust else 4.5, mew=1.0, zorder=4,
+                    gid=f"{'trusted' if trust else 'untrusted'} {'aperiodic' if no_period else 'periodic'}")
+    _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if n_curves == 1 else colour)
+    return y[shown]
+
+
+class _Analytic:
+    """What the analytic side of a response figure has drawn so far (curves share it)."""
+
+    def __init__(self, barrier_shared):
+        self.barrier_shared = barrier_shared
+        self.barrier_drawn = False
+        self.done = set()  # the parameter values whose branches are drawn
+        self.resonance_handles = []
+
+
+def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic):
+    """The corrected theory's branches (stable solid, unstable dashed), the barrier's level and
+    the resonance g_res (eq3.4) at one curve's parameters, once per set of parameter values (it
+    depends on the parameters only, not on the continuation direction). Returns the values drawn."""
+    parameter_where = {axis: index for axis, index in where.items() if axis != "direction"}
+    key = tuple(sorted(parameter_where.items()))
+    if key in analytic.done:
+        return []
+    analytic.done.add(key)
+    parameters = view.parameters(**{axis: float(view.axes[axis][i]) for axis, i in parameter_where.items()})
+    fine = np.linspace(x.min(), x.max(), FINE_POINTS)
+    branches = analytic_branches(parameters, x_axis, fine, gain=not amplitude)
+    _draw_branches(ax, branches, colour)
+    barrier = _fine_parameters(parameters, x_axis, fine)
+    barrier_level = barrier["Delta"] if amplitude else barrier["Delta"] / barrier["c"]
+    # Its own dash pattern (never the dotted line that joins a sweep's points) and, when every
+    # curve shares it (Delta and c not swept), drawn once in its own colour.
+    if not (analytic.barrier_shared and analytic.barrier_drawn):
+        ax.plot(fine, barrier_level, color=BARRIER_COLOUR if analytic.barrier_shared else colour, lw=1.0,
+                ls=BARRIER_DASHES, zorder=1, gid="barrier")
+        analytic.barrier_drawn = True
+    for position in resonance_positions(parameters, x_axis, fine):
+        ax.axvline(position, color=colour, ls="-.", lw=0.9, zorder=1)
+        if scale_axis is None:
+            analytic.resonance_handles.append(Line2D([], [], color=colour, ls="-.", lw=0.9,
+                                                     label=_resonance_label(x_axis, position)))
+        elif not analytic.resonance_handles:
+            analytic.resonance_handles.append(Line2D([], [], color="0.3", ls="-.", lw=0.9,
+                                                     label="resonance (eq3.4), in the curve's colour"))
+    return [branch_y for _, branch_y, _ in branches]
+
+
+def _response_legend(curve_handles, kinds_seen, failure_note, n_curves, amplitude, analytic):
+    """The legend's entries: the curves, the kinds of mark that appear, failed points, and the
+    analytic side's (``analytic``: None for a written model, which has no theory)."""
+    symbol = "|Q|" if amplitude else "R"
     error = "error" if amplitude else "$R_{err}$"  # R_err/R is also the relative error of |Q|
     handles = list(curve_handles)
     handles.append(Line2D([], [], ls="none", marker="o", color="k", ms=4,
@@ -158,30 +205,32 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     if kinds_seen["aperiodic"]:
         handles.append(Line2D([], [], ls="none", marker="s", mfc="none", mec="k", ms=4.5, mew=1.0,
                               label="square: no period found (period 0)"))
-    failure_note = _failure_note(view, "along the bottom edge")
     if failure_note:
-        handles.append(Line2D([], [], ls="none", marker="x", mew=1.5,
-                              color=FAILED_COLOUR if len(curves) == 1 else "k",
+        handles.append(Line2D([], [], ls="none", marker="x", mew=1.5, color=FAILED_COLOUR if n_curves == 1 else "k",
                               label="× at the bottom edge: integration failed"))
-    written = view.config is not None and view.config.written  # no analytic side: the paper's theory only
-    if view.config is not None and not written:
-        handles.append(Line2D([], [], color="k", lw=1.3, label=f"analytic {analytic}, stable (corrected eq2.27)"))
-        handles.append(Line2D([], [], color="k", lw=1.3, ls="--", label=f"analytic {analytic}, unstable"))
-        handles.append(Line2D([], [], color=BARRIER_COLOUR if barrier_shared else "k", lw=1.0,
-                              ls=BARRIER_DASHES,
-                              label=f"{'A = Δ' if amplitude else 'A/c = Δ/c'}: above, the analytic motion "
-                                    "crosses the barrier"))
-    handles += resonance_handles
-    fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
+    if analytic is None:
+        return handles
+    name = "A" if amplitude else "A/c"
+    handles.append(Line2D([], [], color="k", lw=1.3, label=f"analytic {name}, stable (corrected eq2.27)"))
+    handles.append(Line2D([], [], color="k", lw=1.3, ls="--", label=f"analytic {name}, unstable"))
+    handles.append(Line2D([], [], color=BARRIER_COLOUR if analytic.barrier_shared else "k", lw=1.0,
+                          ls=BARRIER_DASHES, label=f"{'A = Δ' if amplitude else 'A/c = Δ/c'}: above, the analytic "
+                                                   "motion crosses the barrier"))
+    return handles + analytic.resonance_handles
+
+
+def _response_axes(ax, view, x_axis, x, drawn, amplitude, log):
+    """Axis labels, the response axis' scale (chosen when ``log`` is None), the grid; returns the
+    caption's note on a scale chosen logarithmic, '' otherwise."""
     ax.set_xlabel(parameter_label(x_axis))
-    if written:
+    if view.config is not None and view.config.written:
         response = view.config.model.as_data()["response"]
         ax.set_ylabel(f"amplitude $|Q|$ of x at {response['frequency']}" if amplitude
                       else f"gain $R = |Q|$ / {response['scale']}, $Q$ at frequency {response['frequency']}")
     elif amplitude:
-        ax.set_ylabel(f"amplitude $|Q|$ of x at $\\omega$, analytic $A$")
+        ax.set_ylabel("amplitude $|Q|$ of x at $\\omega$, analytic $A$")
     else:
-        ax.set_ylabel(f"gain $R = |Q|/c$, analytic $A/c$")
+        ax.set_ylabel("gain $R = |Q|/c$, analytic $A/c$")
     scale_note = ""
     span = _decades(drawn)
     if log is None:
@@ -194,14 +243,69 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
         ax.set_ylim(bottom=0.0)
     _span_grid(ax, x)
     ax.grid(alpha=0.3, which="both" if log else "major")
-    quantity = "amplitude |Q|" if amplitude else "gain R"
-    x_symbol = parameter_symbol(x_axis)
-    notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note) if note)
-    theory_note = ("" if written else "; analytic: first-order theory of the effective system "
-                   f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})")
-    _title(fig, f"Response {quantity} against {x_symbol}{theory_note}",
+    return scale_note
+
+
+@figure_options
+def variable_figure(ds, name, x_axis=None, log=None) -> Figure:
+    """Any stored variable with one value per grid point (``mappable_variables``: impact_speed_min,
+    x_max, period, R_err...) against one swept parameter, one curve per value of the other axes
+    (issue 31); labelled with the variable's long name and units as the file stores them
+    (store/variables.py). Points with no value (not computed, failed, or none to take: no impact
+    in the window) are left out, and counted in the caption.
+
+    log: True/False for a logarithmic/linear vertical axis; None: logarithmic when the positive
+    values span LOG_SPAN or more and none is zero or negative.
+    """
+    view = _Sweep(ds)
+    x_axis = _choose_x_axis(view, x_axis)
+    mappable = mappable_variables(ds)
+    if name not in mappable:
+        raise UsageError.naming("{var} {value}: {path} has no such variable with one value per grid point; "
+                                "it has {names}", value=name, path=view.path, names=", ".join(mappable))
+    curves = view.curve_coordinates(x_axis)
+    if len(curves) > MAX_CURVES:
+        others = [n for n in view.parameter_axes if n != x_axis]
+        raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
+                                "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
+    x = np.asarray(view.axes[x_axis], dtype=np.float64)
+    fig = _new_figure(8.0, 4.5)
+    ax = fig.subplots()
+    drawn, missing = [], 0
+    for k, (where, label) in enumerate(curves):
+        colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
+        y = np.asarray(view.along(name, x_axis, **where), dtype=np.float64)
+        done = np.asarray(view.along("done", x_axis, **where), dtype=bool) if "done" in view.variables else True
+        y = np.where(done & np.isfinite(y), y, np.nan)
+        missing += int(np.sum(np.isnan(y)))
+        drawn.append(y[np.isfinite(y)])
+        ax.plot(x, y, "o-", ms=3.5, lw=0.9, color=colour, label=label or None)
+    values = np.concatenate(drawn) if drawn else np.array([])
+    if log is None:
+        log = values.size > 1 and bool(np.all(values > 0)) and _decades([values]) >= np.log10(LOG_SPAN)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel(parameter_label(x_axis, ds[x_axis].attrs.get("units")))
+    ax.set_ylabel(_line_label(ds, name))
+    _span_grid(ax, x)
+    ax.grid(alpha=0.3, which="both" if log else "major")
+    if len(curves) > 1:
+        ax.legend(fontsize="x-small", loc="best")
+    long_name = str(ds[name].attrs.get("long_name", "")).split(" (")[0]  # its first words: the title is one line
+    notes = "; ".join(note for note in (_progress_note(view), f"{missing} points with no value left out"
+                                        if missing else "") if note)
+    _title(fig, f"{name} against {parameter_symbol(x_axis)}" + (f" ({long_name})" if long_name else ""),
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
+
+
+def _line_label(ds, name):
+    """A variable's axis label: its name and the long name up to its first parenthesis, units."""
+    words = MAP_LABELS.get(name)
+    if words is None:
+        long_name = str(ds[name].attrs.get("long_name", "")).split(" (")[0]
+        words = f"{name}: {long_name}" if long_name else name
+    return f"{words}{units_suffix(ds[name].attrs.get('units'))}"
 
 
 def _decades(arrays):
@@ -228,6 +332,7 @@ SPECIAL_VALUES = {"period": {0: "no period"}, "impacts_per_cycle": {-1: "no peri
 STATUS_COLOURS = {"not_computed": "0.85", "ok": "tab:green", "max_steps": "tab:orange", "diverged": "tab:red",
                   "chatter_limit": "tab:purple", "step_too_small": "tab:brown", "non_finite": "k"}
 MAX_TICK_LABELS = 20  # an integer colour bar with more values labels every k-th only
+NARROW_FIGURE = 5.0   # inches: a figure narrower than this (a journal column) gets fewer colour-bar ticks
 
 
 def mappable_variables(ds) -> list:
@@ -472,7 +577,9 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             bar.set_ticks(ticks, labels=tick_labels)
             bar.minorticks_off()
         elif cmap == "RdBu_r":  # zero in the middle, ticks symmetric about it
-            ticks = np.linspace(norm.vmin, norm.vmax, 9) if norm.vmin == -norm.vmax else None
+            # Nine ticks, five on a narrow figure (one journal column): their labels take its width.
+            count = 9 if fig.get_figwidth() >= NARROW_FIGURE else 5
+            ticks = np.linspace(norm.vmin, norm.vmax, count) if norm.vmin == -norm.vmax else None
             if ticks is not None:
                 bar.set_ticks(ticks, labels=[f"{tick:.2g}" for tick in ticks])
         resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)

@@ -228,6 +228,20 @@ def is_branch_file(path) -> bool:
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
             "interrupted")
 KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
+# The short names of the bifurcations, numbered per kind in the file's order (F1, F2, PD1, G1...):
+# the same on a branch figure as in ``vrsweep info`` (bifurcation_tags).
+TAG_PREFIXES = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G"}
+
+
+def bifurcation_tags(kinds) -> list[str]:
+    """['F1', 'PD1', 'F2', ...]: each bifurcation's kind's prefix and its number among that kind's."""
+    counts, tags = {}, []
+    for kind in kinds:
+        kind = kind.decode() if isinstance(kind, bytes) else str(kind)
+        prefix = TAG_PREFIXES.get(kind, kind)
+        counts[prefix] = counts.get(prefix, 0) + 1
+        tags.append(f"{prefix}{counts[prefix]}")
+    return tags
 LAYOUT = {
     "point": (("point",), "i"), "multiplier": (("multiplier",), "i"), "bifurcation": (("bifurcation",), "i"),
     "branch_id": (("branch_id",), "i"),

@@ -1,0 +1,440 @@
+"""What every figure gets after it is drawn (``labels.figure_options``): the axis limits asked for
+(``xlim``, ``ylim``), the legend where it was asked for (``legend``), and labels rewrapped so that
+they fit their axes -- so that a figure at one journal column (3.4 x 2.6 in, no title) keeps every
+text inside the canvas, no two texts on top of each other, and its axes at least half the figure
+(issue 32; tests/test_figure_layout.py measures all three with matplotlib's renderer).
+
+Which panels a limit applies to: ``xlim`` goes to every panel whose horizontal axis shows what the
+main panel's does (the same label: all panels of a map over several directions, the multipliers'
+panel under a branch, position and velocity against time), ``ylim`` to every panel whose vertical
+axis does (the gain of a branch figure, not its multipliers). The main panel is the figure's first
+that is not a colour bar. A panel whose horizontal axis was narrowed and whose vertical one was not
+given is refitted to the data in view: a zoom on a few per cent of a branch shows that part of it
+at full height.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vrsweep.errors import UsageError
+
+LEGEND_PLACES = ("best", "outside", "none")
+# The share of the figure the panels keep at least (the rest: labels, ticks, legend, colour bars).
+AXES_SHARE = 0.5
+MARGIN = 0.05  # of the data's span, on each side, when a panel is refitted to a zoomed range
+MAX_LABEL_LINES = 3
+SHORT = 3.75             # inches: a figure lower than this, or narrower than NARROW, is small (``small``)
+NARROW = 5.0             # inches: a figure narrower than this is laid out with the margins of a journal column ...
+NARROW_PAD = 1.5 / 72.0  # ... 1.5 pt around each panel
+
+
+def parse_limits(text, option):
+    """'LOW,HIGH' (or a pair) -> (low, high), finite, low < high; UsageError naming ``option``."""
+    if text is None:
+        return None
+    parts = text.split(",") if isinstance(text, str) else list(text)
+    try:
+        low, high = (float(part) for part in parts)
+    except (TypeError, ValueError):
+        raise UsageError.naming("{" + option + "} {value}: expected LOW,HIGH, e.g. 17.82,17.84",
+                                value=text) from None
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise UsageError.naming("{" + option + "} {value}: both ends must be finite numbers", value=text)
+    if not low < high:
+        raise UsageError.naming("{" + option + "} {value}: LOW must be below HIGH", value=text)
+    return low, high
+
+
+LEGEND_COLUMN_WIDTH = 2.6  # inches a column of legend entries needs at the legends' font size
+
+
+def legend_columns(fig, wanted):
+    """``wanted`` legend columns, fewer (down to one) on a narrow figure, e.g. a journal column
+    (--size 3.4,2.6): a legend below the axes must not be wider than the figure (``arrange``
+    widens it again where its entries are short)."""
+    return max(1, min(wanted, int(fig.get_figwidth() // LEGEND_COLUMN_WIDTH)))
+
+
+def data_axes(fig):
+    """The figure's panels, colour bars and tables left out."""
+    return [ax for ax in fig.axes if not hasattr(ax, "_colorbar") and ax.axison]
+
+
+def apply_limits(fig, xlim=None, ylim=None):
+    """Set ``xlim`` on every panel that shares the main panel's horizontal quantity, ``ylim`` on
+    every panel sharing its vertical one; refit the vertical axis to the data in view where only
+    the horizontal one was given. UsageError naming ylim/xlim for a log axis and a bound <= 0."""
+    panels = data_axes(fig)
+    if not panels or (xlim is None and ylim is None):
+        return
+    main = panels[0]
+    same_x = [ax for ax in panels if ax.get_xlabel() == main.get_xlabel() or ax.get_shared_x_axes().joined(ax, main)]
+    same_y = [ax for ax in panels if ax.get_ylabel() == main.get_ylabel()]
+    for limits, axes, option, axis in ((xlim, same_x, "xlim", "x"), (ylim, same_y, "ylim", "y")):
+        if limits is None:
+            continue
+        for ax in axes:
+            scale = ax.get_xscale() if axis == "x" else ax.get_yscale()
+            if scale == "log" and limits[0] <= 0:
+                raise UsageError.naming("{" + option + "} {low:g},{high:g}: that axis is logarithmic; both ends "
+                                        "must be above zero", low=limits[0], high=limits[1])
+            (ax.set_xlim if axis == "x" else ax.set_ylim)(*limits)
+    if xlim is not None:
+        for ax in same_x:
+            if ylim is None or ax not in same_y:
+                fit_y_to_view(ax)
+
+
+def fit_y_to_view(ax):
+    """Vertical limits around the lines' points inside the horizontal limits (lines in data
+    coordinates only: marks along an edge or across the axes are placed in axes coordinates; the
+    theory's curves drawn for comparison left out, they may reach far beyond the data).
+    Nothing changes on a panel with no such points (a map, a status strip)."""
+    from matplotlib.collections import QuadMesh
+
+    if ax.images or any(isinstance(c, QuadMesh) for c in ax.collections):
+        return  # a map's vertical axis is a parameter: it keeps its range
+    low, high = sorted(ax.get_xlim())
+    found = []
+    for line in ax.get_lines():
+        if line.get_transform() != ax.transData or not line.get_visible() or getattr(line, "_vrsweep_context", False):
+            continue
+        x = np.asarray(line.get_xdata(), dtype=float)
+        y = np.asarray(line.get_ydata(), dtype=float)
+        if x.shape != y.shape:
+            continue
+        inside = (x >= low) & (x <= high) & np.isfinite(y)
+        if ax.get_yscale() == "log":
+            inside &= y > 0
+        found.append(y[inside])
+    values = np.concatenate(found) if found else np.array([])
+    if values.size == 0:
+        return
+    bottom, top = float(values.min()), float(values.max())
+    if ax.get_yscale() == "log":
+        # Never below the floor the panel had: a multipliers' panel stops above the roundoff.
+        bottom = max(bottom, min(ax.get_ylim()))
+        top = max(top, bottom)
+        factor = (top / bottom) ** MARGIN if top > bottom else 1.5
+        ax.set_ylim(bottom / factor, top * factor)
+        return
+    pad = MARGIN * (top - bottom) or 0.05 * abs(top) or 1.0
+    ax.set_ylim(bottom - pad, top + pad)
+
+
+# --------------------------------------------------------------------------------------------
+# The legend: where it was asked for, or where it leaves the panels their share of the figure
+# --------------------------------------------------------------------------------------------
+
+
+def _legends(fig):
+    """(legend, its axes or None) of the figure: the figure's own, then the main panel's."""
+    found = [(legend, None) for legend in fig.legends]
+    for ax in fig.axes:
+        if ax.get_legend() is not None:
+            found.append((ax.get_legend(), ax))
+    return found
+
+
+def _entries(legend):
+    return list(legend.legend_handles), [text.get_text() for text in legend.get_texts()]
+
+
+def _style_of(legend):
+    """What a re-made legend keeps of ``legend``: its frame's colour and its texts' colour (a map's
+    legend is dark, with white text, to show white marks)."""
+    texts = legend.get_texts()
+    return dict(facecolor=legend.get_frame().get_facecolor(), framealpha=legend.get_frame().get_alpha(),
+                labelcolor=texts[0].get_color() if texts else None)
+
+
+def place_legend(fig, where):
+    """Move the figure's legend (below the figure or inside the main panel) to ``where``: 'best'
+    (inside the main panel, where it hides least), 'outside' (below the panels), 'none'
+    (removed: every legend of the figure). Legends of other panels stay (a trajectory's phase
+    portrait has its own)."""
+    if where is None:
+        return
+    if where not in LEGEND_PLACES:
+        raise UsageError.naming("{legend} {value}: one of {places}", value=where, places=", ".join(LEGEND_PLACES))
+    legends = _legends(fig)
+    panels = data_axes(fig)
+    if where == "none":
+        for legend, _ in legends:
+            legend.remove()
+        return
+    main = panels[0] if panels else None
+    # The legend to move: the figure's, else the main panel's (another panel's legend stays put).
+    chosen = [(legend, ax) for legend, ax in legends if ax is None or ax is main]
+    if not chosen or main is None:
+        return
+    legend, owner = chosen[0]
+    handles, labels = _entries(legend)
+    style = _style_of(legend)
+    fontsize = legend.get_texts()[0].get_fontsize() if legend.get_texts() else "x-small"
+    markerscale = legend.markerscale
+    legend.remove()  # a figure legend leaves fig.legends too
+    style = {key: value for key, value in style.items() if value is not None}
+    if where == "best":
+        main.legend(handles, labels, loc="best", fontsize=fontsize, markerscale=markerscale, **style)
+    else:
+        fig.legend(handles, labels, loc="outside lower center", fontsize=fontsize, markerscale=markerscale,
+                   ncol=legend_columns(fig, 2), **style)
+
+
+# --------------------------------------------------------------------------------------------
+# Labels that fit their axes, and the measurements the layout is judged by
+# --------------------------------------------------------------------------------------------
+
+
+def renderer_of(fig):
+    """A renderer for ``fig``, its layout done (an Agg canvas is attached where there is none)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
+    renderer = fig.canvas.get_renderer()
+    fig.draw_without_rendering()
+    return renderer
+
+
+def _split_words(text):
+    """``text``'s words, a mathtext $...$ kept whole (never broken inside)."""
+    words, current, inside = [], "", False
+    for character in text:
+        if character == "$":
+            inside = not inside
+        if character == " " and not inside:
+            words.append(current)
+            current = ""
+        else:
+            current += character
+    return [word for word in words + [current] if word]
+
+
+def _rewrap(text, lines):
+    """``text`` (one line) broken into ``lines`` lines of about equal length, at spaces."""
+    words = _split_words(text.replace("\n", " "))
+    target = len(text) / lines
+    out, current = [], ""
+    for word in words:
+        if current and len(current) + 1 + len(word) > target * 1.15 and len(out) < lines - 1:
+            out.append(current)
+            current = word
+        else:
+            current = f"{current} {word}" if current else word
+    return "\n".join(out + [current])
+
+
+def fit_labels(fig):
+    """Rewrap every axis label longer than its axes (a y label taller than its panel, a colour
+    bar's label taller than the bar) into two or three lines, then make it smaller if that is not
+    enough: at one journal column 'gain R = |Q|/c, analytic A/c' is taller than the panel."""
+    renderer = renderer_of(fig)
+    changed = False
+    for ax in fig.axes:
+        box = ax.get_window_extent(renderer)
+        for label, room, vertical in ((ax.yaxis.label, box.height, True), (ax.xaxis.label, box.width, False)):
+            text = label.get_text()
+            if not text or room <= 0:
+                continue
+            extent = label.get_window_extent(renderer)
+            length = extent.height if vertical else extent.width
+            if length <= room:
+                continue
+            original = " ".join(text.split("\n"))
+            # A colour bar's label takes its lines from the panels' width: two at most, then smaller.
+            most = 2 if hasattr(ax, "_colorbar") else MAX_LABEL_LINES
+            for lines in range(len(text.split("\n")) + 1, most + 1):
+                label.set_text(_rewrap(original, lines))
+                extent = label.get_window_extent(renderer)
+                if (extent.height if vertical else extent.width) <= room:
+                    break
+            for size in ("small", "x-small", "xx-small"):
+                extent = label.get_window_extent(renderer)
+                if (extent.height if vertical else extent.width) <= room:
+                    break
+                label.set_fontsize(size)
+            changed = True
+    if changed:
+        fig.draw_without_rendering()
+
+
+def axes_share(fig, renderer=None):
+    """The share of the figure's area its axes take (panels and colour bars; not a table)."""
+    renderer = renderer or renderer_of(fig)
+    area = sum(ax.get_window_extent(renderer).width * ax.get_window_extent(renderer).height
+               for ax in fig.axes if ax.axison)
+    return area / (fig.bbox.width * fig.bbox.height)
+
+
+def arrange(fig, legend=None):
+    """``_arrange`` with matplotlib's warning that the layout collapsed kept back: ``render`` draws
+    the figure again and turns that warning into a note of what to do (``labels.layout_note``)."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        note = _arrange(fig, legend)
+    for warning in caught:
+        if "collapsed to zero" not in str(warning.message):
+            warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
+    return note
+
+
+def small(fig):
+    """Whether ``fig`` is a figure for a journal column or smaller: its legend may move (``arrange``)."""
+    width, height = fig.get_size_inches()
+    return width < NARROW or height < SHORT
+
+
+def _arrange(fig, legend=None):
+    """After ``legend`` was placed as asked: a legend below the panels given as many columns as fit
+    across the figure; on a small figure (``small``) with no legend place asked, one that still
+    leaves the panels under AXES_SHARE of the figure moved inside the main panel if it fits there
+    with room to spare (at one journal column a branch's legend of eleven entries below took two
+    thirds of the height), and left off if it does not; labels fitted to their axes; tags on the
+    curves (a branch's F1, PD1...) moved apart. Returns a note in words when it moved or left off
+    the legend, '' otherwise."""
+    engine = fig.get_layout_engine()
+    if fig.get_figwidth() < NARROW and engine is not None and hasattr(engine, "set"):
+        engine.set(w_pad=NARROW_PAD, h_pad=NARROW_PAD)  # constrained layout's 3 pt around each panel, halved
+    labels = {label: (label.get_text(), label.get_fontsize())
+              for ax in fig.axes for label in (ax.xaxis.label, ax.yaxis.label)}
+    fit_labels(fig)
+    note = ""
+    if fig.legends:
+        _widen(fig.legends[0], fig)
+        if legend is None and small(fig) and axes_share(fig) < AXES_SHARE:
+            count = len(fig.legends[0].get_texts())
+            place_legend(fig, "best")
+            main = data_axes(fig)[0]
+            _compact(main)
+            if _fits_inside(main):
+                note = "the legend went inside the axes, where it leaves them half the figure"
+            else:
+                place_legend(fig, "none")
+                note = (f"the legend ({count} entries) is left off: below the axes it would leave them under half "
+                        "the figure, inside it would cover them")
+            for label, (text, size) in labels.items():  # wrapped for the old layout: fitted again to the new
+                label.set_text(text)
+                label.set_fontsize(size)
+            fit_labels(fig)
+    for ax in data_axes(fig):
+        if ax.get_legend() is not None and small(fig):
+            _compact(ax)
+        _separate_tags(ax)
+    return note
+
+
+LEGEND_COVERS_AT_MOST = 0.5  # of the main panel's area, for a legend moved inside it
+
+
+def _fits_inside(ax):
+    """Whether ``ax``'s legend lies within the panel and covers at most LEGEND_COVERS_AT_MOST of it."""
+    renderer = renderer_of(ax.figure)
+    box, panel = ax.get_legend().get_window_extent(renderer), ax.get_window_extent(renderer)
+    inside = panel.x0 - 1 <= box.x0 and box.x1 <= panel.x1 + 1 and panel.y0 - 1 <= box.y0 and box.y1 <= panel.y1 + 1
+    return inside and box.width * box.height <= LEGEND_COVERS_AT_MOST * panel.width * panel.height
+
+
+def _remake(legend, fig, **changes):
+    """``legend`` made again with ``changes`` (ncol, handlelength...), in the same place."""
+    handles, labels = _entries(legend)
+    texts = legend.get_texts()
+    options = dict(fontsize=texts[0].get_fontsize() if texts else "x-small", markerscale=legend.markerscale,
+                   **{key: value for key, value in _style_of(legend).items() if value is not None})
+    options.update(changes)
+    owner = legend.axes if legend.axes is not None and legend.axes.get_legend() is legend else None
+    legend.remove()
+    if owner is not None:
+        return owner.legend(handles, labels, loc="best", **options)
+    return fig.legend(handles, labels, loc="outside lower center", **options)
+
+
+def _widen(legend, fig):
+    """A legend below the panels in as many columns as fit across the figure (fewer rows: more
+    height for the panels); entries are short, so a column needs far less than the 2.6 in
+    ``legend_columns`` allows when it cannot measure."""
+    renderer = renderer_of(fig)
+    original = legend._ncols
+    for columns in range(len(legend.get_texts()), original, -1):
+        legend = _remake(legend, fig, ncol=columns)
+        fig.draw_without_rendering()
+        if legend.get_window_extent(renderer).width <= 0.98 * fig.bbox.width:
+            return
+    if legend._ncols != original:
+        _remake(legend, fig, ncol=original)
+
+
+def _compact(ax):
+    """A legend inside a panel with short entries, in two columns when it has many: half the height."""
+    legend = ax.get_legend()
+    texts = [text.get_text() for text in legend.get_texts()]
+    if texts and len(texts) >= 5 and max(len(text) for text in texts) <= 28 and legend._ncols == 1:
+        _remake(legend, ax.figure, ncol=2, handlelength=1.5, columnspacing=0.8)
+
+
+TAG_TRIES = 8
+
+
+def _separate_tags(ax):
+    """Move apart the tags of ``ax`` (annotations marked _vrsweep_tag) that overlap each other or
+    the panel's legend: each, in turn from left to right, steps away from its point (up or down,
+    as it was placed) until it is clear, and tries the other side when stepping took it out of
+    the panel."""
+    tags = [text for text in ax.texts if getattr(text, "_vrsweep_tag", False)]
+    if not tags:
+        return
+    renderer = renderer_of(ax.figure)
+    panel = ax.get_window_extent(renderer)
+    legend = ax.get_legend()
+    placed = [(None, legend.get_window_extent(renderer))] if legend is not None else []
+    tags.sort(key=lambda text: text.xy[0])
+    for text in tags:
+        box = _text_box(text, renderer)
+        if not text.get_visible() or not box.width:
+            continue
+        x, first = text.xyann
+        sides = (-1.0, 1.0) if first < 0 else (1.0, -1.0)
+        step = box.height * 72.0 / ax.figure.dpi + 1.0
+        clear = False
+        for side in sides:
+            text.set_va("bottom" if side > 0 else "top")
+            for attempt in range(TAG_TRIES):
+                text.xyann = (x, side * (abs(first) + attempt * step))
+                box = _text_box(text, renderer)
+                if box.y0 < panel.y0 or box.y1 > panel.y1:
+                    break  # out of the panel: the other side
+                if not any(_overlap(box, other) for _, other in placed):
+                    clear = True
+                    break
+            if clear:
+                break
+        if clear:
+            placed.append((text, box))
+            continue
+        # Crowded everywhere: named in the tag of its nearest neighbour ('F1, PD2'), not on top of it.
+        text.xyann = (x, first)
+        text.set_va("bottom" if first > 0 else "top")
+        neighbours = [other for other, _ in placed if other is not None]
+        if neighbours:
+            nearest = min(neighbours, key=lambda other: abs(other.xy[0] - text.xy[0]))
+            nearest.set_text(f"{nearest.get_text()}, {text.get_text()}")
+            text.set_visible(False)
+        else:
+            placed.append((text, _text_box(text, renderer)))
+
+
+def _text_box(text, renderer):
+    """The box of an annotation's text alone (its own extent includes the leader line)."""
+    from matplotlib.text import Text
+
+    return Text.get_window_extent(text, renderer)
+
+
+def _overlap(a, b):
+    return min(a.x1, b.x1) - max(a.x0, b.x0) > 0.5 and min(a.y1, b.y1) - max(a.y0, b.y0) > 0.5
