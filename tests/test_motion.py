@@ -231,3 +231,35 @@ def test_a_motion_locked_to_a_forcing_of_11_periods_is_periodic_beyond_max_perio
     config["integration"]["measure_periods"] = 99  # 9 whole cycles: the kernel's own window mean
     whole = _sweep(tmp_path, "whole", config)
     assert whole["R"][0] == pytest.approx(values["R"][0], rel=1e-8)
+
+
+def test_plot_kind_motion_draws_the_classes_and_refuses_a_file_without_them(quasi_periodic, tmp_path, invoke,
+                                                                              write_config):
+    import h5py
+
+    config = write_config(tmp_path, """\
+        model: original
+        parameters: {Omega: 4.0}
+        sweep:
+          g: [5.0, 10.0, 30.0]
+        integration: {transient_periods: 50, measure_periods: 50}
+        """)
+    out = tmp_path / "kinds.h5"
+    assert invoke("run", config, "-o", out, "-q").exit_code == 0
+    result = invoke("plot", out, "--kind", "motion", "-o", tmp_path / "motion.png")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "motion.png").stat().st_size > 0
+    from damaged import reseal
+
+    with h5py.File(out, "r+") as f:  # as vrsweep 0.5.0 wrote it
+        del f["motion"]
+        names = f["done"].attrs["point_variables"]
+        names = names.decode() if isinstance(names, bytes) else names
+        f["done"].attrs["point_variables"] = " ".join(n for n in names.split() if n != "motion")
+        f.attrs["vrsweep_version"] = "0.5.0"
+    reseal(out)
+    assert invoke("plot", out, "-o", tmp_path / "old_r.png").exit_code == 0  # readable as before
+    assert "motion:" not in invoke("info", out).output
+    result = invoke("plot", out, "--kind", "motion", "-o", tmp_path / "old.png")
+    assert result.exit_code != 0 and "Traceback" not in result.output
+    assert "has no motion (written by vrsweep before 0.6.0)" in result.output

@@ -41,7 +41,7 @@ def default_output(path, kind):
                 type=click.Path(dir_okay=True))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Figure file, .png, .pdf or .svg (default: FILE.png, or FILE.KIND.png with --kind).")
-@click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "bifurcation", "lyapunov",
+@click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "motion", "bifurcation", "lyapunov",
                                            "bifurcation+lyapunov", "trajectory", "slowflow", "basin"]),
               default=None,
               help="What to draw (default: chosen from the file, see above).")
@@ -106,6 +106,7 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
                    --var NAME maps any stored variable (R_err, period, x_min...)
       impacts      mean impacts per slow period
       status       how each point's integration ended
+      motion       the kind of motion: periodic, quasi-periodic, chaotic, not settled
       bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
       lyapunov     largest Lyapunov exponent against the axis, with its 95% band and the
                    zero line (sweeps run with integration.lyapunov: true); -inf (stuck on

@@ -68,7 +68,7 @@ from vrsweep.plot.labels import (
 from vrsweep.plot.lyapunov import lyapunov_figure
 from vrsweep.plot.selection import _grid_axes, _sweep_default, load, select
 from vrsweep.plot.sweeps import (
-    bifurcation_figure, impacts_figure, map_figure, mappable_variables, response_figure, status_figure,
+    bifurcation_figure, impacts_figure, map_figure, mappable_variables, response_figure, status_figure, motion_figure,
     variable_figure,
 )
 from vrsweep.plot.trajectories import (
@@ -179,6 +179,8 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
         raise UsageError.naming("{log} is for response, map and impacts plots, not {kind} {value}", value=kind)
     if kind == "status":
         return status_figure(ds, x_axis=x_axis, **options, **limits)
+    if kind == "motion":
+        return motion_figure(ds, x_axis=x_axis, **options, **limits)
     if kind in ("lyapunov", "bifurcation+lyapunov"):
         return lyapunov_figure(ds, x_axis=x_axis, bifurcation=kind == "bifurcation+lyapunov", **options, **limits)
     return bifurcation_figure(ds, x_axis=x_axis, **options, **limits)
@@ -233,7 +235,7 @@ def _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, 
 
 __all__ = [
     "curves_figure", "KINDS", "SWEEP_KINDS", "TRAJECTORY_KINDS", "RELATIVE_ERROR_LIMIT", "LOG_SPAN", "load", "default_kind", "plot",
-    "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "variable_figure", "map_figure", "impacts_figure", "status_figure", "bifurcation_figure",
+    "select", "mappable_variables", "basin_plot", "basin_figure", "response_figure", "variable_figure", "map_figure", "impacts_figure", "status_figure", "motion_figure", "bifurcation_figure",
     "trajectory_figure", "impacts_per_period_figure", "slow_flow_figure", "analytic_branches",
     "resonance_positions", "with_impacts", "parse_periods", "slow_periods_in", "parameter_label",
     "figure_options", "description", "metadata", "render", "layout_note", "legend_note", "read_description", "resolve_style", "parse_size",

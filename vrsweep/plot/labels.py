@@ -21,9 +21,9 @@ from vrsweep.numerics.model import (
 )
 
 
-SWEEP_KINDS = ("response", "map", "impacts", "status", "bifurcation", "lyapunov", "bifurcation+lyapunov")
+SWEEP_KINDS = ("response", "map", "impacts", "status", "motion", "bifurcation", "lyapunov", "bifurcation+lyapunov")
 TRAJECTORY_KINDS = ("trajectory", "impacts", "slowflow")
-KINDS = ("response", "map", "impacts", "status", "bifurcation", "lyapunov", "bifurcation+lyapunov", "trajectory",
+KINDS = ("response", "map", "impacts", "status", "motion", "bifurcation", "lyapunov", "bifurcation+lyapunov", "trajectory",
          "slowflow")
 
 RELATIVE_ERROR_LIMIT = 0.10

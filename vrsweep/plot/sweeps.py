@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from vrsweep.errors import UsageError
+from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.plot.analytic import (
     barrier_positions,
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
@@ -23,7 +23,7 @@ from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
     _progress_note, _span_grid, _Sweep, _sweep_default,
 )
-from vrsweep.results import Status
+from vrsweep.results import Motion, Status
 
 
 # --------------------------------------------------------------------------------------------
@@ -680,9 +680,31 @@ def status_figure(ds, x_axis=None) -> Figure:
     """How each point ended (ok, max_steps, diverged, ...): a strip (1 axis) or a map (2 axes)."""
     view = _Sweep(ds)
     view.require("status")
-    codes = [int(s) for s in Status]
-    names = [s.name.lower() for s in Status]
     colours = ["0.85", "tab:green", "tab:orange", "tab:red", "tab:purple", "tab:brown", "k"]
+    return _flag_figure(view, "status", [int(s) for s in Status], [s.name.lower() for s in Status], colours,
+                        x_axis, "status of the point", "How each point's integration ended")
+
+
+# One colour per kind of motion (results.Motion's order): none (failed) grey as the status
+# figure's not-computed, periodic green, quasi-periodic blue, chaotic red, not settled orange.
+MOTION_COLOURS = ["0.85", "tab:green", "tab:blue", "tab:red", "tab:orange"]
+
+
+@figure_options
+def motion_figure(ds, x_axis=None) -> Figure:
+    """The kind of motion at each point (periodic, quasi-periodic, chaotic, not settled; none where
+    it failed: analysis/motion.py): a strip (1 axis) or a map (2 axes)."""
+    view = _Sweep(ds)
+    if "motion" not in view.variables:
+        raise ResultFileError(f"{view.path} has no motion (written by vrsweep before 0.6.0): run the sweep "
+                              "again to classify its points")
+    names = [kind.name.lower().replace("_", "-") for kind in Motion]
+    return _flag_figure(view, "motion", [int(kind) for kind in Motion], names, MOTION_COLOURS, x_axis,
+                        "kind of motion", "The kind of motion at each point")
+
+
+def _flag_figure(view, name, codes, names, colours, x_axis, y_label, title):
+    """A flag variable (one code per point, one colour per code): a strip (1 axis) or a map (2)."""
     cmap = ListedColormap(colours)
     norm = BoundaryNorm(np.arange(min(codes) - 0.5, max(codes) + 1.5), cmap.N)
     panels = _map_panels(view)
@@ -692,7 +714,7 @@ def status_figure(ds, x_axis=None) -> Figure:
         x_axis, y_axis = _map_axes(view, x_axis)
         axes = fig.subplots(1, len(panels), squeeze=False)[0]
         for ax, (where, panel_title) in zip(axes, panels):
-            z = _as_x_y(view, "status", x_axis, y_axis, where)
+            z = _as_x_y(view, name, x_axis, y_axis, where)
             mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap, norm=norm)
             bar = fig.colorbar(mesh, ax=ax, ticks=codes)
             bar.ax.set_yticklabels(names, fontsize="x-small")
@@ -706,25 +728,25 @@ def status_figure(ds, x_axis=None) -> Figure:
         curves = view.curve_coordinates(x_axis)
         shapes = "os^Dv<>p"
         for k, (where, label) in enumerate(curves):
-            status = view.along("status", x_axis, **where).astype(int)
-            # Several curves (e.g. up and down): each its own row above each status, and its own
+            flags = view.along(name, x_axis, **where).astype(int)
+            # Several curves (e.g. up and down): each its own row above each code, and its own
             # marker, named in the legend.
             row = k - (len(curves) - 1) / 2
-            ax.scatter(view.axes[x_axis], status + STATUS_ROW_STEP * row,
-                       c=[colours[codes.index(s)] for s in status], marker=shapes[k % len(shapes)],
+            ax.scatter(view.axes[x_axis], flags + STATUS_ROW_STEP * row,
+                       c=[colours[codes.index(f)] for f in flags], marker=shapes[k % len(shapes)],
                        s=18, edgecolors="k", linewidths=0.3,
                        label=f"{label}: {_row_name(k, len(curves))}" if label else None)
         ax.set_yticks(codes, names, fontsize="small")
         ax.set_ylim(min(codes) - 0.5, max(codes) + 0.5)
         _span_grid(ax, view.axes[x_axis])
         ax.set_xlabel(parameter_label(x_axis))
-        ax.set_ylabel("status of the point")
+        ax.set_ylabel(y_label)
         ax.grid(alpha=0.3)
         if len(curves) > 1:
             fig.legend(fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, min(len(curves), 4)))
-    counts = {name: int(np.sum(view.variables["status"] == code)) for code, name in zip(codes, names)}
-    summary = ", ".join(f"{n} {name}" for name, n in counts.items() if n)
-    _title(fig, f"How each point's integration ended ({summary})",
+    counts = {label: int(np.sum(view.variables[name] == code)) for code, label in zip(codes, names)}
+    summary = ", ".join(f"{n} {label}" for label, n in counts.items() if n)
+    _title(fig, f"{title} ({summary})",
            _caption(view.path, view.config, view.model, view.selected, _progress_note(view), _width(fig)))
     return fig
 
