@@ -78,12 +78,12 @@ def test_classes_of_synthetic_sequences():
     period = np.zeros(4, dtype=np.int64)
     found = motion.classify(records, ok, period)
     assert list(found) == [Motion.QUASI_PERIODIC, Motion.CHAOTIC, Motion.NOT_SETTLED, Motion.NONE]
-    # a positive exponent beyond its error bar makes chaos of anything; a negative one marks an
-    # unconverged point as settling; dying away stays not settled whatever the exponent's sign
+    # a positive exponent beyond its error bar makes chaos of anything; a negative one makes a
+    # response locked to the forcing of unconverged averages; dying away stays not settled
     lyapunov = np.array([0.1, -0.2, 0.0, np.nan])
     error = np.array([0.01, 0.01, 0.5, np.nan])
     found = motion.classify(records, ok, period, lyapunov, error)
-    assert list(found) == [Motion.CHAOTIC, Motion.NOT_SETTLED, Motion.NOT_SETTLED, Motion.NONE]
+    assert list(found) == [Motion.CHAOTIC, Motion.QUASI_PERIODIC, Motion.NOT_SETTLED, Motion.NONE]
     assert motion.classify(records, ok, np.array([2, 0, 0, 0]))[0] == Motion.PERIODIC
 
 
@@ -263,3 +263,24 @@ def test_plot_kind_motion_draws_the_classes_and_refuses_a_file_without_them(quas
     result = invoke("plot", out, "--kind", "motion", "-o", tmp_path / "old.png")
     assert result.exit_code != 0 and "Traceback" not in result.output
     assert "has no motion (written by vrsweep before 0.6.0)" in result.output
+
+
+def test_with_exponents_a_response_locked_to_a_quasi_periodic_forcing_is_recognised(tmp_path):
+    """Omega/omega = p/59 (Omega from linspace(3, 6, 60)): no period within 50. Where lambda1 < 0
+    the motion is quasi-periodic even when 100 periods leave its averages unconverged, and the
+    partial windows' R_err covers R's distance from a 1000-period run (measured: at most 0.79 of it
+    over 122 such points, analysis/motion.py); where lambda1 > 0, chaotic."""
+    omega = float(np.linspace(3.0, 6.0, 60)[13])
+    config = {"model": "original", "parameters": {"Omega": omega}, "sweep": {"g": [2.0, 6.0, 14.0, 30.0]},
+              "integration": {"transient_periods": 100, "measure_periods": 100, "lyapunov": True}}
+    short = _sweep(tmp_path, "short", config)
+    config["integration"]["measure_periods"] = 1000
+    long = _sweep(tmp_path, "long", config)
+    negative = short["lyapunov"] + short["lyapunov_err"] < 0
+    positive = short["lyapunov"] - short["lyapunov_err"] > 0
+    assert negative.sum() == 3 and positive.sum() == 1 and (short["period"] == 0).all()
+    assert (short["motion"][negative] == Motion.QUASI_PERIODIC).all()
+    assert (short["motion"][positive] == Motion.CHAOTIC).all()
+    locked = negative & (long["motion"] == Motion.QUASI_PERIODIC)
+    assert locked.any()
+    assert (np.abs(short["R"] - long["R"])[locked] <= short["R_err"][locked]).all()

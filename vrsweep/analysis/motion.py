@@ -46,20 +46,30 @@ Classes (``Motion``, stored as ``motion``):
                   over the window's last whole cycles (the last m - m mod p periods), the
                   orbit's own R (continuation's). Over the whole window it would be off by a
                   fixed amount: 1.6e-2 relative at g = 10, Omega = 4 (period 3, 100 periods).
-  quasi_periodic  no period, convergence < QUASI_PERIODIC_LIMIT, not dying away, and lambda1 not
-                  positive beyond its error bar (where computed): R is the weighted average,
-                  R_err the larger of its distances from the two halves' weighted averages (each
-                  converged far less than the whole window, so this bounds the whole window's
-                  error).
-  chaotic         no period, the averages do not converge, and nothing says it is settling;
-                  where Lyapunov exponents are computed, lambda1 > 0 beyond its error bar makes
-                  a point chaotic whatever else holds. R and R_err as in diagnostics.py.
+  quasi_periodic  no period, not dying away, lambda1 not positive beyond its error bar, and
+                  either convergence < QUASI_PERIODIC_LIMIT or lambda1 < 0 beyond its error bar
+                  (where computed): R is the weighted average, R_err the largest of its
+                  distances from the weighted averages of the window's halves and first and
+                  last three quarters (each converged far less than the whole window, so this
+                  bounds the whole window's error).
+  chaotic         no period, and neither converged averages nor a negative lambda1 say
+                  otherwise; lambda1 > 0 beyond its error bar makes any point without a period
+                  chaotic. R and R_err as in diagnostics.py.
   not_settled     no period and dying away: the last quarter of the window varies less than
                   SETTLING_RATIO of the first quarter (measured quasi-periodic and chaotic points
-                  give 0.65 to 1.12), or the averages do not converge while lambda1 < 0 beyond
-                  its error bar. A longer transient would tell what it settles into. R and R_err
-                  as in diagnostics.py.
+                  give 0.65 to 1.12). A longer transient would tell what it settles into. R and
+                  R_err as in diagnostics.py.
   none            the point failed (its status says why) or was not computed.
+
+Why a negative lambda1 suffices: a response locked to a quasi-periodic forcing is attracted to a
+torus parameterised by the forcing's phases, which are not state variables, so lambda1 < 0, and
+the partial windows bound R's error whatever the convergence. Measured on 150 points of the
+original model at Omega values of linspace(3, 6, 60) (Omega/omega = p/59: no period within 50),
+100 periods against 1000: at all 122 points with lambda1 < 0 beyond its error bar R's error was
+at most 0.79 times that R_err (convergence from 0.0006 to 2.5: a slow beat, when Omega/omega lies
+near a whole number, is seen as a wide R_err, not hidden); at the 27 with lambda1 > 0 the same
+bound was exceeded up to 3 times, which is why chaos keeps the plain average and its jackknife.
+Without exponents, only convergence can say it, and the limit stays low (above).
 """
 
 import numpy as np
@@ -166,8 +176,7 @@ def classify(measured, ok, period, lyapunov=None, lyapunov_err=None):
             positive = negative = np.zeros(n_points, dtype=bool)
     aperiodic = ok & (period == 0)
     motion = np.full(n_points, Motion.CHAOTIC, dtype=np.int8)
-    motion[aperiodic & ~positive & ~converged & negative] = Motion.NOT_SETTLED
-    motion[aperiodic & ~positive & converged] = Motion.QUASI_PERIODIC
+    motion[aperiodic & ~positive & (converged | negative)] = Motion.QUASI_PERIODIC
     motion[aperiodic & ~positive & dying] = Motion.NOT_SETTLED
     motion[ok & (period > 0)] = Motion.PERIODIC
     motion[~ok] = Motion.NONE
