@@ -43,12 +43,21 @@ def problem_of(config):
     from vrsweep.analysis import continuation
     from vrsweep.execution.sweep import integration_settings
 
+    from vrsweep.config.domains import domain_test
+
     check_section(config)
     section = config.continuation
     parameters = dict(config.parameters, **{section.parameter: section.start})
+    # Every orbit inside the domain the config's own values must keep (config/domains.py): the
+    # branch ends at its edge, and a start outside is refused.
+    domain = domain_test(config.model, parameters)
+    outside = domain({})
+    if outside is not None:
+        raise UsageError.naming("the start {from_key} = {value} lies outside the model's domain: {reason}",
+                                SECTION_WORDS, value=f"{section.start:g}", reason=outside)
     return continuation.ContinuationProblem(parameters, config.model, section.parameter,
                                             integration_settings(config.integration), config.integration.method,
-                                            section.options())
+                                            section.options(), domain=domain)
 
 
 def barrier_of(config) -> float:
