@@ -76,6 +76,11 @@ ENDED_NEWTON = "newton_failed"
 ENDED_INTEGRATION = "integration_failed"
 ENDED_STICKING = "sticking"
 ENDED_INTERRUPTED = continuation.ENDED_INTERRUPTED  # a signal: the points so far are kept
+ENDED_DOMAIN = continuation.ENDED_DOMAIN  # the next point outside the model's domain (config/domains.py)
+# The steps of a curve run by vrsweep continue: at most this fraction of either parameter's range,
+# so that a curve across its range has at least 1/RANGE_FRACTION points whatever max_step allows
+# (a curve in e over [0.9, 0.97] had 2 points at the default max_step 0.5).
+RANGE_FRACTION = 1.0 / 40
 GRAZING_MEETING = {"fold": "fold_grazing", "period_doubling": "period_doubling_grazing"}
 # An orbit within this distance of the barrier (relative to max(1, Delta)) is next to a graze
 # (or within the Jacobian's reach of it: _near_barrier).
@@ -118,6 +123,12 @@ class CurveProblem:
     settings: np.ndarray
     method: str = "rk45"
     options: dict = field(default_factory=lambda: dict(continuation.DEFAULTS))
+    # domain({name: value, ...}) -> None inside the model's domain, else why not (the config's own
+    # rule, config/domains.domain_test, passed in by execution); None: no edge.
+    domain: object = None
+    # A step moves either parameter by at most this fraction of its range (RANGE_FRACTION); None:
+    # only max_step bounds it.
+    range_fraction: float = None
 
     def __post_init__(self):
         self.names = tuple(self.names)
@@ -410,6 +421,19 @@ def _inside(problem, point, ranges):
     return all(low <= value <= high for value, (low, high) in zip(point.values, ranges))
 
 
+def _outside_domain(problem, point):
+    """None where both parameters at ``point`` lie inside the model's domain, else why not."""
+    return None if problem.domain is None else problem.domain(dict(zip(problem.names, map(float, point.values))))
+
+
+def _longest_step(problem, tangent, ranges):
+    """The arclength that moves either parameter along ``tangent`` by range_fraction of its range."""
+    if problem.range_fraction is None:
+        return np.inf
+    return min((problem.range_fraction * (high - low)) / abs(t) if t != 0.0 else np.inf
+               for t, (low, high) in zip(tangent[2:], ranges))
+
+
 def _range_reason(problem, point, ranges):
     for name, value, (low, high) in zip(problem.names, point.values, ranges):
         if not low <= value <= high:
@@ -537,8 +561,31 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
     while True:
         if len(points) >= max_points:
             return points, specials, (ENDED_MAX_POINTS, f"{max_points} points reached")
+        step = min(step, _longest_step(problem, tangent, ranges))
         z_predicted = current.z + step * tangent
         point, failure = correct(problem, kind, z_predicted, start.periods, tangent, z_predicted)
+        edge = None
+        if failure is None and not _turned_back(current, point, tangent, step) and (
+                not _inside(problem, point, ranges) or _outside_domain(problem, point) is not None):
+            # The step left a range or the model's domain: the curve is followed to that edge
+            # (its last point within min_step of it), and ends there saying which it was.
+            outside = _outside_domain(problem, point)
+            edge = (ENDED_DOMAIN, f"the edge of the model's domain: beyond it {outside}") if outside else (
+                ENDED_RANGE, _range_reason(problem, point, ranges))
+
+            def point_at(s, current=current, tangent=tangent):
+                z = current.z + s * tangent
+                found, failed = correct(problem, kind, z, start.periods, tangent, z)
+                if failed or _turned_back(current, found, tangent, s):
+                    return None, failed or (ENDED_NEWTON, "")
+                return found, None
+
+            landed_step, landed = continuation.approach_edge(
+                step, options["min_step"], point_at,
+                lambda found: _inside(problem, found, ranges) and _outside_domain(problem, found) is None)
+            if landed is None:
+                return points, specials, _edge_end(problem, edge, current)
+            step, point = landed_step, landed
         if failure is not None or _turned_back(current, point, tangent, step):
             step *= 0.5
             if step < options["min_step"]:
@@ -576,9 +623,17 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
             except KeyboardInterrupt as interrupt:  # a stop asked for: what is followed so far is kept
                 return points, specials, (ENDED_INTERRUPTED, f"stopped by {interrupt or 'SIGINT'} at "
                                                              f"{_where(problem, point)}")
+        if edge is not None:
+            return points, specials, _edge_end(problem, edge, point)
         if point.newton_iterations <= EASY_NEWTON:
             step = min(step * STEP_GROWTH, options["max_step"])
         current, tangent = point, new_tangent
+
+
+def _edge_end(problem, edge, last):
+    """(status, reason) of a curve that ends at the edge of a range or of the domain after ``last``."""
+    status, reason = edge
+    return status, f"{reason}; the last point at {_where(problem, last)}"
 
 
 def _extrapolate_to_barrier(points, start, current):
