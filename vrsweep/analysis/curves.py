@@ -570,8 +570,7 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
             # The step left a range or the model's domain: the curve is followed to that edge
             # (its last point within min_step of it), and ends there saying which it was.
             outside = _outside_domain(problem, point)
-            edge = (ENDED_DOMAIN, f"the edge of the model's domain: beyond it {outside}") if outside else (
-                ENDED_RANGE, _range_reason(problem, point, ranges))
+            edge = (ENDED_DOMAIN, outside) if outside else (ENDED_RANGE, _range_reason(problem, point, ranges))
 
             def point_at(s, current=current, tangent=tangent):
                 z = current.z + s * tangent
@@ -633,6 +632,8 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
 def _edge_end(problem, edge, last):
     """(status, reason) of a curve that ends at the edge of a range or of the domain after ``last``."""
     status, reason = edge
+    if status == ENDED_DOMAIN:  # worded as a branch's (continuation._domain_end)
+        return status, f"stops at {_where(problem, last)}, the edge of the model's domain: beyond it {reason}"
     return status, f"{reason}; the last point at {_where(problem, last)}"
 
 
