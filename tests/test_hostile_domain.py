@@ -253,6 +253,8 @@ def test_a_curves_step_and_points_are_set_on_a_branch_file(large_branch, invoke,
                         "--set", setting, "-o", tmp_path / "no.h5")
         assert result.exit_code == 2 and result.output.startswith(f"Error: {words}"), result.output
         assert len(result.output.strip().splitlines()) == 1 and not (tmp_path / "no.h5").exists()
+    result = invoke("continue", large_branch, "--point", "0", "--along", "e", "--at", "g=28", "-o", tmp_path / "no.h5")
+    assert result.exit_code == 2 and "--start and --at go with a config" in result.output  # it was ignored
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

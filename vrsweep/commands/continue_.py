@@ -63,7 +63,10 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
 
     Given a branch file instead (the output of the above), --point K --along NAME follows its
     bifurcation K (a fold, period doubling or grazing) in the second parameter NAME, both ways
-    within --to and --within, into a curves file (docs/commands.md).
+    to the ends of --to and --within, into a curves file (docs/commands.md); --set
+    continuation.max_step=... (or max_points, or another numeric key of the section) sets the
+    curve's step and points. Branches and curves stop at the edge of the model's domain
+    (domain_edge: e in (0, 1], c, omega, Omega > 0).
     """
     from vrsweep.store.branch_file import check_branch, is_branch_file
     from vrsweep.store.fileio import is_hdf5
@@ -78,7 +81,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
 
             raise UsageError(f"--switch goes with a config (vrsweep continue CONFIG.yaml --switch); {config_path} "
                              "is a branch file, whose bifurcations --point K --along NAME follows")
-        _curves(config_path, overrides, output, start_path, point, along, to, within, overwrite, quiet)
+        _curves(config_path, overrides, output, start_path or at, point, along, to, within, overwrite, quiet)
         return
     if point or along is not None or to or within:
         from vrsweep.errors import UsageError
