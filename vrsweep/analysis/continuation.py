@@ -564,11 +564,12 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             # meaning at c <= 0): the branch ends at the last orbit inside, found on this arc.
             edge = outside(problem, orbit.parameter)
 
-            def point_at(s):
+            def point_at(s, current=current, tangent=tangent):
                 z = current.z + s * tangent
                 found, failed = correct(problem, z, start.periods, tangent, z)
-                return (None, failed or (ENDED_NEWTON, "")) if failed or _turned_back(current, found, tangent, s) \
-                    else (found, None)
+                if failed or _turned_back(current, found, tangent, s):
+                    return None, failed or (ENDED_NEWTON, "the corrector jumped to another branch")
+                return found, None
 
             step, orbit = approach_edge(step, options["min_step"], point_at,
                                         lambda found: outside(problem, found.parameter) is None)

@@ -576,7 +576,7 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
                 z = current.z + s * tangent
                 found, failed = correct(problem, kind, z, start.periods, tangent, z)
                 if failed or _turned_back(current, found, tangent, s):
-                    return None, failed or (ENDED_NEWTON, "")
+                    return None, failed or (ENDED_NEWTON, "the corrector jumped to another curve")
                 return found, None
 
             landed_step, landed = continuation.approach_edge(
