@@ -27,9 +27,11 @@ derivatives would need the second variational equation, or of x_max) by central 
 Newton's rate and the predictor only, never the converged point, which is checked by the
 residuals alone.
 
-A curve ends (status, one-line reason) when it leaves either parameter's range, reaches
-max_points, Newton fails at the smallest step, or at a codimension-two point where the augmented
-system stops describing the curve:
+A curve ends (status, one-line reason) at the end of either parameter's range (left_range) or at
+the edge of the model's domain (domain_edge: the step that leaves either is bisected to min_step,
+so the last point lies at the edge: continuation.approach_edge), when it reaches max_points, when
+Newton fails at the smallest step, or at a codimension-two point where the augmented system stops
+describing the curve:
     fold_grazing, period_doubling_grazing
                    on a fold or period-doubling curve, the orbit starts (or stops) hitting the
                    barrier: its impact count changes between two points (located by bisection
@@ -607,11 +609,9 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
             continue
         _orient(point, current)
         new_tangent = tangent_of(point, tangent)
+        # Inside both ranges and the domain here (a step beyond was shortened to the edge above):
+        # the special points on the arc are all inside too.
         found, end = _specials(problem, kind, current, point, tangent, step)
-        if not _inside(problem, point, ranges):
-            # The last step may have crossed a special point before leaving the range.
-            specials.extend((name, special) for name, special in found if _inside(problem, special, ranges))
-            return points, specials, (ENDED_RANGE, _range_reason(problem, point, ranges))
         specials.extend(found)
         if end is not None:
             return points, specials, end
