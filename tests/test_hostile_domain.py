@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 
 import vrsweep
 from vrsweep.cli import main
-from vrsweep.config import PARAMETER_DOMAINS, config_from_dict
+from vrsweep.config import config_from_dict
 from vrsweep.config.domains import outside_domain
 from vrsweep.errors import ConfigError
 from vrsweep.execution import continuation as execution

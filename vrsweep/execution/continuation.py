@@ -41,9 +41,8 @@ def check_section(config):
 def problem_of(config):
     """The ContinuationProblem of a config with a continuation section (check_section's refusals first)."""
     from vrsweep.analysis import continuation
-    from vrsweep.execution.sweep import integration_settings
-
     from vrsweep.config.domains import domain_test
+    from vrsweep.execution.sweep import integration_settings
 
     check_section(config)
     section = config.continuation

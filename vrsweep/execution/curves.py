@@ -13,8 +13,8 @@ import numpy as np
 from vrsweep.analysis import curves
 from vrsweep.config.domains import domain_test, outside_domain
 from vrsweep.errors import UsageError
-from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.execution.sweep import integration_settings
+from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 
 
 # The branch file's grazing orbit and the barrier-free orbit Newton finds from it are the same orbit
