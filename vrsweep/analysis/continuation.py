@@ -84,6 +84,9 @@ ENDED_GRAZING = "grazing"
 # Stopped by a signal (progress raised KeyboardInterrupt): the orbits so far are kept and written,
 # the file marked incomplete (vrsweep continue; execution/signals.GracefulStop).
 ENDED_INTERRUPTED = "interrupted"
+# The next point would lie outside the model's domain (e above one, c or Omega at or below zero, a
+# written model's rule broken: config/domains.py): the branch ends at its last point inside.
+ENDED_DOMAIN = "domain_edge"
 POINT_FIELDS = ("parameter", "x", "v", "R", "Q_amplitude", "impacts_per_period", "x_max",
                 "slowest_impact", "residual", "newton_iterations")
 
@@ -147,6 +150,9 @@ class ContinuationProblem:
     settings: np.ndarray
     method: str = "rk45"
     options: dict = field(default_factory=lambda: dict(DEFAULTS))
+    # domain({name: value}) -> None inside the model's domain, else why not (one line): the
+    # config's own rule (config/domains.domain_test), which execution passes in; None: no edge.
+    domain: object = field(default=None, compare=False)
     # The last coefficient vectors built: Newton, its parameter derivative and the graze checks ask
     # for the same few values again and again, and building one costs ~30 us (a quarter of a
     # whole branch's time at the hysteresis example). Read-only use: the kernel never writes it.
@@ -160,6 +166,28 @@ class ContinuationProblem:
             built = self._built[value] = kernels_for(self.model).coefficients(
                 dict(self.parameters, **{self.parameter: value}))
         return built
+
+
+def outside(problem, value):
+    """None where the continued parameter at ``value`` is inside the model's domain, else why not."""
+    return None if problem.domain is None else problem.domain({problem.parameter: float(value)})
+
+
+def approach_edge(step, min_step, point_at, inside):
+    """The point nearest an edge (of the domain, or a range) on the arc s in (0, step) whose end
+    lies beyond it: bisection on s until the bracket is below ``min_step``, the last point inside
+    kept. point_at(s) -> (point, failure); inside(point) -> bool. Returns (s, point) or (None,
+    None) when no corrected point inside is found (the arc's start is already that close).
+    Shared by branches (follow) and curves (curves.follow)."""
+    low, high, best = 0.0, step, None
+    while high - low > min_step:
+        s = 0.5 * (low + high)
+        point, failure = point_at(s)
+        if failure is None and inside(point):
+            low, best = s, point
+        else:
+            high = s
+    return (low, best) if best is not None else (None, None)
 
 
 def evaluate(problem, state, value, periods):
@@ -530,6 +558,24 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, (ENDED_MAX_POINTS, f"{max_points} points reached")
         z_predicted = current.z + step * tangent
         orbit, failure = correct(problem, z_predicted, start.periods, tangent, z_predicted)
+        edge = None
+        if failure is None and outside(problem, orbit.parameter) is not None:
+            # Beyond the model's domain (e > 1 gains energy at each impact, R = |Q|/c has no
+            # meaning at c <= 0): the branch ends at the last orbit inside, found on this arc.
+            edge = outside(problem, orbit.parameter)
+
+            def point_at(s, current=current, tangent=tangent):
+                z = current.z + s * tangent
+                found, failed = correct(problem, z, start.periods, tangent, z)
+                if failed or _turned_back(current, found, tangent, s):
+                    return None, failed or (ENDED_NEWTON, "the corrector jumped to another branch")
+                return found, None
+
+            step, orbit = approach_edge(step, options["min_step"], point_at,
+                                        lambda found: outside(problem, found.parameter) is None)
+            if orbit is None:
+                return orbits, bifurcations, _domain_end(problem, current, edge)
+            z_predicted = current.z + step * tangent
         crossed = False
         if failure is not None or _turned_back(current, orbit, tangent, step):
             step *= 0.5
@@ -577,6 +623,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, ended
         if not lo <= orbit.parameter <= hi:
             return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
+        if outside(problem, orbit.parameter) is not None:  # e.g. an orbit beyond a graze: never kept
+            return orbits, bifurcations, _domain_end(problem, current, outside(problem, orbit.parameter))
         if crossed:
             step = options["initial_step"]
             memo.clear()  # the graze just crossed is no test of the next step's
@@ -595,12 +643,20 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             except KeyboardInterrupt as interrupt:  # a stop asked for: what is followed so far is kept
                 return orbits, bifurcations, (ENDED_INTERRUPTED, f"stopped by {interrupt or 'SIGINT'} at "
                                                                  f"{problem.parameter} = {orbit.parameter:.8g}")
+        if edge is not None:
+            return orbits, bifurcations, _domain_end(problem, orbit, edge)
         # No secant through a graze's corner for the next step's _bends: the branch is not smooth there.
         before, current, tangent = (None if crossed else current), orbit, new_tangent
         tried_crossing = False
         failed_crossing = failed_crossing and _near_grazing(problem, orbit)
         if not failed_crossing:
             grazing_reason = None
+
+
+def _domain_end(problem, last, reason):
+    """The (status, reason) of a branch whose next orbit lies outside the model's domain."""
+    return ENDED_DOMAIN, (f"stops at {problem.parameter} = {last.parameter:.8g}, the edge of the model's domain: "
+                          f"beyond it {reason}")
 
 
 def _record_graze(problem, bifurcations, graze):

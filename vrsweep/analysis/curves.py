@@ -27,9 +27,11 @@ derivatives would need the second variational equation, or of x_max) by central 
 Newton's rate and the predictor only, never the converged point, which is checked by the
 residuals alone.
 
-A curve ends (status, one-line reason) when it leaves either parameter's range, reaches
-max_points, Newton fails at the smallest step, or at a codimension-two point where the augmented
-system stops describing the curve:
+A curve ends (status, one-line reason) at the end of either parameter's range (left_range) or at
+the edge of the model's domain (domain_edge: the step that leaves either is bisected to min_step,
+so the last point lies at the edge: continuation.approach_edge), when it reaches max_points, when
+Newton fails at the smallest step, or at a codimension-two point where the augmented system stops
+describing the curve:
     fold_grazing, period_doubling_grazing
                    on a fold or period-doubling curve, the orbit starts (or stops) hitting the
                    barrier: its impact count changes between two points (located by bisection
@@ -76,6 +78,11 @@ ENDED_NEWTON = "newton_failed"
 ENDED_INTEGRATION = "integration_failed"
 ENDED_STICKING = "sticking"
 ENDED_INTERRUPTED = continuation.ENDED_INTERRUPTED  # a signal: the points so far are kept
+ENDED_DOMAIN = continuation.ENDED_DOMAIN  # the next point outside the model's domain (config/domains.py)
+# The steps of a curve run by vrsweep continue: at most this fraction of either parameter's range,
+# so that a curve across its range has at least 1/RANGE_FRACTION points whatever max_step allows
+# (a curve in e over [0.9, 0.97] had 2 points at the default max_step 0.5).
+RANGE_FRACTION = 1.0 / 40
 GRAZING_MEETING = {"fold": "fold_grazing", "period_doubling": "period_doubling_grazing"}
 # An orbit within this distance of the barrier (relative to max(1, Delta)) is next to a graze
 # (or within the Jacobian's reach of it: _near_barrier).
@@ -118,6 +125,12 @@ class CurveProblem:
     settings: np.ndarray
     method: str = "rk45"
     options: dict = field(default_factory=lambda: dict(continuation.DEFAULTS))
+    # domain({name: value, ...}) -> None inside the model's domain, else why not (the config's own
+    # rule, config/domains.domain_test, passed in by execution); None: no edge.
+    domain: object = None
+    # A step moves either parameter by at most this fraction of its range (RANGE_FRACTION); None:
+    # only max_step bounds it.
+    range_fraction: float = None
 
     def __post_init__(self):
         self.names = tuple(self.names)
@@ -410,6 +423,19 @@ def _inside(problem, point, ranges):
     return all(low <= value <= high for value, (low, high) in zip(point.values, ranges))
 
 
+def _outside_domain(problem, point):
+    """None where both parameters at ``point`` lie inside the model's domain, else why not."""
+    return None if problem.domain is None else problem.domain(dict(zip(problem.names, map(float, point.values))))
+
+
+def _longest_step(problem, tangent, ranges):
+    """The arclength that moves either parameter along ``tangent`` by range_fraction of its range."""
+    if problem.range_fraction is None:
+        return np.inf
+    return min((problem.range_fraction * (high - low)) / abs(t) if t != 0.0 else np.inf
+               for t, (low, high) in zip(tangent[2:], ranges))
+
+
 def _range_reason(problem, point, ranges):
     for name, value, (low, high) in zip(problem.names, point.values, ranges):
         if not low <= value <= high:
@@ -537,8 +563,30 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
     while True:
         if len(points) >= max_points:
             return points, specials, (ENDED_MAX_POINTS, f"{max_points} points reached")
+        step = min(step, _longest_step(problem, tangent, ranges))
         z_predicted = current.z + step * tangent
         point, failure = correct(problem, kind, z_predicted, start.periods, tangent, z_predicted)
+        edge = None
+        if failure is None and not _turned_back(current, point, tangent, step) and (
+                not _inside(problem, point, ranges) or _outside_domain(problem, point) is not None):
+            # The step left a range or the model's domain: the curve is followed to that edge
+            # (its last point within min_step of it), and ends there saying which it was.
+            outside = _outside_domain(problem, point)
+            edge = (ENDED_DOMAIN, outside) if outside else (ENDED_RANGE, _range_reason(problem, point, ranges))
+
+            def point_at(s, current=current, tangent=tangent):
+                z = current.z + s * tangent
+                found, failed = correct(problem, kind, z, start.periods, tangent, z)
+                if failed or _turned_back(current, found, tangent, s):
+                    return None, failed or (ENDED_NEWTON, "the corrector jumped to another curve")
+                return found, None
+
+            landed_step, landed = continuation.approach_edge(
+                step, options["min_step"], point_at,
+                lambda found: _inside(problem, found, ranges) and _outside_domain(problem, found) is None)
+            if landed is None:
+                return points, specials, _edge_end(problem, edge, current)
+            step, point = landed_step, landed
         if failure is not None or _turned_back(current, point, tangent, step):
             step *= 0.5
             if step < options["min_step"]:
@@ -561,11 +609,9 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
             continue
         _orient(point, current)
         new_tangent = tangent_of(point, tangent)
+        # Inside both ranges and the domain here (a step beyond was shortened to the edge above):
+        # the special points on the arc are all inside too.
         found, end = _specials(problem, kind, current, point, tangent, step)
-        if not _inside(problem, point, ranges):
-            # The last step may have crossed a special point before leaving the range.
-            specials.extend((name, special) for name, special in found if _inside(problem, special, ranges))
-            return points, specials, (ENDED_RANGE, _range_reason(problem, point, ranges))
         specials.extend(found)
         if end is not None:
             return points, specials, end
@@ -576,9 +622,19 @@ def follow(problem, kind, start, direction, ranges, max_points, progress=None):
             except KeyboardInterrupt as interrupt:  # a stop asked for: what is followed so far is kept
                 return points, specials, (ENDED_INTERRUPTED, f"stopped by {interrupt or 'SIGINT'} at "
                                                              f"{_where(problem, point)}")
+        if edge is not None:
+            return points, specials, _edge_end(problem, edge, point)
         if point.newton_iterations <= EASY_NEWTON:
             step = min(step * STEP_GROWTH, options["max_step"])
         current, tangent = point, new_tangent
+
+
+def _edge_end(problem, edge, last):
+    """(status, reason) of a curve that ends at the edge of a range or of the domain after ``last``."""
+    status, reason = edge
+    if status == ENDED_DOMAIN:  # worded as a branch's (continuation._domain_end)
+        return status, f"stops at {_where(problem, last)}, the edge of the model's domain: beyond it {reason}"
+    return status, f"{reason}; the last point at {_where(problem, last)}"
 
 
 def _extrapolate_to_barrier(points, start, current):

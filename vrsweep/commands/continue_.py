@@ -63,7 +63,10 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
 
     Given a branch file instead (the output of the above), --point K --along NAME follows its
     bifurcation K (a fold, period doubling or grazing) in the second parameter NAME, both ways
-    within --to and --within, into a curves file (docs/commands.md).
+    to the ends of --to and --within, into a curves file (docs/commands.md); --set
+    continuation.max_step=... (or max_points, or another numeric key of the section) sets the
+    curve's step and points. Branches and curves stop at the edge of the model's domain
+    (domain_edge: e in (0, 1], c, omega, Omega > 0).
     """
     from vrsweep.store.branch_file import check_branch, is_branch_file
     from vrsweep.store.fileio import is_hdf5
@@ -78,7 +81,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
 
             raise UsageError(f"--switch goes with a config (vrsweep continue CONFIG.yaml --switch); {config_path} "
                              "is a branch file, whose bifurcations --point K --along NAME follows")
-        _curves(config_path, overrides, output, start_path, point, along, to, within, overwrite, quiet)
+        _curves(config_path, overrides, output, start_path or at, point, along, to, within, overwrite, quiet)
         return
     if point or along is not None or to or within:
         from vrsweep.errors import UsageError
@@ -99,6 +102,9 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     flags = {**OUTPUT_FLAGS, "start": "--start", "at": "--at"}
     with flag_wording(flags):
         execution.problem_of(config)  # refuse a bad request before integrating anything
+        # --start's point read (and a bad --at refused) before the compile notice: nothing compiles
+        # for a request that is refused.
+        start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
     path = config.output_path(output)
     _prepare_output(path, overwrite, quiet, config)
     from vrsweep.analysis.continuation import interrupted
@@ -108,7 +114,6 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     # written (marked incomplete); a second signal stops at once, keeping nothing.
     with GracefulStop(announce=False) as stop, flag_wording(flags):
         stop.announce_with(f"stopping at the next orbit: the branch followed so far will be written to {path}")
-        start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
         missed = []
         branches, bifurcations = execution.run_continuation(config, start_state, failures=missed,
                                                             progress=lambda orbit: stop.check())
@@ -155,11 +160,13 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
     if not point or along is None:
         raise UsageError(f"{path} is a branch file: say which bifurcation to follow in which parameter, "
                          "e.g. --point 0 --along Omega (vrsweep info lists its bifurcations)")
-    if start_path or overrides:
-        raise UsageError("--start, --at and --set go with a config, not with a branch file")
-    flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to", "within": "--within"}
+    if start_path:
+        raise UsageError("--start and --at go with a config, not with a branch file")
+    flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to", "within": "--within",
+             "set": "--set", **{key: f"continuation.{key}" for key in ("initial_step", "min_step", "max_step")}}
     with flag_wording(flags):
-        requests = [execution.read_request(path, index, along, to, within) for index in point]
+        # --set continuation.max_step=... (or max_points, ...): the curve's own settings over the branch's.
+        requests = [execution.read_request(path, index, along, to, within, overrides) for index in point]
     name = "_".join(str(index) for index in point)
     path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{name}_{along}.h5")
     _prepare_output(path, overwrite, quiet, requests[0].config)

@@ -31,6 +31,7 @@ The package, one module per concern:
   load_config, parse_config, config_from_dict (a dict nested as the YAML, for the Python API),
   with_overrides, and same_config (what --resume compares);
 - ``axes``: each sweep axis checked on its own; ``rules``: the rules across fields;
+- ``domains``: where a model is defined (outside_domain), for the config, branches and curves alike;
 - ``report``: problems worded and located (file, line, field path), pydantic's and ruamel's
   errors in this project's words;
 - ``yaml``: reading and writing YAML through ruamel (the canonical text of a resolved config);

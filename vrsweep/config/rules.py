@@ -16,6 +16,7 @@ from vrsweep.config.schema import (
     INITIAL_DEFAULTS, INITIAL_DOMAINS, INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS, PARAMETER_DOMAINS,
     integral_float_to_int,
 )
+from vrsweep.config.domains import outside_domain
 from vrsweep.config.wording import show
 from vrsweep.config.models import check_written_model
 from vrsweep.numerics.written import WrittenModel
@@ -67,6 +68,8 @@ class CrossFieldRules:
                 self.report(("integration", "measure_periods"),
                             f"must be >= integration.strobe_periods = {strobe}, got {measure}")
 
+        self.check_continuation_start(parameters, _section(data, "continuation"))
+
         with_continuation = [name for name, (_, continuation, _) in axes.items() if continuation]
         for name in with_continuation[1:]:
             self.report(("sweep", name, "continuation"),
@@ -86,6 +89,24 @@ class CrossFieldRules:
         swept = {name: values for name, (values, _, _) in axes.items() if name in self.parameter_names}
         swept_initial = {name: axes[name][0] for name in ("x0", "v0") if name in axes}
         check_written_model(self.report, self.model, fixed, swept, {"x": x}, swept_initial)
+
+    def check_continuation_start(self, parameters, section):
+        """continuation.from inside the model's domain (config/domains.py, the rule every point of
+        a branch keeps): a start at e = 1.2, c = -0.04 or Omega = -4 was continued without a word."""
+        name, start = section.get("parameter"), section.get("from")
+        if name not in self.parameter_names or isinstance(start, bool) or not isinstance(start, (int, float)) \
+                or not math.isfinite(start):
+            return  # reported at the key itself
+        values = {name: float(start)}
+        for other in self.parameter_names:
+            if other != name:
+                value = _valid(parameters, other, self.parameter_defaults, self.parameter_domains)
+                if value is None:
+                    return  # reported at the parameter itself
+                values[other] = float(value)
+        reason = outside_domain(self.model, values)
+        if reason is not None:
+            self.report(("continuation", "from"), f"lies outside the model's domain: {reason}")
 
     def blame(self, first, second, first_given, second_given) -> bool:
         """Whether a broken rule between two fields is reported at ``first`` (else at ``second``):

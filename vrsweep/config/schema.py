@@ -83,6 +83,14 @@ PARAMETER_DOMAINS = {
     "g": ANY,
     "Omega": _POSITIVE,
 }
+# Why each bounded parameter stops where it does: said when a continuation or a curve meets the edge
+# (config/domains.py), which the table above sets for configs, branches and curves alike.
+PARAMETER_DOMAIN_REASONS = {
+    "c": "R = |Q|/c (eq3.3) is undefined at c = 0",
+    "omega": "the slow period 2 pi/omega sets the time unit",
+    "e": "eq2.2: 0 < e <= 1; a restitution above one creates energy at each impact",
+    "Omega": "cos(-Omega t) = cos(Omega t): a negative Omega repeats the positive one, and 0 is no fast forcing",
+}
 
 INITIAL_DEFAULTS = {"x": 0.99, "v": 0.5}  # the paper's Fig. 6 caption
 INITIAL_DOMAINS = {"x": ANY, "v": ANY}

@@ -41,14 +41,22 @@ def check_section(config):
 def problem_of(config):
     """The ContinuationProblem of a config with a continuation section (check_section's refusals first)."""
     from vrsweep.analysis import continuation
+    from vrsweep.config.domains import domain_test
     from vrsweep.execution.sweep import integration_settings
 
     check_section(config)
     section = config.continuation
     parameters = dict(config.parameters, **{section.parameter: section.start})
+    # Every orbit inside the domain the config's own values must keep (config/domains.py): the
+    # branch ends at its edge, and a start outside is refused.
+    domain = domain_test(config.model, parameters)
+    outside = domain({})
+    if outside is not None:
+        raise UsageError.naming("the start {from_key} = {value} lies outside the model's domain: {reason}",
+                                SECTION_WORDS, value=f"{section.start:g}", reason=outside)
     return continuation.ContinuationProblem(parameters, config.model, section.parameter,
                                             integration_settings(config.integration), config.integration.method,
-                                            section.options())
+                                            section.options(), domain=domain)
 
 
 def barrier_of(config) -> float:

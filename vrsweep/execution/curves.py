@@ -11,8 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrsweep.analysis import curves
+from vrsweep.config.domains import domain_test, outside_domain
 from vrsweep.errors import UsageError
 from vrsweep.execution.sweep import integration_settings
+from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 
 
 # The branch file's grazing orbit and the barrier-free orbit Newton finds from it are the same orbit
@@ -33,11 +35,18 @@ class CurveRequest:
     ranges: tuple           # ((low1, high1), (low2, high2))
 
 
-def read_request(path, point, along, to=None, within=None):
+# The settings a curve may change on a branch file (overrides ``continuation.KEY=VALUE``): the
+# continuation section's numerics; parameter, from, to and switch are the branch's own.
+CURVE_SETTINGS = tuple(f"continuation.{key}" for key in CONTINUATION_DEFAULTS)
+
+
+def read_request(path, point, along, to=None, within=None, overrides=()):
     """The CurveRequest of bifurcation row ``point`` of branch file ``path`` moved along ``along``.
 
     to: (low, high) of ``along`` (default: the config's sweep axis of that name); within: (low,
-    high) of the branch's parameter (default: the branch's continuation.to)."""
+    high) of the branch's parameter (default: the branch's continuation.to); overrides:
+    ``continuation.KEY=VALUE`` settings (CURVE_SETTINGS) over the branch's section: the step
+    (max_step, initial_step, min_step) and max_points of the curve, checked as a config's are."""
     from vrsweep.config import parse_config
     from vrsweep.store.reading import open_results
 
@@ -64,6 +73,7 @@ def read_request(path, point, along, to=None, within=None):
         raise UsageError.naming("{point} = {index} is a {kind} point: only fold, period_doubling and grazing "
                                 "points can be followed in two parameters", {"point": "point"}, index=point,
                                 kind=kind)
+    config = _with_settings(config, overrides)
     names = (first, along)
     curves.check_pair(config.parameters, config.model, names, config.continuation.max_period)
     section = config.continuation
@@ -85,6 +95,11 @@ def read_request(path, point, along, to=None, within=None):
                                     name=name, now=f"{now:.8g}", low=f"{low:g}", high=f"{high:g}")
     # The stored config holds the point's own values of both parameters, not the branch's start.
     config = dataclasses.replace(config, parameters={**config.parameters, first: value})
+    # A branch file written before branches kept to the model's domain may hold points outside.
+    outside = outside_domain(config.model, config.parameters)
+    if outside is not None:
+        raise UsageError.naming("{point} = {index} lies outside the model's domain ({reason}): there is no curve "
+                                "to follow from it", {"point": "point"}, index=point, reason=outside)
     return CurveRequest(config, kind, names, np.array([value, second]), state, periods, (within, tuple(to)))
 
 
@@ -92,7 +107,37 @@ def problem_of(request):
     config = request.config
     parameters = dict(config.parameters, **dict(zip(request.names, request.values)))
     return curves.CurveProblem(parameters, config.model, request.names, integration_settings(config.integration),
-                               config.integration.method, config.continuation.options())
+                               config.integration.method, config.continuation.options(),
+                               domain=domain_test(config.model, parameters), range_fraction=curves.RANGE_FRACTION)
+
+
+def _with_settings(config, overrides):
+    """The branch's config with the curve's settings (CURVE_SETTINGS) over its continuation section;
+    the section's own rule (min_step <= initial_step <= max_step) holds for them too."""
+    from vrsweep.config import with_overrides
+    from vrsweep.execution.continuation import SECTION_WORDS
+
+    for setting in overrides:
+        name = str(setting).partition("=")[0].strip()
+        if name not in CURVE_SETTINGS:
+            raise UsageError.naming("{set} {setting}: a branch file takes the settings of its curves only: "
+                                    "{allowed}", {"set": "set"}, setting=str(setting),
+                                    allowed=", ".join(CURVE_SETTINGS))
+    if not overrides:
+        return config
+    config = with_overrides(config, overrides)
+    section = config.continuation
+    given = {str(setting).partition("=")[0].strip() for setting in overrides}
+    if "continuation.initial_step" not in given:
+        # --set continuation.max_step=0.001 alone: the first step is the nearest allowed to the branch's.
+        start = min(max(section.initial_step, section.min_step), section.max_step)
+        section = dataclasses.replace(section, initial_step=start)
+        config = dataclasses.replace(config, continuation=section)
+    if not section.min_step <= section.initial_step <= section.max_step:
+        raise UsageError.naming("{initial_step} = {value} must lie between {min_step} = {low} and {max_step} = "
+                                "{high}", SECTION_WORDS, value=f"{section.initial_step:g}",
+                                low=f"{section.min_step:g}", high=f"{section.max_step:g}")
+    return config
 
 
 def run_curve(request, progress=None):

@@ -26,7 +26,8 @@ root attributes: ``vrsweep_file = "branch"``, ``vrsweep_format_version``, ``vrsw
     branch_id (dim)               one entry per branch
     branch_periods, branch_end_first_status, branch_end_first_reason, branch_end_last_status,
     branch_end_last_reason (branch_id): why each branch stops at its first and last point
-    (statuses: left_range, max_points, newton_failed, sticking, integration_failed, grazing, period_doubling)
+    (statuses: left_range, max_points, newton_failed, sticking, integration_failed, grazing, period_doubling,
+    interrupted, domain_edge: the next point would lie outside the model's domain, config/domains.py)
 
 Built in memory and written whole through ``fileio.write_bytes`` (atomic). Every numeric array
 carries a Fletcher-32 checksum, and ``check_branch`` (the one check every reader goes through:
@@ -226,7 +227,7 @@ def is_branch_file(path) -> bool:
 # What check_branch expects: each array's dimensions and kind of number ("i" whole, "f" real,
 # "s" text). A file written by this version has all of them.
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
-            "interrupted")
+            "interrupted", "domain_edge")
 KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
 # The short names of the bifurcations, numbered per kind in the file's order (F1, F2, PD1, G1...):
 # the same on a branch figure as in ``vrsweep info`` (bifurcation_tags).

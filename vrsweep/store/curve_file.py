@@ -25,7 +25,8 @@ references, date_created), ``vrsweep_version``.
     curve_end_first_status, curve_end_first_reason, curve_end_last_status, curve_end_last_reason
                   (curve_id)      why each curve stops at its first and last point (statuses:
                                   left_range, max_points, newton_failed, sticking,
-                                  integration_failed, fold_grazing, period_doubling_grazing)
+                                  integration_failed, fold_grazing, period_doubling_grazing,
+                                  interrupted, domain_edge)
     special (dim)                 codimension-two points
     special_kind (special)        fold_grazing, period_doubling_grazing or cusp
     special_curve (special)
@@ -135,7 +136,7 @@ def is_curves_file(path) -> bool:
 
 
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "fold_grazing",
-            "period_doubling_grazing", "interrupted")
+            "period_doubling_grazing", "interrupted", "domain_edge")
 KINDS = ("fold", "period_doubling", "grazing")
 SPECIAL_KINDS = ("fold_grazing", "period_doubling_grazing", "cusp")
 
