@@ -18,6 +18,7 @@ ends a branch long before it.
 """
 
 import math
+import re
 import signal
 
 import h5py
@@ -175,6 +176,50 @@ def test_a_written_models_branch_stops_where_its_restitution_reaches_one():
     config, branch = _branch(WRITTEN, "r", 0.8, 0.7, 1.5, max_step=0.1)
     _check_branch_at_edge(config, branch, "r", 1.0, "up")
     assert "model.barriers[0].restitution must be in [0, 1]" in branch.ends["up"][1]
+
+
+# A declared range (model.ranges) is the model's domain as much as its rules: zeta in [0.02, 0.2].
+RANGED = dict(WRITTEN, model=dict(WRITTEN_MODEL, ranges={"zeta": [0.02, 0.2], "r": [0.0, None], "phi": [-0.3, 0.3]}))
+
+
+def test_a_declared_range_refuses_values_starts_and_axes_beyond_it():
+    with pytest.raises(ConfigError, match=r"parameters.zeta: must be in \[0.02, 0.2\], got 0.5"):
+        config_from_dict(dict(RANGED, parameters={"zeta": 0.5}))
+    with pytest.raises(ConfigError, match=r"sweep.zeta\[2\]: must be in \[0.02, 0.2\], got 0.3"):
+        config_from_dict(dict(RANGED, sweep={"zeta": [0.05, 0.1, 0.3]}))
+    with pytest.raises(ConfigError, match=r"continuation.from: lies outside the model's domain: zeta must be in "
+                                          r"\[0.02, 0.2\], got 0.01 \(the model's declared range, model.ranges.zeta\)"):
+        config_from_dict(dict(RANGED, continuation={"parameter": "zeta", "from": 0.01, "to": [0.0, 0.1]}))
+    with pytest.raises(ConfigError, match=r"model.parameters.zeta: the default must be in \[0.1, 0.2\], got 0.05"):
+        config_from_dict(dict(RANGED, model=dict(WRITTEN_MODEL, ranges={"zeta": [0.1, 0.2]})))
+
+
+@pytest.mark.parametrize("bounds, message", [
+    ([0.2, 0.1], "must have low < high"), ([None, None], "bounds nothing"), ("0..1", "must be [low, high]"),
+    ([0, float("inf")], "must be [low, high]"), ([True, 1], "must be [low, high]"), ([0, 1, 2], "must be [low, high]"),
+])
+def test_a_bad_declared_range_is_refused_at_its_field(bounds, message):
+    with pytest.raises(ConfigError, match=r"model.ranges.zeta: " + re.escape(message)):
+        config_from_dict(dict(RANGED, model=dict(WRITTEN_MODEL, ranges={"zeta": bounds})))
+    with pytest.raises(ConfigError, match=r"model.ranges.zetta: not a parameter of the model"):
+        config_from_dict(dict(RANGED, model=dict(WRITTEN_MODEL, ranges={"zetta": [0, 1]})))
+
+
+def test_a_written_models_branch_stops_at_its_declared_range():
+    # the forcing's phase phi only shifts the orbit in time: nothing but the range stops it
+    config, branch = _branch(RANGED, "phi", 0.0, -0.1, 1.0, max_step=0.1)
+    _check_branch_at_edge(config, branch, "phi", 0.3, "up")
+    assert "model.ranges.phi" in branch.ends["up"][1]
+
+
+def test_a_declared_range_is_kept_in_the_files_config(tmp_path, invoke, write_config):
+    from vrsweep.config import parse_config
+    from vrsweep.config.dump import dump_config
+
+    config = config_from_dict(dict(RANGED, sweep={"zeta": [0.05, 0.1]}, integration={"transient_periods": 20,
+                                                                                     "measure_periods": 20}))
+    again = parse_config(dump_config(config), "dumped.yaml")
+    assert again.model.ranges == config.model.ranges == (("zeta", 0.02, 0.2), ("r", 0.0, None), ("phi", -0.3, 0.3))
 
 
 def test_the_branch_file_and_info_say_domain_edge(tmp_path, invoke, write_config):

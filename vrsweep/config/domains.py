@@ -3,8 +3,9 @@ validation, a branch (analysis/continuation.py) and a curve (analysis/curves.py)
 
 For the paper's models the domains are the table config/schema.PARAMETER_DOMAINS (e in (0, 1],
 c, omega and Omega > 0), which the config's schema validates ``parameters`` and sweep axes with;
-for a model written in the config they are its rules at a point (config/models.check_written_model:
-a positive period, restitutions in [0, 1], barriers that do not overlap...). A continuation
+for a model written in the config they are its declared ``ranges`` and its rules at a point
+(config/models.check_written_model: a positive period, restitutions in [0, 1], barriers that do
+not overlap...). A continuation
 steps wherever the parameter goes, so it asks this module at every point: outside, the branch or
 curve stops (status ``domain_edge``), and a start outside is refused.
 """
@@ -13,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from vrsweep.config.models import check_written_model
+from vrsweep.config.models import check_written_model, range_domain
 from vrsweep.config.schema import PARAMETER_DOMAIN_REASONS, PARAMETER_DOMAINS
 from vrsweep.config.wording import dotted
 from vrsweep.numerics.written import WrittenModel
@@ -24,6 +25,12 @@ def outside_domain(model, values: dict) -> str | None:
     are given) lie outside the model's domain, in one line naming the parameter or the model's
     field (``e must be in (0, 1], got 1.2 (eq2.2: ...)``); None inside."""
     if isinstance(model, WrittenModel):
+        for name, low, high in model.ranges:
+            if name in values:
+                value = float(values[name])
+                domain = range_domain(low, high)
+                if math.isnan(value) or not domain.contains(value):
+                    return f"{name} {domain.range_message(value)} (the model's declared range, model.ranges.{name})"
         if set(model.parameter_names) - set(values):
             return None  # the rules read every parameter: checked where all are known
         problems = []

@@ -79,6 +79,13 @@ def _model_node(model):
             value = CommentedMap((name, DoubleQuotedScalarString(item) if isinstance(item, str) else float(item))
                                  for name, item in value.items())
             value.fa.set_flow_style()
+        elif key == "ranges":
+            ranges = CommentedMap()
+            for name, bounds in value.items():
+                ranges[name] = CommentedSeq(bounds)
+                ranges[name].fa.set_flow_style()
+            ranges.fa.set_flow_style()
+            value = ranges
         elif key == "barriers":
             items = CommentedSeq()
             for barrier in value:

@@ -26,13 +26,14 @@ import math
 
 import numpy as np
 
-from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, PARAMETER_DOMAINS
+from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, PARAMETER_DOMAINS, Domain
 from vrsweep.config.wording import did_you_mean, show
 import vrsweep.numerics.expressions as expressions
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, PARAMETER_NAMES
 from vrsweep.numerics.written import SIDES, Barrier, WrittenModel
 
-MODEL_KEYS = ("name", "acceleration", "parameters", "symbols", "barriers", "period", "response", "max_step")
+MODEL_KEYS = ("name", "acceleration", "parameters", "ranges", "symbols", "barriers", "period", "response",
+              "max_step")
 REQUIRED_KEYS = ("acceleration", "parameters", "period", "response")
 BARRIER_KEYS = ("position", "side", "restitution")
 RESPONSE_KEYS = ("frequency", "scale")
@@ -51,11 +52,19 @@ def parameter_defaults(model) -> dict[str, float]:
 
 
 def parameter_domains(model) -> dict:
-    """A written model's parameters may take any value; what they may not make (a negative
-    period, a restitution above one) is checked at the grid's points."""
+    """The interval each parameter may take: the paper's table, or a written model's declared
+    ``ranges`` (closed; any value where none is declared). What a written model's values may not
+    make (a negative period, a restitution above one) is checked at the grid's points besides."""
     if isinstance(model, WrittenModel):
-        return {name: ANY for name in model.parameter_names}
+        declared = {name: range_domain(low, high) for name, low, high in model.ranges}
+        return {name: declared.get(name, ANY) for name in model.parameter_names}
     return PARAMETER_DOMAINS
+
+
+def range_domain(low, high):
+    """A declared range [low, high] (None: unbounded on that side) as a Domain."""
+    return Domain(low=-math.inf if low is None else float(low), high=math.inf if high is None else float(high),
+                  low_open=low is None, high_open=high is None)
 
 
 class ModelSection:
@@ -84,6 +93,7 @@ class ModelSection:
         parameters = self._model_parameters(value.get("parameters"))
         names = tuple(parameters) if parameters is not None else ()
         symbols = self._model_symbols(value.get("symbols"), names)
+        ranges = self._model_ranges(value.get("ranges"), parameters or {})
         acceleration = self._expression(value, ("acceleration",), names + expressions.STATE_NAMES, parameters)
         barriers = self._model_barriers(value.get("barriers"), names, parameters)
         period = self._expression(value, ("period",), names, parameters)
@@ -105,7 +115,7 @@ class ModelSection:
             return None
         return WrittenModel(acceleration=acceleration, parameters=tuple(parameters.items()), barriers=barriers,
                             period=period, response_frequency=frequency, response_scale=scale, max_step=max_step,
-                            name=name, symbols=symbols)
+                            name=name, symbols=symbols, ranges=ranges)
 
     def _model_parameters(self, value):
         path = ("model", "parameters")
@@ -130,6 +140,42 @@ class ModelSection:
                 continue
             parameters[name] = float(default)
         return parameters if len(parameters) == len(value) else None
+
+    def _model_ranges(self, value, parameters):
+        """``ranges: {name: [low, high]}``: where each named parameter is defined (closed; null for
+        no bound on that side). The default must lie inside. Returns ((name, low, high), ...)."""
+        path = ("model", "ranges")
+        if value is None:
+            return ()
+        if not isinstance(value, dict):
+            self.report(path, f"must be a mapping of parameter name -> [low, high], got {show(value)}")
+            return ()
+        ranges = []
+        for name, bounds in value.items():
+            where = path + (name,)
+            if name not in parameters:
+                self.report(where, f"not a parameter of the model{did_you_mean(str(name), tuple(parameters))}",
+                            allowed=", ".join(parameters))
+                continue
+            if not (isinstance(bounds, list) and len(bounds) == 2 and all(
+                    bound is None or (not isinstance(bound, bool) and isinstance(bound, (int, float))
+                                      and math.isfinite(float(bound))) for bound in bounds)):
+                self.report(where, f"must be [low, high], finite numbers or null (no bound), got {show(bounds)}")
+                continue
+            low, high = (None if bound is None else float(bound) for bound in bounds)
+            if low is None and high is None:
+                self.report(where, "bounds nothing: give a low or a high end (or leave the parameter out)")
+                continue
+            if low is not None and high is not None and not low < high:
+                self.report(where, f"must have low < high, got {show(bounds)}")
+                continue
+            domain = range_domain(low, high)
+            if not domain.contains(parameters[name]):
+                self.report(("model", "parameters", name),
+                            f"the default {domain.range_message(parameters[name])} (model.ranges.{name})")
+                continue
+            ranges.append((name, low, high))
+        return tuple(ranges)
 
     def _model_symbols(self, value, names):
         if value is None:

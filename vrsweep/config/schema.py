@@ -402,11 +402,13 @@ class Document(BaseModel):
 
 
 @functools.lru_cache(maxsize=64)
-def written_document(parameters: tuple[tuple[str, float], ...]):
+def written_document(parameters: tuple[tuple[str, float], ...], domains: tuple[tuple[str, Domain], ...] = ()):
     """Document for a written model (config/models.py checks its ``model`` mapping): its parameters
-    are the model's own, with the model's defaults, and any value (the model's rules are checked
-    at the grid's points); the continuation may follow any of them."""
-    fields = {name: (_number_type(ANY), default) for name, default in parameters}
+    are the model's own, with the model's defaults, and any value within the model's declared
+    ranges (``domains``: name -> Domain; the model's rules are checked at the grid's points); the
+    continuation may follow any of them."""
+    declared = dict(domains)
+    fields = {name: (_number_type(declared.get(name, ANY)), default) for name, default in parameters}
     parameters_model = create_model("WrittenParameters", __config__=_STRICT, **fields)
     continuation_model = create_model(
         "WrittenContinuation", __base__=_ContinuationModel,

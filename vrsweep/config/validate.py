@@ -28,7 +28,7 @@ from vrsweep.config.report import Report
 from vrsweep.config.rules import CrossFieldRules
 from vrsweep.config.schema import (
     AXIS_FORMS, CONTINUATION_DEFAULTS, INITIAL_DEFAULTS, INITIAL_DOMAINS, INTEGRATION_DEFAULTS, KEY_HOME, SECTIONS,
-    Axis, Config, Continuation, Document, Integration, written_document,
+    ANY, Axis, Config, Continuation, Document, Integration, written_document,
 )
 from vrsweep.config.wording import did_you_mean, dotted, show
 from vrsweep.config.yaml import (
@@ -282,7 +282,9 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
         if written:
             data = {key: value for key, value in data.items() if key != "model"}  # read_model's
         try:
-            document = written_document(self.model.parameters) if written else Document
+            document = (written_document(self.model.parameters, tuple(sorted(
+                (name, domain) for name, domain in self.parameter_domains.items() if domain != ANY)))
+                if written else Document)
             return document.model_validate(data)
         except ValidationError as error:
             for item in error.errors(include_url=False):

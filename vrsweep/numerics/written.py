@@ -59,6 +59,9 @@ class WrittenModel:
     max_step: str | None = None
     name: str | None = None
     symbols: tuple[tuple[str, str], ...] = field(default=())
+    # Declared ranges (name, low, high), closed, None where unbounded: where the model is defined
+    # (config/domains.py). Not in code_key: a range changes no compiled code.
+    ranges: tuple[tuple[str, float | None, float | None], ...] = field(default=())
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -84,6 +87,8 @@ class WrittenModel:
         data["parameters"] = dict(self.parameters)
         if self.symbols:
             data["symbols"] = dict(self.symbols)
+        if self.ranges:
+            data["ranges"] = {name: [low, high] for name, low, high in self.ranges}
         if self.barriers:
             data["barriers"] = [{"position": b.position, "side": b.side, "restitution": b.restitution}
                                 for b in self.barriers]
