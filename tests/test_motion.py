@@ -284,3 +284,23 @@ def test_with_exponents_a_response_locked_to_a_quasi_periodic_forcing_is_recogni
     locked = negative & (long["motion"] == Motion.QUASI_PERIODIC)
     assert locked.any()
     assert (np.abs(short["R"] - long["R"])[locked] <= short["R_err"][locked]).all()
+
+
+def test_run_notes_many_chaotic_points_without_exponents(tmp_path, invoke, write_config):
+    omega = float(np.linspace(3.0, 6.0, 60)[13])
+    text = f"""\
+        model: original
+        parameters: {{Omega: {omega!r}}}
+        sweep:
+          g: [2.0, 6.0, 14.0, 30.0]
+        integration: {{transient_periods: 100, measure_periods: 100{{lyapunov}}}}
+        """
+    plain = write_config(tmp_path, text.replace("{lyapunov}", ""), "plain.yaml")
+    result = invoke("run", plain, "-o", tmp_path / "plain.h5")
+    with xr.open_dataset(tmp_path / "plain.h5", engine="h5netcdf") as ds:
+        chaotic = int((ds["motion"].values == Motion.CHAOTIC).sum())
+    assert chaotic > 0.3 * 4  # the premise: three of the four look chaotic without exponents
+    assert f"Note: {chaotic} of 4 points" in result.output and "integration.lyapunov: true" in result.output
+    exponents = write_config(tmp_path, text.replace("{lyapunov}", ", lyapunov: true"), "lyap.yaml")
+    result = invoke("run", exponents, "-o", tmp_path / "lyap.h5")
+    assert result.exit_code == 0 and "Note:" not in result.output

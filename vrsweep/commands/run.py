@@ -152,6 +152,9 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
                        f"{format_duration(guess.seconds * report.n_run / max(1, guess.n_points))}; "
                        "--dry-run measures one)", err=True)
         click.echo(report.summary_line(), err=True)
+        note = report.motion_note()
+        if note:
+            click.echo(note, err=True)
     for item in report.advice():  # even with --quiet: the file holds mostly failures
         example = f", e.g. --set {item.setting}" if item.setting else ""
         click.echo(f"Warning: {item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "

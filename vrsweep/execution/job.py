@@ -14,7 +14,7 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.store.provenance import cf_attributes, model_attributes
 from vrsweep.errors import InvalidArgument
-from vrsweep.results import Status
+from vrsweep.results import Motion, Status
 from vrsweep.execution.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
 from vrsweep.numerics.model import AXIS_LONG_NAMES, AXIS_UNITS
 from vrsweep.store import ResultWriter, VariableSpec
@@ -24,6 +24,8 @@ from vrsweep.store.variables import point_variables, written_model_words
 
 
 FAILURE_ADVICE_FRACTION = 0.03
+# More than this fraction of a run's points called chaotic without Lyapunov exponents: a note.
+CHAOTIC_NOTE_FRACTION = 0.3
 """Above this share of failed points (of those computed now), the summary says what to change."""
 
 
@@ -62,6 +64,23 @@ class JobReport:
     n_run: int             # points computed now (less than n_points when resuming)
     counts: dict = field(default_factory=dict)  # Status -> points, over the points run now
     integration: object = None  # the config's Integration, for advice on failed points
+    motions: dict = field(default_factory=dict)  # Motion -> points, over the points run now
+
+    def motion_note(self) -> str | None:
+        """A note when many points were called chaotic without Lyapunov exponents: a response
+        locked to a quasi-periodic forcing converges slowly and is called chaotic then, and a
+        negative exponent would tell it apart (analysis/motion.py); None otherwise."""
+        from vrsweep.results import Motion
+
+        computed = sum(self.motions.values())
+        chaotic = self.motions.get(Motion.CHAOTIC, 0)
+        if self.integration is None or self.integration.lyapunov or not computed \
+                or chaotic <= CHAOTIC_NOTE_FRACTION * computed:
+            return None
+        return (f"Note: {chaotic} of {computed} points ({chaotic / computed:.0%}) have no period and averages that "
+                "do not converge in the window, and are called chaotic; some may be responses locked to a "
+                "quasi-periodic forcing, which integration.lyapunov: true tells apart (a negative exponent; "
+                "docs/trust.md)")
 
     def summary_line(self):
         parts = [f"{n} {status.name.lower()}" for status, n in sorted(self.counts.items())]
@@ -281,8 +300,12 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         run = executor or run_sweep
         left = [n_owned - n_done]
 
+        motions = {}
+
         def on_chunk(flat_indices, values):
             writer.write_points(flat_indices, values)
+            for code, n in zip(*np.unique(values["motion"], return_counts=True)):
+                motions[Motion(int(code))] = motions.get(Motion(int(code)), 0) + int(n)
             left[0] -= len(flat_indices)
             if stop is not None and left[0] > 0:  # after the last chunk, finishing is better
                 stop.check()  # a stop asked for during the chunk takes effect now it is saved
@@ -298,7 +321,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         attractors, coords = basin_extras(config, writer)
         extras.update(attractors)
     writer.finish(extra=extras, coords=coords, attributes=solver_error_attributes(config, grid, shard, writer))
-    return JobReport(path, n_owned, sum(counts.values()), counts, config.integration)
+    return JobReport(path, n_owned, sum(counts.values()), counts, config.integration, motions)
 
 
 def _refuse_results_of_older_steps(path):
