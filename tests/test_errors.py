@@ -239,12 +239,16 @@ def test_a_corrupt_results_file(command, finished, tmp_path):
     size = os.path.getsize(finished)
     failures = []
     harmless = 0
+    hdf5_loops = []
     for offset in range(0, size - 512, 4500):
         path = tmp_path / "corrupt.h5"
         shutil.copy(finished, path)
         with open(path, "r+b") as handle:
             handle.seek(offset)
             handle.write(b"\xff" * 512)
+        if _hdf5_loops_on(path):
+            hdf5_loops.append(offset)
+            continue
         args, _ = reader_args(command, path, tmp_path)
         result = CliRunner().invoke(main, [str(a) for a in args])
         if "Traceback" in result.output or not isinstance(result.exception, (SystemExit, type(None))):
@@ -259,6 +263,43 @@ def test_a_corrupt_results_file(command, finished, tmp_path):
             leftover.unlink(missing_ok=True)
     assert not failures, failures
     assert harmless < (size - 512) // 4500  # most offsets hold data or metadata, and are caught
+    # HDF5's own limit, not vrsweep's: damage in a global heap (where variable-length attribute
+    # strings and dimension-scale references live; it has no checksum) can make the library loop
+    # forever reading any attribute stored there, before vrsweep sees a byte (docs/faults.md).
+    # One offset of the 23 here lands on such bytes in this file's layout.
+    assert len(hdf5_loops) <= 1, hdf5_loops
+
+
+# Reading every attribute of every object with h5py alone, in a child process: what HDF5 itself
+# does with the file, whatever vrsweep would make of it.
+_READ_ALL_ATTRIBUTES = """
+import sys, h5py
+try:
+    with h5py.File(sys.argv[1], "r") as f:
+        for obj in [f] + [f[name] for name in f]:
+            for name in obj.attrs:
+                obj.attrs[name]
+except Exception:
+    pass
+"""
+
+
+_LOOPS = {}  # file content -> whether HDF5 loops on it: each damaged copy is probed once
+
+
+def _hdf5_loops_on(path, seconds=10):
+    """Whether HDF5 (through h5py, no vrsweep) does not return from reading ``path``'s attributes."""
+    import hashlib
+
+    key = hashlib.sha1(path.read_bytes()).hexdigest()
+    if key not in _LOOPS:
+        try:
+            subprocess.run([sys.executable, "-c", _READ_ALL_ATTRIBUTES, str(path)], capture_output=True,
+                           timeout=seconds)
+            _LOOPS[key] = False
+        except subprocess.TimeoutExpired:
+            _LOOPS[key] = True
+    return _LOOPS[key]
 
 
 def test_trajectory_files_that_cannot_be_read(finished, tmp_path, invoke):
