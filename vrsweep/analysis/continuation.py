@@ -29,7 +29,9 @@ regula falsi until the parameter is known to location_tolerance (grazing: below)
                      such an orbit or steps over the graze (the impact count changes).
 
 At a graze the map has a square-root term and Newton from one side does not reach the other:
-the branch is carried across by grazing.py's normal form (cross_grazing). Where no window fits
+the branch is carried across by grazing.py's normal form (cross_grazing); where the map beyond is
+steep (multipliers of order 1/u, u the new impact's speed) the branch beyond is followed in u
+itself until the ordinary corrector holds again (march_in_speed). Where no window fits
 (a touch at the stroboscopic section t = 0 mod pT) the graze is only bracketed and the branch
 beyond is searched for around it (switch_at_grazing); when none is found the branch ends with
 status "grazing".

@@ -25,7 +25,10 @@ orbits", its part on grazing):
    lam grows or falls along it (the branch goes on, or folds back at a corner) is the sign of its
    last component. The predictor at a small u is corrected by the ordinary arclength corrector on
    the real map, where Newton's square-root basin is wide enough (it converges from sigma in
-   (0, 4 sigma*)). Coming the other way, from an impacting orbit whose one impact slows to zero,
+   (0, 4 sigma*)). Where the map beyond is steep (multipliers of order 1/u: the predictor's O(u^2)
+   error is then as large as sigma) that basin is missed, and the branch is followed in u
+   instead (correct_at_speed, at the end of this module). Coming the other way, from an
+   impacting orbit whose one impact slows to zero,
    the graze is located the same way and the free branch leaves it along the free tangent,
    oriented away from the barrier.
 
@@ -275,7 +278,7 @@ def graze_site(problem, orbit_map, value, periods, proximity):
 # Beyond a graze the map is F(z) = Phi(z, u(z)), Phi smooth in (z, u) and u(z) = sqrt(kappa
 # sigma(z)) the new impact's speed (Nordmark's normal form: F_free(z) + C u + O(u^2)). Its
 # Jacobian carries C du/dz, and du/dz = kappa grad sigma / (2 u) grows like 1/u: next to the graze
-# the impacting map has a multiplier of order |C| kappa / u (near -100 at Fig. 1's g = 17.8973)
+# the impacting map has a multiplier of order |C| kappa / u (-24 at u = 0.01 beyond Fig. 1's g = 17.8973, 1.4e4 beyond g = 45.122 at Omega = 5)
 # and curves like 1/u^3, so Newton on F alone diverges from any predictor whose error in sigma is
 # not far below sigma ~ u^2 itself. The curve of impacting orbits is smooth in u, though (the
 # desingularised map: sigma = u^2 / kappa), and so is the system
@@ -285,7 +288,7 @@ def graze_site(problem, orbit_map, value, periods, proximity):
 # meets it in one step from any sigma > 0; and the steep rank-one part C du/dz of the first two
 # rows is the third row times C / (2u): a row operation removes it, so Newton's step is that of
 # the smooth system [F_free + C u_*; kappa sigma - u_*^2] up to O(u) terms. The branch beyond is
-# then followed by marching u_* up from small values (impacting_branch in continuation.py).
+# then followed by marching u_* up from small values (continuation.march_in_speed).
 
 # The Jacobian is taken by differences in a basis fitted to the square root: d3 across the level
 # sets of u^2 (a unit change of u^2 along it) and d1, d2 along them. Along d1, d2 the speed u
