@@ -278,9 +278,9 @@ def graze_site(problem, orbit_map, value, periods, proximity):
 # Beyond a graze the map is F(z) = Phi(z, u(z)), Phi smooth in (z, u) and u(z) = sqrt(kappa
 # sigma(z)) the new impact's speed (Nordmark's normal form: F_free(z) + C u + O(u^2)). Its
 # Jacobian carries C du/dz, and du/dz = kappa grad sigma / (2 u) grows like 1/u: next to the graze
-# the impacting map has a multiplier of order |C| kappa / u (-24 at u = 0.01 beyond Fig. 1's g = 17.8973, 1.4e4 beyond g = 45.122 at Omega = 5)
-# and curves like 1/u^3, so Newton on F alone diverges from any predictor whose error in sigma is
-# not far below sigma ~ u^2 itself. The curve of impacting orbits is smooth in u, though (the
+# the impacting map has a multiplier of order |C| kappa / u (-24 at u = 0.01 beyond Fig. 1's
+# g = 17.8973, 1.4e4 beyond g = 45.122 at Omega = 5) and curves like 1/u^3, so Newton on F alone
+# diverges from any predictor whose error in sigma is not far below sigma ~ u^2 itself. The curve of impacting orbits is smooth in u, though (the
 # desingularised map: sigma = u^2 / kappa), and so is the system
 #     P^p(y; lam) - y = 0,   u(z)^2 - u_*^2 = 0
 # at a fixed speed u_*, three equations in z = (x, v, lam). Its second equation is
