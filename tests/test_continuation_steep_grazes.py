@@ -120,7 +120,6 @@ def test_fig1_period_four_branch_crosses_its_graze():
     _check_crossed(FIG1, start, orbits, grazes, 17.8275, +1)
 
 
-@pytest.mark.slow
 def test_omega_five_period_one_branch_crosses_its_graze():
     """The original model at Omega = 5, the period-1 branch (5 impacts) from g = 50 down, beyond
     g = 45.12196: orbits with 6 impacts and multipliers of 3e3 to 1.4e4, followed in the new
