@@ -29,7 +29,9 @@ regula falsi until the parameter is known to location_tolerance (grazing: below)
                      such an orbit or steps over the graze (the impact count changes).
 
 At a graze the map has a square-root term and Newton from one side does not reach the other:
-the branch is carried across by grazing.py's normal form (cross_grazing). Where no window fits
+the branch is carried across by grazing.py's normal form (cross_grazing); where the map beyond is
+steep (multipliers of order 1/u, u the new impact's speed) the branch beyond is followed in u
+itself until the ordinary corrector holds again (march_in_speed). Where no window fits
 (a touch at the stroboscopic section t = 0 mod pT) the graze is only bracketed and the branch
 beyond is searched for around it (switch_at_grazing); when none is found the branch ends with
 status "grazing".
@@ -68,6 +70,9 @@ EASY_NEWTON = 3
 # 100 times shorter when both directions straddle a graze.
 PARAMETER_DIFFERENCE = 1e-6
 PARAMETER_DIFFERENCE_TRIES = 3
+# An impact slower than sqrt(SLOW_IMPACT * max(1, |Delta|)) makes the map curve like 1/u^3 in the
+# parameter: F_lam is then a central difference (_parameter_derivative).
+SLOW_IMPACT = 0.1
 # Periods integrated after the transient to detect the start's period.
 START_STROBE_PERIODS = 64
 # Loose on purpose: a weakly stable orbit (|mu| = 0.96 at the hysteresis example's g = 23) is still
@@ -209,8 +214,19 @@ def _parameter_derivative(problem, state, value, periods, orbit_map):
     """F_lam = d P^p / d lam by a forward difference (module doc), on the same side of every
     graze as the orbit: a difference whose other end gains or loses an impact measures the jump,
     not the derivative (next to a graze an orbit can be 1e-6 from it in lam, the difference's own
-    size), so it is taken backwards, or shorter, until both ends have the same impacts."""
+    size), so it is taken backwards, or shorter, until both ends have the same impacts.
+
+    Beyond a graze, while the new impact is slow (speed u), the map curves like 1/u^3 in lam
+    (grazing.py's square root): a forward difference of 1e-6 * lam is then off by O(1) (at Fig.
+    1's g = 17.8978, u = 0.11: 258 for 437 in one component), enough for Newton to diverge with
+    multipliers of only -4.4. There the difference is central (its error goes with the square of
+    the step), when both ends keep the orbit's impacts."""
     step = PARAMETER_DIFFERENCE * max(1.0, abs(value))
+    scale = max(1.0, abs(grazing_barrier(problem.coefficients(value))))
+    if orbit_map.slowest_impact ** 2 < SLOW_IMPACT * scale:
+        ends = [evaluate(problem, state, value + direction * step, periods) for direction in (1.0, -1.0)]
+        if not any(_failure(end) or end.impacts != orbit_map.impacts for end in ends):
+            return (ends[0].end_state - ends[1].end_state) / (2.0 * step)
     for _ in range(PARAMETER_DIFFERENCE_TRIES):
         for direction in (1.0, -1.0):
             moved = evaluate(problem, state, value + direction * step, periods)
@@ -585,10 +601,11 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 # The square-root singularity of grazing: Newton from this side cannot reach the
                 # other (module doc); the graze is located and crossed from its normal form.
                 tried_crossing = True
-                graze, orbit, new_tangent, grazing_reason = cross_grazing(problem, current, tangent)
+                graze, beyond, new_tangent, grazing_reason = cross_grazing(problem, current, tangent)
                 if graze is not None:
                     _record_graze(problem, bifurcations, graze)
-                crossed = orbit is not None
+                crossed = bool(beyond)
+                orbit = beyond[-1] if crossed else None
                 # The same graze, located again from a closer orbit, is crossed no better: the
                 # crossing starts from the located graze, not from here.
                 failed_crossing = not crossed
@@ -636,6 +653,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                     bifurcations.append((kind, found))
             if orbit.newton_iterations <= EASY_NEWTON:
                 step = min(step * STEP_GROWTH, options["max_step"])
+        if crossed:  # the orbits a march in the new impact's speed found on the way (march_in_speed)
+            orbits.extend(passed for passed in beyond[:-1] if lo <= passed.parameter <= hi)
         orbits.append(orbit)
         if progress is not None:
             try:
@@ -671,8 +690,11 @@ def _record_graze(problem, bifurcations, graze):
 def cross_grazing(problem, near, tangent):
     """Locate the graze next to ``near`` (an Orbit on either side of it) and step across.
 
-    Returns (the grazing Orbit or None, the first Orbit beyond or None, its tangent, a one-line
-    reason when there is none). The map without the grazing impact is the barrier-free map, or
+    Returns (the grazing Orbit or None, the Orbits beyond in order along the branch (empty when
+    none), the last one's tangent, a one-line reason when there are none). Where the ordinary
+    corrector fails from the normal form's predictor (the map beyond is steep: Fig. 1's period-2
+    branch at g = 17.8973) the branch beyond is followed in the new impact's speed (march_in_speed),
+    several orbits at once. The map without the grazing impact is the barrier-free map, or
     the map with the barrier transparent in a window around the touch where the orbit has other
     impacts (grazing.graze_site); a touch with no room for a window is only recorded where the
     corrector gave up, and the branch beyond is searched for around it (switch_at_grazing).
@@ -682,20 +704,20 @@ def cross_grazing(problem, near, tangent):
     if site is None:
         switched = switch_at_grazing(problem, near, tangent)
         if switched is None:
-            return near, None, None, "no branch beyond the graze was found"
-        return near, switched[0], switched[1], None
+            return near, [], None, "no branch beyond the graze was found"
+        return near, [switched[0]], switched[1], None
     side, window = site
     located = grazing.locate_graze(problem, near.z, periods, _tolerance(problem, near.state), window)
     if located is None:
         free = "barrier-free" if window is None else "windowed"
-        return None, None, None, f"the grazing orbit could not be located (Newton on the {free} map failed)"
+        return None, [], None, f"the grazing orbit could not be located (Newton on the {free} map failed)"
     graze = _graze_orbit(problem, located)
     lengths = [problem.options["initial_step"] * factor for factor in CROSSING_DISTANCES]
     impacts_near = round(near.impacts_per_period * periods)
     if side == "free":
         normal_form = grazing.impacting_direction(problem, located)
         if normal_form is None:
-            return graze, None, None, "the orbit beyond the graze does not gain one impact, as its normal form needs"
+            return graze, [], None, "the orbit beyond the graze does not gain one impact, as its normal form needs"
         direction, predictor, speed_scale = normal_form
         candidates = [predictor(length / speed_scale) for length in lengths]
         beyond, impacts_beyond = "impacting", impacts_near + 1
@@ -707,8 +729,101 @@ def cross_grazing(problem, near, tangent):
         orbit, failure = correct(problem, z_predicted, periods, direction, z_predicted)
         if (failure is None and round(orbit.impacts_per_period * periods) == impacts_beyond
                 and (orbit.z - located.z) @ direction > 0.0):
-            return graze, orbit, tangent_of(orbit, direction), None
-    return graze, None, None, f"no {beyond} orbit converged beyond the graze"
+            return graze, [orbit], tangent_of(orbit, direction), None
+    if side == "free":
+        marched = march_in_speed(problem, located, predictor, impacts_beyond)
+        if marched:
+            return graze, marched[0], marched[1], None
+    return graze, [], None, f"no {beyond} orbit converged beyond the graze"
+
+
+# The march in the new impact's speed u beyond a steep graze (march_in_speed): from u =
+# SPEED_START * sqrt(max(1, |Delta|)), where the map is known well enough for the Newton tolerance
+# (its noise is about |mu| times the integration's, and |mu| ~ 1/u), growing by SPEED_GROWTH (a
+# failed point is retried at the square root of the growth, the first at a faster u, SPEED_RETRIES
+# times in all), until the orbits
+# are no longer near the graze for follow's checks (u^2 >= JUMP_PROXIMITY * max(1, |Delta|)) and
+# the ordinary corrector converges from the last one, a chord further on; at most
+# SPEED_MAX_POINTS orbits.
+SPEED_START = 1e-2
+SPEED_GROWTH = 1.5
+SPEED_RETRIES = 3
+SPEED_MAX_POINTS = 40
+
+
+def march_in_speed(problem, graze, predictor, impacts_beyond):
+    """The impacting branch beyond a graze, parameterised by its new impact's speed u:
+    ([Orbit] with u growing, the last one's tangent) or None when no orbit converged.
+
+    Each orbit is grazing.correct_at_speed's, from the normal form's predictor at the first u and
+    from the quadratic (then linear) extrapolation in u of the orbits before (the branch is smooth
+    in u, grazing.py), each moved first to where the free map overshoots the barrier as that u
+    needs (grazing.onto_speed). Bifurcations between these orbits are not looked for (the arc's
+    corrector, which locates them, is what fails here). The march hands over to follow once the
+    ordinary corrector converges from its last orbit onto the same branch, forward. Where it never
+    does (multipliers of 10^3 and more all along: the original model at Omega = 5 beyond g =
+    45.122) the march goes on while it converges, and follow ends the branch after its last orbit.
+    """
+    periods, window = graze.periods, graze.window
+    scale = max(1.0, abs(grazing.barrier(problem, graze.z[2])))
+    tolerance = _tolerance(problem, graze.z[:2])
+    speeds, points, orbits = [], [], []
+    speed, growth, retries = SPEED_START * math.sqrt(scale), SPEED_GROWTH, 0
+    handover = None
+    while len(orbits) < SPEED_MAX_POINTS:
+        if len(points) >= 3:
+            guess = np.array([np.polyval(np.polyfit(speeds[-3:], [p[i] for p in points[-3:]], 2), speed)
+                              for i in range(3)])
+        elif len(points) == 2:
+            guess = points[-1] + (points[-1] - points[-2]) * (speed - speeds[-1]) / (speeds[-1] - speeds[-2])
+        else:
+            guess = predictor(speed)
+        guess = grazing.onto_speed(problem, graze, guess, speed, predictor.kappa)
+        found = grazing.correct_at_speed(problem, guess, periods, window, speed, tolerance)
+        if found is None or found[1].impacts != impacts_beyond:
+            if retries >= SPEED_RETRIES:
+                break
+            retries += 1
+            if speeds:
+                growth = math.sqrt(growth)
+                speed = speeds[-1] * growth
+            else:  # no orbit yet: the first u a little faster, where the map is less steep
+                speed *= SPEED_GROWTH
+            continue
+        z, real, residual, iterations, jacobian = found
+        orbit = _orbit(problem, z[:2], z[2], periods, real, residual, iterations, jacobian[:2, 2].copy())
+        speeds.append(speed)
+        points.append(z)
+        orbits.append(orbit)
+        if len(points) >= 2:
+            chord = points[-1] - points[-2]
+            ahead = _ordinary_step(problem, orbit, chord, impacts_beyond)
+            if ahead is not None:
+                handover = (len(orbits), ahead)
+                if speed * speed >= JUMP_PROXIMITY * scale:
+                    break
+        speed *= growth
+    if handover is not None:
+        count, tangent = handover
+        return orbits[:count], tangent
+    if len(orbits) < 2:
+        return None
+    chord = points[-1] - points[-2]
+    return orbits, chord / np.linalg.norm(chord)
+
+
+def _ordinary_step(problem, orbit, chord, impacts):
+    """The tangent at ``orbit`` (along ``chord``) when the arclength corrector converges from it
+    a chord further on, with the same impacts and forward; else None."""
+    length = float(np.linalg.norm(chord))
+    tangent = tangent_of(orbit, chord / length)
+    z_predicted = orbit.z + length * tangent
+    ahead, failure = correct(problem, z_predicted, orbit.periods, tangent, z_predicted)
+    if (failure is None and round(ahead.impacts_per_period * orbit.periods) == impacts
+            and (ahead.z - orbit.z) @ tangent > 0.0):
+        return tangent
+    return None
+
 
 
 # An orbit is near grazing when its highest free maximum is this close to Delta (relative), or

@@ -25,7 +25,10 @@ orbits", its part on grazing):
    lam grows or falls along it (the branch goes on, or folds back at a corner) is the sign of its
    last component. The predictor at a small u is corrected by the ordinary arclength corrector on
    the real map, where Newton's square-root basin is wide enough (it converges from sigma in
-   (0, 4 sigma*)). Coming the other way, from an impacting orbit whose one impact slows to zero,
+   (0, 4 sigma*)). Where the map beyond is steep (multipliers of order 1/u: the predictor's O(u^2)
+   error is then as large as sigma) that basin is missed, and the branch is followed in u
+   instead (correct_at_speed, at the end of this module). Coming the other way, from an
+   impacting orbit whose one impact slows to zero,
    the graze is located the same way and the free branch leaves it along the free tangent,
    oriented away from the barrier.
 
@@ -223,6 +226,7 @@ def impacting_direction(problem, graze):
     def predictor(u):
         return z_g + u * direction + (u * u + graze.gap * kappa) * curvature
 
+    predictor.kappa = kappa  # for onto_speed
     return direction / np.linalg.norm(direction), predictor, np.linalg.norm(direction)
 
 
@@ -267,3 +271,154 @@ def graze_site(problem, orbit_map, value, periods, proximity):
     time = float(orbit_map.impact_times[np.argmin(orbit_map.impact_speeds)])
     window = graze_window(problem, orbit_map, value, periods, time)
     return None if window is None else ("impacting", window)
+
+
+# --- the branch beyond a steep graze, parameterised by the new impact's speed --------------------
+#
+# Beyond a graze the map is F(z) = Phi(z, u(z)), Phi smooth in (z, u) and u(z) = sqrt(kappa
+# sigma(z)) the new impact's speed (Nordmark's normal form: F_free(z) + C u + O(u^2)). Its
+# Jacobian carries C du/dz, and du/dz = kappa grad sigma / (2 u) grows like 1/u: next to the graze
+# the impacting map has a multiplier of order |C| kappa / u (-24 at u = 0.01 beyond Fig. 1's
+# g = 17.8973, 1.4e4 beyond g = 45.122 at Omega = 5) and curves like 1/u^3, so Newton on F alone
+# diverges from any predictor whose error in sigma is not far below sigma ~ u^2 itself. The curve of impacting orbits is smooth in u, though (the
+# desingularised map: sigma = u^2 / kappa), and so is the system
+#     P^p(y; lam) - y = 0,   u(z)^2 - u_*^2 = 0
+# at a fixed speed u_*, three equations in z = (x, v, lam). Its second equation is
+# kappa(z) sigma(z) - u_*^2: smooth in z, with gradient kappa grad sigma of order one, so Newton
+# meets it in one step from any sigma > 0; and the steep rank-one part C du/dz of the first two
+# rows is the third row times C / (2u): a row operation removes it, so Newton's step is that of
+# the smooth system [F_free + C u_*; kappa sigma - u_*^2] up to O(u) terms. The branch beyond is
+# then followed by marching u_* up from small values (continuation.march_in_speed).
+
+# The Jacobian is taken by differences in a basis fitted to the square root: d3 across the level
+# sets of u^2 (a unit change of u^2 along it) and d1, d2 along them. Along d1, d2 the speed u
+# stays put to first order and F is smooth: central differences of length SPEED_ALONG * u (the
+# level sets curve, and u moves by O(h^2 / u)). Along d3 F is steep (C / 2u per unit of u^2):
+# central differences that change u^2 by SPEED_ACROSS * u^2, short enough to keep the impact
+# and the 1/u^3 curvature out. Newton meets the u^2 equation in one step (it is smooth), after
+# which the d3 component of its steps, and so the error of the steep column, is small: the
+# iteration's rate is set by the smooth columns. The map is known to about |mu| times the
+# integration tolerance (the new impact's speed carries the solver's error in x divided by u),
+# which the differences' lengths stay well above.
+SPEED_ALONG = 1e-2
+SPEED_ACROSS = 0.1
+MAX_SPEED_ITERATIONS = 12
+
+
+def new_impact_speed(real, window):
+    """The speed of the grazing impact of an impacting orbit's OrbitMap: its one impact without a
+    window, its one impact inside the window with one (NaN when there is not exactly one)."""
+    return _grazing_impact_speed(real, window)
+
+
+def _speed_system(problem, z, periods, window):
+    """[P^p(y) - y; u^2] (3,) at z on the real map and the OrbitMap, or None when it failed or
+    the new impact is missing (the point fell on the free side)."""
+    real = periodic_map(problem.coefficients(z[2]), z[:2], problem.settings, periods, problem.method,
+                        model=problem.model)
+    if real.status != Status.OK or real.stuck_time > 0.0:
+        return None
+    speed = new_impact_speed(real, window)
+    if not speed > 0.0:
+        return None
+    return np.array([*(real.end_state - z[:2]), speed * speed]), real
+
+
+def _speed_jacobian(problem, z, periods, window, value, impacts):
+    """(3, 3) Jacobian of _speed_system's vector at z (its value ``value``), by differences in the
+    basis of the comment above; None when a difference point leaves the impacting side."""
+    def at(point):
+        there = _speed_system(problem, point, periods, window)
+        return None if there is None or there[1].impacts != impacts else there[0]
+
+    squared = value[2]
+    gradient = np.zeros(3)  # of u^2: smooth, a forward difference that keeps the impact
+    for column in range(3):
+        there, step = None, SPEED_ACROSS * squared
+        for _ in range(8):  # either way, shorter until the difference keeps the new impact
+            for signed in (step, -step):
+                moved = z.copy()
+                moved[column] += signed
+                there = at(moved)
+                if there is not None:
+                    break
+            if there is not None:
+                break
+            step *= 0.1
+        if there is None:
+            return None
+        gradient[column] = (there[2] - squared) / signed
+    norm = np.linalg.norm(gradient)
+    if not norm > 0.0:
+        return None
+    across = gradient / (norm * norm)          # u^2 grows by one along it
+    along = np.linalg.svd(gradient[None, :])[2][1:]  # orthonormal, with gradient . d = 0
+    basis = np.column_stack([along[0], along[1], across])
+    lengths = (SPEED_ALONG * np.sqrt(squared), SPEED_ALONG * np.sqrt(squared), SPEED_ACROSS * squared)
+    columns = np.zeros((3, 3))
+    for k in range(3):
+        length = lengths[k]
+        for _ in range(6):
+            plus, minus = at(z + length * basis[:, k]), at(z - length * basis[:, k])
+            # The level sets of u^2 curve: where they curve strongly (|grad u^2| ~ 6e3 at Omega = 5,
+            # g = 45.122) even a short step along one leaves it, and u with it; shorter then.
+            if (plus is not None and minus is not None
+                    and max(abs(plus[2] - squared), abs(minus[2] - squared)) <= SPEED_ACROSS * squared):
+                break
+            length *= 0.1
+        if plus is None or minus is None:
+            return None
+        columns[:, k] = (plus - minus) / (2.0 * length)
+    return columns @ np.linalg.inv(basis)      # back to (x, v, lam)
+
+
+def onto_speed(problem, graze, z_guess, speed, kappa, iterations=4):
+    """z_guess moved along the gap's gradient at the graze until the free map (without the new
+    impact) overshoots the barrier by sigma = speed^2 / kappa, where the real orbit hits it at
+    about ``speed``: the normal form's predictor is off by O(u^2) in z, and where the gap's
+    second derivatives are large (the period-1 orbit at Omega = 5, g = 45.122: |grad gap| ~ 70)
+    that is O(1) of sigma itself, on either side of the barrier. The free map is smooth there
+    (Newton-chord steps, the gradient kept from the graze). Returns z, or z_guess when the free map
+    fails."""
+    z = np.array(z_guess, dtype=float)
+    gradient = graze.jacobian[2]
+    target = speed * speed / kappa
+    for _ in range(iterations):
+        value, _ = _free_system(problem, z, graze.periods, graze.window)
+        if value is None:
+            return np.array(z_guess, dtype=float)
+        sigma = -value[2]
+        if abs(sigma - target) <= 1e-3 * target:
+            break
+        z = z - (target - sigma) * gradient / (gradient @ gradient)
+    return z
+
+
+def correct_at_speed(problem, z_guess, periods, window, speed, tolerance):
+    """The impacting orbit whose new impact (the grazing one: alone, or in ``window``) has speed
+    ``speed``: Newton on [P^p(y) - y; u^2 - speed^2] = 0 in z = (x, v, lam) from z_guess.
+
+    Returns (z, OrbitMap, residual max |P^p(y) - y|, iterations, the Jacobian (3, 3) of
+    [P^p(y) - y; u^2]) or None.
+    """
+    z = np.array(z_guess, dtype=float)
+    target = speed * speed
+    for iteration in range(1, MAX_SPEED_ITERATIONS + 1):
+        here = _speed_system(problem, z, periods, window)
+        if here is None:
+            return None
+        value, real = here
+        jacobian = _speed_jacobian(problem, z, periods, window, value, real.impacts)
+        if jacobian is None:
+            return None
+        residual = float(np.max(np.abs(value[:2])))
+        if residual <= tolerance and abs(value[2] - target) <= 1e-6 * target:
+            return z, real, residual, iteration, jacobian
+        try:
+            step = np.linalg.solve(jacobian, -np.array([value[0], value[1], value[2] - target]))
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(step)):
+            return None
+        z = z + step
+    return None
