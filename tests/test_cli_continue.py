@@ -1,5 +1,7 @@
 """vrsweep continue: the config section, the branch file, its summary, and the refusals."""
 
+import re
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -67,7 +69,7 @@ def test_info_of_a_bifurcation_without_a_parameter_says_nan(branch_file, invoke,
     path = damaged_copy(branch_file[0], tmp_path, forget_the_parameter)
     result = invoke("info", path)
     assert result.exit_code == 0, result.output
-    assert " at g = nan (branch 0" in result.output
+    assert re.search(r" at g = nan \([A-Z]+1 on the figure, branch 0", result.output), result.output
 
 
 def test_existing_output_is_refused(branch_file, invoke, tmp_path, write_config):
@@ -201,7 +203,9 @@ def test_plot_draws_the_branch_with_a_sweep(branch_file, invoke, tmp_path, write
     axes = figure.axes
     assert len(axes) == 2
     labels = [text.get_text() for legend in figure.legends for text in legend.get_texts()]
-    assert any(label.startswith("fold, $g$ = ") for label in labels)  # each bifurcation named in the legend
+    # one legend entry per kind of bifurcation, each bifurcation tagged on the curve (F1, ...)
+    assert "F: fold" in labels, labels
+    assert any(text.get_text().startswith("F1") for text in axes[0].texts)
     styles = {line.get_linestyle() for line in axes[0].lines if line.get_color() == "C0"}
     assert {"-", "--"} <= styles  # stable solid, unstable dashed
     assert figure._suptitle is not None and "continued in" in figure._suptitle.get_text()
@@ -407,7 +411,8 @@ def test_plot_draws_every_branch_in_its_period_colour(switched_file):
     assert len(colours) == 2  # period 2 and period 4
     labels = [text.get_text() for legend in figure.legends for text in legend.get_texts()]
     assert "period 2 T" in labels and "period 4 T" in labels
-    assert any(label.startswith("period doubling, $g$ = ") for label in labels)
+    assert "PD: period doubling" in labels, labels
+    assert any("PD1" in text.get_text() for text in figure.axes[0].texts)
 
 
 def test_switch_key_is_validated(invoke, tmp_path, write_config):

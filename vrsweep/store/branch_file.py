@@ -143,7 +143,7 @@ def write_branch(path, arrays, config, method, overwrite=False, complete=True):
                             f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}",
                             complete=complete, parameter=parameter)
     image = io.BytesIO()
-    with h5py.File(image, "w", track_order=True) as f:
+    with h5py.File(image, "w", track_order=True, libver=("v108", "latest")) as f:
         for name, value in attrs.items():
             f.attrs[name] = value
         n_points = len(arrays["parameter"])

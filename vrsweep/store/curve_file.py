@@ -95,7 +95,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False, complete=
                             f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})",
                             complete=complete)
     image = io.BytesIO()
-    with h5py.File(image, "w", track_order=True) as f:
+    with h5py.File(image, "w", track_order=True, libver=("v108", "latest")) as f:
         for name, value in attrs.items():
             f.attrs[name] = value
         f.attrs.create("parameter_names", np.asarray(names, dtype=object), dtype=h5py.string_dtype())

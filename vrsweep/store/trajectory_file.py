@@ -145,7 +145,7 @@ def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
     # Built in memory, then written whole: the disk only ever sees plain bytes, so a full disk
     # is one clear error, and its message knows the file's exact size.
     image = io.BytesIO()
-    with h5py.File(image, "w") as f:  # a buffer, not a file: no locking to decide
+    with h5py.File(image, "w", libver=("v108", "latest")) as f:  # a buffer, not a file: no locking to decide
         for name, value in attrs.items():
             f.attrs[name] = value
         for model, run in data.runs.items():
