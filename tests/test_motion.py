@@ -185,7 +185,11 @@ def test_periodic_and_chaotic_points_keep_the_plain_average(tmp_path, monkeypatc
             np.testing.assert_array_equal(found[name][variable], plain[variable])
 
 
-def test_info_counts_the_kinds_of_motion(quasi_periodic, tmp_path, invoke, write_config):
+@pytest.fixture(scope="module")
+def kinds_file(tmp_path_factory, invoke, write_config):
+    """A sweep of the original model at Omega = 4: g = 5 chaotic (lambda1 > 0, docs/lyapunov.md),
+    g = 10 period 3, g = 30 period 1."""
+    tmp_path = tmp_path_factory.mktemp("kinds")
     config = write_config(tmp_path, """\
         model: original
         parameters: {Omega: 4.0}
@@ -195,12 +199,15 @@ def test_info_counts_the_kinds_of_motion(quasi_periodic, tmp_path, invoke, write
         """)
     out = tmp_path / "kinds.h5"
     assert invoke("run", config, "-o", out, "-q").exit_code == 0
-    lines = [line for line in invoke("info", out).output.splitlines() if line.startswith("motion:")]
-    # g = 5 chaotic (lambda1 > 0, docs/lyapunov.md), g = 10 period 3, g = 30 period 1
+    return out
+
+
+def test_info_counts_the_kinds_of_motion(kinds_file, invoke):
+    lines = [line for line in invoke("info", kinds_file).output.splitlines() if line.startswith("motion:")]
     assert lines == ["motion:      2 periodic, 1 chaotic (docs/trust.md)"]
     import json
 
-    summary = json.loads(invoke("info", out, "--json").output)
+    summary = json.loads(invoke("info", kinds_file, "--json").output)
     assert summary["motion_counts"] == {"periodic": 2, "chaotic": 1}
 
 
@@ -233,24 +240,17 @@ def test_a_motion_locked_to_a_forcing_of_11_periods_is_periodic_beyond_max_perio
     assert whole["R"][0] == pytest.approx(values["R"][0], rel=1e-8)
 
 
-def test_plot_kind_motion_draws_the_classes_and_refuses_a_file_without_them(quasi_periodic, tmp_path, invoke,
-                                                                              write_config):
-    import h5py
+def test_plot_kind_motion_draws_the_classes_and_refuses_a_file_without_them(kinds_file, tmp_path, invoke):
+    import shutil
 
-    config = write_config(tmp_path, """\
-        model: original
-        parameters: {Omega: 4.0}
-        sweep:
-          g: [5.0, 10.0, 30.0]
-        integration: {transient_periods: 50, measure_periods: 50}
-        """)
-    out = tmp_path / "kinds.h5"
-    assert invoke("run", config, "-o", out, "-q").exit_code == 0
-    result = invoke("plot", out, "--kind", "motion", "-o", tmp_path / "motion.png")
-    assert result.exit_code == 0, result.output
-    assert (tmp_path / "motion.png").stat().st_size > 0
+    import h5py
     from damaged import reseal
 
+    result = invoke("plot", kinds_file, "--kind", "motion", "-o", tmp_path / "motion.png")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "motion.png").stat().st_size > 0
+    out = tmp_path / "old.h5"
+    shutil.copy(kinds_file, out)
     with h5py.File(out, "r+") as f:  # as vrsweep 0.5.0 wrote it
         del f["motion"]
         names = f["done"].attrs["point_variables"]

@@ -186,11 +186,8 @@ def locate_graze(problem, z_guess, periods, tolerance, window=None):
             return Graze(z=z, periods=periods, window=window, orbit_map=orbit_map, jacobian=jacobian,
                          gap=float(value[2]),
                          residual=float(np.max(np.abs(value[:2]))), iterations=iteration)
-        try:
-            step = np.linalg.solve(jacobian, -value)
-        except np.linalg.LinAlgError:
-            return None
-        if not np.all(np.isfinite(step)):
+        step = _newton_step(jacobian, -value)
+        if step is None:
             return None
         z = z + step
     return None
@@ -414,11 +411,18 @@ def correct_at_speed(problem, z_guess, periods, window, speed, tolerance):
         residual = float(np.max(np.abs(value[:2])))
         if residual <= tolerance and abs(value[2] - target) <= 1e-6 * target:
             return z, real, residual, iteration, jacobian
-        try:
-            step = np.linalg.solve(jacobian, -np.array([value[0], value[1], value[2] - target]))
-        except np.linalg.LinAlgError:
-            return None
-        if not np.all(np.isfinite(step)):
+        step = _newton_step(jacobian, -np.array([value[0], value[1], value[2] - target]))
+        if step is None:
             return None
         z = z + step
     return None
+
+
+def _newton_step(jacobian, rhs):
+    """The solution of ``jacobian @ step = rhs``, or None where the matrix is singular or the
+    step is not finite: the corrector then gives up rather than step into NaN."""
+    try:
+        step = np.linalg.solve(jacobian, rhs)
+    except np.linalg.LinAlgError:
+        return None
+    return step if np.all(np.isfinite(step)) else None

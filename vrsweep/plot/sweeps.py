@@ -66,10 +66,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     # Many curves over one other parameter: colours from a scale of its value, named by a colour
     # bar, instead of a legend entry (and a resonance entry) per curve.
     scale_axis = others[0] if len(curves) > LEGEND_CURVES and len(others) == 1 and others[0] != "direction" else None
-    if len(curves) > (MAX_SCALED_CURVES if scale_axis else MAX_CURVES):
-        others = [n for n in view.parameter_axes if n != x_axis]
-        raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
-                                "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
+    _refuse_too_many_curves(view, curves, MAX_SCALED_CURVES if scale_axis else MAX_CURVES, name, x_axis)
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 6.0)
     ax = fig.subplots()
@@ -104,6 +101,14 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
+
+
+def _refuse_too_many_curves(view, curves, limit, name, x_axis):
+    """UsageError when more than ``limit`` curves would share one plot: fix the other axes."""
+    if len(curves) > limit:
+        others = [n for n in view.parameter_axes if n != x_axis]
+        raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
+                                "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
 
 
 def _curve_colours(fig, ax, ds, view, scale_axis):
@@ -264,10 +269,7 @@ def variable_figure(ds, name, x_axis=None, log=None) -> Figure:
         raise UsageError.naming("{var} {value}: {path} has no such variable with one value per grid point; "
                                 "it has {names}", value=name, path=view.path, names=", ".join(mappable))
     curves = view.curve_coordinates(x_axis)
-    if len(curves) > MAX_CURVES:
-        others = [n for n in view.parameter_axes if n != x_axis]
-        raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
-                                "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
+    _refuse_too_many_curves(view, curves, MAX_CURVES, name, x_axis)
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 4.5)
     ax = fig.subplots()
