@@ -300,7 +300,7 @@ def test_run_notes_many_chaotic_points_without_exponents(tmp_path, invoke, write
     with xr.open_dataset(tmp_path / "plain.h5", engine="h5netcdf") as ds:
         chaotic = int((ds["motion"].values == Motion.CHAOTIC).sum())
     assert chaotic > 0.3 * 4  # the premise: three of the four look chaotic without exponents
-    assert f"Note: {chaotic} of 4 points" in result.output and "integration.lyapunov: true" in result.output
+    assert f"Note: {chaotic} of the 4 points" in result.output and "integration.lyapunov: true" in result.output
     exponents = write_config(tmp_path, text.replace("{lyapunov}", ", lyapunov: true"), "lyap.yaml")
     result = invoke("run", exponents, "-o", tmp_path / "lyap.h5")
     assert result.exit_code == 0 and "Note:" not in result.output

@@ -151,10 +151,10 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
             click.echo(f"time:        {format_duration(time.perf_counter() - began)} (the cost model's estimate: "
                        f"{format_duration(guess.seconds * report.n_run / max(1, guess.n_points))}; "
                        "--dry-run measures one)", err=True)
-        click.echo(report.summary_line(), err=True)
         note = report.motion_note()
         if note:
             click.echo(note, err=True)
+        click.echo(report.summary_line(), err=True)
     for item in report.advice():  # even with --quiet: the file holds mostly failures
         example = f", e.g. --set {item.setting}" if item.setting else ""
         click.echo(f"Warning: {item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "

@@ -74,12 +74,13 @@ class JobReport:
 
         computed = sum(self.motions.values())
         chaotic = self.motions.get(Motion.CHAOTIC, 0)
-        if self.integration is None or self.integration.lyapunov or not computed \
-                or chaotic <= CHAOTIC_NOTE_FRACTION * computed:
+        # Under 8 measured periods nothing converges or not (motion.convergence): no note.
+        if self.integration is None or self.integration.lyapunov or self.integration.measure_periods < 8 \
+                or not computed or chaotic <= CHAOTIC_NOTE_FRACTION * computed:
             return None
-        return (f"Note: {chaotic} of {computed} points ({chaotic / computed:.0%}) have no period and averages that "
-                "do not converge in the window, and are called chaotic; some may be responses locked to a "
-                "quasi-periodic forcing, which integration.lyapunov: true tells apart (a negative exponent; "
+        return (f"Note: {chaotic} of the {computed} points have no period and averages that do not converge in "
+                f"the window ({chaotic / computed:.0%}), and are called chaotic; some may be responses locked to "
+                "a quasi-periodic forcing, which integration.lyapunov: true tells apart (a negative exponent; "
                 "docs/trust.md)")
 
     def summary_line(self):
