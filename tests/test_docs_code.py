@@ -118,7 +118,7 @@ def _end_of_notebook(namespace):
 
 def test_the_python_pages_show_each_way_in():
     joined = "\n".join(code for page in PAGES for _, code, _ in code_blocks(page, "python"))
-    for needle in ("vrsweep.open_results(", ".sel(Omega=4)", ".plot(", ".to_dataframe()", "h5py.File(",
+    for needle in ("vrsweep.open_results(", ".sel(Omega=", ".plot(", ".to_dataframe()", "h5py.File(",
                    'group="effective"', "xr.open_dataset("):
         assert needle in joined, needle
 
