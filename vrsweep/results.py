@@ -45,10 +45,3 @@ class Motion(enum.IntEnum):
 
 
 MOTION_MEANINGS = " ".join(kind.name.lower() for kind in Motion)
-MOTION_DESCRIPTIONS = {
-    Motion.NONE: "failed or not computed",
-    Motion.PERIODIC: "periodic (period detected)",
-    Motion.QUASI_PERIODIC: "quasi-periodic (weighted averages converge)",
-    Motion.CHAOTIC: "chaotic (averages do not converge)",
-    Motion.NOT_SETTLED: "not settled (still dying away)",
-}

@@ -76,7 +76,7 @@ import numpy as np
 
 from vrsweep.numerics import kernel
 from vrsweep.numerics.coefficients import PERIOD, RESPONSE_SCALE
-from vrsweep.results import MOTION_DESCRIPTIONS, MOTION_MEANINGS, Motion, Status  # noqa: F401 - read here
+from vrsweep.results import Motion, Status
 
 
 # Convergence (module doc) below which a point without a period is quasi-periodic: chaos gives
