@@ -106,8 +106,9 @@ def _ptxas():
 
 def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path):
     """compile_ptx for sm_90 without a GPU (vrsweep.numerics.cuda.compile_for), then ptxas: the
-    resource report names the kernel; its local memory is the work arrays' (about 8 kB: the
-    dop853 rotation table, 68 kB, must never come back into a thread)."""
+    resource report names the kernel; its local memory is the work arrays' (about 1 kB since the
+    impact test walks its pieces without a stack: the two stacks took 7.7 kB of a thread's 8.1 kB;
+    and dop853's rotation table, 68 kB, must never come into a thread)."""
     from vrsweep.numerics import cuda
 
     ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0))
@@ -125,7 +126,7 @@ def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path):
     frame = int(re.search(r"(\d+) bytes stack frame", entry).group(1))
     registers = int(re.search(r"Used (\d+) registers", entry).group(1))
     assert registers <= 255
-    assert frame < 16 * 1024, entry[:2000]
+    assert frame < 2 * 1024, entry[:2000]
 
 
 def test_asking_for_the_gpu_where_there_is_none_is_one_line_and_exit_2(tmp_path, invoke, write_config):

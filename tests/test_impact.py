@@ -11,7 +11,7 @@ import pytest
 
 from vrsweep.numerics.impact import (
     BARRIER_SCAN_POINTS, IMPACT, N_BRACKET, NO_IMPACT, THETA_TOLERANCE, TURNING_POINT, UNRESOLVED, V, X,
-    bernstein_coefficients, find_crossing, locate_root,
+    bernstein_coefficients, find_crossing, first_reach, locate_root,
 )
 from vrsweep.numerics.rk45 import dense_value
 
@@ -274,3 +274,94 @@ def test_the_cheap_exclusion_bounds_a_closed_form_step_from_above():
     assert hermite_reach(x0, v0, a0, x1, v1, a1, h, 0.0) >= 0.5
     assert hermite_reach(x0, v0, a0, x1, v1, a1, h, 0.7) < 0.0
     assert hermite_reach(x0, v0, a0, x1, v1, a1, h, 0.51) >= 0.0
+
+
+# --- first_reach's walk over pieces: no stack, the same pieces in the same order ----------------
+
+def _stack_walk(dense, y, h, delta, coefficients):
+    """first_reach as version 0.6.0 wrote it, with a stack of pieces (plain Python here): the
+    reference its stackless walk must agree with to the last bit. Returns (verdict, low, high,
+    turning point)."""
+    from vrsweep.numerics.impact import (
+        BERNSTEIN_ROUNDING, MAX_SUBDIVISIONS, _difference_shape, _sign_changes, locate_maximum,
+    )
+
+    def halve(c):
+        right = list(c)
+        left = [right[0]]
+        for level in range(1, len(c)):
+            for i in range(len(c) - level):
+                right[i] = 0.5 * (right[i] + right[i + 1])
+            left.append(right[0])
+        return left, right
+
+    n = len(coefficients) - 1
+    size = abs(y[X]) + abs(delta)
+    for i in range(1, n + 1):
+        size += abs(h * dense[X, i - 1])
+    slack = BERNSTEIN_ROUNDING * size
+    turning = np.nan
+    if max(coefficients) < -slack:
+        return NO_IMPACT, None, None, turning
+    stack = [(list(coefficients), 0.0, 0)]
+    while stack:
+        piece, low, depth = stack.pop()
+        width = 0.5 ** depth
+        high = low + width if depth > 0 else 1.0
+        if max(piece) < -slack:
+            continue
+        as_array = np.array(piece)
+        if dense_value(dense, y, h, high, X) >= delta and (_sign_changes(as_array, n) <= 1
+                                                            or depth >= MAX_SUBDIVISIONS):
+            return IMPACT, low, high, turning
+        shape = _difference_shape(as_array, n)
+        if shape == 0:
+            continue
+        if shape == 1 or depth >= MAX_SUBDIVISIONS:
+            top = locate_maximum(dense, y, h, X, low, high)
+            if depth == 0 and shape == 1:
+                turning = top
+            value = dense_value(dense, y, h, top, X)
+            if value >= delta or (value >= delta - slack and value - y[X] > slack):
+                return IMPACT, low, top, turning
+            continue
+        left, right = halve(piece)
+        stack.append((right, low + 0.5 * width, depth + 1))
+        stack.append((left, low, depth + 1))
+    return NO_IMPACT, None, None, turning
+
+
+@pytest.mark.parametrize("degree", [4, 7])
+def test_the_stackless_walk_finds_what_a_stack_of_pieces_finds_to_the_last_bit(degree):
+    """Polynomials with up to `degree` roots just below, on and just past the barrier (several
+    touches and near misses in one step), the hardest case for the walk: its verdict, bracket and
+    turning point are the reference's exactly. The bracket holds only the 39 values a GPU thread
+    keeps per barrier."""
+    assert N_BRACKET <= 40
+    rng = np.random.default_rng(20261126 + degree)
+    walked = 0
+    for _ in range(400):
+        # x - Delta = -A prod (theta - r_i)^2 (i < degree / 2) + a small shift: touches at the r_i
+        roots = np.sort(rng.uniform(0.0, 1.0, degree // 2))
+        poly = np.array([-rng.uniform(0.5, 8.0)])
+        for r in roots:
+            poly = np.polynomial.polynomial.polymul(poly, [r * r, -2.0 * r, 1.0])
+        poly[0] += rng.choice([-1.0, 1.0]) * 2.0 ** -rng.integers(8, 52) + DELTA
+        shift = rng.normal(0.0, 2.0 ** -rng.integers(10, 40), 2)
+        poly[:2] += shift
+        if poly[0] >= DELTA:
+            continue
+        dense, y, y_new, h = motion(list(poly), degree=degree)
+        coefficients = np.empty(degree + 1)
+        bernstein_coefficients(dense, y, h, X, DELTA, coefficients)
+        verdict, low, high, turning = _stack_walk(dense, y, h, DELTA, list(coefficients))
+        bracket = np.full(N_BRACKET, -7.0)
+        bracket[3:3 + degree + 1] = coefficients
+        got = first_reach(dense, y, h, DELTA, bracket[3:3 + degree + 1], bracket)
+        bracket_turning = bracket[TURNING_POINT] if bracket[TURNING_POINT] != -7.0 else np.nan
+        assert got == verdict
+        if verdict == IMPACT:
+            assert (bracket[0], bracket[1]) == (low, high)
+        np.testing.assert_array_equal(bracket_turning, turning)
+        walked += 1
+    assert walked > 200

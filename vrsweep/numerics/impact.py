@@ -30,14 +30,16 @@ MAX_ROOT_ITERATIONS = 200
 BARRIER_SCAN_POINTS = 8
 NO_CROSSING = -1.0
 # find_crossing's bracket: (theta_low, theta_high, the turning point it located), then room for the
-# step's Bernstein coefficients (so that the kernel's hot loop allocates nothing).
+# step's Bernstein coefficients and first_reach's workspace (so that the kernel's hot loop
+# allocates nothing). first_reach walks its pieces without a stack (each piece is recomputed from
+# the step's coefficients), so the bracket is 39 values: a GPU thread keeps two of them (one per
+# barrier) in 624 bytes of local memory, where a stack of pieces took 7.7 kB (benchmarks/README.md).
 TURNING_POINT = 2
 BERNSTEIN = 3                    # the step's coefficients, up to degree 8 (rk45: 4, dop853: 7)
-PIECE = BERNSTEIN + 9            # first_reach's workspace: the piece being examined,
-STACK_LOW = PIECE + 9            # the pieces still to examine (their start, depth, coefficients)
-STACK_DEPTH = STACK_LOW + 42     # (MAX_SUBDIVISIONS + 2 entries each)
-STACK = STACK_DEPTH + 42
-N_BRACKET = STACK + 42 * 9
+PIECE = BERNSTEIN + 9            # the piece being examined
+LEFT = PIECE + 9                 # the halves of a piece while it is halved
+RIGHT = LEFT + 9
+N_BRACKET = RIGHT + 9
 # find_crossing's verdicts.
 NO_IMPACT = 0
 IMPACT = 1
@@ -231,62 +233,61 @@ def first_reach(dense, y, h, delta, coefficients, bracket):
     slack = BERNSTEIN_ROUNDING * size
     if largest < -slack:
         return NO_IMPACT  # proven below the barrier over the whole step (the usual case)
-    # Depth-first over halvings, left piece first, so the first crossing is the one found. The
-    # stack lives in the bracket array (no allocation in the kernel's loop): entry k's
-    # coefficients at STACK + 9 k.
+    # Depth-first over halvings, left piece first, so the first crossing is the one found. Piece
+    # (depth, index) is theta in [index, index + 1] / 2^depth; the walk needs no stack: after a
+    # piece, climb while it is a right half, then take the next piece to the right. A piece's
+    # coefficients are the step's halved along the bits of its index, the same halvings in the
+    # same order as a stack of pieces would make, so the values are the same to the last bit.
     piece = bracket[PIECE:PIECE + n + 1]
-    for i in range(n + 1):
-        bracket[STACK + i] = coefficients[i]
-    bracket[STACK_LOW] = 0.0
-    bracket[STACK_DEPTH] = 0.0
-    top = 1
-    while top > 0:
-        top -= 1
-        for i in range(n + 1):
-            piece[i] = bracket[STACK + 9 * top + i]
-        low = bracket[STACK_LOW + top]
-        depth = int(bracket[STACK_DEPTH + top])
+    left = bracket[LEFT:LEFT + n + 1]
+    right = bracket[RIGHT:RIGHT + n + 1]
+    depth = 0
+    index = 0
+    while True:
+        _piece_coefficients(coefficients, n, depth, index, piece, left, right)
         width = 0.5 ** depth
+        low = index * width
         high = low + width if depth > 0 else 1.0
         largest = piece[0]
         for i in range(1, n + 1):
             largest = max(largest, piece[i])
+        halve = False
         if largest < -slack:
-            continue  # this piece is below the barrier
+            pass  # this piece is below the barrier
         # x(low) < Delta here: the pieces to its left were all below.
-        if dense_value(dense, y, h, high, X) >= delta and (_sign_changes(piece, n) <= 1
-                                                            or depth >= MAX_SUBDIVISIONS):
+        elif dense_value(dense, y, h, high, X) >= delta and (_sign_changes(piece, n) <= 1
+                                                              or depth >= MAX_SUBDIVISIONS):
             bracket[0] = low
             bracket[1] = high
             return IMPACT  # one crossing in [low, high] (or a touch at high): locate_root's
-        shape = _difference_shape(piece, n)
-        if shape == 0:
-            continue  # monotone, with both ends below
-        if shape == 1 or depth >= MAX_SUBDIVISIONS:
-            theta_top = locate_maximum(dense, y, h, X, low, high)
-            if depth == 0 and shape == 1:
-                bracket[TURNING_POINT] = theta_top
-            top_value = dense_value(dense, y, h, theta_top, X)
-            # A touch to rounding counts, unless the maximum is the step's start again (no rise
-            # above x(0) beyond rounding): that point was judged as the previous step's end, and
-            # a start within rounding of Delta that moves away (v <= 0) is no impact; taking it
-            # for one would divide the saltation by a zero speed.
-            if top_value >= delta or (top_value >= delta - slack and top_value - y[X] > slack):
-                bracket[0] = low
-                bracket[1] = theta_top
-                return IMPACT
-            continue  # its single maximum is below the barrier: a near miss
-        # Halve (de Casteljau at 1/2): the right half lower on the stack, so the left comes next.
-        right = top
-        left = top + 1
-        _halve(piece, n, bracket[STACK + 9 * left:STACK + 9 * left + n + 1],
-               bracket[STACK + 9 * right:STACK + 9 * right + n + 1])
-        bracket[STACK_LOW + right] = low + 0.5 * width
-        bracket[STACK_DEPTH + right] = depth + 1
-        bracket[STACK_LOW + left] = low
-        bracket[STACK_DEPTH + left] = depth + 1
-        top += 2
-    return NO_IMPACT
+        else:
+            shape = _difference_shape(piece, n)
+            if shape == 1 or (shape != 0 and depth >= MAX_SUBDIVISIONS):
+                theta_top = locate_maximum(dense, y, h, X, low, high)
+                if depth == 0 and shape == 1:
+                    bracket[TURNING_POINT] = theta_top
+                top_value = dense_value(dense, y, h, theta_top, X)
+                # A touch to rounding counts, unless the maximum is the step's start again (no
+                # rise above x(0) beyond rounding): that point was judged as the previous step's
+                # end, and a start within rounding of Delta that moves away (v <= 0) is no
+                # impact; taking it for one would divide the saltation by a zero speed.
+                if top_value >= delta or (top_value >= delta - slack and top_value - y[X] > slack):
+                    bracket[0] = low
+                    bracket[1] = theta_top
+                    return IMPACT
+                # else its single maximum is below the barrier: a near miss
+            elif shape != 0:  # (0: monotone, with both ends below)
+                halve = True
+        if halve:
+            depth += 1
+            index *= 2  # its left half next
+            continue
+        while index % 2 == 1:
+            index //= 2
+            depth -= 1
+        if depth == 0:
+            return NO_IMPACT  # the whole step is done
+        index += 1
 
 
 @kernel_jit
@@ -299,6 +300,20 @@ def _halve(c, n, left, right):
         for i in range(n - level + 1):
             right[i] = 0.5 * (right[i] + right[i + 1])
         left[level] = right[0]
+
+
+@kernel_jit
+def _piece_coefficients(coefficients, n, depth, index, piece, left, right):
+    """piece[0..n] = the Bernstein coefficients of piece (depth, index) of first_reach's walk:
+    coefficients[0..n] (the whole step's) halved depth times, keeping the half that the bits of
+    index name, from the most significant (left and right are workspace)."""
+    for i in range(n + 1):
+        piece[i] = coefficients[i]
+    for level in range(depth - 1, -1, -1):
+        _halve(piece, n, left, right)
+        kept = right if (index >> level) & 1 else left
+        for i in range(n + 1):
+            piece[i] = kept[i]
 
 
 @kernel_jit
