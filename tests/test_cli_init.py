@@ -18,7 +18,9 @@ def test_configs_is_the_package_folder_so_there_is_one_copy():
 
 
 def test_list_names_every_example_with_its_first_sentence(invoke):
-    result = invoke("init", "--list")
+    # A terminal wide enough for the whole sentence (the list cuts lines to the terminal's width,
+    # which is 80 in a pytest-xdist worker and whatever the developer's window is).
+    result = invoke("init", "--list", env={"COLUMNS": "200"})
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()[1:]
     assert [line.split()[0] for line in lines] == list(shipped_examples())
