@@ -1,6 +1,6 @@
 """The GPU kernel's launch shapes against each other and against the CPU, one run, one machine.
 
-    python benchmarks/gpu_variants.py [--points 65536] [--out DIR]
+    python benchmarks/gpu_variants.py [--points 65536] [--variants A,C,D] [--source DIR] [--out DIR]
 
 numerics/cuda.py has three levers (its QUEUE, SORT and MAX_REGISTERS): a work queue, lines handed
 out in parameter order, and a register cap. This script times, on the first POINTS points of
@@ -14,6 +14,10 @@ for the original model with rk45 and the effective model with dop853 (each model
 on the GPU in gpu.py's first run), and the CPU's best method (dop853, every core) on a sample, so
 that every ratio is of this one process. Checks that every variant gives the same statuses and R
 as variant A bit for bit (the order of the lines changes nothing in a line's arithmetic).
+
+--source DIR times another checkout's vrsweep (its package folder's parent, e.g. an old version
+unpacked with `git archive REV | tar -x -C DIR`): two calls, one with it and one without, compare
+two versions on one card; --variants C times only the default shape.
 """
 
 from __future__ import annotations
@@ -29,6 +33,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+if "--source" in sys.argv[:-1]:  # another checkout's package, imported before gpu.py's path puts this one first
+    sys.path.insert(0, str(Path(sys.argv[sys.argv.index("--source") + 1]).resolve()))
+import vrsweep  # noqa: E402,F401
 
 from gpu import INTEGRATION, coefficients_of, grid, log, run  # noqa: E402
 from vrsweep.numerics import cuda  # noqa: E402
@@ -44,11 +51,19 @@ CASES = [("original", "rk45", 2000), ("effective", "dop853", 8000)]  # model, GP
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--points", type=int, default=65536)
+    parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of A, C, D")
+    parser.add_argument("--source", help="the folder holding the vrsweep package to time (default: this one)")
     parser.add_argument("--out", default=os.environ.get("OUT", "."))
     args = parser.parse_args()
+    chosen = [name.strip() for name in args.variants.split(",")]
+    unknown = sorted(set(chosen) - set(VARIANTS))
+    if unknown:
+        parser.error(f"--variants: unknown {', '.join(unknown)} (known: {', '.join(VARIANTS)})")
     settings = settings_vector(**INTEGRATION)
     measure = INTEGRATION["measure_periods"]
-    results = {"card": str(getattr(cuda.cuda.get_current_device(), "name", "CUDA simulator")), "points": args.points}
+    results = {"card": str(getattr(cuda.cuda.get_current_device(), "name", "CUDA simulator")), "points": args.points,
+               "vrsweep": f"{vrsweep.__version__} from {Path(vrsweep.__file__).parent}"}
+    log(f"vrsweep {results['vrsweep']}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for model, method, cpu_sample in CASES:
@@ -63,7 +78,8 @@ def main():
         row["cpu_dop853_points_per_s"] = len(sample) / elapsed
         reference = None
         functions = cuda.paper_functions(False)
-        for name, variant in VARIANTS.items():
+        for name in chosen:
+            variant = VARIANTS[name]
             compiled = cuda.line_kernel(method, False, *functions, queue=variant["queue"],
                                         max_registers=variant["max_registers"])
             lines = cuda.DeviceLines(compiled, sort=variant["sort"])
@@ -77,17 +93,17 @@ def main():
             except AttributeError:  # the CUDA simulator
                 registers = local = None
             same = None
-            if reference is None:
+            if reference is None:  # the first variant timed (A unless --variants leaves it out)
                 reference = (summaries, statuses)
             else:
                 same = bool(np.array_equal(statuses, reference[1])
                             and np.array_equal(summaries, reference[0], equal_nan=True))
             row[name] = {"points_per_s": args.points / elapsed, "seconds": elapsed, "compile_s": compile_s,
-                         "registers": registers, "local_bytes": local, "same_as_A": same}
+                         "registers": registers, "local_bytes": local, "same_as_first": same}
             row[name]["over_cpu_best"] = row[name]["points_per_s"] / row["cpu_dop853_points_per_s"]
             log(f"{model:9s} {method:6s} {name}: {row[name]['points_per_s']:8.0f} pts/s "
                 f"({row[name]['over_cpu_best']:.2f}x CPU dop853 {row['cpu_dop853_points_per_s']:.0f}), "
-                f"regs {registers}, local {local}, compile {compile_s:.1f} s, same as A: {same}")
+                f"regs {registers}, local {local}, compile {compile_s:.1f} s, same as {chosen[0]}: {same}")
             (out / "gpu_variants.json").write_text(json.dumps(results, indent=1))
     log(json.dumps(results))
 
