@@ -726,9 +726,8 @@ def cross_grazing(problem, near, tangent):
         candidates = [located.z + length * direction for length in lengths]
         beyond, impacts_beyond = "free", impacts_near - 1
     for z_predicted in candidates:
-        orbit, failure = correct(problem, z_predicted, periods, direction, z_predicted)
-        if (failure is None and round(orbit.impacts_per_period * periods) == impacts_beyond
-                and (orbit.z - located.z) @ direction > 0.0):
+        orbit = _corrected_forward(problem, z_predicted, periods, direction, located.z, impacts_beyond)
+        if orbit is not None:
             return graze, [orbit], tangent_of(orbit, direction), None
     if side == "free":
         marched = march_in_speed(problem, located, predictor, impacts_beyond)
@@ -818,10 +817,18 @@ def _ordinary_step(problem, orbit, chord, impacts):
     length = float(np.linalg.norm(chord))
     tangent = tangent_of(orbit, chord / length)
     z_predicted = orbit.z + length * tangent
-    ahead, failure = correct(problem, z_predicted, orbit.periods, tangent, z_predicted)
-    if (failure is None and round(ahead.impacts_per_period * orbit.periods) == impacts
-            and (ahead.z - orbit.z) @ tangent > 0.0):
-        return tangent
+    ahead = _corrected_forward(problem, z_predicted, orbit.periods, tangent, orbit.z, impacts)
+    return None if ahead is None else tangent
+
+
+def _corrected_forward(problem, z_predicted, periods, direction, origin, impacts):
+    """The arclength corrector's orbit from ``z_predicted`` (on the plane normal to ``direction``)
+    when it converges with ``impacts`` impacts in its ``periods`` and lies ahead of ``origin``
+    along ``direction``; else None."""
+    orbit, failure = correct(problem, z_predicted, periods, direction, z_predicted)
+    if (failure is None and round(orbit.impacts_per_period * periods) == impacts
+            and (orbit.z - origin) @ direction > 0.0):
+        return orbit
     return None
 
 

@@ -302,12 +302,6 @@ SPEED_ACROSS = 0.1
 MAX_SPEED_ITERATIONS = 12
 
 
-def new_impact_speed(real, window):
-    """The speed of the grazing impact of an impacting orbit's OrbitMap: its one impact without a
-    window, its one impact inside the window with one (NaN when there is not exactly one)."""
-    return _grazing_impact_speed(real, window)
-
-
 def _speed_system(problem, z, periods, window):
     """[P^p(y) - y; u^2] (3,) at z on the real map and the OrbitMap, or None when it failed or
     the new impact is missing (the point fell on the free side)."""
@@ -315,7 +309,7 @@ def _speed_system(problem, z, periods, window):
                         model=problem.model)
     if real.status != Status.OK or real.stuck_time > 0.0:
         return None
-    speed = new_impact_speed(real, window)
+    speed = _grazing_impact_speed(real, window)
     if not speed > 0.0:
         return None
     return np.array([*(real.end_state - z[:2]), speed * speed]), real

@@ -46,7 +46,7 @@ import numpy as np
 
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.store.fileio import has_file_kind, open_hdf5, write_bytes
+from vrsweep.store.fileio import LIBVER, has_file_kind, open_hdf5, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "branch"
@@ -143,7 +143,7 @@ def write_branch(path, arrays, config, method, overwrite=False, complete=True):
                             f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}",
                             complete=complete, parameter=parameter)
     image = io.BytesIO()
-    with h5py.File(image, "w", track_order=True, libver=("v108", "latest")) as f:
+    with h5py.File(image, "w", track_order=True, libver=LIBVER) as f:
         for name, value in attrs.items():
             f.attrs[name] = value
         n_points = len(arrays["parameter"])

@@ -54,7 +54,7 @@ from vrsweep.store.branch_file import (
     ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_values, file_attributes,
     has_file_kind, note_if_unprotected, read_checked, seal_attributes, stored_config, writable_output,
 )
-from vrsweep.store.fileio import write_bytes
+from vrsweep.store.fileio import LIBVER, write_bytes
 
 FILE_KIND = "curves"
 
@@ -95,7 +95,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False, complete=
                             f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})",
                             complete=complete)
     image = io.BytesIO()
-    with h5py.File(image, "w", track_order=True, libver=("v108", "latest")) as f:
+    with h5py.File(image, "w", track_order=True, libver=LIBVER) as f:
         for name, value in attrs.items():
             f.attrs[name] = value
         f.attrs.create("parameter_names", np.asarray(names, dtype=object), dtype=h5py.string_dtype())

@@ -39,6 +39,11 @@ import h5py
 
 from vrsweep.errors import OutputError, UsageError
 
+# The HDF5 format every file vrsweep writes uses: v108 and later checksum object headers and index
+# chunks with version-2 B-trees that carry checksums (with the earliest format one flipped bit in a
+# chunk's key made h5py read the fill value silently: a fold at g = 0 instead of 24).
+LIBVER = ("v108", "latest")
+
 try:  # POSIX; elsewhere nothing is locked and nothing can be told about other writers
     import fcntl
 except ImportError:  # pragma: no cover - Windows

@@ -31,7 +31,7 @@ from typing import Iterable
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
-from vrsweep.store.fileio import atomic_write, open_hdf5, output_target, prepare_output_directory, writing_hdf5
+from vrsweep.store.fileio import LIBVER, atomic_write, open_hdf5, output_target, prepare_output_directory, writing_hdf5
 from vrsweep.store.provenance import (
     RESULTS_CHANGE, RESULTS_SINCE_VERSION, cf_attributes, results_epoch, same_results_as_now,
 )
@@ -287,7 +287,7 @@ def _merge(shards, out_path, allow_missing):
         # As ResultWriter.create: checksummed object headers, and the file's space allocated before
         # HDF5 writes (writing_hdf5), so a full disk is one clean error, never a crash in HDF5.
         with writing_hdf5(tmp, "w", reserve=creation_reserve(axes, specs), track_order=True,
-                          libver=("v108", "latest")) as out:
+                          libver=LIBVER) as out:
             build_skeleton(out, axes, specs, root_attrs, extra_coords, None)
         for name in ref.point_variables:  # reopened for each: see _Shard on HDF5's memory per chunk
             # Space allocated at creation: point values overwrite it in place.

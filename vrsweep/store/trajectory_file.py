@@ -53,7 +53,7 @@ import numpy as np
 from vrsweep import __version__
 from vrsweep.errors import ResultFileError
 from vrsweep.results import MESSAGES, Status
-from vrsweep.store.fileio import has_file_kind, open_hdf5, output_target, write_bytes
+from vrsweep.store.fileio import LIBVER, has_file_kind, open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 from vrsweep.store.sealing import ATTRIBUTES_CHECKSUM, WHEN_AND_HOW, check_attributes, note_if_unprotected, seal_attributes
 
@@ -145,7 +145,7 @@ def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
     # Built in memory, then written whole: the disk only ever sees plain bytes, so a full disk
     # is one clear error, and its message knows the file's exact size.
     image = io.BytesIO()
-    with h5py.File(image, "w", libver=("v108", "latest")) as f:  # a buffer, not a file: no locking to decide
+    with h5py.File(image, "w", libver=LIBVER) as f:  # a buffer, not a file: no locking to decide
         for name, value in attrs.items():
             f.attrs[name] = value
         for model, run in data.runs.items():

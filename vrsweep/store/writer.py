@@ -30,7 +30,7 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.store.fileio import (
-    check_still_at_path, close_without_writing, closed_without_writing_on_failure, fsync_path, identity,
+    LIBVER, check_still_at_path, close_without_writing, closed_without_writing_on_failure, fsync_path, identity,
     lock_for_writing, output_target, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
     writing_hdf5,
 )
@@ -157,7 +157,7 @@ class ResultWriter:
         # keeps the very file it built, never a file that someone else put at the path since.
         with replacing(path, reserve, doing="create") as tmp:
             # HDF5 1.8 object headers carry checksums, so damaged metadata is caught too.
-            f = open_store_file(tmp, "w", track_order=True, libver=("v108", "latest"))
+            f = open_store_file(tmp, "w", track_order=True, libver=LIBVER)
             with closed_without_writing_on_failure(f):
                 fd = f.id.get_vfd_handle()
                 reserve_space(fd, reserve)  # a full disk fails here, before HDF5 writes anything
