@@ -15,6 +15,9 @@ map), for each model (original: eq2.1, effective: eq2.10):
   dop853 (the GPU's evaluates the forcing by the library, the CPU's by rotation).
 - A Lyapunov map: lambda_1 from GPU and CPU (rk45) on a sample; the GPU's speed.
 - The kernels' registers and local memory per thread (numba-cuda's report).
+- Through the job (--job-points, each model's fastest GPU method): vrsweep.sweep(device="cuda")
+  writing its HDF5 file, with the chunks, diagnostics and writing a user's run has, against the
+  bare launches above: what a user gets.
 
 Prints a table as it goes and writes everything to OUT/gpu.json. Ratios compare runs of this one
 process on this one machine; the card's name and the CPU's core count are printed with them.
@@ -119,11 +122,15 @@ def main():
     parser.add_argument("--out", default=os.environ.get("OUT", "."))
     parser.add_argument("--models", default="effective,original")
     parser.add_argument("--quick", action="store_true", help="tiny samples: a smoke test (CUDA simulator)")
+    parser.add_argument("--job-points", type=int, default=262144,
+                        help="points of the map run through the job per model (0: none)")
+    parser.add_argument("--job-only", action="store_true", help="only the runs through the job")
     args = parser.parse_args()
     global AGREEMENT_SAMPLE, LYAPUNOV_SAMPLE, FIRST_LAUNCH
     if args.quick:
         CPU_SAMPLE.update(original=48, effective=48)
         AGREEMENT_SAMPLE = LYAPUNOV_SAMPLE = FIRST_LAUNCH = 32
+        args.job_points = min(args.job_points, 16)
     from numba import cuda
 
     import numba_cuda
@@ -146,7 +153,7 @@ def main():
         (out / "gpu.json").write_text(json.dumps(results, indent=1))
 
     models = args.models.split(",")
-    for model in models:
+    for model in [] if args.job_only else models:
         kernels = kernels_for(model)
         entry = results["models"][model] = {}
         sample = grid(args.points)[:CPU_SAMPLE[model]]
@@ -175,6 +182,7 @@ def main():
             first = min(len(points), FIRST_LAUNCH)
             elapsed, _, _, statuses = run(gpu_lines, coefficients_of(kernels, points[:first]), settings, measure)
             rate = first / elapsed
+            row["gpu_first_launch_points_per_s"] = rate  # gpu_variants.py's workload: its figures compare
             n_map = first
             if len(points) > first and (len(points) - first) / rate < left:
                 rest = coefficients_of(kernels, points[first:])
@@ -198,7 +206,53 @@ def main():
         log(f"{model}: best GPU / best CPU = {entry['gpu_over_best_cpu']:.2f}x")
         save()
 
-    # Lyapunov: rk45 with the tangent vectors, original model.
+    if not args.job_only:
+        lyapunov_map(args, results, settings, measure)
+        save()
+    if args.job_points:
+        results["job"] = {}
+        for model in models:
+            results["job"][model] = row = through_the_job(model, JOB_METHOD[model], args.job_points)
+            save()
+            log(f"{model:9s} {JOB_METHOD[model]:6s} through the job: {row['points_per_s']:.0f} pts/s on {row['points']} "
+                f"points ({row['seconds']:.1f} s, compile included: {row['first_seconds']:.1f} s for the first "
+                f"{row['first_points']})")
+    log(json.dumps(results))
+
+
+JOB_METHOD = {"effective": "dop853", "original": "rk45"}  # each model's fastest on the GPU
+
+
+def through_the_job(model, method, n_points):
+    """vrsweep.sweep on the GPU, with its file, as a user's run: a small run first (it compiles the
+    kernel, so the timed run's figure is of the computing), then the map of about n_points."""
+    import tempfile
+
+    import vrsweep
+
+    side = int(round(np.sqrt(n_points)))
+    row = {"method": method}
+    with tempfile.TemporaryDirectory() as folder:
+        for name, num in (("first", 8), ("map", side)):
+            config = {"model": model,
+                      "sweep": {"g": {"start": 5.0, "stop": 35.0, "num": num},
+                                "Omega": {"start": 3.0, "stop": 6.0, "num": num}},
+                      "integration": {key: INTEGRATION[key] for key in
+                                      ("rtol", "atol", "transient_periods", "measure_periods")}}
+            began = time.perf_counter()
+            vrsweep.sweep(config, output=Path(folder) / f"{name}.h5", progress=False, method=method, device="cuda",
+                          allow_large=True)
+            elapsed = time.perf_counter() - began
+            if name == "first":
+                row["first_seconds"], row["first_points"] = elapsed, num * num
+            else:
+                row["seconds"], row["points"] = elapsed, num * num
+    row["points_per_s"] = row["points"] / row["seconds"]
+    return row
+
+
+def lyapunov_map(args, results, settings, measure):
+    """lambda_1 from GPU and CPU (rk45, original model) on a sample; the GPU's speed on a launch."""
     kernels = kernels_for("original")
     sample_coefficients = coefficients_of(kernels, grid(args.points)[:LYAPUNOV_SAMPLE])
     row = results["lyapunov"] = {}
@@ -221,11 +275,9 @@ def main():
     elapsed, _, _, _ = run(gpu_lines, big, settings, measure)
     row["gpu_points_per_s"] = len(big) / elapsed
     row.update(resources(gpu_lines))
-    save()
     log(f"lyapunov rk45 original: CPU {row['cpu_points_per_s']:.0f} pts/s, GPU {row['gpu_points_per_s']:.0f} pts/s "
         f"({row['gpu_points_per_s'] / row['cpu_points_per_s']:.1f}x), lambda1 |diff| max {row['lambda1_abs_max']} "
         f"median {row['lambda1_abs_median']}, statuses equal {row['statuses_equal']:.4f}")
-    log(json.dumps(results))
 
 
 if __name__ == "__main__":

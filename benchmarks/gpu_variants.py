@@ -1,6 +1,6 @@
 """The GPU kernel's launch shapes against each other and against the CPU, one run, one machine.
 
-    python benchmarks/gpu_variants.py [--points 65536] [--variants A,C,D] [--source DIR] [--out DIR]
+    python benchmarks/gpu_variants.py [--points 65536] [--variants A,C,D] [--source DIR] [--no-cpu] [--out DIR]
 
 numerics/cuda.py has three levers (its QUEUE, SORT and MAX_REGISTERS): a work queue, lines handed
 out in parameter order, and a register cap. This script times, on the first POINTS points of
@@ -54,6 +54,8 @@ def main():
     parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of A, C, D")
     parser.add_argument("--source", help="the folder holding the vrsweep package to time (default: this one)")
     parser.add_argument("--out", default=os.environ.get("OUT", "."))
+    parser.add_argument("--no-cpu", action="store_true",
+                        help="leave out the CPU's sample (when another run in the same call times it)")
     args = parser.parse_args()
     chosen = [name.strip() for name in args.variants.split(",")]
     unknown = sorted(set(chosen) - set(VARIANTS))
@@ -71,11 +73,13 @@ def main():
         points = grid(1_000_000)[:args.points]
         coefficients = coefficients_of(kernels, points)
         row = results[f"{model} {method}"] = {}
-        cpu_lines = kernels.run_lines("dop853")
-        run(cpu_lines, coefficients[:16], settings, measure)  # compile
-        sample = coefficients[:cpu_sample]
-        elapsed, *_ = run(cpu_lines, sample, settings, measure)
-        row["cpu_dop853_points_per_s"] = len(sample) / elapsed
+        row["cpu_dop853_points_per_s"] = float("nan")
+        if not args.no_cpu:
+            cpu_lines = kernels.run_lines("dop853")
+            run(cpu_lines, coefficients[:16], settings, measure)  # compile
+            sample = coefficients[:cpu_sample]
+            elapsed, *_ = run(cpu_lines, sample, settings, measure)
+            row["cpu_dop853_points_per_s"] = len(sample) / elapsed
         reference = None
         functions = cuda.paper_functions(False)
         for name in chosen:
