@@ -14,7 +14,7 @@ import pytest
 
 from vrsweep.numerics import kernel
 from vrsweep.config import parse_config
-from vrsweep.analysis.diagnostics import N_BATCHES, detect_period, point_diagnostics, r_error
+from vrsweep.analysis.diagnostics import N_BATCHES, batch_error, detect_period, point_diagnostics, r_error
 from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.results import Motion, Status
 from vrsweep.execution.sweep import run_sweep
@@ -115,6 +115,28 @@ def test_r_err_is_nan_without_a_drive_or_with_too_short_a_window():
     assert np.isnan(r_error(s, s, SLOW_PERIOD, 0.0, period=0))  # c = 0: R itself is NaN
     assert np.isnan(r_error(s[:5], s[:5], SLOW_PERIOD, C_DRIVE, period=3))  # under two cycles
     assert N_BATCHES == 10
+
+
+@pytest.mark.parametrize("n_measured", [100, 37, 16, 5])
+def test_a_chunk_s_r_err_is_each_point_s_r_error_to_the_last_bit(n_measured):
+    """batch_error computes all the points of one cycle length at once; each value must be what
+    r_error, the one-point definition, gives, bit for bit (a sweep's R_err must not depend on
+    which points share its chunk). Cycle lengths 0..12 (incomplete batches, cycles longer than
+    a tenth of the window, windows under two cycles), c = 0, failed points."""
+    rng = np.random.default_rng(n_measured)
+    n_points = 600
+    measured = np.full((n_points, n_measured, kernel.N_RECORD), np.nan)
+    measured[:, :, kernel.REC_QS] = rng.normal(0.3, rng.uniform(1e-9, 1.0, (n_points, 1)), (n_points, n_measured))
+    measured[:, :, kernel.REC_QC] = rng.normal(-0.2, rng.uniform(1e-9, 1.0, (n_points, 1)), (n_points, n_measured))
+    slow_period = rng.uniform(0.5, 8.0, n_points)
+    c = np.where(rng.random(n_points) < 0.05, 0.0, rng.uniform(0.1, 3.0, n_points))
+    period = rng.integers(0, 13, n_points)
+    ok = rng.random(n_points) > 0.05
+    got = batch_error(measured, slow_period, c, period, ok)
+    expected = np.array([r_error(measured[i, :, kernel.REC_QS], measured[i, :, kernel.REC_QC], slow_period[i],
+                                 c[i], period[i]) if ok[i] else np.nan for i in range(n_points)])
+    assert np.isfinite(expected).sum() > n_points // 2 if n_measured >= 16 else np.isfinite(expected).any()
+    assert np.array_equal(got, expected, equal_nan=True)
 
 
 # --- the paper's system ---------------------------------------------------------------------------

@@ -208,12 +208,33 @@ def window_records(records, integration):
 def batch_error(measured, slow_period, c, period, ok):
     """R_err for every point of a chunk (see r_error and the module doc); NaN where not ok.
 
-    measured: (n_points, measure_periods, N_RECORD), the measurement window's records."""
-    n_points = measured.shape[0]
+    measured: (n_points, measure_periods, N_RECORD), the measurement window's records.
+
+    r_error's arithmetic on all the points of one cycle length at once: their batches have the same
+    shape, and every sum runs along the last, contiguous axis of its array, as r_error's do along
+    its one-point arrays, so each value is r_error's to the last bit (tests/test_diagnostics.py).
+    One point at a time it was most of the host's work per chunk, which a GPU waits for."""
+    n_points, n_measured = measured.shape[:2]
     r_err = np.full(n_points, np.nan)
-    for i in np.flatnonzero(ok):  # a failed point's records are partly NaN: nothing to estimate
-        r_err[i] = r_error(measured[i, :, kernel.REC_QS], measured[i, :, kernel.REC_QC],
-                           slow_period[i], c[i], period[i])
+    unit = np.where(period > 0, period, 1).astype(np.int64)
+    # a failed point's records are partly NaN, and c == 0 leaves R undefined: nothing to estimate
+    estimable = ok & (c != 0.0) & (n_measured >= 2 * unit)
+    for length in np.unique(unit[estimable]):
+        rows = np.flatnonzero(estimable & (unit == length))
+        length = int(length)
+        batch_length = (n_measured // N_BATCHES // length) * length
+        n_batches = N_BATCHES
+        if batch_length == 0:  # short window: batches of one cycle each
+            batch_length = length
+            n_batches = n_measured // length
+        used = n_batches * batch_length
+        window = measured[rows, n_measured - used:]
+        qs = np.ascontiguousarray(window[:, :, kernel.REC_QS]).reshape(len(rows), n_batches, batch_length).sum(axis=2)
+        qc = np.ascontiguousarray(window[:, :, kernel.REC_QC]).reshape(len(rows), n_batches, batch_length).sum(axis=2)
+        duration = (n_batches - 1) * batch_length * slow_period[rows]
+        r_loo = _gain(qs.sum(axis=1)[:, None] - qs, qc.sum(axis=1)[:, None] - qc, duration[:, None], c[rows, None])
+        variance = (n_batches - 1) / n_batches * np.sum((r_loo - r_loo.mean(axis=1)[:, None]) ** 2, axis=1)
+        r_err[rows] = _T975.get(n_batches - 1, 1.96) * np.sqrt(variance)
     return r_err
 
 
