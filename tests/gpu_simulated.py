@@ -48,5 +48,31 @@ def main(config_path, method, lyapunov, line_length, transient_periods=4):
     print(json.dumps({"cpu": cpu, "gpu": gpu}))
 
 
+def sweep(config_path):
+    """The job's loop (execution/sweep.run_sweep) on the GPU, from chunks of two points growing, and
+    on the CPU: the chunks handed to on_chunk, in order, and every point's values of both."""
+    from vrsweep.execution import chunks
+    from vrsweep.execution.sweep import run_sweep
+
+    chunks.GPU_FIRST_CHUNK_LINES = 2  # several chunks, so that one is in flight while another finishes
+    results = {}
+    for device in ("cuda", "cpu"):
+        config = load_config(config_path, [f"device={device}", "transient_periods=4", "measure_periods=16"])
+        handed, values = [], {}
+
+        def keep(flat, chunk, handed=handed, values=values):
+            handed.append(flat.tolist())
+            for name in ("R", "R_err", "status", "period", "x_final", "n_steps"):
+                for k, index in enumerate(flat):
+                    values.setdefault(name, {})[int(index)] = float(chunk[name][k])
+
+        run_sweep(config, on_chunk=keep)
+        results[device] = {"handed": handed, "values": values}
+    print(json.dumps(results))
+
+
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2], sys.argv[3], *[int(argument) for argument in sys.argv[4:]])
+    if sys.argv[1] == "sweep":
+        sweep(sys.argv[2])
+    else:
+        main(sys.argv[1], sys.argv[2], sys.argv[3], *[int(argument) for argument in sys.argv[4:]])

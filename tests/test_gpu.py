@@ -11,6 +11,7 @@
 Speed and agreement on a real card: benchmarks/gpu.py (benchmarks/README.md).
 """
 
+import itertools
 import json
 import os
 import re
@@ -70,6 +71,28 @@ def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config
     assert (cpu["statuses"] == 0).all(), cpu["statuses"]  # Status.OK: the comparison is of real runs
     for key in ("statuses", "summaries", "records"):
         np.testing.assert_array_equal(gpu[key], cpu[key], err_msg=f"{case}: {key}")
+
+
+def test_the_job_on_the_gpu_hands_every_chunk_over_once_in_order_with_the_cpu_s_values(tmp_path):
+    """On a GPU run_sweep launches the next chunk before it finishes the last (the host's diagnostics
+    and writing overlap the card's work): every point is handed to on_chunk exactly once, the chunks
+    in the order they were cut, growing from two points, and each point's values are the CPU's bit
+    for bit (rk45)."""
+    config = tmp_path / "gpu.yaml"
+    config.write_text(textwrap.dedent(BASIN_MAP.replace("[5.0, 20.0, 30.0]", "[5.0, 12.0, 20.0, 25.0, 30.0, 35.0]")))
+    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), "sweep", str(config)], capture_output=True,
+                          text=True, env=dict(os.environ, NUMBA_ENABLE_CUDASIM="1"), timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    handed = result["cuda"]["handed"]
+    sizes = [len(chunk) for chunk in handed]
+    assert sizes[:2] == [2, 2] and max(sizes) > 2 and len(handed) >= 4, sizes
+    flat = [index for chunk in handed for index in chunk]
+    assert sorted(flat) == list(range(24))
+    # cut in order: the same sequence as the CPU's run of the grid's shuffled lines
+    assert flat == [index for chunk in result["cpu"]["handed"] for index in chunk]
+    assert result["cuda"]["values"] == result["cpu"]["values"]
+    assert set(result["cpu"]["values"]["status"].values()) == {0.0}
 
 
 def test_dop853_on_the_gpu_agrees_with_the_cpu_to_the_tolerance(tmp_path):
@@ -165,19 +188,35 @@ def test_a_gpu_failing_during_a_run_is_the_runs_failure_in_one_line(monkeypatch)
     from vrsweep.execution import device
 
     class Failing:
-        def __init__(self, error):
-            self.error = error
+        """A device whose chunk fails at its launch (copies, allocation) or at the wait (the kernel)."""
+
+        def __init__(self, error, at):
+            self.error, self.at = error, at
 
         def gpu_lines(self, method, lyapunov):
-            def lines(*arrays):
-                raise self.error
-            return lines
+            failing = self
+
+            class Launch:
+                kernel_seconds = None
+
+                def wait(self):
+                    raise failing.error
+
+            class Lines:
+                def launch(self, *arrays):
+                    if failing.at == "launch":
+                        raise failing.error
+                    return Launch()
+
+            return Lines()
 
     monkeypatch.setattr(device, "check_device", lambda name: None)
-    for error, words in ((MemoryError("cuMemAlloc results in CUDA_ERROR_OUT_OF_MEMORY"), "ran out of memory"),
-                         (RuntimeError("CUDA_ERROR_LAUNCH_FAILED\nmore lines"), "the GPU failed (RuntimeError: "
-                                                                              "CUDA_ERROR_LAUNCH_FAILED)")):
-        run_lines = device.gpu_lines(Failing(error), "rk45", False)
+    for (error, words), at in itertools.product(
+            ((MemoryError("cuMemAlloc results in CUDA_ERROR_OUT_OF_MEMORY"), "ran out of memory"),
+             (RuntimeError("CUDA_ERROR_LAUNCH_FAILED\nmore lines"), "the GPU failed (RuntimeError: "
+                                                                    "CUDA_ERROR_LAUNCH_FAILED)")),
+            ("launch", "wait")):
+        run_lines = device.gpu_lines(Failing(error, at), "rk45", False)
         with pytest.raises(RunFailed) as caught:
             run_lines()
         assert words in str(caught.value) and "\n" not in str(caught.value)

@@ -30,15 +30,20 @@ MAX_CHUNK_LINES = 8192
 # line is the least a run can hold (estimate.memory_problem refuses a run where that cannot fit).
 RECORD_ROW_BYTES = 15 * 8
 CHUNK_RECORD_BYTES = 256 * 2 ** 20
-# On a GPU (integration.device: cuda) a chunk is one launch, a thread per line: it must hold far more
-# lines than the card runs at once (an H100 holds about 34,000 threads of this kernel; the slowest
-# point of a launch holds it), so chunks start at GPU_FIRST_CHUNK_LINES and double up to
-# GPU_MAX_CHUNK_LINES while a launch lasts less than GPU_GROW_CHUNK_BELOW_SECONDS, their records
-# bounded by GPU_CHUNK_RECORD_BYTES (on the card and in the host's memory alike).
+# On a GPU (integration.device: cuda) a chunk is one launch, a thread per line from a queue. A launch
+# ends with a tail, its slowest points on a few threads while the rest of the card idles: measured
+# on an H100, launch time = lines / rate + about 5.6 s (the original model; about 1.1 s for the
+# effective one), so a chunk must run far longer than that (benchmarks/README.md, "GPU"). Chunks start
+# at GPU_FIRST_CHUNK_LINES and double while a launch lasts less than GPU_GROW_CHUNK_BELOW_SECONDS on
+# the card, up to GPU_MAX_CHUNK_LINES; their records are bounded by GPU_CHUNK_RECORD_BYTES and by a
+# share of the card's and the host's memory: GPU_CHUNKS_IN_FLIGHT chunks are held at once (the
+# next one computes while the host finishes the last), and the host's diagnostics take about as
+# much again as a chunk's records.
 GPU_FIRST_CHUNK_LINES = 2 ** 15
-GPU_MAX_CHUNK_LINES = 2 ** 19
-GPU_GROW_CHUNK_BELOW_SECONDS = 5.0
-GPU_CHUNK_RECORD_BYTES = 2 ** 30
+GPU_MAX_CHUNK_LINES = 2 ** 20
+GPU_GROW_CHUNK_BELOW_SECONDS = 30.0
+GPU_CHUNK_RECORD_BYTES = 4 * 2 ** 30
+GPU_CHUNKS_IN_FLIGHT = 2
 
 
 def point_record_bytes(integration) -> int:
@@ -47,12 +52,17 @@ def point_record_bytes(integration) -> int:
     return int(integration.measure_periods) * RECORD_ROW_BYTES
 
 
-def max_chunk_lines(integration, line_length, gpu=False) -> int:
+def max_chunk_lines(integration, line_length, gpu=False, memory=None) -> int:
     """The most lines a chunk may hold: MAX_CHUNK_LINES, fewer when their records would pass
-    CHUNK_RECORD_BYTES, never fewer than one (on a GPU: the GPU_* bounds)."""
+    CHUNK_RECORD_BYTES, never fewer than one (on a GPU: the GPU_* bounds, and at most a
+    2 * GPU_CHUNKS_IN_FLIGHT-th of ``memory``, the bytes of the smaller of the card's memory and
+    what the host allows a run, where known)."""
     line_bytes = max(1, line_length) * point_record_bytes(integration)
     if gpu:
-        return max(1, min(GPU_MAX_CHUNK_LINES, GPU_CHUNK_RECORD_BYTES // line_bytes))
+        bound = GPU_CHUNK_RECORD_BYTES
+        if memory is not None:
+            bound = min(bound, int(memory) // (2 * GPU_CHUNKS_IN_FLIGHT))
+        return max(1, min(GPU_MAX_CHUNK_LINES, bound // line_bytes))
     return max(1, min(MAX_CHUNK_LINES, CHUNK_RECORD_BYTES // line_bytes))
 
 

@@ -41,21 +41,61 @@ def check_device(device: str) -> None:
         raise UsageError(f"integration.device: cuda: {problem}")
 
 
+def gpu_memory_bytes() -> int | None:
+    """The smaller of the card's memory and what the host allows a run (estimate.memory_allowance),
+    in bytes: what a GPU's chunks are sized within (chunks.max_chunk_lines). The host's alone where
+    the card does not say (numba's CUDA simulator)."""
+    from vrsweep.execution.estimate import memory_allowance
+
+    host = memory_allowance()[0]
+    try:
+        from numba import cuda
+
+        _free, total = cuda.current_context().get_memory_info()
+        return min(host, int(total))
+    except Exception:  # noqa: BLE001 -- no figure from the card: the host's bound still holds
+        return host
+
+
 def gpu_lines(kernels, method: str, lyapunov: bool):
     """kernels.gpu_lines(method, lyapunov), with a device failure reported as RunFailed (whose
     message the command completes: the chunks finished so far are saved, --resume continues)."""
     check_device("cuda")
-    lines = kernels.gpu_lines(method, lyapunov)
+    return _ReportedLines(kernels.gpu_lines(method, lyapunov))
 
-    def run_lines(*arrays):
-        try:
-            lines(*arrays)
-        except (KeyboardInterrupt, SystemExit):
-            raise
-        except MemoryError as error:
-            raise RunFailed(f"the GPU ran out of memory for a chunk ({error})") from error
-        except Exception as error:  # noqa: BLE001 -- driver, compiler and launch errors alike
-            first_line = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-            raise RunFailed(f"the GPU failed ({type(error).__name__}: {first_line})") from error
 
-    return run_lines
+class _ReportedLines:
+    """numerics/cuda.DeviceLines with its failures, at launch or at the wait, as RunFailed."""
+
+    def __init__(self, lines):
+        self.lines = lines
+
+    def __call__(self, *arrays):
+        self.launch(*arrays).wait()
+
+    def launch(self, *arrays):
+        return _ReportedLaunch(_reported(self.lines.launch, *arrays))
+
+
+class _ReportedLaunch:
+    def __init__(self, launch):
+        self.launch = launch
+
+    @property
+    def kernel_seconds(self):
+        return self.launch.kernel_seconds
+
+    def wait(self):
+        _reported(self.launch.wait)
+
+
+def _reported(call, *arguments):
+    try:
+        return call(*arguments)
+    except (KeyboardInterrupt, SystemExit):
+        raise
+    except MemoryError as error:
+        raise RunFailed(f"the GPU ran out of memory for a chunk ({error})") from error
+    except Exception as error:  # noqa: BLE001 -- driver, compiler and launch errors alike
+        first_line = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise RunFailed(f"the GPU failed ({type(error).__name__}: {first_line})") from error

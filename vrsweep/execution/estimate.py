@@ -62,18 +62,19 @@ class Estimate:
 
 def memory_bytes(config, threads=None) -> int:
     """Bytes of per-period records a run of ``config`` holds at once, per process: one chunk's
-    (chunks.default_chunk_lines within chunks.max_chunk_lines: at most CHUNK_RECORD_BYTES, at least one line)."""
+    (chunks.default_chunk_lines within chunks.max_chunk_lines: at most CHUNK_RECORD_BYTES, at least one
+    line); on a GPU two chunks' (one computing while the host finishes the other)."""
     from vrsweep.config.grid import Grid
-    from vrsweep.execution.chunks import default_chunk_lines, max_chunk_lines, point_record_bytes
+    from vrsweep.execution.chunks import GPU_CHUNKS_IN_FLIGHT, default_chunk_lines, max_chunk_lines, point_record_bytes
 
     threads = max(1, int(threads or available_threads()))
     grid = Grid.from_config(config)
     line_length = len(grid.axis_values[grid.continuation_axis]) if grid.continuation_axis is not None else 1
     n_lines = max(1, config.n_runs // line_length)
-    if config.integration.device == "cuda":  # a GPU's chunks grow to their bound (chunks.py)
-        lines = min(n_lines, max_chunk_lines(config.integration, line_length, gpu=True))
-    else:
-        lines = min(n_lines, default_chunk_lines(threads, line_length), max_chunk_lines(config.integration, line_length))
+    if config.integration.device == "cuda":  # a GPU's chunks grow to their bound, two at once (chunks.py)
+        lines = min(n_lines, max_chunk_lines(config.integration, line_length, gpu=True, memory=memory_limit()))
+        return GPU_CHUNKS_IN_FLIGHT * lines * line_length * point_record_bytes(config.integration)
+    lines = min(n_lines, default_chunk_lines(threads, line_length), max_chunk_lines(config.integration, line_length))
     return lines * line_length * point_record_bytes(config.integration)
 
 

@@ -63,6 +63,11 @@ class LineRunner:
 
     def run(self, lines, threads=None):
         """lines (n_lines, line_length) flat indices -> (flat_indices, values) for on_chunk."""
+        return self.finish(self.start(lines, threads))
+
+    def start(self, lines, threads=None):
+        """Start the lines' kernel: on the CPU it runs here, to the end; on a GPU it is launched and
+        left running (finish waits for it), so that the host can meanwhile finish the chunk before."""
         threads = threads or numba.config.NUMBA_NUM_THREADS
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
         n_lines, line_length = lines.shape
@@ -76,12 +81,43 @@ class LineRunner:
         records = np.full((n_lines, line_length, self.n_record_rows, kernel.N_RECORD), np.nan)
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
-        with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-            self.run_lines(coefficients, initial_states, self.settings, local_lines, records, summaries, statuses)
+        chunk = ChunkRun(flat, coefficients, records, summaries, statuses)
+        chunk.threads = threads
+        arrays = (coefficients, initial_states, self.settings, local_lines, records, summaries, statuses)
+        if self.device == "cuda":
+            chunk.launch = self.run_lines.launch(*arrays)
+        else:
+            with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
+                self.run_lines(*arrays)
+        return chunk
+
+    def finish(self, chunk):
+        """A started chunk's (flat_indices, values), once its kernel is done."""
+        if chunk.launch is not None:
+            chunk.launch.wait()
+            chunk.seconds = chunk.launch.kernel_seconds
         values = point_values(
-            records.reshape(-1, self.n_record_rows, kernel.N_RECORD), summaries.reshape(-1, kernel.N_SUMMARY),
-            statuses.reshape(-1), coefficients, self.config.integration)
-        return flat, values
+            chunk.records.reshape(-1, self.n_record_rows, kernel.N_RECORD),
+            chunk.summaries.reshape(-1, kernel.N_SUMMARY), chunk.statuses.reshape(-1), chunk.coefficients,
+            self.config.integration, threads=chunk.threads)
+        if chunk.seconds is None:
+            chunk.seconds = time.perf_counter() - chunk.began
+        return chunk.flat, values
+
+
+class ChunkRun:
+    """A chunk between LineRunner.start and finish: its points, the kernel's output arrays, the
+    launch in flight on a GPU, and after finish its time in seconds, which the chunks' growth reads:
+    on the CPU the whole chunk's (kernel and diagnostics), on a GPU the kernel's on the card (the
+    host's part overlaps the next chunk's kernel), or the whole chunk's where the card cannot tell."""
+
+    def __init__(self, flat, coefficients, records, summaries, statuses):
+        self.flat, self.coefficients = flat, coefficients
+        self.records, self.summaries, self.statuses = records, summaries, statuses
+        self.launch = None
+        self.threads = 1
+        self.began = time.perf_counter()
+        self.seconds = None
 
 
 def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
@@ -92,6 +128,10 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     on_chunk:  callback(flat_indices (n,), values: dict name -> (n, ...)) after every chunk.
     progress:  callback(points_done_now, points_total) or None.
     Returns a dict of status counts {Status: n} over the points run.
+
+    On a GPU the next chunk's kernel is launched before the host finishes a chunk (its diagnostics,
+    on_chunk's writing): the card computes while the host works. Chunks are still handed to
+    on_chunk one at a time, in order; an interrupted run loses the chunk in flight, not one written.
     """
     runner = LineRunner(config)
     threads = threads or numba.config.NUMBA_NUM_THREADS
@@ -99,29 +139,65 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     lines = plan.lines
     adaptive = chunk_lines is None
     gpu = runner.device == "cuda"
-    largest_chunk = max_chunk_lines(config.integration, plan.line_length, gpu=gpu)  # the memory bound
+    if gpu:
+        from vrsweep.execution.device import gpu_memory_bytes
+    largest_chunk = max_chunk_lines(config.integration, plan.line_length, gpu=gpu,
+                                    memory=gpu_memory_bytes() if gpu else None)  # the memory bound
     first_chunk = gpu_first_chunk_lines(plan.line_length) if gpu else default_chunk_lines(threads, plan.line_length)
     chunk_lines = chunk_lines or min(first_chunk, largest_chunk)
     largest_chunk = max(chunk_lines, largest_chunk)
     grow_below = GPU_GROW_CHUNK_BELOW_SECONDS if gpu else GROW_CHUNK_BELOW_SECONDS
     counts = {}
     start = 0
-    while start < len(lines):
-        began = time.perf_counter()
-        flat, values = runner.run(lines[start:start + chunk_lines], threads)
-        start += chunk_lines
-        if adaptive and time.perf_counter() - began < grow_below:
-            chunk_lines = min(2 * chunk_lines, largest_chunk)
-        count_statuses(counts, values["status"])
-        if on_chunk is not None:
-            on_chunk(flat, values)
-        if progress is not None:
-            progress(plan.newly_done(flat), plan.total)
+    in_flight = None  # a GPU's chunk launched and not yet finished
+    while start < len(lines) or in_flight is not None:
+        started = None
+        if start < len(lines):
+            started = runner.start(lines[start:start + chunk_lines], threads)
+            start += chunk_lines
+        if not gpu:
+            in_flight, started = started, None
+        if in_flight is not None:
+            flat, values = runner.finish(in_flight)
+            if adaptive and in_flight.seconds < grow_below:
+                chunk_lines = min(2 * chunk_lines, largest_chunk)
+            count_statuses(counts, values["status"])
+            if on_chunk is not None:
+                on_chunk(flat, values)
+            if progress is not None:
+                progress(plan.newly_done(flat), plan.total)
+        in_flight = started
     return counts
 
 
-def point_values(records, summaries, statuses, coefficients, integration):
-    """Per-point output variables (the HDF5 contract's names, docs/design.md) from the kernel's raw outputs."""
+# Points per block of the diagnostics when a chunk's are shared among threads (point_values).
+DIAGNOSTICS_BLOCK = 4096
+
+
+def point_values(records, summaries, statuses, coefficients, integration, threads=1):
+    """Per-point output variables (the HDF5 contract's names, docs/design.md) from the kernel's raw outputs.
+
+    Every value is a function of its own point's outputs alone (a point's values do not depend on
+    which points share its chunk: tests/test_threads.py), so a large chunk's points are taken in
+    blocks of DIAGNOSTICS_BLOCK by up to ``threads`` threads: numpy's array operations leave
+    Python's lock while they work. On a GPU the host's diagnostics would otherwise keep the card
+    waiting (benchmarks/README.md, "GPU")."""
+    n_points = len(statuses)
+    n_blocks = min(max(1, int(threads)), -(-n_points // DIAGNOSTICS_BLOCK))
+    if n_blocks <= 1:
+        return _point_values(records, summaries, statuses, coefficients, integration)
+    from concurrent.futures import ThreadPoolExecutor
+
+    edges = [(n_points * k) // n_blocks for k in range(n_blocks + 1)]
+    blocks = [slice(low, high) for low, high in zip(edges[:-1], edges[1:])]
+    with ThreadPoolExecutor(max_workers=n_blocks) as pool:
+        parts = list(pool.map(
+            lambda rows: _point_values(records[rows], summaries[rows], statuses[rows], coefficients[rows], integration),
+            blocks))
+    return {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
+
+
+def _point_values(records, summaries, statuses, coefficients, integration):
     values = {
         "R": summaries[:, kernel.SUM_R],
         "Qs": summaries[:, kernel.SUM_QS],

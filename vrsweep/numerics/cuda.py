@@ -191,25 +191,56 @@ class DeviceLines:
         return max(1, min(needed, QUEUE_BLOCKS_PER_SM * multiprocessors))
 
     def __call__(self, coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+        """Run the lines and wait for them: lines.run_lines_*'s call."""
+        self.launch(coefficients, initial_states, settings, lines, period_records, summaries, statuses).wait()
+
+    def launch(self, coefficients, initial_states, settings, lines, period_records, summaries, statuses):
+        """Copy the chunk to the device and launch its kernel on a stream of its own, without waiting:
+        the returned Launch's wait() fills the caller's arrays. The host can meanwhile prepare or
+        post-process another chunk (execution/sweep.py keeps one chunk in flight this way)."""
         n_lines = lines.shape[0]
         if n_lines == 0:
-            return
+            return Launch(None, None, None, ())
         order = self.order(coefficients, initial_states, lines)
         stream = cuda.stream()
+        began, ended = cuda.event(), cuda.event()
         device_records = cuda.to_device(period_records, stream=stream)
         device_summaries = cuda.to_device(summaries, stream=stream)
         device_statuses = cuda.to_device(statuses, stream=stream)
-        self.kernel[self.blocks(n_lines), THREADS_PER_BLOCK, stream](
+        arguments = (
             cuda.to_device(np.ascontiguousarray(coefficients), stream=stream),
             cuda.to_device(np.ascontiguousarray(initial_states), stream=stream),
             cuda.to_device(np.ascontiguousarray(settings), stream=stream),
             cuda.to_device(np.ascontiguousarray(lines), stream=stream),
             device_records, device_summaries, device_statuses,
             cuda.to_device(order, stream=stream), cuda.to_device(np.zeros(1, dtype=np.int64), stream=stream))
-        device_records.copy_to_host(period_records, stream=stream)
-        device_summaries.copy_to_host(summaries, stream=stream)
-        device_statuses.copy_to_host(statuses, stream=stream)
-        stream.synchronize()
+        began.record(stream)
+        self.kernel[self.blocks(n_lines), THREADS_PER_BLOCK, stream](*arguments)
+        ended.record(stream)
+        copies = ((device_records, period_records), (device_summaries, summaries), (device_statuses, statuses))
+        return Launch(stream, began, ended, copies)
+
+
+class Launch:
+    """A chunk's kernel in flight (DeviceLines.launch)."""
+
+    def __init__(self, stream, began, ended, copies):
+        self.stream, self.began, self.ended, self.copies = stream, began, ended, copies
+        self.kernel_seconds = None
+
+    def wait(self):
+        """Copy the outputs into the host's arrays once the kernel is done; sets kernel_seconds, the
+        kernel's time on the device (None where the device does not time it: the simulator)."""
+        if self.stream is None:
+            return
+        # (issued here, not at launch: a copy into pageable host memory holds the host until the
+        # stream reaches it, which would make launch wait for the kernel)
+        for device_array, host_array in self.copies:
+            device_array.copy_to_host(host_array, stream=self.stream)
+        self.stream.synchronize()
+        milliseconds = self.began.elapsed_time(self.ended)
+        self.kernel_seconds = milliseconds / 1000.0 if milliseconds >= 0 else None
+        self.stream = self.copies = None  # the device's arrays can go
 
 
 def compile_for(method, tangents, model_rhs, tangent, barrier_force, compute_capability=(9, 0), **options):
