@@ -245,7 +245,14 @@ def test_a_branch_file_whose_config_cannot_drive_continue(files, tmp_path, invok
 
 def test_a_branch_files_model_must_be_its_configs(files, tmp_path, invoke, no_numerics):
     path = damaged_copy(files["branch"], tmp_path, _unprotected(lambda f: f.attrs.__setitem__("model", "original")))
-    _refused_everywhere(invoke, "branch", path, tmp_path, "attribute model is original")
+    _refused_everywhere(invoke, "branch", path, tmp_path, "attribute model is 'original'")
+
+
+@pytest.mark.parametrize("wrong", ["original", ""])
+def test_a_curves_files_model_must_be_its_configs(files, tmp_path, invoke, no_numerics, wrong):
+    """As a branch file's (found by test_every_root_attribute_changed: an empty model was read)."""
+    path = damaged_copy(files["curves"], tmp_path, _unprotected(lambda f: f.attrs.__setitem__("model", wrong)))
+    _refused_everywhere(invoke, "curves", path, tmp_path, f"attribute model is {wrong!r}")
 
 
 # -- values a command acts on ----------------------------------------------------------------

@@ -446,13 +446,21 @@ def check_values(path, values, config, what, finite):
         raise ResultFileError(f"{path} is corrupt: periods differs from its {what}'s {what}_periods")
 
 
+def check_model_attribute(path, model, config) -> None:
+    """ResultFileError unless the file's ``model`` attribute (text, or None where absent) is the
+    one its stored config's model writes (a written model's is not its name)."""
+    from vrsweep.store.provenance import model_attributes
+
+    expected = model_attributes(config.model)["model"]
+    if model is not None and model != expected:
+        raise ResultFileError(f"{path} is corrupt: attribute model is {model!r}, its config's model {expected}")
+
+
 def check_branch(path) -> tuple[str, dict]:
     """Raise ResultFileError (one line) unless ``path`` is a sound branch file of this format.
 
     Returns what the check read, so that a reader needs no second pass over the file: the
     continued parameter's name and {name: values} of every array of LAYOUT (text as bytes)."""
-    from vrsweep.store.provenance import model_attributes
-
     path = os.fspath(path)
 
     def read(f):
@@ -478,9 +486,7 @@ def check_branch(path) -> tuple[str, dict]:
     if config.continuation.parameter != parameter:
         raise ResultFileError(f"{path} is corrupt: attribute parameter is {parameter}, its config continues "
                               f"{config.continuation.parameter}")
-    expected = model_attributes(config.model)["model"]  # a written model's is not its name
-    if model is not None and model != expected:
-        raise ResultFileError(f"{path} is corrupt: attribute model is {model}, its config's model {expected}")
+    check_model_attribute(path, model, config)
     if np.any((values["stable"] != 0) & (values["stable"] != 1)):
         raise ResultFileError(f"{path} is corrupt: stable must be 0 or 1")
     # The bifurcation table may hold NaN (a point located elsewhere without its parameter): info

@@ -51,7 +51,7 @@ from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
 from vrsweep.store.branch_file import (
-    ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_values, file_attributes,
+    ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_model_attribute, check_values, file_attributes,
     has_file_kind, note_if_unprotected, read_checked, seal_attributes, stored_config, writable_output,
 )
 from vrsweep.store.fileio import LIBVER, write_bytes
@@ -175,9 +175,9 @@ def check_curves(path) -> tuple[list, dict]:
                 or names[0] == names[1]:
             raise ResultFileError(f"{path} is corrupt: attribute parameter_names must name two parameters")
         return (names, check_layout(f, path, layout(names), FILE_KIND), _attr_text(f, path, "config"),
-                ATTRIBUTES_CHECKSUM in f.attrs)
+                _attr_text(f, path, "model"), ATTRIBUTES_CHECKSUM in f.attrs)
 
-    names, values, text, protected = read_checked(path, read)
+    names, values, text, model, protected = read_checked(path, read)
     n_curves = len(values["curve_id"])
     for name in ("curve", "special_curve"):
         if np.any((values[name] < 0) | (values[name] >= n_curves)):
@@ -189,7 +189,9 @@ def check_curves(path) -> tuple[list, dict]:
             raise ResultFileError(f"{path} is corrupt: {name} holds {unknown[0]!r}, not one of {', '.join(allowed)}")
     # Nothing is computed from a curves file: its config only labels the figure, and one this
     # version cannot read is drawn without it.
-    check_values(path, values, stored_config(path, text, required=False), "curve",
-                 (*names, "x", "v", *(f"special_{name}" for name in names)))
+    config = stored_config(path, text, required=False)
+    if config is not None:  # the model the file says must be its config's (as a branch file's)
+        check_model_attribute(path, model, config)
+    check_values(path, values, config, "curve", (*names, "x", "v", *(f"special_{name}" for name in names)))
     note_if_unprotected(path, protected)
     return names, values
