@@ -171,6 +171,15 @@ def _gain(sin_integral, cos_integral, duration, c):
     return 2.0 * np.hypot(sin_integral, cos_integral) / duration / c
 
 
+def _batches(n_measured, unit):
+    """(B, L): the window's last B * L periods in B batches of L, a multiple of the cycle length
+    ``unit``; B = N_BATCHES unless the window is short, then batches of one cycle each."""
+    batch_length = (n_measured // N_BATCHES // unit) * unit
+    if batch_length == 0:
+        return n_measured // unit, unit
+    return N_BATCHES, batch_length
+
+
 def r_error(sin_part, cos_part, slow_period, c, period):
     """R_err of one point (module doc): the jackknife half-width over batches of whole cycles.
 
@@ -181,11 +190,7 @@ def r_error(sin_part, cos_part, slow_period, c, period):
     unit = int(period) if period > 0 else 1
     if c == 0.0 or n_measured < 2 * unit:
         return np.nan
-    batch_length = (n_measured // N_BATCHES // unit) * unit
-    n_batches = N_BATCHES
-    if batch_length == 0:  # short window: batches of one cycle each
-        batch_length = unit
-        n_batches = n_measured // unit
+    n_batches, batch_length = _batches(n_measured, unit)
     used = n_batches * batch_length
     # The last `used` periods: the end of the window is the most settled part.
     qs = sin_part[n_measured - used:].reshape(n_batches, batch_length).sum(axis=1)
@@ -221,12 +226,7 @@ def batch_error(measured, slow_period, c, period, ok):
     estimable = ok & (c != 0.0) & (n_measured >= 2 * unit)
     for length in np.unique(unit[estimable]):
         rows = np.flatnonzero(estimable & (unit == length))
-        length = int(length)
-        batch_length = (n_measured // N_BATCHES // length) * length
-        n_batches = N_BATCHES
-        if batch_length == 0:  # short window: batches of one cycle each
-            batch_length = length
-            n_batches = n_measured // length
+        n_batches, batch_length = _batches(n_measured, int(length))
         used = n_batches * batch_length
         window = measured[rows, n_measured - used:]
         qs = np.ascontiguousarray(window[:, :, kernel.REC_QS]).reshape(len(rows), n_batches, batch_length).sum(axis=2)
@@ -246,11 +246,7 @@ def lyapunov_error(log_stretch, slow_period, period):
         return np.nan
     if np.isneginf(log_stretch).any():
         return 0.0  # the tangent map collapsed (sticking): lyapunov is -inf, exactly
-    batch_length = (n_measured // N_BATCHES // unit) * unit
-    n_batches = N_BATCHES
-    if batch_length == 0:
-        batch_length = unit
-        n_batches = n_measured // unit
+    n_batches, batch_length = _batches(n_measured, unit)
     used = n_batches * batch_length
     exponents = log_stretch[n_measured - used:].reshape(n_batches, batch_length).sum(axis=1) / (
         batch_length * slow_period)
