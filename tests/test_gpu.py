@@ -197,8 +197,6 @@ def test_a_gpu_failing_during_a_run_is_the_runs_failure_in_one_line(monkeypatch)
             failing = self
 
             class Launch:
-                kernel_seconds = None
-
                 def wait(self):
                     raise failing.error
 

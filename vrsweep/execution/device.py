@@ -41,7 +41,7 @@ def check_device(device: str) -> None:
         raise UsageError(f"integration.device: cuda: {problem}")
 
 
-def gpu_memory_bytes() -> int | None:
+def gpu_memory_bytes() -> int:
     """The smaller of the card's memory and what the host allows a run (estimate.memory_allowance),
     in bytes: what a GPU's chunks are sized within (chunks.max_chunk_lines). The host's alone where
     the card does not say (numba's CUDA simulator)."""
@@ -81,12 +81,8 @@ class _ReportedLaunch:
     def __init__(self, launch):
         self.launch = launch
 
-    @property
-    def kernel_seconds(self):
-        return self.launch.kernel_seconds
-
     def wait(self):
-        _reported(self.launch.wait)
+        return _reported(self.launch.wait)
 
 
 def _reported(call, *arguments):

@@ -30,6 +30,7 @@ from vrsweep.execution.chunks import (  # noqa: F401
     shard_of_points, shuffled_lines,
 )
 from vrsweep.config.grid import DIRECTION_VALUES, Grid  # noqa: F401
+from vrsweep.execution.device import gpu_memory_bytes
 from vrsweep.numerics.models import kernels_for
 from vrsweep.results import Status
 from vrsweep.numerics.trajectory import settings_vector
@@ -81,8 +82,7 @@ class LineRunner:
         records = np.full((n_lines, line_length, self.n_record_rows, kernel.N_RECORD), np.nan)
         summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
         statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
-        chunk = ChunkRun(flat, coefficients, records, summaries, statuses)
-        chunk.threads = threads
+        chunk = ChunkRun(flat, coefficients, records, summaries, statuses, threads)
         arrays = (coefficients, initial_states, self.settings, local_lines, records, summaries, statuses)
         if self.device == "cuda":
             chunk.launch = self.run_lines.launch(*arrays)
@@ -94,8 +94,7 @@ class LineRunner:
     def finish(self, chunk):
         """A started chunk's (flat_indices, values), once its kernel is done."""
         if chunk.launch is not None:
-            chunk.launch.wait()
-            chunk.seconds = chunk.launch.kernel_seconds
+            chunk.seconds = chunk.launch.wait()
         values = point_values(
             chunk.records.reshape(-1, self.n_record_rows, kernel.N_RECORD),
             chunk.summaries.reshape(-1, kernel.N_SUMMARY), chunk.statuses.reshape(-1), chunk.coefficients,
@@ -111,11 +110,11 @@ class ChunkRun:
     on the CPU the whole chunk's (kernel and diagnostics), on a GPU the kernel's on the card (the
     host's part overlaps the next chunk's kernel), or the whole chunk's where the card cannot tell."""
 
-    def __init__(self, flat, coefficients, records, summaries, statuses):
+    def __init__(self, flat, coefficients, records, summaries, statuses, threads):
         self.flat, self.coefficients = flat, coefficients
         self.records, self.summaries, self.statuses = records, summaries, statuses
+        self.threads = threads
         self.launch = None
-        self.threads = 1
         self.began = time.perf_counter()
         self.seconds = None
 
@@ -139,8 +138,6 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     lines = plan.lines
     adaptive = chunk_lines is None
     gpu = runner.device == "cuda"
-    if gpu:
-        from vrsweep.execution.device import gpu_memory_bytes
     largest_chunk = max_chunk_lines(config.integration, plan.line_length, gpu=gpu,
                                     memory=gpu_memory_bytes() if gpu else None)  # the memory bound
     first_chunk = gpu_first_chunk_lines(plan.line_length) if gpu else default_chunk_lines(threads, plan.line_length)
@@ -155,7 +152,7 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
         if start < len(lines):
             started = runner.start(lines[start:start + chunk_lines], threads)
             start += chunk_lines
-        if not gpu:
+        if not gpu:  # the CPU's chunk is done once started: written before the next one computes
             in_flight, started = started, None
         if in_flight is not None:
             flat, values = runner.finish(in_flight)

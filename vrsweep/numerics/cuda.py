@@ -196,7 +196,7 @@ class DeviceLines:
 
     def launch(self, coefficients, initial_states, settings, lines, period_records, summaries, statuses):
         """Copy the chunk to the device and launch its kernel on a stream of its own, without waiting:
-        the returned Launch's wait() fills the caller's arrays. The host can meanwhile prepare or
+        the returned Launch's wait() fills the caller's arrays and returns the kernel's seconds. The host can meanwhile prepare or
         post-process another chunk (execution/sweep.py keeps one chunk in flight this way)."""
         n_lines = lines.shape[0]
         if n_lines == 0:
@@ -226,21 +226,20 @@ class Launch:
 
     def __init__(self, stream, began, ended, copies):
         self.stream, self.began, self.ended, self.copies = stream, began, ended, copies
-        self.kernel_seconds = None
 
     def wait(self):
-        """Copy the outputs into the host's arrays once the kernel is done; sets kernel_seconds, the
-        kernel's time on the device (None where the device does not time it: the simulator)."""
+        """Copy the outputs into the host's arrays once the kernel is done; the kernel's time on the
+        device in seconds (None where the device does not time it: the simulator, or no lines)."""
         if self.stream is None:
-            return
+            return None
         # (issued here, not at launch: a copy into pageable host memory holds the host until the
         # stream reaches it, which would make launch wait for the kernel)
         for device_array, host_array in self.copies:
             device_array.copy_to_host(host_array, stream=self.stream)
         self.stream.synchronize()
         milliseconds = self.began.elapsed_time(self.ended)
-        self.kernel_seconds = milliseconds / 1000.0 if milliseconds >= 0 else None
         self.stream = self.copies = None  # the device's arrays can go
+        return milliseconds / 1000.0 if milliseconds >= 0 else None
 
 
 def compile_for(method, tangents, model_rhs, tangent, barrier_force, compute_capability=(9, 0), **options):
