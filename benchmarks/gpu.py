@@ -17,7 +17,9 @@ map), for each model (original: eq2.1, effective: eq2.10):
 - The kernels' registers and local memory per thread (numba-cuda's report).
 - Through the job (--job-points, each model's fastest GPU method): vrsweep.sweep(device="cuda")
   writing its HDF5 file, with the chunks, diagnostics and writing a user's run has, against the
-  bare launches above: what a user gets.
+  bare launches above: what a user gets (--job-fresh-arrays: also with fresh device arrays per
+  launch, as up to 0.6.2, in the same process).
+- --divergence N: gpu_divergence.py's one point per warp against 32 (what divergence costs).
 
 Prints a table as it goes and writes everything to OUT/gpu.json. Ratios compare runs of this one
 process on this one machine; the card's name and the CPU's core count are printed with them.
@@ -125,6 +127,10 @@ def main():
     parser.add_argument("--job-points", type=int, default=262144,
                         help="points of the map run through the job per model (0: none)")
     parser.add_argument("--job-only", action="store_true", help="only the runs through the job")
+    parser.add_argument("--divergence", type=int, default=0, metavar="DISTINCT",
+                        help="then gpu_divergence.py's measurement on DISTINCT points x 32 (0: none)")
+    parser.add_argument("--job-fresh-arrays", action="store_true",
+                        help="run each job's map twice: fresh device arrays per launch (0.6.2), then kept slots")
     args = parser.parse_args()
     global AGREEMENT_SAMPLE, LYAPUNOV_SAMPLE, FIRST_LAUNCH
     if args.quick:
@@ -212,26 +218,46 @@ def main():
     if args.job_points:
         results["job"] = {}
         for model in models:
-            results["job"][model] = row = through_the_job(model, JOB_METHOD[model], args.job_points)
-            save()
-            log(f"{model:9s} {JOB_METHOD[model]:6s} through the job: {row['points_per_s']:.0f} pts/s on {row['points']} "
-                f"points ({row['seconds']:.1f} s, compile included: {row['first_seconds']:.1f} s for the first "
-                f"{row['first_points']})")
+            for reuse in (False, True) if args.job_fresh_arrays else (True,):
+                key = model if reuse else f"{model}, fresh arrays"
+                results["job"][key] = row = through_the_job(model, JOB_METHOD[model], args.job_points, reuse)
+                save()
+                log(f"{key:9s} {JOB_METHOD[model]:6s} through the job: {row['points_per_s']:.0f} pts/s on "
+                    f"{row['points']} points ({row['seconds']:.1f} s, compile included: {row['first_seconds']:.1f} s "
+                    f"for the first {row['first_points']}; GPU chunks {row['chunks']})")
+    if args.divergence:
+        from gpu_divergence import measure as divergence  # this folder's
+
+        results["divergence"] = divergence(args.divergence, out=out)
+        save()
     log(json.dumps(results))
 
 
 JOB_METHOD = {"effective": "dop853", "original": "rk45"}  # each model's fastest on the GPU
 
 
-def through_the_job(model, method, n_points):
+def through_the_job(model, method, n_points, reuse=True):
     """vrsweep.sweep on the GPU, with its file, as a user's run: a small run first (it compiles the
-    kernel, so the timed run's figure is of the computing), then the map of about n_points."""
+    kernel, so the timed run's figure is of the computing), then the map of about n_points.
+    reuse: numerics/cuda.REUSE_DEVICE_ARRAYS for the run (False: 0.6.2's fresh arrays per launch).
+    Also records the GPU chunks' sizes and kernel seconds (sweep.LineRunner.finish's)."""
     import tempfile
 
     import vrsweep
+    from vrsweep.execution import sweep
+    from vrsweep.numerics import cuda
 
     side = int(round(np.sqrt(n_points)))
-    row = {"method": method}
+    row = {"method": method, "reuse_device_arrays": reuse, "chunks": []}
+    cuda.REUSE_DEVICE_ARRAYS = reuse
+    finish = sweep.LineRunner.finish
+
+    def timed_finish(runner, chunk):
+        done = finish(runner, chunk)
+        row["chunks"].append([len(chunk.flat), round(chunk.seconds, 2)])
+        return done
+
+    sweep.LineRunner.finish = timed_finish
     with tempfile.TemporaryDirectory() as folder:
         for name, num in (("first", 8), ("map", side)):
             config = {"model": model,
@@ -245,8 +271,11 @@ def through_the_job(model, method, n_points):
             elapsed = time.perf_counter() - began
             if name == "first":
                 row["first_seconds"], row["first_points"] = elapsed, num * num
+                row["chunks"].clear()
             else:
                 row["seconds"], row["points"] = elapsed, num * num
+    sweep.LineRunner.finish = finish
+    cuda.REUSE_DEVICE_ARRAYS = True
     row["points_per_s"] = row["points"] / row["seconds"]
     return row
 

@@ -38,5 +38,8 @@ if [ -d .old060/vrsweep ]; then
 fi
 # 2. This version: both models and methods on the map against the CPU's 16 cores, agreement, the
 #    Lyapunov map, the kernels' resources.
-python3 benchmarks/gpu.py --budget "${GPU_BUDGET:-200}" --out "$OUT/new" 2>&1 | tee "$OUT/new.log"
+#    GPU_PY_ARGS replaces gpu.py's arguments but --out, for a shorter call (e.g. "--job-only
+#    --job-fresh-arrays --divergence 2048": the job with fresh and kept device arrays, and what
+#    divergence costs; about 6 minutes on an H100).
+python3 benchmarks/gpu.py ${GPU_PY_ARGS:---budget ${GPU_BUDGET:-200}} --out "$OUT/new" 2>&1 | tee "$OUT/new.log"
 echo "all done at $((SECONDS - began)) s"

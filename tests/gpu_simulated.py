@@ -71,8 +71,64 @@ def sweep(config_path):
     print(json.dumps(results))
 
 
+def slots(config_path):
+    """Launches in flight at once on DeviceLines' kept slots (cuda.REUSE_DEVICE_ARRAYS): chunks of
+    4 and 2 lines in flight together, then one of 6 (more rows than any slot holds) and one of 1
+    (the first rows of a slot's arrays). Prints each chunk's outputs from the kept slots, from
+    fresh arrays and from the CPU, the slots' count, and whether each of the last two chunks
+    allocated arrays."""
+    from vrsweep.numerics import cuda
+
+    config = load_config(config_path, ["transient_periods=4", "measure_periods=16"])
+    grid = Grid.from_config(config)
+    kernels = kernels_for(config.model)
+    flat = np.arange(grid.n_points, dtype=np.int64)
+    coefficients = np.ascontiguousarray(kernels.coefficients(grid.parameters_at(config, flat)))
+    initial_states = grid.initial_states_at(config, flat)
+    settings = integration_settings(config.integration)
+    measure = config.integration.measure_periods
+    kept = kernels.gpu_lines("rk45")
+    fresh = cuda.DeviceLines(kept.kernel, reuse=False)
+    cpu = kernels.run_lines("rk45")
+
+    def arrays(rows):
+        n = len(rows)
+        return (coefficients[rows], initial_states[rows], settings, np.arange(n, dtype=np.int64).reshape(n, 1),
+                np.full((n, 1, measure, kernel.N_RECORD), np.nan), np.full((n, 1, kernel.N_SUMMARY), np.nan),
+                np.full((n, 1), -1, dtype=np.int8))
+
+    def listed(chunk):
+        return {"records": chunk[4].tolist(), "summaries": chunk[5].tolist(), "statuses": chunk[6].tolist()}
+
+    chunks, results = [], []
+    first, second = arrays(flat[:4]), arrays(flat[4:6])
+    in_flight = [kept.launch(*first), kept.launch(*second)]
+    slots_in_flight = len(kept.slots)
+    for launch in in_flight:
+        launch.wait()
+    chunks += [first, second]
+    reallocated = []
+    for rows in (flat[:6], flat[6:7]):
+        held = [id(array) for slot in kept.slots for array in slot.arrays]
+        chunk = arrays(rows)
+        kept.launch(*chunk).wait()
+        chunks.append(chunk)
+        reallocated.append([id(array) for slot in kept.slots for array in slot.arrays] != held)
+    for chunk in chunks:
+        other, host = arrays(np.arange(len(chunk[0]))), arrays(np.arange(len(chunk[0])))
+        other = (chunk[0], chunk[1]) + other[2:]
+        host = (chunk[0], chunk[1]) + host[2:]
+        fresh(*other)
+        cpu(*host)
+        results.append({"kept": listed(chunk), "fresh": listed(other), "cpu": listed(host)})
+    print(json.dumps({"chunks": results, "slots_in_flight": slots_in_flight, "slots": len(kept.slots),
+                      "reallocated": reallocated}))
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "sweep":
         sweep(sys.argv[2])
+    elif sys.argv[1] == "slots":
+        slots(sys.argv[2])
     else:
         main(sys.argv[1], sys.argv[2], sys.argv[3], *[int(argument) for argument in sys.argv[4:]])

@@ -95,6 +95,25 @@ def test_the_job_on_the_gpu_hands_every_chunk_over_once_in_order_with_the_cpu_s_
     assert set(result["cpu"]["values"]["status"].values()) == {0.0}
 
 
+def test_launches_in_flight_keep_their_slots_and_give_fresh_arrays_values(tmp_path):
+    """DeviceLines keeps a launch's device arrays for the next (an allocation between two launches
+    keeps CUDA from running them at once): two launches in flight hold two slots; a larger chunk
+    replaces a slot's arrays, a smaller one uses their first rows; every chunk's outputs are those
+    of fresh arrays and of the CPU, bit for bit."""
+    config = tmp_path / "gpu.yaml"
+    config.write_text(textwrap.dedent(SMALL_MAP.replace("[3.5, 4.0]", "[3.5, 4.0, 4.5]")))
+    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), "slots", str(config)], capture_output=True,
+                          text=True, env=dict(os.environ, NUMBA_ENABLE_CUDASIM="1"), timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["slots_in_flight"] == 2 and result["slots"] == 2
+    assert result["reallocated"] == [True, False]  # 6 lines fit in no slot; 1 line fits in the first
+    assert [len(chunk["kept"]["statuses"]) for chunk in result["chunks"]] == [4, 2, 6, 1]
+    for k, chunk in enumerate(result["chunks"]):
+        assert chunk["kept"] == chunk["fresh"] == chunk["cpu"], k
+        assert {status for row in chunk["kept"]["statuses"] for status in row} == {0}
+
+
 def test_dop853_on_the_gpu_agrees_with_the_cpu_to_the_tolerance(tmp_path):
     """The GPU's dop853 calls cos at every stage (no 68 kB rotation table per thread), so its steps
     are not the CPU's: where the orbit is periodic in both runs, R agrees to the tolerance's level

@@ -56,10 +56,16 @@ THREADS_PER_BLOCK = 64
 #   threads of one warp integrate neighbouring points, whose paths through the loop (impacts,
 #   rejected steps) are alike; the sweep's shuffle spread them for the CPU's threads.
 # - MAX_REGISTERS: None leaves the compiler its choice (up to 255).
+# - REUSE_DEVICE_ARRAYS: a launch's device arrays, stream and timing events are one of a few slots
+#   kept between launches (one per launch in flight), not allocated anew: CUDA runs two kernels of
+#   different streams at once only if no device allocation comes between their launches, so with
+#   kept slots the next chunk's kernel fills the card while this one's slowest points finish (the
+#   launch's tail). False: fresh arrays each launch, as up to 0.6.2 (benchmarks compare the two).
 QUEUE = True
 QUEUE_BLOCKS_PER_SM = 16
 SORT = True
 MAX_REGISTERS = None
+REUSE_DEVICE_ARRAYS = True
 
 # method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
 # factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
@@ -170,11 +176,14 @@ def written_functions(module, tangents):
 class DeviceLines:
     """lines.run_lines_*'s call, run on the GPU: copies the chunk's arrays to the device, launches
     the kernel, and copies the outputs back into the caller's arrays (the same arrays the CPU
-    fills, so everything after the kernel is the CPU's code). sort: SORT by default."""
+    fills, so everything after the kernel is the CPU's code). sort: SORT by default; reuse:
+    REUSE_DEVICE_ARRAYS by default (the slots it keeps are freed with it)."""
 
-    def __init__(self, kernel_, sort=None):
+    def __init__(self, kernel_, sort=None, reuse=None):
         self.kernel = kernel_
         self.sort = SORT if sort is None else sort
+        self.reuse = REUSE_DEVICE_ARRAYS if reuse is None else reuse
+        self.slots = []
 
     def order(self, coefficients, initial_states, lines):
         """The order the lines are handed out in: by their first point's parameters and start."""
@@ -195,50 +204,84 @@ class DeviceLines:
         self.launch(coefficients, initial_states, settings, lines, period_records, summaries, statuses).wait()
 
     def launch(self, coefficients, initial_states, settings, lines, period_records, summaries, statuses):
-        """Copy the chunk to the device and launch its kernel on a stream of its own, without waiting:
-        the returned Launch's wait() fills the caller's arrays and returns the kernel's seconds. The host can meanwhile prepare or
-        post-process another chunk (execution/sweep.py keeps one chunk in flight this way)."""
+        """Copy the chunk to the device and launch its kernel on its slot's stream, without waiting:
+        the returned Launch's wait() fills the caller's arrays (C-contiguous, as LineRunner makes
+        them) and returns the kernel's seconds. The host can meanwhile prepare or post-process
+        another chunk, and the card run another launch (execution/sweep.py keeps one in flight)."""
         n_lines = lines.shape[0]
         if n_lines == 0:
-            return Launch(None, None, None, ())
+            return Launch(None, ())
         order = self.order(coefficients, initial_states, lines)
-        stream = cuda.stream()
-        began, ended = cuda.event(), cuda.event()
-        device_records = cuda.to_device(period_records, stream=stream)
-        device_summaries = cuda.to_device(summaries, stream=stream)
-        device_statuses = cuda.to_device(statuses, stream=stream)
-        arguments = (
-            cuda.to_device(np.ascontiguousarray(coefficients), stream=stream),
-            cuda.to_device(np.ascontiguousarray(initial_states), stream=stream),
-            cuda.to_device(np.ascontiguousarray(settings), stream=stream),
-            cuda.to_device(np.ascontiguousarray(lines), stream=stream),
-            device_records, device_summaries, device_statuses,
-            cuda.to_device(order, stream=stream), cuda.to_device(np.zeros(1, dtype=np.int64), stream=stream))
-        began.record(stream)
-        self.kernel[self.blocks(n_lines), THREADS_PER_BLOCK, stream](*arguments)
-        ended.record(stream)
-        copies = ((device_records, period_records), (device_summaries, summaries), (device_statuses, statuses))
-        return Launch(stream, began, ended, copies)
+        slot = self._free_slot()
+        # (the outputs go in too: the kernel writes only some of their entries)
+        arguments = [slot.holding(k, np.ascontiguousarray(host)) for k, host in enumerate((
+            coefficients, initial_states, settings, lines, period_records, summaries, statuses, order,
+            np.zeros(1, dtype=np.int64)))]
+        slot.began.record(slot.stream)
+        self.kernel[self.blocks(n_lines), THREADS_PER_BLOCK, slot.stream](*arguments)
+        slot.ended.record(slot.stream)
+        copies = ((arguments[4], period_records), (arguments[5], summaries), (arguments[6], statuses))
+        return Launch(slot, copies)
+
+    def _free_slot(self):
+        """A slot no launch in flight uses: a kept one (reuse), else a new one, kept if reuse."""
+        for slot in self.slots:
+            if not slot.busy:
+                break
+        else:
+            slot = _Slot()
+            if self.reuse:
+                self.slots.append(slot)
+        slot.busy = True
+        return slot
+
+
+class _Slot:
+    """A launch's place on the device: its stream, the events that time its kernel, and its arrays
+    (k: the kernel's k-th argument), kept for the next launch that finds the slot free."""
+
+    def __init__(self):
+        self.stream = cuda.stream()
+        self.began, self.ended = cuda.event(), cuda.event()
+        self.arrays = []
+        self.busy = False
+
+    def holding(self, k, host):
+        """Device array k with host's values (copied on the slot's stream): the slot's own, or its
+        first rows, replaced where host needs more rows or another shape or type. Only a
+        replacement allocates: the one point where this launch waits for those in flight."""
+        if k == len(self.arrays):
+            self.arrays.append(None)
+        held = self.arrays[k]
+        if (held is None or held.shape[1:] != host.shape[1:] or held.dtype != host.dtype
+                or held.shape[0] < host.shape[0]):
+            self.arrays[k] = None  # freed before its successor is allocated
+            held = self.arrays[k] = cuda.device_array(host.shape, dtype=host.dtype, stream=self.stream)
+        view = held if held.shape[0] == host.shape[0] else held[:host.shape[0]]
+        view.copy_to_device(host, stream=self.stream)
+        return view
 
 
 class Launch:
     """A chunk's kernel in flight (DeviceLines.launch)."""
 
-    def __init__(self, stream, began, ended, copies):
-        self.stream, self.began, self.ended, self.copies = stream, began, ended, copies
+    def __init__(self, slot, copies):
+        self.slot, self.copies = slot, copies
 
     def wait(self):
-        """Copy the outputs into the host's arrays once the kernel is done; the kernel's time on the
-        device in seconds (None where the device does not time it: the simulator, or no lines)."""
-        if self.stream is None:
+        """Copy the outputs into the host's arrays once the kernel is done, and free the launch's
+        slot; the kernel's time on the device in seconds (None where the device does not time it:
+        the simulator, or no lines)."""
+        if self.slot is None:
             return None
         # (issued here, not at launch: a copy into pageable host memory holds the host until the
         # stream reaches it, which would make launch wait for the kernel)
         for device_array, host_array in self.copies:
-            device_array.copy_to_host(host_array, stream=self.stream)
-        self.stream.synchronize()
-        milliseconds = self.began.elapsed_time(self.ended)
-        self.stream = self.copies = None  # the device's arrays can go
+            device_array.copy_to_host(host_array, stream=self.slot.stream)
+        self.slot.stream.synchronize()
+        milliseconds = self.slot.began.elapsed_time(self.slot.ended)
+        self.slot.busy = False
+        self.slot = self.copies = None
         return milliseconds / 1000.0 if milliseconds >= 0 else None
 
 
