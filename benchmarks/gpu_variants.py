@@ -1,19 +1,22 @@
 """The GPU kernel's launch shapes against each other and against the CPU, one run, one machine.
 
-    python benchmarks/gpu_variants.py [--points 65536] [--variants A,C,D] [--source DIR] [--no-cpu] [--out DIR]
+    python benchmarks/gpu_variants.py [--points 65536] [--variants A,C,D,E] [--cases original:rk45,...]
+                                      [--source DIR] [--no-cpu] [--out DIR]
 
-numerics/cuda.py has three levers (its QUEUE, SORT and MAX_REGISTERS): a work queue, lines handed
-out in parameter order, and a register cap. This script times, on the first POINTS points of
-gpu.py's shuffled (g, Omega) map (rtol 1e-9, 100 + 100 periods):
+numerics/cuda.py has four levers (its QUEUE, SORT, MAX_REGISTERS and GATHER_LANES): a work
+queue, lines handed out in parameter order, a register cap, and a warp barrier at every pass of
+the loop. This script times, on the first POINTS points of gpu.py's shuffled (g, Omega) map (rtol
+1e-9, 100 + 100 periods):
 
     A  one thread per line, shuffled order, the compiler's registers   (the first version)
-    C  the queue, parameter order, the compiler's registers             (the default)
+    C  the queue, parameter order, the compiler's registers             (the default up to 0.6.2)
     D  C with at most 128 registers a thread
+    E  C with the lanes of a warp gathered at every pass                (the default)
 
-for the original model with rk45 and the effective model with dop853 (each model's fastest method
-on the GPU in gpu.py's first run), and the CPU's best method (dop853, every core) on a sample, so
-that every ratio is of this one process. Checks that every variant gives the same statuses and R
-as variant A bit for bit (the order of the lines changes nothing in a line's arithmetic).
+for the original model with rk45 and dop853 and the effective model with dop853, and the CPU's
+best method (dop853, every core) on a sample, so that every ratio is of this one process. Checks
+that every variant gives the same statuses and R as the first bit for bit (neither the order of
+the lines nor a barrier changes anything in a line's arithmetic).
 
 --source DIR times another checkout's vrsweep (its package folder's parent, e.g. an old version
 unpacked with `git archive REV | tar -x -C DIR`): two calls, one with it and one without, compare
@@ -23,6 +26,7 @@ two versions on one card; --variants C times only the default shape.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import os
 import sys
@@ -42,18 +46,21 @@ from vrsweep.numerics import cuda  # noqa: E402
 from vrsweep.numerics.models import kernels_for  # noqa: E402
 from vrsweep.numerics.trajectory import settings_vector  # noqa: E402
 
-VARIANTS = {"A": dict(queue=False, sort=False, max_registers=None),
-            "C": dict(queue=True, sort=True, max_registers=None),
-            "D": dict(queue=True, sort=True, max_registers=128)}
-CASES = [("original", "rk45", 2000), ("effective", "dop853", 8000)]  # model, GPU method, CPU sample
+VARIANTS = {"A": dict(queue=False, sort=False, max_registers=None, gather=False),
+            "C": dict(queue=True, sort=True, max_registers=None, gather=False),
+            "D": dict(queue=True, sort=True, max_registers=128, gather=False),
+            "E": dict(queue=True, sort=True, max_registers=None, gather=True)}
+CASES = [("original", "rk45", 2000), ("effective", "dop853", 8000), ("original", "dop853", 2000)]
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--points", type=int, default=65536)
-    parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of A, C, D")
+    parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of A, C, D, E")
     parser.add_argument("--source", help="the folder holding the vrsweep package to time (default: this one)")
     parser.add_argument("--out", default=os.environ.get("OUT", "."))
+    parser.add_argument("--cases", help="comma-separated model:method, of " + ",".join(
+        f"{model}:{method}" for model, method, _ in CASES) + " (default: all)")
     parser.add_argument("--no-cpu", action="store_true",
                         help="leave out the CPU's sample (when another run in the same call times it)")
     args = parser.parse_args()
@@ -61,6 +68,12 @@ def main():
     unknown = sorted(set(chosen) - set(VARIANTS))
     if unknown:
         parser.error(f"--variants: unknown {', '.join(unknown)} (known: {', '.join(VARIANTS)})")
+    cases = CASES
+    if args.cases:
+        asked = [case.strip() for case in args.cases.split(",")]
+        cases = [case for name in asked for case in CASES if f"{case[0]}:{case[1]}" == name]
+        if len(cases) != len(asked):
+            parser.error(f"--cases: {args.cases} (known: {', '.join(f'{m}:{k}' for m, k, _ in CASES)})")
     settings = settings_vector(**INTEGRATION)
     measure = INTEGRATION["measure_periods"]
     results = {"card": str(getattr(cuda.cuda.get_current_device(), "name", "CUDA simulator")), "points": args.points,
@@ -68,7 +81,7 @@ def main():
     log(f"vrsweep {results['vrsweep']}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    for model, method, cpu_sample in CASES:
+    for model, method, cpu_sample in cases:
         kernels = kernels_for(model)
         points = grid(1_000_000)[:args.points]
         coefficients = coefficients_of(kernels, points)
@@ -84,8 +97,9 @@ def main():
         functions = cuda.paper_functions(False)
         for name in chosen:
             variant = VARIANTS[name]
-            compiled = cuda.line_kernel(method, False, *functions, queue=variant["queue"],
-                                        max_registers=variant["max_registers"])
+            known = inspect.signature(cuda.line_kernel).parameters  # (an old version's, --source, has fewer)
+            options = {key: variant[key] for key in ("queue", "max_registers", "gather") if key in known}
+            compiled = cuda.line_kernel(method, False, *functions, **options)
             lines = cuda.DeviceLines(compiled, sort=variant["sort"])
             began = time.perf_counter()
             run(lines, coefficients[:16], settings, measure)

@@ -49,7 +49,7 @@ from vrsweep.numerics.dop853 import (
     dop853_step,
 )
 from vrsweep.numerics.kernel import (
-    DOP853_ROTATED_RULES, N_VECTORS, RK45_RULES, _integrate, no_preparation, no_scratch,
+    DOP853_ROTATED_RULES, N_VECTORS, RK45_RULES, _integrate, lanes_apart, no_preparation, no_scratch,
 )
 from vrsweep.numerics.coefficients import MAX_BARRIERS, MAX_STEP
 from vrsweep.numerics.impact import N_BRACKET
@@ -161,7 +161,7 @@ def integrate_{method}{suffix}(coefficients, initial_state, settings, period_rec
                    impact_log, stick_log{monodromy_argument}):
     return {call}
                       coefficients, initial_state, settings, period_records, summary, sample_times, samples,
-                      impact_log, stick_log, {monodromy})
+                      impact_log, stick_log, {monodromy}, lanes_apart)
 '''
 
 _LINES = '''

@@ -61,11 +61,15 @@ THREADS_PER_BLOCK = 64
 #   different streams at once only if no device allocation comes between their launches, so with
 #   kept slots the next chunk's kernel fills the card while this one's slowest points finish (the
 #   launch's tail). False: fresh arrays each launch, as up to 0.6.2 (benchmarks compare the two).
+# - GATHER_LANES: the loop's every pass starts with a vote of the warp's lanes (gather_warp), a
+#   barrier: lanes which drifted apart (an impact in one, a rejected step in another) take the next
+#   step together rather than one after the other.
 QUEUE = True
 QUEUE_BLOCKS_PER_SM = 16
 SORT = True
 MAX_REGISTERS = None
 REUSE_DEVICE_ARRAYS = True
+GATHER_LANES = True
 
 # method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
 # factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
@@ -105,16 +109,23 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
                 model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
                 step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
                 brackets, scratch, coefficients[lines[line, slot]], state, settings, period_records[line, slot],
-                summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy)
+                summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy, gather_lanes)
             statuses[line, slot] = status
             next_start(status, summary, first, state)
         position = {next_position}
-"""
+{wait_for_warp}"""
 # Where a thread starts and what it does next: a line from the queue's counter, or one line each.
 _POSITIONS = {
     True: ("cuda.atomic.add(counter, 0, 1)", "cuda.atomic.add(counter, 0, 1)"),
     False: ("cuda.grid(1)", "order.shape[0]"),
 }
+
+
+# With gather_warp: a lane with no line left answers its warp's votes until no lane integrates.
+_WAIT_FOR_WARP = """\
+    while cuda.any_sync(WARP_LANES, False):
+        pass
+"""
 
 
 # In numba's CUDA simulator (tests) the kernel runs as Python, its arrays wrapped in the
@@ -127,32 +138,51 @@ _SIMULATOR_PROLOGUE = """\
 """
 
 
+# A warp's 32 lanes (THREADS_PER_BLOCK is a multiple of 32, so every lane of a warp exists).
+WARP_LANES = 0xFFFFFFFF
+
+
+@numba.njit
+def gather_warp():
+    """kernel._integrate's gather_lanes on the GPU: a vote of the warp's lanes ("I am still
+    integrating"), a barrier after which they run together. A lane between two lines comes to the
+    next line's loop; a lane with no line left waits in the kernel's last loop, whose vote answers
+    these until every lane of its warp has none (no lane of the warp exits before: a warp vote
+    must not name an exited lane)."""
+    cuda.any_sync(WARP_LANES, True)
+
+
 @functools.lru_cache(maxsize=None)
-def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None):
+def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None, gather=None):
     """The CUDA kernel that runs lines with ``method`` for a model's functions (kernel._integrate's
     rhs, tangent and barrier_force; model_rhs with the tangent vectors when ``tangents``).
 
     kernel[blocks, THREADS_PER_BLOCK](coefficients, initial_states, settings, lines,
     period_records, summaries, statuses, order, counter): lines.run_lines_rk45's arguments, then
     order (n_lines,), the lines in the order they are handed out, and counter (1,) int64, zero, the
-    queue's (queue: QUEUE by default). Compiled on its first launch, once per process.
+    queue's (queue: QUEUE by default; gather: GATHER_LANES). Compiled on its first launch, once
+    per process.
     """
     queue = QUEUE if queue is None else queue
     max_registers = MAX_REGISTERS if max_registers is None else max_registers
+    gather = GATHER_LANES if gather is None else gather
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
      dense_order) = METHOD_PARTS[method]
     first_position, next_position = _POSITIONS[bool(queue)]
+    # (the simulator runs the loop as a CPU compile, where a warp vote has no meaning)
+    gather = bool(gather) and not numba.config.ENABLE_CUDASIM
     source = _LINE_KERNEL.format(
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
         n_vectors=kernel.N_VECTORS, max_barriers=MAX_BARRIERS, n_bracket=N_BRACKET, tangents=bool(tangents),
         simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
-        first_position=first_position, next_position=next_position)
+        first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "")
     namespace = {
         "cuda": cuda, "float64": float64, "_integrate": kernel._integrate, "next_start": next_start,
         "no_preparation": rhs.no_preparation, "RULES": rules, "step": step, "step_error": step_error,
         "dense_output": dense_output, "accepted_factor": accepted_factor, "growth": growth,
         "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
         "barrier_force": barrier_force,
+        "gather_lanes": gather_warp if gather else kernel.lanes_apart, "WARP_LANES": WARP_LANES,
     }
     exec(compile(source, f"<vrsweep cuda line kernel {method}>", "exec"), namespace)
     # (numba's CUDA simulator has no registers to cap)

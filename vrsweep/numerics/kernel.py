@@ -107,6 +107,12 @@ N_VECTORS = 4
 
 
 @kernel_jit
+def lanes_apart():
+    """_integrate's gather_lanes on the CPU: a thread is alone, nothing to gather."""
+    return
+
+
+@kernel_jit
 def _smallest_step(t, slow_period):
     """A step this short no longer moves t by more than a few units of its last place."""
     return 4.0 * 2.2e-16 * max(abs(t), slow_period)
@@ -140,7 +146,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
                       rejected_step_factor, False, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
 
 @kernel_jit
@@ -159,7 +165,7 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
                       np.empty((N_VECTORS, N_STATE)), np.empty((MAX_BARRIERS, N_BRACKET)),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
 
 @kernel_jit
@@ -176,7 +182,7 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
 
 @kernel_jit
@@ -190,12 +196,12 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
+                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
 
 @kernel_jit
 def integrate_rk45_monodromy(coefficients, initial_state, settings, period_records, summary,
-                             sample_times, samples, impact_log, stick_log, monodromy_log):
+                             sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart):
     """integrate_rk45_lyapunov that also returns each period's tangent map (continuation).
 
     monodromy_log (n_periods, 4): row k is the 2x2 matrix d y((k+1)T) / d y(kT) of period k,
@@ -209,12 +215,12 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, monodromy_log)
+                      sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart)
 
 
 @kernel_jit
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
-                               sample_times, samples, impact_log, stick_log, monodromy_log):
+                               sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart):
     """integrate_rk45_monodromy with DOP853 steps."""
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
                       prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
@@ -223,7 +229,7 @@ def integrate_dop853_monodromy(coefficients, initial_state, settings, period_rec
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, monodromy_log)
+                      sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart)
 
 
 # integration.method -> the kernel. Each is compiled (or loaded from the cache) on its first call,
@@ -248,7 +254,7 @@ def integrator(method, lyapunov=False):
 def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, rules, step, step_error,
                dense_output, accepted_factor, certain_growth, rejected_factor, tangents, K, dense, vectors, brackets,
                scratch, coefficients, initial_state, settings, period_records, summary,
-               sample_times, samples, impact_log, stick_log, monodromy_log):
+               sample_times, samples, impact_log, stick_log, monodromy_log, gather_lanes):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; tangent(t, y,
@@ -280,6 +286,10 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     monodromy_log (n, 4): with tangents, the raw one-period tangent map of each of the first n
     periods (record_monodromy); the tangent vectors then restart from the unit vectors every period
     instead of being renormalised. Length 0 (every kernel but the *_monodromy ones): unused.
+    
+    gather_lanes() is called at the start of every pass of the loop: on a GPU (cuda.py) it gathers
+    the lanes of a warp that have drifted apart (one took an impact, another a rejected step), so
+    that they take the next pass's step together; on the CPU it does nothing (lanes_apart).
     """
     # The state components the right-hand sides read: x, v (the quadratures are read by nobody),
     # and the tangent vectors when they are integrated.
@@ -348,6 +358,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     next_sample = emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
 
     while True:
+        gather_lanes()
         record = period_records[max(period - first_row, 0)]
         if stuck:
             # --- held at (Delta, 0) until the force lets go or the period ends ---
