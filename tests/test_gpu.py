@@ -155,6 +155,7 @@ def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path):
 
     ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0))
     assert ".target sm_90" in ptx
+    assert "vote.sync" in ptx  # the warp's lanes gathered at every pass (gather_warp)
     ptxas = _ptxas()
     if ptxas is None:
         pytest.skip("ptxas is not installed (cuda-toolkit[nvcc])")
@@ -169,6 +170,19 @@ def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path):
     registers = int(re.search(r"Used (\d+) registers", entry).group(1))
     assert registers <= 255
     assert frame < 2 * 1024, entry[:2000]
+
+
+def test_the_warp_vote_is_on_but_for_the_effective_model():
+    """cuda.GATHER_LANES_BY_MODEL: measured slower on the effective model's kernel (an H100), it is
+    off there; on for the original model and for written ones. Choosing compiles nothing."""
+    from vrsweep.config import parse_config
+    from vrsweep.numerics.models import kernels_for
+
+    assert kernels_for("original").gpu_lines("rk45").kernel.gather is True
+    assert kernels_for("original").gpu_lines("dop853", True).kernel.gather is True
+    assert kernels_for("effective").gpu_lines("dop853").kernel.gather is False
+    written = parse_config((EXAMPLES / "impact_two_sided.yaml").read_text(), "impact_two_sided.yaml").model
+    assert kernels_for(written).gpu_lines("rk45").kernel.gather is True
 
 
 def test_asking_for_the_gpu_where_there_is_none_is_one_line_and_exit_2(tmp_path, invoke, write_config):

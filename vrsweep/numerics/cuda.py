@@ -63,13 +63,16 @@ THREADS_PER_BLOCK = 64
 #   launch's tail). False: fresh arrays each launch, as up to 0.6.2 (benchmarks compare the two).
 # - GATHER_LANES: the loop's every pass starts with a vote of the warp's lanes (gather_warp), a
 #   barrier: lanes which drifted apart (an impact in one, a rejected step in another) take the next
-#   step together rather than one after the other.
+#   step together rather than one after the other (on an H100: 1.71x on the original model).
+#   GATHER_LANES_BY_MODEL: the paper's models whose kernels run without it, where the card measured
+#   it slower (the effective model, about 0.77x: its neighbouring points' lanes keep together).
 QUEUE = True
 QUEUE_BLOCKS_PER_SM = 16
 SORT = True
 MAX_REGISTERS = None
 REUSE_DEVICE_ARRAYS = True
 GATHER_LANES = True
+GATHER_LANES_BY_MODEL = {"effective": False}
 
 # method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
 # factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
@@ -152,7 +155,6 @@ def gather_warp():
     cuda.any_sync(WARP_LANES, True)
 
 
-@functools.lru_cache(maxsize=None)
 def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None, gather=None):
     """The CUDA kernel that runs lines with ``method`` for a model's functions (kernel._integrate's
     rhs, tangent and barrier_force; model_rhs with the tangent vectors when ``tangents``).
@@ -163,14 +165,18 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None,
     queue's (queue: QUEUE by default; gather: GATHER_LANES). Compiled on its first launch, once
     per process.
     """
-    queue = QUEUE if queue is None else queue
-    max_registers = MAX_REGISTERS if max_registers is None else max_registers
-    gather = GATHER_LANES if gather is None else gather
+    return _line_kernel(method, bool(tangents), model_rhs, tangent, barrier_force,
+                        bool(QUEUE if queue is None else queue), MAX_REGISTERS if max_registers is None else max_registers,
+                        bool(GATHER_LANES if gather is None else gather))
+
+
+@functools.lru_cache(maxsize=None)  # (line_kernel's defaults resolved first: one compile per kernel)
+def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max_registers, gather):
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
      dense_order) = METHOD_PARTS[method]
     first_position, next_position = _POSITIONS[bool(queue)]
     # (the simulator runs the loop as a CPU compile, where a warp vote has no meaning)
-    gather = bool(gather) and not numba.config.ENABLE_CUDASIM
+    gather = gather and not numba.config.ENABLE_CUDASIM
     source = _LINE_KERNEL.format(
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
         n_vectors=kernel.N_VECTORS, max_barriers=MAX_BARRIERS, n_bracket=N_BRACKET, tangents=bool(tangents),
@@ -188,7 +194,8 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None,
     # (numba's CUDA simulator has no registers to cap)
     options = {"max_registers": max_registers} if max_registers and not numba.config.ENABLE_CUDASIM else {}
     compiled = cuda.jit(**options)(namespace["run_lines"])
-    compiled.queue = bool(queue)
+    compiled.queue = queue
+    compiled.gather = gather
     return compiled
 
 

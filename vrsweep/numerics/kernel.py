@@ -201,7 +201,7 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
 
 @kernel_jit
 def integrate_rk45_monodromy(coefficients, initial_state, settings, period_records, summary,
-                             sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart):
+                             sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_lyapunov that also returns each period's tangent map (continuation).
 
     monodromy_log (n_periods, 4): row k is the 2x2 matrix d y((k+1)T) / d y(kT) of period k,
@@ -220,7 +220,7 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
 
 @kernel_jit
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
-                               sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart):
+                               sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
     return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
                       prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,

@@ -43,7 +43,8 @@ class PaperKernels:
     def gpu_lines(self, method, lyapunov=False):
         from vrsweep.numerics import cuda
 
-        return cuda.DeviceLines(cuda.line_kernel(method, lyapunov, *cuda.paper_functions(lyapunov)))
+        return cuda.DeviceLines(cuda.line_kernel(method, lyapunov, *cuda.paper_functions(lyapunov),
+                                                 gather=cuda.GATHER_LANES_BY_MODEL.get(self.name)))
 
 
 class WrittenKernels:
