@@ -294,6 +294,42 @@ def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path, 
     assert_identical(full, partial)
 
 
+@settings(max_examples=40, deadline=None)
+@given(shape=st.lists(st.integers(1, 7), min_size=1, max_size=3), data=st.data())
+def test_points_written_as_slabs_or_as_points_give_the_same_file(tmp_path_factory, shape, data):
+    """writer._write_selection writes a chunk's points as a slab of rows (read, updated, written
+    back) or as an HDF5 point selection, by their share of the slab: both give every dataset the
+    same values, whatever the points (some of the grid's or all), their chunks and what the file
+    held before (the earlier chunks, as on a resume)."""
+    from vrsweep.store import writer as writer_module
+
+    n = int(np.prod(shape))
+    points = data.draw(st.permutations(range(n)))[:data.draw(st.integers(1, n))]
+    cuts = sorted(data.draw(st.lists(st.integers(0, n), max_size=4)))
+    chunks = [chunk for chunk in np.split(np.array(points, dtype=np.int64), cuts) if chunk.size]
+    axes = [(f"a{k}", np.arange(float(size))) for k, size in enumerate(shape)]
+    folder = tmp_path_factory.mktemp("slabs")
+    contents = []
+    for share in (0.0, np.inf):  # every write a slab; every write points
+        writer_module.SLAB_WRITE_SHARE = share
+        try:
+            path = folder / f"share_{share}.h5"
+            writer = ResultWriter.create(path, axes, specs(), ATTRS)
+            for chunk in chunks:
+                writer.write_points(chunk, values_for(chunk))
+            writer.close()
+        finally:
+            writer_module.SLAB_WRITE_SHARE = 1 / 16
+        with h5py.File(path, "r") as f:
+            contents.append({name: f[name][()] for name in ("R", "Qs", "n_steps", "roots", "status", "done")})
+    for name in contents[0]:
+        np.testing.assert_array_equal(contents[0][name], contents[1][name], err_msg=name)
+    done = contents[0]["done"].reshape(-1)
+    assert set(np.flatnonzero(done)) == {point for chunk in chunks for point in chunk}
+    written = np.flatnonzero(done)
+    np.testing.assert_array_equal(contents[0]["roots"].reshape(n, -1)[written], values_for(written)["roots"])
+
+
 def test_resume_refuses_a_foreign_config(tmp_path):
     path = write_file(tmp_path / "r.h5", AXES_1D, finish=False)
     other = CONFIG.replace("0.95", "0.9")

@@ -79,6 +79,14 @@ def _fsync(h5file):
         pass
 
 
+# A chunk's points that make up at least this share of the grid's rows they fall in (a slab along
+# the first axis) are written as that slab, read, updated in memory and written back: HDF5's point
+# selection costs about 0.3 us per element, a slab's read and write a few ns per byte (a GPU's
+# chunks of 131,072 shuffled points of a 512 x 512 map: 32 ms a variable as points, 3 ms as a slab;
+# at a thirtieth of the slab the points were faster, 17 against 37 ms).
+SLAB_WRITE_SHARE = 1 / 16
+
+
 def _write_selection(ds, grid_shape, idx, array):
     """Write ``array`` (n, *extra) at grid points ``idx`` (sorted flat indices) of ``ds``."""
     array = np.ascontiguousarray(array, dtype=ds.dtype)
@@ -89,6 +97,14 @@ def _write_selection(ds, grid_shape, idx, array):
     n = idx.size
     if n == math.prod(grid_shape):  # the whole grid (a single chunk run, or a merge)
         ds[()] = array.reshape(grid_shape + extra)
+        return
+    row = math.prod(grid_shape[1:])  # points per index of the first axis
+    first, last = int(idx[0]) // row, int(idx[-1]) // row + 1
+    if n >= SLAB_WRITE_SHARE * (last - first) * row:
+        # (the other points' values are written back as read: a resumed file's too)
+        slab = ds[first:last]
+        slab.reshape((-1,) + extra)[idx - first * row] = array
+        ds[first:last] = slab
         return
     # An HDF5 point selection: exactly these elements, in this order; the chunk cache keeps
     # the read-modify-write of partially written chunks in memory.
