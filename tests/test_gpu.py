@@ -73,17 +73,23 @@ def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config
         np.testing.assert_array_equal(gpu[key], cpu[key], err_msg=f"{case}: {key}")
 
 
+def _simulated_run(tmp_path, mode, config_text):
+    """gpu_simulated.py's ``mode`` (sweep, slots) on a config in numba's CUDA simulator: its JSON."""
+    config = tmp_path / "gpu.yaml"
+    config.write_text(textwrap.dedent(config_text))
+    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), mode, str(config)], capture_output=True,
+                          text=True, env=dict(os.environ, NUMBA_ENABLE_CUDASIM="1"), timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def test_the_job_on_the_gpu_hands_every_chunk_over_once_in_order_with_the_cpu_s_values(tmp_path):
     """On a GPU run_sweep launches the next chunk before it finishes the last (the host's diagnostics
     and writing overlap the card's work): every point is handed to on_chunk exactly once, the chunks
     in the order they were cut, growing from two points, and each point's values are the CPU's bit
     for bit (rk45)."""
-    config = tmp_path / "gpu.yaml"
-    config.write_text(textwrap.dedent(BASIN_MAP.replace("[5.0, 20.0, 30.0]", "[5.0, 12.0, 20.0, 25.0, 30.0, 35.0]")))
-    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), "sweep", str(config)], capture_output=True,
-                          text=True, env=dict(os.environ, NUMBA_ENABLE_CUDASIM="1"), timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = _simulated_run(tmp_path, "sweep",
+                            BASIN_MAP.replace("[5.0, 20.0, 30.0]", "[5.0, 12.0, 20.0, 25.0, 30.0, 35.0]"))
     handed = result["cuda"]["handed"]
     sizes = [len(chunk) for chunk in handed]
     assert sizes[:2] == [2, 2] and max(sizes) > 2 and len(handed) >= 4, sizes
@@ -100,12 +106,7 @@ def test_launches_in_flight_keep_their_slots_and_give_fresh_arrays_values(tmp_pa
     keeps CUDA from running them at once): two launches in flight hold two slots; a larger chunk
     replaces a slot's arrays, a smaller one uses their first rows; every chunk's outputs are those
     of fresh arrays and of the CPU, bit for bit."""
-    config = tmp_path / "gpu.yaml"
-    config.write_text(textwrap.dedent(SMALL_MAP.replace("[3.5, 4.0]", "[3.5, 4.0, 4.5]")))
-    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), "slots", str(config)], capture_output=True,
-                          text=True, env=dict(os.environ, NUMBA_ENABLE_CUDASIM="1"), timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = _simulated_run(tmp_path, "slots", SMALL_MAP.replace("[3.5, 4.0]", "[3.5, 4.0, 4.5]"))
     assert result["slots_in_flight"] == 2 and result["slots"] == 2
     assert result["reallocated"] == [True, False]  # 6 lines fit in no slot; 1 line fits in the first
     assert [len(chunk["kept"]["statuses"]) for chunk in result["chunks"]] == [4, 2, 6, 1]
