@@ -286,7 +286,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     monodromy_log (n, 4): with tangents, the raw one-period tangent map of each of the first n
     periods (record_monodromy); the tangent vectors then restart from the unit vectors every period
     instead of being renormalised. Length 0 (every kernel but the *_monodromy ones): unused.
-    
+
     gather_lanes() is called at the start of every pass of the loop: on a GPU (cuda.py) it gathers
     the lanes of a warp that have drifted apart (one took an impact, another a rejected step), so
     that they take the next pass's step together; on the CPU it does nothing (lanes_apart).
