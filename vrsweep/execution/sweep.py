@@ -177,8 +177,8 @@ def point_values(records, summaries, statuses, coefficients, integration, thread
     Every value is a function of its own point's outputs alone (a point's values do not depend on
     which points share its chunk: tests/test_threads.py), so a large chunk's points are shared
     among up to ``threads`` threads, one block of at least DIAGNOSTICS_BLOCK points each: numpy's
-    array operations leave Python's lock while they work. On a GPU the host's diagnostics would otherwise keep the card
-    waiting (benchmarks/README.md, "GPU")."""
+    array operations leave Python's lock while they work. On a GPU the host's diagnostics would
+    otherwise keep the card waiting (benchmarks/README.md, "GPU")."""
     n_points = len(statuses)
     n_blocks = min(max(1, int(threads)), -(-n_points // DIAGNOSTICS_BLOCK))
     if n_blocks <= 1:

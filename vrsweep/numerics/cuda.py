@@ -174,7 +174,7 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None,
 def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max_registers, gather):
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
      dense_order) = METHOD_PARTS[method]
-    first_position, next_position = _POSITIONS[bool(queue)]
+    first_position, next_position = _POSITIONS[queue]
     # (the simulator runs the loop as a CPU compile, where a warp vote has no meaning)
     gather = gather and not numba.config.ENABLE_CUDASIM
     source = _LINE_KERNEL.format(
