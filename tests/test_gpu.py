@@ -186,6 +186,96 @@ def test_the_warp_vote_is_on_but_for_the_effective_model():
     assert kernels_for(written).gpu_lines("rk45").kernel.gather is True
 
 
+def test_the_gpu_kernels_are_files_that_numba_caches_one_per_kernel():
+    """numba caches a kernel by its source file: an exec'd string cannot be cached (numba-cuda
+    refuses it, "no locator available"). Each kernel's source is a module file in numba's cache
+    folder, named by a digest of its text, so a kernel of another method, model, option or register
+    cap is another file, and caching is on for every one of them (written models' too)."""
+    from numba.cuda.dispatcher import CUDACache
+
+    from vrsweep.config import parse_config
+    from vrsweep.numerics import cuda, numba_cache
+    from vrsweep.numerics.models import kernels_for
+
+    if not numba_cache.enabled():
+        pytest.skip("numba's cache is off here: the kernels' files go to a temporary folder, uncached")
+    written = parse_config((EXAMPLES / "impact_two_sided.yaml").read_text(), "impact_two_sided.yaml").model
+    kernels = [kernels_for("original").gpu_kernel("rk45"), kernels_for("original").gpu_kernel("dop853", True),
+               kernels_for("effective").gpu_kernel("dop853"), kernels_for(written).gpu_kernel("rk45"),
+               cuda.line_kernel("rk45", False, *cuda.paper_functions(False), max_registers=128)]
+    files = [Path(k.py_func.__code__.co_filename) for k in kernels]
+    assert len(set(files)) == len(files)
+    for k, file in zip(kernels, files):
+        assert file.is_file() and file.parent.parent == numba_cache.cache_dir()
+        assert isinstance(k._cache, CUDACache)
+    assert "max_registers: 128" in files[-1].read_text()
+    # The same kernel asked for again is the same dispatcher (one compile per process).
+    assert kernels_for("original").gpu_kernel("rk45") is kernels[0]
+
+
+def test_the_compile_notice_looks_where_numba_cuda_keeps_the_kernel(monkeypatch):
+    """`vrsweep run --device cuda` says the CUDA kernel compiles first unless numba's cache holds
+    it: the hint looks for the index file at the path numba-cuda's own cache reads."""
+    from vrsweep.numerics import cuda
+    from vrsweep.numerics.models import kernels_for
+
+    kernel_ = kernels_for("original").gpu_kernel("dop853")
+    index = Path(kernel_._cache._cache_file._index_path)
+    if index.exists():
+        pytest.skip("this machine has compiled the kernel for a GPU")
+    assert not kernels_for("original").is_cached("dop853", device="cuda")
+    index.parent.mkdir(parents=True, exist_ok=True)
+    index.touch()
+    try:
+        assert kernels_for("original").is_cached("dop853", device="cuda")
+        monkeypatch.setattr(cuda, "CACHE_KERNELS", False)
+        assert not kernels_for("original").is_cached("dop853", device="cuda")
+    finally:
+        index.unlink()
+
+
+def test_a_kernel_the_cache_fails_on_compiles_without_it(monkeypatch):
+    """cuda.ready_kernel: where loading or saving the cached kernel raises, the same source compiles
+    without the cache (as up to 0.6.3), and the dispatcher launched says why; a compile that fails
+    without the cache too is the run's error."""
+    import pickle
+
+    from vrsweep.numerics import cuda
+
+    compiled = []
+
+    class Uncached:
+        def compile(self, signature):
+            compiled.append(signature)
+
+    class Cached:
+        queue, gather = True, False
+
+        def compile(self, signature):
+            raise pickle.PicklingError("cannot pickle the kernel's library")
+
+        def without_cache(self):
+            return Uncached()
+
+    monkeypatch.setattr(cuda, "_READY", {})
+    cached = Cached()
+    ready = cuda.ready_kernel(cached)
+    assert isinstance(ready, Uncached) and compiled == [cuda.kernel_signature()]
+    assert ready.queue is True and ready.gather is False
+    assert ready.cache_failure == "PicklingError: cannot pickle the kernel's library"
+    assert cuda.ready_kernel(cached) is ready and len(compiled) == 1  # once per process
+
+    class Broken(Cached):
+        def without_cache(self):
+            class Failing:
+                def compile(self, signature):
+                    raise RuntimeError("the kernel does not compile")
+            return Failing()
+
+    with pytest.raises(RuntimeError, match="does not compile"):
+        cuda.ready_kernel(Broken())
+
+
 def test_asking_for_the_gpu_where_there_is_none_is_one_line_and_exit_2(tmp_path, invoke, write_config):
     from numba import cuda as numba_cuda_target
 

@@ -100,7 +100,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
         if quiet:
             return None
         if already_done < total and (not dask_address or parse_local(dask_address)):
-            _say_if_compiling(config.integration.method, config.integration.lyapunov, config.model)  # a remote cluster's workers have caches of their own
+            _say_if_compiling(config.integration, config.model)  # a remote cluster's workers have caches of their own
         if not sys.stderr.isatty():  # a batch log: lines, not a bar's redraws
             from vrsweep.execution.progress import ProgressLog
 
@@ -169,7 +169,7 @@ def _dry_run(config, threads, shard, guess, dask_address):
 
     if dask_address:
         raise UsageError("--dry-run times this machine, not a Dask cluster's workers: leave out --dask")
-    _say_if_compiling(config.integration.method, config.integration.lyapunov, config.model)
+    _say_if_compiling(config.integration, config.model)
     timing = measure(config, threads, shard)
     click.echo(f"estimate:    {describe(timing, threads, config.integration.device)}")
     agreement = "" if rough_and_measured_agree(guess.seconds, timing) else " (more than 2x off: the measurement counts)"
@@ -183,13 +183,12 @@ def _line_length(config):
     return len(grid.axis_values[grid.continuation_axis]) if grid.continuation_axis is not None else 1
 
 
-# Measured with an empty cache on a loaded 2-core machine: rk45 29 s wall (11 s of CPU); dop853
-# 17-19 s in benchmarks/README.md's runs, up to 30 s at load 3-4.
-COMPILE_SECONDS = "about 30 s"
-
-
-def _say_if_compiling(method, lyapunov, model="original"):
+def _say_if_compiling(integration, model="original"):
     from vrsweep.commands.options import say_if_compiling
+    from vrsweep.execution.api import COMPILE_SECONDS, GPU_COMPILE_SECONDS
     from vrsweep.numerics.models import kernels_for
 
-    say_if_compiling(lambda: kernels_for(model).is_cached(method, lyapunov), duration=COMPILE_SECONDS)
+    gpu = integration.device == "cuda"
+    say_if_compiling(lambda: kernels_for(model).is_cached(integration.method, integration.lyapunov, integration.device),
+                     what="the CUDA kernel" if gpu else "the numba kernel",
+                     duration=GPU_COMPILE_SECONDS if gpu else COMPILE_SECONDS)

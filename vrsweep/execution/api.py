@@ -250,8 +250,12 @@ def _capped_threads(threads):
     return threads
 
 
-# Measured as for `vrsweep run` (commands/run.py COMPILE_SECONDS).
+# What a first run's notice says compiling takes (`vrsweep run` and the API's bar alike). The CPU's:
+# measured with an empty cache on a loaded 2-core machine, rk45 29 s wall (11 s of CPU), dop853
+# 17-19 s in benchmarks/README.md's runs, up to 30 s at load 3-4. The CUDA kernel's: 20 to 65 s
+# on an H100's host (benchmarks/README.md, "GPU").
 COMPILE_SECONDS = "about 30 s"
+GPU_COMPILE_SECONDS = "20 to 65 s"
 
 
 def _progress_factory(config, bars):
@@ -265,8 +269,10 @@ def _progress_factory(config, bars):
 
         label = "vrsweep"
         integration = config.integration
-        if already_done < total and not kernels_for(config.model).is_cached(integration.method, integration.lyapunov):
-            label = f"vrsweep (compiling the numba kernel first, {COMPILE_SECONDS})"
+        if already_done < total and not kernels_for(config.model).is_cached(integration.method, integration.lyapunov,
+                                                                              integration.device):
+            label = (f"vrsweep (compiling the CUDA kernel first, {GPU_COMPILE_SECONDS})" if integration.device == "cuda"
+                     else f"vrsweep (compiling the numba kernel first, {COMPILE_SECONDS})")
         bar = tqdm(total=total, initial=already_done, unit="pt", desc=label, dynamic_ncols=True)
         bars.append(bar)
         return bar.update

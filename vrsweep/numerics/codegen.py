@@ -339,17 +339,25 @@ _MODULES = {}
 def compiled(model):
     """The generated module of ``model`` (imported once per process; its functions compile on
     their first call, or load from numba's cache)."""
-    name = module_name(model)
+    return generated_module(module_name(model), lambda: source(model))
+
+
+def generated_module(name, text):
+    """The module ``name`` of generated source (``text()``, called only when the file is missing):
+    written once into the generated modules' folder and imported from that file, once per process.
+
+    numba caches a function by its source file, so generated code compiles once only if it is a
+    file (an exec'd string cannot be cached); ``name`` must be a key of the text (its digest), so
+    that changed code is another file, never a stale kernel."""
     if name in _MODULES:
         return _MODULES[name]
     path = _folder() / f"{name}.py"
     if not path.exists():
-        text = source(model)
         # Written whole, then renamed: a reader (another process, a Dask worker) never sees half a
         # file, and the file's time stamp, which numba keys its cache by, never changes after.
         handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{name}.", suffix=".tmp")
         with os.fdopen(handle, "w", encoding="utf-8") as file:
-            file.write(text)
+            file.write(text())
         os.replace(temporary, path)
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
@@ -359,9 +367,14 @@ def compiled(model):
     return module
 
 
+def module_path(name) -> Path:
+    """Where generated_module(name, ...) keeps its file."""
+    return _folder() / f"{name}.py"
+
+
 def is_cached(model, function_name) -> bool:
     """Whether ``function_name`` of the model's module is in numba's cache (a hint, as
     numba_cache.is_compiled); False while the module has not even been generated."""
-    if not (_folder() / f"{module_name(model)}.py").exists():
+    if not module_path(module_name(model)).exists():
         return False
     return numba_cache.is_compiled(getattr(compiled(model), function_name))

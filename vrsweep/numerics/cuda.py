@@ -16,6 +16,10 @@ What differs on the GPU, and why:
 - Samples, impact and sticking logs and monodromy matrices stay on the CPU (trajectories and
   continuation): a sweep's lines need none of them.
 
+A kernel's source (the loop's call with the method's and model's functions) is written as a module
+file into numba's cache folder, like a written model's (codegen.generated_module), so that
+numba-cuda caches its compile: only a machine's first run compiles it.
+
 Requires the optional extra ``vrsweep[cuda]`` (numba-cuda and the CUDA compiler libraries from
 the package index); importing this module without it raises ImportError, which the execution layer
 turns into one line for the user (execution/device.py). ``NUMBA_ENABLE_CUDASIM=1`` runs the same
@@ -25,13 +29,15 @@ kernels in numba's CUDA simulator, on the CPU, for tests.
 from __future__ import annotations
 
 import functools
+import hashlib
 import math
+import sys
 
 import numba
 import numpy as np
-from numba import cuda, float64
+from numba import cuda
 
-from vrsweep.numerics import dop853, kernel, rhs
+from vrsweep.numerics import codegen, dop853, kernel, numba_cache, rhs
 from vrsweep.numerics.coefficients import MAX_BARRIERS
 from vrsweep.numerics.dop853 import (
     dop853_accepted_step_factor, dop853_certain_growth, dop853_dense, dop853_error_norm, dop853_rejected_step_factor,
@@ -66,6 +72,10 @@ THREADS_PER_BLOCK = 64
 #   step together rather than one after the other (on an H100: 1.71x on the original model).
 #   GATHER_LANES_BY_MODEL: the paper's models whose kernels run without it, where the card measured
 #   it slower (the effective model, about 0.77x: its neighbouring points' lanes keep together).
+# - CACHE_KERNELS: a kernel's source is a module file in numba's cache folder (codegen.generated_module)
+#   and numba-cuda caches its compile there (cache=True): the first run on a machine compiles (20 to
+#   65 s on an H100's host), later runs load it. Where loading or saving fails, the kernel compiles
+#   as without a cache (ready_kernel). False: every process compiles, as up to 0.6.3.
 QUEUE = True
 QUEUE_BLOCKS_PER_SM = 16
 SORT = True
@@ -73,6 +83,7 @@ MAX_REGISTERS = None
 REUSE_DEVICE_ARRAYS = True
 GATHER_LANES = True
 GATHER_LANES_BY_MODEL = {"effective": False}
+CACHE_KERNELS = True
 
 # method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
 # factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
@@ -177,26 +188,95 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
     first_position, next_position = _POSITIONS[queue]
     # (the simulator runs the loop as a CPU compile, where a warp vote has no meaning)
     gather = gather and not numba.config.ENABLE_CUDASIM
-    source = _LINE_KERNEL.format(
+    body = _LINE_KERNEL.format(
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
         n_vectors=kernel.N_VECTORS, max_barriers=MAX_BARRIERS, n_bracket=N_BRACKET, tangents=bool(tangents),
         simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
         first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "")
-    namespace = {
-        "cuda": cuda, "float64": float64, "_integrate": kernel._integrate, "next_start": next_start,
-        "no_preparation": rhs.no_preparation, "RULES": rules, "step": step, "step_error": step_error,
-        "dense_output": dense_output, "accepted_factor": accepted_factor, "growth": growth,
-        "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
-        "barrier_force": barrier_force,
-        "gather_lanes": gather_warp if gather else kernel.lanes_apart, "WARP_LANES": WARP_LANES,
+    functions = {
+        "_integrate": kernel._integrate, "next_start": next_start, "no_preparation": rhs.no_preparation,
+        "step": step, "step_error": step_error, "dense_output": dense_output, "accepted_factor": accepted_factor,
+        "growth": growth, "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
+        "barrier_force": barrier_force, "gather_lanes": gather_warp if gather else kernel.lanes_apart,
     }
-    exec(compile(source, f"<vrsweep cuda line kernel {method}>", "exec"), namespace)
+    # (max_registers changes the compile, not the source: the header names it, so that it is part of
+    # the file's name and numba's cache never hands one cap's kernel to another)
+    text = _KERNEL_MODULE.format(
+        method=method, max_registers=max_registers, imports="".join(
+            _import_line(alias, function) for alias, function in functions.items()),
+        rules=repr(tuple(rules)), warp_lanes=WARP_LANES, body=body)
+    name = f"vrsweep_cuda_lines_{hashlib.sha1(text.encode()).hexdigest()[:16]}"
+    module = codegen.generated_module(name, lambda: text)
     # (numba's CUDA simulator has no registers to cap)
     options = {"max_registers": max_registers} if max_registers and not numba.config.ENABLE_CUDASIM else {}
-    compiled = cuda.jit(**options)(namespace["run_lines"])
+    compiled = cuda.jit(cache=CACHE_KERNELS and numba_cache.enabled(), **options)(module.run_lines)
     compiled.queue = queue
     compiled.gather = gather
+    compiled.without_cache = lambda: cuda.jit(**options)(module.run_lines)
     return compiled
+
+
+def kernel_signature():
+    """The line kernel's argument types: a launch's arrays (DeviceLines.launch), C-contiguous."""
+    from numba import types as nb
+
+    return (nb.float64[:, ::1], nb.float64[:, ::1], nb.float64[::1], nb.int64[:, ::1],
+            nb.float64[:, :, :, ::1], nb.float64[:, :, ::1], nb.int8[:, ::1], nb.int64[::1], nb.int64[::1])
+
+
+_READY = {}
+
+
+def ready_kernel(kernel_):
+    """kernel_ compiled for kernel_signature() in this process, loaded from numba's cache where it
+    holds it: the dispatcher to launch. Where the cache fails (a file it cannot read, a kernel it
+    cannot save), the same source compiles without it, as every process did up to 0.6.3: slower,
+    never wrong; the returned dispatcher's ``cache_failure`` then says why. A compile error of the
+    kernel itself is raised (by the second compile). Once per kernel and process."""
+    if numba.config.ENABLE_CUDASIM:  # (the simulator compiles nothing)
+        return kernel_
+    ready = _READY.get(id(kernel_))
+    if ready is None:
+        try:
+            kernel_.compile(kernel_signature())
+            ready = kernel_
+        except Exception as error:  # noqa: BLE001 -- numba-cuda's cache raises many kinds
+            ready = kernel_.without_cache()
+            ready.queue, ready.gather = kernel_.queue, kernel_.gather
+            ready.compile(kernel_signature())
+            ready.cache_failure = f"{type(error).__name__}: {error}"
+        _READY[id(kernel_)] = ready
+    return ready
+
+
+def is_cached(kernel_) -> bool:
+    """Whether numba's cache holds a compile of the kernel (a hint, as numba_cache.is_compiled: the
+    run's notice that the kernel compiles first). The simulator's kernels compile nothing for a GPU."""
+    if numba.config.ENABLE_CUDASIM:
+        return True
+    return bool(CACHE_KERNELS) and numba_cache.is_compiled(kernel_)
+
+
+# The kernel's module, as written into numba's cache folder (codegen.generated_module).
+_KERNEL_MODULE = '''"""Generated by vrsweep (vrsweep/numerics/cuda.py): the CUDA line kernel of {method}; do not edit.
+
+max_registers: {max_registers}
+"""
+from numba import cuda, float64
+{imports}
+RULES = {rules}
+WARP_LANES = {warp_lanes}
+
+{body}'''
+
+
+def _import_line(alias, function):
+    """``from module import name as alias`` for a module-level njit function (a generated model's
+    module too: codegen registers it in sys.modules before its functions are handed here)."""
+    module, name = function.py_func.__module__, function.py_func.__name__
+    if getattr(sys.modules.get(module), name, None) is not function:
+        raise ValueError(f"{alias}: {module}.{name} is not importable as the function handed to the kernel")
+    return f"from {module} import {name} as {alias}\n"
 
 
 def paper_functions(tangents):
@@ -249,6 +329,7 @@ class DeviceLines:
         if n_lines == 0:
             return Launch(None, ())
         order = self.order(coefficients, initial_states, lines)
+        self.kernel = ready_kernel(self.kernel)
         slot = self._free_slot()
         # (the outputs go in too: the kernel writes only some of their entries)
         arguments = [slot.holding(k, np.ascontiguousarray(host)) for k, host in enumerate((
@@ -334,14 +415,11 @@ def compile_for(method, tangents, model_rhs, tangent, barrier_force, compute_cap
     import types
     from unittest import mock
 
-    from numba import types as nb
     from numba.cuda import compile_ptx
     from numba.cuda import dispatcher as cuda_dispatcher
 
-    signature = (nb.float64[:, ::1], nb.float64[:, ::1], nb.float64[::1], nb.int64[:, ::1],
-                 nb.float64[:, :, :, ::1], nb.float64[:, :, ::1], nb.int8[:, ::1], nb.int64[::1], nb.int64[::1])
     kernel_ = line_kernel(method, tangents, model_rhs, tangent, barrier_force, **options)
     stand_in = types.SimpleNamespace(compute_capability=tuple(compute_capability))
     with mock.patch.object(cuda_dispatcher, "get_current_device", lambda: stand_in):
-        ptx, _ = compile_ptx(kernel_.py_func, signature, cc=tuple(compute_capability))
+        ptx, _ = compile_ptx(kernel_.py_func, kernel_signature(), cc=tuple(compute_capability))
     return ptx

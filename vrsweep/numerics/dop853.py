@@ -74,6 +74,8 @@ def _stage_source(s):
 
 
 def _generated(name, lines, namespace):
+    # (named this module's: the GPU's kernel module imports it from here, cuda._import_line)
+    namespace = {"__name__": __name__, **namespace}
     exec("\n".join(lines), namespace)  # noqa: S102 - source built above from the tableau only
     return kernel_jit(namespace[name], inline="always", cache=False)
 

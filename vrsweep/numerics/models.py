@@ -6,6 +6,7 @@ paper's two models (model.py, kernel.py, lines.py) and for a written one (writte
     kernels_for(model).monodromy(method)             one point with each period's tangent map
     kernels_for(model).run_lines(method, lyapunov)   the sweep's parallel lines
     kernels_for(model).gpu_lines(method, lyapunov)   the same call, run on an NVIDIA GPU (cuda.py)
+    kernels_for(model).is_cached(method, lyapunov, device)   whether the kernel compiles first (a hint)
 
 ``model`` is ``"original"``, ``"effective"`` or a written.WrittenModel (the config's ``model``).
 """
@@ -37,14 +38,21 @@ class PaperKernels:
     def run_lines(self, method, lyapunov=False):
         return lines.RUN_LINES[method, lyapunov]
 
-    def is_cached(self, method, lyapunov=False):
+    def is_cached(self, method, lyapunov=False, device="cpu"):
+        if device == "cuda":
+            return _gpu_is_cached(self, method, lyapunov)
         return lines.kernel_is_cached(method, lyapunov)
+
+    def gpu_kernel(self, method, lyapunov=False):
+        from vrsweep.numerics import cuda
+
+        return cuda.line_kernel(method, lyapunov, *cuda.paper_functions(lyapunov),
+                                gather=cuda.GATHER_LANES_BY_MODEL.get(self.name))
 
     def gpu_lines(self, method, lyapunov=False):
         from vrsweep.numerics import cuda
 
-        return cuda.DeviceLines(cuda.line_kernel(method, lyapunov, *cuda.paper_functions(lyapunov),
-                                                 gather=cuda.GATHER_LANES_BY_MODEL.get(self.name)))
+        return cuda.DeviceLines(self.gpu_kernel(method, lyapunov))
 
 
 class WrittenKernels:
@@ -78,16 +86,32 @@ class WrittenKernels:
     def run_lines(self, method, lyapunov=False):
         return self._function(f"run_lines_{method}{'_lyapunov' if lyapunov else ''}")
 
-    def is_cached(self, method, lyapunov=False):
+    def is_cached(self, method, lyapunov=False, device="cpu"):
         from vrsweep.numerics import codegen
 
+        if device == "cuda":
+            return _gpu_is_cached(self, method, lyapunov)
         return codegen.is_cached(self.model, f"run_lines_{method}{'_lyapunov' if lyapunov else ''}")
 
-    def gpu_lines(self, method, lyapunov=False):
+    def gpu_kernel(self, method, lyapunov=False):
         from vrsweep.numerics import codegen, cuda
 
-        functions = cuda.written_functions(codegen.compiled(self.model), lyapunov)
-        return cuda.DeviceLines(cuda.line_kernel(method, lyapunov, *functions))
+        return cuda.line_kernel(method, lyapunov, *cuda.written_functions(codegen.compiled(self.model), lyapunov))
+
+    def gpu_lines(self, method, lyapunov=False):
+        from vrsweep.numerics import cuda
+
+        return cuda.DeviceLines(self.gpu_kernel(method, lyapunov))
+
+
+def _gpu_is_cached(kernels, method, lyapunov):
+    """Whether the GPU's kernel is in numba's cache (a hint); True where numba-cuda is missing, so
+    that no compile is announced for a run that will stop at its one-line error (execution/device.py)."""
+    try:
+        from vrsweep.numerics import cuda
+    except ImportError:
+        return True
+    return cuda.is_cached(kernels.gpu_kernel(method, lyapunov))
 
 
 def kernels_for(model):
