@@ -21,11 +21,16 @@ from vrsweep.numerics import kernel  # noqa: E402
 from vrsweep.numerics.models import kernels_for  # noqa: E402
 
 
-def outputs(run_lines, coefficients, initial_states, settings, lines, measure):
+# What the host's output arrays hold before a GPU's launch: not NaN, so that an entry the card
+# left unfilled (cuda.fill_nan) shows (the CPU's are NaN-filled, as execution/sweep.py fills them).
+GARBAGE, GARBAGE_STATUS = 7.0, 99
+
+
+def outputs(run_lines, coefficients, initial_states, settings, lines, measure, fill=np.nan, status_fill=-1):
     n_lines, length = lines.shape
-    records = np.full((n_lines, length, measure, kernel.N_RECORD), np.nan)
-    summaries = np.full((n_lines, length, kernel.N_SUMMARY), np.nan)
-    statuses = np.full((n_lines, length), -1, dtype=np.int8)
+    records = np.full((n_lines, length, measure, kernel.N_RECORD), fill)
+    summaries = np.full((n_lines, length, kernel.N_SUMMARY), fill)
+    statuses = np.full((n_lines, length), status_fill, dtype=np.int8)
     run_lines(coefficients, initial_states, settings, lines, records, summaries, statuses)
     return {"records": records.tolist(), "summaries": summaries.tolist(), "statuses": statuses.tolist()}
 
@@ -44,7 +49,8 @@ def main(config_path, method, lyapunov, line_length, transient_periods=4):
     measure = config.integration.measure_periods
     local = np.arange(lines.size, dtype=np.int64).reshape(lines.shape)
     cpu = outputs(kernels.run_lines(method, lyapunov), coefficients, initial_states, settings, local, measure)
-    gpu = outputs(kernels.gpu_lines(method, lyapunov), coefficients, initial_states, settings, local, measure)
+    gpu = outputs(kernels.gpu_lines(method, lyapunov), coefficients, initial_states, settings, local, measure,
+                  GARBAGE, GARBAGE_STATUS)
     print(json.dumps({"cpu": cpu, "gpu": gpu}))
 
 
@@ -91,11 +97,11 @@ def slots(config_path):
     fresh = cuda.DeviceLines(kept.kernel, reuse=False)
     cpu = kernels.run_lines("rk45")
 
-    def arrays(rows):
+    def arrays(rows, fill=GARBAGE, status_fill=GARBAGE_STATUS):
         n = len(rows)
         return (coefficients[rows], initial_states[rows], settings, np.arange(n, dtype=np.int64).reshape(n, 1),
-                np.full((n, 1, measure, kernel.N_RECORD), np.nan), np.full((n, 1, kernel.N_SUMMARY), np.nan),
-                np.full((n, 1), -1, dtype=np.int8))
+                np.full((n, 1, measure, kernel.N_RECORD), fill), np.full((n, 1, kernel.N_SUMMARY), fill),
+                np.full((n, 1), status_fill, dtype=np.int8))
 
     def listed(chunk):
         return {"records": chunk[4].tolist(), "summaries": chunk[5].tolist(), "statuses": chunk[6].tolist()}
@@ -115,7 +121,7 @@ def slots(config_path):
         chunks.append(chunk)
         reallocated.append([id(array) for slot in kept.slots for array in slot.arrays] != held)
     for chunk in chunks:
-        other, host = arrays(np.arange(len(chunk[0]))), arrays(np.arange(len(chunk[0])))
+        other, host = arrays(np.arange(len(chunk[0]))), arrays(np.arange(len(chunk[0])), np.nan, -1)
         other = (chunk[0], chunk[1]) + other[2:]
         host = (chunk[0], chunk[1]) + host[2:]
         fresh(*other)

@@ -73,11 +73,23 @@ def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config
         np.testing.assert_array_equal(gpu[key], cpu[key], err_msg=f"{case}: {key}")
 
 
-def _simulated_run(tmp_path, mode, config_text):
-    """gpu_simulated.py's ``mode`` (sweep, slots) on a config in numba's CUDA simulator: its JSON."""
+def test_entries_a_failed_point_leaves_are_nan_on_the_gpu_as_on_the_cpu(tmp_path):
+    """A point stopped by its step cap leaves its later periods' records unwritten: NaN on the CPU
+    (its caller fills them), and NaN on the GPU, whose kernel fills its outputs on the card
+    (cuda.fill_nan) while the host's arrays hold anything (gpu_simulated.GARBAGE)."""
+    cpu, gpu = _simulated(tmp_path, SMALL_MAP + "integration: {max_steps: 6000}\n", "rk45", "false", 1)
+    assert (cpu["statuses"] != 0).all(), cpu["statuses"]  # Status.OK is 0
+    assert np.isnan(cpu["records"]).any() and not np.isnan(cpu["records"]).all()
+    for key in ("statuses", "summaries", "records"):
+        np.testing.assert_array_equal(gpu[key], cpu[key], err_msg=key)
+
+
+def _simulated_run(tmp_path, mode, config_text, *arguments):
+    """gpu_simulated.py's ``mode`` (sweep, slots, job) on a config in numba's CUDA simulator: its JSON."""
     config = tmp_path / "gpu.yaml"
     config.write_text(textwrap.dedent(config_text))
-    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), mode, str(config)], capture_output=True,
+    done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), mode, str(config), *arguments],
+                          capture_output=True,
                           text=True, env=dict(os.environ, NUMBA_ENABLE_CUDASIM="1"), timeout=900)
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])

@@ -79,9 +79,14 @@ class LineRunner:
         # A line runs along a parameter axis only (continuation along x0 / v0 is refused), so
         # its first point's x0 / v0 is the whole line's.
         initial_states = self.grid.initial_states_at(self.config, lines[:, 0])
-        records = np.full((n_lines, line_length, self.n_record_rows, kernel.N_RECORD), np.nan)
-        summaries = np.full((n_lines, line_length, kernel.N_SUMMARY), np.nan)
-        statuses = np.full((n_lines, line_length), Status.NOT_COMPUTED, dtype=np.int8)
+        # NaN where the kernel computes nothing (the periods after a failure). A GPU's kernel fills
+        # its outputs on the card (cuda.fill_nan) and the copy back overwrites every entry, so the
+        # host neither fills nor copies in a GPU chunk's records (1.8 GB for 131,072 points of 100
+        # periods).
+        gpu = self.device == "cuda"
+        records = _outputs((n_lines, line_length, self.n_record_rows, kernel.N_RECORD), np.nan, np.float64, gpu)
+        summaries = _outputs((n_lines, line_length, kernel.N_SUMMARY), np.nan, np.float64, gpu)
+        statuses = _outputs((n_lines, line_length), Status.NOT_COMPUTED, np.int8, gpu)
         chunk = ChunkRun(flat, coefficients, records, summaries, statuses, threads)
         arrays = (coefficients, initial_states, self.settings, local_lines, records, summaries, statuses)
         if self.device == "cuda":
@@ -102,6 +107,10 @@ class LineRunner:
         if chunk.seconds is None:
             chunk.seconds = time.perf_counter() - chunk.began
         return chunk.flat, values
+
+
+def _outputs(shape, fill, dtype, filled_by_kernel):
+    return np.empty(shape, dtype=dtype) if filled_by_kernel else np.full(shape, fill, dtype=dtype)
 
 
 class ChunkRun:

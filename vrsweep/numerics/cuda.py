@@ -119,6 +119,7 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
         state[1] = first[1]
         for slot in range(lines.shape[1]):
             summary = summaries[line, slot]
+            fill_nan(period_records[line, slot], summary)
             status = _integrate(
                 model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
                 step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
@@ -152,6 +153,10 @@ _SIMULATOR_PROLOGUE = """\
 """
 
 
+# The kernel's arguments that are only its outputs: period_records, summaries, statuses.
+OUTPUT_ARGUMENTS = (4, 5, 6)
+
+
 # A warp's 32 lanes (THREADS_PER_BLOCK is a multiple of 32, so every lane of a warp exists).
 WARP_LANES = 0xFFFFFFFF
 
@@ -164,6 +169,18 @@ def gather_warp():
     these until every lane of its warp has none (no lane of the warp exits before: a warp vote
     must not name an exited lane)."""
     cuda.any_sync(WARP_LANES, True)
+
+
+@numba.njit
+def fill_nan(records, summary):
+    """A point's outputs before its integration: NaN where the kernel writes nothing (the periods
+    after a failure), as the CPU's callers fill them (execution/sweep.py). Filled on the card, the
+    outputs need no copy from the host: a GPU's chunk of 131,072 points holds 1.8 GB of records."""
+    for row in range(records.shape[0]):
+        for j in range(records.shape[1]):
+            records[row, j] = math.nan
+    for j in range(summary.shape[0]):
+        summary[j] = math.nan
 
 
 def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None, gather=None):
@@ -264,6 +281,7 @@ max_registers: {max_registers}
 """
 from numba import cuda, float64
 {imports}
+from vrsweep.numerics.cuda import fill_nan
 RULES = {rules}
 WARP_LANES = {warp_lanes}
 
@@ -291,9 +309,10 @@ def written_functions(module, tangents):
 
 
 class DeviceLines:
-    """lines.run_lines_*'s call, run on the GPU: copies the chunk's arrays to the device, launches
+    """lines.run_lines_*'s call, run on the GPU: copies the chunk's inputs to the device, launches
     the kernel, and copies the outputs back into the caller's arrays (the same arrays the CPU
-    fills, so everything after the kernel is the CPU's code). sort: SORT by default; reuse:
+    fills, so everything after the kernel is the CPU's code; what they held before is overwritten,
+    never read: the kernel fills its outputs itself). sort: SORT by default; reuse:
     REUSE_DEVICE_ARRAYS by default (the slots it keeps are freed with it)."""
 
     def __init__(self, kernel_, sort=None, reuse=None):
@@ -331,8 +350,8 @@ class DeviceLines:
         order = self.order(coefficients, initial_states, lines)
         self.kernel = ready_kernel(self.kernel)
         slot = self._free_slot()
-        # (the outputs go in too: the kernel writes only some of their entries)
-        arguments = [slot.holding(k, np.ascontiguousarray(host)) for k, host in enumerate((
+        # (the outputs are not copied in: the kernel fills every entry, fill_nan where it computes none)
+        arguments = [slot.holding(k, np.ascontiguousarray(host), copy=k not in OUTPUT_ARGUMENTS) for k, host in enumerate((
             coefficients, initial_states, settings, lines, period_records, summaries, statuses, order,
             np.zeros(1, dtype=np.int64)))]
         slot.began.record(slot.stream)
@@ -364,10 +383,11 @@ class _Slot:
         self.arrays = []
         self.busy = False
 
-    def holding(self, k, host):
-        """Device array k with host's values (copied on the slot's stream): the slot's own, or its
-        first rows, replaced where host needs more rows or another shape or type. Only a
-        replacement allocates: the one point where this launch waits for those in flight."""
+    def holding(self, k, host, copy=True):
+        """Device array k with host's values (copied on the slot's stream; with copy False only its
+        shape and type): the slot's own, or its first rows, replaced where host needs more rows or
+        another shape or type. Only a replacement allocates: the one point where this launch waits
+        for those in flight."""
         if k == len(self.arrays):
             self.arrays.append(None)
         held = self.arrays[k]
@@ -376,7 +396,8 @@ class _Slot:
             self.arrays[k] = None  # freed before its successor is allocated
             held = self.arrays[k] = cuda.device_array(host.shape, dtype=host.dtype, stream=self.stream)
         view = held if held.shape[0] == host.shape[0] else held[:host.shape[0]]
-        view.copy_to_device(host, stream=self.stream)
+        if copy:
+            view.copy_to_device(host, stream=self.stream)
         return view
 
 
