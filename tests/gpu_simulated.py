@@ -131,10 +131,48 @@ def slots(config_path):
                       "reallocated": reallocated}))
 
 
+def job(config_path, folder):
+    """run_job on the GPU (chunks of two points growing) and on the CPU: each file's solver error
+    attributes, and for each run the chunks written when the solver error's tight run started, of
+    how many in all (solver_error.start)."""
+    import h5py
+
+    from vrsweep.execution import chunks, job as jobs, solver_error
+
+    chunks.GPU_FIRST_CHUNK_LINES = 2
+    written, started = [0], []
+    write_points = jobs.ResultWriter.write_points
+    start = solver_error.start
+
+    def counted(self, *arguments):
+        write_points(self, *arguments)
+        written[0] += 1
+
+    def noted(*arguments):
+        started.append(written[0])
+        return start(*arguments)
+
+    jobs.ResultWriter.write_points = counted
+    solver_error.start = noted
+    results = {}
+    for device in ("cuda", "cpu"):
+        written[0], started[:] = 0, []
+        # (a transient long enough for periodic points: the estimate needs some)
+        config = load_config(config_path, [f"device={device}", "transient_periods=60", "measure_periods=16"])
+        path = os.path.join(folder, f"{device}.h5")
+        jobs.run_job(config, path)
+        with h5py.File(path, "r") as file:
+            attributes = {name: float(value) for name, value in file.attrs.items() if name.startswith("R_solver_err")}
+        results[device] = {"attributes": attributes, "started_after": list(started), "chunks": written[0]}
+    print(json.dumps(results))
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "sweep":
         sweep(sys.argv[2])
     elif sys.argv[1] == "slots":
         slots(sys.argv[2])
+    elif sys.argv[1] == "job":
+        job(sys.argv[2], sys.argv[3])
     else:
         main(sys.argv[1], sys.argv[2], sys.argv[3], *[int(argument) for argument in sys.argv[4:]])

@@ -113,6 +113,20 @@ def test_the_job_on_the_gpu_hands_every_chunk_over_once_in_order_with_the_cpu_s_
     assert set(result["cpu"]["values"]["status"].values()) == {0.0}
 
 
+def test_on_the_gpu_the_solver_errors_tight_run_starts_beside_the_grid_and_gives_the_cpus_estimate(tmp_path):
+    """execution/job.py's SolverErrorSample: on a GPU the tight run of R_solver_err's sample starts
+    once the grid's first lines are written (after the first chunk, with chunks left to run), not
+    as a launch of its own at the end; the file's estimate is the CPU run's, bit for bit, whose
+    tight run still starts at the end."""
+    result = _simulated_run(tmp_path, "job", "model: effective\n" + SMALL_MAP.replace(
+        "[5.0, 20.0, 30.0]", "[5.0, 10.0, 15.0, 20.0, 25.0, 30.0]"), str(tmp_path))
+    gpu, cpu = result["cuda"], result["cpu"]
+    assert len(gpu["started_after"]) == 1 and 1 <= gpu["started_after"][0] < gpu["chunks"], gpu
+    assert cpu["started_after"] == [cpu["chunks"]], cpu
+    assert gpu["attributes"]["R_solver_err_points"] > 0, gpu
+    assert gpu["attributes"] == cpu["attributes"]
+
+
 def test_launches_in_flight_keep_their_slots_and_give_fresh_arrays_values(tmp_path):
     """DeviceLines keeps a launch's device arrays for the next (an allocation between two launches
     keeps CUDA from running them at once): two launches in flight hold two slots; a larger chunk

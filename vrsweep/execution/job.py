@@ -227,17 +227,51 @@ def analytic_extras(config, grid):
     return extras
 
 
-def solver_error_attributes(config, grid, shard, writer):
+def solver_error_attributes(config, grid, shard, writer, sample=None):
     """R_solver_err and its sample's size and tolerance (execution/solver_error.py), measured on the
-    points this file holds (a shard's own)."""
+    points this file holds (a shard's own); ``sample``: its tight run, if started already
+    (SolverErrorSample)."""
     from vrsweep.execution import solver_error
 
+    done, stored = _done_and_stored(writer)
+    if sample is None:
+        sample = solver_error.start(config, grid, done, stored)
+    return solver_error.finish(sample, stored)
+
+
+def _done_and_stored(writer):
+    """The points this file holds done (a shard's own) and the values the solver's error is
+    estimated from, flat over the grid."""
     done = writer.done_mask().reshape(-1)
     owned = writer.owned_mask()
     if owned is not None:
         done = done & owned.reshape(-1)
     stored = {name: array.reshape(-1) for name, array in writer.read_variables(("R", "period", "status", "motion")).items()}
-    return solver_error.estimate(config, grid, done, stored)
+    return done, stored
+
+
+class SolverErrorSample:
+    """On a GPU, the solver error's tight run (execution/solver_error.py) starts as soon as its
+    sample is final, the grid's first lines being done, and the card computes it beside the rest
+    of the grid: at the run's end it would be a launch of a few points alone on the card (4.9 s on
+    the original model on an H100, benchmarks/README.md). On the CPU it runs at the end, as before
+    (started early, it would take the run's threads)."""
+
+    def __init__(self, config, grid, writer):
+        self.config, self.grid, self.writer = config, grid, writer
+        self.sample = None
+        self.early = config.integration.device == "cuda"
+
+    def check(self):
+        """Start the tight run if it can start now (called before the run and after every chunk)."""
+        from vrsweep.execution import solver_error
+
+        if not self.early or self.sample is not None:
+            return
+        owned = self.writer.owned_mask()
+        if solver_error.sample_is_final(self.grid, self.writer.done_mask().reshape(-1),
+                                        None if owned is None else owned.reshape(-1)):
+            self.sample = solver_error.start(self.config, self.grid, *_done_and_stored(self.writer))
 
 
 def basin_extras(config, writer):
@@ -302,12 +336,15 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         left = [n_owned - n_done]
 
         motions = {}
+        solver_sample = SolverErrorSample(config, grid, writer)
+        solver_sample.check()  # (a resumed run's sample may be done already)
 
         def on_chunk(flat_indices, values):
             writer.write_points(flat_indices, values)
             for code, n in zip(*np.unique(values["motion"], return_counts=True)):
                 motions[Motion(int(code))] = motions.get(Motion(int(code)), 0) + int(n)
             left[0] -= len(flat_indices)
+            solver_sample.check()
             if stop is not None and left[0] > 0:  # after the last chunk, finishing is better
                 stop.check()  # a stop asked for during the chunk takes effect now it is saved
 
@@ -321,7 +358,8 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     if shard[1] == 1:  # a shard sees part of each slice: the merge labels the whole grid
         attractors, coords = basin_extras(config, writer)
         extras.update(attractors)
-    writer.finish(extra=extras, coords=coords, attributes=solver_error_attributes(config, grid, shard, writer))
+    writer.finish(extra=extras, coords=coords,
+                  attributes=solver_error_attributes(config, grid, shard, writer, solver_sample.sample))
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration, motions)
 
 

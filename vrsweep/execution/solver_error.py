@@ -20,6 +20,9 @@ its R_err), so the bound can only be wider. A periodic point whose tight run set
 is left out (estimate: a transient, not the solver). With none left there is no R_solver_err,
 and R_solver_err_points is 0: nothing was estimated.
 
+On a GPU the tight run starts as soon as the sample's points are done (start, execution/job.py's
+SolverErrorSample), beside the rest of the grid; its points, and so the estimate, are the same.
+
 The first points are the grid's, not a shard's: each shard reruns those it holds, and the merge's
 largest bound is the whole run's, bit for bit. Cost: SAMPLE_FRACTION of the points (at least
 SAMPLE_MIN, at most SAMPLE_POINTS), the periodic ones only, each about 2.5 to 4 times a point's
@@ -48,17 +51,41 @@ def tight_integration(integration):
     return dataclasses.replace(integration, rtol=rtol, atol=integration.atol * (rtol / integration.rtol))
 
 
-def sample_lines(grid, done, periodic):
-    """The lines to rerun: of the grid's first lines in its shuffled order (SAMPLE_FRACTION of its
-    points, at least SAMPLE_MIN, at most SAMPLE_POINTS: the same lines for a whole run and for its
-    shards, so that merged shards carry the whole run's estimate), those this file holds done
-    (``done``: False outside a shard's own points) and periodic throughout."""
+def candidate_lines(grid):
+    """The grid's first lines in its shuffled order, SAMPLE_FRACTION of its points (at least
+    SAMPLE_MIN, at most SAMPLE_POINTS): the same lines for a whole run and for its shards, so that
+    merged shards carry the whole run's estimate."""
     from vrsweep.config.grid import shuffled_lines
 
     lines = shuffled_lines(grid, 0, 1)
     n_points = max(SAMPLE_MIN, min(SAMPLE_POINTS, math.ceil(SAMPLE_FRACTION * grid.n_points)))
-    first = lines[:max(1, math.ceil(n_points / lines.shape[1]))]
+    return lines[:max(1, math.ceil(n_points / lines.shape[1]))]
+
+
+def sample_lines(grid, done, periodic):
+    """The lines to rerun: of candidate_lines, those this file holds done (``done``: False outside a
+    shard's own points) and periodic throughout."""
+    first = candidate_lines(grid)
     return first[np.all(done[first] & periodic[first], axis=1)]
+
+
+def sample_is_final(grid, done, owned=None):
+    """Whether every candidate line this file will hold (``owned``: a shard's points, None for all)
+    is done: then the sample, and so the estimate, is what the run's end would choose, and its
+    tight run can start while the rest of the grid computes (a GPU's run, execution/job.py)."""
+    first = candidate_lines(grid)
+    held = np.ones(first.shape, dtype=bool) if owned is None else owned[first]
+    return bool(np.all(done[first] | ~held))
+
+
+@dataclasses.dataclass
+class Sample:
+    """The tight run of the sample, started (start): its settings' rtol, and where it has lines,
+    the runner, its chunk in flight or done, and the points the run counted as converged."""
+    rtol: float
+    runner: object = None
+    chunk: object = None
+    converged: np.ndarray = None
 
 
 def estimate(config, grid, done, stored):
@@ -66,13 +93,17 @@ def estimate(config, grid, done, stored):
     periodic points it was measured on) and R_solver_err_rtol (the tight rtol).
 
     stored: the run's {"R", "period", "status", "motion"} over the whole grid (flat)."""
+    return finish(start(config, grid, done, stored), stored)
+
+
+def start(config, grid, done, stored):
+    """The sample's tight run, started (a Sample): on the CPU it runs here, to the end; on a GPU it
+    is launched and left running (finish waits), so that a run can start it once its sample is
+    final (sample_is_final) and let the card compute it beside the rest of the grid."""
     from vrsweep.execution.sweep import LineRunner
     from vrsweep.results import Motion, Status
 
     tight = tight_integration(config.integration)
-    # R_solver_err itself only where it was measured (an attribute of NaN would make equal files
-    # compare unequal): its absence with R_solver_err_points = 0 says "not estimated".
-    attributes = {"R_solver_err_points": np.int64(0), "R_solver_err_rtol": tight.rtol}
     ok = stored["status"] == Status.OK
     converged = ok & (stored["period"] > 0)
     lines = sample_lines(grid, done, converged)
@@ -80,8 +111,23 @@ def estimate(config, grid, done, stored):
         converged = ok & (stored["motion"] == Motion.QUASI_PERIODIC)
         lines = sample_lines(grid, done, converged)
     if not len(lines):
+        return Sample(tight.rtol)
+    runner = LineRunner(dataclasses.replace(config, integration=tight))
+    return Sample(tight.rtol, runner, runner.start(lines), converged)
+
+
+def finish(sample, stored):
+    """start's attributes (see estimate), once its tight run is done. stored: as start's; the
+    sample's points are the same in both (written once, never again)."""
+    from vrsweep.results import Status
+
+    # R_solver_err itself only where it was measured (an attribute of NaN would make equal files
+    # compare unequal): its absence with R_solver_err_points = 0 says "not estimated".
+    attributes = {"R_solver_err_points": np.int64(0), "R_solver_err_rtol": sample.rtol}
+    if sample.chunk is None:
         return attributes
-    flat, values = LineRunner(dataclasses.replace(config, integration=tight)).run(lines)
+    converged = sample.converged
+    flat, values = sample.runner.finish(sample.chunk)
     r, r_tight = stored["R"][flat], values["R"]
     # Converged in the run (sample_lines chose such points); whatever the tight run found: a period
     # that changes with the tolerance is itself the run's error (rk45 at rtol 1e-4 made a period-6
