@@ -302,13 +302,15 @@ def test_a_kernel_the_cache_fails_on_compiles_without_it(monkeypatch):
         cuda.ready_kernel(Broken())
 
 
-def test_asking_for_the_gpu_where_there_is_none_is_one_line_and_exit_2(tmp_path, invoke, write_config):
+@pytest.mark.parametrize("options", [["-q"], ["--dry-run"]])
+def test_asking_for_the_gpu_where_there_is_none_is_one_line_and_exit_2(tmp_path, invoke, write_config, options):
+    """One line, exit 2, no file; a dry run does not first announce a compile that never comes."""
     from numba import cuda as numba_cuda_target
 
     if numba_cuda_target.is_available():
         pytest.skip("this machine has a GPU")
     config = write_config(tmp_path, SMALL_MAP)
-    result = invoke("run", config, "-o", tmp_path / "out.h5", "--device", "cuda", "-q")
+    result = invoke("run", config, "-o", tmp_path / "out.h5", "--device", "cuda", *options)
     assert result.exit_code == 2, result.output
     assert "integration.device: cuda:" in result.output
     assert len(result.output.strip().splitlines()) == 1, result.output

@@ -189,6 +189,11 @@ def _say_if_compiling(integration, model="original"):
     from vrsweep.numerics.models import kernels_for
 
     gpu = integration.device == "cuda"
+    if gpu:
+        from vrsweep.execution.device import cuda_problem
+
+        if cuda_problem() is not None:  # nothing compiles: the run stops first, in one line
+            return
     say_if_compiling(lambda: kernels_for(model).is_cached(integration.method, integration.lyapunov, integration.device),
                      what="the CUDA kernel" if gpu else "the numba kernel",
                      duration=GPU_COMPILE_SECONDS if gpu else COMPILE_SECONDS)
