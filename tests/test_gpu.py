@@ -283,7 +283,18 @@ def test_a_kernel_the_cache_fails_on_compiles_without_it(monkeypatch):
         def without_cache(self):
             return Uncached()
 
+    class Loaded:
+        def bind(self):
+            raise RuntimeError("CUDA_ERROR_INVALID_IMAGE")
+
+    class Unloadable(Cached):
+        def compile(self, signature):
+            return Loaded()
+
     monkeypatch.setattr(cuda, "_READY", {})
+    assert isinstance(cuda.ready_kernel(Unloadable()), Uncached)  # loaded from the cache, not loadable
+    assert cuda.ready_kernel(Unloadable()).cache_failure == "RuntimeError: CUDA_ERROR_INVALID_IMAGE"
+    compiled.clear()
     cached = Cached()
     ready = cuda.ready_kernel(cached)
     assert isinstance(ready, Uncached) and compiled == [cuda.kernel_signature()]

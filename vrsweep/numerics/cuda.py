@@ -44,6 +44,7 @@ from vrsweep.numerics.dop853 import (
     dop853_step,
 )
 from vrsweep.numerics.impact import N_BRACKET
+from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.lines import next_start
 from vrsweep.numerics.rk45 import (
     DENSE_ORDER, N_STAGES, accepted_step_factor, certain_growth, dp54_dense, dp54_step, error_norm,
@@ -171,6 +172,16 @@ def gather_warp():
     cuda.any_sync(WARP_LANES, True)
 
 
+# In numba's CUDA simulator the kernel runs as Python and calls the loop from there, so numba
+# compiles kernel._integrate as an entry point of its own for the functions passed to it. Cached,
+# each process would add an entry that never hits (a key with function arguments names those
+# functions' objects, new in every process) to one index, and numba fails to save an index that
+# names more functions than it keeps alive ("underlying object has vanished": seen in a second run
+# of tests/test_gpu.py). Elsewhere the loop is inlined into its callers, never an entry point.
+simulated_integrate = kernel_jit(kernel._integrate.py_func, cache=False)
+_WHERE = {simulated_integrate: (__name__, "simulated_integrate")}
+
+
 @numba.njit
 def fill_nan(records, summary):
     """A point's outputs before its integration: NaN where the kernel writes nothing (the periods
@@ -211,7 +222,7 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
         simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
         first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "")
     functions = {
-        "_integrate": kernel._integrate, "next_start": next_start, "no_preparation": rhs.no_preparation,
+        "_integrate": simulated_integrate if numba.config.ENABLE_CUDASIM else kernel._integrate, "next_start": next_start, "no_preparation": rhs.no_preparation,
         "step": step, "step_error": step_error, "dense_output": dense_output, "accepted_factor": accepted_factor,
         "growth": growth, "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
         "barrier_force": barrier_force, "gather_lanes": gather_warp if gather else kernel.lanes_apart,
@@ -241,28 +252,29 @@ def kernel_signature():
             nb.float64[:, :, :, ::1], nb.float64[:, :, ::1], nb.int8[:, ::1], nb.int64[::1], nb.int64[::1])
 
 
-_READY = {}
+_READY = {}  # kernel -> the dispatcher ready_kernel returned for it (kernels live as long as the process)
 
 
 def ready_kernel(kernel_):
     """kernel_ compiled for kernel_signature() in this process, loaded from numba's cache where it
     holds it: the dispatcher to launch. Where the cache fails (a file it cannot read, a kernel it
-    cannot save), the same source compiles without it, as every process did up to 0.6.3: slower,
+    cannot save, a loaded kernel the card cannot load), the same source compiles without it, as every process did up to 0.6.3: slower,
     never wrong; the returned dispatcher's ``cache_failure`` then says why. A compile error of the
     kernel itself is raised (by the second compile). Once per kernel and process."""
     if numba.config.ENABLE_CUDASIM:  # (the simulator compiles nothing)
         return kernel_
-    ready = _READY.get(id(kernel_))
+    ready = _READY.get(kernel_)
     if ready is None:
         try:
-            kernel_.compile(kernel_signature())
+            # (bound here, not at the first launch: a cached module the card cannot load falls back too)
+            kernel_.compile(kernel_signature()).bind()
             ready = kernel_
         except Exception as error:  # noqa: BLE001 -- numba-cuda's cache raises many kinds
             ready = kernel_.without_cache()
             ready.queue, ready.gather = kernel_.queue, kernel_.gather
             ready.compile(kernel_signature())
             ready.cache_failure = f"{type(error).__name__}: {error}"
-        _READY[id(kernel_)] = ready
+        _READY[kernel_] = ready
     return ready
 
 
@@ -291,7 +303,7 @@ WARP_LANES = {warp_lanes}
 def _import_line(alias, function):
     """``from module import name as alias`` for a module-level njit function (a generated model's
     module too: codegen registers it in sys.modules before its functions are handed here)."""
-    module, name = function.py_func.__module__, function.py_func.__name__
+    module, name = _WHERE.get(function, (function.py_func.__module__, function.py_func.__name__))
     if getattr(sys.modules.get(module), name, None) is not function:
         raise ValueError(f"{alias}: {module}.{name} is not importable as the function handed to the kernel")
     return f"from {module} import {name} as {alias}\n"
