@@ -258,9 +258,13 @@ class SolverErrorSample:
     (started early, it would take the run's threads)."""
 
     def __init__(self, config, grid, writer):
+        from vrsweep.execution import solver_error
+
         self.config, self.grid, self.writer = config, grid, writer
         self.sample = None
         self.early = config.integration.device == "cuda"
+        # (the grid's shuffled order, once: not after every chunk)
+        self.candidates = solver_error.candidate_lines(grid) if self.early else None
 
     def check(self):
         """Start the tight run if it can start now (called before the run and after every chunk)."""
@@ -269,7 +273,7 @@ class SolverErrorSample:
         if not self.early or self.sample is not None:
             return
         owned = self.writer.owned_mask()
-        if solver_error.sample_is_final(self.grid, self.writer.done_mask().reshape(-1),
+        if solver_error.sample_is_final(self.candidates, self.writer.done_mask().reshape(-1),
                                         None if owned is None else owned.reshape(-1)):
             self.sample = solver_error.start(self.config, self.grid, *_done_and_stored(self.writer))
 

@@ -69,11 +69,11 @@ def sample_lines(grid, done, periodic):
     return first[np.all(done[first] & periodic[first], axis=1)]
 
 
-def sample_is_final(grid, done, owned=None):
-    """Whether every candidate line this file will hold (``owned``: a shard's points, None for all)
-    is done: then the sample, and so the estimate, is what the run's end would choose, and its
-    tight run can start while the rest of the grid computes (a GPU's run, execution/job.py)."""
-    first = candidate_lines(grid)
+def sample_is_final(first, done, owned=None):
+    """Whether every candidate line (``first``: candidate_lines) this file will hold (``owned``: a
+    shard's points, None for all) is done: then the sample, and so the estimate, is what the run's
+    end would choose, and its tight run can start while the rest of the grid computes (a GPU's
+    run, execution/job.py)."""
     held = np.ones(first.shape, dtype=bool) if owned is None else owned[first]
     return bool(np.all(done[first] | ~held))
 
