@@ -10,7 +10,8 @@ cuda.ready_kernel (compiling or loading the kernel), reports numba-cuda's cache 
 and any cache failure (ready_kernel then compiles without the cache), and runs a launch of
 ``--points`` points of the benchmark map (benchmarks/gpu.py's settings). Prints both children's
 figures, the ratio of their kernel times, and whether their outputs are equal bit for bit; writes
-DIR/gpu_cache.json.
+DIR/gpu_cache.json. --cache-dir keeps the cache folder, so that later runs of a device call
+(NUMBA_CACHE_DIR set to it) load the kernel rather than compile it.
 """
 
 from __future__ import annotations
@@ -63,13 +64,18 @@ def main():
     parser.add_argument("--method", default="rk45")
     parser.add_argument("--points", type=int, default=4096)
     parser.add_argument("--out", default=".")
+    parser.add_argument("--cache-dir", default=None,
+                        help="an empty folder to cache in, kept after (default: a temporary one)")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         child(args.model, args.method, args.points)
         return
     runs = []
-    with tempfile.TemporaryDirectory() as folder:
+    if args.cache_dir and any(Path(args.cache_dir).glob("*")):
+        sys.exit(f"--cache-dir {args.cache_dir}: not empty")
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = args.cache_dir or scratch
         env = dict(os.environ, NUMBA_CACHE_DIR=folder)
         for name in ("first process (compiles)", "second process (loads)"):
             began = time.perf_counter()
