@@ -61,7 +61,6 @@ def sweep(config_path):
     from vrsweep.execution.sweep import run_sweep
 
     chunks.GPU_FIRST_CHUNK_LINES = 2  # several chunks, so that one is in flight while another finishes
-    chunks.GPU_SHUFFLED_LINES = 2     # and after the first, chunks in the grid's order
     results = {}
     for device in ("cuda", "cpu"):
         config = load_config(config_path, [f"device={device}", "transient_periods=4", "measure_periods=16"])

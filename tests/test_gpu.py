@@ -98,9 +98,8 @@ def _simulated_run(tmp_path, mode, config_text, *arguments):
 def test_the_job_on_the_gpu_hands_every_chunk_over_once_in_order_with_the_cpu_s_values(tmp_path):
     """On a GPU run_sweep launches the next chunk before it finishes the last (the host's diagnostics
     and writing overlap the card's work): every point is handed to on_chunk exactly once, the chunks
-    in the order they were cut, growing from two points, the first chunk the CPU's (the grid's
-    shuffled lines) and the rest in the grid's order (chunks.GPU_CHUNKS_IN_GRID_ORDER), and each
-    point's values are the CPU's bit for bit (rk45)."""
+    in the order they were cut, growing from two points, and each point's values are the CPU's bit
+    for bit (rk45)."""
     result = _simulated_run(tmp_path, "sweep",
                             BASIN_MAP.replace("[5.0, 20.0, 30.0]", "[5.0, 12.0, 20.0, 25.0, 30.0, 35.0]"))
     handed = result["cuda"]["handed"]
@@ -108,9 +107,8 @@ def test_the_job_on_the_gpu_hands_every_chunk_over_once_in_order_with_the_cpu_s_
     assert sizes[:2] == [2, 2] and max(sizes) > 2 and len(handed) >= 4, sizes
     flat = [index for chunk in handed for index in chunk]
     assert sorted(flat) == list(range(24))
-    # cut in order: the CPU's first chunk of the grid's shuffled lines, then the rest by grid index
-    shuffled = [index for chunk in result["cpu"]["handed"] for index in chunk]
-    assert flat[:2] == shuffled[:2] and flat[2:] == sorted(shuffled[2:]) != shuffled[2:]
+    # cut in order: the same sequence as the CPU's run of the grid's shuffled lines
+    assert flat == [index for chunk in result["cpu"]["handed"] for index in chunk]
     assert result["cuda"]["values"] == result["cpu"]["values"]
     assert set(result["cpu"]["values"]["status"].values()) == {0.0}
 

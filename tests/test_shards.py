@@ -320,35 +320,3 @@ def test_a_write_failure_during_merge_is_one_line_and_leaves_nothing(runs, tmp_p
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"Error: cannot write {out}: No space left on device")
     assert list(tmp_path.iterdir()) == []
-
-
-# ---------------------------------------------------------------------------------------------
-# A GPU run's order of lines (execution/chunks.gpu_run_order)
-# ---------------------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("count, first_chunk, resumed", [(1, 1, False), (1, 40, False), (3, 2, False), (4, 1, True)])
-def test_a_gpu_run_takes_its_first_chunk_shuffled_and_the_rest_in_the_grids_order(count, first_chunk, resumed):
-    """The same lines as the CPU's plan, once each; the first chunk's (at least GPU_SHUFFLED_LINES)
-    in the plan's shuffled order, holding every line of the solver error's sample that the shard
-    runs (its tight run can start early); the rest sorted by their place in the grid, so that a
-    chunk is a region of the grid."""
-    from vrsweep.execution import chunks, solver_error
-
-    config = parse_config(textwrap.dedent("""\
-        sweep:
-          g: {start: 0.0, stop: 30.0, num: 37}
-          Omega: {start: 3.0, stop: 6.0, num: 29}
-        """))
-    grid = Grid.from_config(config)
-    assert chunks.GPU_SHUFFLED_LINES >= solver_error.SAMPLE_POINTS
-    done = np.random.default_rng(count).random(grid.n_points) < 0.3 if resumed else None
-    for shard in range(count):
-        plan = chunks.plan_lines(grid, (shard, count), done)
-        ordered = chunks.gpu_run_order(plan.lines, first_chunk)
-        kept = max(first_chunk, chunks.GPU_SHUFFLED_LINES)
-        assert sorted(ordered[:, 0].tolist()) == sorted(plan.lines[:, 0].tolist())
-        np.testing.assert_array_equal(ordered[:kept], plan.lines[:kept])
-        assert np.all(np.diff(ordered[kept:, 0]) > 0)
-        owned = np.isin(solver_error.candidate_lines(grid)[:, 0], plan.lines[:, 0])
-        assert np.isin(solver_error.candidate_lines(grid)[owned, 0], ordered[:kept, 0]).all()

@@ -44,18 +44,6 @@ GPU_MAX_CHUNK_LINES = 2 ** 20
 GPU_GROW_CHUNK_BELOW_SECONDS = 30.0
 GPU_CHUNK_RECORD_BYTES = 4 * 2 ** 30
 GPU_CHUNKS_IN_FLIGHT = 2
-# A warp's 32 lanes run in step: where their points take different paths through the integrator's
-# loop (an impact in one, a rejected step in another), the others wait. Neighbouring grid points
-# take nearly the same path, so a GPU run hands out its lines, after the first chunk, in the grid's
-# order: each chunk is a region of the grid, and a warp's lanes integrate adjacent points (the
-# launch sorts a chunk's lines by their parameters, numerics/cuda.py). Shuffled chunks put a warp's
-# lanes as far apart as the chunk is sparse in the grid (benchmarks/README.md, "GPU"). The first
-# chunk, and at least the first GPU_SHUFFLED_LINES lines, keep the shuffled order: they hold the
-# solver error's sample (solver_error.candidate_lines: at most SAMPLE_POINTS lines, among a shard's
-# first that many; tests/test_shards.py checks), whose tight run then starts beside the next
-# chunks, and the first chunk's rate is the whole grid's.
-GPU_CHUNKS_IN_GRID_ORDER = True
-GPU_SHUFFLED_LINES = 32  # solver_error.SAMPLE_POINTS (not imported: that module imports the sweep's)
 
 
 def point_record_bytes(integration) -> int:
@@ -120,16 +108,6 @@ def plan_lines(grid, shard=(0, 1), done=None) -> LinePlan:
     lines = shuffled_lines(grid, *shard)
     not_done = np.ones(grid.n_points, dtype=bool) if done is None else ~np.asarray(done, dtype=bool).reshape(-1)
     return LinePlan(lines[np.any(not_done[lines], axis=1)], not_done)
-
-
-def gpu_run_order(lines, first_chunk):
-    """A GPU run's lines (``lines``: a LinePlan's, shuffled) in the order its chunks take them: the
-    first chunk's (``first_chunk`` lines, at least GPU_SHUFFLED_LINES) as they are, the rest by
-    their first point's place in the grid (GPU_CHUNKS_IN_GRID_ORDER). A point's outputs do not
-    depend on its chunk: only the speed changes."""
-    kept = max(int(first_chunk), GPU_SHUFFLED_LINES)
-    rest = lines[kept:]
-    return np.concatenate([lines[:kept], rest[np.argsort(rest[:, 0], kind="stable")]])
 
 
 def count_statuses(counts, statuses) -> dict:

@@ -17,7 +17,6 @@ import time
 import numba
 import numpy as np
 
-from vrsweep.execution import chunks
 from vrsweep.numerics import kernel
 from vrsweep.analysis.diagnostics import lyapunov_values, point_diagnostics, window_records
 from vrsweep.analysis.motion import motion_values
@@ -26,7 +25,7 @@ from vrsweep.numerics.lines import RUN_LINES  # noqa: F401
 # Grid, the planner's names: imported from here by callers written before they moved.
 from vrsweep.execution.chunks import (  # noqa: F401
     GPU_GROW_CHUNK_BELOW_SECONDS, GROW_CHUNK_BELOW_SECONDS, MAX_CHUNK_LINES, SHUFFLE_SEED, count_statuses,
-    default_chunk_lines, gpu_first_chunk_lines, gpu_run_order, max_chunk_lines,
+    default_chunk_lines, gpu_first_chunk_lines, max_chunk_lines,
     plan_lines,
     shard_of_points, shuffled_lines,
 )
@@ -154,8 +153,6 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
     chunk_lines = chunk_lines or min(first_chunk, largest_chunk)
     largest_chunk = max(chunk_lines, largest_chunk)
     grow_below = GPU_GROW_CHUNK_BELOW_SECONDS if gpu else GROW_CHUNK_BELOW_SECONDS
-    if gpu and chunks.GPU_CHUNKS_IN_GRID_ORDER:
-        lines = gpu_run_order(lines, chunk_lines)
     counts = {}
     start = 0
     in_flight = None  # a GPU's chunk launched and not yet finished
