@@ -18,8 +18,8 @@ map), for each model (original: eq2.1, effective: eq2.10):
 - Through the job (--job-points, each model's fastest GPU method): vrsweep.sweep(device="cuda")
   writing its HDF5 file, with the chunks, diagnostics and writing a user's run has, against the
   bare launches above: what a user gets (--job-fresh-arrays: also with fresh device arrays per
-  launch, as up to 0.6.2, in the same process; --job-shuffled: also with 0.6.4's shuffled chunks,
-  where since 0.6.5 the chunks after the first are regions of the grid).
+  launch, as up to 0.6.2, in the same process). Each chunk's size and seconds on the card are
+  printed as it finishes, so that a call cut short still tells.
 - --divergence N: gpu_divergence.py's one point per warp against 32 (what divergence costs).
 
 Prints a table as it goes and writes everything to OUT/gpu.json. Ratios compare runs of this one
@@ -132,8 +132,6 @@ def main():
                         help="then gpu_divergence.py's measurement on DISTINCT points x 32 (0: none)")
     parser.add_argument("--job-fresh-arrays", action="store_true",
                         help="run each job's map twice: fresh device arrays per launch (0.6.2), then kept slots")
-    parser.add_argument("--job-shuffled", action="store_true",
-                        help="run each job's map twice: shuffled chunks (0.6.4), then chunks in the grid's order")
     args = parser.parse_args()
     global AGREEMENT_SAMPLE, LYAPUNOV_SAMPLE, FIRST_LAUNCH
     if args.quick:
@@ -221,14 +219,9 @@ def main():
     if args.job_points:
         results["job"] = {}
         for model in models:
-            runs = [(True, True)]
-            if args.job_fresh_arrays:
-                runs.insert(0, (False, True))
-            if args.job_shuffled:
-                runs.insert(0, (True, False))
-            for reuse, grid_order in runs:
-                key = model + ("" if reuse else ", fresh arrays") + ("" if grid_order else ", shuffled chunks")
-                results["job"][key] = row = through_the_job(model, JOB_METHOD[model], args.job_points, reuse, grid_order)
+            for reuse in (False, True) if args.job_fresh_arrays else (True,):
+                key = model if reuse else f"{model}, fresh arrays"
+                results["job"][key] = row = through_the_job(model, JOB_METHOD[model], args.job_points, reuse)
                 save()
                 log(f"{key:9s} {JOB_METHOD[model]:6s} through the job: {row['points_per_s']:.0f} pts/s on "
                     f"{row['points']} points ({row['seconds']:.1f} s, compile included: {row['first_seconds']:.1f} s "
@@ -244,11 +237,10 @@ def main():
 JOB_METHOD = {"effective": "dop853", "original": "rk45"}  # each model's fastest on the GPU
 
 
-def through_the_job(model, method, n_points, reuse=True, grid_order=True):
+def through_the_job(model, method, n_points, reuse=True):
     """vrsweep.sweep on the GPU, with its file, as a user's run: a small run first (it compiles the
     kernel, so the timed run's figure is of the computing), then the map of about n_points.
     reuse: numerics/cuda.REUSE_DEVICE_ARRAYS for the run (False: 0.6.2's fresh arrays per launch).
-    grid_order: execution/chunks.GPU_CHUNKS_IN_GRID_ORDER (False: 0.6.4's shuffled chunks).
     Also records the GPU chunks' sizes and kernel seconds (sweep.LineRunner.finish's)."""
     import tempfile
 
@@ -257,11 +249,8 @@ def through_the_job(model, method, n_points, reuse=True, grid_order=True):
     from vrsweep.numerics import cuda
 
     side = int(round(np.sqrt(n_points)))
-    from vrsweep.execution import chunks
-
-    row = {"method": method, "reuse_device_arrays": reuse, "grid_order": grid_order, "chunks": []}
+    row = {"method": method, "reuse_device_arrays": reuse, "chunks": []}
     cuda.REUSE_DEVICE_ARRAYS = reuse
-    chunks.GPU_CHUNKS_IN_GRID_ORDER = grid_order
     finish = sweep.LineRunner.finish
 
     def timed_finish(runner, chunk):
@@ -291,7 +280,6 @@ def through_the_job(model, method, n_points, reuse=True, grid_order=True):
                 row["seconds"], row["points"] = elapsed, num * num
     sweep.LineRunner.finish = finish
     cuda.REUSE_DEVICE_ARRAYS = True
-    chunks.GPU_CHUNKS_IN_GRID_ORDER = True
     row["points_per_s"] = row["points"] / row["seconds"]
     return row
 
