@@ -1,6 +1,6 @@
 """What the lanes of a warp cost each other on the GPU: one point per warp against 32, one run.
 
-    python benchmarks/gpu_divergence.py [--distinct 2048] [--out DIR]
+    python benchmarks/gpu_divergence.py [--distinct 2048] [--cases original:rk45,...] [--out DIR]
 
 A warp's 32 threads execute one instruction at a time: where their points take different paths
 through the loop (a rejected step, an impact, a dense output for an extremum), the warp runs each
@@ -77,10 +77,13 @@ def measure(distinct, cases=CASES, out=None):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--distinct", type=int, default=2048, help="distinct points, each run 32 times")
+    parser.add_argument("--cases", default=",".join(f"{model}:{method}" for model, method in CASES),
+                        help="comma-separated model:method (each compiles a kernel)")
     parser.add_argument("--out", default=os.environ.get("OUT", "."))
     args = parser.parse_args()
     Path(args.out).mkdir(parents=True, exist_ok=True)
-    log(json.dumps(measure(args.distinct, out=args.out)))
+    cases = [tuple(case.split(":")) for case in args.cases.split(",")]
+    log(json.dumps(measure(args.distinct, cases, out=args.out)))
 
 
 if __name__ == "__main__":
