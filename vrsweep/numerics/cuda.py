@@ -205,7 +205,8 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None,
     per process.
     """
     return _line_kernel(method, bool(tangents), model_rhs, tangent, barrier_force,
-                        bool(QUEUE if queue is None else queue), MAX_REGISTERS if max_registers is None else max_registers,
+                        bool(QUEUE if queue is None else queue),
+                        MAX_REGISTERS if max_registers is None else max_registers,
                         bool(GATHER_LANES if gather is None else gather))
 
 
@@ -222,7 +223,8 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
         simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
         first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "")
     functions = {
-        "_integrate": simulated_integrate if numba.config.ENABLE_CUDASIM else kernel._integrate, "next_start": next_start, "no_preparation": rhs.no_preparation,
+        "_integrate": simulated_integrate if numba.config.ENABLE_CUDASIM else kernel._integrate,
+        "next_start": next_start, "no_preparation": rhs.no_preparation,
         "step": step, "step_error": step_error, "dense_output": dense_output, "accepted_factor": accepted_factor,
         "growth": growth, "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
         "barrier_force": barrier_force, "gather_lanes": gather_warp if gather else kernel.lanes_apart,
@@ -258,9 +260,10 @@ _READY = {}  # kernel -> the dispatcher ready_kernel returned for it (kernels li
 def ready_kernel(kernel_):
     """kernel_ compiled for kernel_signature() in this process, loaded from numba's cache where it
     holds it: the dispatcher to launch. Where the cache fails (a file it cannot read, a kernel it
-    cannot save, a loaded kernel the card cannot load), the same source compiles without it, as every process did up to 0.6.3: slower,
-    never wrong; the returned dispatcher's ``cache_failure`` then says why. A compile error of the
-    kernel itself is raised (by the second compile). Once per kernel and process."""
+    cannot save, a loaded kernel the card cannot load), the same source compiles without it, as
+    every process did up to 0.6.3: slower, never wrong; the returned dispatcher's ``cache_failure``
+    then says why. A compile error of the kernel itself is raised (by the second compile). Once per
+    kernel and process."""
     if numba.config.ENABLE_CUDASIM:  # (the simulator compiles nothing)
         return kernel_
     ready = _READY.get(kernel_)
@@ -363,9 +366,10 @@ class DeviceLines:
         self.kernel = ready_kernel(self.kernel)
         slot = self._free_slot()
         # (the outputs are not copied in: the kernel fills every entry, fill_nan where it computes none)
-        arguments = [slot.holding(k, np.ascontiguousarray(host), copy=k not in OUTPUT_ARGUMENTS) for k, host in enumerate((
-            coefficients, initial_states, settings, lines, period_records, summaries, statuses, order,
-            np.zeros(1, dtype=np.int64)))]
+        hosts = (coefficients, initial_states, settings, lines, period_records, summaries, statuses, order,
+                 np.zeros(1, dtype=np.int64))
+        arguments = [slot.holding(k, np.ascontiguousarray(host), copy=k not in OUTPUT_ARGUMENTS)
+                     for k, host in enumerate(hosts)]
         slot.began.record(slot.stream)
         self.kernel[self.blocks(n_lines), THREADS_PER_BLOCK, slot.stream](*arguments)
         slot.ended.record(slot.stream)
