@@ -35,7 +35,10 @@ def outputs(run_lines, coefficients, initial_states, settings, lines, measure, f
     return {"records": records.tolist(), "summaries": summaries.tolist(), "statuses": statuses.tolist()}
 
 
-def main(config_path, method, lyapunov, line_length, transient_periods=4):
+def main(config_path, method, lyapunov, line_length, transient_periods=4, local_coefficients="false"):
+    from vrsweep.numerics import cuda
+
+    cuda.LOCAL_COEFFICIENTS = local_coefficients == "true"
     config = load_config(config_path, [f"method={method}", f"lyapunov={lyapunov}", f"transient_periods={transient_periods}",
                                        "measure_periods=16"])
     grid = Grid.from_config(config)
@@ -175,4 +178,4 @@ if __name__ == "__main__":
     elif sys.argv[1] == "job":
         job(sys.argv[2], sys.argv[3])
     else:
-        main(sys.argv[1], sys.argv[2], sys.argv[3], *[int(argument) for argument in sys.argv[4:]])
+        main(sys.argv[1], sys.argv[2], sys.argv[3], *[int(argument) for argument in sys.argv[4:6]], *sys.argv[6:])

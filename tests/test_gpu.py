@@ -42,7 +42,7 @@ sweep:
 """
 
 
-def _simulated(tmp_path, text_or_path, method, lyapunov, line_length, transient_periods=4):
+def _simulated(tmp_path, text_or_path, method, lyapunov, line_length, transient_periods=4, local_coefficients=False):
     if isinstance(text_or_path, Path):
         config = text_or_path
     else:
@@ -50,24 +50,28 @@ def _simulated(tmp_path, text_or_path, method, lyapunov, line_length, transient_
         config.write_text(textwrap.dedent(text_or_path))
     env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
     done = subprocess.run([sys.executable, str(HERE / "gpu_simulated.py"), str(config), method, lyapunov,
-                           str(line_length), str(transient_periods)], capture_output=True, text=True, env=env, timeout=900)
+                           str(line_length), str(transient_periods), str(local_coefficients).lower()],
+                          capture_output=True, text=True, env=env, timeout=900)
     assert done.returncode == 0, done.stderr[-3000:]
     result = json.loads(done.stdout.strip().splitlines()[-1])
     return ({key: np.array(value, dtype=float) for key, value in result["cpu"].items()},
             {key: np.array(value, dtype=float) for key, value in result["gpu"].items()})
 
 
-@pytest.mark.parametrize("case, config, method, lyapunov, line_length", [
-    ("original, with an initial-state axis", BASIN_MAP, "rk45", "false", 1),
-    ("original, tangent vectors", SMALL_MAP, "rk45", "true", 1),
-    ("original, hysteresis line", HYSTERESIS_LINE, "rk45", "false", 3),
-    ("written, two barriers", EXAMPLES / "impact_two_sided.yaml", "rk45", "false", 1),
+@pytest.mark.parametrize("case, config, method, lyapunov, line_length, local_coefficients", [
+    ("original, with an initial-state axis", BASIN_MAP, "rk45", "false", 1, False),
+    ("original, tangent vectors", SMALL_MAP, "rk45", "true", 1, False),
+    ("original, hysteresis line", HYSTERESIS_LINE, "rk45", "false", 3, False),
+    ("written, two barriers", EXAMPLES / "impact_two_sided.yaml", "rk45", "false", 1, False),
+    # cuda.LOCAL_COEFFICIENTS: the loop reads a thread's copy of its point's coefficients
+    ("written, two barriers, coefficients copied", EXAMPLES / "impact_two_sided.yaml", "rk45", "false", 1, True),
 ])
-def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config, method, lyapunov, line_length):
+def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config, method, lyapunov, line_length,
+                                                          local_coefficients):
     if isinstance(config, Path):  # a written model's example: a few of its points
         text = config.read_text().split("sweep:")[0] + "sweep:\n  F: {values: [0.3, 1.5, 2.5]}\n"
         config = text
-    cpu, gpu = _simulated(tmp_path, config, method, lyapunov, line_length)
+    cpu, gpu = _simulated(tmp_path, config, method, lyapunov, line_length, local_coefficients=local_coefficients)
     assert (cpu["statuses"] == 0).all(), cpu["statuses"]  # Status.OK: the comparison is of real runs
     for key in ("statuses", "summaries", "records"):
         np.testing.assert_array_equal(gpu[key], cpu[key], err_msg=f"{case}: {key}")
@@ -173,14 +177,16 @@ def _ptxas():
     return find_nvidia_binary_utility("ptxas")
 
 
-def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path):
+@pytest.mark.parametrize("options", [{}, {"local_coefficients": True}], ids=["default", "local coefficients"])
+def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path, options):
     """compile_ptx for sm_90 without a GPU (vrsweep.numerics.cuda.compile_for), then ptxas: the
     resource report names the kernel; its local memory is the work arrays' (about 1 kB since the
     impact test walks its pieces without a stack: the two stacks took 7.7 kB of a thread's 8.1 kB;
-    and dop853's rotation table, 68 kB, must never come into a thread)."""
+    and dop853's rotation table, 68 kB, must never come into a thread), with the coefficients'
+    copy (cuda.LOCAL_COEFFICIENTS) 0.5 kB more."""
     from vrsweep.numerics import cuda
 
-    ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0))
+    ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0), **options)
     assert ".target sm_90" in ptx
     assert "vote.sync" in ptx  # the warp's lanes gathered at every pass (gather_warp)
     ptxas = _ptxas()
@@ -197,6 +203,22 @@ def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path):
     registers = int(re.search(r"Used (\d+) registers", entry).group(1))
     assert registers <= 255
     assert frame < 2 * 1024, entry[:2000]
+
+
+def test_a_kernel_reading_a_local_copy_of_the_coefficients_refuses_a_wider_row():
+    """cuda.LOCAL_COEFFICIENTS: the thread's copy holds LOCAL_COEFFICIENTS_SIZE values; a model with
+    more is refused before anything reaches the device (and the default kernel reads any width)."""
+    from vrsweep.numerics import cuda
+
+    kernel_ = cuda.line_kernel("rk45", False, *cuda.paper_functions(False), local_coefficients=True)
+    assert kernel_.local_coefficients is True
+    assert cuda.line_kernel("rk45", False, *cuda.paper_functions(False)).local_coefficients is False
+    n = 1
+    wide = np.zeros((n, cuda.LOCAL_COEFFICIENTS_SIZE + 1))
+    with pytest.raises(ValueError, match="LOCAL_COEFFICIENTS_SIZE"):
+        cuda.DeviceLines(kernel_).launch(wide, np.zeros((n, 2)), np.zeros(16), np.zeros((n, 1), dtype=np.int64),
+                                         np.empty((n, 1, 4, kernel.N_RECORD)), np.empty((n, 1, kernel.N_SUMMARY)),
+                                         np.empty((n, 1), dtype=np.int8))
 
 
 def test_the_warp_vote_is_on_but_for_the_effective_model():
@@ -275,7 +297,7 @@ def test_a_kernel_the_cache_fails_on_compiles_without_it(monkeypatch):
             compiled.append(signature)
 
     class Cached:
-        queue, gather = True, False
+        queue, gather, local_coefficients = True, False, False
 
         def compile(self, signature):
             raise pickle.PicklingError("cannot pickle the kernel's library")

@@ -84,7 +84,14 @@ MAX_REGISTERS = None
 REUSE_DEVICE_ARRAYS = True
 GATHER_LANES = True
 GATHER_LANES_BY_MODEL = {"effective": False}
+# - LOCAL_COEFFICIENTS: a thread copies its point's coefficients (LOCAL_COEFFICIENTS_SIZE at most)
+#   into its local memory before integrating, and the loop reads them there. In global memory a warp's 32 lanes read 32 rows, at least one cache line each,
+#   for every coefficient the right-hand side reads (about 9 an evaluation); the local copies of 32
+#   lanes lie side by side (the hardware interleaves local memory), so a warp's read takes two
+#   lines. Off until a card has measured it (benchmarks/gpu_variants.py, variant F).
 CACHE_KERNELS = True
+LOCAL_COEFFICIENTS = False
+LOCAL_COEFFICIENTS_SIZE = 64
 
 # method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
 # factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
@@ -106,7 +113,7 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
     brackets = cuda.local.array(({max_barriers}, {n_bracket}), float64)
     scratch = cuda.local.array(1, float64)  # no_preparation reads none
     state = cuda.local.array(2, float64)
-    # The observers a sweep does not use, as empty views (nothing is allocated for them).
+{local_coefficients}    # The observers a sweep does not use, as empty views (nothing is allocated for them).
     no_samples = scratch[:0]
     no_sample_values = vectors[:0, :2]
     no_impacts = vectors[:0, :3]
@@ -121,10 +128,10 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
         for slot in range(lines.shape[1]):
             summary = summaries[line, slot]
             fill_nan(period_records[line, slot], summary)
-            status = _integrate(
+{point}            status = _integrate(
                 model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
                 step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
-                brackets, scratch, coefficients[lines[line, slot]], state, settings, period_records[line, slot],
+                brackets, scratch, point, state, settings, period_records[line, slot],
                 summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy, gather_lanes)
             statuses[line, slot] = status
             next_start(status, summary, first, state)
@@ -135,6 +142,23 @@ _POSITIONS = {
     True: ("cuda.atomic.add(counter, 0, 1)", "cuda.atomic.add(counter, 0, 1)"),
     False: ("cuda.grid(1)", "order.shape[0]"),
 }
+
+
+# The point's coefficients: its row of the launch's array, or with LOCAL_COEFFICIENTS the thread's
+# copy of it (only a copy: a choice between the two would leave the compiler a pointer into either
+# memory, and every read a generic load; DeviceLines refuses a wider row than the copy holds).
+_POINT = """\
+            point = coefficients[lines[line, slot]]
+"""
+_LOCAL_COEFFICIENTS = """\
+    local_point = cuda.local.array({size}, float64)
+"""
+_LOCAL_POINT = """\
+            row = coefficients[lines[line, slot]]
+            for k in range(row.shape[0]):
+                local_point[k] = row[k]
+            point = local_point[:row.shape[0]]
+"""
 
 
 # With gather_warp: a lane with no line left answers its warp's votes until no lane integrates.
@@ -194,24 +218,27 @@ def fill_nan(records, summary):
         summary[j] = math.nan
 
 
-def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None, gather=None):
+def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None, gather=None,
+                local_coefficients=None):
     """The CUDA kernel that runs lines with ``method`` for a model's functions (kernel._integrate's
     rhs, tangent and barrier_force; model_rhs with the tangent vectors when ``tangents``).
 
     kernel[blocks, THREADS_PER_BLOCK](coefficients, initial_states, settings, lines,
     period_records, summaries, statuses, order, counter): lines.run_lines_rk45's arguments, then
     order (n_lines,), the lines in the order they are handed out, and counter (1,) int64, zero, the
-    queue's (queue: QUEUE by default; gather: GATHER_LANES). Compiled on its first launch, once
-    per process.
+    queue's (queue: QUEUE by default; gather: GATHER_LANES; local_coefficients: LOCAL_COEFFICIENTS).
+    Compiled on its first launch, once per process.
     """
     return _line_kernel(method, bool(tangents), model_rhs, tangent, barrier_force,
                         bool(QUEUE if queue is None else queue),
                         MAX_REGISTERS if max_registers is None else max_registers,
-                        bool(GATHER_LANES if gather is None else gather))
+                        bool(GATHER_LANES if gather is None else gather),
+                        bool(LOCAL_COEFFICIENTS if local_coefficients is None else local_coefficients))
 
 
 @functools.lru_cache(maxsize=None)  # (line_kernel's defaults resolved first: one compile per kernel)
-def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max_registers, gather):
+def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max_registers, gather,
+                 local_coefficients):
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
      dense_order) = METHOD_PARTS[method]
     first_position, next_position = _POSITIONS[queue]
@@ -221,7 +248,9 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
         n_vectors=kernel.N_VECTORS, max_barriers=MAX_BARRIERS, n_bracket=N_BRACKET, tangents=bool(tangents),
         simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
-        first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "")
+        first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "",
+        local_coefficients=_LOCAL_COEFFICIENTS.format(size=LOCAL_COEFFICIENTS_SIZE) if local_coefficients else "",
+        point=_LOCAL_POINT if local_coefficients else _POINT)
     functions = {
         "_integrate": simulated_integrate if numba.config.ENABLE_CUDASIM else kernel._integrate,
         "next_start": next_start, "no_preparation": rhs.no_preparation,
@@ -242,6 +271,7 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
     compiled = cuda.jit(cache=CACHE_KERNELS and numba_cache.enabled(), **options)(module.run_lines)
     compiled.queue = queue
     compiled.gather = gather
+    compiled.local_coefficients = local_coefficients
     compiled.without_cache = lambda: cuda.jit(**options)(module.run_lines)
     return compiled
 
@@ -275,6 +305,7 @@ def ready_kernel(kernel_):
         except Exception as error:  # noqa: BLE001 -- numba-cuda's cache raises many kinds
             ready = kernel_.without_cache()
             ready.queue, ready.gather = kernel_.queue, kernel_.gather
+            ready.local_coefficients = kernel_.local_coefficients
             ready.compile(kernel_signature())
             ready.cache_failure = f"{type(error).__name__}: {error}"
         _READY[kernel_] = ready
@@ -362,6 +393,9 @@ class DeviceLines:
         n_lines = lines.shape[0]
         if n_lines == 0:
             return Launch(None, ())
+        if getattr(self.kernel, "local_coefficients", False) and coefficients.shape[1] > LOCAL_COEFFICIENTS_SIZE:
+            raise ValueError(f"{coefficients.shape[1]} coefficients a point: the kernel's local copy holds "
+                             f"{LOCAL_COEFFICIENTS_SIZE} (cuda.LOCAL_COEFFICIENTS_SIZE)")
         order = self.order(coefficients, initial_states, lines)
         self.kernel = ready_kernel(self.kernel)
         slot = self._free_slot()
