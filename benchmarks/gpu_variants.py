@@ -3,15 +3,16 @@
     python benchmarks/gpu_variants.py [--points 65536] [--variants A,C,D,E] [--cases original:rk45,...]
                                       [--source DIR] [--no-cpu] [--out DIR]
 
-numerics/cuda.py has four levers (its QUEUE, SORT, MAX_REGISTERS and GATHER_LANES): a work
-queue, lines handed out in parameter order, a register cap, and a warp barrier at every pass of
-the loop. This script times, on the first POINTS points of gpu.py's shuffled (g, Omega) map (rtol
+numerics/cuda.py has five levers (its QUEUE, SORT, MAX_REGISTERS, GATHER_LANES and
+LOCAL_COEFFICIENTS): a work queue, lines handed out in parameter order, a register cap, a warp
+barrier at every pass of the loop, and a thread's coefficients read from its own copy. This script times, on the first POINTS points of gpu.py's shuffled (g, Omega) map (rtol
 1e-9, 100 + 100 periods):
 
     A  one thread per line, shuffled order, the compiler's registers   (the first version)
     C  the queue, parameter order, the compiler's registers             (the default up to 0.6.2)
     D  C with at most 128 registers a thread
     E  C with the lanes of a warp gathered at every pass                (the default)
+    F  E with each thread's coefficients copied to its local memory    (cuda.LOCAL_COEFFICIENTS)
 
 for the original model with rk45 and dop853 and the effective model with dop853, and the CPU's
 best method (dop853, every core) on a sample, so that every ratio is of this one process. Checks
@@ -49,14 +50,15 @@ from vrsweep.numerics.trajectory import settings_vector  # noqa: E402
 VARIANTS = {"A": dict(queue=False, sort=False, max_registers=None, gather=False),
             "C": dict(queue=True, sort=True, max_registers=None, gather=False),
             "D": dict(queue=True, sort=True, max_registers=128, gather=False),
-            "E": dict(queue=True, sort=True, max_registers=None, gather=True)}
+            "E": dict(queue=True, sort=True, max_registers=None, gather=True),
+            "F": dict(queue=True, sort=True, max_registers=None, gather=True, local_coefficients=True)}
 CASES = [("original", "rk45", 2000), ("effective", "dop853", 8000), ("original", "dop853", 2000)]
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--points", type=int, default=65536)
-    parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of A, C, D, E")
+    parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of A, C, D, E, F")
     parser.add_argument("--source", help="the folder holding the vrsweep package to time (default: this one)")
     parser.add_argument("--out", default=os.environ.get("OUT", "."))
     parser.add_argument("--cases", help="comma-separated model:method, of " + ",".join(
@@ -98,7 +100,8 @@ def main():
         for name in chosen:
             variant = VARIANTS[name]
             known = inspect.signature(cuda.line_kernel).parameters  # (an old version's, --source, has fewer)
-            options = {key: variant[key] for key in ("queue", "max_registers", "gather") if key in known}
+            options = {key: variant[key] for key in ("queue", "max_registers", "gather", "local_coefficients")
+                       if key in known and key in variant}
             compiled = cuda.line_kernel(method, False, *functions, **options)
             lines = cuda.DeviceLines(compiled, sort=variant["sort"])
             began = time.perf_counter()
