@@ -60,8 +60,10 @@ THREADS_PER_BLOCK = 64
 #   holds one thread, not its whole launch; the launch then has QUEUE_BLOCKS_PER_SM blocks per
 #   multiprocessor (more than fit at once: the rest start as the first finish).
 # - SORT: a chunk's lines are handed out in the order of their parameters (lexicographic), so the
-#   threads of one warp integrate neighbouring points, whose paths through the loop (impacts,
-#   rejected steps) are alike; the sweep's shuffle spread them for the CPU's threads.
+#   threads of one warp integrate neighbouring points. Measured on an H100, this keeps a warp's
+#   lanes no closer than scattered points do: adjacent points of a map fall out of step at their
+#   first different step size (benchmarks/gpu_spacing.py: 0.93x to 0.96x against points 32 cells
+#   apart). Kept: it costs a sort of the chunk.
 # - MAX_REGISTERS: None leaves the compiler its choice (up to 255).
 # - REUSE_DEVICE_ARRAYS: a launch's device arrays, stream and timing events are one of a few slots
 #   kept between launches (one per launch in flight), not allocated anew: CUDA runs two kernels of
@@ -72,11 +74,16 @@ THREADS_PER_BLOCK = 64
 #   barrier: lanes which drifted apart (an impact in one, a rejected step in another) take the next
 #   step together rather than one after the other (on an H100: 1.71x on the original model).
 #   GATHER_LANES_BY_MODEL: the paper's models whose kernels run without it, where the card measured
-#   it slower (the effective model, about 0.77x: its neighbouring points' lanes keep together).
+#   it slower (the effective model: 0.86x in one run on an H100).
 # - CACHE_KERNELS: a kernel's source is a module file in numba's cache folder (codegen.generated_module)
 #   and numba-cuda caches its compile there (cache=True): the first run on a machine compiles (20 to
 #   65 s on an H100's host), later runs load it. Where loading or saving fails, the kernel compiles
 #   as without a cache (ready_kernel). False: every process compiles, as up to 0.6.3.
+# - LOCAL_COEFFICIENTS: a thread copies its point's coefficients (LOCAL_COEFFICIENTS_SIZE at most)
+#   into its local memory before integrating, and the loop reads them there. In the launch's array
+#   a warp's 32 lanes read 32 rows, a cache line each, for every coefficient a right-hand side
+#   reads (about 9 an evaluation); the hardware interleaves local memory across a warp's lanes, so
+#   there the same read takes two lines. Off until a card has measured it (gpu_variants.py, F).
 QUEUE = True
 QUEUE_BLOCKS_PER_SM = 16
 SORT = True
@@ -84,11 +91,6 @@ MAX_REGISTERS = None
 REUSE_DEVICE_ARRAYS = True
 GATHER_LANES = True
 GATHER_LANES_BY_MODEL = {"effective": False}
-# - LOCAL_COEFFICIENTS: a thread copies its point's coefficients (LOCAL_COEFFICIENTS_SIZE at most)
-#   into its local memory before integrating, and the loop reads them there. In global memory a warp's 32 lanes read 32 rows, at least one cache line each,
-#   for every coefficient the right-hand side reads (about 9 an evaluation); the local copies of 32
-#   lanes lie side by side (the hardware interleaves local memory), so a warp's read takes two
-#   lines. Off until a card has measured it (benchmarks/gpu_variants.py, variant F).
 CACHE_KERNELS = True
 LOCAL_COEFFICIENTS = False
 LOCAL_COEFFICIENTS_SIZE = 64
