@@ -271,11 +271,13 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
     # (numba's CUDA simulator has no registers to cap)
     options = {"max_registers": max_registers} if max_registers and not numba.config.ENABLE_CUDASIM else {}
     compiled = cuda.jit(cache=CACHE_KERNELS and numba_cache.enabled(), **options)(module.run_lines)
-    compiled.queue = queue
-    compiled.gather = gather
-    compiled.local_coefficients = local_coefficients
+    compiled.queue, compiled.gather, compiled.local_coefficients = queue, gather, local_coefficients
     compiled.without_cache = lambda: cuda.jit(**options)(module.run_lines)
     return compiled
+
+
+# The launch's choices a line kernel carries (_line_kernel sets them; DeviceLines reads them).
+KERNEL_CHOICES = ("queue", "gather", "local_coefficients")
 
 
 def kernel_signature():
@@ -306,8 +308,8 @@ def ready_kernel(kernel_):
             ready = kernel_
         except Exception as error:  # noqa: BLE001 -- numba-cuda's cache raises many kinds
             ready = kernel_.without_cache()
-            ready.queue, ready.gather = kernel_.queue, kernel_.gather
-            ready.local_coefficients = kernel_.local_coefficients
+            for name in KERNEL_CHOICES:
+                setattr(ready, name, getattr(kernel_, name))
             ready.compile(kernel_signature())
             ready.cache_failure = f"{type(error).__name__}: {error}"
         _READY[kernel_] = ready
