@@ -397,7 +397,7 @@ class DeviceLines:
         n_lines = lines.shape[0]
         if n_lines == 0:
             return Launch(None, ())
-        if getattr(self.kernel, "local_coefficients", False) and coefficients.shape[1] > LOCAL_COEFFICIENTS_SIZE:
+        if self.kernel.local_coefficients and coefficients.shape[1] > LOCAL_COEFFICIENTS_SIZE:
             raise ValueError(f"{coefficients.shape[1]} coefficients a point: the kernel's local copy holds "
                              f"{LOCAL_COEFFICIENTS_SIZE} (cuda.LOCAL_COEFFICIENTS_SIZE)")
         order = self.order(coefficients, initial_states, lines)
