@@ -1,12 +1,14 @@
 """What the loop's branches cost a warp whose lanes take each pass together: a model from the CPU.
 
-    python benchmarks/warp_branches.py [--points 64] [--warps 1056] [--out FILE.json]
+    python benchmarks/warp_branches.py [--method rk45|dop853] [--points 64] [--warps 1056]
+                                       [--measured FACTOR] [--out FILE.json]
 
 On a GPU the warp vote (numerics/cuda.py) starts every pass of the loop (kernel._integrate) with
 the warp's 32 lanes together; inside the pass a branch that any lane takes costs the whole warp
 its time, while the lanes that do not take it wait. warp_passes.py bounded one branch this way
 (the impact's Newton steps); this does it for every costly branch of a pass at once, on the
-original model with rk45 (the GPU's method for it), gpu.py's map and settings:
+original model, gpu.py's map and settings, with the loop composed as the GPU's kernel composes it
+(cuda.METHOD_PARTS: the library's cosines at every stage, no rotation table, with either method):
 
 1. counts: a random sample of the map's points integrated in pure Python (NUMBA_DISABLE_JIT, one
    process per core), the kernel's own functions wrapped so that every pass of the loop records
@@ -24,7 +26,8 @@ original model with rk45 (the GPU's method for it), gpu.py's map and settings:
 
 The CPU's costs stand in for the card's: the model says how much of gpu_divergence.py's factor
 (one point per warp against 32) the union of branches explains if the card weighs the branches as
-the CPU does. A card's profile checks that (benchmarks/README.md, "What the loop's branches cost a
+the CPU does; --measured FACTOR, the card's, gives the weight of the branches (relative to the
+pass's rest, against the CPU's) at which it would explain all of it. A card's profile checks that (benchmarks/README.md, "What the loop's branches cost a
 warp").
 """
 
@@ -53,13 +56,14 @@ WARP = 32
 # The kinds a pass can take, and the function whose call marks it. A rejected step costs nothing
 # beyond the pass's step (the pass ends there), the period's close next to nothing: counted, not
 # costed.
+# (None: the method's own function, wrapped where the loop is handed it.)
 KINDS = {
-    "dense": ("kernel", "dp54_dense"),          # the step's dense output (free of RHS with rk45)
+    "dense": None,                              # the step's dense output (rk45: free of RHS)
     "find": ("kernel", "find_crossing"),        # the exact barrier test on it (Bernstein form)
     "impact": ("kernel", "_reach_impact"),      # the impact located and reached by Newton steps
     "turn_test": ("records", "_inside_extremes"),  # a turning point: can it pass the extremes?
     "turn_root": ("records", "locate_root"),    # ... it can: locate it
-    "reject": ("kernel", "rejected_step_factor"),
+    "reject": None,
     "period": ("kernel", "close_period"),
 }
 COSTED = ("dense", "find", "impact", "turn_test", "turn_root")
@@ -67,11 +71,44 @@ BIT = {kind: 1 << i for i, kind in enumerate(KINDS)}
 CAPTURED_CALLS = 200   # arguments kept per kind, for the costs
 CAPTURE_SHARE = 0.05   # of the calls, at random
 REPEAT = 2000          # calls timed per captured argument set
+ROUNDS = 3             # every time is the best of ROUNDS (this machine's noise)
+
+
+def method_parts(method):
+    """cuda.METHOD_PARTS without importing the GPU's module: (rules, step, error norm, dense output,
+    accepted / certain growth / rejected step factor, rows of K, the dense output's order)."""
+    from vrsweep.numerics import dop853, kernel, rk45
+
+    if method == "rk45":
+        return (kernel.RK45_RULES, rk45.dp54_step, rk45.error_norm, rk45.dp54_dense, rk45.accepted_step_factor,
+                rk45.certain_growth, rk45.rejected_step_factor, rk45.N_STAGES + 1, rk45.DENSE_ORDER)
+    return (kernel.DOP853_RULES, kernel.dop853_step, kernel.dop853_error_norm, kernel.dop853_dense,
+            kernel.dop853_accepted_step_factor, kernel.dop853_certain_growth, kernel.dop853_rejected_step_factor,
+            dop853.N_STAGES_EXTENDED, dop853.DENSE_ORDER)
+
+
+def integrate(method, coefficients, settings, gather_lanes, parts=None):
+    """One point through kernel._integrate, composed as the GPU's line kernel composes it."""
+    from vrsweep.numerics import kernel, rhs
+    from vrsweep.numerics.coefficients import MAX_BARRIERS
+    from vrsweep.numerics.impact import N_BRACKET
+    from vrsweep.numerics.state import N_STATE
+
+    (rules, step, error, dense_output, accepted, growth, rejected, k_rows, dense_order) = parts or method_parts(method)
+    period_records = np.full((INTEGRATION["measure_periods"], kernel.N_RECORD), np.nan)
+    summary = np.full(kernel.N_SUMMARY, np.nan)
+    return kernel._integrate(
+        rhs.oscillator_rhs, rhs.oscillator_rhs, rhs.oscillator_tangent, rhs.force_at_barrier, rhs.no_preparation,
+        rhs.no_preparation, rules, step, error, dense_output, accepted, growth, rejected, False,
+        np.empty((k_rows, N_STATE)), np.empty((N_STATE, dense_order)), np.empty((kernel.N_VECTORS, N_STATE)),
+        np.empty((MAX_BARRIERS, N_BRACKET)), np.empty(1), coefficients, np.array([X0, V0]), settings,
+        period_records, summary, np.empty(0), np.empty((0, 2)), np.empty((0, 3)), np.empty((0, 2)),
+        np.empty((0, 4)), gather_lanes)
 
 
 # --- 1. counts, in pure Python -------------------------------------------------------------------
 
-def count(model, seed, first, n_points, out):
+def count(model, method, seed, first, n_points, out):
     """Per pass bit masks of KINDS for points [first, first + n_points) of the sample."""
     from vrsweep.numerics import kernel, records
     from vrsweep.numerics.models import kernels_for
@@ -101,9 +138,13 @@ def count(model, seed, first, n_points, out):
         state["passes"].append(state["flags"])
         state["flags"] = 0
 
-    for kind, (module, name) in KINDS.items():
-        setattr(modules[module], name, wrapped(kind, getattr(modules[module], name)))
-    kernel.lanes_apart = next_pass
+    for kind, where in KINDS.items():
+        if where is not None:
+            module, name = where
+            setattr(modules[module], name, wrapped(kind, getattr(modules[module], name)))
+    parts = list(method_parts(method))
+    parts[3] = wrapped("dense", parts[3])
+    parts[6] = wrapped("reject", parts[6])
 
     kernels = kernels_for(model)
     points = sample(seed, first + n_points)[first:]
@@ -112,10 +153,7 @@ def count(model, seed, first, n_points, out):
     sequences = {}
     for i in range(n_points):
         state["passes"], state["flags"] = [], 0
-        period_records = np.full((INTEGRATION["measure_periods"], kernel.N_RECORD), np.nan)
-        summary = np.full(kernel.N_SUMMARY, np.nan)
-        kernel.integrate_rk45(coefficients[i], np.array([X0, V0]), settings, period_records, summary,
-                              np.empty(0), np.empty((0, 2)), np.empty((0, 3)), np.empty((0, 2)))
+        integrate(method, coefficients[i], settings, next_pass, parts)
         next_pass()
         sequences[f"p{first + i}"] = np.array(state["passes"][1:], dtype=np.uint16)
     np.savez(out, **sequences)
@@ -128,14 +166,15 @@ def sample(seed, n_points):
     return points[np.random.default_rng(seed).choice(len(points), n_points, replace=False)]
 
 
-def count_in_parallel(model, seed, n_points, processes, folder):
+def count_in_parallel(model, method, seed, n_points, processes, folder):
     """count() in `processes` pure-Python processes; (the points' pass masks, captured arguments)."""
     shares = np.array_split(np.arange(n_points), processes)
     environment = dict(os.environ, NUMBA_DISABLE_JIT="1")
     jobs = []
     for k, share in enumerate(s for s in shares if len(s)):
         out = str(Path(folder) / f"count{k}")
-        command = [sys.executable, __file__, "--count", model, str(seed), str(share[0]), str(len(share)), out]
+        command = [sys.executable, __file__, "--count", model, method, str(seed), str(share[0]), str(len(share)),
+                   out]
         jobs.append((subprocess.Popen(command, env=environment), out))
     sequences, captured = {}, {kind: [] for kind in KINDS}
     for job, out in jobs:
@@ -151,7 +190,7 @@ def count_in_parallel(model, seed, n_points, processes, folder):
 
 # --- 2. costs on the CPU ---------------------------------------------------------------------------
 
-def costs_on_cpu(model, seed, n_points, captured, passes):
+def costs_on_cpu(model, method, seed, n_points, captured, passes):
     """({kind: seconds a call}, the compiled kernel's seconds a pass) on this CPU, one thread.
     Each call is timed on its captured arguments; a call that would be the same every repetition
     gets a step size changed in its last bits, so that the compiler cannot take it out of the loop."""
@@ -161,7 +200,8 @@ def costs_on_cpu(model, seed, n_points, captured, passes):
     from vrsweep.numerics.models import kernels_for
     from vrsweep.numerics.trajectory import settings_vector
 
-    rhs, step, dense_output, nothing = kernel.oscillator_rhs, kernel.dp54_step, kernel.dp54_dense, kernel.no_preparation
+    _, step, _, dense_output, *_ = method_parts(method)
+    rhs, nothing = kernel.oscillator_rhs, kernel.no_preparation
     find_crossing, locate_root, inside_extremes = impact.find_crossing, impact.locate_root, records._inside_extremes
     reach_impact = kernel._reach_impact
 
@@ -215,29 +255,26 @@ def costs_on_cpu(model, seed, n_points, captured, passes):
             costs[kind] = 0.0
             continue
         timer(*arguments_of(calls[0]), 1)  # compile
-        seconds = []
-        for call in calls:
-            began = time.perf_counter()
-            timer(*arguments_of(call), REPEAT)
-            seconds.append((time.perf_counter() - began) / REPEAT)
+        seconds = np.full(len(calls), np.inf)
+        for _ in range(ROUNDS):
+            for i, call in enumerate(calls):
+                began = time.perf_counter()
+                timer(*arguments_of(call), REPEAT)
+                seconds[i] = min(seconds[i], (time.perf_counter() - began) / REPEAT)
         costs[kind] = float(np.mean(seconds))
 
     kernels = kernels_for(model)
     coefficients = coefficients_of(kernels, sample(seed, n_points))
     settings = settings_vector(**INTEGRATION)
 
-    def integrate(i):
-        period_records = np.full((INTEGRATION["measure_periods"], kernel.N_RECORD), np.nan)
-        summary = np.full(kernel.N_SUMMARY, np.nan)
-        kernel.integrate_rk45(coefficients[i], np.array([X0, V0]), settings, period_records, summary,
-                              np.empty(0), np.empty((0, 2)), np.empty((0, 3)), np.empty((0, 2)))
-
-    integrate(0)  # compile
+    integrate(method, coefficients[0], settings, kernel.lanes_apart)  # compile
     timed = min(n_points, 16)
-    began = time.perf_counter()
-    for i in range(timed):
-        integrate(i)
-    per_pass = (time.perf_counter() - began) / sum(len(passes[i]) for i in range(timed))
+    per_pass = np.inf
+    for _ in range(ROUNDS):
+        began = time.perf_counter()
+        for i in range(timed):
+            integrate(method, coefficients[i], settings, kernel.lanes_apart)
+        per_pass = min(per_pass, (time.perf_counter() - began) / sum(len(passes[i]) for i in range(timed)))
     return costs, per_pass
 
 
@@ -277,24 +314,51 @@ def launch_times(lengths, n_points, warps, cost_of_lanes, one_point_cost, rng):
     return slowest, max(warp_ends), own / issued
 
 
+MEASURED_POINTS = 65536  # gpu_divergence.py's launches of 2,048 points x 32 copies
+
+
+def branch_weight(measured, lengths, warps, rest, rates, costs, seed):
+    """The factor w by which the branches' costs (not the pass's rest) must grow for the model's
+    launch of MEASURED_POINTS to be `measured` times slower with 32 points per warp (bisection)."""
+    def factor(w):
+        heavier = {kind: w * cost for kind, cost in costs.items()}
+        lone = rest + sum(rates[kind] * heavier[kind] for kind in COSTED)
+        mixed, same, _ = launch_times(lengths, MEASURED_POINTS, warps,
+                                      lambda lanes: pass_cost(rest, rates, heavier, lanes), lone,
+                                      np.random.default_rng(seed))
+        return mixed / same
+
+    low, high = 0.0, 100.0
+    if factor(high) < measured:
+        return float("inf")
+    for _ in range(40):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if factor(middle) < measured else (low, middle)
+    return 0.5 * (low + high)
+
+
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--count":
-        model, seed, first, n_points, out = sys.argv[2:7]
-        return count(model, int(seed), int(first), int(n_points), out)
+        model, method, seed, first, n_points, out = sys.argv[2:8]
+        return count(model, method, int(seed), int(first), int(n_points), out)
     parser = argparse.ArgumentParser()
+    parser.add_argument("--method", choices=("rk45", "dop853"), default="rk45")
     parser.add_argument("--points", type=int, default=64)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--warps", type=int, default=1056, help="warps resident on the card (H100: 132 x 8)")
     parser.add_argument("--processes", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--measured", type=float,
+                        help="the card's factor (one point per warp / 32) on a launch of MEASURED_POINTS: the "
+                             "branches' weight, relative to the CPU's, at which the model gives it")
     parser.add_argument("--out", help="a JSON file for the figures")
     args = parser.parse_args()
     model = "original"
     began = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
-        passes, captured = count_in_parallel(model, args.seed, args.points, args.processes, folder)
-    print(f"{model}, rk45: {args.points} points of the map counted in pure Python "
+        passes, captured = count_in_parallel(model, args.method, args.seed, args.points, args.processes, folder)
+    print(f"{model}, {args.method}: {args.points} points of the map counted in pure Python "
           f"({time.perf_counter() - began:.0f} s), {sum(map(len, passes)):,} passes", flush=True)
-    costs, per_pass = costs_on_cpu(model, args.seed, args.points, captured, passes)
+    costs, per_pass = costs_on_cpu(model, args.method, args.seed, args.points, captured, passes)
     every = np.concatenate(passes)
     rates = {kind: float(np.mean((every & BIT[kind]) > 0)) for kind in KINDS}
     rest = per_pass - sum(rates[kind] * costs[kind] for kind in COSTED)
@@ -319,9 +383,14 @@ def main():
         print(f"a launch of {n_points:>9,} points on {args.warps} warps: 32 points a warp / one point a warp "
               f"{mixed / same:.2f}x, lanes active per instruction {active:.1f} of 32; a point takes "
               f"{mixed / n_points * 1e9:.0f} ns of the model's time")
+    weight = None
+    if args.measured:
+        weight = branch_weight(args.measured, lengths, args.warps, rest, rates, costs, args.seed)
+        print(f"the card's {args.measured:.2f}x on {MEASURED_POINTS:,} points: the model gives it with the branches "
+              f"{weight:.1f}x as costly, relative to the pass's rest, as on this CPU")
     if args.out:
-        Path(args.out).write_text(json.dumps({
-            "points": args.points, "passes": int(len(every)), "rates": rates, "costs_s": costs,
+        Path(args.out).write_text(json.dumps({"weight": weight, 
+            "method": args.method, "points": args.points, "passes": int(len(every)), "rates": rates, "costs_s": costs,
             "per_pass_s": per_pass, "rest_s": rest, "pass_ratio": together / lone,
             "lanes_active": WARP * lone / together, "launches": launches}, indent=1))
 
