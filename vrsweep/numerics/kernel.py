@@ -279,9 +279,12 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     N_BRACKET), find_crossing's, one per barrier.
 
     Each pass of the loop is one of: hold the mass on the barrier up to its release or the period's
-    end; or attempt a step, and if it is accepted, resolve an impact inside it (reach it with an
-    exact step), feed the observers, and apply the restitution law or start sticking. A pass that
-    reaches the period's end closes the period.
+    end; or attempt a step, and if it is accepted and meets a barrier, locate the impact on its
+    dense output; or take one Newton step of the exact step to a located impact (from the same t,
+    at most IMPACT_NEWTON_ITERATIONS passes). A step accepted without an impact, or the impact's
+    last Newton step, feeds the observers, and at an impact the restitution law applies or sticking
+    starts. A pass that reaches the period's end closes the period. (The Newton steps are passes,
+    not a loop inside one, so that on a GPU a warp's lanes take them with the others' steps.)
 
     monodromy_log (n, 4): with tangents, the raw one-period tangent map of each of the first n
     periods (record_monodromy); the tangent vectors then restart from the unit vectors every period
@@ -348,6 +351,15 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     n_sticks = 0
     n_scans = 0
     retrying = False
+    # A located impact being reached: its Newton steps are passes of the loop (reaching), the trial
+    # step's size and clipping, the barrier and what else the trial pass decided kept for them.
+    reaching = False
+    newton_steps = 0
+    h_try = h_taken = 0.0
+    clipped = impact = dense_ready = False
+    hit = -1
+    position = side = restitution = 1.0
+    theta_turn = math.nan
     stuck = False
     stuck_at = 0  # the barrier that holds the mass while stuck
     status = Status.OK
@@ -382,116 +394,144 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                 n_rhs += 1
                 err_previous = 1.0
         else:
-            # --- attempt a step ---
-            if n_steps >= max_steps:
-                status = Status.MAX_STEPS
-                break
-            if not (h > _smallest_step(t, slow_period)):
-                # An overflowing start (g = 1e200: the first step estimate is 0 or NaN) would
-                # otherwise take zero-length steps up to the step cap.
-                status = Status.STEP_TOO_SMALL if h == h else Status.NON_FINITE
-                break
-            h_try = min(h, h_max)
-            if grid_steps:
-                h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
-            if has_window:
-                # A step ends on each edge of the transparent window, so that each step is wholly
-                # inside it or outside (a sliver left before an edge is judged by its midpoint).
-                if t < transparent_from - _smallest_step(t, slow_period) and t + h_try > transparent_from:
-                    h_try = transparent_from - t
-                elif t < transparent_to - _smallest_step(t, slow_period) and t + h_try > transparent_to:
-                    h_try = transparent_to - t
-                transparent = transparent_from <= t + 0.5 * h_try < transparent_to
-            clipped = False
-            if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
-                h_try = t_boundary - t
-                clipped = True
-            prepare_step(t, h_try, coefficients, scratch)
-            step(stage_rhs, t, y, f, h_try, coefficients, K, y_new, stage, scratch, n_dynamic)
-            n_steps += 1
-            n_rhs += n_stages
-            err = step_error(K, h_try, y, y_new, rtol, atol)
-            if not (err <= 1.0):  # also catches NaN from an overflowing trial step
-                n_rejected += 1
-                retrying = True
-                h = h_try * (rejected_factor(err) if err == err else 0.2)
-                if h <= _smallest_step(t, slow_period):
-                    status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
-                    break
-                continue
-            # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
-            # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
-            if clipped and h >= h_max:
-                h_next = h  # h = max(h_next, h) below stays >= h_max whatever the factor
-            elif h_try >= h_max and certain_growth(err, err_previous):
-                h_next = h_try  # the factor is >= 1: h_try * factor >= h_max
+            if reaching:
+                # --- the impact's exact step: a Newton iterate of its size, from the same t ---
+                h_step = h_taken
             else:
-                h_next = h_try * accepted_factor(err, err_previous)
-            if retrying and hold_after_reject:
-                h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
-            retrying = False
-            err_previous = err
-            h = max(h_next, h) if clipped else h_next
-
-            # --- does the step cross a barrier? ---
-            # A barrier below (SIDE -1) is the same problem seen in -x: its tests run on the mirrored
-            # step (_mirror), which keeps every theta; a barrier above multiplies by 1 (exact).
-            impact = False
-            dense_ready = False
-            theta_turn = math.nan
-            hit = -1  # the barrier the step meets first
-            unresolved = False
-            position = side = restitution = 1.0
-            for barrier in range(0 if transparent else n_barriers):
-                slot = BARRIER + BARRIER_VALUES * barrier
-                side = coefficients[slot + SIDE]
-                level = side * coefficients[slot + POSITION]
-                # Every step that the ends alone cannot place far from the barrier gets its dense
-                # output and the exact test on it (find_crossing: Bernstein form).
-                if not (side * y_new[X] >= level or side * y[X] >= level
-                        or hermite_reach(side * y[X], side * y[V], side * f[V], side * y_new[X], side * y_new[V],
-                                         side * K[n_stages, V], h_try, level) >= 0.0):
-                    continue
-                if not dense_ready:
-                    prepare_dense(t, h_try, coefficients, scratch)
-                    n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
-                                          n_dynamic)
-                    dense_ready = True
-                pushed = side * y[X] >= level and barrier_force(t, coefficients, barrier) > 0.0
-                bracket = brackets[barrier]
-                if side < 0.0:
-                    _mirror(y, y_new, dense)
-                verdict = find_crossing(dense, y, y_new, h_try, level, pushed, bracket)
-                if side < 0.0:
-                    _mirror(y, y_new, dense)
-                if verdict == UNRESOLVED:
-                    unresolved = True
+                # --- attempt a step ---
+                if n_steps >= max_steps:
+                    status = Status.MAX_STEPS
                     break
-                if verdict == IMPACT:
-                    if hit < 0 or bracket[1] < brackets[hit, 1]:
-                        hit = barrier
-                elif bracket[TURNING_POINT] == bracket[TURNING_POINT]:
-                    theta_turn = bracket[TURNING_POINT]
-            if unresolved:
-                # Off the barrier and back within the first scan interval: look closer.
-                h = h_try * UNRESOLVED_STEP_FACTOR
-                if h <= _smallest_step(t, slow_period):
-                    status = Status.STEP_TOO_SMALL
+                if not (h > _smallest_step(t, slow_period)):
+                    # An overflowing start (g = 1e200: the first step estimate is 0 or NaN) would
+                    # otherwise take zero-length steps up to the step cap.
+                    status = Status.STEP_TOO_SMALL if h == h else Status.NON_FINITE
                     break
-                continue
-            impact = hit >= 0
-            if impact:
-                slot = BARRIER + BARRIER_VALUES * hit
-                side = coefficients[slot + SIDE]
-                position = coefficients[slot + POSITION]
-                restitution = coefficients[slot + RESTITUTION]
-            h_taken = h_try
-            if impact:
-                h_taken, spent = _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages,
-                                               n_dynamic, t, y, f, h_try, position, side, brackets[hit], coefficients,
-                                               K, y_new, dense, stage, scratch)
-                n_rhs += spent
+                h_try = min(h, h_max)
+                if grid_steps:
+                    h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
+                if has_window:
+                    # A step ends on each edge of the transparent window, so that each step is wholly
+                    # inside it or outside (a sliver left before an edge is judged by its midpoint).
+                    if t < transparent_from - _smallest_step(t, slow_period) and t + h_try > transparent_from:
+                        h_try = transparent_from - t
+                    elif t < transparent_to - _smallest_step(t, slow_period) and t + h_try > transparent_to:
+                        h_try = transparent_to - t
+                    transparent = transparent_from <= t + 0.5 * h_try < transparent_to
+                clipped = False
+                if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
+                    h_try = t_boundary - t
+                    clipped = True
+                h_step = h_try
+            # One call of the step for both: on a GPU the lanes of a warp that reach an impact
+            # take their Newton steps with the others' ordinary steps, not while those wait.
+            prepare_step(t, h_step, coefficients, scratch)
+            step(stage_rhs, t, y, f, h_step, coefficients, K, y_new, stage, scratch, n_dynamic)
+            n_rhs += n_stages
+            if reaching:
+                # Newton on x(t + h) = Delta, at most IMPACT_NEWTON_ITERATIONS steps (eq2.2's impact)
+                newton_steps += 1
+                miss = y_new[X] - position
+                if not (abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(position)) or side * y_new[V] <= 0.0):
+                    h_corrected = h_taken - miss / y_new[V]
+                    if 0.0 < h_corrected <= h_try:
+                        h_taken = h_corrected
+                        if newton_steps < IMPACT_NEWTON_ITERATIONS:
+                            continue  # the next pass steps to the corrected size
+                reaching = False
+                prepare_dense(t, h_taken, coefficients, scratch)
+                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
+                                      n_dynamic)
                 dense_ready = True
+            else:
+                n_steps += 1
+                err = step_error(K, h_try, y, y_new, rtol, atol)
+                if not (err <= 1.0):  # also catches NaN from an overflowing trial step
+                    n_rejected += 1
+                    retrying = True
+                    h = h_try * (rejected_factor(err) if err == err else 0.2)
+                    if h <= _smallest_step(t, slow_period):
+                        status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
+                        break
+                    continue
+                # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
+                # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
+                if clipped and h >= h_max:
+                    h_next = h  # h = max(h_next, h) below stays >= h_max whatever the factor
+                elif h_try >= h_max and certain_growth(err, err_previous):
+                    h_next = h_try  # the factor is >= 1: h_try * factor >= h_max
+                else:
+                    h_next = h_try * accepted_factor(err, err_previous)
+                if retrying and hold_after_reject:
+                    h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
+                retrying = False
+                err_previous = err
+                h = max(h_next, h) if clipped else h_next
+
+                # --- does the step cross a barrier? ---
+                # A barrier below (SIDE -1) is the same problem seen in -x: its tests run on the mirrored
+                # step (_mirror), which keeps every theta; a barrier above multiplies by 1 (exact).
+                impact = False
+                dense_ready = False
+                theta_turn = math.nan
+                hit = -1  # the barrier the step meets first
+                unresolved = False
+                position = side = restitution = 1.0
+                for barrier in range(0 if transparent else n_barriers):
+                    slot = BARRIER + BARRIER_VALUES * barrier
+                    side = coefficients[slot + SIDE]
+                    level = side * coefficients[slot + POSITION]
+                    # Every step that the ends alone cannot place far from the barrier gets its dense
+                    # output and the exact test on it (find_crossing: Bernstein form).
+                    if not (side * y_new[X] >= level or side * y[X] >= level
+                            or hermite_reach(side * y[X], side * y[V], side * f[V], side * y_new[X], side * y_new[V],
+                                             side * K[n_stages, V], h_try, level) >= 0.0):
+                        continue
+                    if not dense_ready:
+                        prepare_dense(t, h_try, coefficients, scratch)
+                        n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
+                                              n_dynamic)
+                        dense_ready = True
+                    pushed = side * y[X] >= level and barrier_force(t, coefficients, barrier) > 0.0
+                    bracket = brackets[barrier]
+                    if side < 0.0:
+                        _mirror(y, y_new, dense)
+                    verdict = find_crossing(dense, y, y_new, h_try, level, pushed, bracket)
+                    if side < 0.0:
+                        _mirror(y, y_new, dense)
+                    if verdict == UNRESOLVED:
+                        unresolved = True
+                        break
+                    if verdict == IMPACT:
+                        if hit < 0 or bracket[1] < brackets[hit, 1]:
+                            hit = barrier
+                    elif bracket[TURNING_POINT] == bracket[TURNING_POINT]:
+                        theta_turn = bracket[TURNING_POINT]
+                if unresolved:
+                    # Off the barrier and back within the first scan interval: look closer.
+                    h = h_try * UNRESOLVED_STEP_FACTOR
+                    if h <= _smallest_step(t, slow_period):
+                        status = Status.STEP_TOO_SMALL
+                        break
+                    continue
+                impact = hit >= 0
+                if impact:
+                    slot = BARRIER + BARRIER_VALUES * hit
+                    side = coefficients[slot + SIDE]
+                    position = coefficients[slot + POSITION]
+                    restitution = coefficients[slot + RESTITUTION]
+                h_taken = h_try
+                if impact:
+                    # Located on the dense output; the exact step is taken in the next passes.
+                    bracket = brackets[hit]
+                    if bracket[0] < bracket[1]:
+                        theta = locate_root(dense, y, h_try, X, position, bracket[0], bracket[1])
+                    else:
+                        theta = bracket[1]
+                    h_taken = theta * h_try
+                    reaching = True
+                    newton_steps = 0
+                    continue
 
             # --- observers: samples and the period's extremes, on the step's dense output ---
             t_new = t_boundary if (clipped and not impact) else t + h_taken
@@ -598,38 +638,6 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     summary[SUM_FREE_X_MAX] = free_x_max
     summary[SUM_FREE_X_MAX_TIME] = free_x_max_time
     return status
-
-
-@kernel_jit(inline="always")
-def _reach_impact(stage_rhs, prepare_step, prepare_dense, step, dense_output, n_stages, n_dynamic, t, y, f, h_try,
-                  delta, side, bracket, coefficients, K, y_new, dense, stage, scratch):
-    """Step exactly to the impact that find_crossing bracketed in the step [t, t + h_try], at the
-    barrier x = delta on ``side`` (locate_root and Newton's step need no mirroring).
-
-    Locates it on the dense output, then reaches it with a step of the method's own order (not
-    the interpolant's), Newton-corrected onto x = Delta; leaves y_new, K and dense for that step.
-    Returns (its size, the RHS evaluations spent).
-    """
-    n_rhs = 0
-    if bracket[0] < bracket[1]:
-        theta = locate_root(dense, y, h_try, X, delta, bracket[0], bracket[1])
-    else:
-        theta = bracket[1]
-    h_taken = theta * h_try
-    for _ in range(IMPACT_NEWTON_ITERATIONS):
-        prepare_step(t, h_taken, coefficients, scratch)
-        step(stage_rhs, t, y, f, h_taken, coefficients, K, y_new, stage, scratch, n_dynamic)
-        n_rhs += n_stages
-        miss = y_new[X] - delta
-        if abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(delta)) or side * y_new[V] <= 0.0:
-            break
-        h_corrected = h_taken - miss / y_new[V]
-        if not (0.0 < h_corrected <= h_try):
-            break
-        h_taken = h_corrected
-    prepare_dense(t, h_taken, coefficients, scratch)
-    n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch, n_dynamic)
-    return h_taken, n_rhs
 
 
 @kernel_jit(inline="always")
