@@ -27,6 +27,7 @@ two versions on one card; --variants C times only the default shape.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import inspect
 import json
 import os
@@ -119,12 +120,16 @@ def main():
             else:
                 same = bool(np.array_equal(statuses, reference[1])
                             and np.array_equal(summaries, reference[0], equal_nan=True))
+            # (a digest of the outputs, so that two calls, --source and not, compare bit for bit too)
+            digest = hashlib.sha1(summaries.tobytes() + statuses.tobytes()).hexdigest()[:16]
             row[name] = {"points_per_s": args.points / elapsed, "seconds": elapsed, "compile_s": compile_s,
-                         "registers": registers, "local_bytes": local, "same_as_first": same}
+                         "registers": registers, "local_bytes": local, "same_as_first": same,
+                         "outputs_sha1": digest}
             row[name]["over_cpu_best"] = row[name]["points_per_s"] / row["cpu_dop853_points_per_s"]
             log(f"{model:9s} {method:6s} {name}: {row[name]['points_per_s']:8.0f} pts/s "
                 f"({row[name]['over_cpu_best']:.2f}x CPU dop853 {row['cpu_dop853_points_per_s']:.0f}), "
-                f"regs {registers}, local {local}, compile {compile_s:.1f} s, same as {chosen[0]}: {same}")
+                f"regs {registers}, local {local}, compile {compile_s:.1f} s, same as {chosen[0]}: {same}, "
+                f"outputs {digest}")
             (out / "gpu_variants.json").write_text(json.dumps(results, indent=1))
     log(json.dumps(results))
 

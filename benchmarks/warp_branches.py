@@ -6,14 +6,16 @@
 On a GPU the warp vote (numerics/cuda.py) starts every pass of the loop (kernel._integrate) with
 the warp's 32 lanes together; inside the pass a branch that any lane takes costs the whole warp
 its time, while the lanes that do not take it wait. warp_passes.py bounded one branch this way
-(the impact's Newton steps); this does it for every costly branch of a pass at once, on the
+(the impact's Newton steps, since made passes of the loop); this does it for every costly branch of
+a pass at once, on the
 original model, gpu.py's map and settings, with the loop composed as the GPU's kernel composes it
 (cuda.METHOD_PARTS: the library's cosines at every stage, no rotation table, with either method):
 
 1. counts: a random sample of the map's points integrated in pure Python (NUMBA_DISABLE_JIT, one
    process per core), the kernel's own functions wrapped so that every pass of the loop records
-   which kinds it took (KINDS): a dense output, the exact barrier test, an impact, a turning
-   point's test and its root, a rejected step; with a sample of each kind's arguments.
+   which kinds it took (KINDS): a dense output, the exact barrier test, an impact located or
+   reached (its Newton steps are passes of their own, whose step is the pass's), a turning point's
+   test and its root, a rejected step; with a sample of each kind's arguments.
 2. costs: each kind's seconds per call on the CPU (numba, one thread), on those arguments; and the
    compiled kernel's seconds per pass on the same points, so that the pass's remaining work (the
    step's error and control, the records, the loop) is what the kinds leave of it.
@@ -60,13 +62,14 @@ WARP = 32
 KINDS = {
     "dense": None,                              # the step's dense output (rk45: free of RHS)
     "find": ("kernel", "find_crossing"),        # the exact barrier test on it (Bernstein form)
-    "impact": ("kernel", "_reach_impact"),      # the impact located and reached by Newton steps
+    "impact": ("kernel", "locate_root"),        # the impact located on it (then Newton steps as passes)
+    "restitution": ("kernel", "_restitution"),  # the impact reached: eq2.2 or the start of sticking
     "turn_test": ("records", "_inside_extremes"),  # a turning point: can it pass the extremes?
     "turn_root": ("records", "locate_root"),    # ... it can: locate it
     "reject": None,
     "period": ("kernel", "close_period"),
 }
-COSTED = ("dense", "find", "impact", "turn_test", "turn_root")
+COSTED = ("dense", "find", "impact", "restitution", "turn_test", "turn_root")
 BIT = {kind: 1 << i for i, kind in enumerate(KINDS)}
 CAPTURED_CALLS = 200   # arguments kept per kind, for the costs
 CAPTURE_SHARE = 0.05   # of the calls, at random
@@ -121,7 +124,7 @@ def count(model, method, seed, first, n_points, out):
 
     def wrapped(kind, original):
         def counting(*arguments):
-            if state["inside"]:  # a call from inside another kind's (the impact's root, dense output)
+            if state["inside"]:  # a call from inside another kind's
                 return original(*arguments)
             state["flags"] |= BIT[kind]
             if len(captured[kind]) < CAPTURED_CALLS and rng.random() < CAPTURE_SHARE:
@@ -200,10 +203,10 @@ def costs_on_cpu(model, method, seed, n_points, captured, passes):
     from vrsweep.numerics.models import kernels_for
     from vrsweep.numerics.trajectory import settings_vector
 
-    _, step, _, dense_output, *_ = method_parts(method)
-    rhs, nothing = kernel.oscillator_rhs, kernel.no_preparation
+    dense_output = method_parts(method)[3]
+    rhs = kernel.oscillator_rhs
     find_crossing, locate_root, inside_extremes = impact.find_crossing, impact.locate_root, records._inside_extremes
-    reach_impact = kernel._reach_impact
+    restitute, force = kernel._restitution, kernel.force_at_barrier
 
     @numba.njit
     def time_dense(t, y, h, c, K, y_new, dense, stage, scratch, n_dynamic, n):
@@ -221,14 +224,15 @@ def costs_on_cpu(model, method, seed, n_points, captured, passes):
         return total
 
     @numba.njit
-    def time_impact(n_stages, n_dynamic, t, y, f, h_try, delta, side, bracket, c, K, y_new, dense, stage, scratch,
-                    n):
+    def time_restitution(y, t, c, barrier, side, restitution, stick_velocity, n):
         total = 0.0
+        f = np.empty_like(y)
+        scratch = np.empty(1)
         for i in range(n):
-            h, _ = reach_impact(rhs, nothing, nothing, step, dense_output, n_stages, n_dynamic, t, y, f,
-                                h_try * (1.0 + 1e-16 * (i & 1)), delta, side, bracket, c, K, y_new, dense, stage,
-                                scratch)
-            total += h
+            v_before, v_after, stuck = restitute(y, t * (1.0 + 1e-16 * (i & 1)), c, force, barrier, side, restitution,
+                                                 stick_velocity)
+            rhs(t, 0.0, -1, 0.0, y, c, f, scratch)  # the derivative after the rebound
+            total += v_after + f[1]
         return total
 
     @numba.njit
@@ -246,7 +250,9 @@ def costs_on_cpu(model, method, seed, n_points, captured, passes):
         return total
 
     timers = {"dense": (time_dense, lambda a: a[1:11]), "find": (time_find, lambda a: a[:7]),
-              "impact": (time_impact, lambda a: a[5:20]), "turn_test": (time_turn_test, lambda a: a[:4]),
+              "impact": (time_turn_root, lambda a: a[:7]),
+              "restitution": (time_restitution, lambda a: (a[0], a[1], a[2], a[4], a[5], a[6], a[7])),
+              "turn_test": (time_turn_test, lambda a: a[:4]),
               "turn_root": (time_turn_root, lambda a: a[:7])}
     costs = {}
     for kind, (timer, arguments_of) in timers.items():
@@ -350,6 +356,8 @@ def main():
     parser.add_argument("--measured", type=float,
                         help="the card's factor (one point per warp / 32) on a launch of MEASURED_POINTS: the "
                              "branches' weight, relative to the CPU's, at which the model gives it")
+    parser.add_argument("--weight", type=float, default=1.0,
+                        help="also print a point's time with the branches WEIGHT times as costly (a card's)")
     parser.add_argument("--out", help="a JSON file for the figures")
     args = parser.parse_args()
     model = "original"
@@ -383,13 +391,21 @@ def main():
         print(f"a launch of {n_points:>9,} points on {args.warps} warps: 32 points a warp / one point a warp "
               f"{mixed / same:.2f}x, lanes active per instruction {active:.1f} of 32; a point takes "
               f"{mixed / n_points * 1e9:.0f} ns of the model's time")
+    passes_a_point = len(every) / args.points
+    heavier = {kind: args.weight * cost for kind, cost in costs.items()}
+    at_weight = {"weight": args.weight, "passes_a_point": passes_a_point,
+                 "mixed_ns_a_point": passes_a_point * pass_cost(rest, rates, heavier, WARP) * 1e9,
+                 "same_ns_a_point": passes_a_point * pass_cost(rest, rates, heavier, 1) * 1e9}
+    print(f"{passes_a_point:,.0f} passes a point; with the branches {args.weight:g}x as costly: a point takes "
+          f"{at_weight['mixed_ns_a_point'] / 1e6:.3f} ms of warp passes with 32 points a warp, "
+          f"{at_weight['same_ns_a_point'] / 1e6:.3f} ms with one")
     weight = None
     if args.measured:
         weight = branch_weight(args.measured, lengths, args.warps, rest, rates, costs, args.seed)
         print(f"the card's {args.measured:.2f}x on {MEASURED_POINTS:,} points: the model gives it with the branches "
               f"{weight:.1f}x as costly, relative to the pass's rest, as on this CPU")
     if args.out:
-        Path(args.out).write_text(json.dumps({"weight": weight, 
+        Path(args.out).write_text(json.dumps({"weight": weight, "at_weight": at_weight, 
             "method": args.method, "points": args.points, "passes": int(len(every)), "rates": rates, "costs_s": costs,
             "per_pass_s": per_pass, "rest_s": rest, "pass_ratio": together / lone,
             "lanes_active": WARP * lone / together, "launches": launches}, indent=1))

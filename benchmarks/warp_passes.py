@@ -3,10 +3,10 @@
     python benchmarks/warp_passes.py [--model original] [--method rk45] [--points 1024]
 
 On a GPU the lanes of a warp take each pass of the loop together (the warp vote, numerics/cuda.py);
-a lane that meets an impact then takes the impact's exact step, IMPACT_NEWTON_ITERATIONS steps at
-most (kernel._reach_impact), while the warp's other lanes wait. Turning those steps into passes of
-the loop, so that they share the one step of every pass, is worth at most what they cost the
-warp. This runs a random sample of the benchmark map (benchmarks/gpu.py's settings) on the CPU and
+up to 0.6.5 a lane that met an impact then took the impact's exact step, IMPACT_NEWTON_ITERATIONS
+steps at most, inside its pass, while the warp's other lanes waited. Turning those steps into
+passes of the loop, so that they share the one step of every pass (done since, kernel._integrate),
+is worth at most what they cost the warp. This runs a random sample of the benchmark map (benchmarks/gpu.py's settings) on the CPU and
 counts per point its steps, impacts and right-hand sides; the Newton steps are the right-hand
 sides left after the steps' own, the two of the start and the one after each rebound (rk45's
 dense output costs none, so rk45 only). With p the impacts per step and m the Newton steps per
