@@ -9,7 +9,7 @@ its time, while the lanes that do not take it wait. warp_passes.py bounded one b
 (the impact's Newton steps, since made passes of the loop); this does it for every costly branch of
 a pass at once, on the
 original model, gpu.py's map and settings, with the loop composed as the GPU's kernel composes it
-(cuda.METHOD_PARTS: the library's cosines at every stage, no rotation table, with either method):
+(kernel.METHOD_PARTS: the library's cosines at every stage, no rotation table, with either method):
 
 1. counts: a random sample of the map's points integrated in pure Python (NUMBA_DISABLE_JIT, one
    process per core), the kernel's own functions wrapped so that every pass of the loop records
@@ -29,8 +29,8 @@ original model, gpu.py's map and settings, with the loop composed as the GPU's k
 The CPU's costs stand in for the card's: the model says how much of gpu_divergence.py's factor
 (one point per warp against 32) the union of branches explains if the card weighs the branches as
 the CPU does; --measured FACTOR, the card's, gives the weight of the branches (relative to the
-pass's rest, against the CPU's) at which it would explain all of it. A card's profile checks that (benchmarks/README.md, "What the loop's branches cost a
-warp").
+pass's rest, against the CPU's) at which it would explain all of it. A card's profile checks that
+(benchmarks/README.md, "What the loop's branches cost a warp").
 """
 
 from __future__ import annotations
@@ -77,19 +77,6 @@ REPEAT = 2000          # calls timed per captured argument set
 ROUNDS = 3             # every time is the best of ROUNDS (this machine's noise)
 
 
-def method_parts(method):
-    """cuda.METHOD_PARTS without importing the GPU's module: (rules, step, error norm, dense output,
-    accepted / certain growth / rejected step factor, rows of K, the dense output's order)."""
-    from vrsweep.numerics import dop853, kernel, rk45
-
-    if method == "rk45":
-        return (kernel.RK45_RULES, rk45.dp54_step, rk45.error_norm, rk45.dp54_dense, rk45.accepted_step_factor,
-                rk45.certain_growth, rk45.rejected_step_factor, rk45.N_STAGES + 1, rk45.DENSE_ORDER)
-    return (kernel.DOP853_RULES, kernel.dop853_step, kernel.dop853_error_norm, kernel.dop853_dense,
-            kernel.dop853_accepted_step_factor, kernel.dop853_certain_growth, kernel.dop853_rejected_step_factor,
-            dop853.N_STAGES_EXTENDED, dop853.DENSE_ORDER)
-
-
 def integrate(method, coefficients, settings, gather_lanes, parts=None):
     """One point through kernel._integrate, composed as the GPU's line kernel composes it."""
     from vrsweep.numerics import kernel, rhs
@@ -97,7 +84,8 @@ def integrate(method, coefficients, settings, gather_lanes, parts=None):
     from vrsweep.numerics.impact import N_BRACKET
     from vrsweep.numerics.state import N_STATE
 
-    (rules, step, error, dense_output, accepted, growth, rejected, k_rows, dense_order) = parts or method_parts(method)
+    rules, step, error, dense_output, accepted, growth, rejected, k_rows, dense_order = (
+        parts or kernel.METHOD_PARTS[method])
     period_records = np.full((INTEGRATION["measure_periods"], kernel.N_RECORD), np.nan)
     summary = np.full(kernel.N_SUMMARY, np.nan)
     return kernel._integrate(
@@ -145,7 +133,7 @@ def count(model, method, seed, first, n_points, out):
         if where is not None:
             module, name = where
             setattr(modules[module], name, wrapped(kind, getattr(modules[module], name)))
-    parts = list(method_parts(method))
+    parts = list(kernel.METHOD_PARTS[method])
     parts[3] = wrapped("dense", parts[3])
     parts[6] = wrapped("reject", parts[6])
 
@@ -203,7 +191,7 @@ def costs_on_cpu(model, method, seed, n_points, captured, passes):
     from vrsweep.numerics.models import kernels_for
     from vrsweep.numerics.trajectory import settings_vector
 
-    dense_output = method_parts(method)[3]
+    dense_output = kernel.METHOD_PARTS[method][3]
     rhs = kernel.oscillator_rhs
     find_crossing, locate_root, inside_extremes = impact.find_crossing, impact.locate_root, records._inside_extremes
     restitute, force = kernel._restitution, kernel.force_at_barrier
@@ -372,7 +360,8 @@ def main():
     rest = per_pass - sum(rates[kind] * costs[kind] for kind in COSTED)
     print(f"the compiled kernel: {per_pass * 1e9:.0f} ns a pass on this CPU; of it, outside the kinds below: "
           f"{rest * 1e9:.0f} ns")
-    print(f"{'kind':10s} {'passes':>8s} {'any of 32':>10s} {'ns a call':>10s} {'a lane':>8s} {'a warp':>8s}  (ns a pass)")
+    print(f"{'kind':10s} {'passes':>8s} {'any of 32':>10s} {'ns a call':>10s} {'a lane':>8s} {'a warp':>8s}"
+          "  (ns a pass)")
     for kind in KINDS:
         rate, cost = rates[kind], costs.get(kind, 0.0)
         anyone = 1.0 - (1.0 - rate) ** WARP
@@ -385,8 +374,8 @@ def main():
     rng = np.random.default_rng(args.seed)
     launches = {}
     for n_points in (2048, 65536, 262144, 1048576):
-        mixed, same, active = launch_times(lengths, n_points, args.warps, lambda lanes: pass_cost(rest, rates, costs, lanes),
-                                   lone, rng)
+        mixed, same, active = launch_times(lengths, n_points, args.warps,
+                                           lambda lanes: pass_cost(rest, rates, costs, lanes), lone, rng)
         launches[n_points] = {"mixed_seconds": mixed, "same_seconds": same, "lanes_active": active}
         print(f"a launch of {n_points:>9,} points on {args.warps} warps: 32 points a warp / one point a warp "
               f"{mixed / same:.2f}x, lanes active per instruction {active:.1f} of 32; a point takes "

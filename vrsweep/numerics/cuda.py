@@ -37,19 +37,11 @@ import numba
 import numpy as np
 from numba import cuda
 
-from vrsweep.numerics import codegen, dop853, kernel, numba_cache, rhs
+from vrsweep.numerics import codegen, kernel, numba_cache, rhs
 from vrsweep.numerics.coefficients import MAX_BARRIERS
-from vrsweep.numerics.dop853 import (
-    dop853_accepted_step_factor, dop853_certain_growth, dop853_dense, dop853_error_norm, dop853_rejected_step_factor,
-    dop853_step,
-)
 from vrsweep.numerics.impact import N_BRACKET
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.lines import next_start
-from vrsweep.numerics.rk45 import (
-    DENSE_ORDER, N_STAGES, accepted_step_factor, certain_growth, dp54_dense, dp54_step, error_norm,
-    rejected_step_factor,
-)
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS
 
 # Threads per block: a block of 64 lets every multiprocessor hold several blocks of a kernel that
@@ -95,14 +87,8 @@ CACHE_KERNELS = True
 LOCAL_COEFFICIENTS = False
 LOCAL_COEFFICIENTS_SIZE = 64
 
-# method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
-# factor, rows of K, dense output's order): the same functions kernel.py's CPU entry points pass.
-METHOD_PARTS = {
-    "rk45": (kernel.RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-             rejected_step_factor, N_STAGES + 1, DENSE_ORDER),
-    "dop853": (kernel.DOP853_RULES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
-               dop853_certain_growth, dop853_rejected_step_factor, dop853.N_STAGES_EXTENDED, dop853.DENSE_ORDER),
-}
+# method -> the loop's parts for it (kernel.METHOD_PARTS: the library's cosines, no rotation table).
+METHOD_PARTS = kernel.METHOD_PARTS
 
 
 # The kernel's source: thread-local arrays need sizes that are constants when numba compiles, so

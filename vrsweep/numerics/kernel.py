@@ -100,6 +100,15 @@ UNRESOLVED_STEP_FACTOR = 0.125
 RK45_RULES = (False, False, ORDER, N_STAGES)
 DOP853_ROTATED_RULES = (True, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES)
 DOP853_RULES = (False, True, dop853.ERROR_ESTIMATOR_ORDER + 1, dop853.N_STAGES)
+# method -> (rules, step, error norm, dense output, accepted / certain growth / rejected step
+# factor, rows of K, dense output's order) for a loop whose stages call the model's right-hand side
+# (no rotation table): the GPU's kernel (cuda.py) and the benchmarks that model it.
+METHOD_PARTS = {
+    "rk45": (RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
+             rejected_step_factor, N_STAGES + 1, DENSE_ORDER),
+    "dop853": (DOP853_RULES, dop853_step, dop853_error_norm, dop853_dense, dop853_accepted_step_factor,
+               dop853_certain_growth, dop853_rejected_step_factor, dop853.N_STAGES_EXTENDED, dop853.DENSE_ORDER),
+}
 # The rows of _integrate's vectors: the state y, the trial step's end y_new, a stage's state and
 # the derivative f = y'(t).
 Y_ROW, Y_NEW_ROW, STAGE_ROW, F_ROW = range(4)
