@@ -80,8 +80,7 @@ ROUNDS = 3             # every time is the best of ROUNDS (this machine's noise)
 def integrate(method, coefficients, settings, gather_lanes, parts=None):
     """One point through kernel._integrate, composed as the GPU's line kernel composes it."""
     from vrsweep.numerics import kernel, rhs
-    from vrsweep.numerics.coefficients import MAX_BARRIERS
-    from vrsweep.numerics.impact import N_BRACKET
+    from vrsweep.numerics.impact import bracket_size
     from vrsweep.numerics.state import N_STATE
 
     rules, step, error, dense_output, accepted, growth, rejected, k_rows, dense_order = (
@@ -92,7 +91,7 @@ def integrate(method, coefficients, settings, gather_lanes, parts=None):
         rhs.oscillator_rhs, rhs.oscillator_rhs, rhs.oscillator_tangent, rhs.force_at_barrier, rhs.no_preparation,
         rhs.no_preparation, rules, step, error, dense_output, accepted, growth, rejected, False,
         np.empty((k_rows, N_STATE)), np.empty((N_STATE, dense_order)), np.empty((kernel.N_VECTORS, N_STATE)),
-        np.empty((MAX_BARRIERS, N_BRACKET)), np.empty(1), coefficients, np.array([X0, V0]), settings,
+        np.empty(bracket_size(dense_order)), np.empty(1), coefficients, np.array([X0, V0]), settings,
         period_records, summary, np.empty(0), np.empty((0, 2)), np.empty((0, 3)), np.empty((0, 2)),
         np.empty((0, 4)), gather_lanes)
 

@@ -10,13 +10,16 @@ import numpy as np
 import pytest
 
 from vrsweep.numerics.impact import (
-    BARRIER_SCAN_POINTS, IMPACT, N_BRACKET, NO_IMPACT, THETA_TOLERANCE, TURNING_POINT, UNRESOLVED, V, X,
-    bernstein_coefficients, find_crossing, first_reach, locate_root,
+    BARRIER_SCAN_POINTS, IMPACT, MAX_DEGREE, N_BRACKET, NO_IMPACT, THETA_TOLERANCE, TURNING_POINT, UNRESOLVED, V, X,
+    bernstein_coefficients, bracket_size, find_crossing, first_reach, locate_root,
 )
 from vrsweep.numerics.rk45 import dense_value
 
 DELTA = 1.0
 DEGREE = 4  # dense outputs of DP5(4)'s shape (2, 4): x up to theta^4
+# Values past a bracket's end, which find_crossing must never write: a GPU thread's bracket is
+# exactly bracket_size(degree) long, and numba checks no bounds.
+GUARD = 8
 
 
 def motion(x_coefficients, h=0.5, degree=DEGREE):
@@ -36,9 +39,10 @@ def motion(x_coefficients, h=0.5, degree=DEGREE):
 
 def crossing(x_coefficients, pushed=False, h=0.5, degree=DEGREE):
     dense, y, y_new, h = motion(x_coefficients, h, degree)
-    bracket = np.full(N_BRACKET, -7.0)
+    bracket = np.full(bracket_size(degree) + GUARD, -7.0)
     verdict = find_crossing(dense, y, y_new, h, DELTA, pushed, bracket)
-    return verdict, bracket, (dense, y, h)
+    np.testing.assert_array_equal(bracket[bracket_size(degree):], -7.0)
+    return verdict, bracket[:bracket_size(degree)], (dense, y, h)
 
 
 def test_the_built_motions_are_what_they_say():
@@ -335,9 +339,9 @@ def _stack_walk(dense, y, h, delta, coefficients):
 def test_the_stackless_walk_finds_what_a_stack_of_pieces_finds_to_the_last_bit(degree):
     """Polynomials with up to `degree` roots just below, on and just past the barrier (several
     touches and near misses in one step), the hardest case for the walk: its verdict, bracket and
-    turning point are the reference's exactly. The bracket holds only the 39 values a GPU thread
-    keeps per barrier."""
-    assert N_BRACKET <= 40
+    turning point are the reference's exactly, and nothing is written past bracket_size(degree),
+    the bracket a GPU thread keeps (one for all barriers, of its method's size)."""
+    assert N_BRACKET == bracket_size(MAX_DEGREE)  # the CPU's brackets hold any degree's
     rng = np.random.default_rng(20261126 + degree)
     walked = 0
     for _ in range(400):
@@ -355,9 +359,10 @@ def test_the_stackless_walk_finds_what_a_stack_of_pieces_finds_to_the_last_bit(d
         coefficients = np.empty(degree + 1)
         bernstein_coefficients(dense, y, h, X, DELTA, coefficients)
         verdict, low, high, turning = _stack_walk(dense, y, h, DELTA, list(coefficients))
-        bracket = np.full(N_BRACKET, -7.0)
+        bracket = np.full(bracket_size(degree) + GUARD, -7.0)
         bracket[3:3 + degree + 1] = coefficients
         got = first_reach(dense, y, h, DELTA, bracket[3:3 + degree + 1], bracket)
+        np.testing.assert_array_equal(bracket[bracket_size(degree):], -7.0)
         bracket_turning = bracket[TURNING_POINT] if bracket[TURNING_POINT] != -7.0 else np.nan
         assert got == verdict
         if verdict == IMPACT:

@@ -51,7 +51,7 @@ from vrsweep.numerics.dop853 import (
 from vrsweep.numerics.kernel import (
     DOP853_ROTATED_RULES, N_VECTORS, RK45_RULES, _integrate, lanes_apart, no_preparation, no_scratch,
 )
-from vrsweep.numerics.coefficients import MAX_BARRIERS, MAX_STEP
+from vrsweep.numerics.coefficients import MAX_STEP
 from vrsweep.numerics.impact import N_BRACKET
 from vrsweep.numerics.rk45 import (
     DENSE_ORDER, N_STAGES, ORDER, accepted_step_factor, certain_growth, dp54_dense, dp54_step, error_norm,
@@ -145,13 +145,13 @@ _METHOD_CALLS = {
              "                      dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,\n"
              "                      rejected_step_factor, {tangents},\n"
              "                      np.empty((N_STAGES + 1, {n_state})), np.empty(({n_state}, DENSE_ORDER)),\n"
-             "                      np.empty((N_VECTORS, {n_state})), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),"),
+             "                      np.empty((N_VECTORS, {n_state})), np.empty(N_BRACKET), no_scratch(0.0),"),
     "dop853": ("_integrate({rhs}, {rhs}_rotated, tangent, barrier_force, prepare_step_rotations, prepare_rotations,\n"
                "                      DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,\n"
                "                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor,\n"
                "                      {tangents}, np.empty((dop853.N_STAGES_EXTENDED, {n_state})),\n"
                "                      np.empty(({n_state}, dop853.DENSE_ORDER)),\n"
-               "                      np.empty((N_VECTORS, {n_state})), np.empty((MAX_BARRIERS, N_BRACKET)),\n"
+               "                      np.empty((N_VECTORS, {n_state})), np.empty(N_BRACKET),\n"
                "                      dop853_rotation_scratch(coefficients[MAX_STEP]),"),
 }
 

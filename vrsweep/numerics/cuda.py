@@ -38,8 +38,7 @@ import numpy as np
 from numba import cuda
 
 from vrsweep.numerics import codegen, kernel, numba_cache, rhs
-from vrsweep.numerics.coefficients import MAX_BARRIERS
-from vrsweep.numerics.impact import N_BRACKET
+from vrsweep.numerics.impact import bracket_size
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.lines import next_start
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS
@@ -98,7 +97,7 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
 {simulator_prologue}    K = cuda.local.array(({k_rows}, {n_state}), float64)
     dense = cuda.local.array(({n_state}, {dense_order}), float64)
     vectors = cuda.local.array(({n_vectors}, {n_state}), float64)
-    brackets = cuda.local.array(({max_barriers}, {n_bracket}), float64)
+    bracket = cuda.local.array({n_bracket}, float64)
     scratch = cuda.local.array(1, float64)  # no_preparation reads none
     state = cuda.local.array(2, float64)
 {local_coefficients}    # The observers a sweep does not use, as empty views (nothing is allocated for them).
@@ -119,7 +118,7 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
 {point}            status = _integrate(
                 model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
                 step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
-                brackets, scratch, point, state, settings, period_records[line, slot],
+                bracket, scratch, point, state, settings, period_records[line, slot],
                 summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy, gather_lanes)
             statuses[line, slot] = status
             next_start(status, summary, first, state)
@@ -234,7 +233,7 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
     gather = gather and not numba.config.ENABLE_CUDASIM
     body = _LINE_KERNEL.format(
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
-        n_vectors=kernel.N_VECTORS, max_barriers=MAX_BARRIERS, n_bracket=N_BRACKET, tangents=bool(tangents),
+        n_vectors=kernel.N_VECTORS, n_bracket=bracket_size(dense_order), tangents=bool(tangents),
         simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
         first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "",
         local_coefficients=_LOCAL_COEFFICIENTS.format(size=LOCAL_COEFFICIENTS_SIZE) if local_coefficients else "",

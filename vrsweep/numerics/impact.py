@@ -29,17 +29,23 @@ MAX_ROOT_ITERATIONS = 200
 # a slow rebound can leave and come back within one step, with x(t + h) < Delta (a graze).
 BARRIER_SCAN_POINTS = 8
 NO_CROSSING = -1.0
-# find_crossing's bracket: (theta_low, theta_high, the turning point it located), then room for the
-# step's Bernstein coefficients and first_reach's workspace (so that the kernel's hot loop
-# allocates nothing). first_reach walks its pieces without a stack (each piece is recomputed from
-# the step's coefficients), so the bracket is 39 values: a GPU thread keeps two of them (one per
-# barrier) in 624 bytes of local memory, where a stack of pieces took 7.7 kB (benchmarks/README.md).
+# find_crossing's bracket: (theta_low, theta_high, the turning point it located), then the step's
+# Bernstein coefficients and first_reach's workspace (so that the kernel's hot loop allocates
+# nothing): a piece and the halves of a piece while it is halved, each n + 1 values for a dense
+# output of degree n, one after the other. first_reach walks its pieces without a stack (each piece
+# is recomputed from the step's coefficients), so a bracket is bracket_size(n) values: 23 with rk45
+# (degree 4), 35 with dop853 (7). A GPU thread keeps one, of its method's size, in local memory,
+# where up to 0.6.2 a stack of pieces took 7.7 kB and up to 0.6.6 two brackets of the largest size
+# (one per barrier) 624 bytes (benchmarks/README.md).
 TURNING_POINT = 2
-BERNSTEIN = 3                    # the step's coefficients, up to degree 8 (rk45: 4, dop853: 7)
-PIECE = BERNSTEIN + 9            # the piece being examined
-LEFT = PIECE + 9                 # the halves of a piece while it is halved
-RIGHT = LEFT + 9
-N_BRACKET = RIGHT + 9
+BERNSTEIN = 3                    # the step's coefficients, then the piece, then its two halves
+
+
+def bracket_size(degree):
+    """A bracket's length for dense outputs of the given degree (DENSE_ORDER, the dense array's columns)."""
+    return BERNSTEIN + 4 * (degree + 1)
+
+
 # find_crossing's verdicts.
 NO_IMPACT = 0
 IMPACT = 1
@@ -98,6 +104,8 @@ def _crossing_after_turning_point(dense, y, h, delta, theta_a, theta_b):
 # BERNSTEIN_FROM_POWER[n, i, k] = C(i, k) / C(n, k): the i-th Bernstein coefficient of degree n of a
 # polynomial is sum_k BERNSTEIN_FROM_POWER[n, i, k] a_k, a_k its power-basis coefficients on [0, 1].
 MAX_DEGREE = 8
+# A bracket that holds any degree's (the CPU's callers allocate this one).
+N_BRACKET = bracket_size(MAX_DEGREE)
 BERNSTEIN_FROM_POWER = np.zeros((MAX_DEGREE + 1, MAX_DEGREE + 1, MAX_DEGREE + 1))
 for _n in range(MAX_DEGREE + 1):
     for _i in range(_n + 1):
@@ -238,9 +246,9 @@ def first_reach(dense, y, h, delta, coefficients, bracket):
     # piece, climb while it is a right half, then take the next piece to the right. A piece's
     # coefficients are the step's halved along the bits of its index, the same halvings in the
     # same order as a stack of pieces would make, so the values are the same to the last bit.
-    piece = bracket[PIECE:PIECE + n + 1]
-    left = bracket[LEFT:LEFT + n + 1]
-    right = bracket[RIGHT:RIGHT + n + 1]
+    piece = bracket[BERNSTEIN + (n + 1):BERNSTEIN + 2 * (n + 1)]
+    left = bracket[BERNSTEIN + 2 * (n + 1):BERNSTEIN + 3 * (n + 1)]
+    right = bracket[BERNSTEIN + 3 * (n + 1):BERNSTEIN + 4 * (n + 1)]
     depth = 0
     index = 0
     while True:

@@ -38,7 +38,7 @@ from vrsweep.numerics.impact import (
     IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, hermite_reach, locate_root, release_time,
 )
 from vrsweep.numerics.coefficients import (
-    BARRIER, BARRIER_VALUES, MAX_BARRIERS, MAX_STEP, N_BARRIERS, PERIOD, POSITION, RESPONSE_FREQUENCY,
+    BARRIER, BARRIER_VALUES, MAX_STEP, N_BARRIERS, PERIOD, POSITION, RESPONSE_FREQUENCY,
     RESPONSE_SCALE, RESTITUTION, SCAN_STEP, SIDE,
 )
 from vrsweep.numerics.rk45 import (
@@ -153,7 +153,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_preparation, no_preparation,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
                       rejected_step_factor, False, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
+                      np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
@@ -171,7 +171,7 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
                       prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, False,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE)), np.empty((MAX_BARRIERS, N_BRACKET)),
+                      np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
@@ -189,7 +189,7 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
                       no_preparation, RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
@@ -202,7 +202,7 @@ def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_reco
                       prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
@@ -222,7 +222,7 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
                       no_preparation, RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)), no_scratch(0.0),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart)
 
@@ -235,7 +235,7 @@ def integrate_dop853_monodromy(coefficients, initial_state, settings, period_rec
                       prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty((MAX_BARRIERS, N_BRACKET)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart)
@@ -261,7 +261,7 @@ def integrator(method, lyapunov=False):
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
 def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, rules, step, step_error,
-               dense_output, accepted_factor, certain_growth, rejected_factor, tangents, K, dense, vectors, brackets,
+               dense_output, accepted_factor, certain_growth, rejected_factor, tangents, K, dense, vectors, bracket,
                scratch, coefficients, initial_state, settings, period_records, summary,
                sample_times, samples, impact_log, stick_log, monodromy_log, gather_lanes):
     """The integration loop of every method; see integrate_rk45 for the arguments.
@@ -284,8 +284,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     state components the right-hand sides read. The work arrays are the caller's, so that the loop
     allocates nothing and compiles for a GPU thread as it does for a CPU one (cuda.py): K (rows,
     n_state) and dense (n_state, order), the method's; vectors (N_VECTORS, n_state), the state, the
-    trial state, a stage's state and the derivative (rows Y_ROW ...); brackets (MAX_BARRIERS,
-    N_BRACKET), find_crossing's, one per barrier.
+    trial state, a stage's state and the derivative (rows Y_ROW ...); bracket (bracket_size(order)
+    at least: N_BRACKET holds any method's), find_crossing's, which each barrier's test reuses.
 
     Each pass of the loop is one of: hold the mass on the barrier up to its release or the period's
     end; or attempt a step, and if it is accepted and meets a barrier, locate the impact on its
@@ -483,7 +483,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                 impact = False
                 dense_ready = False
                 theta_turn = math.nan
-                hit = -1  # the barrier the step meets first
+                hit = -1  # the barrier the step meets first, between theta hit_low and hit_high
+                hit_low = hit_high = 0.0
                 unresolved = False
                 position = side = restitution = 1.0
                 for barrier in range(0 if transparent else n_barriers):
@@ -502,7 +503,6 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                                               n_dynamic)
                         dense_ready = True
                     pushed = side * y[X] >= level and barrier_force(t, coefficients, barrier) > 0.0
-                    bracket = brackets[barrier]
                     if side < 0.0:
                         _mirror(y, y_new, dense)
                     verdict = find_crossing(dense, y, y_new, h_try, level, pushed, bracket)
@@ -512,8 +512,10 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                         unresolved = True
                         break
                     if verdict == IMPACT:
-                        if hit < 0 or bracket[1] < brackets[hit, 1]:
+                        if hit < 0 or bracket[1] < hit_high:
                             hit = barrier
+                            hit_low = bracket[0]
+                            hit_high = bracket[1]
                     elif bracket[TURNING_POINT] == bracket[TURNING_POINT]:
                         theta_turn = bracket[TURNING_POINT]
                 if unresolved:
@@ -532,11 +534,10 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                 h_taken = h_try
                 if impact:
                     # Located on the dense output; the exact step is taken in the next passes.
-                    bracket = brackets[hit]
-                    if bracket[0] < bracket[1]:
-                        theta = locate_root(dense, y, h_try, X, position, bracket[0], bracket[1])
+                    if hit_low < hit_high:
+                        theta = locate_root(dense, y, h_try, X, position, hit_low, hit_high)
                     else:
-                        theta = bracket[1]
+                        theta = hit_high
                     h_taken = theta * h_try
                     reaching = True
                     newton_steps = 0
