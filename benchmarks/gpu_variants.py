@@ -13,6 +13,8 @@ barrier at every pass of the loop, and a thread's coefficients read from its own
     D  C with at most 128 registers a thread
     E  C with the lanes of a warp gathered at every pass                (the default)
     F  E with each thread's coefficients copied to its local memory    (cuda.LOCAL_COEFFICIENTS)
+    G  E with at most 168 registers a thread: 12 warps a multiprocessor instead of 8, more to hide
+       the latency of a branch's serial arithmetic, for spills (benchmarks/README.md, 0.6.7)
 
 for the original model with rk45 and dop853 and the effective model with dop853, and the CPU's
 best method (dop853, every core) on a sample, so that every ratio is of this one process. Checks
@@ -52,14 +54,15 @@ VARIANTS = {"A": dict(queue=False, sort=False, max_registers=None, gather=False)
             "C": dict(queue=True, sort=True, max_registers=None, gather=False),
             "D": dict(queue=True, sort=True, max_registers=128, gather=False),
             "E": dict(queue=True, sort=True, max_registers=None, gather=True),
-            "F": dict(queue=True, sort=True, max_registers=None, gather=True, local_coefficients=True)}
+            "F": dict(queue=True, sort=True, max_registers=None, gather=True, local_coefficients=True),
+            "G": dict(queue=True, sort=True, max_registers=168, gather=True)}
 CASES = [("original", "rk45", 2000), ("effective", "dop853", 8000), ("original", "dop853", 2000)]
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--points", type=int, default=65536)
-    parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of A, C, D, E, F")
+    parser.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated, of " + ", ".join(VARIANTS))
     parser.add_argument("--source", help="the folder holding the vrsweep package to time (default: this one)")
     parser.add_argument("--out", default=os.environ.get("OUT", "."))
     parser.add_argument("--cases", help="comma-separated model:method, of " + ",".join(
