@@ -6,7 +6,7 @@
 #
 # The machine's image (the device tool's KINDS.md lists it) has numba, numba-cuda, h5py, xarray,
 # click, tqdm, sympy and scipy, with Python 3.12 and numpy 2.5; vrsweep also needs the packages
-# below, and numpy < 2.5 (pyproject.toml's cuda extra says why). About 21 MB: the checkout's
+# below, and numpy < 2.5 (pyproject.toml's cuda extra says why). About 19 MB: the checkout's
 # working tree travels with it, within the tool's 64 MiB a call.
 #
 #   bash benchmarks/gpu_wheels.sh          (from the repository root, where pip reaches PyPI)

@@ -180,12 +180,11 @@ def _ptxas():
 @pytest.mark.parametrize("options", [{}, {"local_coefficients": True}], ids=["default", "local coefficients"])
 def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path, options):
     """compile_ptx for sm_90 without a GPU (vrsweep.numerics.cuda.compile_for), then ptxas: the
-    resource report names the kernel; its local memory is the work arrays' and little more. A
-    multiprocessor holds 8 warps of this kernel (255 registers a thread): their 256 threads'
-    frames stay within three quarters of its 256 kB of L1 while a frame is at most 768 bytes
-    (rk45: 608 since 0.6.7, with one bracket of the method's size; 1,056 with two of the largest;
-    8.1 kB when the impact test kept a stack of pieces; and dop853's rotation table, 68 kB, must
-    never come into a thread). The coefficients' copy (cuda.LOCAL_COEFFICIENTS) is 0.5 kB more."""
+    resource report names the kernel; its local memory is the work arrays' and little more: at
+    most 768 bytes (rk45: 608 since 0.6.7, with one impact-test bracket of the method's size;
+    1,056 with two of the largest). A change that brings a larger workspace into a thread fails
+    here: the impact test's stack of pieces took 8.1 kB, and dop853's rotation table, 68 kB, must
+    never come into a thread. The coefficients' copy (cuda.LOCAL_COEFFICIENTS) is 0.5 kB more."""
     from vrsweep.numerics import cuda
 
     ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0), **options)
