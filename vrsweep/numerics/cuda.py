@@ -86,9 +86,6 @@ CACHE_KERNELS = True
 LOCAL_COEFFICIENTS = False
 LOCAL_COEFFICIENTS_SIZE = 64
 
-# method -> the loop's parts for it (kernel.METHOD_PARTS: the library's cosines, no rotation table).
-METHOD_PARTS = kernel.METHOD_PARTS
-
 
 # The kernel's source: thread-local arrays need sizes that are constants when numba compiles, so
 # the method's and state's sizes are written into it (line_kernel) rather than read from variables.
@@ -227,7 +224,7 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None,
 def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max_registers, gather,
                  local_coefficients):
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
-     dense_order) = METHOD_PARTS[method]
+     dense_order) = kernel.METHOD_PARTS[method]  # (the library's cosines, no rotation table)
     first_position, next_position = _POSITIONS[queue]
     # (the simulator runs the loop as a CPU compile, where a warp vote has no meaning)
     gather = gather and not numba.config.ENABLE_CUDASIM

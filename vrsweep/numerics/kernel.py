@@ -531,8 +531,6 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                     side = coefficients[slot + SIDE]
                     position = coefficients[slot + POSITION]
                     restitution = coefficients[slot + RESTITUTION]
-                h_taken = h_try
-                if impact:
                     # Located on the dense output; the exact step is taken in the next passes.
                     if hit_low < hit_high:
                         theta = locate_root(dense, y, h_try, X, position, hit_low, hit_high)
@@ -542,6 +540,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                     reaching = True
                     newton_steps = 0
                     continue
+                h_taken = h_try
 
             # --- observers: samples and the period's extremes, on the step's dense output ---
             t_new = t_boundary if (clipped and not impact) else t + h_taken
