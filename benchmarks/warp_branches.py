@@ -124,9 +124,10 @@ def count(model, method, seed, first, n_points, out):
                 state["inside"] -= 1
         return counting
 
-    def next_pass():  # kernel._integrate's gather_lanes, called at the start of every pass
+    def next_pass(waiting=False):  # kernel._integrate's gather_lanes, called at the start of every pass
         state["passes"].append(state["flags"])
         state["flags"] = 0
+        return kernel.APART  # (nothing held: each pass's branches follow its step, as counted)
 
     for kind, where in KINDS.items():
         if where is not None:

@@ -177,19 +177,25 @@ def _ptxas():
     return find_nvidia_binary_utility("ptxas")
 
 
-@pytest.mark.parametrize("options", [{}, {"local_coefficients": True}], ids=["default", "local coefficients"])
+@pytest.mark.parametrize("options", [{}, {"local_coefficients": True}, {"hold": 8}],
+                         ids=["default", "local coefficients", "branches held"])
 def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path, options):
     """compile_ptx for sm_90 without a GPU (vrsweep.numerics.cuda.compile_for), then ptxas: the
     resource report names the kernel; its local memory is the work arrays' and little more: at
     most 768 bytes (rk45: 608 since 0.6.7, with one impact-test bracket of the method's size;
     1,056 with two of the largest). A change that brings a larger workspace into a thread fails
     here: the impact test's stack of pieces took 8.1 kB, and dop853's rotation table, 68 kB, must
-    never come into a thread. The coefficients' copy (cuda.LOCAL_COEFFICIENTS) is 0.5 kB more."""
+    never come into a thread. The coefficients' copy (cuda.LOCAL_COEFFICIENTS) is 0.5 kB more.
+    With the branches held (cuda.HOLD_LANES), the step and its branches are apart in the loop's
+    passes, and the kernel needs 216 registers and spills none (0.6.8): a change that brings
+    spills back fails here."""
     from vrsweep.numerics import cuda
 
     ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0), **options)
     assert ".target sm_90" in ptx
     assert "vote.sync" in ptx  # the warp's lanes gathered at every pass (gather_warp)
+    if options.get("hold"):
+        assert "vote.sync.ballot" in ptx  # the lanes waiting, counted
     ptxas = _ptxas()
     if ptxas is None:
         pytest.skip("ptxas is not installed (cuda-toolkit[nvcc])")
@@ -205,6 +211,9 @@ def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path, options):
     assert registers <= 255
     copy = 8 * cuda.LOCAL_COEFFICIENTS_SIZE if options.get("local_coefficients") else 0
     assert frame <= 768 + copy, entry[:2000]
+    if options.get("hold"):
+        spills = [int(n) for n in re.search(r"(\d+) bytes spill stores, (\d+) bytes spill loads", entry).groups()]
+        assert spills == [0, 0], entry[:2000]
 
 
 def test_a_kernel_reading_a_local_copy_of_the_coefficients_refuses_a_wider_row():

@@ -75,6 +75,14 @@ THREADS_PER_BLOCK = 64
 #   a warp's 32 lanes read 32 rows, a cache line each, for every coefficient a right-hand side
 #   reads (about 9 an evaluation); the hardware interleaves local memory across a warp's lanes, so
 #   there the same read takes two lines. Off until a card has measured it (gpu_variants.py, F).
+# - HOLD_LANES: with GATHER_LANES, a lane whose step needs the loop's rare branches (the dense
+#   output, the exact barrier test, an impact, a turning point) keeps the step and waits until
+#   HOLD_LANES lanes of its warp wait (or all that still integrate), and they take their branches
+#   in one pass (kernel._integrate's vote, _HOLD_WARP): the warp pays for a rare branch once for many
+#   lanes, not at every pass one lane needs it. The same arithmetic per lane, bit for bit; only the
+#   lanes' order in time changes. 0: off, until a card has measured it (gpu_variants.py, H: 8;
+#   benchmarks/warp_defer.py predicts 1.0x to 1.65x on the original model, from the branches'
+#   weight on the card).
 QUEUE = True
 QUEUE_BLOCKS_PER_SM = 16
 SORT = True
@@ -85,6 +93,7 @@ GATHER_LANES_BY_MODEL = {"effective": False}
 CACHE_KERNELS = True
 LOCAL_COEFFICIENTS = False
 LOCAL_COEFFICIENTS_SIZE = 64
+HOLD_LANES = 0
 
 
 # The kernel's source: thread-local arrays need sizes that are constants when numba compiles, so
@@ -150,6 +159,28 @@ _WAIT_FOR_WARP = """\
     while cuda.any_sync(WARP_LANES, False):
         pass
 """
+# With _HOLD_WARP's gather_lanes: the same, answering its two ballots ("waiting", "integrating") in their order.
+_WAIT_FOR_HOLDING_WARP = """\
+    while True:
+        cuda.ballot_sync(WARP_LANES, False)
+        if cuda.ballot_sync(WARP_LANES, False) == 0:
+            break
+"""
+# _HOLD_WARP, written into the kernel's module: its threshold is part of the source (and so of the
+# kernel's name in numba's cache), not a global that numba would freeze unseen.
+_HOLD_WARP = """import numba
+from vrsweep.numerics.kernel import HOLD, RELEASE
+HOLD_LANES = {hold}
+
+
+@numba.njit
+def gather_lanes(waiting):
+    \"\"\"kernel._integrate's gather_lanes with HOLD_LANES (cuda.py): the warp's lanes gathered, and
+    the waiting ones released together once HOLD_LANES of them wait or no other lane integrates.\"\"\"
+    n_waiting = cuda.popc(cuda.ballot_sync(WARP_LANES, waiting))
+    n_integrating = cuda.popc(cuda.ballot_sync(WARP_LANES, True))
+    return RELEASE if n_waiting >= HOLD_LANES or n_waiting == n_integrating else HOLD
+"""
 
 
 # In numba's CUDA simulator (tests) the kernel runs as Python, its arrays wrapped in the
@@ -171,13 +202,14 @@ WARP_LANES = 0xFFFFFFFF
 
 
 @numba.njit
-def gather_warp():
+def gather_warp(waiting):
     """kernel._integrate's gather_lanes on the GPU: a vote of the warp's lanes ("I am still
     integrating"), a barrier after which they run together. A lane between two lines comes to the
     next line's loop; a lane with no line left waits in the kernel's last loop, whose vote answers
     these until every lane of its warp has none (no lane of the warp exits before: a warp vote
-    must not name an exited lane)."""
+    must not name an exited lane). Nothing is held back (kernel.APART)."""
     cuda.any_sync(WARP_LANES, True)
+    return kernel.APART
 
 
 # In numba's CUDA simulator the kernel runs as Python and calls the loop from there, so numba
@@ -203,36 +235,39 @@ def fill_nan(records, summary):
 
 
 def line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue=None, max_registers=None, gather=None,
-                local_coefficients=None):
+                local_coefficients=None, hold=None):
     """The CUDA kernel that runs lines with ``method`` for a model's functions (kernel._integrate's
     rhs, tangent and barrier_force; model_rhs with the tangent vectors when ``tangents``).
 
     kernel[blocks, THREADS_PER_BLOCK](coefficients, initial_states, settings, lines,
     period_records, summaries, statuses, order, counter): lines.run_lines_rk45's arguments, then
     order (n_lines,), the lines in the order they are handed out, and counter (1,) int64, zero, the
-    queue's (queue: QUEUE by default; gather: GATHER_LANES; local_coefficients: LOCAL_COEFFICIENTS).
-    Compiled on its first launch, once per process.
+    queue's (queue: QUEUE by default; gather: GATHER_LANES; local_coefficients: LOCAL_COEFFICIENTS;
+    hold: HOLD_LANES, with gather only). Compiled on its first launch, once per process.
     """
     return _line_kernel(method, bool(tangents), model_rhs, tangent, barrier_force,
                         bool(QUEUE if queue is None else queue),
                         MAX_REGISTERS if max_registers is None else max_registers,
                         bool(GATHER_LANES if gather is None else gather),
-                        bool(LOCAL_COEFFICIENTS if local_coefficients is None else local_coefficients))
+                        bool(LOCAL_COEFFICIENTS if local_coefficients is None else local_coefficients),
+                        int(HOLD_LANES if hold is None else hold))
 
 
 @functools.lru_cache(maxsize=None)  # (line_kernel's defaults resolved first: one compile per kernel)
 def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max_registers, gather,
-                 local_coefficients):
+                 local_coefficients, hold):
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
      dense_order) = kernel.METHOD_PARTS[method]  # (the library's cosines, no rotation table)
     first_position, next_position = _POSITIONS[queue]
     # (the simulator runs the loop as a CPU compile, where a warp vote has no meaning)
     gather = gather and not numba.config.ENABLE_CUDASIM
+    hold = hold if gather else 0  # (a lane waits at the warp's vote: none, none to wait at)
+    wait_for_warp = (_WAIT_FOR_HOLDING_WARP if hold else _WAIT_FOR_WARP) if gather else ""
     body = _LINE_KERNEL.format(
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
         n_vectors=kernel.N_VECTORS, n_bracket=bracket_size(dense_order), tangents=bool(tangents),
         simulator_prologue=_SIMULATOR_PROLOGUE if numba.config.ENABLE_CUDASIM else "",
-        first_position=first_position, next_position=next_position, wait_for_warp=_WAIT_FOR_WARP if gather else "",
+        first_position=first_position, next_position=next_position, wait_for_warp=wait_for_warp,
         local_coefficients=_LOCAL_COEFFICIENTS.format(size=LOCAL_COEFFICIENTS_SIZE) if local_coefficients else "",
         point=_LOCAL_POINT if local_coefficients else _POINT)
     functions = {
@@ -240,26 +275,29 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
         "next_start": next_start, "no_preparation": rhs.no_preparation,
         "step": step, "step_error": step_error, "dense_output": dense_output, "accepted_factor": accepted_factor,
         "growth": growth, "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
-        "barrier_force": barrier_force, "gather_lanes": gather_warp if gather else kernel.lanes_apart,
+        "barrier_force": barrier_force,
     }
+    if not hold:
+        functions["gather_lanes"] = gather_warp if gather else kernel.lanes_apart
     # (max_registers changes the compile, not the source: the header names it, so that it is part of
     # the file's name and numba's cache never hands one cap's kernel to another)
     text = _KERNEL_MODULE.format(
         method=method, max_registers=max_registers, imports="".join(
             _import_line(alias, function) for alias, function in functions.items()),
-        rules=repr(tuple(rules)), warp_lanes=WARP_LANES, body=body)
+        rules=repr(tuple(rules)), warp_lanes=WARP_LANES, body=body,
+        hold_warp=_HOLD_WARP.format(hold=hold) if hold else "")
     name = f"vrsweep_cuda_lines_{hashlib.sha1(text.encode()).hexdigest()[:16]}"
     module = codegen.generated_module(name, lambda: text)
     # (numba's CUDA simulator has no registers to cap)
     options = {"max_registers": max_registers} if max_registers and not numba.config.ENABLE_CUDASIM else {}
     compiled = cuda.jit(cache=CACHE_KERNELS and numba_cache.enabled(), **options)(module.run_lines)
-    compiled.queue, compiled.gather, compiled.local_coefficients = queue, gather, local_coefficients
+    compiled.queue, compiled.gather, compiled.local_coefficients, compiled.hold = queue, gather, local_coefficients, hold
     compiled.without_cache = lambda: cuda.jit(**options)(module.run_lines)
     return compiled
 
 
 # The launch's choices a line kernel carries (_line_kernel sets them; DeviceLines reads them).
-KERNEL_CHOICES = ("queue", "gather", "local_coefficients")
+KERNEL_CHOICES = ("queue", "gather", "local_coefficients", "hold")
 
 
 def kernel_signature():
@@ -316,7 +354,7 @@ from numba import cuda, float64
 from vrsweep.numerics.cuda import fill_nan
 RULES = {rules}
 WARP_LANES = {warp_lanes}
-
+{hold_warp}
 {body}'''
 
 

@@ -115,10 +115,19 @@ Y_ROW, Y_NEW_ROW, STAGE_ROW, F_ROW = range(4)
 N_VECTORS = 4
 
 
+# gather_lanes(waiting)'s answers, at the start of each pass of _integrate's loop: APART, a
+# thread alone (the CPU, or a GPU kernel that holds nothing back), whose step's branches follow it
+# in the same pass; on a GPU that holds them (cuda.py, HOLD_LANES), HOLD: a lane waiting with a
+# kept step waits on; RELEASE: the waiting lanes take their branches now, together.
+APART, HOLD, RELEASE = -1, 0, 1
+# What a held step waits to do (_integrate's `held`).
+ACCEPTED, REACHED = 1, 2
+
+
 @kernel_jit
-def lanes_apart():
-    """_integrate's gather_lanes on the CPU: a thread is alone, nothing to gather."""
-    return
+def lanes_apart(waiting):
+    """_integrate's gather_lanes on the CPU: a thread is alone, nothing to gather or hold."""
+    return APART
 
 
 @kernel_jit
@@ -290,7 +299,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     Each pass of the loop is one of: hold the mass on the barrier up to its release or the period's
     end; or attempt a step, and if it is accepted and meets a barrier, locate the impact on its
     dense output; or take one Newton step of the exact step to a located impact (from the same t,
-    at most IMPACT_NEWTON_ITERATIONS passes). A step accepted without an impact, or the impact's
+    at most IMPACT_NEWTON_ITERATIONS passes); or, on a GPU that holds branches back, wait with a
+    kept step, or take its branches (below). A step accepted without an impact, or the impact's
     last Newton step, feeds the observers, and at an impact the restitution law applies or sticking
     starts. A pass that reaches the period's end closes the period. (The Newton steps are passes,
     not a loop inside one, so that on a GPU a warp's lanes take them with the others' steps.)
@@ -299,9 +309,15 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     periods (record_monodromy); the tangent vectors then restart from the unit vectors every period
     instead of being renormalised. Length 0 (every kernel but the *_monodromy ones): unused.
 
-    gather_lanes() is called at the start of every pass of the loop: on a GPU (cuda.py) it gathers
-    the lanes of a warp that have drifted apart (one took an impact, another a rejected step), so
-    that they take the next pass's step together; on the CPU it does nothing (lanes_apart).
+    gather_lanes(waiting) is called at the start of every pass of the loop: on a GPU (cuda.py) it
+    gathers the lanes of a warp that have drifted apart (one took an impact, another a rejected
+    step), so that they take the next pass's step together; on the CPU it does nothing and answers
+    APART (lanes_apart). A GPU kernel may also hold branches back: a lane whose step needs its
+    rare branches (the dense output, the exact barrier test, the impact, a turning point, a sample)
+    keeps the step and waits (waiting: True) while the vote answers HOLD, and takes them when it
+    answers RELEASE, with the warp's other waiting lanes, so that the warp pays for them once
+    rather than at every pass one of its lanes needs them. A held lane computes exactly what it
+    would have computed at once: only when it does so changes, relative to the other lanes.
     """
     # The state components the right-hand sides read: x, v (the quadratures are read by nobody),
     # and the tangent vectors when they are integrated.
@@ -371,6 +387,11 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     theta_turn = math.nan
     stuck = False
     stuck_at = 0  # the barrier that holds the mass while stuck
+    # A step whose branches wait for the warp (on a GPU, gather_lanes): ACCEPTED, an accepted step
+    # with `near` (bit b: barrier b's quick test could not clear it); REACHED, an impact's last
+    # Newton step. On the CPU a step is never held: its branches follow it in the same pass.
+    held = 0
+    near = 0
     status = Status.OK
 
     period = 0
@@ -379,7 +400,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     next_sample = emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
 
     while True:
-        gather_lanes()
+        vote = gather_lanes(held != 0)
         record = period_records[max(period - first_row, 0)]
         if stuck:
             # --- held at (Delta, 0) until the force lets go or the period ends ---
@@ -402,84 +423,110 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                 rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
                 n_rhs += 1
                 err_previous = 1.0
+        elif held and vote == HOLD:
+            continue  # the kept step's branches wait for the warp's release
         else:
-            if reaching:
-                # --- the impact's exact step: a Newton iterate of its size, from the same t ---
-                h_step = h_taken
-            else:
-                # --- attempt a step ---
-                if n_steps >= max_steps:
-                    status = Status.MAX_STEPS
-                    break
-                if not (h > _smallest_step(t, slow_period)):
-                    # An overflowing start (g = 1e200: the first step estimate is 0 or NaN) would
-                    # otherwise take zero-length steps up to the step cap.
-                    status = Status.STEP_TOO_SMALL if h == h else Status.NON_FINITE
-                    break
-                h_try = min(h, h_max)
-                if grid_steps:
-                    h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
-                if has_window:
-                    # A step ends on each edge of the transparent window, so that each step is wholly
-                    # inside it or outside (a sliver left before an edge is judged by its midpoint).
-                    if t < transparent_from - _smallest_step(t, slow_period) and t + h_try > transparent_from:
-                        h_try = transparent_from - t
-                    elif t < transparent_to - _smallest_step(t, slow_period) and t + h_try > transparent_to:
-                        h_try = transparent_to - t
-                    transparent = transparent_from <= t + 0.5 * h_try < transparent_to
-                clipped = False
-                if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
-                    h_try = t_boundary - t
-                    clipped = True
-                h_step = h_try
-            # One call of the step for both: on a GPU the lanes of a warp that reach an impact
-            # take their Newton steps with the others' ordinary steps, not while those wait.
-            prepare_step(t, h_step, coefficients, scratch)
-            step(stage_rhs, t, y, f, h_step, coefficients, K, y_new, stage, scratch, n_dynamic)
-            n_rhs += n_stages
-            if reaching:
-                # Newton on x(t + h) = Delta, at most IMPACT_NEWTON_ITERATIONS steps (eq2.2's impact)
-                newton_steps += 1
-                miss = y_new[X] - position
-                if not (abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(position)) or side * y_new[V] <= 0.0):
-                    h_corrected = h_taken - miss / y_new[V]
-                    if 0.0 < h_corrected <= h_try:
-                        h_taken = h_corrected
-                        if newton_steps < IMPACT_NEWTON_ITERATIONS:
-                            continue  # the next pass steps to the corrected size
-                reaching = False
+            if not held:
+                if reaching:
+                    # --- the impact's exact step: a Newton iterate of its size, from the same t ---
+                    h_step = h_taken
+                else:
+                    # --- attempt a step ---
+                    if n_steps >= max_steps:
+                        status = Status.MAX_STEPS
+                        break
+                    if not (h > _smallest_step(t, slow_period)):
+                        # An overflowing start (g = 1e200: the first step estimate is 0 or NaN) would
+                        # otherwise take zero-length steps up to the step cap.
+                        status = Status.STEP_TOO_SMALL if h == h else Status.NON_FINITE
+                        break
+                    h_try = min(h, h_max)
+                    if grid_steps:
+                        h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
+                    if has_window:
+                        # A step ends on each edge of the transparent window, so that each step is wholly
+                        # inside it or outside (a sliver left before an edge is judged by its midpoint).
+                        if t < transparent_from - _smallest_step(t, slow_period) and t + h_try > transparent_from:
+                            h_try = transparent_from - t
+                        elif t < transparent_to - _smallest_step(t, slow_period) and t + h_try > transparent_to:
+                            h_try = transparent_to - t
+                        transparent = transparent_from <= t + 0.5 * h_try < transparent_to
+                    clipped = False
+                    if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
+                        h_try = t_boundary - t
+                        clipped = True
+                    h_step = h_try
+                # One call of the step for both: on a GPU the lanes of a warp that reach an impact
+                # take their Newton steps with the others' ordinary steps, not while those wait.
+                prepare_step(t, h_step, coefficients, scratch)
+                step(stage_rhs, t, y, f, h_step, coefficients, K, y_new, stage, scratch, n_dynamic)
+                n_rhs += n_stages
+                if reaching:
+                    # Newton on x(t + h) = Delta, at most IMPACT_NEWTON_ITERATIONS steps (eq2.2's impact)
+                    newton_steps += 1
+                    miss = y_new[X] - position
+                    if not (abs(miss) <= IMPACT_POSITION_TOLERANCE * max(1.0, abs(position))
+                            or side * y_new[V] <= 0.0):
+                        h_corrected = h_taken - miss / y_new[V]
+                        if 0.0 < h_corrected <= h_try:
+                            h_taken = h_corrected
+                            if newton_steps < IMPACT_NEWTON_ITERATIONS:
+                                continue  # the next pass steps to the corrected size
+                    reaching = False
+                    held = REACHED
+                else:
+                    n_steps += 1
+                    err = step_error(K, h_try, y, y_new, rtol, atol)
+                    if not (err <= 1.0):  # also catches NaN from an overflowing trial step
+                        n_rejected += 1
+                        retrying = True
+                        h = h_try * (rejected_factor(err) if err == err else 0.2)
+                        if h <= _smallest_step(t, slow_period):
+                            status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
+                            break
+                        continue
+                    # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
+                    # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
+                    if clipped and h >= h_max:
+                        h_next = h  # h = max(h_next, h) below stays >= h_max whatever the factor
+                    elif h_try >= h_max and certain_growth(err, err_previous):
+                        h_next = h_try  # the factor is >= 1: h_try * factor >= h_max
+                    else:
+                        h_next = h_try * accepted_factor(err, err_previous)
+                    if retrying and hold_after_reject:
+                        h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
+                    retrying = False
+                    err_previous = err
+                    h = max(h_next, h) if clipped else h_next
+                    held = ACCEPTED
+                    # Which barriers the step's ends alone cannot place far from: those get the dense
+                    # output and the exact test below. A barrier below (SIDE -1) is the same problem
+                    # seen in -x (a barrier above multiplies by 1, exact).
+                    near = 0
+                    for barrier in range(0 if transparent else n_barriers):
+                        slot = BARRIER + BARRIER_VALUES * barrier
+                        side = coefficients[slot + SIDE]
+                        level = side * coefficients[slot + POSITION]
+                        if (side * y_new[X] >= level or side * y[X] >= level
+                                or hermite_reach(side * y[X], side * y[V], side * f[V], side * y_new[X],
+                                                 side * y_new[V], side * K[n_stages, V], h_try, level) >= 0.0):
+                            near |= 1 << barrier
+                if vote != APART and (held == REACHED or near != 0 or y[V] * y_new[V] < 0.0
+                                      or (next_sample < sample_times.shape[0]
+                                          and sample_times[next_sample] <= t + h_try)):
+                    continue  # on a GPU: the step is kept, its branches taken with the warp's others
+            # --- the step's branches (at once on the CPU; on a GPU when the warp releases them) ---
+            kept = held
+            held = 0
+            if kept == REACHED:
                 prepare_dense(t, h_taken, coefficients, scratch)
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
                 dense_ready = True
             else:
-                n_steps += 1
-                err = step_error(K, h_try, y, y_new, rtol, atol)
-                if not (err <= 1.0):  # also catches NaN from an overflowing trial step
-                    n_rejected += 1
-                    retrying = True
-                    h = h_try * (rejected_factor(err) if err == err else 0.2)
-                    if h <= _smallest_step(t, slow_period):
-                        status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
-                        break
-                    continue
-                # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
-                # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
-                if clipped and h >= h_max:
-                    h_next = h  # h = max(h_next, h) below stays >= h_max whatever the factor
-                elif h_try >= h_max and certain_growth(err, err_previous):
-                    h_next = h_try  # the factor is >= 1: h_try * factor >= h_max
-                else:
-                    h_next = h_try * accepted_factor(err, err_previous)
-                if retrying and hold_after_reject:
-                    h_next = min(h_next, h_try)  # Hairer's DOP853: no growth right after a rejection
-                retrying = False
-                err_previous = err
-                h = max(h_next, h) if clipped else h_next
-
                 # --- does the step cross a barrier? ---
-                # A barrier below (SIDE -1) is the same problem seen in -x: its tests run on the mirrored
-                # step (_mirror), which keeps every theta; a barrier above multiplies by 1 (exact).
+                # Barrier tests run on the mirrored step (_mirror) for a barrier below, which keeps
+                # every theta.
                 impact = False
                 dense_ready = False
                 theta_turn = math.nan
@@ -488,15 +535,13 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                 unresolved = False
                 position = side = restitution = 1.0
                 for barrier in range(0 if transparent else n_barriers):
+                    if not (near >> barrier) & 1:
+                        continue
                     slot = BARRIER + BARRIER_VALUES * barrier
                     side = coefficients[slot + SIDE]
                     level = side * coefficients[slot + POSITION]
                     # Every step that the ends alone cannot place far from the barrier gets its dense
                     # output and the exact test on it (find_crossing: Bernstein form).
-                    if not (side * y_new[X] >= level or side * y[X] >= level
-                            or hermite_reach(side * y[X], side * y[V], side * f[V], side * y_new[X], side * y_new[V],
-                                             side * K[n_stages, V], h_try, level) >= 0.0):
-                        continue
                     if not dense_ready:
                         prepare_dense(t, h_try, coefficients, scratch)
                         n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
