@@ -132,8 +132,14 @@ def main():
                         help="then gpu_divergence.py's measurement on DISTINCT points x 32 (0: none)")
     parser.add_argument("--job-fresh-arrays", action="store_true",
                         help="run each job's map twice: fresh device arrays per launch (0.6.2), then kept slots")
+    parser.add_argument("--hold", type=int, default=None, metavar="LANES",
+                        help="cuda.HOLD_LANES for every kernel of this run (default: the package's)")
     args = parser.parse_args()
     global AGREEMENT_SAMPLE, LYAPUNOV_SAMPLE, FIRST_LAUNCH
+    if args.hold is not None:
+        from vrsweep.numerics import cuda as vrsweep_cuda
+
+        vrsweep_cuda.HOLD_LANES = args.hold
     if args.quick:
         CPU_SAMPLE.update(original=48, effective=48)
         AGREEMENT_SAMPLE = LYAPUNOV_SAMPLE = FIRST_LAUNCH = 32
@@ -146,7 +152,8 @@ def main():
     name = getattr(device, "name", "CUDA simulator")
     card = name.decode() if isinstance(name, bytes) else str(name)
     results = {"card": card, "cpu_threads": numba.config.NUMBA_NUM_THREADS, "numba": numba.__version__,
-               "numba_cuda": getattr(numba_cuda, "__version__", "?"), "points_asked": args.points, "models": {}}
+               "numba_cuda": getattr(numba_cuda, "__version__", "?"), "points_asked": args.points, "models": {},
+               "hold_lanes": args.hold}
     log(f"card {card}, {results['cpu_threads']} CPU threads, numba {numba.__version__}, "
         f"numba-cuda {results['numba_cuda']}")
     out = Path(args.out)

@@ -3,10 +3,11 @@
     python benchmarks/gpu_variants.py [--points 65536] [--variants A,C,D,E] [--cases original:rk45,...]
                                       [--source DIR] [--no-cpu] [--out DIR]
 
-numerics/cuda.py has five levers (its QUEUE, SORT, MAX_REGISTERS, GATHER_LANES and
-LOCAL_COEFFICIENTS): a work queue, lines handed out in parameter order, a register cap, a warp
-barrier at every pass of the loop, and a thread's coefficients read from its own copy. This script times, on the first POINTS points of gpu.py's shuffled (g, Omega) map (rtol
-1e-9, 100 + 100 periods):
+numerics/cuda.py has six levers (its QUEUE, SORT, MAX_REGISTERS, GATHER_LANES, LOCAL_COEFFICIENTS
+and HOLD_LANES): a work queue, lines handed out in parameter order, a register cap, a warp barrier
+at every pass of the loop, a thread's coefficients read from its own copy, and the loop's rare
+branches held back until several lanes of a warp take them together. This script times, on the
+first POINTS points of gpu.py's shuffled (g, Omega) map (rtol 1e-9, 100 + 100 periods):
 
     A  one thread per line, shuffled order, the compiler's registers   (the first version)
     C  the queue, parameter order, the compiler's registers             (the default up to 0.6.2)
@@ -15,6 +16,9 @@ barrier at every pass of the loop, and a thread's coefficients read from its own
     F  E with each thread's coefficients copied to its local memory    (cuda.LOCAL_COEFFICIENTS)
     G  E with at most 168 registers a thread: 12 warps a multiprocessor instead of 8, more to hide
        the latency of a branch's serial arithmetic, for spills (benchmarks/README.md, 0.6.7)
+    H  E with a step's rare branches held until 8 lanes of the warp wait (cuda.HOLD_LANES = 8)
+    I  the same until 16 wait (benchmarks/warp_defer.py: the better if the card weighs the
+       branches 10x as the CPU does, the worse if it weighs them as the CPU does)
 
 for the original model with rk45 and dop853 and the effective model with dop853, and the CPU's
 best method (dop853, every core) on a sample, so that every ratio is of this one process. Checks
@@ -55,7 +59,9 @@ VARIANTS = {"A": dict(queue=False, sort=False, max_registers=None, gather=False)
             "D": dict(queue=True, sort=True, max_registers=128, gather=False),
             "E": dict(queue=True, sort=True, max_registers=None, gather=True),
             "F": dict(queue=True, sort=True, max_registers=None, gather=True, local_coefficients=True),
-            "G": dict(queue=True, sort=True, max_registers=168, gather=True)}
+            "G": dict(queue=True, sort=True, max_registers=168, gather=True),
+            "H": dict(queue=True, sort=True, max_registers=None, gather=True, hold=8),
+            "I": dict(queue=True, sort=True, max_registers=None, gather=True, hold=16)}
 CASES = [("original", "rk45", 2000), ("effective", "dop853", 8000), ("original", "dop853", 2000)]
 
 
@@ -104,7 +110,7 @@ def main():
         for name in chosen:
             variant = VARIANTS[name]
             known = inspect.signature(cuda.line_kernel).parameters  # (an old version's, --source, has fewer)
-            options = {key: variant[key] for key in ("queue", "max_registers", "gather", "local_coefficients")
+            options = {key: variant[key] for key in ("queue", "max_registers", "gather", "local_coefficients", "hold")
                        if key in known and key in variant}
             compiled = cuda.line_kernel(method, False, *functions, **options)
             lines = cuda.DeviceLines(compiled, sort=variant["sort"])
