@@ -308,7 +308,7 @@ def test_a_kernel_the_cache_fails_on_compiles_without_it(monkeypatch):
             compiled.append(signature)
 
     class Cached:
-        queue, gather, local_coefficients = True, False, False
+        queue, gather, local_coefficients, hold = True, False, False, 0
 
         def compile(self, signature):
             raise pickle.PicklingError("cannot pickle the kernel's library")
