@@ -136,6 +136,22 @@ def test_a_changed_attribute_is_refused_by_every_reader(files, tmp_path_factory,
     assert not (tmp_path / "f.png").exists() and copy.read_bytes() == before
 
 
+@pytest.mark.parametrize("how", ["append", "replace", "empty"])
+@pytest.mark.parametrize("kind, name", [("sweep", "vrsweep_format_version"), ("shard", "vrsweep_format_version"),
+                                        ("trajectory", "vrsweep_format_version"), ("trajectory", "vrsweep_file")])
+def test_a_changed_kind_or_format_is_called_corrupt(files, tmp_path, invoke, kind, name, how):
+    """The attributes a reader reads before the checksum (what kind of file, which format): changed,
+    the refusal says the file may be corrupt, not only that it is another kind or a newer format
+    (hypothesis found a trajectory read as a sweep without a 'done' mask, a format 2 "from a
+    newer vrsweep")."""
+    copy = _edited_copy(files[kind], tmp_path, "", name, how)
+    with pytest.raises(ResultFileError, match="corrupt"):
+        vrsweep.open_results(copy)
+    result = invoke("plot", copy, "-o", tmp_path / "f.png")
+    lines = result.output.strip().splitlines()
+    assert result.exit_code == 2 and len(lines) == 1 and "corrupt" in lines[0], result.output
+
+
 def test_the_issues_example_gamma_in_the_stored_config(files, tmp_path, invoke):
     copy = tmp_path / "sweep.h5"
     shutil.copy(files["sweep"], copy)

@@ -261,7 +261,7 @@ LAYOUT = {
 # the figure's caption and continue --point would state and use parameters the numbers were not
 # computed at.
 from vrsweep.store.sealing import (  # noqa: E402 - beside what it replaced; re-exported for curve_file
-    ATTRIBUTES_CHECKSUM, attributes_digest, note_if_unprotected, seal_attributes,
+    ATTRIBUTES_CHECKSUM, attributes_digest, note_if_unprotected, seal_attributes, unless_changed,
 )
 
 
@@ -330,11 +330,13 @@ def check_layout(f, path, layout, kind):
     dimension (a dimension's length is that of its own array, whose values count 0, 1, ...), its
     root attributes of their types, and every checksum holds (each array is read whole). Returns
     {name: values} of the arrays read."""
+    # (a refusal for what an attribute says names the checksum too where the attributes fail it)
     if _attr_text(f, path, "vrsweep_file") != kind:
-        raise ResultFileError(f"{path} is not a vrsweep {kind} file")
+        raise ResultFileError(f"{path} is not a vrsweep {kind} file" + unless_changed(f, path))
     version = _whole(f, path, "vrsweep_format_version", 0)
     if version != FORMAT_VERSION:
-        raise ResultFileError(f"{path} has {kind} format {version}; this vrsweep reads format {FORMAT_VERSION}")
+        raise ResultFileError(f"{path} has {kind} format {version}; this vrsweep reads format {FORMAT_VERSION}"
+                              + unless_changed(f, path))
     complete = _whole(f, path, "vrsweep_complete", 0)
     if complete not in (0, 1):
         raise ResultFileError(f"{path} is corrupt: attribute vrsweep_complete must be 0 or 1, found {complete}")

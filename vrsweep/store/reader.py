@@ -20,7 +20,7 @@ from vrsweep.store.fileio import open_hdf5
 from vrsweep.store.layout import (
     BOOKKEEPING, FORMAT_VERSION, VariableSpec, clean_attrs, decode, point_label, point_variables_of, scale_names,
 )
-from vrsweep.store.sealing import SWEEP_UNSEALED, check_attributes, note_if_unprotected
+from vrsweep.store.sealing import SWEEP_UNSEALED, check_attributes, note_if_unprotected, unless_changed
 
 # Chunk cache per open dataset: a scattered write (a shard's points) revisits the same chunks.
 RDCC_NBYTES = 32 * 1024 * 1024
@@ -55,14 +55,17 @@ def open_checked(path, mode="r"):
             raise ResultFileError(f"{path} is an HDF5 file but not a vrsweep results file "
                                   "(no vrsweep_format_version attribute)")
         version = _whole_number_attr(f, "vrsweep_format_version", path)
+        # (a refusal for what an attribute says names the checksum too where the attributes fail it)
         if version > FORMAT_VERSION:
             raise ResultFileError(f"{path} was written by a newer vrsweep (format {version}; this "
-                                  f"vrsweep reads format {FORMAT_VERSION}); upgrade vrsweep to read it")
+                                  f"vrsweep reads format {FORMAT_VERSION}); upgrade vrsweep to read it"
+                                  + unless_changed(f, path))
         if version < FORMAT_VERSION:
             raise ResultFileError(f"{path} was written by an older vrsweep (format {version}; this "
-                                  f"vrsweep reads format {FORMAT_VERSION})")
+                                  f"vrsweep reads format {FORMAT_VERSION})" + unless_changed(f, path))
         if "done" not in f or "point_variables" not in f["done"].attrs:
-            raise ResultFileError(f"{path} is a vrsweep file but not a sweep result (no 'done' mask)")
+            raise ResultFileError(f"{path} is a vrsweep file but not a sweep result (no 'done' mask)"
+                                  + unless_changed(f, path))
         check_structure(f, path)
     except ResultFileError:
         f.close()

@@ -107,6 +107,18 @@ def check_attributes_of_any_kind(f, path) -> None:
                           "match their checksum")
 
 
+def unless_changed(f, path) -> str:
+    """What a refusal that read the file's kind or format adds where the file's attributes match
+    their checksum under no kind's sealing: the attribute it read may be the one that was changed
+    (a bit flipped, an edit), so the file may be corrupt rather than what the attribute says.
+    "" where the attributes match (or the file has no checksum)."""
+    try:
+        check_attributes_of_any_kind(f, path)
+    except ResultFileError:
+        return "; or it is corrupt: its attributes do not match their checksum"
+    return ""
+
+
 def note_if_unprotected(path, protected) -> None:
     """The note, once per file and process, that a sound file's attributes have no checksum (written
     before they had one): after every check, so that a refused file is one line."""

@@ -55,7 +55,8 @@ from vrsweep.errors import ResultFileError
 from vrsweep.results import MESSAGES, Status
 from vrsweep.store.fileio import LIBVER, has_file_kind, open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
-from vrsweep.store.sealing import ATTRIBUTES_CHECKSUM, WHEN_AND_HOW, check_attributes, note_if_unprotected, seal_attributes
+from vrsweep.store.sealing import (ATTRIBUTES_CHECKSUM, WHEN_AND_HOW, check_attributes, note_if_unprotected, seal_attributes,
+                                   unless_changed)
 
 FILE_KIND = "trajectory"
 # --------------------------------------------------------------------------------------------
@@ -265,15 +266,17 @@ def check_trajectory(path) -> None:
 
 
 def _check_header(f, path):
+    # (a refusal for what an attribute says names the checksum too where the attributes fail it)
     if _text(f.attrs.get("vrsweep_file", "")) != FILE_KIND:
-        raise ResultFileError(f"{path} is not a vrsweep trajectory file (written by vrsweep simulate)")
+        raise ResultFileError(f"{path} is not a vrsweep trajectory file (written by vrsweep simulate)"
+                              + unless_changed(f, path))
     version = f.attrs.get("vrsweep_format_version", 0)
     if isinstance(version, (bool, np.bool_)) or not isinstance(version, (int, np.integer)):
         raise ResultFileError(f"{path} is corrupt: attribute vrsweep_format_version must be a whole "
                               f"number, got {_text(version)!r}")
     if version != FORMAT_VERSION:
         raise ResultFileError(f"{path} has trajectory format {version}; this vrsweep reads format "
-                              f"{FORMAT_VERSION}")
+                              f"{FORMAT_VERSION}" + unless_changed(f, path))
     _check_root(f, path)
     for name in RUN_GROUPS:
         if name in f:
