@@ -159,7 +159,8 @@ _WAIT_FOR_WARP = """\
     while cuda.any_sync(WARP_LANES, False):
         pass
 """
-# With _HOLD_WARP's gather_lanes: the same, answering its two ballots ("waiting", "integrating") in their order.
+# With _HOLD_WARP's gather_lanes: the same, answering its two ballots ("waiting", "integrating")
+# in their order.
 _WAIT_FOR_HOLDING_WARP = """\
     while True:
         cuda.ballot_sync(WARP_LANES, False)
@@ -261,7 +262,7 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
     first_position, next_position = _POSITIONS[queue]
     # (the simulator runs the loop as a CPU compile, where a warp vote has no meaning)
     gather = gather and not numba.config.ENABLE_CUDASIM
-    hold = hold if gather else 0  # (a lane waits at the warp's vote: none, none to wait at)
+    hold = hold if gather else 0  # (a lane waits at the warp's vote: without the vote nothing is held)
     wait_for_warp = (_WAIT_FOR_HOLDING_WARP if hold else _WAIT_FOR_WARP) if gather else ""
     body = _LINE_KERNEL.format(
         k_rows=k_rows, n_state=N_STATE_WITH_TANGENTS if tangents else N_STATE, dense_order=dense_order,
