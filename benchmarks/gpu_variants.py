@@ -50,7 +50,7 @@ if "--source" in sys.argv[:-1]:  # another checkout's package, imported before g
 import vrsweep  # noqa: E402,F401
 
 from gpu import INTEGRATION, coefficients_of, grid, log, run  # noqa: E402
-from vrsweep.numerics import cuda  # noqa: E402
+from vrsweep.numerics import cuda, rhs  # noqa: E402
 from vrsweep.numerics.models import kernels_for  # noqa: E402
 from vrsweep.numerics.trajectory import settings_vector  # noqa: E402
 
@@ -106,7 +106,9 @@ def main():
             elapsed, *_ = run(cpu_lines, sample, settings, measure)
             row["cpu_dop853_points_per_s"] = len(sample) / elapsed
         reference = None
-        functions = cuda.paper_functions(False)
+        # (up to 0.6.7 the helper was cuda's: an old version's, --source, has it there)
+        functions = getattr(rhs, "paper_functions", None) or cuda.paper_functions
+        functions = functions(False)
         for name in chosen:
             variant = VARIANTS[name]
             known = inspect.signature(cuda.line_kernel).parameters  # (an old version's, --source, has fewer)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vrsweep.numerics import kernel
+from vrsweep.numerics import kernel, rhs
 
 HERE = Path(__file__).resolve().parent
 EXAMPLES = HERE.parent / "vrsweep" / "examples"
@@ -191,7 +191,7 @@ def test_the_line_kernel_compiles_for_an_h100_and_assembles(tmp_path, options):
     spills back fails here."""
     from vrsweep.numerics import cuda
 
-    ptx = cuda.compile_for("rk45", False, *cuda.paper_functions(False), compute_capability=(9, 0), **options)
+    ptx = cuda.compile_for("rk45", False, *rhs.paper_functions(False), compute_capability=(9, 0), **options)
     assert ".target sm_90" in ptx
     assert "vote.sync" in ptx  # the warp's lanes gathered at every pass (gather_warp)
     if options.get("hold"):
@@ -221,9 +221,9 @@ def test_a_kernel_reading_a_local_copy_of_the_coefficients_refuses_a_wider_row()
     more is refused before anything reaches the device (and the default kernel reads any width)."""
     from vrsweep.numerics import cuda
 
-    kernel_ = cuda.line_kernel("rk45", False, *cuda.paper_functions(False), local_coefficients=True)
+    kernel_ = cuda.line_kernel("rk45", False, *rhs.paper_functions(False), local_coefficients=True)
     assert kernel_.local_coefficients is True
-    assert cuda.line_kernel("rk45", False, *cuda.paper_functions(False)).local_coefficients is False
+    assert cuda.line_kernel("rk45", False, *rhs.paper_functions(False)).local_coefficients is False
     n = 1
     wide = np.zeros((n, cuda.LOCAL_COEFFICIENTS_SIZE + 1))
     with pytest.raises(ValueError, match="LOCAL_COEFFICIENTS_SIZE"):
@@ -261,7 +261,7 @@ def test_the_gpu_kernels_are_files_that_numba_caches_one_per_kernel():
     written = parse_config((EXAMPLES / "impact_two_sided.yaml").read_text(), "impact_two_sided.yaml").model
     kernels = [kernels_for("original").gpu_kernel("rk45"), kernels_for("original").gpu_kernel("dop853", True),
                kernels_for("effective").gpu_kernel("dop853"), kernels_for(written).gpu_kernel("rk45"),
-               cuda.line_kernel("rk45", False, *cuda.paper_functions(False), max_registers=128)]
+               cuda.line_kernel("rk45", False, *rhs.paper_functions(False), max_registers=128)]
     files = [Path(k.py_func.__code__.co_filename) for k in kernels]
     assert len(set(files)) == len(files)
     for k, file in zip(kernels, files):

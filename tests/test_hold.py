@@ -43,13 +43,10 @@ def seed_votes(seed):
 
 
 def _functions(model, tangents):
-    """(rhs, tangent, barrier_force) as the GPU's kernel takes them (cuda.paper_functions,
-    cuda.written_functions), without importing numba-cuda."""
+    """(rhs, tangent, barrier_force) as the GPU's kernel takes them."""
     if isinstance(model, WrittenModel):
-        module = codegen.compiled(model)
-        return (module.tangent_rhs if tangents else module.rhs), module.tangent, module.barrier_force
-    return (rhs.oscillator_tangent_rhs if tangents else rhs.oscillator_rhs), rhs.oscillator_tangent, \
-        rhs.force_at_barrier
+        return codegen.written_functions(codegen.compiled(model), tangents)
+    return rhs.paper_functions(tangents)
 
 
 def _integrate(integrate, functions, method, tangents, coefficients, initial_state, settings, gather):

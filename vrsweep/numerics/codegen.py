@@ -336,6 +336,12 @@ def _folder() -> Path:
 _MODULES = {}
 
 
+def written_functions(module, tangents):
+    """A generated module's (rhs, tangent, barrier_force), as kernel._integrate takes them (the
+    GPU's line kernel, cuda.line_kernel; tests that drive the loop)."""
+    return (module.tangent_rhs if tangents else module.rhs), module.tangent, module.barrier_force
+
+
 def compiled(model):
     """The generated module of ``model`` (imported once per process; its functions compile on
     their first call, or load from numba's cache)."""

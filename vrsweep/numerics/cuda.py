@@ -368,17 +368,6 @@ def _import_line(alias, function):
     return f"from {module} import {name} as {alias}\n"
 
 
-def paper_functions(tangents):
-    """The paper's family's (rhs, tangent, barrier_force) for line_kernel (rhs.py's)."""
-    model_rhs = rhs.oscillator_tangent_rhs if tangents else rhs.oscillator_rhs
-    return model_rhs, rhs.oscillator_tangent, rhs.force_at_barrier
-
-
-def written_functions(module, tangents):
-    """A written model's generated module's (rhs, tangent, barrier_force) (codegen.py)."""
-    return (module.tangent_rhs if tangents else module.rhs), module.tangent, module.barrier_force
-
-
 class DeviceLines:
     """lines.run_lines_*'s call, run on the GPU: copies the chunk's inputs to the device, launches
     the kernel, and copies the outputs back into the caller's arrays (the same arrays the CPU

@@ -13,7 +13,7 @@ paper's two models (model.py, kernel.py, lines.py) and for a written one (writte
 
 from __future__ import annotations
 
-from vrsweep.numerics import kernel, lines
+from vrsweep.numerics import kernel, lines, rhs
 from vrsweep.numerics.model import MODELS, kernel_coefficients
 from vrsweep.numerics.written import WrittenModel
 
@@ -46,7 +46,7 @@ class PaperKernels:
     def gpu_kernel(self, method, lyapunov=False):
         from vrsweep.numerics import cuda
 
-        return cuda.line_kernel(method, lyapunov, *cuda.paper_functions(lyapunov),
+        return cuda.line_kernel(method, lyapunov, *rhs.paper_functions(lyapunov),
                                 gather=cuda.GATHER_LANES_BY_MODEL.get(self.name))
 
     def gpu_lines(self, method, lyapunov=False):
@@ -96,7 +96,7 @@ class WrittenKernels:
     def gpu_kernel(self, method, lyapunov=False):
         from vrsweep.numerics import codegen, cuda
 
-        return cuda.line_kernel(method, lyapunov, *cuda.written_functions(codegen.compiled(self.model), lyapunov))
+        return cuda.line_kernel(method, lyapunov, *codegen.written_functions(codegen.compiled(self.model), lyapunov))
 
     def gpu_lines(self, method, lyapunov=False):
         from vrsweep.numerics import cuda

@@ -68,6 +68,13 @@ def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
     oscillator_tangent(t + c * h, y, coefficients, dydt)
 
 
+def paper_functions(tangents):
+    """The paper's family's (rhs, tangent, barrier_force), as kernel._integrate takes them with the
+    library's cosines (the GPU's line kernel, cuda.line_kernel; tests that drive the loop)."""
+    model_rhs = oscillator_tangent_rhs if tangents else oscillator_rhs
+    return model_rhs, oscillator_tangent, force_at_barrier
+
+
 @kernel_jit
 def force_at_barrier(t, coefficients, barrier):
     """Acceleration of a mass resting at (Delta, 0): positive pushes it into the barrier (the
