@@ -130,6 +130,30 @@ def test_variables_of_the_wrong_shape_or_type(good, tmp_path, invoke, name, shap
     _refused_everywhere(invoke, config, path, tmp_path, which=which)
 
 
+def _set_mask(name, values, dtype=np.int8):
+    def change(f):
+        _replace(f, name, (5, 2), dtype)
+        f[name][()] = values
+    return change
+
+
+@pytest.mark.parametrize("change, words", [
+    (_set_mask("done", 0, np.int64), "done must be int8 flags over the grid (5, 2), got (5, 2) of int64"),
+    (_set_mask("done", 1, np.uint8), "done must be int8 flags"),
+    (_set_mask("done", 2), "done must hold only 0 and 1"),
+    (_set_mask("done", 0), "marked finished (vrsweep_complete = 1), but 10 of its 10 points are not done"),
+    (_set_mask("done", [[1, 1]] * 4 + [[1, 0]]), "but 1 of its 10 points are not done"),
+], ids=["int64 zeros", "uint8 ones", "a 2", "a finished file none done", "a finished file one not done"])
+def test_a_done_mask_of_another_type_or_with_points_missing_from_a_finished_file(good, tmp_path, invoke, change,
+                                                                                  words):
+    """Hypothesis found it (with fresh draws): a done mask replaced by int64 zeros of the grid's
+    shape was read as flags, so `info` described the file, `plot` drew an empty figure and `merge`
+    said every point was missing, none naming the damage. Every vrsweep wrote done as int8 0/1,
+    and a finished file has every point done."""
+    config, path = _damaged(good, tmp_path, change)
+    _refused_everywhere(invoke, config, path, tmp_path, words)
+
+
 @HYPOTHESIS
 @given(axis=st.sampled_from(AXES), index=st.integers(0, 1),
        value=st.sampled_from([np.nan, np.inf, -np.inf]), which=st.integers(0, 3))

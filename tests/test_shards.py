@@ -164,6 +164,7 @@ def test_merge_names_each_shard_that_points_are_missing_from(runs, tmp_path, inv
         for i, j in lost:
             done[i, j] = 0
         f["done"][()] = done
+        f.attrs.modify("vrsweep_complete", np.int32(0))  # as a kill leaves it: not finished
     result = invoke("merge", shards[0], unfinished, "-o", tmp_path / "merged.h5")
     assert result.exit_code == 2
     n_owned_1, n_owned_2 = int(_owned(shards[1]).sum()), int(owned.sum())

@@ -154,8 +154,7 @@ def check_structure(f, path):
         if grid is not None and not axis.fletcher32 and not np.array_equal(axis[()], grid.axis_values[index]):
             raise ResultFileError(f"{path} is corrupt: axis {name} holds values other than those of the "
                                   "config it was run from")
-    if done.dtype.kind not in "iub":
-        raise ResultFileError(f"{path} is corrupt: done must be integer flags, got {done.dtype}")
+    _check_flags(f, path, complete)
     for name in names:
         if name not in f or not isinstance(f[name], h5py.Dataset):
             raise ResultFileError(f"{path} is corrupt: variable {name} is missing")
@@ -186,6 +185,31 @@ def check_structure(f, path):
             _read_through_checksums(obj, path, finite=name in axis_names)
     # After the structure: a variable replaced whole loses its attributes too, and its own message says more.
     note_if_unprotected(path, check_attributes(f, path, SWEEP_UNSEALED))
+
+
+def _check_flags(f, path, complete):
+    """``done`` (and a shard's ``owned``) are what every vrsweep wrote: int8 flags, 0 or 1, over the
+    grid; and a file marked finished has every point (of a shard: every point it owns) done. A mask
+    of another type or with other values (a damaged or hand-made file) would otherwise be read as
+    flags, and a finished file missing points would be plotted and merged as if whole."""
+    done = f["done"]
+    masks = {"done": done}
+    if "owned" in f:
+        masks["owned"] = f["owned"]
+    for name, mask in masks.items():
+        if not isinstance(mask, h5py.Dataset) or mask.dtype != np.int8 or mask.shape != done.shape:
+            got = f"{mask.shape} of {mask.dtype}" if isinstance(mask, h5py.Dataset) else "a group"
+            raise ResultFileError(f"{path} is corrupt: {name} must be int8 flags over the grid {done.shape}, "
+                                  f"got {got}")
+        masks[name] = np.asarray(mask[()])
+        if not np.isin(masks[name], (0, 1)).all():
+            raise ResultFileError(f"{path} is corrupt: {name} must hold only 0 and 1")
+    if complete:
+        wanted = masks["owned"] == 1 if "owned" in masks else np.ones(done.shape, dtype=bool)
+        missing = int(np.count_nonzero(wanted & (masks["done"] == 0)))
+        if missing:
+            raise ResultFileError(f"{path} is corrupt: it is marked finished (vrsweep_complete = 1), but "
+                                  f"{missing} of its {int(np.count_nonzero(wanted))} points are not done")
 
 
 def _grid_of(config_text):
