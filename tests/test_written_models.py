@@ -433,3 +433,30 @@ def test_sweeps_shards_merge_lyapunov_and_overflow_on_a_written_model(tmp_path):
     assert np.all(np.isfinite(whole["lyapunov"].values[:3]))
     info = runner.invoke(main, ["info", str(tmp_path / "merged.h5")])
     assert info.exit_code == 0 and "model_definition" in info.output
+
+
+# --- figures of a written model: no paper theory, barriers where they are ----------------------
+
+def test_the_bifurcation_diagram_of_a_written_model_draws_its_barrier_where_it_is(tmp_path):
+    """`plot --kind bifurcation` of a written model's sweep drew the paper's g_res lines from its
+    nine parameters (KeyError: 'gamma', a traceback), and a barrier that moves with the swept
+    parameter (position: "0.5*F + 0.2") as one horizontal line at the default F."""
+    import vrsweep
+    from vrsweep import plot
+
+    text = (EXAMPLES / "impact_linear.yaml").read_text()
+    text = text.replace("{position: Delta, side: above", '{position: "0.5*F + 0.2", side: above')
+    text = text.replace("omega: {start: 0.4, stop: 1.6, num: 61}", "F: [0.2, 1.0, 2.0]")
+    text = text.replace("transient_periods: 200", "transient_periods: 4").replace(
+        "measure_periods: 100", "measure_periods: 16")
+    config = tmp_path / "moving.yaml"
+    config.write_text(text)
+    output = tmp_path / "moving.h5"
+    vrsweep.sweep(str(config), output=str(output))
+    result = CliRunner().invoke(main, ["plot", str(output), "--kind", "bifurcation", "-o", str(tmp_path / "b.png")])
+    assert result.exit_code == 0, result.output
+    with vrsweep.open_results(output) as ds:
+        figure = plot.bifurcation_figure(ds)
+    [barrier] = [line for line in figure.axes[0].get_lines() if line.get_label() == "barrier"]
+    np.testing.assert_allclose(barrier.get_ydata(), [0.3, 0.7, 1.2])
+    np.testing.assert_allclose(barrier.get_xdata(), [0.2, 1.0, 2.0])

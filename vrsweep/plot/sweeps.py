@@ -803,8 +803,17 @@ def _draw_bifurcation(ax, view, x_axis):
     if view.config is not None and not view.config.written:
         ax.axhline(view.parameters()["Delta"], color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
     elif view.config is not None:
-        for index, position in enumerate(barrier_positions(view.config, view.parameters())):
-            ax.axhline(position, color="k", lw=0.8, ls="--", label="barrier" if index == 0 else None)
+        # A written barrier may move with the swept parameter (position: "s*F + 0.2"): its level
+        # at each drawn value, a horizontal line only where it stays put.
+        levels = np.array([barrier_positions(view.config, view.parameters(**{x_axis: float(value)}))
+                           for value in x]).reshape(len(x), -1)
+        for index in range(levels.shape[1]):
+            label = "barrier" if index == 0 else None
+            if np.all(levels[:, index] == levels[0, index]):
+                ax.axhline(levels[0, index], color="k", lw=0.8, ls="--", label=label)
+            else:
+                order = np.argsort(x)
+                ax.plot(np.asarray(x)[order], levels[order, index], color="k", lw=0.8, ls="--", label=label)
     _span_grid(ax, x)  # the whole grid, even where every point failed
     ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$")
     ax.grid(alpha=0.3)
@@ -813,8 +822,9 @@ def _draw_bifurcation(ax, view, x_axis):
 
 
 def _draw_resonance_lines(ax, view, x_axis, x):
-    """g_res (eq3.4) as vertical lines, where it falls on the drawn range."""
-    if view.config is None:
+    """g_res (eq3.4) as vertical lines, where it falls on the drawn range (the paper's theory:
+    none for a written model, whose parameters are its own)."""
+    if view.config is None or view.config.written:
         return
     parameters = view.parameters()
     for position in resonance_positions(parameters, x_axis, np.linspace(x.min(), x.max(), FINE_POINTS)):
