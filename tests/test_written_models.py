@@ -245,6 +245,11 @@ def test_continue_locates_the_linear_oscillators_graze_and_follows_it_in_omega(t
         grazes = f["bifurcation_parameter"][()][np.array(kinds) == "grazing"]
     assert len(grazes) == 1
     assert abs(grazes[0] - _free_amplitude(p["zeta"], p["F"], p["omega"])) < 1e-6
+    with vrsweep.open_results(branch) as ds:  # measured to the barrier at each orbit's own Delta,
+        delta, x_max = ds["parameter"].values, ds["x_max"].values  # not at the config's Delta = 1.2
+        np.testing.assert_allclose(ds["barrier_distance"].values, delta - x_max, rtol=0, atol=1e-12)
+        free = ds["impacts_per_period"].values == 0
+        assert free.any() and np.all(ds["barrier_distance"].values[free] > 0)
     point = kinds.index("grazing")
     result = runner.invoke(main, ["continue", str(branch), "--point", str(point), "--along", "omega",
                                   "--to", "0.7", "0.9", "-o", str(curve)])

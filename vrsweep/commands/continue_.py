@@ -118,9 +118,14 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
         branches, bifurcations = execution.run_continuation(config, start_state, failures=missed,
                                                             progress=lambda orbit: stop.check())
         stopped = any(interrupted(branch) for branch in branches)
-        delta = execution.barrier_of(config)
         # The stored config holds the start's value of the continued parameter, not its unused default.
         section = config.continuation
+
+        def delta(value, config=config, name=section.parameter):
+            """The barrier at the orbit's own value of the continued parameter (it may move the
+            barrier: Delta, or a written position such as "s*F + 0.2")."""
+            return execution.barrier_of(dataclasses.replace(config, parameters={**config.parameters, name: value}))
+
         config = dataclasses.replace(config, parameters={**config.parameters, section.parameter: section.start})
         write_branch(path, branch_arrays(branches, bifurcations, delta), config, config.integration.method,
                      overwrite=overwrite, complete=not stopped)

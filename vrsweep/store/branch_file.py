@@ -70,7 +70,12 @@ _POINT_VARIABLES = {
 
 
 def branch_arrays(branches, bifurcations, delta):
-    """Plain arrays from analysis.continuation's Branch and Bifurcation lists (see the layout)."""
+    """Plain arrays from analysis.continuation's Branch and Bifurcation lists (see the layout).
+
+    ``delta`` is the barrier that ``barrier_distance`` measures to: a number, or a function of the
+    continued parameter's value (a barrier that moves with it: the paper's Delta, a written
+    model's ``position: D``)."""
+    barrier = delta if callable(delta) else (lambda value: delta)
     points = {name: [] for name in _POINT_VARIABLES}
     multipliers = []
     for number, branch in enumerate(branches):
@@ -78,7 +83,7 @@ def branch_arrays(branches, bifurcations, delta):
             values = dict(branch=number, parameter=orbit.parameter, x=orbit.state[0], v=orbit.state[1],
                           periods=orbit.periods, R=orbit.R, Q_amplitude=orbit.Q_amplitude,
                           impacts_per_period=orbit.impacts_per_period, x_max=orbit.x_max,
-                          barrier_distance=delta - orbit.x_max,
+                          barrier_distance=barrier(orbit.parameter) - orbit.x_max,
                           slowest_impact=orbit.slowest_impact if np.isfinite(orbit.slowest_impact) else np.nan,
                           stable=int(orbit.stable), residual=orbit.residual)
             for name in points:
