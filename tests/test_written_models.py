@@ -465,3 +465,32 @@ def test_the_bifurcation_diagram_of_a_written_model_draws_its_barrier_where_it_i
     [barrier] = [line for line in figure.axes[0].get_lines() if line.get_label() == "barrier"]
     np.testing.assert_allclose(barrier.get_ydata(), [0.3, 0.7, 1.2])
     np.testing.assert_allclose(barrier.get_xdata(), [0.2, 1.0, 2.0])
+
+
+def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names(tmp_path):
+    """A branch figure labelled a written model's parameters as the paper's: the axis of a branch in
+    D read 'D D' and a parameter named c was set as the paper's $c$. No kernel: orbits by hand."""
+    from tests.handmade import orbit
+
+    import vrsweep
+    from vrsweep import plot
+    from vrsweep.analysis.continuation import Branch
+    from vrsweep.config.validate import config_from_dict
+    from vrsweep.store import branch_file
+
+    config = config_from_dict({
+        "model": {"acceleration": "-c*v - sin(x) + F*cos(w*t)",
+                  "parameters": {"c": 0.1, "F": 0.3, "w": 0.9, "D": 0.5, "r": 0.8},
+                  "barriers": [{"position": "D", "side": "above", "restitution": "r"}],
+                  "period": "2*pi/w", "response": {"frequency": "w", "scale": "F"}},
+        "initial": {"x": 0.0, "v": 0.0}, "continuation": {"parameter": "D", "from": 0.5, "to": [0.2, 1.5]}})
+    orbits = [orbit(value, True) for value in np.linspace(0.4, 0.6, 5)]
+    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "D left"), "up": ("left_range", "D left")})]
+    path = tmp_path / "branch.h5"
+    branch_file.write_branch(path, branch_file.branch_arrays(branches, [], 0.5), config, "rk45")
+    plot.labels.use_model(None)  # as after any figure of the paper's model in the same process
+    with vrsweep.open_results(path) as ds:
+        figure = plot.branch_figure(ds)
+    assert figure.axes[1].get_xlabel() == "parameter D"
+    title = " ".join(text.get_text() for text in figure.texts)
+    assert "c = 0.1" in title and "$c$" not in title

@@ -44,10 +44,15 @@ def _runs(values, stable):
 def _stored_parameters(ds):
     from vrsweep.config import parse_config
 
+    from vrsweep.plot.labels import use_model
+
     try:
-        return parse_config(str(ds.attrs["config"]), "<the stored config>")
+        config = parse_config(str(ds.attrs["config"]), "<the stored config>")
     except Exception:  # noqa: BLE001 - a file without a readable config still gets its branch drawn
+        use_model(None)
         return None
+    use_model(config.model)  # a written model's parameters are labelled by its own names or symbols
+    return config
 
 
 @figure_options
