@@ -151,3 +151,47 @@ def test_resume_through_a_link_finishes_the_target_and_keeps_the_link(tmp_path, 
     with h5py.File(partial) as f:
         assert int(f.attrs["vrsweep_complete"]) == 1
         np.testing.assert_array_equal(f["R"][()], expected_R)  # the same point, the same bits
+
+
+CONTINUATION = """\
+model: effective
+parameters: {gamma: 0.05, alpha: 0.05, Omega: 4.0}
+initial: {x: 0.0, v: 0.0}
+continuation: {parameter: g, from: 23.0, to: [22.0, 24.0]}
+"""
+
+
+@pytest.mark.parametrize("kind", ["config", "link_to_config", "branch", "link_to_branch", "sweep", "fifo", "device"])
+def test_continue_follows_the_one_rule_of_outputs(tmp_path, inputs, invoke, kind):
+    """continue wrote through its own rule (store/branch_file.writable_output): `-o` its own config,
+    the --start sweep or the branch file being followed, with --overwrite, replaced it with the
+    result, and `-o /dev/null --overwrite` (run as root) replaced the device with a regular file.
+    Every refusal comes before anything is integrated, so no kernel is compiled here."""
+    from handmade import write_branch_file
+
+    config = tmp_path / "c.yaml"
+    config.write_text(CONTINUATION)
+    branch = write_branch_file(tmp_path / "branch.h5")
+    sweep = tmp_path / "sweep.h5"
+    shutil.copy(inputs / "good.h5", sweep)
+    fifo = tmp_path / "fifo.h5"
+    os.mkfifo(fifo)
+    link = tmp_path / "link.h5"
+    if kind in ("link_to_config", "link_to_branch"):
+        link.symlink_to(config.name if kind == "link_to_config" else branch.name)
+    out = {"config": config, "link_to_config": link, "branch": branch, "link_to_branch": link, "sweep": sweep,
+           "fifo": fifo, "device": os.devnull}[kind]
+    if kind in ("branch", "link_to_branch"):
+        args = ["continue", branch, "--point", "0", "--along", "Omega", "--to", "3.9", "4.1"]
+    elif kind == "sweep":
+        args = ["continue", config, "--start", sweep, "--at", "g=20"]
+    else:
+        args = ["continue", config]
+    before = {path: path.read_bytes() for path in (config, branch, sweep)}
+    result = invoke(*args, "-o", out, "--overwrite", "-q")
+    assert result.exit_code == 2, result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+    assert "choose another output" in result.output, result.output
+    for path, contents in before.items():
+        assert path.read_bytes() == contents
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode) and stat.S_ISCHR(os.stat(os.devnull).st_mode)

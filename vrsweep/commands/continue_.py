@@ -106,7 +106,9 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
         # for a request that is refused.
         start_state = execution.start_state_from_sweep(start_path, at) if start_path else None
     path = config.output_path(output)
-    _prepare_output(path, overwrite, quiet, config)
+    inputs = (config_path, start_path) if start_path else (config_path,)
+    with flag_wording(flags):
+        target = _prepare_output(path, overwrite, quiet, config, inputs, "an input of this continuation")
     from vrsweep.analysis.continuation import interrupted
     from vrsweep.execution.signals import GracefulStop
 
@@ -127,7 +129,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
             return execution.barrier_of(dataclasses.replace(config, parameters={**config.parameters, name: value}))
 
         config = dataclasses.replace(config, parameters={**config.parameters, section.parameter: section.start})
-        write_branch(path, branch_arrays(branches, bifurcations, delta), config, config.integration.method,
+        write_branch(target, branch_arrays(branches, bifurcations, delta), config, config.integration.method,
                      overwrite=overwrite, complete=not stopped)
     if stop.signum is not None:
         _say_interrupted(stop.signum, path, sum(len(branch.orbits) for branch in branches), stopped, "orbits",
@@ -173,8 +175,11 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
         # --set continuation.max_step=... (or max_points, ...): the curve's own settings over the branch's.
         requests = [execution.read_request(path, index, along, to, within, overrides) for index in point]
     name = "_".join(str(index) for index in point)
+    branch_path = path
     path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{name}_{along}.h5")
-    _prepare_output(path, overwrite, quiet, requests[0].config)
+    with flag_wording(flags):
+        target = _prepare_output(path, overwrite, quiet, requests[0].config, (branch_path,),
+                                 "the branch file being followed")
     from vrsweep.analysis.curves import ENDED_INTERRUPTED
     from vrsweep.execution.signals import GracefulStop
 
@@ -192,7 +197,7 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
             stopped = any(end[0] == ENDED_INTERRUPTED for curve in found for end in curve.ends.values())
             if stopped:
                 break  # the other --point requests are not followed
-        write_curves(path, curve_arrays(curves, specials, request.names), request.names, request.config,
+        write_curves(target, curve_arrays(curves, specials, request.names), request.names, request.config,
                      request.config.integration.method, overwrite=overwrite, complete=not stopped)
     if stop.signum is not None:
         _say_interrupted(stop.signum, path, sum(len(curve.points) for curve in curves), stopped, "points",
@@ -232,20 +237,24 @@ def _say_interrupted(signum, path, count, stopped, what, whole):
     sys.exit(128 + signum)
 
 
-def _prepare_output(path, overwrite, quiet, config):
-    """Refuse an existing output without --overwrite, make its folder, and say (unless quiet) that
-    the first run compiles the kernels: before any work, for branches and curves alike."""
-    from vrsweep.errors import UsageError
+def _prepare_output(path, overwrite, quiet, config, inputs, inputs_are):
+    """The path to write (fileio's one rule, as run, merge and plot: a link followed to its target;
+    a folder, a device or a pipe refused; an existing file only with --overwrite; an input never),
+    its folder made, and (unless quiet) the notice that the first run compiles the kernels: before
+    any work, for branches and curves alike."""
+    from pathlib import Path
+
+    from vrsweep.store.branch_file import writable_output
     from vrsweep.store.fileio import prepare_output_directory
 
-    if path.exists() and not overwrite:
-        raise UsageError(f"output {path} already exists: pass --overwrite to replace it")
-    prepare_output_directory(path)
+    target = Path(writable_output(path, overwrite, inputs=inputs, inputs_are=inputs_are))
+    prepare_output_directory(target)
     if not quiet:
         from vrsweep.commands.options import say_if_compiling
 
         say_if_compiling(lambda: _kernels_cached(config), "the numba kernels of continuation", COMPILE_DURATION,
                          "them")
+    return target
 
 
 def _kernels_cached(config) -> bool:

@@ -112,16 +112,14 @@ def _multipliers(f, mu, dims):
     _variable(f, "multiplier_modulus", np.abs(mu), dims, "modulus of the Floquet multiplier", "1")
 
 
-def writable_output(path, overwrite):
-    """``path`` as a string, or UsageError: a directory, or an existing file without ``overwrite``
-    (branch and curves files alike)."""
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise UsageError(f"output {path} is a directory")
-    if os.path.lexists(path) and not overwrite:
-        raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
-                                {"overwrite": "overwrite=True"}, path=path)
-    return path
+def writable_output(path, overwrite, inputs=(), inputs_are="an input of this command"):
+    """The path to write (branch and curves files alike), by fileio's one rule of what an output may
+    replace (``output_target``): a link is followed to its target; a folder, a device, a pipe or a
+    socket is refused, as is an existing file without ``overwrite`` and any of ``inputs`` whatever
+    the flags. UsageError (one line) otherwise."""
+    from vrsweep.store.fileio import output_target
+
+    return output_target(os.fspath(path), overwrite=overwrite, inputs=inputs, inputs_are=inputs_are)
 
 
 def file_attributes(kind, config, method, title, complete=True, **more):
