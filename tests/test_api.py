@@ -359,3 +359,24 @@ def test_every_snippet_of_the_guide_runs(tmp_path, monkeypatch):
         exec(compile(code, f"docs/python-api.md, snippet {number}", "exec"), namespace)
     assert (tmp_path / "results" / "effective_map.h5").exists() and (tmp_path / "fig3_x.png").stat().st_size > 0
     assert namespace["ds"].R.shape == (21, 2)
+
+
+def test_simulate_never_writes_over_its_own_config(tmp_path):
+    """vrsweep.simulate("x.yaml", output="x.yaml", overwrite=True) replaced the config with the
+    trajectory (vrsweep simulate refuses it): the output goes through fileio's one rule, with the
+    config as its input, before anything is integrated."""
+    config = tmp_path / "point.yaml"
+    config.write_text(POINT_TEXT)
+    for output in (config, str(config), tmp_path / "link.yaml"):
+        if output == tmp_path / "link.yaml":
+            output.symlink_to(config.name)
+        with pytest.raises(UsageError, match="is the config being run"):
+            vrsweep.simulate(config, output=output, overwrite=True)
+        assert config.read_text() == POINT_TEXT
+
+
+@pytest.mark.parametrize("value", [1.5, 5.0, "5", True, None])
+def test_samples_per_period_is_a_whole_number(value):
+    """samples_per_period=5.0 (or "5") was a TypeError from deep inside the trajectory's sampling."""
+    with pytest.raises(UsageError, match="samples_per_period must be a whole number of at least 1"):
+        vrsweep.simulate(POINT_TEXT, samples_per_period=value)

@@ -23,6 +23,7 @@ names the keyword argument (``overwrite=True``) instead of the flag.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import tempfile
 import warnings
@@ -319,10 +320,14 @@ def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERI
         ``x``, ``v``, ``R``, ``theta`` over ``time``). All loaded into memory.
     """
     from vrsweep.execution.simulate import check_single_point, simulate_point
-    from vrsweep.store.fileio import prepare_output_directory
+    from vrsweep.store.fileio import output_target, prepare_output_directory
     from vrsweep.store.trajectory_file import write_trajectory
 
     _check_flags(overwrite=overwrite)
+    if isinstance(samples_per_period, bool) or not isinstance(samples_per_period, numbers.Integral):
+        raise UsageError.naming("{samples_per_period} must be a whole number of at least 1, got {value!r}",
+                                value=samples_per_period)
+    samples_per_period = int(samples_per_period)
     _check_path("output", output)
     resolved = resolve_config(config, overrides)
     if compare is not None and compare not in COMPARE_CHOICES:
@@ -330,15 +335,14 @@ def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERI
                                 value=repr(compare), choices=", ".join(map(repr, COMPARE_CHOICES)))
     with _python_wording():
         check_single_point(resolved)  # before compiling anything
-        if output is not None:
-            path = Path(output)
-            if path.exists() and not overwrite:  # say so before integrating, not after
-                raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it", path=path)
+        if output is not None:  # fileio's one rule, as vrsweep simulate: say so before integrating, not after
+            inputs = (resolved.source_name,) if os.path.isfile(resolved.source_name) else ()  # never written over
+            path = Path(output_target(output, overwrite=overwrite, inputs=inputs, inputs_are="the config being run"))
             prepare_output_directory(path)
         data = simulate_point(resolved, samples_per_period, compare_effective=compare == "effective")
         if output is not None:
-            write_trajectory(output, data, resolved, overwrite=overwrite)
-            return _trajectory_datasets(output, every_group=compare is not None)
+            write_trajectory(path, data, resolved, overwrite=overwrite)
+            return _trajectory_datasets(path, every_group=compare is not None)
         with tempfile.TemporaryDirectory(prefix="vrsweep-") as folder:
             path = Path(folder) / "trajectory.h5"
             write_trajectory(path, data, resolved)
