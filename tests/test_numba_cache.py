@@ -180,3 +180,19 @@ def test_an_edited_kernel_is_never_loaded_stale_with_the_cache_folder_unwritable
     assert np.isfinite(before) and np.isfinite(after)
     assert abs(after - before) > 1e-6 * abs(before), "the edited kernel was not the one that ran"
     assert not list(copy.rglob("*.nbi")), "numba cached kernels inside the package"
+
+
+def test_numba_disable_jit_runs_in_python_without_a_traceback(tmp_path):
+    """NUMBA_DISABLE_JIT=1 (numba's own switch for debugging in Python) made run, continue and
+    run --dry-run end in a traceback (AttributeError: 'function' object has no attribute
+    'py_func') where they asked whether the kernel was cached; run --quiet, simulate and validate
+    worked. With the JIT off nothing compiles: no notice, and the point is computed in Python."""
+    config = tmp_path / "one.yaml"
+    config.write_text("model: effective\nparameters: {g: 5}\n"
+                      "integration: {transient_periods: 0, measure_periods: 1, strobe_periods: 1}\n")
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    result = subprocess.run([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(tmp_path / "one.h5")],
+                            capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert "Traceback" not in result.stderr and "Compiling" not in result.stderr
+    assert "1 of 1 points computed (1 ok)" in result.stderr

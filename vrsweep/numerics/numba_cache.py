@@ -203,7 +203,9 @@ def is_compiled(dispatcher) -> bool:
     """
     if not enabled():
         return False
-    function = dispatcher.py_func
+    function = getattr(dispatcher, "py_func", None)
+    if function is None:  # NUMBA_DISABLE_JIT=1: njit hands back the Python function, nothing compiles
+        return True
     source = Path(os.path.abspath(function.__code__.co_filename))  # abspath, not resolve(): as numba does
     subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
     index = (cache_dir() / subfolder /
