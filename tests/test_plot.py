@@ -284,6 +284,18 @@ def test_bifurcation_draws_every_strobe_sample(files):
     assert "x(nT)" in ax.get_ylabel() and "[1]" not in ax.get_ylabel()
 
 
+def test_bifurcation_draws_the_barrier_where_each_point_had_it(files, tmp_path):
+    """A sweep in Delta moves the barrier: it is drawn at Delta at each value (the line x = Delta),
+    not as one horizontal line at the config's default Delta; elsewhere, one line at Delta."""
+    (fixed,) = lines_with_label(plot.plot(files["g"], kind="bifurcation"), "barrier")
+    np.testing.assert_array_equal(fixed.get_ydata(), [DEFAULT_PARAMETERS["Delta"]] * 2)
+    path = _run(tmp_path, "delta", "parameters: {g: 5.0, Omega: 5.0}\ninitial: {x: 0.0, v: 0.0}\nsweep:\n  Delta: [0.6, 1.0, 1.4]\n"
+                "integration: {transient_periods: 2, measure_periods: 4, strobe_periods: 2}\n", "run")
+    (moving,) = lines_with_label(plot.plot(path, kind="bifurcation"), "barrier")
+    np.testing.assert_array_equal(moving.get_xdata(), [0.6, 1.0, 1.4])
+    np.testing.assert_array_equal(moving.get_ydata(), [0.6, 1.0, 1.4])
+
+
 def test_bifurcation_of_two_axes_needs_at(files):
     with pytest.raises(UsageError, match="fix the others with at, e.g. at Omega=4") as info:
         plot.plot(files["g_Omega_short"], kind="bifurcation")

@@ -800,25 +800,35 @@ def _draw_bifurcation(ax, view, x_axis):
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ms=2.0, ls="none",
                 label="integration failed: no samples")  # ms x markerscale 3 = the drawn marks
     _draw_resonance_lines(ax, view, x_axis, x)
-    if view.config is not None and not view.config.written:
-        ax.axhline(view.parameters()["Delta"], color="k", lw=0.8, ls="--", label="barrier $x = \\Delta$")
-    elif view.config is not None:
-        # A written barrier may move with the swept parameter (position: "s*F + 0.2"): its level
-        # at each drawn value, a horizontal line only where it stays put.
-        levels = np.array([barrier_positions(view.config, view.parameters(**{x_axis: float(value)}))
-                           for value in x]).reshape(len(x), -1)
+    if view.config is not None:
+        levels = _barrier_levels(view, x_axis, x)
         for index in range(levels.shape[1]):
-            label = "barrier" if index == 0 else None
+            label = ("barrier" if view.config.written else "barrier $x = \\Delta$") if index == 0 else None
             if np.all(levels[:, index] == levels[0, index]):
                 ax.axhline(levels[0, index], color="k", lw=0.8, ls="--", label=label)
             else:
                 order = np.argsort(x)
                 ax.plot(np.asarray(x)[order], levels[order, index], color="k", lw=0.8, ls="--", label=label)
     _span_grid(ax, x)  # the whole grid, even where every point failed
-    ax.set_ylabel(f"stroboscopic position $x(nT)$, $T = 2\\pi/\\omega$")
+    period = "$T$ the model's period" if view.config is not None and view.config.written else "$T = 2\\pi/\\omega$"
+    ax.set_ylabel(f"stroboscopic position $x(nT)$, {period}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize="x-small", loc="best", markerscale=3)
     return failure_note
+
+
+def _barrier_levels(view, x_axis, x):
+    """(len(x), barriers): each barrier's position at each drawn value. A barrier may move with the
+    swept parameter (the paper's Delta, a written position such as "s*F + 0.2"); a horizontal line
+    at the fixed parameters' barrier would put it where no point of the sweep had it."""
+    def positions(parameters):
+        if view.config.written:
+            return barrier_positions(view.config, parameters)
+        return [parameters["Delta"]]
+
+    if x_axis not in view.config.parameters:  # an initial-state axis (x0, v0): the barrier stays put
+        return np.array([positions(view.parameters())] * len(x)).reshape(len(x), -1)
+    return np.array([positions(view.parameters(**{x_axis: float(value)})) for value in x]).reshape(len(x), -1)
 
 
 def _draw_resonance_lines(ax, view, x_axis, x):
