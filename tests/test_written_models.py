@@ -494,3 +494,20 @@ def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names
     assert figure.axes[1].get_xlabel() == "parameter D"
     title = " ".join(text.get_text() for text in figure.texts)
     assert "c = 0.1" in title and "$c$" not in title
+
+
+def test_a_start_where_the_acceleration_is_infinite_is_non_finite_not_a_step_too_small(tmp_path):
+    """beta x**3 at x = -1e110 is inf: the first step's estimate is 0, which the kernel called
+    step_too_small (advice: loosen rtol/atol). The derivative is not finite: non_finite, as a
+    NaN or inf appearing later is; the point beside it is untouched."""
+    import vrsweep
+
+    text = (EXAMPLES / "impact_duffing_two_forces.yaml").read_text()
+    text = text.replace("phi: {start: 0.0, stop: 6.283185307179586, num: 49}", "x0: [-0.5, -1.0e110]")
+    config = tmp_path / "inf.yaml"
+    config.write_text(text.replace("transient_periods: 200", "transient_periods: 4")
+                      .replace("measure_periods: 100", "measure_periods: 16"))
+    for method in ("rk45", "dop853"):
+        result = vrsweep.sweep(str(config), output=str(tmp_path / f"{method}.h5"), method=method)
+        assert list(result["status"].values) == [Status.OK, Status.NON_FINITE], method
+        assert result["n_steps"].values[1] == 0

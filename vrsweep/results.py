@@ -23,7 +23,7 @@ MESSAGES = {
     Status.DIVERGED: "|x| or |v| exceeded integration.divergence_bound",
     Status.CHATTER_LIMIT: "more impacts in one slow period than integration.max_impacts_per_period",
     Status.STEP_TOO_SMALL: "the step size fell below the floating-point resolution of t",
-    Status.NON_FINITE: "a non-finite value (NaN or inf) appeared in the state",
+    Status.NON_FINITE: "a non-finite value (NaN or inf) appeared in the state or its derivative",
 }
 
 FLAG_VALUES = [int(s) for s in Status]

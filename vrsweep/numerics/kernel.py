@@ -437,8 +437,10 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                         break
                     if not (h > _smallest_step(t, slow_period)):
                         # An overflowing start (g = 1e200: the first step estimate is 0 or NaN) would
-                        # otherwise take zero-length steps up to the step cap.
-                        status = Status.STEP_TOO_SMALL if h == h else Status.NON_FINITE
+                        # otherwise take zero-length steps up to the step cap. An infinite derivative
+                        # (a written 1/x at x = 0) makes the estimate 0 too: not a tolerance's fault.
+                        finite = h == h and math.isfinite(f[X]) and math.isfinite(f[V])
+                        status = Status.STEP_TOO_SMALL if finite else Status.NON_FINITE
                         break
                     h_try = min(h, h_max)
                     if grid_steps:
