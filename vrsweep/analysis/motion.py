@@ -72,6 +72,8 @@ bound was exceeded up to 3 times, which is why chaos keeps the plain average and
 Without exponents, only convergence can say it, and the limit stays low (above).
 """
 
+import warnings
+
 import numpy as np
 
 from vrsweep.numerics import kernel
@@ -153,7 +155,9 @@ def settling(measured):
     if quarter < 2:
         return np.full(n_points, np.nan)
     values = measured[:, :, OBSERVABLES]
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+        # A failed point's window is all NaN: its NaN is the answer, not a warning to the user.
+        warnings.simplefilter("ignore", RuntimeWarning)
         spread = np.std(values, axis=1)
         early = np.std(values[:, :quarter], axis=1) / spread
         late = np.std(values[:, m - quarter:], axis=1) / spread
