@@ -130,6 +130,26 @@ def test_bad_models_name_the_file_line_and_field(change, expected):
     assert any(problem.startswith(expected) for problem in found), found
 
 
+def test_a_start_the_user_never_wrote_is_called_the_default():
+    """Without initial:, a written model starts at the paper's (0.99, 0.5): a refusal that named
+    initial.x = 0.99 named a value the config does not hold."""
+    text = MODEL.replace("initial: {x: 0.0, v: 0.0}\n", "").replace("Delta: 1.2", "Delta: 0.5")
+    (problem,) = problems(text)
+    assert problem.startswith("m.yaml:1: initial.x: must be below model.barriers[0]"), problem
+    assert "the config gives no initial.x, and the default start is the paper's (x, v) = (0.99, 0.5)" in problem
+    (problem,) = problems(MODEL.replace("x: 0.0,", "x: 1.5,"))
+    assert "default" not in problem, problem
+
+
+def test_a_bad_period_is_not_also_blamed_on_the_step_cap_it_sets():
+    """max_step defaults to period/8: a negative period made a second problem at model.max_step,
+    a key the config does not hold. A step cap of its own is still checked."""
+    found = problems(MODEL.replace("omega: 0.8", "omega: -0.8"))
+    assert not any("max_step" in problem for problem in found), found
+    found = problems(MODEL.replace("omega: 0.8", "omega: -0.8").replace("initial:", '  max_step: "0.1*omega"\ninitial:'))
+    assert any(problem.startswith("m.yaml:8: model.max_step: must be > 0") for problem in found), found
+
+
 def test_swept_values_are_checked_at_every_grid_point():
     found = problems(MODEL + "sweep: {r: [0.5, 0.9, 1.2]}\n")
     assert any("model.barriers[0].restitution: must be in [0, 1] (eq2.2: a rebound cannot gain energy), got 1.2 "

@@ -267,7 +267,22 @@ def _bad_name(name) -> str | None:
     return None
 
 
-def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, initial: dict, swept_initial: dict):
+# A config without initial.x starts where the paper's Fig. 6 does: say so, or the message names a
+# value the user never wrote.
+_DEFAULT_START = ("; the config gives no initial.x, and the default start is the paper's (x, v) = (0.99, 0.5): "
+                  "write initial: {x: ..., v: ...}")
+
+
+def _follows_the_period(model: WrittenModel) -> bool:
+    """Whether the step cap is computed from the period (the default period/8 is)."""
+    from vrsweep.numerics import expressions
+
+    return model.max_step is None or "period" in expressions.names_in(
+        expressions.parse(model.max_step, tuple(model.parameter_names) + ("period",)))
+
+
+def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, initial: dict, swept_initial: dict,
+                        initial_given=True):
     """The rules a written model's values must keep at every grid point (or along each axis through
     the fixed values, for a grid beyond FULL_CHECK_POINTS): each reported once, at the model's field.
 
@@ -312,13 +327,16 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
                           "must be finite"))
             rules.append((("barriers", index, "restitution"), header[f"barriers.{index}.restitution"],
                           lambda a: (a >= 0) & (a <= 1), "must be in [0, 1] (eq2.2: a rebound cannot gain energy)"))
-        failed = False
+        failed = period_failed = False
         for key_path, array, good, message in rules:
+            if key_path == ("max_step",) and period_failed and _follows_the_period(model):
+                continue  # a step cap of period/8 is bad because the period is: one problem, said there
             found = first_bad(array, good)
             if found is not None:
                 value, where = found
                 report(("model",) + key_path, f"{message}, got {show(value)}{where}")
                 failed = True
+                period_failed = period_failed or key_path == ("period",)
         if failed:
             return
         if len(model.barriers) == 2:
@@ -349,5 +367,5 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
                        f"must be {relation} model.barriers[{index}] (the mass starts between its barriers), "
                        f"got {field} = {show(float(np.max(x) if barrier.side == 'above' else np.min(x)))} and the "
                        f"barrier at {show(float(np.broadcast_to(position, np.shape(position) or (1,)).reshape(-1)[0]))}"
-                       f"{found[1]}")
+                       f"{found[1]}{'' if initial_given or 'x0' in swept_initial else _DEFAULT_START}")
                 return

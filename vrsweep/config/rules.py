@@ -88,7 +88,8 @@ class CrossFieldRules:
             return  # a broken axis is reported on its own
         swept = {name: values for name, (values, _, _) in axes.items() if name in self.parameter_names}
         swept_initial = {name: axes[name][0] for name in ("x0", "v0") if name in axes}
-        check_written_model(self.report, self.model, fixed, swept, {"x": x}, swept_initial)
+        check_written_model(self.report, self.model, fixed, swept, {"x": x}, swept_initial,
+                            initial_given="x" in initial)
 
     def check_continuation_start(self, parameters, section):
         """continuation.from inside the model's domain (config/domains.py, the rule every point of
