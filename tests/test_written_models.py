@@ -277,6 +277,11 @@ def test_continue_locates_the_linear_oscillators_graze_and_follows_it_in_omega(t
     with vrsweep.open_results(curve) as ds:
         delta, omega = ds["Delta"].values, ds["omega"].values
     assert len(omega) >= 10 and np.ptp(omega) > 0.1
+    for path in (branch, curve):  # the model's own period and response, not the paper's omega and c
+        with h5py.File(path, "r") as f:
+            assert f["R"].attrs["long_name"].startswith("gain R = |Q|/(F) over the orbit, Q at the response "
+                                                        "frequency omega"), path
+            assert f["periods"].attrs["long_name"] == "orbit period in periods T = 2 * pi / omega", path
     np.testing.assert_allclose(delta, _free_amplitude(p["zeta"], p["F"], omega), rtol=0, atol=1e-6)
     for path in (branch, curve):
         assert runner.invoke(main, ["info", str(path)]).exit_code == 0
@@ -531,3 +536,24 @@ def test_a_start_where_the_acceleration_is_infinite_is_non_finite_not_a_step_too
         result = vrsweep.sweep(str(config), output=str(tmp_path / f"{method}.h5"), method=method)
         assert list(result["status"].values) == [Status.OK, Status.NON_FINITE], method
         assert result["n_steps"].values[1] == 0
+
+
+def test_a_written_models_trajectory_file_names_its_own_barrier_and_period(tmp_path):
+    """simulate's file described a written model's impacts as "at x = Delta" and its periods as
+    T = 2 pi/omega, the paper's words."""
+    import h5py
+
+    text = (EXAMPLES / "impact_linear.yaml").read_text()
+    config = tmp_path / "one.yaml"
+    config.write_text(text.replace("transient_periods: 200", "transient_periods: 4")
+                      .replace("measure_periods: 100", "measure_periods: 16"))
+    output = tmp_path / "one_traj.h5"
+    result = CliRunner().invoke(main, ["simulate", str(config), "--set", "omega=0.8", "--set", "Delta=0.5",
+                                       "-o", str(output), "-q"])
+    assert result.exit_code == 0, result.output
+    with h5py.File(output, "r") as f:
+        group = f["written"]
+        assert len(group["impact_t"]) > 0
+        assert group["impact_t"].attrs["long_name"] == "time of the impact at a barrier"
+        assert "2 pi/omega" not in group["period"].attrs["long_name"]
+        assert "slow" not in group["impacts_per_period"].attrs["long_name"]

@@ -69,6 +69,22 @@ _POINT_VARIABLES = {
 }
 
 
+def point_long_names(config):
+    """The point variables' long names for ``config``'s model: a written model's own period,
+    response and barrier, not the paper's omega, c and Delta."""
+    names = {name: long_name for name, (long_name, _) in _POINT_VARIABLES.items()}
+    if config.written:
+        model = config.model
+        names.update(
+            periods=f"orbit period in periods T = {model.period}",
+            R=(f"gain R = |Q|/({model.response_scale}) over the orbit, Q at the response frequency "
+               f"{model.response_frequency}"),
+            Q_amplitude=f"response amplitude |Q| at {model.response_frequency} over the orbit",
+            impacts_per_period="impacts per period T",
+            barrier_distance="distance (position - x_max) of the orbit from the first barrier above (inf: none)")
+    return names
+
+
 def branch_arrays(branches, bifurcations, delta):
     """Plain arrays from analysis.continuation's Branch and Bifurcation lists (see the layout).
 
@@ -153,8 +169,9 @@ def write_branch(path, arrays, config, method, overwrite=False, complete=True):
         point = _dimension(f, "point", np.arange(n_points, dtype=np.int64), "point along the branch")
         multiplier = _dimension(f, "multiplier", np.arange(2, dtype=np.int64),
                                 "Floquet multiplier number, larger modulus first")
-        for name, (long_name, units) in _POINT_VARIABLES.items():
-            _variable(f, name, arrays[name], (point,), long_name, units)
+        words = point_long_names(config)
+        for name, (_, units) in _POINT_VARIABLES.items():
+            _variable(f, name, arrays[name], (point,), words[name], units)
         _multipliers(f, arrays["multipliers"], (point, multiplier))
         f["parameter"].attrs["long_name"] = f"continued parameter {parameter}"
         table = arrays["bifurcations"]

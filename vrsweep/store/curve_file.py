@@ -50,6 +50,7 @@ import numpy as np
 from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
+from vrsweep.store.branch_file import point_long_names
 from vrsweep.store.branch_file import (
     ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_model_attribute, check_values, file_attributes,
     has_file_kind, note_if_unprotected, read_checked, seal_attributes, stored_config, writable_output,
@@ -106,8 +107,9 @@ def write_curves(path, arrays, names, config, method, overwrite=False, complete=
         for name in names:
             _variable(f, name, arrays[name], (point,), PARAMETER_LONG_NAMES.get(name, f"model parameter {name}"),
                       PARAMETER_UNITS.get(name, "1"))
-        for name, (long_name, units) in _POINT_VARIABLES.items():
-            _variable(f, name, arrays[name], (point,), long_name, units)
+        words = point_long_names(config)
+        for name, (_, units) in _POINT_VARIABLES.items():
+            _variable(f, name, arrays[name], (point,), words[name], units)
         _multipliers(f, arrays["multipliers"], (point, multiplier))
         curves = arrays["curves"]
         curve_id = _dimension(f, "curve_id", np.arange(len(curves), dtype=np.int64), "curve number")

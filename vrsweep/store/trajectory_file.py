@@ -55,6 +55,7 @@ from vrsweep.errors import ResultFileError
 from vrsweep.results import MESSAGES, Status
 from vrsweep.store.fileio import LIBVER, has_file_kind, open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
+from vrsweep.store.provenance import WRITTEN
 from vrsweep.store.sealing import (ATTRIBUTES_CHECKSUM, WHEN_AND_HOW, check_attributes, note_if_unprotected, seal_attributes,
                                    unless_changed)
 
@@ -197,19 +198,23 @@ def _write_model_run(group, run: ModelRun):
     time = _dimension(group, "time", run.t, "time t of the dense-output samples")
     _variable(group, "x", run.x, time, "position x")
     _variable(group, "v", run.v, time, "velocity dx/dt")
+    written = run.model == WRITTEN  # its own barriers and period T, not the paper's Delta and 2 pi/omega
     impact = _dimension(group, "impact", np.arange(len(run.impacts), dtype=np.int64), "impact number")
-    _variable(group, "impact_t", run.impacts[:, 0], impact, "time of the impact at x = Delta")
+    _variable(group, "impact_t", run.impacts[:, 0], impact,
+              "time of the impact at a barrier" if written else "time of the impact at x = Delta")
     _variable(group, "impact_v_before", run.impacts[:, 1], impact, "velocity just before the impact")
     _variable(group, "impact_v_after", run.impacts[:, 2], impact, "velocity just after the impact (eq2.2)")
     stick = _dimension(group, "stick", np.arange(len(run.sticks), dtype=np.int64), "sticking interval number")
     _variable(group, "stick_start", run.sticks[:, 0], stick, "time the mass sticks to the barrier")
     _variable(group, "stick_end", run.sticks[:, 1], stick, "time the mass is released")
     period = _dimension(group, "period", np.arange(1, len(run.impacts_per_period) + 1, dtype=np.int64),
+                        "period number n (nT - T < t <= nT, T the model's period)" if written else
                         "slow period number n (nT - T < t <= nT, T = 2 pi/omega)")
     counts = group.create_dataset("impacts_per_period", data=np.asarray(run.impacts_per_period, dtype=np.int64))
     counts.dims[0].attach_scale(period)
     counts.attrs["units"] = "1"
-    counts.attrs["long_name"] = "impacts in each slow period, transient included (Fig. impact_no)"
+    counts.attrs["long_name"] = ("impacts in each period T, transient included" if written else
+                                 "impacts in each slow period, transient included (Fig. impact_no)")
     _variable(group, "strobe_x", run.strobe_x, period, "stroboscopic x at t = nT")
     _variable(group, "strobe_v", run.strobe_v, period, "stroboscopic velocity at t = nT")
 
