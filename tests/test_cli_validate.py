@@ -236,3 +236,25 @@ def test_the_size_estimate_is_the_size_of_the_file(tmp_path, sweep, lyapunov):
     size = (tmp_path / "small.h5").stat().st_size
     guess = estimate(parse_config(path.read_text()), 1).output_bytes
     assert abs(guess - size) < 0.1 * size, (guess, size)
+
+
+def test_a_continued_parameter_is_shown_fixed_when_a_sweep_holds_it(tmp_path):
+    """`run` sweeps with the continued parameter at its value in parameters; `continue` starts it at
+    continuation.from. With a sweep in the config the fixed line showed neither."""
+    text = """\
+        parameters: {g: 23.0, Omega: 4.0}
+        initial: {x: 0.0, v: 0.0}
+        sweep:
+          Omega: [4.0, 5.0]
+        continuation: {parameter: g, from: 25.0, to: [20.0, 30.0]}
+        """
+    result, output = invoke("validate", str(write(tmp_path, text)))
+    assert result.exit_code == 0, output
+    fixed = next(line for line in output.splitlines() if line.startswith("fixed:"))
+    assert "g=23" in fixed, fixed
+    alone = textwrap.dedent(text).replace("sweep:\n  Omega: [4.0, 5.0]\n", "")
+    assert "sweep" not in alone
+    result, output = invoke("validate", str(write(tmp_path, alone)))
+    fixed = next(line for line in output.splitlines() if line.startswith("fixed:"))
+    assert "g" not in [token.split("=")[0] for token in fixed.split()[1:]], fixed  # only continue uses it
+    assert "Omega=4" in fixed, fixed

@@ -49,8 +49,10 @@ def command(config_path, overrides, threads):
             click.echo("barriers:    none")
         click.echo(f"period:      T = {model.period}; R = |Q| / {model.response_scale}, Q at frequency "
                    f"{model.response_frequency}")
-    # The continued parameter is not fixed: its value in parameters is unused (continuation.from starts it).
-    moving = {*config.axis_names, *([config.continuation.parameter] if config.continuation else [])}
+    # The continued parameter is not fixed for `continue` (continuation.from starts it), but a sweep
+    # in the same config (`run`) holds it at its value in parameters: shown then.
+    continued = [config.continuation.parameter] if config.continuation and not config.axes else []
+    moving = {*config.axis_names, *continued}
     fixed = [f"{name}={config.parameters[name]:g}" for name in config.parameter_names if name not in moving]
     click.echo(f"fixed:       {' '.join(fixed)}")
     initial = [f"{key}=swept ({axis})" if axis in config.axis_names else f"{key}={config.initial[key]:g}"
@@ -68,7 +70,7 @@ def command(config_path, overrides, threads):
     integration = config.integration
     click.echo(f"integration: {integration.method}, rtol={integration.rtol:g} atol={integration.atol:g}, "
                f"{integration.transient_periods} transient + {integration.measure_periods} measured "
-               f"slow periods{_other_settings(integration)}")
+               f"{'periods T' if config.written else 'slow periods'}{_other_settings(integration)}")
     if config.continuation is not None:
         click.echo(f"continuation: {_describe_continuation(config.continuation)}")
     click.echo(f"output:      {config.output_path()}")
