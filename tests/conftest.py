@@ -18,7 +18,7 @@ from vrsweep.cli import main
 # The property tests draw the same examples on every run ("derandomize": each test's seed is its
 # own name), so a run of the suite, CI's included, passes or fails on the code alone, never on a
 # lucky draw. Searching for new failures is a deliberate run with fresh random draws:
-# VRSWEEP_HYPOTHESIS=explore python -m pytest tests/test_hostile_*.py (README, "Tests").
+# VRSWEEP_HYPOTHESIS=explore python -m pytest tests/test_hostile_*.py (the README says so too).
 settings.register_profile("repeatable", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("VRSWEEP_HYPOTHESIS", "repeatable"))
