@@ -127,6 +127,33 @@ def test_what_an_output_may_replace(tmp_path_factory, inputs, invoke, command, k
         assert path.read_bytes() == contents
 
 
+@pytest.mark.parametrize("command", ["init", "plot"])
+@pytest.mark.parametrize("kind", ["sweep", "branch", "link_to_sweep"])
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_results_are_never_replaced_by_a_config_or_a_figure(tmp_path, inputs, invoke, command, kind, overwrite):
+    """`init results.h5 --overwrite` replaced a sweep with the quickstart's YAML: plot refused
+    this on its own, init had no such rule. Both now ask output_target (writes=...)."""
+    from handmade import write_branch_file
+
+    plotted = tmp_path / "plotted.h5"
+    shutil.copy(inputs / "good.h5", plotted)
+    results = tmp_path / f"results{SUFFIX[command]}"  # results under the output's own suffix
+    if kind == "branch":
+        write_branch_file(tmp_path / "branch.h5").rename(results)
+    else:
+        shutil.copy(inputs / "good.h5", tmp_path / "sweep.h5")
+        if kind == "link_to_sweep":
+            results.symlink_to("sweep.h5")
+        else:
+            os.rename(tmp_path / "sweep.h5", results)
+    before = {path: path.read_bytes() for path in tmp_path.iterdir()}
+    result = invoke(*_args(command, results, [plotted], overwrite))
+    assert result.exit_code == 2, result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+    assert "is an HDF5 file (results?)" in result.output and "choose another output" in result.output, result.output
+    assert {path: path.read_bytes() for path in tmp_path.iterdir()} == before
+
+
 def test_run_never_replaces_its_own_config(tmp_path, invoke):
     config = tmp_path / "one.yaml"
     config.write_text(CONFIG)

@@ -45,7 +45,7 @@ def command(path, name, list_only, overwrite):
     from vrsweep.store.fileio import output_target, write_bytes
 
     shown = target
-    target = Path(output_target(target, overwrite=overwrite, exists_error=lambda: UsageError(
+    target = Path(output_target(target, overwrite=overwrite, writes="a config", exists_error=lambda: UsageError(
         f"{shown} already exists: pass --overwrite to replace it")))
     if not target.parent.is_dir():
         raise UsageError(f"directory {target.parent} does not exist (PATH: {target})")

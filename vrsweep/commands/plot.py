@@ -165,18 +165,16 @@ def _output(paths, output, kind, overwrite):
     name given (a link's target may have any name), the path from fileio.output_target."""
     from vrsweep.errors import UsageError
     from vrsweep.plot.labels import made_by_vrsweep
-    from vrsweep.store.fileio import is_hdf5, output_target
+    from vrsweep.store.fileio import output_target
 
     given = Path(output) if output else default_output(paths[0], kind)
     if given.suffix.lower() not in FORMATS:
         raise UsageError(f"-o {given}: the figure's format comes from its suffix, one of {', '.join(FORMATS)}")
-    # Never an input nor anything other than a regular file; a link is followed (output_target).
-    target = output_target(given, overwrite=True, inputs=paths, inputs_are="one of the files being plotted")
+    # Never an input, results or anything other than a regular file; a link is followed (output_target).
+    target = output_target(given, overwrite=True, inputs=paths, inputs_are="one of the files being plotted",
+                           writes="a figure")
     shown = str(given) if os.fspath(target) == os.fspath(given) else f"{given} (a link to {target})"
     option = "-o " if output else "the default figure path "
-    if is_hdf5(target):  # results (a sweep, a branch...) are never replaced by a picture, asked or not
-        raise UsageError(f"{option}{shown} is an HDF5 file (results?): a figure never replaces one; "
-                         "choose another output")
     # A figure vrsweep wrote is replaced unasked (a figure is redrawn often); any other file is
     # someone's, and the default path in particular was never named by the user.
     if os.path.exists(target) and not overwrite and not made_by_vrsweep(target):

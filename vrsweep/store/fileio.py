@@ -367,7 +367,8 @@ def reserve_space(fd, length, offset=0) -> None:
 # --------------------------------------------------------------------------------------------
 
 
-def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None) -> str:
+def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None,
+                  writes=None) -> str:
     """The one rule of what vrsweep may write at an output ``path`` (run, simulate, merge, plot,
     init). Returns the path to write; raises UsageError (one line) otherwise.
 
@@ -379,6 +380,9 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
     - An existing regular file is replaced only with ``overwrite`` (else ``exists_error()`` is
       raised, or a generic message), and never when it is one of ``inputs`` (the config being
       run, the files being merged or plotted), whatever the flags.
+    - ``writes`` names what a command writes when it is not results ("a figure", "a config"): an
+      HDF5 file at the path is then refused whatever the flags. Results took hours to compute and
+      a figure or a config is rewritten in a second: no flag should trade one for the other.
     """
     import stat
 
@@ -404,6 +408,9 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
     if not stat.S_ISREG(mode):
         raise UsageError(f"output {shown} is not a regular file (a device, a pipe or a socket): vrsweep "
                          "writes and replaces regular files only; choose another output")
+    if writes is not None and is_hdf5(target):  # before the overwrite test: --overwrite would not help
+        raise UsageError(f"output {shown} is an HDF5 file (results?): {writes} never replaces one; "
+                         "choose another output")
     if not overwrite:
         if exists_error is not None:
             raise exists_error()
