@@ -70,13 +70,28 @@ def test_every_task_of_an_array_gets_its_own_shard():
     ("auto", {"SLURM_ARRAY_TASK_ID": "x", "SLURM_ARRAY_TASK_COUNT": "2"}, "SLURM_ARRAY_TASK_ID"),
     ("2/2", {}, "not in 0..1"),
     ("-1/2", {}, "not in 0..1"),
-    ("1/0", {}, "not in"),
+    ("1/0", {}, "number of shards N must be >= 1, got 0"),
     ("1", {}, "expected I/N"),
     ("a/b", {}, "expected I/N"),
 ])
 def test_bad_shards_are_usage_errors(text, env, words):
     with pytest.raises(UsageError, match=words):
         parse_shard(text, env)
+
+
+@pytest.mark.parametrize("text, env, count", [
+    ("0/0", {}, 0),
+    ("1/-3", {}, -3),
+    ("-1/-1", {}, -1),
+    ("auto", slurm(0, 0, first=0), 0),
+])
+def test_a_shard_count_below_one_is_named_as_such(text, env, count):
+    """`--shard 0/0` said "shard index 0 is not in 0..-1", `1/-3` "not in 0..-4": the count is
+    what is wrong, and no range of indices exists to name."""
+    with pytest.raises(UsageError) as caught:
+        parse_shard(text, env)
+    assert f"N must be >= 1, got {count}" in str(caught.value)
+    assert "not in" not in str(caught.value)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -134,7 +134,9 @@ def parse_shard(text, environ=None):
         except ValueError:
             raise InvalidArgument("shard", text, "expected I/N (e.g. 0/8) or 'auto'") from None
         where = ""
-    if not (count >= 1 and 0 <= index < count):
+    if count < 1:  # before the index: a range 0..N-1 of N <= 0 ("0..-1") means nothing
+        raise InvalidArgument("shard", text, f"{where}the number of shards N must be >= 1, got {count}")
+    if not 0 <= index < count:
         hint = "; submit the array as a range A-B (or A-B:STEP), not a list" if text == "auto" else ""
         raise InvalidArgument("shard", text, f"{where}shard index {index} is not in 0..{count - 1}{hint}")
     return (index, count)
