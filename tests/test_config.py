@@ -122,6 +122,24 @@ def test_value_errors(text, line, words):
     assert_words(problem, *words)
 
 
+@pytest.mark.parametrize("text, words", [
+    ("integration:\n  measure_periods: 1e23\n", ["integration.measure_periods", "got 1e+23"]),
+    ("integration:\n  max_steps: 1.0e30\n", ["integration.max_steps", "got 1e+30"]),
+    ("integration:\n  transient_periods: 9223372036854775808\n", ["integration.transient_periods", ">= 0"]),
+    ("integration:\n  measure_periods: 2.5\n", ["integration.measure_periods", "must be an integer, got 2.5"]),
+])
+def test_a_count_beyond_int64_is_told_its_limit(text, words):
+    """`measure_periods: 1e23` said "must be an integer, got 1e+23 (allowed: an integer >= 1)": a
+    whole number, within what was said allowed. The kernel counts in int64, and the message says so."""
+    problem = only_problem(text)
+    assert_words(problem, *words, "<= 9223372036854775807")
+    assert problem.startswith("fig1.yaml:2: "), problem
+
+
+def test_a_count_below_its_least_is_not_told_int64():
+    assert only_problem("integration:\n  measure_periods: 0\n").endswith("must be an integer >= 1, got 0")
+
+
 @pytest.mark.parametrize("text, line, words", [
     ("sweep:\n  g: {start: 40, stop: 0, num: 81}\n", 2,
      ["sweep.g.stop", "must be >= start", "use an explicit list or swap start and stop",

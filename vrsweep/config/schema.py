@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -43,10 +43,12 @@ class Domain:
     integer: bool = False
 
     def describe(self) -> str:
-        """The interval in words, e.g. ``(0, 1]``, ``> 0``, ``an integer >= 1``."""
+        """The interval in words, e.g. ``(0, 1]``, ``> 0``, ``an integer >= 1``; a count says int64's limit too."""
         low, high = show_number(self.low), show_number(self.high)
-        has_low, has_high = self.low > -math.inf, self.high < math.inf and self.high != _INT64_MAX
-        if has_low and has_high:
+        has_low, has_high = self.low > -math.inf, self.high < math.inf
+        if has_low and self.high == _INT64_MAX:  # said as a limit, not as an interval [1, 9223372036854775807]
+            text = f"{'>' if self.low_open else '>='} {low} and <= {_INT64_MAX}"
+        elif has_low and has_high:
             text = f"in {'(' if self.low_open else '['}{low}, {high}{')' if self.high_open else ']'}"
         elif has_low:
             text = f"{'>' if self.low_open else '>='} {low}"
@@ -64,7 +66,10 @@ class Domain:
 
     def range_message(self, value) -> str:
         """``must be in (0, 1], got 1.5`` -- the message for a value of the right type outside."""
-        allowed = self.describe().replace("an integer ", "").replace("a number ", "")
+        domain = self
+        if self.high == _INT64_MAX and value <= _INT64_MAX:  # a count below its least: int64's limit is noise
+            domain = replace(self, high=math.inf)
+        allowed = domain.describe().replace("an integer ", "").replace("a number ", "")
         if self.integer:
             allowed = "an integer " + allowed
         return f"must be {allowed}, got {show(value)}"
@@ -340,9 +345,19 @@ def integral_float_to_int(value):
     return value
 
 
+def _integral_count(domain: Domain):
+    def convert(value):
+        value = integral_float_to_int(value)
+        # 1e23 is a whole number, only too large: its range says so, "must be an integer" would not
+        if isinstance(value, float) and value.is_integer():
+            raise PydanticCustomError("out_of_range", "{message}", {"message": domain.range_message(value)})
+        return value
+    return convert
+
+
 def _number_type(domain: Domain):
     if domain.integer:
-        return Annotated[int, BeforeValidator(integral_float_to_int), AfterValidator(_check_range(domain))]
+        return Annotated[int, BeforeValidator(_integral_count(domain)), AfterValidator(_check_range(domain))]
     return Annotated[float, AfterValidator(_check_range(domain))]
 
 
