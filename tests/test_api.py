@@ -234,14 +234,35 @@ def test_a_bad_config_raises_the_command_lines_messages(tmp_path, invoke):
     bad.write_text("parameters:\n  e: 1.5\nintegration: {lyapunov: yes, method: rk4}\n")
     expected = cli_problems(invoke, "validate", str(bad), "--set", "rtol=abc")
     assert len(expected) == 4, expected
+    # The same messages, but the keyword argument is named as the caller wrote it, not as --set.
+    in_python = [problem.replace("--set rtol=abc:", "keyword argument rtol='abc':") for problem in expected]
     with pytest.raises(ConfigError) as error:
         vrsweep.sweep(bad, rtol="abc")
-    assert error.value.problems == expected
+    assert error.value.problems == in_python
     assert expected[0] == "%s:2: parameters.e: must be in (0, 1], got 1.5" % bad
     assert expected[-1].startswith("--set rtol=abc: integration.rtol: must be a number")
     with pytest.raises(ConfigError) as error:
         vrsweep.theory(bad.read_text(), rtol="abc")  # YAML text: <string> and the same lines
-    assert error.value.problems == [problem.replace(str(bad), "<string>") for problem in expected]
+    assert error.value.problems == [problem.replace(str(bad), "<string>") for problem in in_python]
+
+
+@pytest.mark.parametrize("config", ["path", "text", "dict", "Config"])
+def test_a_bad_keyword_argument_is_named_as_one(tmp_path, config):
+    """`vrsweep.sweep(config, g="abc")` said "--set g=abc: ...": the caller passed no --set."""
+    from vrsweep.config import load_config
+
+    path = tmp_path / "c.yaml"
+    path.write_text("model: effective\nsweep:\n  g: [1, 2]\n")
+    given = {"path": path, "text": path.read_text(), "dict": {"model": "effective", "sweep": {"g": [1, 2]}},
+             "Config": load_config(path)}[config]
+    cases = [({"g": "abc"}, "keyword argument g='abc': parameters.g: must be a number, got 'abc'"),
+             ({"gg": 5}, "keyword argument gg=5: unknown name 'gg' (did you mean 'g'?)"),
+             ({"initial.x": 2.0}, "keyword argument initial.x=2.0: initial.x: must be below parameters.Delta")]
+    for overrides, words in cases:
+        with pytest.raises(ConfigError) as error:
+            vrsweep.theory(given, **overrides)
+        (problem,) = error.value.problems
+        assert problem.startswith(words) and "--set" not in problem, problem
 
 
 def test_a_bad_dict_names_the_field_without_a_line():

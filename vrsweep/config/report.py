@@ -27,11 +27,12 @@ from vrsweep.numerics.model import MODELS
 class Report:
     """The problems found in one config text (and its overrides), each with its file and line."""
 
-    def __init__(self, text, source_name, overrides, line_numbers=True):
+    def __init__(self, text, source_name, overrides, line_numbers=True, override_words=None):
         self.text = text if isinstance(text, str) else str(text)
         self.source = source_name
         self.line_numbers = line_numbers  # False: the text was made from a dict, its lines mean nothing
         self.overrides = overrides
+        self.override_words = dict(override_words or {})  # how each override was given, if not --set
         self.root = None          # the ruamel tree (CommentedMap ...), for line numbers
         self.overridden = {}      # path tuple -> the "--set NAME=VALUE" that set it
         self.problems = []        # (order key, text)
@@ -45,11 +46,16 @@ class Report:
         for length in range(len(path), 0, -1):
             setting = self.overridden.get(path[:length])
             if setting is not None:
-                self.problems.append((self.setting_order(setting), f"--set {setting}: {text}"))
+                self.problems.append((self.setting_order(setting), f"{self.said(setting)}: {text}"))
                 return
         line = self.line_of(path)
         where = f"{self.source}:{line}" if self.line_numbers else self.source
         self.problems.append(((0, line, ""), f"{where}: {text}"))
+
+    def said(self, setting):
+        """An override as its user gave it: ``--set g=abc``, or ``keyword argument g='abc'`` in Python,
+        whose user never typed --set (execution/api.resolve_config)."""
+        return self.override_words.get(setting, f"--set {setting}")
 
     def setting_order(self, setting):
         """Problems with --set options come after the file's, in the order the options were given."""

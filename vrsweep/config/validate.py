@@ -44,7 +44,7 @@ from vrsweep.numerics.written import WrittenModel
 MAX_CONFIG_BYTES = 2 ** 20
 
 
-def load_config(path, overrides=()) -> Config:
+def load_config(path, overrides=(), *, override_words=None) -> Config:
     """Read and validate the config file at ``path``; messages name the file as given."""
     name = str(path)
     try:
@@ -65,19 +65,21 @@ def load_config(path, overrides=()) -> Config:
                           source=name) from None
     except OSError as error:
         raise ConfigError([f"{name}: cannot read: {error.strerror or error}"], source=name) from None
-    return parse_config(text, source_name=name, overrides=overrides)
+    return parse_config(text, source_name=name, overrides=overrides, override_words=override_words)
 
 
-def parse_config(text: str, source_name: str = "<string>", overrides=(), *, line_numbers=True) -> Config:
+def parse_config(text: str, source_name: str = "<string>", overrides=(), *, line_numbers=True,
+                 override_words=None) -> Config:
     """Validate config ``text``; raise ConfigError listing every problem found.
 
     ``line_numbers=False``: problems name the source and the field but no line (for text written
-    out from a Python dict, whose lines the user never saw).
+    out from a Python dict, whose lines the user never saw). ``override_words``: {"NAME=VALUE":
+    how a problem it causes names it}, for overrides not given as ``--set`` (the default wording).
     """
-    return _Validator(text, source_name, tuple(overrides), line_numbers).run()
+    return _Validator(text, source_name, tuple(overrides), line_numbers, override_words).run()
 
 
-def config_from_dict(data, source_name: str = "<dict>", overrides=()) -> Config:
+def config_from_dict(data, source_name: str = "<dict>", overrides=(), *, override_words=None) -> Config:
     """Validate a config given as a dict nested as the YAML is (``{"sweep": {"g": [5, 10]}}``).
 
     The dict is written out as YAML text and validated as a file is, so every message is the one
@@ -91,17 +93,18 @@ def config_from_dict(data, source_name: str = "<dict>", overrides=()) -> Config:
         text = yaml_text(data)
     except Unrepresentable as error:
         raise ConfigError([f"{source_name}: {dotted(error.path)}: {error}"], source=source_name) from None
-    return parse_config(text, source_name, overrides, line_numbers=False)
+    return parse_config(text, source_name, overrides, line_numbers=False, override_words=override_words)
 
 
-def with_overrides(config: Config, overrides) -> Config:
+def with_overrides(config: Config, overrides, *, override_words=None) -> Config:
     """``config`` with more ``NAME=VALUE`` overrides applied on top of it.
 
     Works from ``config.to_yaml()`` (so a Config changed with dataclasses.replace keeps its
     changes); that text is valid, so any problem is one of the new overrides and says so.
     """
     overrides = tuple(overrides)
-    changed = parse_config(config.to_yaml(), f"{config.source_name} (resolved)", overrides)
+    changed = parse_config(config.to_yaml(), f"{config.source_name} (resolved)", overrides,
+                           override_words=override_words)
     return dataclasses.replace(changed, source_name=config.source_name, source_text=config.source_text,
                                overrides=config.overrides + overrides)
 
@@ -228,12 +231,12 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
             allowed = ("a parameter, an integration key, initial.x (or x0), initial.v (or v0), model or "
                        "continuation.KEY")
             if not sep or not name:
-                self.report_raw(self.setting_order(setting), f"--set {setting}: expected NAME=VALUE, e.g. --set g=5")
+                self.report_raw(self.setting_order(setting), f"{self.said(setting)}: expected NAME=VALUE, e.g. --set g=5")
                 continue
             if name not in targets:
                 home = KEY_HOME.get(name)  # e.g. x -> initial.x
                 hint = f" (did you mean {home}?)" if home in targets else did_you_mean(name, list(targets))
-                self.report_raw(self.setting_order(setting), f"--set {setting}: unknown name {name!r}{hint} (allowed: {allowed})")
+                self.report_raw(self.setting_order(setting), f"{self.said(setting)}: unknown name {name!r}{hint} (allowed: {allowed})")
                 continue
             try:
                 if targets[name] == ("continuation", "to"):
@@ -245,7 +248,7 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
                 else:
                     value = parse_scalar(value_text)
             except ValueError as error:
-                self.report_raw(self.setting_order(setting), f"--set {setting}: {error}")
+                self.report_raw(self.setting_order(setting), f"{self.said(setting)}: {error}")
                 continue
             settings.append((targets[name], value, setting))
         return settings

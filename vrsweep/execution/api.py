@@ -108,22 +108,25 @@ def resolve_config(config, overrides=None):
     A ``str`` is a path when it is one line that ends in ``.yaml``/``.yml``, names an existing
     file or holds no ``:`` (so cannot be a YAML mapping), and YAML text otherwise. Problems raise :class:`vrsweep.errors.ConfigError` with the
     messages the command line prints: ``FILE:LINE: field: ...`` for a file, ``<string>:LINE:
-    ...`` for YAML text, ``<dict>: field: ...`` for a dict, ``--set NAME=VALUE: field: ...``
-    for an override.
+    ...`` for YAML text, ``<dict>: field: ...`` for a dict, ``keyword argument NAME=VALUE: field:
+    ...`` for an override.
     """
     from vrsweep.config import Config, config_from_dict, load_config, parse_config, with_overrides
 
-    settings = tuple(setting_text(name, value) for name, value in (overrides or {}).items())
+    overrides = overrides or {}
+    settings = tuple(setting_text(name, value) for name, value in overrides.items())
+    # A problem names the keyword argument as the caller wrote it: this user never typed --set.
+    words = {text: f"keyword argument {name}={value!r}" for text, (name, value) in zip(settings, overrides.items())}
     if isinstance(config, Config):
-        return with_overrides(config, settings) if settings else config
+        return with_overrides(config, settings, override_words=words) if settings else config
     if isinstance(config, os.PathLike):
-        return load_config(os.fspath(config), settings)
+        return load_config(os.fspath(config), settings, override_words=words)
     if isinstance(config, str):
         if _looks_like_path(config):
-            return load_config(config, settings)
-        return parse_config(config, "<string>", settings)
+            return load_config(config, settings, override_words=words)
+        return parse_config(config, "<string>", settings, override_words=words)
     if isinstance(config, dict):
-        return config_from_dict(config, "<dict>", settings)
+        return config_from_dict(config, "<dict>", settings, override_words=words)
     raise UsageError.naming("{config} must be a path, YAML text, a dict or a vrsweep Config, got {kind}",
                             kind=type(config).__name__)
 
