@@ -154,6 +154,46 @@ def test_results_are_never_replaced_by_a_config_or_a_figure(tmp_path, inputs, in
     assert {path: path.read_bytes() for path in tmp_path.iterdir()} == before
 
 
+@pytest.mark.parametrize("command", [*sorted(SUFFIX), "continue"])
+@pytest.mark.parametrize("separator", ["/", "//"])
+def test_an_output_ending_in_a_slash_names_a_folder_and_is_refused(tmp_path, inputs, invoke, command, separator):
+    """`plot X.h5 -o x.png/` wrote x.png (pathlib drops the slash): a trailing slash names a folder,
+    so every command refuses it, in one line, before anything is computed or written."""
+    work = tmp_path / "work"
+    work.mkdir()
+    config = work / ("point.yaml" if command == "simulate" else "sweep.yaml")
+    shutil.copy(inputs / config.name, config)
+    result_file = work / "good.h5"
+    shutil.copy(inputs / "good.h5", result_file)
+    out = f"{work / 'out'}{SUFFIX.get(command, '.h5')}{separator}"
+    args = {"run": ["run", config, "-o", out, "-q"], "simulate": ["simulate", config, "-o", out, "-q"],
+            "merge": ["merge", result_file, "-o", out, "-q"], "plot": ["plot", result_file, "-o", out],
+            "init": ["init", out], "continue": ["continue", config, "-o", out, "-q"]}[command]
+    before = sorted(work.iterdir())
+    result = invoke(*args)
+    assert result.exit_code == 2, result.output
+    (line,) = result.output.strip().splitlines()
+    assert "ends in a slash, which names a folder" in line and out in line, line
+    assert sorted(work.iterdir()) == before
+
+
+def test_an_output_ending_in_a_slash_is_refused_in_python_and_in_a_config(tmp_path, inputs, monkeypatch):
+    import vrsweep
+    from vrsweep.config import load_config
+    from vrsweep.errors import ConfigError, UsageError
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(UsageError, match="^output o.h5/ ends in a slash, which names a folder"):
+        vrsweep.sweep(inputs / "sweep.yaml", output="o.h5/", progress=False)
+    with pytest.raises(UsageError, match="^output o.h5/ ends in a slash"):
+        vrsweep.simulate(inputs / "point.yaml", output="o.h5/")
+    config = tmp_path / "c.yaml"
+    config.write_text(CONFIG + "output: results/\n")
+    with pytest.raises(ConfigError, match="c.yaml:5: output: must name a file, got 'results/', which ends in a slash"):
+        load_config(config)
+    assert not (tmp_path / "o.h5").exists() and not (tmp_path / "results").exists()
+
+
 def test_run_never_replaces_its_own_config(tmp_path, invoke):
     config = tmp_path / "one.yaml"
     config.write_text(CONFIG)

@@ -55,8 +55,19 @@ device_option = click.option(
     help="Where the points are integrated: cpu (all cores) or cuda (an NVIDIA GPU; needs "
          "pip install \"vrsweep[cuda]\"). Overrides integration.device; the same as --set device=...",
 )
+def file_name_only(ctx, param, value):
+    """A click callback for an option that names a file to write: ``-o x.png/`` names a folder, and
+    pathlib, which every command hands the path to, would drop the slash and write ``x.png``."""
+    if value is not None:
+        from vrsweep.store.fileio import refuse_a_folder_name
+
+        with flag_wording({"output": param.opts[0]}):
+            refuse_a_folder_name(value)
+    return value
+
+
 output_option = click.option(
-    "-o", "--output", type=click.Path(dir_okay=False), default=None,
+    "-o", "--output", type=click.Path(dir_okay=False), default=None, callback=file_name_only,
     help="Output file (overrides the config's 'output').",
 )
 class FiniteFloatRange(click.FloatRange):

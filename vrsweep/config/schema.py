@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -368,6 +369,10 @@ def _check_path(value: str) -> str:
         raise PydanticCustomError("bad_path", "must be a file path, got a string containing a NUL character")
     if any("\ud800" <= char <= "\udfff" for char in value):
         raise PydanticCustomError("bad_path", "must be a file path, got a string with an unpaired surrogate")
+    if value.endswith(("/", os.sep)):  # a folder: Path() drops the slash and a file of its name was written
+        raise PydanticCustomError("bad_path", "{message}", {"message": (
+            f"must name a file, got {show(value)}, which ends in a slash (a folder): give the file's name, "
+            f"e.g. {value}{'results.h5' if value.strip('/') else ''}")})
     return value
 
 

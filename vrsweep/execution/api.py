@@ -220,10 +220,14 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
 
 def _check_path(name, value):
     """PathTypeError unless ``value`` is None or a path as str or os.PathLike giving str: before
-    anything is computed, as output=123 or output=b"o.h5" failed in pathlib, after the run."""
+    anything is computed, as output=123 or output=b"o.h5" failed in pathlib, after the run; a
+    UsageError for a str that ends in a slash (a folder's name)."""
+    from vrsweep.store.fileio import refuse_a_folder_name
+
     if value is None:
         return
     if isinstance(value, str) or (isinstance(value, os.PathLike) and isinstance(os.fspath(value), str)):
+        refuse_a_folder_name(value, name)  # "o.h5/": a folder, which pathlib would make o.h5 of
         return
     raise PathTypeError(name, value)
 

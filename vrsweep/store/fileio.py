@@ -367,6 +367,21 @@ def reserve_space(fd, length, offset=0) -> None:
 # --------------------------------------------------------------------------------------------
 
 
+def ends_in_a_folder_separator(path) -> bool:
+    """Whether ``path``, as typed, ends in ``/`` (or the system's other separator)."""
+    return isinstance(path, str) and path.endswith(tuple(sep for sep in (os.sep, os.altsep) if sep))
+
+
+def refuse_a_folder_name(path, argument="output") -> None:
+    """UsageError when ``path`` ends in a slash: it names a folder, and a file written there (as
+    pathlib, which drops the slash, would write ``x.png`` for ``x.png/``) is not what was asked.
+    Called where a path arrives as text (an option, an argument, a config's ``output``): a
+    pathlib.Path has already lost the slash. ``argument`` is worded by the caller's flags."""
+    if ends_in_a_folder_separator(path):
+        raise UsageError.naming("{" + argument + "} {path} ends in a slash, which names a folder: give the "
+                                "file's name (without the slash)", path=path)
+
+
 def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None,
                   writes=None) -> str:
     """The one rule of what vrsweep may write at an output ``path`` (run, simulate, merge, plot,
@@ -386,6 +401,7 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
     """
     import stat
 
+    refuse_a_folder_name(path)
     given = os.fspath(path)
     target = os.path.realpath(given) if os.path.islink(given) else given
     shown = given if target == given else f"{given} (a link to {target})"
