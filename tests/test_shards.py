@@ -94,6 +94,29 @@ def test_a_shard_count_below_one_is_named_as_such(text, env, count):
     assert "not in" not in str(caught.value)
 
 
+@pytest.mark.parametrize("given, shard, expected", [
+    ("out.h5", (0, 2), "out.shard0of2.h5"),
+    ("out.shard0of2.h5", (0, 2), "out.shard0of2.h5"),      # already this shard's file: kept
+    ("run.shard3of16.nc", (3, 16), "run.shard3of16.nc"),
+    ("out.shard0of2.h5", (0, 1), "out.shard0of2.h5"),      # a whole run: the name as given
+])
+def test_a_shard_output_that_names_its_shard_is_not_suffixed_again(given, shard, expected):
+    """`run --shard 0/2 -o s.shard0of2.h5` wrote s.shard0of2.shard0of2.h5."""
+    from vrsweep.execution.job import shard_output_path
+
+    assert str(shard_output_path(given, shard)) == expected
+
+
+def test_a_shard_output_that_names_another_shard_is_refused():
+    from vrsweep.execution.job import shard_output_path
+
+    with pytest.raises(UsageError, match=r"^output s.shard1of2.h5 names the file of shard 1/2, but this is shard "
+                                         r"0/2: give the run's output, s.h5"):
+        shard_output_path("s.shard1of2.h5", (0, 2))
+    with pytest.raises(UsageError, match=r"names the file of shard 0/20, but this is shard 0/2"):
+        shard_output_path("s.shard0of20.h5", (0, 2))
+
+
 # ---------------------------------------------------------------------------------------------
 # Shards end to end
 # ---------------------------------------------------------------------------------------------
@@ -243,6 +266,24 @@ def test_a_partial_merge_is_completed_by_resume(runs, tmp_path, assert_same_resu
     with h5py.File(shards[2], "r") as f:
         assert f"{int(f['owned'][()].sum())} of 14 points computed" in result.output
     assert_same_result(merged, single)
+
+
+def test_a_shard_named_as_its_own_file_runs_resumes_and_merges_there(runs, tmp_path, invoke, assert_same_result):
+    """-o OUT.shardIofN.h5 with --shard I/N (a job script naming each task's file) is that file:
+    run writes it, --resume finds it, merge takes it; a shard given another shard's name is refused."""
+    config, single, shards = runs
+    own = [tmp_path / f"map.shard{i}of{N_SHARDS}.h5" for i in range(N_SHARDS)]
+    for i, path in enumerate(own):
+        result = invoke("run", config, "-o", path, "--shard", f"{i}/{N_SHARDS}", "-q")
+        assert result.exit_code == 0, result.output
+    assert sorted(tmp_path.iterdir()) == own
+    result = invoke("run", config, "-o", own[0], "--shard", f"0/{N_SHARDS}", "--resume")
+    assert result.exit_code == 0 and "nothing left to compute" in result.output, result.output
+    result = invoke("run", config, "-o", own[0], "--shard", f"1/{N_SHARDS}")
+    assert result.exit_code == 2 and f"-o {own[0]} names the file of shard 0/{N_SHARDS}" in result.output, result.output
+    assert sorted(tmp_path.iterdir()) == own
+    assert invoke("merge", *own, "-o", tmp_path / "map.h5", "-q").exit_code == 0
+    assert_same_result(tmp_path / "map.h5", single)
 
 
 def test_a_shard_resumes_only_as_itself(runs, tmp_path, invoke):

@@ -5,6 +5,7 @@ Glue between sweep (numerics), store (HDF5) and theory (the analytic columns). T
 """
 
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -142,11 +143,29 @@ def parse_shard(text, environ=None):
     return (index, count)
 
 
+SHARD_SUFFIX = re.compile(r"\.shard(\d+)of(\d+)$")  # OUT.shardIofN.h5's, as merge reads it too
+
+
 def shard_output_path(path, shard):
+    """Shard I of N's file: OUT.shardIofN.h5 for ``-o OUT.h5``. An output that already names this
+    shard's file (``-o OUT.shard0of2.h5 --shard 0/2``, as a job script often spells it) is its file:
+    it was made OUT.shard0of2.shard0of2.h5, which neither merge's names nor --resume then found.
+    One that names another shard's file is refused: it would hold this shard's points."""
     index, count = shard
-    if count == 1:
-        return Path(path)
     path = Path(path)
+    if count == 1:
+        return path
+    given = SHARD_SUFFIX.search(path.stem)
+    if given and (int(given.group(1)), int(given.group(2))) == (index, count):
+        return path
+    if given:
+        from vrsweep.errors import UsageError
+
+        run_output = path.with_name(path.stem[:given.start()] + path.suffix)
+        raise UsageError.naming("{output} {path} names the file of shard {named}, but this is shard {this}: give "
+                                "the run's output, {run_output}, and each shard adds its own .shardIofN",
+                                path=path, named=f"{given.group(1)}/{given.group(2)}", this=f"{index}/{count}",
+                                run_output=run_output)
     return path.with_name(f"{path.stem}.shard{index}of{count}{path.suffix}")
 
 
