@@ -135,6 +135,52 @@ def test_output_directory_not_writable(tmp_path):
     assert list(locked.iterdir()) == []
 
 
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+@pytest.mark.parametrize("command", ["run", "simulate", "continue", "merge", "plot", "init"])
+def test_a_folder_no_file_can_be_created_in_is_refused_before_the_work(finished, tmp_path, invoke, command):
+    """`run -o /proc/x.h5` passed os.access (as root does everywhere; /proc says yes to anyone)
+    and failed only when creating the file, exit 1 ("cannot create ... No such file or
+    directory"); plot drew its figure first. fileio.prepare_output_directory now creates a file
+    there to know: one line, exit 2, before anything is computed or drawn."""
+    config = tmp_path / "c.yaml"
+    config.write_text(QUICKSTART.read_text() + ("continuation: {parameter: g, from: 23.0, to: [22.0, 24.0]}\n"
+                                                if command == "continue" else ""))
+    out = f"/proc/vrsweep-test-{os.getpid()}.{'png' if command == 'plot' else 'yaml' if command == 'init' else 'h5'}"
+    args = {"run": ["run", config, "-o", out, *SHORT], "simulate": ["simulate", config, "--set", "g=5", "-o", out],
+            "continue": ["continue", config, "-o", out], "merge": ["merge", finished, "-o", out],
+            "plot": ["plot", finished, "-o", out], "init": ["init", out]}[command]
+    result = invoke(*args)
+    assert result.exit_code == 2, result.output
+    (line,) = result.output.strip().splitlines()
+    assert line.startswith("Error: output directory /proc is not writable"), line
+    assert not os.path.exists(out)
+
+
+@pytest.mark.parametrize("error, refused", [(errno.EROFS, True), (errno.EACCES, True), (errno.ENOSPC, False),
+                                            (errno.EDQUOT, False)])
+def test_the_output_folder_is_judged_by_creating_a_file(tmp_path, monkeypatch, error, refused):
+    """A read-only mount (or a folder root may not write) refuses the probe: exit 2 before the
+    work. A full disk or quota does not: the write says what it needs, as before (exit 1)."""
+    from vrsweep.errors import UsageError
+    from vrsweep.store import fileio
+
+    real_open = os.open
+
+    def failing_open(path, flags, *args, **kwargs):
+        if os.path.dirname(str(path)) == str(tmp_path) and flags & os.O_CREAT:
+            raise OSError(error, os.strerror(error), path)
+        return real_open(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", failing_open)
+    if refused:
+        with pytest.raises(UsageError, match=f"is not writable: a file cannot be created there \\({os.strerror(error)}"):
+            fileio.prepare_output_directory(tmp_path / "out.h5")
+    else:
+        fileio.prepare_output_directory(tmp_path / "out.h5")
+    monkeypatch.undo()
+    assert list(tmp_path.iterdir()) == []  # the probe leaves nothing
+
+
 def test_output_that_exists_is_not_replaced(finished, tmp_path, invoke):
     out = tmp_path / "taken.h5"
     shutil.copy(finished, out)

@@ -167,7 +167,7 @@ def _output(paths, output, kind, overwrite):
     name given (a link's target may have any name), the path from fileio.output_target."""
     from vrsweep.errors import UsageError
     from vrsweep.plot.labels import made_by_vrsweep
-    from vrsweep.store.fileio import output_target
+    from vrsweep.store.fileio import output_target, prepare_output_directory
 
     given = Path(output) if output else default_output(paths[0], kind)
     if given.suffix.lower() not in FORMATS:
@@ -182,6 +182,10 @@ def _output(paths, output, kind, overwrite):
     if os.path.exists(target) and not overwrite and not made_by_vrsweep(target):
         raise UsageError(f"{option}{shown} already exists and is not a figure vrsweep wrote: pass --overwrite "
                          "to replace it, or choose another output with -o")
+    # Before drawing: a folder no file can be written in is known now. A missing one is made only
+    # when the figure is written, so that a plot refused for its inputs leaves no folder behind.
+    if os.path.isdir(os.path.dirname(os.path.abspath(target))):
+        prepare_output_directory(target)
     return Path(target), given.suffix.lower()[1:]
 
 

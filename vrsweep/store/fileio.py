@@ -458,6 +458,32 @@ def prepare_output_directory(path) -> None:
         notice(f"Created the output folder {directory}")
     if not os.access(directory, os.W_OK | os.X_OK):
         raise UsageError(f"output directory {directory} is not writable (output: {path})")
+    _probe_directory(directory, path)
+
+
+# Why a folder cannot hold a new file at all, whoever asks; a full disk or quota is not among them:
+# the write then says what it needs (write_failure), exit 1, as for a file that stops growing.
+_UNWRITABLE_FOLDER = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOENT, errno.ENOTDIR}
+
+
+def _probe_directory(directory, path) -> None:
+    """Create and remove an empty file in ``directory``: os.access answers from permission bits,
+    which root passes everywhere, and says yes to /proc, /sys and a read-only mount, where a run
+    then computed its first chunk (a figure was drawn) before failing, exit 1. The probe is named
+    as a temporary file is, so a kill between its two steps leaves what the next write removes."""
+    probe = temporary_path(path)
+    try:
+        fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except OSError as error:
+        if error.errno not in _UNWRITABLE_FOLDER:
+            return
+        raise UsageError(f"output directory {directory} is not writable: a file cannot be created there "
+                         f"({error.strerror or error}; output: {path})") from None
+    os.close(fd)
+    try:
+        os.remove(probe)
+    except OSError:
+        pass
 
 
 _HOST = re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname().split(".")[0]) or "host"
