@@ -196,3 +196,23 @@ def test_numba_disable_jit_runs_in_python_without_a_traceback(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "Traceback" not in result.stderr and "Compiling" not in result.stderr
     assert "1 of 1 points computed (1 ok)" in result.stderr
+
+
+def test_numba_disable_jit_on_the_gpu_is_one_line_not_a_traceback(tmp_path):
+    """No CPU command imports numerics/cuda.py; `run --device cuda` does, and with the JIT off it
+    ended in a traceback (cuda.py reads the CPU kernel's py_func when imported): the GPU's kernel
+    needs numba's compiler, so the run is refused in one line, exit 2, before any file exists.
+    numba's CUDA simulator stands in for the card."""
+    pytest.importorskip("numba_cuda")
+    config = tmp_path / "two.yaml"
+    config.write_text("model: effective\nsweep:\n  g: [5, 10]\n"
+                      "integration: {transient_periods: 0, measure_periods: 1, strobe_periods: 1}\n")
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "NUMBA_ENABLE_CUDASIM": "1",
+           "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    result = subprocess.run([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(tmp_path / "two.h5"),
+                             "--device", "cuda"], capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "Error: integration.device: cuda: NUMBA_DISABLE_JIT=1 turns numba's compiler off, and the GPU's kernel "
+        "is compiled by it: unset it, or run on the cpu"], result.stderr
+    assert not (tmp_path / "two.h5").exists()

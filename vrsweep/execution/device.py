@@ -16,6 +16,13 @@ INSTALL_HINT = 'pip install "vrsweep[cuda]"'
 def cuda_problem() -> str | None:
     """Why a sweep cannot run on a CUDA GPU here, or None if it can: numba-cuda missing, no driver,
     no GPU (numba's CUDA simulator, NUMBA_ENABLE_CUDASIM=1, counts as a GPU: tests)."""
+    import numba
+
+    # numerics/cuda.py builds the GPU's kernels from the CPU kernel's compiled functions (their
+    # py_func), which NUMBA_DISABLE_JIT=1 leaves as plain functions: importing it was a traceback.
+    if numba.config.DISABLE_JIT:
+        return ("NUMBA_DISABLE_JIT=1 turns numba's compiler off, and the GPU's kernel is compiled by it: "
+                "unset it, or run on the cpu")
     try:
         from numba import cuda
     except ImportError as error:  # numba without its CUDA target
