@@ -492,6 +492,28 @@ def test_the_bifurcation_diagram_of_a_written_model_draws_its_barrier_where_it_i
     np.testing.assert_allclose(barrier.get_xdata(), [0.2, 1.0, 2.0])
 
 
+def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
+    """`plot MAP.h5` (and `plot MAP.h5 CURVES.h5`) of a written model's sweep over two axes drew the
+    paper's g_res(Omega) contour from its nine parameters: KeyError: 'alpha', a traceback."""
+    import vrsweep
+    from vrsweep import plot
+
+    text = (EXAMPLES / "impact_linear.yaml").read_text()
+    text = text.replace("omega: {start: 0.4, stop: 1.6, num: 61}",
+                        "omega: [0.6, 0.8, 1.0]\n  F: [0.5, 1.0]")
+    text = text.replace("transient_periods: 200", "transient_periods: 4").replace(
+        "measure_periods: 100", "measure_periods: 16")
+    config = tmp_path / "map.yaml"
+    config.write_text(text)
+    output = tmp_path / "map.h5"
+    vrsweep.sweep(str(config), output=str(output))
+    result = CliRunner().invoke(main, ["plot", str(output), "--kind", "map", "-o", str(tmp_path / "m.png")])
+    assert result.exit_code == 0, result.output
+    with vrsweep.open_results(output) as ds:
+        figure = plot.map_figure(ds, "R")
+    assert not any("g_{res}" in str(handle.get_label()) for handle in figure.axes[0].get_legend_handles_labels()[0])
+
+
 def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names(tmp_path):
     """A branch figure labelled a written model's parameters as the paper's: the axis of a branch in
     D read 'D D' and a parameter named c was set as the paper's $c$. No kernel: orbits by hand."""

@@ -112,10 +112,11 @@ def _resonance_label(axis, position):
 
 
 def _draw_resonance_curve(ax, view, x_axis, y_axis):
-    """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega)."""
+    """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega); none for a
+    written model (the paper's theory is its own system's only: its nine parameters may be absent)."""
     from vrsweep.analysis import theory
 
-    if view.config is None:
+    if view.config is None or view.config.written:
         return None
     xs = np.linspace(*_limits(view.axes[x_axis]), 400)
     ys = np.linspace(*_limits(view.axes[y_axis]), 400)
