@@ -152,6 +152,20 @@ def test_a_changed_kind_or_format_is_called_corrupt(files, tmp_path, invoke, kin
     assert result.exit_code == 2 and len(lines) == 1 and "corrupt" in lines[0], result.output
 
 
+@pytest.mark.parametrize("how", ["append", "replace", "empty"])
+def test_resume_of_a_file_whose_version_was_changed_calls_it_corrupt(files, tmp_path, invoke, how):
+    """--resume reads vrsweep_version before the checksum, to refuse results of older steps:
+    hypothesis (fresh draws) found an emptied version refused as "written by vrsweep , whose points
+    differ", without a word of damage."""
+    copy = _edited_copy(files["sweep"], tmp_path, "", "vrsweep_version", how)
+    before = copy.read_bytes()
+    result = invoke("run", files["config"], "-o", copy, "--resume", "-q")
+    lines = result.output.strip().splitlines()
+    assert result.exit_code == 2 and len(lines) == 1 and "corrupt" in lines[0], result.output
+    assert "vrsweep ," not in lines[0], lines[0]
+    assert copy.read_bytes() == before
+
+
 def test_the_issues_example_gamma_in_the_stored_config(files, tmp_path, invoke):
     copy = tmp_path / "sweep.h5"
     shutil.copy(files["sweep"], copy)

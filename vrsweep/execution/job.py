@@ -394,6 +394,7 @@ def _refuse_results_of_older_steps(path):
     from vrsweep.errors import ResultFileError
     from vrsweep.store.fileio import open_hdf5
     from vrsweep.store.provenance import RESULTS_CHANGE, RESULTS_SINCE_VERSION, same_results_as_now
+    from vrsweep.store.sealing import unless_changed
     from vrsweep.store.writer import ARGUMENT_WORDS
 
     try:
@@ -401,18 +402,20 @@ def _refuse_results_of_older_steps(path):
             if "vrsweep_format_version" not in h5file.attrs:
                 return  # not a vrsweep file: the writer says so
             written_by = h5file.attrs.get("vrsweep_version")
+            if isinstance(written_by, bytes):
+                written_by = written_by.decode("utf-8", errors="replace")
+            if same_results_as_now(written_by):
+                return
+            # The version is read before the attributes' checksum: an edited or damaged one says so.
+            changed = unless_changed(h5file, path)
     except Exception:  # noqa: BLE001 -- any failure here is reported by open_for_resume itself
-        return
-    if isinstance(written_by, bytes):
-        written_by = written_by.decode("utf-8", errors="replace")
-    if same_results_as_now(written_by):
         return
     raise ResultFileError.naming(
         "cannot resume: {path} was written by vrsweep {written_by}, whose points differ from those of "
         "vrsweep {version} ({change} since {since}), so the two "
-        "cannot share a file; pass {overwrite} to compute it afresh", ARGUMENT_WORDS, path=path,
-        written_by=written_by if written_by is not None else "(unknown version)", version=__version__,
-        since=RESULTS_SINCE_VERSION, change=RESULTS_CHANGE)
+        "cannot share a file; pass {overwrite} to compute it afresh{changed}", ARGUMENT_WORDS, path=path,
+        written_by=written_by or "(unknown version)", version=__version__,
+        since=RESULTS_SINCE_VERSION, change=RESULTS_CHANGE, changed=changed)
 
 
 def _expected_config_text(path, config):
