@@ -579,3 +579,34 @@ def test_a_written_models_trajectory_file_names_its_own_barrier_and_period(tmp_p
         assert group["impact_t"].attrs["long_name"] == "time of the impact at a barrier"
         assert "2 pi/omega" not in group["period"].attrs["long_name"]
         assert "slow" not in group["impacts_per_period"].attrs["long_name"]
+
+
+def test_no_period_doubling_is_reported_where_a_graze_makes_the_multipliers_jump(tmp_path):
+    """A Duffing oscillator with a stop (the shipped example without its second force), continued in
+    omega through its graze at 1.19345: the free orbit's multipliers 0.57 +- 0.64i jump to -10.9
+    beyond, so det(M + I) changes sign across the step, and a 'period doubling' was located at
+    omega = 1.1933562 with no multiplier near -1 (an independent SciPy map agreed: none). Every
+    fold and period doubling in the file has its multiplier at +1 or -1."""
+    import h5py
+
+    text = (EXAMPLES / "impact_duffing_two_forces.yaml").read_text()
+    text = text.replace("{zeta: 0.05, beta: 0.5, F1: 0.6, F2: 0.3, omega: 1.1, phi: 0.0, Delta: 0.8, r: 0.85}",
+                        "{zeta: 0.03, beta: 0.3, F1: 0.25, F2: 0.0, omega: 1.0, phi: 0.0, Delta: 1.6, r: 0.7}")
+    text = text.split("sweep:")[0] + ("integration: {rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 300}\n"
+                                      "continuation: {parameter: omega, from: 0.6, to: [0.5, 2.2], max_step: 0.05}\n")
+    config = tmp_path / "duffing.yaml"
+    config.write_text(text)
+    branch = tmp_path / "branch.h5"
+    result = CliRunner().invoke(main, ["continue", str(config), "-o", str(branch)])
+    assert result.exit_code == 0, result.output
+    with h5py.File(branch, "r") as f:
+        kinds = [k.decode() if isinstance(k, bytes) else str(k) for k in f["bifurcation_kind"][()]]
+        where = f["bifurcation_parameter"][()]
+        mu = f["bifurcation_multiplier_real"][()] + 1j * f["bifurcation_multiplier_imag"][()]
+    assert abs(where[kinds.index("grazing")] - 1.1934525) < 1e-6
+    doublings = where[np.array(kinds) == "period_doubling"]
+    assert len(doublings) == 1 and abs(doublings[0] - 1.2371) < 1e-3, (kinds, where)  # the genuine one stays
+    assert kinds.count("fold") == 2, kinds
+    for kind, multipliers in zip(kinds, mu):
+        if kind in ("fold", "period_doubling"):
+            assert np.min(np.abs(multipliers - (1.0 if kind == "fold" else -1.0))) < 1e-3, (kind, multipliers)

@@ -342,6 +342,10 @@ def _torus_test(orbit):
 
 
 TEST_FUNCTIONS = {"fold": _fold_test, "period_doubling": _doubling_test, "neimark_sacker": _torus_test}
+# How near its critical value (+1, -1, the unit circle) a multiplier of a located fold, period
+# doubling or Neimark-Sacker point must be where the arc crosses a graze (_detect). A genuine one,
+# located to location_tolerance, is far nearer (the coarsest of Fig. 1's cascade: -1.009).
+CRITICAL_DISTANCE = 0.1
 
 
 def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, illinois=True):
@@ -404,15 +408,32 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
     return locate_on_arc(point_at, TEST_FUNCTIONS[kind], step, value_start, value_end, narrow, 60)
 
 
+def _is_critical(kind, orbit):
+    """Whether a located fold, period doubling or Neimark-Sacker point has its multiplier at the
+    critical value, to CRITICAL_DISTANCE: a real one at +1, a real one at -1, a complex pair on
+    the unit circle."""
+    mu = orbit.multipliers
+    real = np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))
+    if kind == "fold":
+        return bool(np.any(real & (np.abs(mu - 1.0) < CRITICAL_DISTANCE)))
+    if kind == "period_doubling":
+        return bool(np.any(real & (np.abs(mu + 1.0) < CRITICAL_DISTANCE)))
+    return bool(not real[0] and abs(abs(mu[0]) - 1.0) < CRITICAL_DISTANCE)
+
+
 def _detect(problem, previous, current, tangent, step, periods, graze=None):
     """Bifurcations on the arc between two consecutive orbits: a list of (kind, Orbit).
     graze: the graze between them that _graze_between located, if any."""
     found = []
+    # Across a graze the test functions jump with the multipliers (a free orbit's 0.57 +- 0.64i to
+    # an impacting one's -10.9): a sign change there may be the jump, which regula falsi brackets
+    # as if it were a root. What it locates is a bifurcation only if a multiplier is critical there.
+    crosses_graze = graze is not None or previous.impacts_per_period != current.impacts_per_period
     for kind, test in TEST_FUNCTIONS.items():
         a, b = test(previous), test(current)
         if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
             orbit = _locate(problem, previous, tangent, step, kind, a, b, periods)
-            if orbit is not None:
+            if orbit is not None and (not crosses_graze or _is_critical(kind, orbit)):
                 found.append((kind, orbit))
     if graze is not None:
         found.append(("grazing", _graze_orbit(problem, graze)))
