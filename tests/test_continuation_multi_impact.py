@@ -281,3 +281,28 @@ def test_a_transparent_window_removes_the_impacts_inside_it_and_no_other():
     assert elsewhere.impacts == 1
     assert np.max(np.abs(elsewhere.end_state - real.end_state)) < 1e-9
     assert elsewhere.window_x_max < parameters["Delta"]
+
+
+def test_past_a_graze_the_branch_goes_back_over_its_parameter_on_its_own_orbits():
+    """Fig. 1's period-1 branch gains a sixth impact at the graze g* = 39.844991; beyond it the
+    6-impact orbits turn back to lower g, 0.02 to 0.06 from the grazing orbit in state. A step on
+    them over g* was refused as a jump onto another branch (the rule for a step from next to a
+    graze), again and again: the branch ended "keeps jumping to another branch" at g*. Now it goes
+    on below g*, and SciPy confirms its orbits there: six impacts a period, a fixed point."""
+    problem = continuation.ContinuationProblem(dict(FIG1, g=39.8), "original", "g",
+                                               settings_vector(rtol=1e-10, atol=1e-12), "rk45",
+                                               dict(continuation.DEFAULTS, max_step=0.5))
+    start = continuation.find_start(problem, [-3.2054, 2.8920], 39.8, 20, 8)  # on the branch from g = 30
+    assert start.periods == 1 and start.impacts_per_period == 5
+    orbits, found, end = continuation.follow(problem, start, +1, 39.7, 40.0, 40)
+    grazes = [orbit.parameter for kind, orbit in found if kind == "grazing"]
+    assert any(abs(g - 39.844991) < 1e-5 for g in grazes), grazes
+    assert "jumping" not in str(end), end
+    below = [o for o in orbits if o.impacts_per_period == 6 and o.parameter < 39.844991 - 1e-4]
+    assert below, [(o.parameter, o.impacts_per_period) for o in orbits]
+    for orbit in below[:1] + below[-1:]:
+        run = reference_trajectory(_coefficients(orbit.parameter), orbit.state[0], orbit.state[1], SLOW_PERIOD,
+                                   rtol=1e-12, atol=1e-14, max_step=_resolving_step(orbit))
+        assert _impacts(run) == 6
+        end_state = np.array([run["x_final"], run["v_final"]])
+        assert np.max(np.abs(end_state - orbit.state)) < 1e-6 * max(1.0, np.max(np.abs(orbit.state)))

@@ -529,7 +529,10 @@ def _graze_between(problem, previous, current, before=None, memo=None):
             memo.update(graze=located, impacts=previous.impacts_per_period)
         passed = located is not None and (located.z[2] - previous.parameter) * (
             current.parameter - located.z[2]) > 0.0
-        return None, passed
+        # Passing the graze's parameter is a jump only where the step passes by the grazing orbit
+        # itself: an orbit far from it (0.05 in state beyond Fig. 1's g = 39.844991, after a fold)
+        # may cross that parameter value on its own branch, with the same impacts.
+        return None, passed and _passes_near(located.z, previous.z, current.z)
     free_side, impacting_side = sorted((previous, current), key=lambda orbit: orbit.impacts_per_period)
     if round((impacting_side.impacts_per_period - free_side.impacts_per_period) * free_side.periods) > 1:
         return None, True
@@ -542,6 +545,15 @@ def _graze_between(problem, previous, current, before=None, memo=None):
                                <= max(previous.parameter, current.parameter)):
         return None, True
     return located, False
+
+
+def _passes_near(point, start, end):
+    """Whether ``point`` lies within one step length |end - start| of the segment from ``start`` to
+    ``end`` (in z = x, v, parameter): a step that long could have passed by it."""
+    segment = end - start
+    length = np.linalg.norm(segment)
+    along = 0.0 if length == 0.0 else float(np.clip((point - start) @ segment / length ** 2, 0.0, 1.0))
+    return np.linalg.norm(point - (start + along * segment)) <= length
 
 
 def _new_impact_window(problem, free_side, impacting_side):
