@@ -610,3 +610,32 @@ def test_no_period_doubling_is_reported_where_a_graze_makes_the_multipliers_jump
     for kind, multipliers in zip(kinds, mu):
         if kind in ("fold", "period_doubling"):
             assert np.min(np.abs(multipliers - (1.0 if kind == "fold" else -1.0))) < 1e-3, (kind, multipliers)
+
+
+def test_a_branch_ending_where_an_impact_reaches_the_section_says_so(tmp_path):
+    """The linear impact oscillator's orbit continued in the forcing's phase phi: the phase moves
+    the section t = 0 mod pT along the orbit, and at phi = 5.9574 its impact lands on the section,
+    where the section's point jumps from before the impact (x = Delta, v = 2.577) to after it. The
+    branch ended 'integration stopped: step_too_small', blaming the integrator; the end now says
+    where and why."""
+    import h5py
+
+    text = (EXAMPLES / "impact_linear.yaml").read_text().replace("Delta: 1.2", "Delta: 2.3")
+    # The period-2 orbit in the phase whose impact reaches the section (the other phase's does at
+    # phi 2 pi further on): started next to the state just before that impact.
+    text = text.replace("initial: {x: 0.0, v: 0.0}", "initial: {x: 2.29, v: 2.58}")
+    text = text.split("sweep:")[0] + ("integration: {rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 200}\n"
+                                      "continuation: {parameter: phi, from: 5.9, to: [5.8, 6.2], max_step: 0.05}\n")
+    config = tmp_path / "phase.yaml"
+    config.write_text(text)
+    branch = tmp_path / "branch.h5"
+    result = CliRunner().invoke(main, ["continue", str(config), "-o", str(branch)])
+    assert result.exit_code == 0, result.output
+    with h5py.File(branch, "r") as f:
+        reasons = [r.decode() if isinstance(r, bytes) else str(r) for r in f["branch_end_last_status"][()]] + \
+                  [r.decode() if isinstance(r, bytes) else str(r) for r in f["branch_end_last_reason"][()]]
+        x, phi = f["x"][()], f["parameter"][()]
+    reason = reasons[-1]
+    assert "an impact lies on the stroboscopic section" in reason and "the barrier at 2.3" in reason, reasons
+    assert abs(phi.max() - 5.9574) < 1e-3 and abs(x[np.argmax(phi)] - 2.3) < 1e-4
+    assert reasons[0] == "integration_failed" and "phi = 5.957" in reason

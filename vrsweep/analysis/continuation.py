@@ -50,7 +50,7 @@ from vrsweep.analysis.commensurate import RATIO_TOLERANCE, check_commensurate  #
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
-from vrsweep.numerics.coefficients import PERIOD, grazing_barrier
+from vrsweep.numerics.coefficients import N_BARRIERS, PERIOD, barrier_position, grazing_barrier
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
@@ -654,7 +654,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                               f"{grazing_reason or 'no branch beyond the graze was found'}")
                     return orbits, bifurcations, (ENDED_GRAZING, reason)
                 status, reason = failure or (ENDED_NEWTON, "the corrector keeps jumping to another branch")
-                reason = f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
+                reason = (f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
+                          f"{_section_note(problem, current)}")
                 return orbits, bifurcations, (status, reason)
         else:
             located, jumped = _graze_between(problem, current, orbit, before, memo)
@@ -873,6 +874,9 @@ GRAZING_PROXIMITY = 1e-3
 # jump to another branch, _graze_between) when its first orbit is this close to one: ten times
 # GRAZING_PROXIMITY, as steps near such orbits are still up to 1e-2 long in g (Fig. 1's g = 17.79).
 JUMP_PROXIMITY = 1e-2
+# An orbit's x at the section this near a barrier (relative to max(1, |position|)) has its impact
+# on the section, for _section_note: the last orbits before such an end lie within 1e-5.
+SECTION_PROXIMITY = 1e-4
 # A step whose R leaves the secant of the last two points by this much (relative to max(1, |R|)) is
 # retried at half the length (_bends): smooth stretches of a branch leave it by ~(step/radius)^2.
 BEND_TOLERANCE = 0.1
@@ -881,6 +885,22 @@ BEND_TOLERANCE = 0.1
 CROSSING_DISTANCES = (1.0, 0.25, 0.0625, 0.015625)
 # Radii (in (x, v, parameter)) of the spheres of predictors searched for the branch beyond a graze.
 GRAZING_SEARCH_RADII = (1e-3, 4e-3, 1.6e-2)
+
+
+def _section_note(problem, orbit):
+    """What a branch's end adds when its last orbit sits on a barrier at the stroboscopic section:
+    an impact at t = 0 mod pT, where the section's fixed point jumps from the state before the
+    impact to the state after it (x = Delta, v -> -e v). The branch cannot be followed through
+    that jump in this section; the orbit itself goes on (a sweep shows it)."""
+    coefficients = problem.coefficients(orbit.parameter)
+    for barrier in range(int(coefficients[N_BARRIERS])):
+        position = float(barrier_position(coefficients, barrier))
+        if abs(orbit.state[0] - position) <= SECTION_PROXIMITY * max(1.0, abs(position)):
+            return (f"; there an impact lies on the stroboscopic section t = 0 mod pT (x = {orbit.state[0]:.8g}, "
+                    f"the barrier at {position:.8g}), where the section's point jumps from before the impact "
+                    "to after it: the branch cannot follow the orbit through (docs/continuation.md, "
+                    "\"An impact at the section\")")
+    return ""
 
 
 def _barrier(problem, orbit):
