@@ -511,7 +511,13 @@ def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
     assert result.exit_code == 0, result.output
     with vrsweep.open_results(output) as ds:
         figure = plot.map_figure(ds, "R")
+        counts = plot.map_figure(ds, "impacts_per_period")
     assert not any("g_{res}" in str(handle.get_label()) for handle in figure.axes[0].get_legend_handles_labels()[0])
+    # Its own response and period, not the paper's |Q|/c and slow period 2 pi/omega.
+    labels = [ax.get_ylabel() for ax in figure.axes] + [ax.get_ylabel() for ax in counts.axes]
+    assert any(label.startswith("gain $R = |Q|$ / F") for label in labels), labels
+    assert any(label.startswith("mean impacts per period $T$") for label in labels), labels
+    assert not any("c$" in label or "slow" in label for label in labels), labels
 
 
 def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names(tmp_path):

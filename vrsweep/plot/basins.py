@@ -12,7 +12,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width
+from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
@@ -208,7 +208,7 @@ def _basin_handle(view, label, colour):
     else:
         kind = "no period (chaotic, quasi-periodic or unsettled)"
         per_period = float(np.asarray(view.variables.get("attractor_impacts_per_period", [np.nan] * (label + 1)))[label])
-        hits = f"{per_period:.3g} impacts per slow period"
+        hits = f"{per_period:.3g} impacts per {period_words(symbol=False)}"
     text = f"{label}: {kind}, R = {R:.4g}, {hits}, {100 * fraction:.1f}%"
     return Line2D([], [], marker="s", ls="", color=colour, markersize=9, label=text)
 

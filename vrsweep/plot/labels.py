@@ -70,6 +70,19 @@ def use_model(model):
     _WRITTEN_MODEL.set(None if isinstance(model, str) or model is None else model)
 
 
+def written_model():
+    """The written model being drawn (``use_model``), or None for the paper's."""
+    return _WRITTEN_MODEL.get()
+
+
+def period_words(symbol=True) -> str:
+    """The period a count or a sample is per: the paper's slow period 2 pi/omega, or a written
+    model's own period T."""
+    if _WRITTEN_MODEL.get() is not None:
+        return "period $T$" if symbol else "period"
+    return "slow period $2\\pi/\\omega$" if symbol else "slow period"
+
+
 def _written_symbol(name):
     model = _WRITTEN_MODEL.get()
     if model is None or name not in model.parameter_names:
@@ -146,10 +159,12 @@ def _parse_config(text):
     from vrsweep.errors import ConfigError
 
     if not text:
+        use_model(None)  # no model known: the paper's words, not the last file's model
         return None
     try:
         config = parse_config(text, "<stored config>")
     except ConfigError:
+        use_model(None)
         return None
     use_model(config.model)  # a written model's parameters are labelled by its own symbols
     return config

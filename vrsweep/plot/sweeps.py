@@ -18,6 +18,7 @@ from vrsweep.plot.labels import (
     parameter_symbol,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
     _caption, _legend_columns, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
+    period_words, written_model,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
@@ -301,9 +302,19 @@ def variable_figure(ds, name, x_axis=None, log=None) -> Figure:
     return fig
 
 
+def _map_words(name):
+    """MAP_LABELS' words for ``name``, in a written model's own terms where the paper's differ."""
+    model = written_model()
+    if model is not None and name == "R":
+        return f"gain $R = |Q|$ / {model.response_scale}"
+    if name == "impacts_per_period":
+        return f"mean impacts per {period_words()}"
+    return MAP_LABELS.get(name)
+
+
 def _line_label(ds, name):
     """A variable's axis label: its name and the long name up to its first parenthesis, units."""
-    words = MAP_LABELS.get(name)
+    words = _map_words(name)
     if words is None:
         long_name = str(ds[name].attrs.get("long_name", "")).split(" (")[0]
         words = f"{name}: {long_name}" if long_name else name
@@ -349,7 +360,7 @@ def _variable_label(ds, name):
     """The colour bar's label: what the variable is and its units, from the file's attributes
     (dimensionless units are not shown)."""
     attrs = ds[name].attrs
-    words = MAP_LABELS.get(name)
+    words = _map_words(name)
     if words is None:
         long_name = str(attrs.get("long_name", ""))
         words = name if not long_name or len(long_name) > LONG_NAME_IN_LABEL else f"{name}: {long_name}"
@@ -660,7 +671,7 @@ def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ls="none",
                 label="integration failed (no count)")
     ax.set_xlabel(parameter_label(x_axis))
-    ax.set_ylabel(f"mean impacts per slow period $2\\pi/\\omega$")
+    ax.set_ylabel(f"mean impacts per {period_words()}")
     if log:
         ax.set_yscale("symlog", linthresh=1.0)  # zero counts stay on the axis
         ax.set_ylim(-0.1, max(2.0, 1.5 * top))
@@ -671,7 +682,7 @@ def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small", loc="best")
     notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
-    _title(fig, f"Impacts per slow period against {parameter_symbol(x_axis)} "
+    _title(fig, f"Impacts per {period_words(symbol=False)} against {parameter_symbol(x_axis)} "
                 "(mean over the measurement window)",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
@@ -774,7 +785,7 @@ def bifurcation_figure(ds, x_axis=None) -> Figure:
     failure_note = _draw_bifurcation(ax, view, x_axis)
     ax.set_xlabel(parameter_label(x_axis))
     notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
-    _title(fig, "Bifurcation diagram: x sampled once per slow period against "
+    _title(fig, f"Bifurcation diagram: x sampled once per {period_words(symbol=False)} against "
                 f"{parameter_symbol(x_axis)} "
                 "(one dot per period: a period-p orbit shows p dots)",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))

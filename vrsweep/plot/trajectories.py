@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
 from vrsweep.plot.analytic import barrier_positions
-from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _title, _width
+from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _title, _width, period_words
 from vrsweep.results import Status
 
 
@@ -162,7 +162,7 @@ def trajectory_figure(data, periods=None) -> Figure:
         ax_phase.set_ylabel(f"velocity $\\dot{{x}}$")
     samples = data.attrs.get("samples_per_period", "?")
     _title(fig, f"Trajectory at {_point_text(config)}, {_window_text(window, data)}: position, velocity, "
-                f"phase portrait ({samples} dense-output samples per slow period, impacts exact; dashed: barrier)",
+                f"phase portrait ({samples} dense-output samples per {period_words(symbol=False)}, impacts exact; dashed: barrier)",
            _caption(data.path or "", config, " and ".join(ROW_TITLES.get(m, m) for m in data.runs),
                     width=_width(fig)))
     return fig
@@ -195,8 +195,8 @@ def impacts_per_period_figure(datasets) -> Figure:
                           label=f"mean over the measured periods: {mean:.2f}")
         letter = f"({'abcdefgh'[k]}) " if len(datasets) > 1 else ""
         ax.set_title(f"{letter}{_point_text(config)}  ·  {os.path.basename(data.path or '')}  ·  "
-                     f"{int(counts.sum())} impacts in {len(counts)} slow periods", fontsize="small")
-        ax.set_ylabel(f"impacts per slow period")
+                     f"{int(counts.sum())} impacts in {len(counts)} {period_words(symbol=False)}s", fontsize="small")
+        ax.set_ylabel(f"impacts per {period_words(symbol=False)}")
         top = max(1.0, float(counts.max(initial=0)))
         ax.set_ylim(-0.06 * top, 1.08 * top)  # room for the markers of 0 and of the largest count
         ax.yaxis.set_major_locator(MaxNLocator(integer=True))
