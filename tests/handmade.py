@@ -70,3 +70,23 @@ def write_cascade_branch_file(path, bifurcations=CASCADE):
     branch_file.write_branch(path, branch_file.branch_arrays(branches, found, 1.0),
                              config_from_dict(CASCADE_CONFIG), "rk45")
     return path
+
+
+def write_grazing_branch_file(path, impacts_change=True):
+    """Nine orbits in g from 22 to 26, like impact_linear's: free and unstable below a graze at
+    24.25, the larger multiplier growing to 27 next to it (1/speed of the new impact), impacting
+    and stable above it (0.68, 0.68). ``impacts_change`` False: the impact count stored is the same
+    on both sides, so only the graze's record says where it is."""
+    orbits = []
+    for g in np.linspace(22.0, 26.0, 9):
+        free = g < 24.25
+        orbits.append(Orbit(parameter=g, state=np.array([0.1 * g, -0.2]), periods=1,
+                            monodromy=np.diag([3.0 + 10.0 * (g - 22.0), 0.02]) if free else np.diag([0.68, 0.68]),
+                            R=10.0 + g, Q_amplitude=0.4, impacts_per_period=0.0 if free or not impacts_change else 1.0,
+                            x_max=0.8, slowest_impact=np.inf if free else 0.1, residual=1e-11, newton_iterations=2))
+    graze = Orbit(**{**orbits[4].__dict__, "parameter": 24.25, "R": 34.25})
+    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "g left [21, 27]"),
+                                                       "up": ("left_range", "g left [21, 27]")})]
+    branch_file.write_branch(path, branch_file.branch_arrays(branches, [Bifurcation("grazing", graze)], 1.0),
+                             config_from_dict(CONFIG), "rk45")
+    return path

@@ -32,13 +32,44 @@ def is_branch(data) -> bool:
     return hasattr(data, "attrs") and data.attrs.get("vrsweep_file") == "branch"
 
 
-def _runs(values, stable):
-    """Index ranges of equal stability; each run shares its last point with the next one."""
+def _runs(values, stable, breaks=None):
+    """Index ranges of equal stability; each run shares its last point with the next one, except
+    across a break (``breaks[i]``: points i and i + 1 are not to be joined)."""
     start = 0
     for end in range(1, len(values) + 1):
-        if end == len(values) or stable[end] != stable[start]:
-            yield slice(start, min(end + 1, len(values))), bool(stable[start])
+        broken = end < len(values) and breaks is not None and breaks[end - 1]
+        if end == len(values) or broken or stable[end] != stable[start]:
+            yield slice(start, end if broken else min(end + 1, len(values))), bool(stable[start])
             start = end
+
+
+GRAZE_MATCH = 0.05  # a graze's R within this share of the branch's R span of a segment's: the segment it lies on
+
+
+def _multiplier_breaks(values, gain, impacts, grazes):
+    """breaks[i]: points i and i + 1 of one branch lie on either side of a graze or of a change of
+    impacts_per_period. The multipliers jump there (through the saltation matrix, e.g. 27 to 0.68
+    on impact_linear): a line between them would draw a continuity there is none of. ``grazes``:
+    (parameter, R) of the grazes located on this branch."""
+    breaks = np.zeros(max(len(values) - 1, 0), dtype=bool)
+    if impacts is not None:
+        with np.errstate(invalid="ignore"):
+            breaks |= impacts[1:] != impacts[:-1]
+    span = float(np.nanmax(gain) - np.nanmin(gain)) if len(gain) else 0.0
+    for at, R in grazes:
+        # The segment that brackets the graze in the parameter, and nearest it in R: a branch that
+        # turns back brackets one parameter several times (a fold, the other side of an S).
+        lows, highs = np.minimum(values[:-1], values[1:]), np.maximum(values[:-1], values[1:])
+        candidates = np.nonzero((lows <= at) & (at <= highs))[0]
+        if candidates.size == 0 or not np.isfinite(R):
+            continue
+        step = values[candidates + 1] - values[candidates]
+        share = np.divide(at - values[candidates], step, out=np.zeros_like(step), where=step != 0)
+        between = gain[candidates] + share * (gain[candidates + 1] - gain[candidates])
+        nearest = int(np.argmin(np.abs(between - R)))
+        if abs(between[nearest] - R) <= GRAZE_MATCH * max(span, 1e-12):
+            breaks[candidates[nearest]] = True
+    return breaks
 
 
 def _stored_parameters(ds):
@@ -167,6 +198,15 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
     # One number per (file, branch): the branches of every file in turn.
     offsets = np.cumsum([0] + [len(d["branch_id"]) for d in datasets[:-1]])
     branch = np.concatenate([np.asarray(d["branch"].values) + offset for d, offset in zip(datasets, offsets)])
+    impacts = np.concatenate([np.asarray(d["impacts_per_period"].values, dtype=float) if "impacts_per_period" in d
+                              else np.full(len(d["parameter"]), np.nan) for d in datasets])
+    # The grazes of each (file, branch): where the multipliers are not joined.
+    grazes = {}
+    for d, offset in zip(datasets, offsets):
+        for kind, at, R, number in zip(d["bifurcation_kind"].values, d["bifurcation_parameter"].values,
+                                       d["bifurcation_R"].values, d["bifurcation_branch"].values):
+            if _text(kind) == "grazing":
+                grazes.setdefault(int(number) + int(offset), []).append((float(at), float(R)))
     colours = _period_colours(periods)
     if config is not None and config.model == "effective" and values.size:
         low, high = values.min(), values.max()
@@ -180,6 +220,10 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
         for piece, is_stable in _runs(values[mine], stable[mine]):
             style = "-" if is_stable else "--"
             top.plot(values[mine][piece], gain[mine][piece], color=colour, ls=style, lw=1.8, zorder=3)
+        # R is continuous through a graze; the multipliers are not.
+        breaks = _multiplier_breaks(values[mine], gain[mine], impacts[mine], grazes.get(int(number), []))
+        for piece, is_stable in _runs(values[mine], stable[mine], breaks):
+            style = "-" if is_stable else "--"
             for k in range(2):
                 bottom.plot(values[mine][piece], modulus[mine][piece, k], color=f"C{k}", ls=style, lw=1.4)
     top.plot([], [], color="k", lw=1.8, label="stable (dashed: unstable)")
