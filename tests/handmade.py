@@ -90,3 +90,21 @@ def write_grazing_branch_file(path, impacts_change=True):
     branch_file.write_branch(path, branch_file.branch_arrays(branches, [Bifurcation("grazing", graze)], 1.0),
                              config_from_dict(CONFIG), "rk45")
     return path
+
+
+def write_switched_branch_file(path):
+    """A period-2 branch in g from 22 to 26 that doubles at 24 (PD1), where a period-4 branch
+    (branch 1) is born and runs to 26 with its own doubling at 25 (PD2): two periods, two
+    colours, the tags of a cascade."""
+    def orbit_at(g, periods, R, mu):
+        return Orbit(parameter=g, state=np.array([0.1 * g, -0.2]), periods=periods, monodromy=np.diag([mu, 0.3]),
+                     R=R, Q_amplitude=0.4, impacts_per_period=1.0, x_max=0.8, slowest_impact=0.2, residual=1e-11,
+                     newton_iterations=2)
+
+    two = [orbit_at(g, 2, 10.0 + g, -0.5 if g < 24.0 else -1.5) for g in np.linspace(22.0, 26.0, 17)]
+    four = [orbit_at(g, 4, 34.0 + 2.0 * (g - 24.0), 0.5 if g < 25.0 else -1.5) for g in np.linspace(24.0, 26.0, 9)]
+    ends = {"down": ("left_range", "g left [21, 27]"), "up": ("left_range", "g left [21, 27]")}
+    branches = [Branch(periods=2, orbits=two, ends=ends), Branch(periods=4, orbits=four, ends=ends)]
+    found = [Bifurcation("period_doubling", two[8]), Bifurcation("period_doubling", four[4], branch=1)]
+    branch_file.write_branch(path, branch_file.branch_arrays(branches, found, 1.0), config_from_dict(CONFIG), "rk45")
+    return path

@@ -47,7 +47,8 @@ integration: {transient_periods: 3, measure_periods: 4, strobe_periods: 2}
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory, invoke, write_config):
-    from handmade import write_branch_file, write_cascade_branch_file, write_curves_file
+    from handmade import (write_branch_file, write_cascade_branch_file, write_curves_file, write_grazing_branch_file,
+                          write_switched_branch_file)
 
     folder = tmp_path_factory.mktemp("layout")
     made = {}
@@ -58,6 +59,8 @@ def files(tmp_path_factory, invoke, write_config):
         made[name] = out
     made["branch"] = write_branch_file(folder / "branch.h5")
     made["cascade"] = write_cascade_branch_file(folder / "cascade.h5")
+    made["switched"] = write_switched_branch_file(folder / "switched.h5")
+    made["graze"] = write_grazing_branch_file(folder / "graze.h5")
     made["curves"] = write_curves_file(folder / "curves.h5")
     return made
 
@@ -122,6 +125,8 @@ FIGURES = {
     "lyapunov map": lambda f: plot.plot(f["plane"], var="lyapunov", size=COLUMN, title=False),
     "branch": lambda f: plot.plot(f["branch"], size=COLUMN, title=False),
     "branch with a cascade": lambda f: plot.plot(f["cascade"], size=COLUMN, title=False),
+    "branch of two periods": lambda f: plot.plot(f["switched"], size=COLUMN, title=False),
+    "branch through a graze": lambda f: plot.plot(f["graze"], size=COLUMN, title=False),
     "curves": lambda f: plot.plot([f["effective"], f["curves"]], size=COLUMN, title=False),
 }
 

@@ -32,3 +32,47 @@ def test_the_multipliers_are_not_joined_across_a_graze(tmp_path, impacts_change)
     assert sorted(multipliers) == [(22.0, 24.0)] * 2 + [(24.5, 26.0)] * 2
     # R is continuous through the graze: the gain's line goes on across it.
     assert [span for span in _spans(top) if span[0] < GRAZE < span[1]]
+
+
+def _below_the_panels(fig, legend):
+    from vrsweep.plot.layout import renderer_of
+
+    renderer = renderer_of(fig)
+    return legend.get_window_extent(renderer).y1 <= min(ax.get_window_extent(renderer).y0 for ax in fig.axes) + 1
+
+
+def test_at_one_column_a_multi_branch_legend_is_kept_abbreviated_below_the_panels(tmp_path):
+    from handmade import write_switched_branch_file
+
+    fig = plot.plot(write_switched_branch_file(tmp_path / "switched.h5"), size=COLUMN, title=False)
+    (legend,) = fig.legends  # not left off, not inside a panel over the data
+    assert all(ax.get_legend() is None for ax in fig.axes)
+    labels = [text.get_text() for text in legend.get_texts()]
+    assert {"2T", "4T", "PD: doubling", "stable (- - unstable)"} <= set(labels), labels
+    assert _below_the_panels(fig, legend)
+    assert "abbreviated" in plot.legend_note(fig)
+    # A screen-sized figure keeps the words in full.
+    full = [text.get_text() for text in plot.plot(tmp_path / "switched.h5").legends[0].get_texts()]
+    assert {"period 2 T", "period 4 T", "PD: period doubling"} <= set(full), full
+
+
+def test_where_below_leaves_the_panels_too_little_the_legend_is_a_strip_above_the_data(tmp_path):
+    from handmade import write_switched_branch_file
+
+    fig = plot.plot(write_switched_branch_file(tmp_path / "switched.h5"), size=(2.6, 2.0), title=False)
+    top = fig.axes[0]
+    legend = top.get_legend()
+    assert legend is not None and not fig.legends
+    from vrsweep.plot.layout import renderer_of
+
+    renderer = renderer_of(fig)
+    box = legend.get_window_extent(renderer)
+    # Every point of the data (branches, theory, markers) lies below the strip.
+    for line in top.get_lines():
+        if line.get_transform() is not top.transData or np.size(line.get_xdata()) == 0:
+            continue
+        y = top.transData.transform(np.column_stack([line.get_xdata(), line.get_ydata()]))[:, 1]
+        assert np.all(y[np.isfinite(y)] < box.y0), line
+    # An explicit vertical range is not raised: the legend goes where it did before.
+    fixed = plot.plot(tmp_path / "switched.h5", size=(2.6, 2.0), title=False, ylim=(20.0, 40.0))
+    assert fixed.axes[0].get_ylim() == (20.0, 40.0)

@@ -156,7 +156,21 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
         labels += more_labels
     figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",
                   ncol=_legend_columns(figure, 3))
+    # Without its legend the figure does not say what colours, dashes and tags mean: at one journal
+    # column the layout keeps it, in these words (layout._abbreviate), rather than leaving it off.
+    figure._vrsweep_short_legend = {label: _short_label(label) for label in labels}
     return figure
+
+
+SHORT_LABELS = {"stable (dashed: unstable)": "stable (- - unstable)", "theory (corrected)": "theory",
+                "PD: period doubling": "PD: doubling", "NS: Neimark-Sacker": "NS: Neim.-Sacker"}
+
+
+def _short_label(label):
+    """``label`` in a few characters: 'period 2 T' is '2T'."""
+    if label.startswith("period ") and label.endswith(" T"):
+        return label[len("period "):-len(" T")] + "T"
+    return SHORT_LABELS.get(label, label)
 
 
 ZOOM_CHOICES = (None, "bifurcations", "none")

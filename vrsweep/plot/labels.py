@@ -408,6 +408,7 @@ def figure_options(function):
                     fig.set_size_inches(*size)  # a figure not made by _new_figure gets the size too
                 fig._vrsweep_style = style
                 fig._vrsweep_title = bool(title)
+                fig._vrsweep_ylim_given = ylim is not None  # the layout may not raise a panel's top then
                 if not title:
                     _drop_titles(fig)
                 layout.apply_limits(fig, None if takes_xlim else xlim, ylim)

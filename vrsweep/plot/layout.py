@@ -310,24 +310,76 @@ def _arrange(fig, legend=None):
         _widen(fig.legends[0], fig)
         if legend is None and small(fig) and axes_share(fig) < AXES_SHARE:
             count = len(fig.legends[0].get_texts())
-            place_legend(fig, "best")
-            main = data_axes(fig)[0]
-            _compact(main)
-            if _fits_inside(main):
-                note = "the legend went inside the axes, where it leaves them half the figure"
-            else:
-                place_legend(fig, "none")
-                note = (f"the legend ({count} entries) is left off: below the axes it would leave them under half "
-                        "the figure, inside it would cover them")
+            short = getattr(fig, "_vrsweep_short_legend", None)
+            if short is not None:
+                # A figure whose legend explains what its marks mean (a branch's tags, periods,
+                # stability) keeps it, abbreviated: below the panels if that leaves them half the
+                # figure, else in a strip of the main panel above its data.
+                note = _abbreviate(fig, short, may_raise=not getattr(fig, "_vrsweep_ylim_given", False))
+            if not note:
+                place_legend(fig, "best")
+                main = data_axes(fig)[0]
+                _compact(main)
+                if _fits_inside(main):
+                    note = "the legend went inside the axes, where it leaves them half the figure"
+                else:
+                    place_legend(fig, "none")
+                    note = (f"the legend ({count} entries) is left off: below the axes it would leave them under "
+                            "half the figure, inside it would cover them")
             for label, (text, size) in labels.items():  # wrapped for the old layout: fitted again to the new
                 label.set_text(text)
                 label.set_fontsize(size)
             fit_labels(fig)
     for ax in data_axes(fig):
-        if ax.get_legend() is not None and small(fig):
+        if ax.get_legend() is not None and small(fig) and not getattr(ax.get_legend(), "_vrsweep_strip", False):
             _compact(ax)
         _separate_tags(ax)
     return note
+
+
+# A legend abbreviated to fit a journal column: small text, short handles, no frame (the frame's
+# padding alone is a tenth of a row).
+COMPACT_LEGEND = dict(fontsize="xx-small", handlelength=1.5, handletextpad=0.4, columnspacing=0.9,
+                      labelspacing=0.25, borderpad=0.2, borderaxespad=0.2, frameon=False)
+STRIP_GAP = 0.02  # of the panel's height, between a legend strip and the data below it
+
+
+def _abbreviate(fig, short, may_raise=True):
+    """The figure's legend below the panels with the labels ``short`` gives ({label: shorter}) in
+    COMPACT_LEGEND's style; if that still leaves the panels under AXES_SHARE of the figure, and
+    ``may_raise`` (no --ylim asked), in a strip across the top of the main panel with the panel's
+    vertical axis raised so that no data lies under it. Returns a note in words, '' when neither
+    was possible (then the legend is below, abbreviated)."""
+    legend = fig.legends[0]
+    handles, labels = _entries(legend)
+    labels = [short.get(label, label) for label in labels]
+    legend.remove()
+    legend = fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), **COMPACT_LEGEND)
+    _widen(legend, fig, down_to=1)
+    if axes_share(fig) >= AXES_SHARE:
+        return "the legend was abbreviated to fit below the axes"
+    main = data_axes(fig)[0] if data_axes(fig) else None
+    if not may_raise or main is None:
+        return ""
+    fig.legends[0].remove()
+    renderer = renderer_of(fig)
+    panel = main.get_window_extent(renderer)
+    for columns in range(len(labels), 0, -1):
+        strip = main.legend(handles, labels, loc="upper center", ncol=columns, **COMPACT_LEGEND)
+        if strip.get_window_extent(renderer).width <= 0.98 * panel.width:
+            break
+    strip._vrsweep_strip = True
+    share = strip.get_window_extent(renderer).height / panel.height + STRIP_GAP
+    if share >= 0.5:  # the data would keep under half the panel: not worth it
+        strip.remove()
+        fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), **COMPACT_LEGEND)
+        return ""
+    low, high = main.get_ylim()
+    if main.get_yscale() == "log":
+        main.set_ylim(low, low * (high / low) ** (1.0 / (1.0 - share)))
+    else:
+        main.set_ylim(low, low + (high - low) / (1.0 - share))
+    return "the legend was abbreviated into a strip at the top of the axes, above the data"
 
 
 LEGEND_COVERS_AT_MOST = 0.5  # of the main panel's area, for a legend moved inside it
@@ -342,10 +394,14 @@ def _fits_inside(ax):
 
 
 def _remake(legend, fig, **changes):
-    """``legend`` made again with ``changes`` (ncol, handlelength...), in the same place."""
+    """``legend`` made again with ``changes`` (ncol, handlelength...), in the same place and with
+    the same spacing (an abbreviated legend stays compact)."""
     handles, labels = _entries(legend)
     texts = legend.get_texts()
     options = dict(fontsize=texts[0].get_fontsize() if texts else "x-small", markerscale=legend.markerscale,
+                   handlelength=legend.handlelength, handletextpad=legend.handletextpad,
+                   columnspacing=legend.columnspacing, labelspacing=legend.labelspacing, borderpad=legend.borderpad,
+                   borderaxespad=legend.borderaxespad, frameon=legend.get_frame_on(),
                    **{key: value for key, value in _style_of(legend).items() if value is not None})
     options.update(changes)
     owner = legend.axes if legend.axes is not None and legend.axes.get_legend() is legend else None
@@ -355,13 +411,15 @@ def _remake(legend, fig, **changes):
     return fig.legend(handles, labels, loc="outside lower center", **options)
 
 
-def _widen(legend, fig):
+def _widen(legend, fig, down_to=None):
     """A legend below the panels in as many columns as fit across the figure (fewer rows: more
     height for the panels); entries are short, so a column needs far less than the 2.6 in
-    ``legend_columns`` allows when it cannot measure."""
+    ``legend_columns`` allows when it cannot measure. ``down_to``: the fewest columns to try (an
+    abbreviated legend, made in one row, may need fewer than it has); by default one more than
+    the legend has."""
     renderer = renderer_of(fig)
     original = legend._ncols
-    for columns in range(len(legend.get_texts()), original, -1):
+    for columns in range(len(legend.get_texts()), (original + 1 if down_to is None else down_to) - 1, -1):
         legend = _remake(legend, fig, ncol=columns)
         fig.draw_without_rendering()
         if legend.get_window_extent(renderer).width <= 0.98 * fig.bbox.width:
