@@ -55,16 +55,16 @@ CASCADE = (("period_doubling", 45.7483), ("fold", 45.7738), ("fold", 45.7904), (
 
 def write_cascade_branch_file(path, bifurcations=CASCADE):
     """A period-1 branch from g = 30 to 55 (with a fold's S-bend near 45.78) whose bifurcations
-    ``bifurcations`` [(kind, g)] lie within 0.06 of g: a branch figure zooms on them by itself."""
+    ``bifurcations`` [(kind, g) or (kind, g, R)] lie within 0.06 of g: a branch figure zooms on them by itself."""
     g = np.concatenate([np.linspace(30.0, 45.7, 40), np.linspace(45.7, 45.85, 60)[1:], np.linspace(45.85, 55.0, 40)[1:]])
     orbits = [Orbit(parameter=value, state=np.array([0.5, -0.2]), periods=1,
                     monodromy=np.diag([0.5 if not 45.7738 < value < 45.7904 else 1.5, -0.3]),
                     R=4.0 + 0.1 * value + 0.3 * np.tanh((value - 45.78) / 0.01), Q_amplitude=0.2, impacts_per_period=1.0,
                     x_max=1.0, slowest_impact=0.5, residual=1e-11, newton_iterations=2) for value in g]
     found = []
-    for kind, at in bifurcations:
+    for kind, at, *R in bifurcations:  # (kind, g) on this branch, or (kind, g, R) off it (another branch's)
         nearest = orbits[int(np.argmin([abs(o.parameter - at) for o in orbits]))]
-        found.append(Bifurcation(kind, Orbit(**{**nearest.__dict__, "parameter": at})))
+        found.append(Bifurcation(kind, Orbit(**{**nearest.__dict__, "parameter": at, **({"R": R[0]} if R else {})})))
     branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "g left [30, 55]"),
                                                        "up": ("left_range", "g left [30, 55]")})]
     branch_file.write_branch(path, branch_file.branch_arrays(branches, found, 1.0),

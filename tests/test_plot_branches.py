@@ -76,3 +76,47 @@ def test_where_below_leaves_the_panels_too_little_the_legend_is_a_strip_above_th
     # An explicit vertical range is not raised: the legend goes where it did before.
     fixed = plot.plot(tmp_path / "switched.h5", size=(2.6, 2.0), title=False, ylim=(20.0, 40.0))
     assert fixed.axes[0].get_ylim() == (20.0, 40.0)
+
+
+def _tag_boxes(fig):
+    """{tag text: (its box, its point in pixels)} of the gain panel's visible tags."""
+    from matplotlib.text import Text
+
+    from vrsweep.plot.layout import renderer_of
+
+    renderer = renderer_of(fig)
+    top = fig.axes[0]
+    return {text.get_text(): (Text.get_window_extent(text, renderer), top.transData.transform(text.xy))
+            for text in top.texts if (text.get_gid() or "").startswith("tag") and text.get_visible()}
+
+
+# Like fig1c's cascade: a doubling on the branch and two of the period-4 branch just below and left
+# of it (their markers overlap), a graze beside them, two folds further on. Before, PD3 was written
+# over the other markers and G1 and PD1 were stacked four tag heights away.
+CROWDED = (("period_doubling", 45.7483), ("period_doubling", 45.7478, 8.25), ("period_doubling", 45.7476, 8.24),
+           ("grazing", 45.7500), ("fold", 45.7738), ("fold", 45.7904))
+
+
+@pytest.mark.parametrize("size", [COLUMN, (8.0, 6.0)], ids=["one column", "screen"])
+@pytest.mark.parametrize("crowded", [False, True], ids=["cascade", "crowded"])
+def test_tags_sit_next_to_their_points_clear_of_each_other_and_of_the_markers(tmp_path, size, crowded):
+    from handmade import CASCADE, write_cascade_branch_file
+
+    from vrsweep.plot.layout import renderer_of
+
+    bifurcations = CROWDED if crowded else CASCADE
+    fig = plot.plot(write_cascade_branch_file(tmp_path / "cascade.h5", bifurcations), size=size, title=False)
+    tags = _tag_boxes(fig)
+    assert len([tag for text in tags for tag in text.split(", ")]) == len(bifurcations)
+    renderer = renderer_of(fig)
+    markers = [line.get_window_extent(renderer) for line in fig.axes[0].get_lines()
+               if (line.get_gid() or "").startswith("bifurcation")]
+    legends = [legend.get_window_extent(renderer) for legend in fig.legends]
+    boxes = [box for box, _ in tags.values()]
+    for number, (text, (box, point)) in enumerate(tags.items()):
+        for other in boxes[number + 1:] + markers + legends:
+            overlap = min(box.x1, other.x1) - max(box.x0, other.x0), min(box.y1, other.y1) - max(box.y0, other.y0)
+            assert min(overlap) <= 0.5, (text, box, other)
+        # Near its point: within about two tag heights of the marker's centre.
+        gap = np.hypot(max(box.x0 - point[0], 0, point[0] - box.x1), max(box.y0 - point[1], 0, point[1] - box.y1))
+        assert gap <= 3.0 * box.height, (text, gap, box.height)

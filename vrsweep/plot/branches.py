@@ -256,35 +256,27 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
     bottom.set_ylabel("Floquet $|\\mu|$")
 
 
-TAG_LEVELS = 3          # tags of nearby bifurcations are staggered over this many heights
-TAG_STEP_POINTS = 7.0   # between two heights
-TAG_CHARACTER = 0.012   # axes fraction a tag's character takes (about; at the tags' font size)
+MARKER_SIZE = 6.0
 
 
 def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
-    """Each bifurcation marked and tagged beside its point (below it in the upper half of the
-    panel, above it in the lower); nearby tags staggered in height; one legend entry per kind."""
+    """Each bifurcation marked and tagged (placed beside its point once the layout is done,
+    clear of the other tags and markers: layout._separate_tags); one legend entry per kind."""
     low, high = top.get_xlim()
     bottom_y, top_y = top.get_ylim()
-    last_place, level = -np.inf, 0
-    order = np.argsort(places)
-    for index in order:
+    for index in np.argsort(places):
         kind, at, R, tag = kinds[index], places[index], heights[index], tags[index]
         marker, _ = BIFURCATION_MARKERS.get(kind, ("x", kind))
-        top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=6, zorder=5, ls="none", gid=f"bifurcation {tag}")
+        top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=MARKER_SIZE, zorder=5, ls="none",
+                 gid=f"bifurcation {tag}")
         bottom.axvline(at, color="0.75", lw=0.8, zorder=0)
-        fraction = (at - low) / (high - low) if high > low else 0.5
-        if not 0.0 <= fraction <= 1.0:
+        if not low <= at <= high:
             continue  # outside the zoom: no tag
-        level = (level + 1) % TAG_LEVELS if fraction - last_place < TAG_CHARACTER * (len(tag) + 1) else 0
-        last_place = fraction
-        upper = (R - bottom_y) / (top_y - bottom_y) > 0.5 if top_y > bottom_y else False
-        offset = (5.0 + TAG_STEP_POINTS * level) * (-1 if upper else 1)
-        note = top.annotate(tag, (at, R), xytext=(0, offset), textcoords="offset points", ha="center",
-                            va="top" if upper else "bottom", fontsize="xx-small", annotation_clip=True,
-                            gid=f"tag {tag}", arrowprops=dict(arrowstyle="-", lw=0.5, color="0.4", shrinkA=0,
-                                                                shrinkB=4))
-        note._vrsweep_tag = True  # moved apart from its neighbours once the layout is done (layout.arrange)
+        note = top.annotate(tag, (at, R), xytext=(0, -MARKER_SIZE), textcoords="offset points", ha="center",
+                            va="top", fontsize="xx-small", annotation_clip=True, gid=f"tag {tag}", zorder=6,
+                            arrowprops=dict(arrowstyle="-", lw=0.5, color="0.4", shrinkA=0, shrinkB=MARKER_SIZE / 2 + 1))
+        note._vrsweep_tag = True
+        note._vrsweep_marker_points = MARKER_SIZE / 2 + 0.6  # the marker's half width and half its edge
     for kind in dict.fromkeys(kinds):
         marker, words = BIFURCATION_MARKERS.get(kind, ("x", kind))
         prefix = TAG_PREFIXES.get(kind, kind)

@@ -436,55 +436,112 @@ def _compact(ax):
         _remake(legend, ax.figure, ncol=2, handlelength=1.5, columnspacing=0.8)
 
 
-TAG_TRIES = 8
+# Where a tag may go around its point, in order of preference: below, above, beside, then the
+# diagonals; each at TAG_RINGS distances, one tag height apart.
+TAG_DIRECTIONS = ((0, -1), (0, 1), (1, 0), (-1, 0), (1, -1), (1, 1), (-1, -1), (-1, 1))
+TAG_RINGS = 6
+TAG_GAP_POINTS = 1.5      # between a marker's edge and its tag
+TAG_COVER_COST = 4.0      # per pixel of data under a tag, against 1 per ring and 0.1 per direction further out
 
 
 def _separate_tags(ax):
-    """Move apart the tags of ``ax`` (annotations marked _vrsweep_tag) that overlap each other or
-    the panel's legend: each, in turn from left to right, steps away from its point (up or down,
-    as it was placed) until it is clear, and tries the other side when stepping took it out of
-    the panel."""
-    tags = [text for text in ax.texts if getattr(text, "_vrsweep_tag", False)]
+    """Place each tag of ``ax`` (annotations marked _vrsweep_tag) next to its point, greedily from
+    left to right: of the places around the point (TAG_DIRECTIONS, nearest ring first), the one
+    that lies in the panel and clear of the tags placed before, of every bifurcation's marker and
+    of the legend, and covers the least of the data; a leader line only for a tag not beside its
+    point. A tag with no clear place is named in its nearest neighbour's ('PD3, PD2')."""
+    tags = [text for text in ax.texts if getattr(text, "_vrsweep_tag", False) and text.get_visible()]
     if not tags:
         return
     renderer = renderer_of(ax.figure)
     panel = ax.get_window_extent(renderer)
     legend = ax.get_legend()
-    placed = [(None, legend.get_window_extent(renderer))] if legend is not None else []
+    blocked = [legend.get_window_extent(renderer)] if legend is not None else []
+    markers = [line for line in ax.get_lines() if (line.get_gid() or "").startswith("bifurcation")]
+    blocked += [line.get_window_extent(renderer) for line in markers]
+    data = _data_pixels(ax, exclude=markers)
+    per_point = ax.figure.dpi / 72.0
+    placed = []
     tags.sort(key=lambda text: text.xy[0])
     for text in tags:
+        point = ax.transData.transform(text.xy)
+        if not (panel.x0 <= point[0] <= panel.x1 and panel.y0 <= point[1] <= panel.y1) or not np.all(np.isfinite(point)):
+            continue
         box = _text_box(text, renderer)
-        if not text.get_visible() or not box.width:
+        width, height = box.width, box.height
+        if not width:
             continue
-        x, first = text.xyann
-        sides = (-1.0, 1.0) if first < 0 else (1.0, -1.0)
-        step = box.height * 72.0 / ax.figure.dpi + 1.0
-        clear = False
-        for side in sides:
-            text.set_va("bottom" if side > 0 else "top")
-            for attempt in range(TAG_TRIES):
-                text.xyann = (x, side * (abs(first) + attempt * step))
-                box = _text_box(text, renderer)
-                if box.y0 < panel.y0 or box.y1 > panel.y1:
-                    break  # out of the panel: the other side
-                if not any(_overlap(box, other) for _, other in placed):
-                    clear = True
-                    break
-            if clear:
-                break
-        if clear:
-            placed.append((text, box))
+        radius = getattr(text, "_vrsweep_marker_points", 4.0) + TAG_GAP_POINTS
+        step = height / per_point + 1.0
+        best = None
+        for ring in range(TAG_RINGS):
+            for order, (dx, dy) in enumerate(TAG_DIRECTIONS):
+                reach = radius + ring * step
+                # The box's edge nearest the point at ``reach`` from it (its corner, on a diagonal).
+                x0 = point[0] + (dx * reach * per_point if dx else -width / 2) - (width if dx < 0 else 0)
+                y0 = point[1] + (dy * reach * per_point if dy else -height / 2) - (height if dy < 0 else 0)
+                candidate = (x0, y0, x0 + width, y0 + height)
+                if candidate[0] < panel.x0 or candidate[2] > panel.x1 or candidate[1] < panel.y0 or candidate[3] > panel.y1:
+                    continue
+                if any(_overlap(_Box(*candidate), other) for other in blocked + [b for _, b in placed]):
+                    continue
+                covered = _covered(data, candidate)
+                cost = ring + 0.1 * order + TAG_COVER_COST * covered
+                if best is None or cost < best[0]:
+                    best = (cost, ring, dx, dy, reach, candidate)
+        if best is None:
+            # Crowded everywhere: named in the tag of its nearest neighbour ('F1, PD2'), not on top of it.
+            if placed:
+                nearest = min((other for other, _ in placed), key=lambda other: abs(other.xy[0] - text.xy[0]))
+                nearest.set_text(f"{nearest.get_text()}, {text.get_text()}")
+                text.set_visible(False)
             continue
-        # Crowded everywhere: named in the tag of its nearest neighbour ('F1, PD2'), not on top of it.
-        text.xyann = (x, first)
-        text.set_va("bottom" if first > 0 else "top")
-        neighbours = [other for other, _ in placed if other is not None]
-        if neighbours:
-            nearest = min(neighbours, key=lambda other: abs(other.xy[0] - text.xy[0]))
-            nearest.set_text(f"{nearest.get_text()}, {text.get_text()}")
-            text.set_visible(False)
-        else:
-            placed.append((text, _text_box(text, renderer)))
+        _, ring, dx, dy, reach, candidate = best
+        text.set_ha({1: "left", -1: "right", 0: "center"}[dx])
+        text.set_va({1: "bottom", -1: "top", 0: "center"}[dy])
+        text.xyann = (dx * reach, dy * reach)
+        if text.arrow_patch is not None:
+            text.arrow_patch.set_visible(ring > 0)  # beside its point a tag needs no line to it
+        placed.append((text, _Box(*candidate)))
+
+
+class _Box:
+    """x0, y0, x1, y1 of a box in pixels (what ``_overlap`` reads of a Bbox)."""
+
+    def __init__(self, x0, y0, x1, y1):
+        self.x0, self.y0, self.x1, self.y1 = x0, y0, x1, y1
+
+
+def _data_pixels(ax, exclude=()):
+    """The data's lines and markers of ``ax`` as points in pixels, a line's segments filled in
+    every DATA_SPACING pixels: a tag over a line covers some of them even between its vertices."""
+    found = []
+    for line in ax.get_lines():
+        if line in exclude or line.get_transform() is not ax.transData or not line.get_visible():
+            continue
+        xy = np.column_stack([np.asarray(line.get_xdata(), dtype=float), np.asarray(line.get_ydata(), dtype=float)])
+        if not len(xy):
+            continue
+        with np.errstate(all="ignore"):
+            pixels = ax.transData.transform(xy)
+        if line.get_linestyle() not in ("None", "none", " ", "") and len(pixels) > 1:
+            segments = pixels[1:] - pixels[:-1]
+            counts = np.clip(np.ceil(np.hypot(*segments.T) / DATA_SPACING), 1, 10_000)
+            counts[~np.isfinite(counts)] = 1
+            counts = counts.astype(int)
+            index = np.repeat(np.arange(len(segments)), counts)
+            share = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)) / np.repeat(counts, counts)
+            pixels = np.vstack([pixels[index] + segments[index] * share[:, None], pixels[-1:]])
+        found.append(pixels[np.all(np.isfinite(pixels), axis=1)])
+    return np.vstack(found) if found else np.zeros((0, 2))
+
+
+DATA_SPACING = 2.0
+
+
+def _covered(pixels, box):
+    x0, y0, x1, y1 = box
+    return int(np.count_nonzero((pixels[:, 0] >= x0) & (pixels[:, 0] <= x1) & (pixels[:, 1] >= y0) & (pixels[:, 1] <= y1)))
 
 
 def _text_box(text, renderer):
