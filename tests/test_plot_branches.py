@@ -120,3 +120,47 @@ def test_tags_sit_next_to_their_points_clear_of_each_other_and_of_the_markers(tm
         # Near its point: within about two tag heights of the marker's centre.
         gap = np.hypot(max(box.x0 - point[0], 0, point[0] - box.x1), max(box.y0 - point[1], 0, point[1] - box.y1))
         assert gap <= 3.0 * box.height, (text, gap, box.height)
+
+
+def _data_lines(ax):
+    return [line for line in ax.get_lines() if line.get_transform() is ax.transData and np.size(line.get_xdata()) > 1
+            and not getattr(line, "_vrsweep_context", False)]
+
+
+def test_colour_means_the_period_in_both_panels_and_markers_tell_periods_apart_in_grey(tmp_path):
+    from matplotlib.colors import to_hex
+
+    from handmade import write_switched_branch_file
+
+    fig = plot.plot(write_switched_branch_file(tmp_path / "switched.h5"), size=COLUMN, title=False)
+    top, bottom = fig.axes[:2]
+    looks = {to_hex(line.get_color()): line.get_marker() for line in _data_lines(top)}
+    assert len(looks) == 2  # period 2 and period 4
+    # The multipliers of a branch in its colour, not C0/C1 for |mu_1|/|mu_2| whatever the branch.
+    multipliers = [line for line in _data_lines(bottom) if (line.get_gid() or "").startswith("multiplier")]
+    assert {to_hex(line.get_color()) for line in multipliers} == set(looks)
+    for line in multipliers:
+        assert line.get_marker() == looks[to_hex(line.get_color())]
+    # |mu_1| and |mu_2| apart by width (stable/unstable keeps solid/dashed, as in the gain panel).
+    widths = {line.get_gid(): line.get_linewidth() for line in multipliers}
+    assert widths["multiplier 1"] > widths["multiplier 2"]
+    assert {line.get_linestyle() for line in multipliers} == {line.get_linestyle() for line in _data_lines(top)}
+    # In greyscale the two periods differ by their markers too, in the panels and in the legend.
+    assert len(set(looks.values())) == 2 and "None" in looks.values()
+    entries = dict(zip([text.get_text() for text in fig.legends[0].get_texts()], fig.legends[0].legend_handles))
+    assert entries["4T"].get_marker() == looks[to_hex(entries["4T"].get_color())] != "None"
+
+
+def test_the_grey_bifurcation_lines_of_the_multipliers_panel_are_named_in_the_legend(tmp_path):
+    from matplotlib.colors import to_hex
+
+    from handmade import write_switched_branch_file
+
+    path = write_switched_branch_file(tmp_path / "switched.h5")
+    for fig, label in ((plot.plot(path), "bifurcation, in $|\\mu|$"),
+                       (plot.plot(path, size=COLUMN, title=False), "bif. in $|\\mu|$")):
+        verticals = [line for line in fig.axes[1].get_lines() if (line.get_gid() or "").startswith("bifurcation line")]
+        assert len(verticals) == 2
+        entries = dict(zip([text.get_text() for text in fig.legends[0].get_texts()], fig.legends[0].legend_handles))
+        assert label in entries, list(entries)
+        assert to_hex(entries[label].get_color()) == to_hex(verticals[0].get_color())

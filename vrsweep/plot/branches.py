@@ -1,7 +1,8 @@
 """The figure of a branch file (``vrsweep continue``): R along the continued parameter, stable
 orbits solid and unstable dashed, the located bifurcations marked and named, sweep files on the
 same axes, the corrected theory's branches for the effective model; below, the moduli of the
-Floquet multipliers with the unit circle's level."""
+Floquet multipliers (in the branch's colour: |mu_1| thick, |mu_2| thin) with the unit circle's
+level, broken at grazes."""
 
 from __future__ import annotations
 
@@ -22,6 +23,9 @@ from vrsweep.store.branch_file import TAG_PREFIXES, bifurcation_tags
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
                        "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing")}
 BRANCH_COLOUR = "C0"
+# Where a bifurcation is, across the multipliers' panel; named in the legend.
+BIFURCATION_LINE = "0.7"
+BIFURCATION_LINE_LABEL = "bifurcation, in $|\\mu|$"
 FINE_POINTS = 600
 # The multipliers' panel is logarithmic when their moduli span more than this factor.
 LOG_SPAN = 100.0
@@ -163,7 +167,8 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
 
 
 SHORT_LABELS = {"stable (dashed: unstable)": "stable (- - unstable)", "theory (corrected)": "theory",
-                "PD: period doubling": "PD: doubling", "NS: Neimark-Sacker": "NS: Neim.-Sacker"}
+                "PD: period doubling": "PD: doubling", "NS: Neimark-Sacker": "NS: Neim.-Sacker",
+                BIFURCATION_LINE_LABEL: "bif. in $|\\mu|$"}
 
 
 def _short_label(label):
@@ -228,24 +233,29 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
         fine = np.linspace(low - 0.05 * span, high + 0.05 * span, FINE_POINTS)
         _draw_branches(top, analytic_branches(config.parameters, name, fine, gain=True), "0.6")
         top.plot([], [], color="0.6", label="theory (corrected)")
+    marks = _period_marks(periods)
     for number in np.unique(branch):
         mine = branch == number
-        colour = colours[int(periods[mine][0])] if mine.any() else BRANCH_COLOUR
+        period = int(periods[mine][0]) if mine.any() else None
+        colour = colours.get(period, BRANCH_COLOUR)
+        # Colour says the period in both panels, and so do markers along the line (greyscale).
+        look = dict(color=colour, marker=marks.get(period, "None"), markevery=MARK_EVERY, ms=MARK_SIZE)
         for piece, is_stable in _runs(values[mine], stable[mine]):
             style = "-" if is_stable else "--"
-            top.plot(values[mine][piece], gain[mine][piece], color=colour, ls=style, lw=1.8, zorder=3)
+            top.plot(values[mine][piece], gain[mine][piece], ls=style, lw=1.8, zorder=3, **look)
         # R is continuous through a graze; the multipliers are not.
         breaks = _multiplier_breaks(values[mine], gain[mine], impacts[mine], grazes.get(int(number), []))
         for piece, is_stable in _runs(values[mine], stable[mine], breaks):
             style = "-" if is_stable else "--"
-            for k in range(2):
-                bottom.plot(values[mine][piece], modulus[mine][piece, k], color=f"C{k}", ls=style, lw=1.4)
+            for k, width in enumerate(MULTIPLIER_WIDTHS):
+                bottom.plot(values[mine][piece], modulus[mine][piece, k], ls=style, lw=width,
+                            gid=f"multiplier {k + 1}", **look)
     top.plot([], [], color="k", lw=1.8, label="stable (dashed: unstable)")
     if len(colours) > 1:
         for period, colour in colours.items():
-            top.plot([], [], color=colour, lw=4, label=f"period {period} T")
-    # The unit circle's level: a multiplier crossing it is a bifurcation. |mu_1| is C0, |mu_2| C1
-    # (said by the axis label, not by two legend entries).
+            top.plot([], [], color=colour, lw=1.8, marker=marks[period], ms=MARK_SIZE + 1, label=f"period {period} T")
+    # The unit circle's level: a multiplier crossing it is a bifurcation. The multipliers are
+    # stored larger modulus first, so |mu_1| is always the upper line: drawn thicker, |mu_2| thin.
     bottom.axhline(1.0, color="k", lw=0.8)
     positive = modulus[modulus > 0.0]
     if positive.size and positive.max() / positive.min() > LOG_SPAN:
@@ -269,7 +279,7 @@ def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
         marker, _ = BIFURCATION_MARKERS.get(kind, ("x", kind))
         top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=MARKER_SIZE, zorder=5, ls="none",
                  gid=f"bifurcation {tag}")
-        bottom.axvline(at, color="0.75", lw=0.8, zorder=0)
+        bottom.axvline(at, color=BIFURCATION_LINE, lw=0.8, zorder=0, gid=f"bifurcation line {tag}")
         if not low <= at <= high:
             continue  # outside the zoom: no tag
         note = top.annotate(tag, (at, R), xytext=(0, -MARKER_SIZE), textcoords="offset points", ha="center",
@@ -281,6 +291,8 @@ def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
         marker, words = BIFURCATION_MARKERS.get(kind, ("x", kind))
         prefix = TAG_PREFIXES.get(kind, kind)
         top.plot([], [], marker=marker, color="k", mfc="w", mew=1.2, ms=6, ls="none", label=f"{prefix}: {words}")
+    if kinds:  # the grey verticals of the multipliers' panel would otherwise be unexplained
+        top.plot([], [], marker="|", color=BIFURCATION_LINE, mew=1.2, ms=8, ls="none", label=BIFURCATION_LINE_LABEL)
     # Room above and below the curve for the tags (the panel otherwise ends at the curve's extremes).
     if kinds:
         span = top_y - bottom_y
@@ -311,15 +323,27 @@ def _bifurcation_table(ax, tags, kinds, places, heights, numbers, name):
     table.auto_set_column_width(list(range(5)))
 
 
-# Colours of the periods after the first (BRANCH_COLOUR); C0/C1 are the multipliers' panel's,
-# C2, C3 the sweeps'.
+# Colours of the periods after the first (BRANCH_COLOUR); C2, C3 are the sweeps'.
 PERIOD_COLOURS = ("C4", "C5", "C6", "C9", "C8", "C7")
+# Markers along the periods' lines after the first, which has none: the periods stay apart in
+# greyscale, where C0 and C4 are the same grey.
+PERIOD_MARKERS = ("o", "s", "D", "v", "P", "X")
+MARK_EVERY = 0.08   # a marker every this share of the panel's diagonal, however dense the points
+MARK_SIZE = 3.0
+MULTIPLIER_WIDTHS = (1.4, 0.7)  # |mu_1|, |mu_2|
 
 
 def _period_colours(periods):
     """{period: colour}: the first point's period in BRANCH_COLOUR, the others in turn."""
     order = list(dict.fromkeys(int(p) for p in periods))
     return {period: BRANCH_COLOUR if k == 0 else PERIOD_COLOURS[(k - 1) % len(PERIOD_COLOURS)]
+            for k, period in enumerate(order)}
+
+
+def _period_marks(periods):
+    """{period: marker} in the order of ``_period_colours``: none for the first period."""
+    order = list(dict.fromkeys(int(p) for p in periods))
+    return {period: "None" if k == 0 else PERIOD_MARKERS[(k - 1) % len(PERIOD_MARKERS)]
             for k, period in enumerate(order)}
 
 
