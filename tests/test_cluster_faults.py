@@ -416,4 +416,7 @@ def test_the_space_reserved_covers_the_file_and_its_finishing(tmp_path, monkeypa
     writer.finish(extra=extras)
     assert path.stat().st_size == plain.stat().st_size
     assert 0 < path.stat().st_size - created <= finish_reserve(extras)
-    assert load_results(path).attrs["vrsweep_complete"] == 1
+    # Finished with no point written (only sizes matter here): a reader refuses such a file as
+    # corrupt (a finished file has every point done), so its mark is read plainly.
+    with h5py.File(path, "r") as f:
+        assert f.attrs["vrsweep_complete"] == 1

@@ -275,8 +275,6 @@ _DEFAULT_START = ("; the config gives no initial.x, and the default start is the
 
 def _follows_the_period(model: WrittenModel) -> bool:
     """Whether the step cap is computed from the period (the default period/8 is)."""
-    from vrsweep.numerics import expressions
-
     return model.max_step is None or "period" in expressions.names_in(
         expressions.parse(model.max_step, tuple(model.parameter_names) + ("period",)))
 
