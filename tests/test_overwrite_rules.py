@@ -50,14 +50,20 @@ def inputs(tmp_path_factory):
     return folder
 
 
-def _setup(tmp_path, inputs, command, kind):
-    """(the output path to give, the input files of the command) with the path made of ``kind``."""
+def _work(tmp_path, inputs, command):
+    """A fresh folder with the command's config and a good result file: (folder, config, result)."""
     work = tmp_path / "work"
     work.mkdir()
     config = work / ("point.yaml" if command == "simulate" else "sweep.yaml")
     shutil.copy(inputs / config.name, config)
     result = work / "good.h5"
     shutil.copy(inputs / "good.h5", result)
+    return work, config, result
+
+
+def _setup(tmp_path, inputs, command, kind):
+    """(the output path to give, the input files of the command) with the path made of ``kind``."""
+    work, config, result = _work(tmp_path, inputs, command)
     command_inputs = {"run": [config], "simulate": [config], "merge": [result], "plot": [result], "init": []}[command]
     out = work / f"out{SUFFIX[command]}"
     target = work / f"target{SUFFIX[command]}"
@@ -159,12 +165,7 @@ def test_results_are_never_replaced_by_a_config_or_a_figure(tmp_path, inputs, in
 def test_an_output_ending_in_a_slash_names_a_folder_and_is_refused(tmp_path, inputs, invoke, command, separator):
     """`plot X.h5 -o x.png/` wrote x.png (pathlib drops the slash): a trailing slash names a folder,
     so every command refuses it, in one line, before anything is computed or written."""
-    work = tmp_path / "work"
-    work.mkdir()
-    config = work / ("point.yaml" if command == "simulate" else "sweep.yaml")
-    shutil.copy(inputs / config.name, config)
-    result_file = work / "good.h5"
-    shutil.copy(inputs / "good.h5", result_file)
+    work, config, result_file = _work(tmp_path, inputs, command)
     out = f"{work / 'out'}{SUFFIX.get(command, '.h5')}{separator}"
     args = {"run": ["run", config, "-o", out, "-q"], "simulate": ["simulate", config, "-o", out, "-q"],
             "merge": ["merge", result_file, "-o", out, "-q"], "plot": ["plot", result_file, "-o", out],

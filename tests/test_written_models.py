@@ -467,6 +467,23 @@ def test_sweeps_shards_merge_lyapunov_and_overflow_on_a_written_model(tmp_path):
 
 # --- figures of a written model: no paper theory, barriers where they are ----------------------
 
+def _short_linear_sweep(tmp_path, name, sweep, *replacements):
+    """The impact_linear example swept over ``sweep`` (YAML under sweep:) instead of its omega
+    axis, 4 + 16 periods, with ``replacements`` (old, new) in its text: the result file's path."""
+    import vrsweep
+
+    text = (EXAMPLES / "impact_linear.yaml").read_text()
+    for old, new in (("omega: {start: 0.4, stop: 1.6, num: 61}", sweep), ("transient_periods: 200",
+                     "transient_periods: 4"), ("measure_periods: 100", "measure_periods: 16"), *replacements):
+        assert old in text, old
+        text = text.replace(old, new)
+    config = tmp_path / f"{name}.yaml"
+    config.write_text(text)
+    output = tmp_path / f"{name}.h5"
+    vrsweep.sweep(str(config), output=str(output))
+    return output
+
+
 def test_the_bifurcation_diagram_of_a_written_model_draws_its_barrier_where_it_is(tmp_path):
     """`plot --kind bifurcation` of a written model's sweep drew the paper's g_res lines from its
     nine parameters (KeyError: 'gamma', a traceback), and a barrier that moves with the swept
@@ -474,15 +491,8 @@ def test_the_bifurcation_diagram_of_a_written_model_draws_its_barrier_where_it_i
     import vrsweep
     from vrsweep import plot
 
-    text = (EXAMPLES / "impact_linear.yaml").read_text()
-    text = text.replace("{position: Delta, side: above", '{position: "0.5*F + 0.2", side: above')
-    text = text.replace("omega: {start: 0.4, stop: 1.6, num: 61}", "F: [0.2, 1.0, 2.0]")
-    text = text.replace("transient_periods: 200", "transient_periods: 4").replace(
-        "measure_periods: 100", "measure_periods: 16")
-    config = tmp_path / "moving.yaml"
-    config.write_text(text)
-    output = tmp_path / "moving.h5"
-    vrsweep.sweep(str(config), output=str(output))
+    output = _short_linear_sweep(tmp_path, "moving", "F: [0.2, 1.0, 2.0]",
+                                 ("{position: Delta, side: above", '{position: "0.5*F + 0.2", side: above'))
     result = CliRunner().invoke(main, ["plot", str(output), "--kind", "bifurcation", "-o", str(tmp_path / "b.png")])
     assert result.exit_code == 0, result.output
     with vrsweep.open_results(output) as ds:
@@ -498,15 +508,7 @@ def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
     import vrsweep
     from vrsweep import plot
 
-    text = (EXAMPLES / "impact_linear.yaml").read_text()
-    text = text.replace("omega: {start: 0.4, stop: 1.6, num: 61}",
-                        "omega: [0.6, 0.8, 1.0]\n  F: [0.5, 1.0]")
-    text = text.replace("transient_periods: 200", "transient_periods: 4").replace(
-        "measure_periods: 100", "measure_periods: 16")
-    config = tmp_path / "map.yaml"
-    config.write_text(text)
-    output = tmp_path / "map.h5"
-    vrsweep.sweep(str(config), output=str(output))
+    output = _short_linear_sweep(tmp_path, "map", "omega: [0.6, 0.8, 1.0]\n  F: [0.5, 1.0]")
     result = CliRunner().invoke(main, ["plot", str(output), "--kind", "map", "-o", str(tmp_path / "m.png")])
     assert result.exit_code == 0, result.output
     with vrsweep.open_results(output) as ds:
@@ -587,6 +589,17 @@ def test_a_written_models_trajectory_file_names_its_own_barrier_and_period(tmp_p
         assert "slow" not in group["impacts_per_period"].attrs["long_name"]
 
 
+def _continued(tmp_path, example_text, settings):
+    """`vrsweep continue` of an example's model section with ``settings`` (integration and
+    continuation) in place of its sweep: the branch file's path."""
+    config = tmp_path / "continued.yaml"
+    config.write_text(example_text.split("sweep:")[0] + settings)
+    branch = tmp_path / "branch.h5"
+    result = CliRunner().invoke(main, ["continue", str(config), "-o", str(branch)])
+    assert result.exit_code == 0, result.output
+    return branch
+
+
 def test_no_period_doubling_is_reported_where_a_graze_makes_the_multipliers_jump(tmp_path):
     """A Duffing oscillator with a stop (the shipped example without its second force), continued in
     omega through its graze at 1.19345: the free orbit's multipliers 0.57 +- 0.64i jump to -10.9
@@ -598,13 +611,8 @@ def test_no_period_doubling_is_reported_where_a_graze_makes_the_multipliers_jump
     text = (EXAMPLES / "impact_duffing_two_forces.yaml").read_text()
     text = text.replace("{zeta: 0.05, beta: 0.5, F1: 0.6, F2: 0.3, omega: 1.1, phi: 0.0, Delta: 0.8, r: 0.85}",
                         "{zeta: 0.03, beta: 0.3, F1: 0.25, F2: 0.0, omega: 1.0, phi: 0.0, Delta: 1.6, r: 0.7}")
-    text = text.split("sweep:")[0] + ("integration: {rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 300}\n"
-                                      "continuation: {parameter: omega, from: 0.6, to: [0.5, 2.2], max_step: 0.05}\n")
-    config = tmp_path / "duffing.yaml"
-    config.write_text(text)
-    branch = tmp_path / "branch.h5"
-    result = CliRunner().invoke(main, ["continue", str(config), "-o", str(branch)])
-    assert result.exit_code == 0, result.output
+    branch = _continued(tmp_path, text, "integration: {rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 300}\n"
+                        "continuation: {parameter: omega, from: 0.6, to: [0.5, 2.2], max_step: 0.05}\n")
     with h5py.File(branch, "r") as f:
         kinds = [k.decode() if isinstance(k, bytes) else str(k) for k in f["bifurcation_kind"][()]]
         where = f["bifurcation_parameter"][()]
@@ -630,13 +638,8 @@ def test_a_branch_ending_where_an_impact_reaches_the_section_says_so(tmp_path):
     # The period-2 orbit in the phase whose impact reaches the section (the other phase's does at
     # phi 2 pi further on): started next to the state just before that impact.
     text = text.replace("initial: {x: 0.0, v: 0.0}", "initial: {x: 2.29, v: 2.58}")
-    text = text.split("sweep:")[0] + ("integration: {rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 200}\n"
-                                      "continuation: {parameter: phi, from: 5.9, to: [5.8, 6.2], max_step: 0.05}\n")
-    config = tmp_path / "phase.yaml"
-    config.write_text(text)
-    branch = tmp_path / "branch.h5"
-    result = CliRunner().invoke(main, ["continue", str(config), "-o", str(branch)])
-    assert result.exit_code == 0, result.output
+    branch = _continued(tmp_path, text, "integration: {rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 200}\n"
+                        "continuation: {parameter: phi, from: 5.9, to: [5.8, 6.2], max_step: 0.05}\n")
     with h5py.File(branch, "r") as f:
         reasons = [r.decode() if isinstance(r, bytes) else str(r) for r in f["branch_end_last_status"][()]] + \
                   [r.decode() if isinstance(r, bytes) else str(r) for r in f["branch_end_last_reason"][()]]
