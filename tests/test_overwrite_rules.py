@@ -231,7 +231,7 @@ continuation: {parameter: g, from: 23.0, to: [22.0, 24.0]}
 
 @pytest.mark.parametrize("kind", ["config", "link_to_config", "branch", "link_to_branch", "sweep", "fifo", "device"])
 def test_continue_follows_the_one_rule_of_outputs(tmp_path, inputs, invoke, kind):
-    """continue wrote through its own rule (store/branch_file.writable_output): `-o` its own config,
+    """continue wrote through its own rule (store/branch_file.writable_output, now gone): `-o` its own config,
     the --start sweep or the branch file being followed, with --overwrite, replaced it with the
     result, and `-o /dev/null --overwrite` (run as root) replaced the device with a regular file.
     Every refusal comes before anything is integrated, so no kernel is compiled here."""

@@ -244,10 +244,9 @@ def _prepare_output(path, overwrite, quiet, config, inputs, inputs_are):
     any work, for branches and curves alike."""
     from pathlib import Path
 
-    from vrsweep.store.branch_file import writable_output
-    from vrsweep.store.fileio import prepare_output_directory
+    from vrsweep.store.fileio import output_target, prepare_output_directory
 
-    target = Path(writable_output(path, overwrite, inputs=inputs, inputs_are=inputs_are))
+    target = Path(output_target(path, overwrite=overwrite, inputs=inputs, inputs_are=inputs_are))
     prepare_output_directory(target)
     if not quiet:
         from vrsweep.commands.options import say_if_compiling

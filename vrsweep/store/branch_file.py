@@ -45,8 +45,8 @@ import h5py
 import numpy as np
 
 from vrsweep import __version__
-from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.store.fileio import LIBVER, has_file_kind, open_hdf5, write_bytes
+from vrsweep.errors import ResultFileError
+from vrsweep.store.fileio import LIBVER, has_file_kind, open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 
 FILE_KIND = "branch"
@@ -128,16 +128,6 @@ def _multipliers(f, mu, dims):
     _variable(f, "multiplier_modulus", np.abs(mu), dims, "modulus of the Floquet multiplier", "1")
 
 
-def writable_output(path, overwrite, inputs=(), inputs_are="an input of this command"):
-    """The path to write (branch and curves files alike), by fileio's one rule of what an output may
-    replace (``output_target``): a link is followed to its target; a folder, a device, a pipe or a
-    socket is refused, as is an existing file without ``overwrite`` and any of ``inputs`` whatever
-    the flags. UsageError (one line) otherwise."""
-    from vrsweep.store.fileio import output_target
-
-    return output_target(os.fspath(path), overwrite=overwrite, inputs=inputs, inputs_are=inputs_are)
-
-
 def file_attributes(kind, config, method, title, complete=True, **more):
     """The file-level attributes of a branch or curves file: kind, format, provenance, CF.
     ``complete`` False: the run was stopped by a signal, and the file holds what it had followed."""
@@ -156,7 +146,7 @@ def file_attributes(kind, config, method, title, complete=True, **more):
 def write_branch(path, arrays, config, method, overwrite=False, complete=True):
     """Write branch_arrays' ``arrays`` to ``path`` atomically; refuse an existing file unless
     ``overwrite``. ``complete`` False: a continuation stopped by a signal (its ends "interrupted")."""
-    path = writable_output(path, overwrite)
+    path = output_target(os.fspath(path), overwrite=overwrite)  # fileio's one rule of outputs
     parameter = config.continuation.parameter
     attrs = file_attributes(FILE_KIND, config, method,
                             f"vrsweep continuation of periodic orbits of the {config.model} model in {parameter}",

@@ -50,12 +50,11 @@ import numpy as np
 from vrsweep.errors import ResultFileError
 from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
-from vrsweep.store.branch_file import point_long_names
 from vrsweep.store.branch_file import (
     ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_model_attribute, check_values, file_attributes,
-    has_file_kind, note_if_unprotected, read_checked, seal_attributes, stored_config, writable_output,
+    has_file_kind, note_if_unprotected, read_checked, seal_attributes, stored_config, point_long_names,
 )
-from vrsweep.store.fileio import LIBVER, write_bytes
+from vrsweep.store.fileio import LIBVER, output_target, write_bytes
 
 FILE_KIND = "curves"
 
@@ -90,7 +89,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False, complete=
 
     names: the two parameters in order; config: the Config whose resolved YAML is stored;
     ``complete`` False: a continuation stopped by a signal (its ends "interrupted")."""
-    path = writable_output(path, overwrite)
+    path = output_target(os.fspath(path), overwrite=overwrite)  # fileio's one rule of outputs
     first, second = names
     attrs = file_attributes(FILE_KIND, config, method,
                             f"vrsweep bifurcation curves of the {config.model} model in ({first}, {second})",
