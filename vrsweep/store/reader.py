@@ -192,21 +192,19 @@ def _check_flags(f, path, complete):
     grid; and a file marked finished has every point (of a shard: every point it owns) done. A mask
     of another type or with other values (a damaged or hand-made file) would otherwise be read as
     flags, and a finished file missing points would be plotted and merged as if whole."""
-    done = f["done"]
-    masks = {"done": done}
-    if "owned" in f:
-        masks["owned"] = f["owned"]
-    for name, mask in masks.items():
-        if not isinstance(mask, h5py.Dataset) or mask.dtype != np.int8 or mask.shape != done.shape:
+    shape = f["done"].shape
+    flags = {}  # name -> its values
+    for name in ("done", "owned") if "owned" in f else ("done",):
+        mask = f[name]
+        if not isinstance(mask, h5py.Dataset) or mask.dtype != np.int8 or mask.shape != shape:
             got = f"{mask.shape} of {mask.dtype}" if isinstance(mask, h5py.Dataset) else "a group"
-            raise ResultFileError(f"{path} is corrupt: {name} must be int8 flags over the grid {done.shape}, "
-                                  f"got {got}")
-        masks[name] = np.asarray(mask[()])
-        if not np.isin(masks[name], (0, 1)).all():
+            raise ResultFileError(f"{path} is corrupt: {name} must be int8 flags over the grid {shape}, got {got}")
+        flags[name] = np.asarray(mask[()])
+        if not np.isin(flags[name], (0, 1)).all():
             raise ResultFileError(f"{path} is corrupt: {name} must hold only 0 and 1")
     if complete:
-        wanted = masks["owned"] == 1 if "owned" in masks else np.ones(done.shape, dtype=bool)
-        missing = int(np.count_nonzero(wanted & (masks["done"] == 0)))
+        wanted = flags["owned"] == 1 if "owned" in flags else np.ones(shape, dtype=bool)
+        missing = int(np.count_nonzero(wanted & (flags["done"] == 0)))
         if missing:
             raise ResultFileError(f"{path} is corrupt: it is marked finished (vrsweep_complete = 1), but "
                                   f"{missing} of its {int(np.count_nonzero(wanted))} points are not done")
