@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib.transforms import Bbox
 
 from vrsweep.errors import UsageError
 
@@ -483,7 +484,7 @@ def _separate_tags(ax):
                 candidate = (x0, y0, x0 + width, y0 + height)
                 if candidate[0] < panel.x0 or candidate[2] > panel.x1 or candidate[1] < panel.y0 or candidate[3] > panel.y1:
                     continue
-                if any(_overlap(_Box(*candidate), other) for other in blocked + [b for _, b in placed]):
+                if any(_overlap(Bbox.from_extents(*candidate), other) for other in blocked + [b for _, b in placed]):
                     continue
                 covered = _covered(data, candidate)
                 cost = ring + 0.1 * order + TAG_COVER_COST * covered
@@ -502,14 +503,7 @@ def _separate_tags(ax):
         text.xyann = (dx * reach, dy * reach)
         if text.arrow_patch is not None:
             text.arrow_patch.set_visible(ring > 0)  # beside its point a tag needs no line to it
-        placed.append((text, _Box(*candidate)))
-
-
-class _Box:
-    """x0, y0, x1, y1 of a box in pixels (what ``_overlap`` reads of a Bbox)."""
-
-    def __init__(self, x0, y0, x1, y1):
-        self.x0, self.y0, self.x1, self.y1 = x0, y0, x1, y1
+        placed.append((text, Bbox.from_extents(*candidate)))
 
 
 def _data_pixels(ax, exclude=()):
