@@ -62,9 +62,10 @@ Stroboscopic (Poincare) samples
     The largest exponent is the mean of the per-period log stretches of the tangent vector over
     the window (tangent.py), a linear statistic: the same B = 10 batches as R_err (L whole
     periods, L a multiple of ``period``) each give an exponent lambda_b, and
-    lyapunov_err = t_{0.975, B-1} std(lambda_b) / sqrt(B), plus |lambda(window) - lambda(whole
-    cycles)| for a period-p orbit with m not a multiple of p. On an orbit whose two Floquet
-    multipliers are a complex pair the per-period stretch oscillates with the pair's rotation and
+    lyapunov_err = t_{0.975, B-1} std(lambda_b) / sqrt(B). A period-p orbit's ``lyapunov`` is its
+    mean over the window's last whole cycles (whole_cycle_exponent), the orbit's log |mu_1| / (pT),
+    as its R is; vrsweep 0.6.9 and earlier stored the window's mean and added the distance between
+    the two to lyapunov_err. On an orbit whose two Floquet multipliers are a complex pair the per-period stretch oscillates with the pair's rotation and
     the window's mean carries an O(1/m) bias, which the batches see as spread. A point that stuck
     in the window has lyapunov = -inf exactly (tangent.py) and lyapunov_err = 0.
     Measured as for R_err (24 runs per point: rtol 1e-8 ... 1e-11 times six x(0) moved by up to
@@ -250,12 +251,17 @@ def lyapunov_error(log_stretch, slow_period, period):
     used = n_batches * batch_length
     exponents = log_stretch[n_measured - used:].reshape(n_batches, batch_length).sum(axis=1) / (
         batch_length * slow_period)
-    half_width = _T975.get(n_batches - 1, 1.96) * np.std(exponents, ddof=1) / np.sqrt(n_batches)
-    if period > 0 and n_measured % unit:
-        whole = (n_measured // unit) * unit
-        half_width += abs(log_stretch.sum() / (n_measured * slow_period)
-                          - log_stretch[-whole:].sum() / (whole * slow_period))
-    return half_width
+    return _T975.get(n_batches - 1, 1.96) * np.std(exponents, ddof=1) / np.sqrt(n_batches)
+
+
+def whole_cycle_exponent(log_stretch, slow_period, period):
+    """The largest exponent over the window's last whole cycles of a period-p orbit: the orbit's
+    own, log |mu_1| / (p T) (mu_1 the largest Floquet multiplier of its p-period map). Over the
+    whole window a period-p orbit's exponent would count the share of a cycle m mod p adds: at
+    g = 10, Omega = 4 (period 3, 8 impacts a cycle, 100 periods) -0.4651 against the orbit's
+    -0.4664, as R would be off by 1.6e-2 (motion.whole_cycle_gain). log_stretch: (m,)."""
+    whole = (len(log_stretch) // period) * period
+    return log_stretch[len(log_stretch) - whole:].sum() / (whole * slow_period)
 
 
 def lyapunov_values(records, summaries, statuses, coefficients, integration, period):
@@ -265,9 +271,14 @@ def lyapunov_values(records, summaries, statuses, coefficients, integration, per
     lyapunov_err = np.full(len(lyapunov), np.nan)
     slow_period = coefficients[:, PERIOD]
     measured = window_records(records, integration)
+    m = measured.shape[1]
     for i in np.flatnonzero(ok):
-        lyapunov_err[i] = lyapunov_error(measured[i, :, kernel.REC_LOG_STRETCH], slow_period[i],
-                                         period[i])
+        log_stretch = measured[i, :, kernel.REC_LOG_STRETCH]
+        lyapunov_err[i] = lyapunov_error(log_stretch, slow_period[i], period[i])
+        # a periodic point's exponent is its orbit's: over the last whole cycles, as its R
+        # (motion.whole_cycle_gain); a point that stuck keeps -inf (tangent.py)
+        if period[i] > 0 and m % period[i] and np.isfinite(lyapunov[i]):
+            lyapunov[i] = whole_cycle_exponent(log_stretch, slow_period[i], int(period[i]))
     lyapunov[~ok] = np.nan
     return {"lyapunov": lyapunov, "lyapunov_err": lyapunov_err}
 
