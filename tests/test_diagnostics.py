@@ -180,6 +180,24 @@ def test_period_three_point_reports_its_period_its_own_r_and_a_tiny_r_err():
     assert p100["Q_amplitude"] == pytest.approx(p99["Q_amplitude"], rel=1e-9)
 
 
+def test_period_three_points_impacts_per_period_is_its_orbits_as_r_is():
+    """g = 10 (period 3, 8 impacts a cycle): impacts_per_period is measured over the window R is,
+    the last whole cycles, so it is 8/3 over 100 periods too, not the window's (33 * 8 + the
+    impacts of one more period) / 100. SciPy (tests/reference.py) over 99 periods counts the
+    orbit's impacts on its own."""
+    from reference import reference_run
+
+    (p99,) = sweep_values([10.0], m=99)
+    (p100,) = sweep_values([10.0], m=100)
+    coefficients = kernel_coefficients({"Omega": 4.0, "g": 10.0, "gamma": 0.22, "alpha": 0.1, "c": 0.04,
+                                        "omega0": 0.1, "omega": 0.5, "Delta": 1.0, "e": 0.95})
+    scipy = reference_run(coefficients, 0.99, 0.5, 100, 99)
+    assert scipy["impacts_per_period"] == pytest.approx(8 / 3, rel=1e-12)
+    for p in (p99, p100):
+        assert p["period"] == 3 and p["impacts_per_cycle"] == 8
+        assert p["impacts_per_period"] == pytest.approx(scipy["impacts_per_period"], rel=1e-12)
+
+
 def test_chaotic_point_reports_no_period_and_an_r_err_covering_the_tolerance_change():
     """g = 5: R over 100 periods is one draw from a wide distribution; two tolerances give two
     draws. Two independent estimates of one mean, each with a 95% half-width R_err, differ by

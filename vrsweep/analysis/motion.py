@@ -46,6 +46,8 @@ Classes (``Motion``, stored as ``motion``):
                   over the window's last whole cycles (the last m - m mod p periods), the
                   orbit's own R (continuation's). Over the whole window it would be off by a
                   fixed amount: 1.6e-2 relative at g = 10, Omega = 4 (period 3, 100 periods).
+                  impacts_per_period likewise (whole_cycle_impacts), as lyapunov
+                  (diagnostics.whole_cycle_exponent).
   quasi_periodic  no period, not dying away, lambda1 not positive beyond its error bar, and
                   either convergence < QUASI_PERIODIC_LIMIT or lambda1 < 0 beyond its error bar
                   (where computed): R is the weighted average, R_err the largest of its
@@ -234,6 +236,17 @@ def whole_cycle_gain(measured, coefficients, period):
     return {"R": r, "Qs": qs, "Qc": qc, "Q_amplitude": amplitude}
 
 
+def whole_cycle_impacts(measured, period):
+    """Impacts per slow period over the last whole cycles of each point's window (period > 0):
+    the orbit's impacts_per_cycle / period, over the window R is measured on (whole_cycle_gain).
+    Over the whole window a period-p orbit counts part of a cycle once more: at g = 10, Omega = 4
+    (period 3, 8 impacts a cycle) 2.67 a period over 100 periods, against the orbit's 8/3."""
+    n_points, m, _ = measured.shape
+    whole = (m // period) * period
+    inside = np.arange(m)[None, :] >= (m - whole)[:, None]
+    return np.where(inside, measured[:, :, kernel.REC_IMPACTS], 0.0).sum(axis=1) / whole
+
+
 def _replace(values, where, estimates):
     for name, estimate in estimates.items():
         column = np.array(values[name], dtype=np.float64, copy=True)
@@ -243,7 +256,8 @@ def _replace(values, where, estimates):
 
 def motion_values(values, measured, statuses, coefficients, lyapunov=None):
     """``values`` (point_values' dict) with ``motion`` added; at periodic points whose window is
-    no whole number of cycles, R, Qs, Qc and Q_amplitude over the last whole cycles; at
+    no whole number of cycles, R, Qs, Qc, Q_amplitude and impacts_per_period over the last whole
+    cycles; at
     quasi-periodic points, R, Qs, Qc, Q_amplitude and R_err by weighted Birkhoff averages.
     lyapunov: the dict of diagnostics.lyapunov_values, or None."""
     ok = statuses == Status.OK
@@ -255,6 +269,7 @@ def motion_values(values, measured, statuses, coefficients, lyapunov=None):
     cut = (motion == Motion.PERIODIC) & (m % np.maximum(period, 1) != 0)
     if cut.any():
         _replace(values, cut, whole_cycle_gain(measured[cut], coefficients[cut], period[cut]))
+        _replace(values, cut, {"impacts_per_period": whole_cycle_impacts(measured[cut], period[cut])})
     quasi = motion == Motion.QUASI_PERIODIC
     if quasi.any():
         _replace(values, quasi, quasi_periodic_gain(measured[quasi], coefficients[quasi]))
