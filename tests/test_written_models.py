@@ -9,6 +9,7 @@ with events (written here, with its own right-hand sides).
 import math
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -648,3 +649,21 @@ def test_a_branch_ending_where_an_impact_reaches_the_section_says_so(tmp_path):
     assert "an impact lies on the stroboscopic section" in reason and "the barrier at 2.3" in reason, reasons
     assert abs(phi.max() - 5.9574) < 1e-3 and abs(x[np.argmax(phi)] - 2.3) < 1e-4
     assert reasons[0] == "integration_failed" and "phi = 5.957" in reason
+
+
+def test_a_negative_response_scale_gives_the_gain_of_its_magnitude():
+    # R = |Q| / |scale|: the linear oscillator with its stop out of reach, forced by F cos(omega t)
+    # with F swept through -1 and 1 (a force of amplitude 1, phase pi or 0), has the closed-form
+    # gain 1 / sqrt((1 - omega^2)^2 + (2 zeta omega)^2) at both, never a negative R.
+    import vrsweep
+
+    text = MODEL.replace("Delta: 1.2", "Delta: 5.0") + textwrap.dedent("""\
+        sweep: {F: [-1.0, 1.0]}
+        integration: {transient_periods: 150, measure_periods: 20, method: dop853, rtol: 1.0e-10, atol: 1.0e-12}
+        """)
+    ds = vrsweep.sweep(text, progress=False)
+    zeta, omega = 0.05, 0.8
+    gain = 1.0 / math.hypot(1.0 - omega ** 2, 2.0 * zeta * omega)
+    assert (ds["impacts_per_period"].values == 0).all()
+    np.testing.assert_allclose(ds["R"].values, gain, rtol=1e-8)
+    np.testing.assert_allclose(ds["Q_amplitude"].values, gain, rtol=1e-8)

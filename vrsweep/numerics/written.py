@@ -144,7 +144,9 @@ def coefficients(model: WrittenModel, parameters):
     out[..., MAX_STEP] = header["max_step"]
     out[..., SCAN_STEP] = header["max_step"] / SCAN_STEPS_PER_MAX_STEP
     out[..., RESPONSE_FREQUENCY] = header["response.frequency"]
-    out[..., RESPONSE_SCALE] = header["response.scale"]
+    # R = |Q| / |scale|: a gain, never negative. A scale written as a forcing amplitude F may be
+    # swept through F < 0, a force of amplitude |F| and phase pi, whose gain is that of |F|.
+    out[..., RESPONSE_SCALE] = np.abs(header["response.scale"])
     out[..., N_BARRIERS] = len(model.barriers)
     # The harmonics dop853 rotates are the generated module's to say (models.WrittenKernels):
     # until then the response frequency alone, which every model's quadratures have.
