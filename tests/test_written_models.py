@@ -280,7 +280,7 @@ def test_continue_locates_the_linear_oscillators_graze_and_follows_it_in_omega(t
     assert len(omega) >= 10 and np.ptp(omega) > 0.1
     for path in (branch, curve):  # the model's own period and response, not the paper's omega and c
         with h5py.File(path, "r") as f:
-            assert f["R"].attrs["long_name"].startswith("gain R = |Q|/(F) over the orbit, Q at the response "
+            assert f["R"].attrs["long_name"].startswith("gain R = |Q|/|F| over the orbit, Q at the response "
                                                         "frequency omega"), path
             assert f["periods"].attrs["long_name"] == "orbit period in periods T = 2 * pi / omega", path
     np.testing.assert_allclose(delta, _free_amplitude(p["zeta"], p["F"], omega), rtol=0, atol=1e-6)
@@ -518,7 +518,7 @@ def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
     assert not any("g_{res}" in str(handle.get_label()) for handle in figure.axes[0].get_legend_handles_labels()[0])
     # Its own response and period, not the paper's |Q|/c and slow period 2 pi/omega.
     labels = [ax.get_ylabel() for ax in figure.axes] + [ax.get_ylabel() for ax in counts.axes]
-    assert any(label.startswith("gain $R = |Q|$ / F") for label in labels), labels
+    assert any(label.startswith("gain $R = |Q|$ / |F|") for label in labels), labels
     assert any(label.startswith("mean impacts per period $T$") for label in labels), labels
     assert not any("c$" in label or "slow" in label for label in labels), labels
 

@@ -47,7 +47,7 @@ def command(config_path, overrides, threads):
                        f"restitution {barrier.restitution}")
         if not model.barriers:
             click.echo("barriers:    none")
-        click.echo(f"period:      T = {model.period}; R = |Q| / {model.response_scale}, Q at frequency "
+        click.echo(f"period:      T = {model.period}; R = |Q| / |{model.response_scale}|, Q at frequency "
                    f"{model.response_frequency}")
     # The continued parameter is not fixed for `continue` (continuation.from starts it), but a sweep
     # in the same config (`run`) holds it at its value in parameters: shown then.

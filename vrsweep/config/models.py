@@ -9,7 +9,7 @@ data (docs/models.md), checked here into a numerics.written.WrittenModel.
       barriers:                                        # zero, one or two
         - {position: Delta, side: above, restitution: r}
       period: "2*pi/omega"                             # the stroboscopic period T
-      response: {frequency: omega, scale: F}           # R = |Q| / scale at that frequency
+      response: {frequency: omega, scale: F}           # R = |Q| / |scale| at that frequency
       max_step: "period/8"                             # optional: the step cap (accuracy of R)
 
 Every expression is checked by numerics.expressions (a whitelist over the syntax tree: a config
@@ -318,7 +318,7 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
                  (("response", "frequency"), header["response.frequency"], lambda a: np.isfinite(a) & (a > 0),
                   "must be > 0 and finite"),
                  (("response", "scale"), header["response.scale"], lambda a: np.isfinite(a) & (a != 0),
-                  "must be finite and not 0 (R = |Q| / scale)"),
+                  "must be finite and not 0 (R = |Q| / |scale|)"),
                  (("max_step",), header["max_step"], lambda a: np.isfinite(a) & (a > 0), "must be > 0 and finite")]
         for index in range(len(model.barriers)):
             rules.append((("barriers", index, "position"), header[f"barriers.{index}.position"], np.isfinite,

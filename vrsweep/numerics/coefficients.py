@@ -9,7 +9,7 @@ order for a written model, numerics/written.py):
     coefficients[MAX_STEP]             the largest step the controller may take (accuracy of R)
     coefficients[SCAN_STEP]            the step of the scan for the release of a stuck mass
     coefficients[RESPONSE_FREQUENCY]   w of R's Fourier component Q = (2/NT) int x e^{iwt} dt
-    coefficients[RESPONSE_SCALE]       R = |Q| / scale (eq3.3: scale = c, the slow drive)
+    coefficients[RESPONSE_SCALE]       R = |Q| / scale, scale > 0 (eq3.3: c; a written model's |scale|)
     coefficients[N_BARRIERS]           0, 1 or 2 rigid stops
     coefficients[HARMONIC, HARMONIC + 1]   the frequencies whose cos and sin a dop853 step takes by
                                        rotating the phases of its start (rhs.py), 0 where unused

@@ -306,7 +306,7 @@ def _map_words(name):
     """MAP_LABELS' words for ``name``, in a written model's own terms where the paper's differ."""
     model = written_model()
     if model is not None and name == "R":
-        return f"gain $R = |Q|$ / {model.response_scale}"
+        return f"gain $R = |Q|$ / |{model.response_scale}|"
     if name == "impacts_per_period":
         return f"mean impacts per {period_words()}"
     return MAP_LABELS.get(name)

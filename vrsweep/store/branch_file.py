@@ -77,7 +77,7 @@ def point_long_names(config):
         model = config.model
         names.update(
             periods=f"orbit period in periods T = {model.period}",
-            R=(f"gain R = |Q|/({model.response_scale}) over the orbit, Q at the response frequency "
+            R=(f"gain R = |Q|/|{model.response_scale}| over the orbit, Q at the response frequency "
                f"{model.response_frequency}"),
             Q_amplitude=f"response amplitude |Q| at {model.response_frequency} over the orbit",
             impacts_per_period="impacts per period T",

@@ -61,7 +61,7 @@ def written_model_words(variables, model):
     """``point_variables``' list with the long names of a written model (numerics.written): its
     response's frequency and scale and its period T, not the paper's omega and c."""
     words = {
-        "R": (f"gain |Q|/({model.response_scale}) at the response frequency {model.response_frequency}: over the "
+        "R": (f"gain |Q|/|{model.response_scale}| at the response frequency {model.response_frequency}: over the "
               "last whole cycles where periodic, a weighted Birkhoff average where quasi-periodic"),
         "Qs": f"sine Fourier component of x at {model.response_frequency}",
         "Qc": f"cosine Fourier component of x at {model.response_frequency}",
