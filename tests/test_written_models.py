@@ -75,6 +75,17 @@ def test_expressions_evaluate_as_written(text, values, expected):
     ("x + " * 1000 + "x", "longer than"),
     ("", "empty"),
     ("x +", "not a valid expression"),
+    # constant parts are folded in doubles: a power beyond 64 however written, and no constant
+    # that is not a finite real number (each reached sympy or numba and ended in a traceback)
+    ("1" + "0" * 400 + " * x", "too large for a double"),
+    ("x ** -100", "power beyond"),
+    ("x ** 64 ** 64", "power beyond"),
+    ("2 ** 10 ** 10", "power beyond"),
+    ("x + 1 / 0", "1 / 0 = inf"),
+    ("x + log(0)", "log(0) = -inf"),
+    ("x + sqrt(-1)", "sqrt(-1) = nan"),
+    ("x + (-8) ** (1 / 3)", "not a finite real number"),
+    ("exp(1000) * x", "exp(1000) = inf"),
 ])
 def test_expressions_refuse_anything_but_the_whitelist(text, token):
     with pytest.raises(expressions.ExpressionError, match=None) as caught:
@@ -176,6 +187,16 @@ def test_the_cli_refuses_a_bad_model_in_one_line_with_exit_2(tmp_path):
     assert "bad.yaml:2: model.acceleration: may not hold an attribute" in result.output
     assert "Traceback" not in result.output
     assert not (tmp_path / "out.h5").exists()
+
+
+def test_an_integer_beyond_a_double_is_one_line_not_a_traceback(tmp_path):
+    """float() of a 400-digit integer raised OverflowError out of the parser: a traceback."""
+    path = tmp_path / "bad.yaml"
+    path.write_text(MODEL.replace("F*cos(omega*t)", "1" + "0" * 400 + "*cos(omega*t)"))
+    result = CliRunner().invoke(main, ["validate", str(path)])
+    assert result.exit_code == 2, result.output
+    assert "bad.yaml:2: model.acceleration: holds a number too large for a double" in result.output
+    assert "Traceback" not in result.output and len(result.output.strip().splitlines()) == 1
 
 
 def test_the_paper_theory_is_refused_for_a_written_model(tmp_path):
@@ -567,6 +588,29 @@ def test_a_start_where_the_acceleration_is_infinite_is_non_finite_not_a_step_too
         result = vrsweep.sweep(str(config), output=str(tmp_path / f"{method}.h5"), method=method)
         assert list(result["status"].values) == [Status.OK, Status.NON_FINITE], method
         assert result["n_steps"].values[1] == 0
+
+
+def test_large_exact_numbers_and_imaginary_parts_compile_as_doubles(tmp_path):
+    """sympy keeps 10**20 exact: the kernel held the literal 100000000000000000000, which numba
+    cannot type (TypingError on the first run), and sqrt(-c**2) became I*|c|, a complex number
+    numba cannot store (NotImplementedError). Both are doubles now: 10**20*k + 10**-20*K = 1
+    gives the free linear oscillator, R = 1/sqrt((1 - w^2)^2 + (2 zeta w)^2) in closed form, and
+    an imaginary part is NaN as in real arithmetic: the point is non_finite."""
+    import vrsweep
+
+    text = MODEL.replace("- x + F*cos(omega*t)", "- (10**20*k + 10**-20*K)*x + F*cos(omega*t)")
+    text = text.replace("{zeta: 0.05,", "{k: 0.5e-20, K: 0.5e+20, zeta: 0.05,").replace("Delta: 1.2", "Delta: 100")
+    settings = "integration: {transient_periods: 200, measure_periods: 32}\n"
+    (tmp_path / "big.yaml").write_text(text + settings)
+    result = vrsweep.sweep(str(tmp_path / "big.yaml"), output=str(tmp_path / "big.h5"))
+    zeta, w = 0.05, 0.8
+    assert int(result["status"]) == Status.OK
+    assert float(result["R"]) == pytest.approx(1 / math.hypot(1 - w * w, 2 * zeta * w), rel=1e-7)
+
+    (tmp_path / "i.yaml").write_text(MODEL.replace("F*cos(omega*t)", "F*cos(omega*t) + sqrt(-F**2)") + settings)
+    with pytest.warns(RuntimeWarning, match="non_finite"):
+        result = vrsweep.sweep(str(tmp_path / "i.yaml"), output=str(tmp_path / "i.h5"))
+    assert int(result["status"]) == Status.NON_FINITE
 
 
 def test_a_written_models_trajectory_file_names_its_own_barrier_and_period(tmp_path):

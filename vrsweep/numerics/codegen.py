@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import importlib.util
+import math
 import os
 import sys
 import tempfile
@@ -246,7 +247,29 @@ def _printer():
             argument = self._print(expr.args[0])
             return f"(1.0 if ({argument}) > 0.0 else (0.0 if ({argument}) < 0.0 else 0.5))"
 
+        # sympy's integers are exact: 10**20*x became the literal 100000000000000000000, which numba
+        # cannot type (TypingError at the first run). Beyond int64 they are doubles, as numpy has them.
+        def _print_Integer(self, expr):
+            return _double(expr) if abs(int(expr)) >= 2 ** 63 else super()._print_Integer(expr)
+
+        def _print_Rational(self, expr):
+            return _double(expr) if max(abs(int(expr.p)), int(expr.q)) >= 2 ** 63 else super()._print_Rational(expr)
+
+        # The language is real (expressions.py refuses a constant sqrt(-1)), but sympy finds
+        # sqrt(-F**2) = I*|F|: complex in numba, which cannot store it. Real arithmetic says NaN.
+        def _print_ImaginaryUnit(self, expr):
+            return "math.nan"
+
     return KernelPrinter({"fully_qualified_modules": True, "strict": True})
+
+
+def _double(number) -> str:
+    """A sympy number as a double's literal (math.inf where it overflows one)."""
+    try:
+        value = float(number)
+    except OverflowError:
+        value = math.inf if number > 0 else -math.inf
+    return repr(value) if math.isfinite(value) else ("math.inf" if value > 0 else "-math.inf")
 
 
 def _assignments(pairs, printer, indent="    "):

@@ -59,6 +59,18 @@ def parse(text, names) -> ast.expr:
     return tree.body
 
 
+def _constant(node, value):
+    """``value`` (a constant part's, or None) if it is a finite real number; refused otherwise."""
+    if value is None:
+        return None
+    with np.errstate(all="ignore"):
+        value = float(value)
+    if not math.isfinite(value):
+        raise ExpressionError(f"has a constant part that is not a finite real number: {_token(node)} = {value} "
+                              f"(in real arithmetic)")
+    return value
+
+
 def _token(node) -> str:
     try:
         text = ast.unparse(node)
@@ -68,31 +80,41 @@ def _token(node) -> str:
 
 
 def _check(node, names, depth):
+    """Checks ``node`` and returns its value when it holds no name but pi (a constant part), else
+    None. Constant parts are folded in doubles here, as numpy and the kernel would compute them:
+    exact integers (sympy's) would let 2**10**10 run for ever and print 10**20 as an integer that
+    numba cannot type, and 1/0 or sqrt(-1) would put inf or a complex number into the kernel."""
     if depth > MAX_DEPTH:
         raise ExpressionError(f"is nested more than {MAX_DEPTH} deep")
     if isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
             raise ExpressionError(f"may hold numbers but not {_token(node)} (only numbers, names and operators)")
-        if not math.isfinite(float(node.value)):
+        try:
+            value = float(node.value)
+        except OverflowError:  # an integer literal beyond a double
+            value = math.inf
+        if not math.isfinite(value):
             raise ExpressionError(f"holds a number too large for a double: {_token(node)}")
-        return
+        return value
     if isinstance(node, ast.Name):
-        if node.id in names or node.id in CONSTANTS:
-            return
+        if node.id in CONSTANTS:
+            return CONSTANTS[node.id]
+        if node.id in names:
+            return None
         if node.id in FUNCTIONS:
             raise ExpressionError(f"uses the function {node.id} without calling it: write {node.id}(...)")
         known = ", ".join(sorted(names)) or "none"
         raise ExpressionError(f"refers to an unknown name {node.id!r} (known: {known}, pi)")
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-        _check(node.left, names, depth + 1)
-        _check(node.right, names, depth + 1)
-        if isinstance(node.op, ast.Pow) and isinstance(node.right, ast.Constant) \
-                and abs(float(node.right.value)) > MAX_EXPONENT:
+        left = _check(node.left, names, depth + 1)
+        right = _check(node.right, names, depth + 1)
+        # Any constant exponent, not only a literal one: x**-100, x**(2**100) and 2**10**10 too.
+        if isinstance(node.op, ast.Pow) and right is not None and abs(right) > MAX_EXPONENT:
             raise ExpressionError(f"has a power beyond {MAX_EXPONENT}: {_token(node)}")
-        return
+        return _constant(node, None if left is None or right is None else evaluate(node, {}))
     if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
-        _check(node.operand, names, depth + 1)
-        return
+        operand = _check(node.operand, names, depth + 1)
+        return None if operand is None else (-operand if isinstance(node.op, ast.USub) else operand)
     if isinstance(node, ast.Call):
         if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
             raise ExpressionError(f"calls {_token(node.func)}, which is not one of the functions "
@@ -103,9 +125,8 @@ def _check(node, names, depth):
         if len(node.args) != wanted or any(isinstance(arg, ast.Starred) for arg in node.args):
             raise ExpressionError(f"calls {node.func.id} with {len(node.args)} argument(s), not {wanted}: "
                                   f"{_token(node)}")
-        for arg in node.args:
-            _check(arg, names, depth + 1)
-        return
+        values = [_check(arg, names, depth + 1) for arg in node.args]
+        return _constant(node, None if None in values else evaluate(node, {}))
     kind = {ast.Attribute: "an attribute", ast.Subscript: "a subscript", ast.Lambda: "a lambda",
             ast.Compare: "a comparison", ast.BoolOp: "a logical operator", ast.IfExp: "a conditional",
             ast.List: "a list", ast.Tuple: "a tuple", ast.Dict: "a mapping", ast.Set: "a set",
