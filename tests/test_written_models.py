@@ -142,6 +142,27 @@ def test_bad_models_name_the_file_line_and_field(change, expected):
     assert any(problem.startswith(expected) for problem in found), found
 
 
+@pytest.mark.parametrize("name", ["R", "status", "period", "curve", "rtol", "max_period", "model"])
+def test_a_parameter_may_not_take_a_name_vrsweep_stores_or_sets(name):
+    """A parameter R swept was an axis beside the variable R: h5py refused it after the whole run
+    ("name already exists", a traceback); a parameter rtol could not be set by --set rtol=."""
+    found = problems(MODEL.replace("zeta: 0.05,", f"zeta: 0.05, {name}: 0.5,"))
+    assert any(problem.startswith(f"m.yaml:3: model.parameters.{name}: {name} is taken") for problem in found), found
+
+
+def test_the_taken_names_cover_every_array_a_result_file_names_itself():
+    from vrsweep.config.models import STORED_NAMES
+    from vrsweep.config.schema import Integration, INTEGRATION_DEFAULTS
+    from vrsweep.store import curve_file
+    from vrsweep.store.layout import BOOKKEEPING
+    from vrsweep.store.variables import point_variables
+
+    integration = Integration(**dict(INTEGRATION_DEFAULTS, lyapunov=True))
+    stored = {spec[0] for spec in point_variables(integration)} | {"strobe"} | set(BOOKKEEPING)
+    stored |= set(curve_file.layout([]))
+    assert stored <= STORED_NAMES | expressions.RESERVED, stored - STORED_NAMES - expressions.RESERVED
+
+
 def test_a_start_the_user_never_wrote_is_called_the_default():
     """Without initial:, a written model starts at the paper's (0.99, 0.5): a refusal that named
     initial.x = 0.99 named a value the config does not hold."""

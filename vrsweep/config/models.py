@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, PARAMETER_DOMAINS, Domain
+from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, INTEGRATION_DEFAULTS, PARAMETER_DOMAINS, Domain
 from vrsweep.config.wording import did_you_mean, show
 import vrsweep.numerics.expressions as expressions
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, PARAMETER_NAMES
@@ -39,6 +39,19 @@ BARRIER_KEYS = ("position", "side", "restitution")
 RESPONSE_KEYS = ("frequency", "scale")
 MAX_PARAMETERS = 64
 MAX_NAME_LENGTH = 200
+# Names the result files give their own arrays (a sweep's variables and dimensions, a curves
+# file's, tests/test_written_models.py keeps this list complete): a parameter of one of these
+# names is an axis or a column of the same name, and h5py refused the second after the whole
+# run ("name already exists"). The store cannot be imported here (tests/test_layout.py).
+STORED_NAMES = frozenset((
+    "R", "Qs", "Qc", "Q_amplitude", "R_err", "impacts_per_period", "status", "period", "motion",
+    "impacts_per_cycle", "strobe", "strobe_x", "strobe_v", "x_min", "x_max", "impact_speed_min",
+    "impact_speed_max", "impact_speed_mean", "impact_phase", "impact_phase_spread", "stuck_fraction",
+    "x_final", "v_final", "n_steps", "n_rhs", "lyapunov", "lyapunov_err", "done", "owned",
+    "point", "multiplier", "curve_id", "special", "curve", "periods", "barrier_distance", "residual",
+    "multiplier_real", "multiplier_imag", "multiplier_modulus", "curve_kind", "curve_periods",
+    "curve_end_first_status", "curve_end_first_reason", "curve_end_last_status", "curve_end_last_reason",
+    "special_kind", "special_curve"))
 # A grid this large is checked point by point; a larger one along each axis through the fixed values.
 FULL_CHECK_POINTS = 1_000_000
 
@@ -262,6 +275,11 @@ def _bad_name(name) -> str | None:
                 f"{', '.join(expressions.FUNCTIONS)} the functions")
     if name in INITIAL_STATE_AXES:
         return f"{name} is taken: x0 and v0 are the initial-state axes of a sweep (basins)"
+    if name in INTEGRATION_DEFAULTS or name == "model":
+        return f"{name} is taken: --set {name}=VALUE sets integration.{name}" if name != "model" else \
+            "model is taken: --set model=VALUE chooses the model"
+    if name in STORED_NAMES:
+        return f"{name} is taken: result files name their own {name!r} array so (rename the parameter)"
     if len(name) > 40:
         return f"is longer than 40 characters: {name[:40]}..."
     return None
