@@ -103,6 +103,9 @@ def _check(node, names, depth):
             return None
         if node.id in FUNCTIONS:
             raise ExpressionError(f"uses the function {node.id} without calling it: write {node.id}(...)")
+        if node.id in STATE_NAMES:  # "unknown name 't'" puzzled: t is known, in the acceleration
+            raise ExpressionError(f"depends on {node.id}, but it may depend on the parameters only (x, v and t "
+                                  f"are the acceleration's)")
         known = ", ".join(sorted(names)) or "none"
         raise ExpressionError(f"refers to an unknown name {node.id!r} (known: {known}, pi)")
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
