@@ -443,6 +443,24 @@ def test_reference_models_agree_with_scipy(name, method):
     assert run.summary[kernel.SUM_R] == pytest.approx(R, rel=1e-7)
 
 
+def test_a_deeply_nested_sine_is_derived_in_seconds():
+    """harmonics() ran sympy.simplify on every sine's argument: sin(sin(...sin(x))) sixty deep, a
+    291-character acceleration within every limit, kept sympy busy for minutes before numba began.
+    The harmonics a t are now recognised by expansion, after the cheap tests."""
+    import time
+
+    from vrsweep.numerics import codegen
+    from vrsweep.numerics.written import WrittenModel
+
+    text = "-x + F*cos(omega*t) + " + "sin(" * 58 + "x" + ")" * 58
+    model = WrittenModel(acceleration=expressions.canonical(text), parameters=(("F", 1.0), ("omega", 0.8)),
+                         period="2*pi/omega", response_frequency="omega")
+    start = time.perf_counter()
+    source = codegen.source(model)
+    assert time.perf_counter() - start < 20
+    assert "C_1" in source  # cos(omega t) is still the rotated harmonic
+
+
 # --- compiled once, and never stale --------------------------------------------------------------
 
 def test_a_second_run_of_the_same_model_compiles_nothing():

@@ -183,14 +183,30 @@ def harmonics(expressions_, t, frequency):
     found = [frequency]
     for expression in expressions_:
         for term in sympy.preorder_traversal(expression):
-            if isinstance(term, (sympy.sin, sympy.cos)):
-                argument = sympy.expand(term.args[0])
-                slope = sympy.diff(argument, t)
-                if argument.is_polynomial(t) and sympy.simplify(argument - slope * t) == 0 and t not in slope.free_symbols \
-                        and not slope.free_symbols & set(sympy.symbols("x v", real=True)):
-                    if all(sympy.simplify(slope - known) != 0 for known in found):
-                        found.append(slope)
+            slope = _slope(term, t)
+            if slope is not None and all(sympy.expand(slope - known) != 0 for known in found):
+                found.append(slope)
     return found[0], (found[1] if len(found) > 1 else None)
+
+
+def _slope(term, t):
+    """a if ``term`` is sin(a t) or cos(a t) with a free of x, v and t, else None.
+
+    The cheap tests first and sympy.expand, not simplify: simplify of every sine's argument took
+    minutes for sin(sin(...sin(x))) sixty deep (a 291-character acceleration). An argument a*t
+    that only simplify would recognise stays a library call, which is as right, only slower."""
+    import sympy
+
+    if not isinstance(term, (sympy.sin, sympy.cos)):
+        return None
+    names = term.args[0].free_symbols
+    if t not in names or any(symbol.name in ("x", "v") for symbol in names):
+        return None
+    argument = sympy.expand(term.args[0])
+    slope = sympy.expand(sympy.diff(argument, t))
+    if t in slope.free_symbols or sympy.expand(argument - slope * t) != 0:
+        return None
+    return slope
 
 
 def _rotated(expression, t, harmonic_1, harmonic_2):
@@ -204,10 +220,12 @@ def _rotated(expression, t, harmonic_1, harmonic_2):
         C, S = sympy.Symbol(f"C_{k}", real=True), sympy.Symbol(f"S_{k}", real=True)
 
         def swap(term, C=C, S=S, frequency=frequency):
-            argument = sympy.expand(term.args[0])
-            if sympy.simplify(argument - frequency * t) == 0:
+            slope = _slope(term, t)  # sympy writes sin(-a t) as -sin(a t): the sign is the slope's
+            if slope is None:
+                return term
+            if sympy.expand(slope - frequency) == 0:
                 return C if isinstance(term, sympy.cos) else S
-            if sympy.simplify(argument + frequency * t) == 0:  # cos(-a t) = C, sin(-a t) = -S
+            if sympy.expand(slope + frequency) == 0:  # cos(-a t) = C, sin(-a t) = -S
                 return C if isinstance(term, sympy.cos) else -S
             return term
 
