@@ -165,6 +165,21 @@ def test_the_taken_names_cover_every_array_a_result_file_names_itself():
     assert stored <= STORED_NAMES | expressions.RESERVED, stored - STORED_NAMES - expressions.RESERVED
 
 
+def test_the_messages_docs_models_shows_are_the_ones_given():
+    """docs/models.md showed the unknown-name message without t, v, x and phi in its list."""
+    import re
+    import yaml
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "models.md").read_text()
+    section = yaml.safe_load(re.search(r"```yaml\n(model:.*?)```", page, re.S).group(1))["model"]
+    shown = re.search(r"```text\n(m\.yaml:2: model\.acceleration: refers.*?)```", page, re.S).group(1).splitlines()
+    for line, acceleration in zip(shown, ["G*x", "__import__('os')"]):
+        model = {"acceleration": acceleration, **{k: v for k, v in section.items() if k not in ("name", "acceleration")}}
+        text = yaml.safe_dump({"model": model, "initial": {"x": 0.0, "v": 0.0}}, sort_keys=False)
+        found = problems(text)
+        assert any(problem.startswith(line.removesuffix("...")) for problem in found), (line, found)
+
+
 def test_a_start_the_user_never_wrote_is_called_the_default():
     """Without initial:, a written model starts at the paper's (0.99, 0.5): a refusal that named
     initial.x = 0.99 named a value the config does not hold."""
