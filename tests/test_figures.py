@@ -337,3 +337,16 @@ def test_a_figure_too_small_for_its_texts_says_what_to_do(files, tmp_path, invok
     assert result.exit_code == 0, result.output
     assert "Note: " in result.output and "too small for its title" in result.output
     assert "--no-title, a larger --size" in result.output and "constrained_layout" not in result.output
+
+
+def test_a_written_models_greek_symbols_are_letters_in_the_description():
+    """A written model's symbols are any LaTeX Greek letter: \\zeta and \\varphi were written
+    "zeta" and "varphi" in the PNG's Description (vrsweep info FIGURE.png), Delta as Δ."""
+    from types import SimpleNamespace
+
+    from vrsweep.plot.labels import description
+
+    figure = SimpleNamespace(_vrsweep_description=(
+        r"Response gain R against $\omega$",
+        r"$\zeta$ = 0.05,  $\varphi$ = 0,  $\Delta$ = 1.2,  $\varepsilon$ = 1,  $\tilde\omega$,  $\omega_0$"))
+    assert description(figure) == "Response gain R against ω\nζ = 0.05,  φ = 0,  Δ = 1.2,  ε = 1,  ω̃,  ω0"

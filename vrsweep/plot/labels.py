@@ -442,9 +442,25 @@ def description(fig) -> str:
     return text.replace("$", "").replace("\\", "")
 
 
-MATHTEXT_PLAIN = {"\\dot{x}": "ẋ", "\\tilde\\omega": "ω̃", "\\gamma": "γ", "\\alpha": "α",
-                  "\\omega_0": "ω0", "\\omega": "ω", "\\Omega": "Ω", "\\Delta": "Δ", "\\lambda_1": "λ1",
-                  "\\pi": "π", "\\infty": "∞", "{": "", "}": ""}
+def _greek() -> dict:
+    """Every Greek letter's LaTeX name -> the letter: a written model's symbols are any of them
+    (its \\zeta and \\varphi were "zeta" and "varphi" in a figure's metadata)."""
+    import unicodedata
+
+    letters = ("alpha beta gamma delta epsilon zeta eta theta iota kappa lambda mu nu xi omicron pi rho sigma tau "
+               "upsilon phi chi psi omega").split()
+    table = {}
+    for name in letters:
+        table[f"\\{name}"] = unicodedata.lookup(f"GREEK SMALL LETTER {name.upper().replace('LAMBDA', 'LAMDA')}")
+        table[f"\\{name.capitalize()}"] = unicodedata.lookup(
+            f"GREEK CAPITAL LETTER {name.upper().replace('LAMBDA', 'LAMDA')}")
+    table.update({"\\varphi": "φ", "\\varepsilon": "ε", "\\vartheta": "ϑ", "\\varrho": "ϱ", "\\varsigma": "ς"})
+    # longest first: \\varphi before \\phi would not matter, but \\epsilon inside \\varepsilon would
+    return dict(sorted(table.items(), key=lambda item: -len(item[0])))
+
+
+MATHTEXT_PLAIN = {"\\dot{x}": "ẋ", "\\tilde\\omega": "ω̃", "\\omega_0": "ω0", "\\lambda_1": "λ1",
+                  **_greek(), "\\infty": "∞", "{": "", "}": ""}
 
 
 def metadata(fig, file_format) -> dict:
