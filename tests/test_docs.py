@@ -201,3 +201,15 @@ def test_design_documents_every_status_and_stored_variable():
     documented = " ".join(row[0] for row in rows)
     problems += [f"variable {name}" for name in stored if f"`{name}`" not in documented]
     assert not problems, f"docs/design.md lacks: {problems}"
+
+
+def test_the_pages_call_the_barrier_line_by_its_style():
+    """The barrier line A/c = Δ/c became dash-dot-dot (plot/sweeps.py BARRIER_DASHES); the README,
+    index.md and paper.md still called it dotted, which a sweep's joining lines are."""
+    from vrsweep.plot.sweeps import BARRIER_DASHES
+
+    assert len(BARRIER_DASHES[1]) == 6  # a dash and two dots
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        text = " ".join(page.read_text(encoding="utf-8").split())
+        for phrase in ("capped by the barrier (dotted", "(dotted: A/c = Δ/c", "Δ = 1 (dotted level)"):
+            assert phrase not in text, f"{page.name}: {phrase}"
