@@ -165,6 +165,18 @@ def test_the_taken_names_cover_every_array_a_result_file_names_itself():
     assert stored <= STORED_NAMES | expressions.RESERVED, stored - STORED_NAMES - expressions.RESERVED
 
 
+def test_a_symbol_matplotlib_cannot_draw_is_refused_when_the_config_is_read(tmp_path):
+    """symbols: {zeta: '\\frac{'} passed validate and run; then plot failed with a traceback
+    from matplotlib's mathtext parser."""
+    text = MODEL.replace("  barriers:", "  symbols: {zeta: '\\frac{', omega: '\\omega_0'}\n  barriers:")
+    found = problems(text)
+    assert len(found) == 1 and found[0].startswith("m.yaml:4: model.symbols.zeta: matplotlib cannot draw $\\frac{$"), found
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    result = CliRunner().invoke(main, ["validate", str(path)])
+    assert result.exit_code == 2 and "Traceback" not in result.output
+
+
 def test_the_messages_docs_models_shows_are_the_ones_given():
     """docs/models.md showed the unknown-name message without t, v, x and phi in its list."""
     import re

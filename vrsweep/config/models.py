@@ -204,6 +204,8 @@ class ModelSection:
             elif not (isinstance(symbol, str) and 0 < len(symbol) <= MAX_NAME_LENGTH and symbol.isprintable()):
                 self.report(("model", "symbols", name), f"must be a short LaTeX string such as '\\\\zeta', got "
                                                         f"{show(symbol)}")
+            elif (problem := _mathtext_problem(symbol)) is not None:
+                self.report(("model", "symbols", name), f"matplotlib cannot draw ${symbol}$: {problem}")
             else:
                 symbols.append((name, symbol))
         return tuple(symbols)
@@ -263,6 +265,22 @@ class ModelSection:
             self.report(path, str(error))
             return None
         return expressions.canonical(text)
+
+
+def _mathtext_problem(symbol) -> str | None:
+    """Why matplotlib's mathtext cannot draw ``$symbol$`` (the figures' labels), or None.
+
+    Checked here, with matplotlib's own parser (imported only for a model that gives symbols): a
+    symbol such as '\\frac{' passed the config and the run, then every figure of the file
+    failed with a traceback from deep in matplotlib."""
+    from matplotlib.mathtext import MathTextParser
+
+    try:
+        MathTextParser("path").parse(f"${symbol}$")
+    except ValueError as error:
+        lines = str(error).strip().splitlines()
+        return lines[-1] if lines else "not mathtext"
+    return None
 
 
 def _bad_name(name) -> str | None:
