@@ -683,7 +683,7 @@ def test_large_exact_numbers_and_imaginary_parts_compile_as_doubles(tmp_path):
 
 def test_a_written_models_trajectory_file_names_its_own_barrier_and_period(tmp_path):
     """simulate's file described a written model's impacts as "at x = Delta" and its periods as
-    T = 2 pi/omega, the paper's words."""
+    T = 2 pi/omega, the paper's words; its summary line counted impacts "per slow period"."""
     import h5py
 
     text = (EXAMPLES / "impact_linear.yaml").read_text()
@@ -692,8 +692,9 @@ def test_a_written_models_trajectory_file_names_its_own_barrier_and_period(tmp_p
                       .replace("measure_periods: 100", "measure_periods: 16"))
     output = tmp_path / "one_traj.h5"
     result = CliRunner().invoke(main, ["simulate", str(config), "--set", "omega=0.8", "--set", "Delta=0.5",
-                                       "-o", str(output), "-q"])
+                                       "-o", str(output)])
     assert result.exit_code == 0, result.output
+    assert "per period T)" in result.output and "slow" not in result.output  # said so too
     with h5py.File(output, "r") as f:
         group = f["written"]
         assert len(group["impact_t"]) > 0

@@ -16,7 +16,8 @@ from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
 @output_option
 @click.option("--samples-per-period", type=click.IntRange(min=1), default=DEFAULT_SAMPLES_PER_PERIOD,
               show_default=True,
-              help="Samples of x and v per slow period 2 pi/omega, taken from the solver's dense output.")
+              help="Samples of x and v per slow period 2 pi/omega (a written model's period T), taken from "
+                   "the solver's dense output.")
 @click.option("--compare", type=click.Choice(["effective"]), default=None,
               help="Also integrate the effective system (eq2.10) from the same initial state, and "
                    "reconstruct it from the slow flow (eq2.21, eq2.24) -- Fig. 3-6 of the paper.")
@@ -54,9 +55,10 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
         data = simulate_point(config, samples_per_period, compare_effective=compare == "effective")
         write_trajectory(path, data, config, overwrite=overwrite)
     if not quiet:
+        per = "period T" if config.written else "slow period"  # a written model's period is its own
         for run in data.runs.values():
             counts = run.impacts_per_period
             click.echo(f"{run.model}: {run.status.name.lower()}, {len(run.t)} samples, {len(run.impacts)} impacts "
-                       f"({counts.sum() / max(1, len(counts)):.2f} per slow period), "
+                       f"({counts.sum() / max(1, len(counts)):.2f} per {per}), "
                        f"{len(run.sticks)} sticking intervals", err=True)
         click.echo(f"-> {path}", err=True)
