@@ -86,6 +86,7 @@ def test_expressions_evaluate_as_written(text, values, expected):
     ("x + sqrt(-1)", "sqrt(-1) = nan"),
     ("x + (-8) ** (1 / 3)", "not a finite real number"),
     ("exp(1000) * x", "exp(1000) = inf"),
+    ("-x\n+ 1", "spans lines"),  # a YAML literal block: "not a valid expression at character 1"
 ])
 def test_expressions_refuse_anything_but_the_whitelist(text, token):
     with pytest.raises(expressions.ExpressionError, match=None) as caught:
@@ -133,6 +134,9 @@ def test_a_written_model_is_read_with_its_parameters():
     (("2*pi/omega", "2*pi/x"), "m.yaml:6: model.period: depends on x, but it may depend on the parameters only"),
     (("position: Delta", "position: Delta + 0*t"), "m.yaml:5: model.barriers[0].position: depends on t"),
     (("position: Delta", "position: Delta*v"), "m.yaml:5: model.barriers[0].position: depends on v"),
+    # a number that is not finite was written back as 'inf' and refused as "an unknown name 'inf'"
+    (("position: Delta", "position: .inf"), "m.yaml:5: model.barriers[0].position: must be a finite number or an "
+                                            "expression, got inf"),
     (("zeta: 0.05", "x: 0.05"), "m.yaml:3: model.parameters.x: x is taken"),
     (("r: 0.8}", "r: 1.5}"), "m.yaml:5: model.barriers[0].restitution: must be in [0, 1]"),
     (("omega: 0.8", "omega: -0.8"), "m.yaml:6: model.period: must be > 0 and finite, got -7.85"),

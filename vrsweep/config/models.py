@@ -255,6 +255,9 @@ class ModelSection:
             self.report(path, f"must be an expression (a string such as \"2*pi/omega\", or a number), "
                               f"got {show(value)}")
             return None
+        if not isinstance(value, str) and not math.isfinite(float(value)):  # repr: 'inf', "an unknown name"
+            self.report(path, f"must be a finite number or an expression, got {show(value)}")
+            return None
         text = value if isinstance(value, str) else repr(float(value))
         known = names if parameters is not None else None
         try:

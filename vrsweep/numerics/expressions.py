@@ -51,6 +51,9 @@ def parse(text, names) -> ast.expr:
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as error:
+        if "\n" in text.strip():  # a YAML literal block (|): Python ends the expression at the line's end
+            raise ExpressionError(f"spans lines, which an expression may not: write it on one line, or as a "
+                                  f"folded block (>-), whose lines YAML joins: {text.strip()!r}") from None
         where = f" at character {error.offset}" if error.offset else ""
         raise ExpressionError(f"is not a valid expression{where}: {text.strip()!r}") from None
     except (ValueError, RecursionError, MemoryError):
