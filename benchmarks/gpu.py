@@ -87,12 +87,13 @@ def run(run_lines, coefficients, settings, measure):
     return time.perf_counter() - began, records[:, 0], summaries[:, 0], statuses[:, 0]
 
 
-def compare(cpu, gpu, coefficients, integration):
+def compare(cpu, gpu, kernels, coefficients, integration):
     """Statuses equal (fraction), and R's relative difference where both have a period."""
     _, records_c, summaries_c, statuses_c = cpu
     _, records_g, summaries_g, statuses_g = gpu
-    period_c = point_diagnostics(records_c, statuses_c, coefficients, integration)["period"]
-    period_g = point_diagnostics(records_g, statuses_g, coefficients, integration)["period"]
+    frequencies = kernels.forcing_frequencies(coefficients)
+    period_c = point_diagnostics(records_c, statuses_c, coefficients, frequencies, integration)["period"]
+    period_g = point_diagnostics(records_g, statuses_g, coefficients, frequencies, integration)["period"]
     both = (period_c > 0) & (period_g > 0) & (statuses_c == Status.OK) & (statuses_g == Status.OK)
     r_c, r_g = summaries_c[both, kernel.SUM_R], summaries_g[both, kernel.SUM_R]
     relative = np.abs(r_g - r_c) / np.maximum(np.abs(r_c), 1e-300)
@@ -189,7 +190,7 @@ def main():
             n = AGREEMENT_SAMPLE
             gpu = run(gpu_lines, sample_coefficients[:n], settings, measure)
             cpu_part = tuple(part[:n] for part in cpu[1:])
-            row["agreement"] = compare((cpu[0],) + cpu_part, gpu, sample_coefficients[:n], integration)
+            row["agreement"] = compare((cpu[0],) + cpu_part, gpu, kernels, sample_coefficients[:n], integration)
             # The map: a first launch of 2^16 points says how many the budget allows.
             left = args.budget / (2 * len(models)) - 0  # this model and method's share
             points = grid(args.points)

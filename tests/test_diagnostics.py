@@ -16,6 +16,7 @@ from vrsweep.numerics import kernel
 from vrsweep.config import parse_config
 from vrsweep.analysis.diagnostics import N_BATCHES, batch_error, detect_period, point_diagnostics, r_error
 from vrsweep.numerics.model import kernel_coefficients
+from vrsweep.numerics.models import kernels_for
 from vrsweep.results import Motion, Status
 from vrsweep.execution.sweep import run_sweep
 from vrsweep.numerics.trajectory import settings_vector, simulate
@@ -228,7 +229,8 @@ def test_strobe_samples_and_extremes_are_those_of_the_trajectory():
     dense_times = np.linspace(n_transient * slow_period, (n_transient + n_measure) * slow_period, 200_001)
     times = np.concatenate([strobe_times, dense_times])
     run = simulate(coefficients[0], [0.99, 0.5], settings_vector(**vars(integration)), sample_times=times)
-    values = point_diagnostics(run.period_records[None], np.array([run.status]), coefficients, integration)
+    values = point_diagnostics(run.period_records[None], np.array([run.status]), coefficients,
+                               kernels_for("original").forcing_frequencies(coefficients), integration)
     order = np.argsort(times, kind="stable")
     samples = np.empty_like(run.samples)
     samples[order] = run.samples  # simulate returns samples in sorted-time order
@@ -249,7 +251,9 @@ def test_failed_points_get_nan_diagnostics():
                                         "Delta": 1.0, "e": 0.95, "g": 10.0, "Omega": 4.0}).reshape(1, -1)
     config = parse_config("integration: {transient_periods: 20, measure_periods: 20}")
     values = point_diagnostics(records, np.array([Status.OK, Status.MAX_STEPS], dtype=np.int8),
-                               np.repeat(coefficients, 2, axis=0), config.integration)
+                               np.repeat(coefficients, 2, axis=0),
+                               kernels_for("original").forcing_frequencies(np.repeat(coefficients, 2, axis=0)),
+                               config.integration)
     assert values["period"].tolist() == [1, 0]
     assert values["impacts_per_cycle"].tolist() == [0, -1]
     assert np.all(np.isnan(values["strobe_x"][1])) and np.isnan(values["R_err"][1])

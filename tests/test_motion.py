@@ -213,15 +213,18 @@ def test_info_counts_the_kinds_of_motion(kinds_file, invoke):
 
 def test_forcing_periods_from_the_coefficient_header():
     from vrsweep.analysis.diagnostics import forcing_periods
+    from vrsweep.numerics.coefficients import PERIOD
     from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
+    from vrsweep.numerics.models import kernels_for
 
     omegas = [4.0, 4.3, float(np.linspace(3.0, 6.0, 12)[2]), QUASI_PERIODIC_POINTS[0][1]]
     coefficients = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=np.full(4, 10.0), Omega=np.array(omegas)), "original")
     # Omega/omega = 8, 43/5, 78/11, irrational; no fast force (g = 0): the slow one alone, q = 1
-    assert list(forcing_periods(coefficients, 50)) == [1, 5, 11, 0]
-    assert list(forcing_periods(coefficients, 10)) == [1, 5, 0, 0]
-    no_fast = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=0.0, Omega=omegas[3]), "original")
-    assert list(forcing_periods(no_fast[np.newaxis], 50)) == [1]
+    frequencies = kernels_for("original").forcing_frequencies(coefficients)
+    assert list(forcing_periods(coefficients[:, PERIOD], frequencies, 50)) == [1, 5, 11, 0]
+    assert list(forcing_periods(coefficients[:, PERIOD], frequencies, 10)) == [1, 5, 0, 0]
+    no_fast = kernel_coefficients(dict(DEFAULT_PARAMETERS, g=0.0, Omega=omegas[3]), "original")[np.newaxis]
+    assert list(forcing_periods(no_fast[:, PERIOD], kernels_for("original").forcing_frequencies(no_fast), 50)) == [1]
 
 
 def test_a_motion_locked_to_a_forcing_of_11_periods_is_periodic_beyond_max_period(tmp_path):

@@ -78,7 +78,7 @@ Stroboscopic (Poincare) samples
 import numpy as np
 
 from vrsweep.numerics import kernel
-from vrsweep.numerics.coefficients import HARMONIC, N_HARMONICS, PERIOD, RESPONSE_SCALE
+from vrsweep.numerics.coefficients import PERIOD, RESPONSE_SCALE
 from vrsweep.results import Status
 
 N_BATCHES = 10
@@ -125,23 +125,24 @@ def detect_period(strobe_x, strobe_v, max_period, tolerance):
 RATIO_TOLERANCE = 1e-12
 
 
-def forcing_periods(coefficients, longest):
-    """The number q of periods T after which every forcing of each point repeats, from the
-    frequencies in the coefficient header (HARMONIC: omega and Omega for the paper's models, a
-    written model's too): each h T / (2 pi) must be a ratio p/q with q <= ``longest``, and q is
-    the least common multiple of their q. 0 where none repeats so soon. (n_points,) int64."""
+def forcing_periods(slow_period, frequencies, longest):
+    """The number q of periods T after which every forcing of each point repeats: each frequency
+    h (models' forcing_frequencies: omega and Omega for the paper's models, every frequency of a
+    written model's sines and cosines) must make h T / (2 pi) a ratio p/q with q <= ``longest``,
+    and q is the least common multiple of their q. 0 where none repeats so soon.
+    slow_period: (n_points,); frequencies: (n_points, K). (n_points,) int64."""
     from fractions import Fraction
     from math import lcm
 
-    header = coefficients[:, [PERIOD] + [HARMONIC + k for k in range(N_HARMONICS)]]
-    periods = np.zeros(len(coefficients), dtype=np.int64)
+    header = np.column_stack([slow_period, frequencies])
+    periods = np.zeros(len(header), dtype=np.int64)
     rows, inverse = np.unique(header, axis=0, return_inverse=True)  # a map has few distinct rows
-    for k, (slow_period, *frequencies) in enumerate(rows):
+    for k, (period, *row) in enumerate(rows):
         q = 1
-        for frequency in frequencies:
+        for frequency in row:
             if frequency == 0.0:
                 continue
-            ratio = frequency * slow_period / (2.0 * np.pi)
+            ratio = frequency * period / (2.0 * np.pi)
             fraction = Fraction(ratio).limit_denominator(max(int(longest), 1))
             if not abs(ratio - fraction) <= RATIO_TOLERANCE * abs(ratio):
                 q = 0
@@ -318,9 +319,10 @@ def impact_observables(measured, ok, slow_period):
     return values
 
 
-def point_diagnostics(records, statuses, coefficients, integration):
+def point_diagnostics(records, statuses, coefficients, frequencies, integration):
     """R_err, stroboscopic samples, period, impacts per cycle, x_min, x_max, the impact observables
-    (impact_observables) (NaN/0/-1 if failed)."""
+    (impact_observables) (NaN/0/-1 if failed). frequencies: (n_points, K), the forcing's
+    (models' forcing_frequencies)."""
     measured = window_records(records, integration)
     n_strobe = integration.strobe_periods  # <= measure_periods (config rule)
     ok = statuses == Status.OK
@@ -330,7 +332,7 @@ def point_diagnostics(records, statuses, coefficients, integration):
     strobe_v[~ok] = np.nan
     period = detect_period(strobe_x, strobe_v, integration.max_period, integration.period_tolerance)
     period[~ok] = 0
-    forcing = forcing_periods(coefficients, measured.shape[1] // 2)
+    forcing = forcing_periods(coefficients[:, PERIOD], frequencies, measured.shape[1] // 2)
     period = forcing_period_detected(measured, period, forcing, integration.max_period, integration.period_tolerance)
     slow_period = coefficients[:, PERIOD]
     r_err = batch_error(measured, slow_period, coefficients[:, RESPONSE_SCALE], period, ok)

@@ -103,7 +103,7 @@ class LineRunner:
         values = point_values(
             chunk.records.reshape(-1, self.n_record_rows, kernel.N_RECORD),
             chunk.summaries.reshape(-1, kernel.N_SUMMARY), chunk.statuses.reshape(-1), chunk.coefficients,
-            self.config.integration, threads=chunk.threads)
+            self.kernels.forcing_frequencies(chunk.coefficients), self.config.integration, threads=chunk.threads)
         if chunk.seconds is None:
             chunk.seconds = time.perf_counter() - chunk.began
         return chunk.flat, values
@@ -180,8 +180,9 @@ def run_sweep(config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
 DIAGNOSTICS_BLOCK = 4096
 
 
-def point_values(records, summaries, statuses, coefficients, integration, threads=1):
-    """Per-point output variables (the HDF5 contract's names, docs/design.md) from the kernel's raw outputs.
+def point_values(records, summaries, statuses, coefficients, frequencies, integration, threads=1):
+    """Per-point output variables (the HDF5 contract's names, docs/design.md) from the kernel's raw
+    outputs; ``frequencies`` (n_points, K) are the forcing's (models' forcing_frequencies).
 
     Every value is a function of its own point's outputs alone (a point's values do not depend on
     which points share its chunk: tests/test_threads.py), so a large chunk's points are shared
@@ -191,19 +192,20 @@ def point_values(records, summaries, statuses, coefficients, integration, thread
     n_points = len(statuses)
     n_blocks = min(max(1, int(threads)), -(-n_points // DIAGNOSTICS_BLOCK))
     if n_blocks <= 1:
-        return _point_values(records, summaries, statuses, coefficients, integration)
+        return _point_values(records, summaries, statuses, coefficients, frequencies, integration)
     from concurrent.futures import ThreadPoolExecutor
 
     edges = [(n_points * k) // n_blocks for k in range(n_blocks + 1)]
     blocks = [slice(low, high) for low, high in zip(edges[:-1], edges[1:])]
     with ThreadPoolExecutor(max_workers=n_blocks) as pool:
         parts = list(pool.map(
-            lambda rows: _point_values(records[rows], summaries[rows], statuses[rows], coefficients[rows], integration),
+            lambda rows: _point_values(records[rows], summaries[rows], statuses[rows], coefficients[rows],
+                                       frequencies[rows], integration),
             blocks))
     return {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
 
 
-def _point_values(records, summaries, statuses, coefficients, integration):
+def _point_values(records, summaries, statuses, coefficients, frequencies, integration):
     values = {
         "R": summaries[:, kernel.SUM_R],
         "Qs": summaries[:, kernel.SUM_QS],
@@ -216,7 +218,7 @@ def _point_values(records, summaries, statuses, coefficients, integration):
         "x_final": summaries[:, kernel.SUM_X_FINAL],
         "v_final": summaries[:, kernel.SUM_V_FINAL],
     }
-    values.update(point_diagnostics(records, statuses, coefficients, integration))
+    values.update(point_diagnostics(records, statuses, coefficients, frequencies, integration))
     lyapunov = None
     if integration.lyapunov:
         lyapunov = lyapunov_values(records, summaries, statuses, coefficients, integration, values["period"])

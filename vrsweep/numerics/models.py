@@ -2,6 +2,7 @@
 paper's two models (model.py, kernel.py, lines.py) and for a written one (written.py, codegen.py).
 
     kernels_for(model).coefficients(parameters)     (..., n) vectors: coefficients.py's header first
+    kernels_for(model).forcing_frequencies(vectors)  (..., K) every frequency of the forcing
     kernels_for(model).integrator(method, lyapunov)  one point (trajectory.simulate)
     kernels_for(model).monodromy(method)             one point with each period's tangent map
     kernels_for(model).run_lines(method, lyapunov)   the sweep's parallel lines
@@ -28,6 +29,12 @@ class PaperKernels:
 
     def coefficients(self, parameters):
         return kernel_coefficients(parameters, self.name)
+
+    def forcing_frequencies(self, vectors):
+        """omega and Omega (0 where g = 0): the two the header holds for dop853 (model.py)."""
+        from vrsweep.numerics.coefficients import HARMONIC, N_HARMONICS
+
+        return vectors[..., HARMONIC:HARMONIC + N_HARMONICS]
 
     def integrator(self, method, lyapunov=False):
         return kernel.integrator(method, lyapunov)
@@ -71,6 +78,14 @@ class WrittenKernels:
         vectors[..., HARMONIC:HARMONIC + 2] = codegen.compiled(self.model).harmonic_frequencies(
             vectors[..., N_HEADER:])
         return vectors
+
+    def forcing_frequencies(self, vectors):
+        """Every frequency of the acceleration's sines and cosines, with or without a phase: more
+        than the two dop853 rotates (HARMONIC), which are phase-free and the response's first."""
+        from vrsweep.numerics import codegen
+        from vrsweep.numerics.coefficients import N_HEADER
+
+        return codegen.compiled(self.model).forcing_frequencies(vectors[..., N_HEADER:])
 
     def _function(self, name):
         from vrsweep.numerics import codegen
