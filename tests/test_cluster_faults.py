@@ -226,6 +226,61 @@ def test_overwrite_is_refused_while_another_run_writes_the_file(slow_config, tmp
     assert written.attrs["vrsweep_complete"] == 1 and written.done.all() and "num: 160" in written.attrs["config"]
 
 
+@pytest.mark.parametrize("command", ["merge", "simulate", "continue"])
+def test_no_command_replaces_a_file_a_running_sweep_writes(slow_config, tmp_path, command, start_writer, invoke,
+                                                             write_config):
+    """run refused --overwrite of a file another run writes; merge, simulate and continue did
+    not: merge --overwrite put the shards' file in its place (the documented way to finish a
+    partial merge is a run --resume of that very file), and the run stopped, its points lost."""
+    shards = [tmp_path / f"m.shard{i}of2.h5" for i in range(2)]
+    for i in range(2):
+        assert invoke("run", slow_config, "-o", tmp_path / "m.h5", "--shard", f"{i}/2", "-q",
+                      "--set", "transient_periods=1", "--set", "measure_periods=1",
+                      "--set", "strobe_periods=1").exit_code == 0
+    point = write_config(tmp_path, "parameters: {g: 5.0}\n" + SHORT_WINDOWS, name="point.yaml")
+    branch = write_config(tmp_path, """\
+        model: effective
+        parameters: {Omega: 4.0}
+        continuation: {parameter: g, from: 30.0, to: [29.0, 31.0]}
+        """, name="branch.yaml")
+    out = tmp_path / "ab.h5"
+    args = {"merge": ["merge", *shards], "simulate": ["simulate", point],
+            "continue": ["continue", branch]}[command]
+    writer = start_writer(slow_config, out)
+    try:
+        still_running(writer)
+        proc = run_process("-m", "vrsweep", *args, "-o", out, "--overwrite")
+        _, stderr = writer.communicate(timeout=120)
+    finally:
+        if writer.poll() is None:
+            writer.kill()
+    assert proc.returncode == 2, proc.stderr
+    assert f"cannot replace {out}: it is being written by another process" in one_error_line(proc.stderr)
+    assert writer.returncode == 0, stderr
+    written = load_results(out)
+    assert written.attrs["vrsweep_complete"] == 1 and written.done.all() and "num: 160" in written.attrs["config"]
+
+
+def test_a_file_a_sweep_starts_writing_during_a_write_is_not_replaced(tmp_path):
+    """The rule holds at the rename too: a merge takes minutes, and a sweep that began on its
+    output meanwhile (a run --resume) would lose its saved points to the merged file's rename."""
+    import fcntl
+
+    from vrsweep.errors import UsageError
+    from vrsweep.store.fileio import replacing
+
+    out = tmp_path / "out.h5"
+    out.write_bytes(b"a sweep's checkpoint")
+    with open(out, "rb") as sweep:  # another open file: its lock is another writer's
+        with pytest.raises(UsageError, match="it is being written by another process"):
+            with replacing(out) as tmp:
+                with open(tmp, "wb") as handle:
+                    handle.write(b"merged")
+                fcntl.flock(sweep.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)  # the sweep starts
+    assert out.read_bytes() == b"a sweep's checkpoint"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5"]  # no temporary file left
+
+
 def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path, start_writer):
     """What --overwrite did before (or any other process can do): the path now names another
     file. The writer stops at its next chunk with one line, and never writes to the new file."""

@@ -140,7 +140,7 @@ def being_written(path) -> bool:
     if fcntl is None:
         return False
     try:
-        fd = os.open(path, os.O_RDONLY)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))  # a pipe put there never blocks
     except OSError:
         return False
     try:
@@ -432,6 +432,9 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
             raise exists_error()
         raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",
                                 {"overwrite": "overwrite=True"}, path=shown)
+    # Whatever command replaces it (run, merge, simulate, continue): a file a running sweep is
+    # writing is that sweep's checkpoint, and replacing it throws its saved points away.
+    refuse_if_being_written(target)
     return target
 
 
@@ -576,16 +579,20 @@ def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None
     :func:`closed_without_writing_on_failure`). If the block fails, the temporary file is removed
     and a file-system error becomes a one-line OutputError (with ``needed_bytes``, the size of
     the new file, when the disk is full). ``before_replace`` runs just before the rename (a
-    writer checks there that ``path`` is still its own file).
+    writer checks there that ``path`` is still its own file). By default it refuses a ``path``
+    that another process is writing: the block may have taken minutes (a merge), and a sweep that
+    started on the path meanwhile would lose its saved points to the rename.
     """
     path = os.fspath(path)
+    if before_replace is None:
+        def before_replace():
+            refuse_if_being_written(path)
     prepare_output_directory(path)
     clean_stale_temporaries(path)
     tmp = temporary_path(path)
     try:
         yield tmp
-        if before_replace is not None:
-            before_replace()
+        before_replace()
         os.replace(tmp, path)
     except BaseException as error:  # KeyboardInterrupt too: never leave the temporary file behind
         written_bytes = None

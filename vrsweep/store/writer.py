@@ -164,8 +164,6 @@ class ResultWriter:
                              exists_error=lambda: UsageError.naming(
             "output {path} already exists: pass {overwrite} to replace it, or {resume} to continue the run that "
             "wrote it", ARGUMENT_WORDS, path=given))
-        if os.path.lexists(path):
-            refuse_if_being_written(path)
         specs = [v if isinstance(v, VariableSpec) else VariableSpec(**v) for v in variables]
         reserve = creation_reserve(axes, specs, shard=owned_mask is not None)
 
@@ -199,9 +197,11 @@ class ResultWriter:
         if not os.path.exists(path):
             raise ResultFileError.naming("cannot resume: {path} does not exist ({start_afresh})", ARGUMENT_WORDS,
                                          path=path)
+        # Also where HDF5's own locking is switched off; before output_target, whose refusal would
+        # say "replace" (a link is followed by the open either way).
+        refuse_if_being_written(path, "resume")
         # A link: its target, as create does.
         path = output_target(path, overwrite=True, inputs=inputs, inputs_are="the config being run")
-        refuse_if_being_written(path, "resume")  # also where HDF5's own locking is switched off
         f = open_checked(path, "r+")
         try:
             stored = decode(f.attrs.get("config", ""))
