@@ -281,6 +281,50 @@ def test_a_file_a_sweep_starts_writing_during_a_write_is_not_replaced(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5"]  # no temporary file left
 
 
+def test_a_file_that_appears_during_a_write_is_never_replaced_unasked(tmp_path):
+    """A path judged empty stays unreplaced to the end: a second merge (or run) of the same
+    output that finished first kept its file only until the slower one renamed over it."""
+    from vrsweep.errors import UsageError
+    from vrsweep.store.fileio import replacing
+
+    out = tmp_path / "out.h5"
+    with pytest.raises(UsageError, match="appeared while this command was writing it"):
+        with replacing(out) as tmp:
+            with open(tmp, "wb") as handle:
+                handle.write(b"the slower merge")
+            out.write_bytes(b"the faster merge")
+    assert out.read_bytes() == b"the faster merge"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5"]  # no temporary file left
+    # A file that was there when the write began was judged by the output rule: replaced.
+    with replacing(out) as tmp:
+        with open(tmp, "wb") as handle:
+            handle.write(b"with --overwrite")
+    assert out.read_bytes() == b"with --overwrite"
+
+
+def test_two_runs_creating_one_output_at_once_keep_the_first(tmp_path, invoke, write_config, monkeypatch):
+    """Two array tasks given the same shard (or one job submitted twice), each with --resume and
+    no file yet: the one that renamed its new file second replaced the first's, which then
+    stopped (exit 1) with its points lost. Now the second is refused, the first's file kept."""
+    import vrsweep.store.writer as writer
+
+    config = write_config(tmp_path, "sweep:\n  g: {start: 0.0, stop: 40.0, num: 3}\n" + SHORT_WINDOWS)
+    out = tmp_path / "out.h5"
+    original = writer.build_skeleton
+
+    def first_run_creates_it_meanwhile(*args, **kwargs):
+        out.write_bytes(b"the first run's file")
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(writer, "build_skeleton", first_run_creates_it_meanwhile)
+    result = invoke("run", config, "-o", out, "--resume")
+    assert result.exit_code == 2, result.output
+    assert "appeared while this command was writing it" in result.stderr and "--overwrite" in result.stderr
+    assert "Traceback" not in result.output
+    assert out.read_bytes() == b"the first run's file"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5", "sweep.yaml"]
+
+
 def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path, start_writer):
     """What --overwrite did before (or any other process can do): the path now names another
     file. The writer stops at its next chunk with one line, and never writes to the new file."""

@@ -569,6 +569,30 @@ def _fsync_directory(directory) -> None:
         pass
 
 
+def _rename_without_replacing(tmp, path) -> None:
+    """Rename ``tmp`` to ``path`` unless something is at ``path`` (UsageError then).
+
+    A hard link is made and the temporary name removed: unlike a rename, a link never replaces.
+    Where the file system has no hard links, the check and the rename are separate steps.
+    """
+    appeared = UsageError.naming("output {path} appeared while this command was writing it (a second run or "
+                                 "merge of the same output?): it is kept and this command's file is not; "
+                                 "choose another output, or pass {overwrite} to replace it",
+                                 {"overwrite": "overwrite=True"}, path=path)
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        raise appeared from None
+    except OSError as error:
+        if error.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK, errno.ENOSYS):
+            raise
+        if os.path.lexists(path):  # no hard links here: as close as it can be checked
+            raise appeared from None
+        os.replace(tmp, path)
+        return
+    os.remove(tmp)
+
+
 @contextmanager
 def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None = None,
               doing="write"):
@@ -582,6 +606,10 @@ def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None
     writer checks there that ``path`` is still its own file). By default it refuses a ``path``
     that another process is writing: the block may have taken minutes (a merge), and a sweep that
     started on the path meanwhile would lose its saved points to the rename.
+
+    Where nothing was at ``path`` when the block began (the caller's output rule judged an empty
+    path), nothing is replaced at the end either: a file that appeared meanwhile (a second run or
+    merge of the same output, finished first) is kept, and the block's file is refused.
     """
     path = os.fspath(path)
     if before_replace is None:
@@ -589,11 +617,15 @@ def replacing(path, needed_bytes=None, before_replace: Callable[[], None] | None
             refuse_if_being_written(path)
     prepare_output_directory(path)
     clean_stale_temporaries(path)
+    may_replace = os.path.lexists(path)
     tmp = temporary_path(path)
     try:
         yield tmp
         before_replace()
-        os.replace(tmp, path)
+        if may_replace:
+            os.replace(tmp, path)
+        else:
+            _rename_without_replacing(tmp, path)
     except BaseException as error:  # KeyboardInterrupt too: never leave the temporary file behind
         written_bytes = None
         try:
