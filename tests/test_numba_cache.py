@@ -216,3 +216,25 @@ def test_numba_disable_jit_on_the_gpu_is_one_line_not_a_traceback(tmp_path):
         "Error: integration.device: cuda: NUMBA_DISABLE_JIT=1 turns numba's compiler off, and the GPU's kernel "
         "is compiled by it: unset it, or run on the cpu"], result.stderr
     assert not (tmp_path / "two.h5").exists()
+
+
+@pytest.mark.parametrize("limit", ["ulimit -f 1", "ulimit -f 2"], ids=["index", "data"])
+def test_a_kernel_the_cache_has_no_room_for_still_runs_with_one_note(tmp_path, limit):
+    """A home folder at its quota, a full disk or `ulimit -f`: numba let the OSError of saving a
+    freshly compiled kernel escape, and every command ended "Error: No space left on device"
+    (no file named) after its compile, with the kernel in memory and the output folder fine.
+    1 kB stops numba's first file (the index, 1.4 kB), 2 kB the compiled code after it (9 kB)."""
+    (tmp_path / "tiny_kernel.py").write_text(
+        "from vrsweep.numerics.jit import kernel_jit\n\n\n@kernel_jit\ndef twice(x):\n"
+        "    return 2.0 * x\n")
+    paths = os.pathsep.join([str(tmp_path), str(PACKAGE.parent), os.environ.get("PYTHONPATH", "")])
+    env = {**{k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"},
+           "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": paths}
+    code = "import tiny_kernel; print(tiny_kernel.twice(21.0))"
+    done = subprocess.run(["bash", "-c", f'{limit}; exec "$0" -c "$1"', sys.executable, code],
+                          capture_output=True, text=True, cwd=tmp_path, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "42.0"
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Note: the compiled kernel could not be saved in the numba "
+                                                   "cache") and "File too large" in lines[0], done.stderr

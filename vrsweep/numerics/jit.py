@@ -12,6 +12,8 @@ from numba import njit
 
 from vrsweep.numerics import numba_cache
 
+numba_cache.keep_going_when_a_save_fails()  # before any kernel is compiled (and saved)
+
 
 def kernel_jit(function=None, **options):
     """``njit(cache=True, error_model="numpy", **options)``, usable with or without arguments.

@@ -183,6 +183,41 @@ def configure() -> Path:
     return Path(folder)
 
 
+_save_failure_told = False
+
+
+def keep_going_when_a_save_fails() -> None:
+    """Make a failed save of a compiled kernel a note, not the end of the command (idempotent).
+
+    numba saves each kernel to the cache right after compiling it and lets an OSError of that
+    save escape the call that compiled it (it guards only against a Windows race). A home folder
+    at its quota, a full disk or ``ulimit -f`` then ended every command with "Error: No space
+    left on device", naming no file, after the whole compile, with the kernel in memory and the
+    output folder fine. The cache saves time, never results: so the run goes on, and the next
+    one compiles again. numba writes each cache file under a temporary name and removes it when
+    the write fails, and reads an index whose data file is missing as no cache.
+    """
+    from numba.core import caching
+
+    save = caching.Cache.save_overload
+    if getattr(save, "keeps_going", False):
+        return
+
+    def save_overload(self, sig, data):
+        global _save_failure_told
+        try:
+            save(self, sig, data)
+        except OSError as error:
+            if not _save_failure_told:
+                _save_failure_told = True
+                print(f"Note: the compiled kernel could not be saved in the numba cache {cache_dir()} "
+                      f"({error.strerror or error}); this run goes on, the next compiles again: free "
+                      "space there, or set NUMBA_CACHE_DIR to another folder", file=sys.stderr, flush=True)
+
+    save_overload.keeps_going = True
+    caching.Cache.save_overload = save_overload
+
+
 def is_empty() -> bool:
     """True when no kernel of this version has been cached yet: the next run compiles."""
     if not enabled():
