@@ -159,6 +159,27 @@ def test_a_full_disk_during_merge_is_one_line_then_a_merge_with_room_is_identica
     assert_same_result(out, reference)
 
 
+def test_a_file_size_limit_is_named_not_the_free_space(tmp_path, invoke, write_config):
+    """`ulimit -f` (or a batch system's limit on file size) stops a write with EFBIG, which was
+    worded as a full disk: "File too large (the file needs about 201.3 kB, 78.1 GB free in ...)",
+    leaving the user to look for a space problem that is not there."""
+    config = write_config(tmp_path, "sweep:\n  g: {start: 0.0, stop: 40.0, num: 8}\n" + SHORT_WINDOWS)
+    for i in range(2):
+        assert invoke("run", config, "-o", tmp_path / "m.h5", "--shard", f"{i}/2", "-q").exit_code == 0
+    shards = [str(tmp_path / f"m.shard{i}of2.h5") for i in range(2)]
+    for args in (["merge", *shards, "-o", str(tmp_path / "merged.h5")],
+                 ["plot", shards[0], "-o", str(tmp_path / "figure.png")]):
+        done = subprocess.run(["bash", "-c", 'ulimit -f 8; exec "$0" -m vrsweep "$@"', sys.executable, *args],
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 1, done.stderr
+        errors = [line for line in error_lines(done.stderr) if not line.startswith("Note: ")]  # plot: a shard's
+        assert len(errors) == 1 and errors[0].startswith("Error: "), done.stderr
+        line = errors[0]
+        assert "File too large" in line and "may write files of at most 8.2 kB: its file size limit, ulimit -f" in line
+        assert " free in " not in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.shard0of2.h5", "m.shard1of2.h5", "sweep.yaml"]
+
+
 # --------------------------------------------------------------------------------------------
 # Two runs, one output; files and folders removed under a running sweep
 # --------------------------------------------------------------------------------------------

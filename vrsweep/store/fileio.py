@@ -312,6 +312,17 @@ def free_bytes(path) -> int | None:
         return None
 
 
+def file_size_limit() -> int | None:
+    """The largest file this process may write, in bytes (RLIMIT_FSIZE), or None if unlimited."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_FSIZE)
+    except (ImportError, OSError, ValueError, AttributeError):
+        return None
+    return None if soft == resource.RLIM_INFINITY else soft
+
+
 def _space_words(path, needed_bytes, written_bytes=None):
     free = free_bytes(path)
     folder = os.path.dirname(os.path.abspath(path))
@@ -337,6 +348,12 @@ def write_failure(path, error, needed_bytes=None, doing="write", written_bytes=N
     if number is None:
         return None
     cause = os.strerror(number)
+    if number == errno.EFBIG and (limit := file_size_limit()) is not None:
+        # Not the disk: the process's own limit (`ulimit -f`, a batch system's), which the free
+        # space would hide ("the file needs 201 kB, 78 GB free").
+        needs = f"the file needs about {format_bytes(needed_bytes)}, " if needed_bytes else ""
+        return OutputError(f"cannot {doing} {path}: {cause} ({needs}this process may write files of at most "
+                           f"{format_bytes(limit)}: its file size limit, ulimit -f)")
     if number in _SPACE_ERRNOS:
         space = _space_words(path, needed_bytes, written_bytes)
         return OutputError(f"cannot {doing} {path}: {cause}" + (f" ({space})" if space else ""))
