@@ -1,9 +1,13 @@
 """Shards: SLURM array variables -> shard, shards 0..N-1 merged == one run, merge refusals."""
 
 import errno
+import os
 import signal
+import subprocess
+import sys
 import textwrap
 import time
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -377,3 +381,67 @@ def test_a_write_failure_during_merge_is_one_line_and_leaves_nothing(runs, tmp_p
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"Error: cannot write {out}: No space left on device")
     assert list(tmp_path.iterdir()) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# examples/slurm, run as written
+# ---------------------------------------------------------------------------------------------
+
+SLURM_EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "slurm"
+
+# sbatch as a test can have it: the script at once, each array task in turn, with the variables
+# SLURM gives a task (and none it would not); --dependency is met by running in order.
+FAKE_SBATCH = r"""#!/bin/bash
+array=""; exports=""
+while [[ $1 == --* ]]; do
+    case $1 in --array=*) array=${1#--array=};; --export=*) exports=${1#--export=};; esac
+    shift
+done
+script=$1
+job=$((RANDOM + 1))
+IFS=, read -ra pairs <<< "$exports"
+envs=()
+for pair in "${pairs[@]}"; do [[ $pair == ALL ]] || envs+=("$pair"); done
+task() { env "${envs[@]}" SLURM_JOB_ID=$job SLURM_CPUS_PER_TASK=1 "$@" bash "$script" >> sbatch.log 2>&1 || exit $?; }
+if [[ -n $array ]]; then
+    first=${array%-*}; last=${array#*-}
+    for ((t = first; t <= last; t++)); do
+        task SLURM_ARRAY_TASK_ID=$t SLURM_ARRAY_TASK_MIN=$first SLURM_ARRAY_TASK_MAX=$last \
+             SLURM_ARRAY_TASK_COUNT=$((last - first + 1)) SLURM_ARRAY_TASK_STEP=1
+    done
+else
+    task
+fi
+echo $job
+"""
+
+
+@pytest.mark.parametrize("script", sorted(p.name for p in SLURM_EXAMPLES.iterdir() if p.suffix in (".sh", ".sbatch")))
+def test_every_slurm_example_script_parses(script):
+    """array.sbatch read `${CONFIG:?... the sweep's YAML ...}`: bash 5.2 takes that quote as the
+    start of a quoted string, and every task of the array failed with a syntax error."""
+    done = subprocess.run(["bash", "-n", str(SLURM_EXAMPLES / script)], capture_output=True, text=True)
+    assert done.returncode == 0 and not done.stderr, done.stderr
+
+
+def test_submit_sh_runs_as_written_and_gives_the_single_run_file(tmp_path, invoke, write_config, assert_same_result):
+    """submit.sh -> warmup.sbatch -> array.sbatch (3 tasks, --shard auto) -> merge.sbatch, with
+    sbatch and srun standing in for SLURM: the merged file is the one a single run writes."""
+    config = write_config(tmp_path, TINY, name="map.yaml")
+    single = tmp_path / "single.h5"
+    assert invoke("run", config, "-o", single, "-q").exit_code == 0
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for name, text in {"sbatch": FAKE_SBATCH, "srun": '#!/bin/bash\nexec "$@"\n',
+                       "vrsweep": f'#!/bin/bash\nexec "{sys.executable}" -m vrsweep "$@"\n'}.items():
+        (bin_dir / name).write_text(text)
+        (bin_dir / name).chmod(0o755)
+    env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}")
+    done = subprocess.run(["bash", str(SLURM_EXAMPLES / "submit.sh"), "map.yaml", "3"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=600)
+    log = (tmp_path / "sbatch.log").read_text() if (tmp_path / "sbatch.log").exists() else ""
+    assert done.returncode == 0, done.stderr + log
+    assert "result: results/map.h5" in done.stdout
+    assert sorted(p.name for p in (tmp_path / "results").iterdir()) == sorted(
+        ["map.h5"] + [f"map.shard{i}of3.h5" for i in range(3)])
+    assert_same_result(single, tmp_path / "results" / "map.h5")
