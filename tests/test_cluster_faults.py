@@ -344,6 +344,7 @@ def test_two_runs_creating_one_output_at_once_keep_the_first(tmp_path, invoke, w
     assert "Traceback" not in result.output
     assert out.read_bytes() == b"the first run's file"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.h5", "sweep.yaml"]
+    assert h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE) == []  # the file it built is closed
 
 
 def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path, start_writer):

@@ -30,7 +30,7 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.store.fileio import (
-    LIBVER, check_still_at_path, close_without_writing, closed_without_writing_on_failure, fsync_path, identity,
+    LIBVER, check_still_at_path, close_without_writing, fsync_path, identity,
     lock_for_writing, output_target, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
     writing_hdf5,
 )
@@ -169,16 +169,23 @@ class ResultWriter:
 
         # Built under a temporary name and renamed into place while still open: the writer
         # keeps the very file it built, never a file that someone else put at the path since.
-        with replacing(path, reserve, doing="create") as tmp:
-            # HDF5 1.8 object headers carry checksums, so damaged metadata is caught too.
-            f = open_store_file(tmp, "w", track_order=True, libver=LIBVER)
-            with closed_without_writing_on_failure(f):
+        f = None
+        try:
+            with replacing(path, reserve, doing="create") as tmp:
+                # HDF5 1.8 object headers carry checksums, so damaged metadata is caught too.
+                f = open_store_file(tmp, "w", track_order=True, libver=LIBVER)
                 fd = f.id.get_vfd_handle()
                 reserve_space(fd, reserve)  # a full disk fails here, before HDF5 writes anything
                 build_skeleton(f, list(axes), specs, dict(attrs), extra_coords, owned_mask)
                 f.flush()
                 trim_to_contents(f)
                 _fsync(f)
+        except BaseException:
+            # Also when the rename is refused (the path was taken meanwhile): the built file stays
+            # open in HDF5 otherwise, its temporary name gone.
+            if f is not None:
+                close_without_writing(f)
+            raise
         try:
             return cls(path, f)
         except BaseException:
