@@ -347,6 +347,49 @@ def test_two_runs_creating_one_output_at_once_keep_the_first(tmp_path, invoke, w
     assert h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE) == []  # the file it built is closed
 
 
+FIRST_WRITER = """
+import sys
+import numpy as np
+from vrsweep.store import ResultWriter, VariableSpec
+spec = VariableSpec("R", np.float64, attrs={"units": "1", "long_name": "response R"})
+writer = ResultWriter.create(sys.argv[1], [("g", np.linspace(0.0, 4.0, 5))], [spec], {"config": "x: 1\\n"})
+writer.write_points([0], {"R": np.array([1.0])})
+print("writing", flush=True)
+sys.stdin.readline()
+writer.write_points([1], {"R": np.array([2.0])})
+writer.close()
+"""
+
+
+def test_two_resumes_at_the_same_moment_never_write_one_file_together(tmp_path, monkeypatch):
+    """With HDF5's locking off (NFS, Lustre), two runs resuming one file at the same moment both
+    passed the "being written?" test before either locked, and wrote one HDF5 file at once (found
+    by starting two --resume runs together: one pair in six). Taking the lock is the test now."""
+    import vrsweep.store.fileio as fileio
+    from vrsweep.errors import UsageError
+    from vrsweep.store import ResultWriter
+
+    monkeypatch.setenv("HDF5_USE_FILE_LOCKING", "FALSE")
+    path = tmp_path / "checkpoint.h5"
+    first = subprocess.Popen([sys.executable, "-c", FIRST_WRITER, str(path)], stdin=subprocess.PIPE,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert first.stdout.readline().strip() == "writing", first.stderr.read()
+        # The second run made its test a moment before the first took its lock.
+        monkeypatch.setattr(fileio, "being_written", lambda path: False)
+        # HDF5 reads HDF5_USE_FILE_LOCKING once, when it starts: this process says it per file.
+        monkeypatch.setattr(fileio, "hdf5_locking_kwargs", lambda: {"locking": False})
+        with pytest.raises(UsageError, match="cannot resume .* it is being written by another process"):
+            ResultWriter.open_for_resume(path, "x: 1\n")
+        _, stderr = first.communicate("go on\n", timeout=60)
+    finally:
+        if first.poll() is None:
+            first.kill()
+    assert first.returncode == 0, stderr
+    assert h5py.h5f.get_obj_ids(types=h5py.h5f.OBJ_FILE) == []  # the refused one closed its file
+    assert load_results(path).done.values.tolist() == [1, 1, 0, 0, 0]
+
+
 def test_a_file_replaced_under_a_running_sweep_stops_it_and_stays_untouched(slow_config, tmp_path, start_writer):
     """What --overwrite did before (or any other process can do): the path now names another
     file. The writer stops at its next chunk with one line, and never writes to the new file."""

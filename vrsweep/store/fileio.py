@@ -31,6 +31,7 @@ import re
 import shutil
 import socket
 import sys
+import time
 import uuid
 from contextlib import contextmanager
 from typing import Callable
@@ -120,19 +121,32 @@ def has_file_kind(path, kind) -> bool:
 # --------------------------------------------------------------------------------------------
 
 
-def lock_for_writing(fd) -> None:
+def lock_for_writing(fd, path=None, action="write") -> None:
     """Take an exclusive lock on the open file ``fd`` for as long as it stays open.
 
     HDF5 already holds one when its own locking is on; this covers ``HDF5_USE_FILE_LOCKING=FALSE``.
     Both are ``flock`` locks on the same open file, so they never conflict with each other. Where
     locks are not supported nothing happens (and nothing can be told about other writers).
+
+    The lock is the test of a second writer, not only :func:`refuse_if_being_written` before it:
+    two runs that resume one file at the same moment (HDF5's locking off, as on NFS or Lustre) both
+    passed that test before either locked, and wrote one HDF5 file at once. A lock held by another
+    process is a UsageError naming ``path``; a :func:`being_written` probe holds its shared lock
+    for an instant, so the lock is tried again for a second before that is concluded.
     """
     if fcntl is None:
         return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        pass  # held already (by HDF5, on this open file), or no locks on this file system
+    deadline = time.monotonic() + 1.0
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return
+        except BlockingIOError:
+            if time.monotonic() > deadline:
+                raise _being_written_error(path, action) from None
+            time.sleep(0.02)
+        except OSError:
+            return  # no locks on this file system
 
 
 def being_written(path) -> bool:
@@ -158,9 +172,13 @@ def refuse_if_being_written(path, action="replace") -> None:
     """UsageError (exit 2) if another process is writing ``path``: never pull a file from under
     it (``--overwrite``), nor write it twice (``--resume``)."""
     if being_written(path):
-        raise UsageError.naming("cannot {action} {path}: it is being written by another process (a run in "
-                                "progress?); wait for that run to end, stop it, or choose another {output}",
-                                {"output": "output path"}, action=action, path=path)
+        raise _being_written_error(path, action)
+
+
+def _being_written_error(path, action):
+    return UsageError.naming("cannot {action} {path}: it is being written by another process (a run in "
+                             "progress?); wait for that run to end, stop it, or choose another {output}",
+                             {"output": "output path"}, action=action, path=path)
 
 
 def identity(fd):

@@ -125,14 +125,14 @@ def _write_selection(ds, grid_shape, idx, array):
 class ResultWriter:
     """A result file being filled: the checkpoint of a sweep. Use ``create`` or ``open_for_resume``."""
 
-    def __init__(self, path, h5file):
+    def __init__(self, path, h5file, action="write"):
         self.path = os.fspath(path)
         self._file = h5file
         # The writer holds its file open from creation to finish and never reopens it by path:
         # it checks instead that the path still names this very file (see _check_still_mine).
         self._fd = h5file.id.get_vfd_handle()
         self._identity = identity(self._fd)
-        lock_for_writing(self._fd)
+        lock_for_writing(self._fd, self.path, action)  # refuses a second writer (held already after create)
         done = h5file["done"]
         self.axis_names = scale_names(done) if done.ndim else ()
         self.grid_shape = tuple(done.shape)
@@ -175,6 +175,9 @@ class ResultWriter:
                 # HDF5 1.8 object headers carry checksums, so damaged metadata is caught too.
                 f = open_store_file(tmp, "w", track_order=True, libver=LIBVER)
                 fd = f.id.get_vfd_handle()
+                # Locked before it has a name others look for: a --resume that finds it renamed
+                # into place meets its writer's lock, never a file without one.
+                lock_for_writing(fd, path)
                 reserve_space(fd, reserve)  # a full disk fails here, before HDF5 writes anything
                 build_skeleton(f, list(axes), specs, dict(attrs), extra_coords, owned_mask)
                 f.flush()
@@ -224,8 +227,8 @@ class ResultWriter:
                         "cannot resume: {path} holds shard {found}, not {expected}; pass {overwrite} to replace it",
                         ARGUMENT_WORDS, path=path, found=shard or "none (a whole run)",
                         expected=expected_shard or "a whole run")
-            return cls(path, f)
-        except ResultFileError:
+            return cls(path, f, action="resume")
+        except (ResultFileError, UsageError):
             f.close()
             raise
         except (OSError, KeyError, ValueError) as error:
