@@ -401,3 +401,29 @@ def test_samples_per_period_is_a_whole_number(value):
     """samples_per_period=5.0 (or "5") was a TypeError from deep inside the trajectory's sampling."""
     with pytest.raises(UsageError, match="samples_per_period must be a whole number of at least 1"):
         vrsweep.simulate(POINT_TEXT, samples_per_period=value)
+
+
+def test_a_killed_sweeps_temporary_folder_is_removed_by_the_next(sweep_yaml, tmp_path, monkeypatch, capfd):
+    """Without output, a sweep runs through a file as large as its grid in TMPDIR; a kill -9 (a
+    notebook's kernel restarted mid-sweep) left it there for good, one more at each restart.
+    The next sweep on this host removes those of processes that are gone, and no other."""
+    import socket
+    import tempfile
+
+    from vrsweep.store import fileio
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    host = fileio._HOST
+    assert host == re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname().split(".")[0])
+    stale = tmp_path / f"vrsweep-{host}.{gone.pid}.abc123_x"
+    alive = tmp_path / f"vrsweep-{host}.{os.getpid()}.def456"
+    elsewhere = tmp_path / f"vrsweep-node17.{gone.pid}.ghi789"
+    for folder in (stale, alive, elsewhere):
+        folder.mkdir()
+        (folder / "sweep.h5").write_bytes(b"a partial sweep")
+    dataset = vrsweep.sweep(sweep_yaml, progress=False)
+    assert int(dataset.done.sum()) == dataset.done.size
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([alive.name, elsewhere.name])
+    assert f"Removed {stale}, left by an interrupted vrsweep (process {gone.pid})" in capfd.readouterr().err

@@ -25,7 +25,6 @@ from __future__ import annotations
 import math
 import numbers
 import os
-import tempfile
 import warnings
 from contextlib import contextmanager
 from pathlib import Path
@@ -199,7 +198,9 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
     try:
         with _python_wording():
             if output is None:
-                with tempfile.TemporaryDirectory(prefix="vrsweep-") as folder:
+                from vrsweep.store.fileio import scratch_folder
+
+                with scratch_folder() as folder:
                     report = run_job(resolved, Path(folder) / "sweep.h5", threads=threads,
                                      progress_factory=factory)
                     dataset = load_results(report.output)
@@ -350,7 +351,9 @@ def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERI
         if output is not None:
             write_trajectory(path, data, resolved, overwrite=overwrite)
             return _trajectory_datasets(path, every_group=compare is not None)
-        with tempfile.TemporaryDirectory(prefix="vrsweep-") as folder:
+        from vrsweep.store.fileio import scratch_folder
+
+        with scratch_folder() as folder:
             path = Path(folder) / "trajectory.h5"
             write_trajectory(path, data, resolved)
             datasets = _trajectory_datasets(path, every_group=compare is not None)

@@ -583,6 +583,40 @@ def clean_stale_temporaries(path) -> None:
                    "delete it if that process is no longer running")
 
 
+_SCRATCH_TAIL = re.compile(r"(?P<host>[A-Za-z0-9_-]+)\.(?P<pid>\d+)\.[A-Za-z0-9_]+")
+
+
+@contextmanager
+def scratch_folder():
+    """A new folder in the system's temporary folder (``TMPDIR``), removed when the block ends;
+    its name says which host and process made it, like a temporary file beside an output.
+
+    A process killed inside the block (``kill -9``, a notebook's kernel restarted) cannot remove
+    it, and it holds a file as large as the grid: so the folders of this host's processes that
+    are gone are removed first, with a line each, as :func:`clean_stale_temporaries` does.
+    """
+    import tempfile
+
+    root = tempfile.gettempdir()
+    try:
+        names = os.listdir(root)
+    except OSError:
+        names = []
+    for name in sorted(names):
+        match = _SCRATCH_TAIL.fullmatch(name[len("vrsweep-"):]) if name.startswith("vrsweep-") else None
+        if not match or match.group("host") != _HOST or _process_alive(int(match.group("pid"))):
+            continue
+        folder = os.path.join(root, name)
+        if not os.path.isdir(folder) or os.path.islink(folder):
+            continue
+        if any(being_written(os.path.join(folder, item)) for item in os.listdir(folder)):
+            continue  # its process id was reused, or the file is shared: leave it
+        shutil.rmtree(folder, ignore_errors=True)
+        notice(f"Removed {folder}, left by an interrupted vrsweep (process {match.group('pid')})")
+    with tempfile.TemporaryDirectory(prefix=f"vrsweep-{_HOST}.{os.getpid()}.") as folder:
+        yield folder
+
+
 # --------------------------------------------------------------------------------------------
 # Atomic writes
 # --------------------------------------------------------------------------------------------
