@@ -424,9 +424,13 @@ def test_every_slurm_example_script_parses(script):
     assert done.returncode == 0 and not done.stderr, done.stderr
 
 
-def test_submit_sh_runs_as_written_and_gives_the_single_run_file(tmp_path, invoke, write_config, assert_same_result):
+@pytest.mark.parametrize("out", [None, "results/map.hdf5", "results/map", "results/v1.2/map.nc"])
+def test_submit_sh_runs_as_written_and_gives_the_single_run_file(tmp_path, invoke, write_config, assert_same_result,
+                                                                 out):
     """submit.sh -> warmup.sbatch -> array.sbatch (3 tasks, --shard auto) -> merge.sbatch, with
-    sbatch and srun standing in for SLURM: the merged file is the one a single run writes."""
+    sbatch and srun standing in for SLURM: the merged file is the one a single run writes. Also
+    with an OUT that does not end in .h5 (submit.sh takes OUT from the environment): merge.sbatch
+    looked for map.hdf5.shard0of3.h5 where the array had written map.shard0of3.hdf5."""
     config = write_config(tmp_path, TINY, name="map.yaml")
     single = tmp_path / "single.h5"
     assert invoke("run", config, "-o", single, "-q").exit_code == 0
@@ -437,11 +441,14 @@ def test_submit_sh_runs_as_written_and_gives_the_single_run_file(tmp_path, invok
         (bin_dir / name).write_text(text)
         (bin_dir / name).chmod(0o755)
     env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}")
+    if out is not None:
+        env["OUT"] = out
+    out = Path(out or "results/map.h5")
     done = subprocess.run(["bash", str(SLURM_EXAMPLES / "submit.sh"), "map.yaml", "3"], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=600)
     log = (tmp_path / "sbatch.log").read_text() if (tmp_path / "sbatch.log").exists() else ""
     assert done.returncode == 0, done.stderr + log
-    assert "result: results/map.h5" in done.stdout
-    assert sorted(p.name for p in (tmp_path / "results").iterdir()) == sorted(
-        ["map.h5"] + [f"map.shard{i}of3.h5" for i in range(3)])
-    assert_same_result(single, tmp_path / "results" / "map.h5")
+    assert f"result: {out}" in done.stdout
+    assert sorted(p.name for p in (tmp_path / out.parent).iterdir()) == sorted(
+        [out.name] + [f"{out.stem}.shard{i}of3{out.suffix}" for i in range(3)])
+    assert_same_result(single, tmp_path / out)
