@@ -607,12 +607,16 @@ def scratch_folder():
         if not match or match.group("host") != _HOST or _process_alive(int(match.group("pid"))):
             continue
         folder = os.path.join(root, name)
-        if not os.path.isdir(folder) or os.path.islink(folder):
+        try:
+            # another user's folder in a shared TMPDIR is theirs to remove
+            if not os.path.isdir(folder) or os.path.islink(folder) or os.stat(folder).st_uid != os.getuid() \
+                    or any(being_written(os.path.join(folder, item)) for item in os.listdir(folder)):
+                continue  # or its process id was reused, or the file is shared: leave it
+        except (OSError, AttributeError):  # AttributeError: no os.getuid (Windows)
             continue
-        if any(being_written(os.path.join(folder, item)) for item in os.listdir(folder)):
-            continue  # its process id was reused, or the file is shared: leave it
         shutil.rmtree(folder, ignore_errors=True)
-        notice(f"Removed {folder}, left by an interrupted vrsweep (process {match.group('pid')})")
+        if not os.path.exists(folder):
+            notice(f"Removed {folder}, left by an interrupted vrsweep (process {match.group('pid')})")
     with tempfile.TemporaryDirectory(prefix=f"vrsweep-{_HOST}.{os.getpid()}.") as folder:
         yield folder
 
