@@ -616,6 +616,22 @@ def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
     assert not any("c$" in label or "slow" in label for label in labels), labels
 
 
+def test_a_written_models_response_curve_and_basins_say_its_gain_is_over_the_scales_magnitude(tmp_path):
+    """R is |Q| / |F| (a gain, never negative); the response curve's axis said |Q| / F and the basin
+    legend the paper's |Q|/c (eq3.3)."""
+    import vrsweep
+    from vrsweep import plot
+
+    curve = _short_linear_sweep(tmp_path, "curve", "F: [0.5, 1.0]")
+    basins = _short_linear_sweep(tmp_path, "basins", "x0: [-0.5, 0.5]\n  v0: [-0.5, 0.5]")
+    with vrsweep.open_results(curve) as ds:
+        label = plot.response_figure(ds).axes[0].get_ylabel()
+    assert label.startswith("gain $R = |Q|$ / |F|"), label
+    with vrsweep.open_results(basins) as ds:
+        title = " ".join(legend.get_title().get_text() for legend in plot.basin_figure(ds).legends)
+    assert "gain R = |Q|/|F|" in title and "/c" not in title, title
+
+
 def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names(tmp_path):
     """A branch figure labelled a written model's parameters as the paper's: the axis of a branch in
     D read 'D D' and a parameter named c was set as the paper's $c$. No kernel: orbits by hand."""

@@ -12,7 +12,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words
+from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words, gain_words
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
@@ -125,7 +125,7 @@ def basin_figure(ds) -> Figure:
         handles.append(Line2D([], [], marker="s", ls="", color=BASIN_NOT_COMPUTED, markeredgecolor="0.5",
                               markersize=9, label=f"not computed ({n_missing} points)"))
     fig.legend(handles=handles, loc="outside lower center", ncols=_legend_columns(fig, 1 if count <= 4 else 2), fontsize="small",
-               title="attractor: period, gain R = |Q|/c (eq3.3), impacts, share of the plane",
+               title=f"attractor: period, {gain_words()}, impacts, share of the plane",
                title_fontsize="small")
     found = f"{count} attractor{'s' if count != 1 else ''}"
     _title(fig, f"Basins of attraction in the plane of initial states: {found}",

@@ -83,6 +83,14 @@ def period_words(symbol=True) -> str:
     return "slow period $2\\pi/\\omega$" if symbol else "slow period"
 
 
+def gain_words() -> str:
+    """What R is: the paper's |Q|/c (eq3.3), or a written model's |Q| over its response scale."""
+    model = _WRITTEN_MODEL.get()
+    if model is not None:
+        return f"gain R = |Q|/|{model.response_scale}|"
+    return "gain R = |Q|/c (eq3.3)"
+
+
 def _written_symbol(name):
     model = _WRITTEN_MODEL.get()
     if model is None or name not in model.parameter_names:

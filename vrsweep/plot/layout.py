@@ -146,10 +146,14 @@ def _entries(legend):
 
 def _style_of(legend):
     """What a re-made legend keeps of ``legend``: its frame's colour and its texts' colour (a map's
-    legend is dark, with white text, to show white marks)."""
+    legend is dark, with white text, to show white marks), and its title (a basin plot's says
+    what each entry lists)."""
     texts = legend.get_texts()
+    title = legend.get_title()
+    titled = bool(title.get_text()) and title.get_visible()
     return dict(facecolor=legend.get_frame().get_facecolor(), framealpha=legend.get_frame().get_alpha(),
-                labelcolor=texts[0].get_color() if texts else None)
+                labelcolor=texts[0].get_color() if texts else None, title=title.get_text() if titled else None,
+                title_fontsize=title.get_fontsize() if titled else None)
 
 
 def place_legend(fig, where):

@@ -232,7 +232,7 @@ def _response_axes(ax, view, x_axis, x, drawn, amplitude, log):
     if view.config is not None and view.config.written:
         response = view.config.model.as_data()["response"]
         ax.set_ylabel(f"amplitude $|Q|$ of x at {response['frequency']}" if amplitude
-                      else f"gain $R = |Q|$ / {response['scale']}, $Q$ at frequency {response['frequency']}")
+                      else f"gain $R = |Q|$ / |{response['scale']}|, $Q$ at frequency {response['frequency']}")
     elif amplitude:
         ax.set_ylabel("amplitude $|Q|$ of x at $\\omega$, analytic $A$")
     else:
