@@ -18,7 +18,8 @@ hysteresis loop of configs/hysteresis_effective.yaml (continuation up and down) 
 attraction of that bistable example at g = 23 (configs/basins_g23.yaml) and of four coexisting
 orbits of the original model at g = 5 (configs/basins_g5_original.yaml); the map of R over g
 and Omega (configs/map_g_Omega.yaml); bifurcation curves over an effective (g, Omega) map and an
-original (g, Delta) map (curves_g_Omega_effective, curves_original: docs/bifurcation-curves.md).
+original (g, Delta) map (curves_g_Omega_effective, curves_original: docs/bifurcation-curves.md);
+two written models' figures (impact_linear_branch, impact_two_sided: docs/models.md).
 """
 
 import argparse
@@ -162,6 +163,15 @@ COMMANDS = {
         ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
          "results/curves_original_p3.h5", "results/curves_original_p2.h5", "--var", "impacts_per_period",
          "--vmax", "4", "-o", "docs/figures/curves_original_impacts.png"],
+    ],
+    # Not in the paper: written models (docs/models.md), from the shipped example configs.
+    "impact_linear_branch": [
+        ["continue", "configs/impact_linear.yaml", "-o", "results/impact_linear_branch.h5", "--overwrite"],
+        ["plot", "results/impact_linear_branch.h5", "-o", "docs/figures/impact_linear_branch.png"],
+    ],
+    "impact_two_sided": [
+        ["run", "configs/impact_two_sided.yaml", "-o", "results/impact_two_sided.h5", "--overwrite"],
+        ["plot", "results/impact_two_sided.h5", "-o", "docs/figures/impact_two_sided.png"],
     ],
 }
 
