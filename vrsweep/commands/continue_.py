@@ -19,7 +19,10 @@ def _parse_at(values):
         try:
             number = float(value)
         except ValueError:
-            sep = ""
+            if name.strip() == "direction":  # up or down, as plot --at takes it (store/reading.axis_index)
+                number = value.strip()
+            else:
+                sep = ""
         if not sep or not name:
             raise click.BadParameter(f"expected AXIS=VALUE, e.g. g=23, got {text!r}", param_hint="--at")
         if name in at:  # the later value was taken silently

@@ -198,11 +198,17 @@ def axis_index(name, values, wanted):
     allowed for direction. Must be a finite number on the grid: the nearest value would answer a
     question that was not asked. Shared by plot's selection and continue's start."""
     if name == "direction":
-        words = {"up": 1.0, "down": -1.0, "+1": 1.0, "1": 1.0, "-1": -1.0}
+        words = {"up": 1.0, "down": -1.0}
         key = str(wanted).strip().lower()
-        if key not in words:
+        try:
+            number = words[key] if key in words else float(key)
+        except ValueError:
+            number = None
+        # Numbers too, not only their text: continue's --at hands over -1.0, which as the text
+        # "-1.0" was refused although the message itself offers -1.
+        if number not in (1.0, -1.0):
             raise UsageError.naming("{at} direction={value}: the direction is up or down (+1 or -1)", value=wanted)
-        wanted = words[key]
+        wanted = number
     given = wanted
     try:
         wanted = float(wanted)
