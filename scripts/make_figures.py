@@ -151,9 +151,11 @@ COMMANDS = {
         ["run", "configs/curves_original.yaml", "--overwrite"],
         *[["continue", f"configs/curves_branch_original_{branch}.yaml", "-o",
            f"results/curves_branch_original_{branch}.h5", "--overwrite"] for branch in ("free", "p1", "p3", "p2")],
-        *[["continue", f"results/curves_branch_original_{branch}.h5", "--point", "0", "--along", "Delta",
+        # The free orbit's graze is bifurcation 1: the branch crosses it onto impacting orbits, whose
+        # own graze at a lower g (bifurcation 0) cannot be followed in two parameters.
+        *[["continue", f"results/curves_branch_original_{branch}.h5", "--point", point, "--along", "Delta",
            "--to", "1.0", "3.0", "-o", f"results/curves_original_{branch}.h5", "--overwrite"]
-          for branch in ("free", "p1", "p3")],
+          for branch, point in (("free", "1"), ("p1", "0"), ("p3", "0"))],
         # The period doubling of the orbit of two periods wanders in g: its range is all of the map's.
         ["continue", "results/curves_branch_original_p2.h5", "--point", "0", "--along", "Delta", "--to", "1.0", "3.0",
          "--within", "0", "40", "-o", "results/curves_original_p2.h5", "--overwrite"],

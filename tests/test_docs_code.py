@@ -27,6 +27,7 @@ import shlex
 from pathlib import Path
 
 import click
+import numpy as np
 import pytest
 
 from vrsweep.cli import main
@@ -287,3 +288,28 @@ def test_every_example_the_docs_name_is_shipped():
     assert named - shipped == set(), f"named in the docs, not in configs/: {sorted(named - shipped)}"
     assert os.path.isdir(ROOT / "configs")
 
+
+
+def test_make_figures_follows_the_free_orbits_graze(invoke, tmp_path, monkeypatch):
+    # The free period-1 orbit's branch crosses its graze (g = 37.98) onto impacting orbits with a
+    # graze of their own at a lower g, listed first: the recipe followed that one (--point 0), which
+    # continue refuses, so `make_figures.py curves_original` stopped at exit 2.
+    import h5py
+
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "scripts" / "make_figures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    steps = [words for words in module.COMMANDS["curves_original"]
+             if words[0] == "continue" and "curves_branch_original_free" in " ".join(words)]
+    assert len(steps) == 2, steps
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "configs").symlink_to(ROOT / "configs")
+    (tmp_path / "results").mkdir()
+    for words in steps:
+        result = invoke(*words)
+        assert result.exit_code == 0, f"vrsweep {shlex.join(words)}\n{result.output}"
+    with h5py.File(tmp_path / steps[1][steps[1].index("-o") + 1], "r") as f:
+        kinds = [k.decode() if isinstance(k, bytes) else str(k) for k in f["curve_kind"][()]]
+        g, delta = f["g"][()], f["Delta"][()]
+    # The curve passes through the branch's own graze: Delta = 2.5 (the config's) near g = 37.98.
+    assert kinds == ["grazing"] and abs(np.interp(37.98, np.sort(g), delta[np.argsort(g)]) - 2.5) < 0.01
