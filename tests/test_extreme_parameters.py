@@ -131,6 +131,35 @@ def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g, invoke):
     assert np.isnan(stored["R"].values)
 
 
+def test_cli_omega_whose_phase_per_period_overflows_is_a_point_status(tmp_path, invoke):
+    # docs/faults.md's Omega: 1.0e308: Omega T / (2 pi) = 2e308 is inf, and the forcing's period
+    # (analysis/diagnostics.forcing_periods) was a Fraction(inf) traceback after the kernel ran.
+    config = tmp_path / "huge.yaml"
+    config.write_text("model: original\nparameters: {g: 20.0, Omega: 1.0e+308}\n"
+                      "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")
+    result = invoke("run", config, "-o", tmp_path / "huge.h5")
+    assert result.exit_code == 0, result.output
+    assert "Traceback" not in result.output and "Error" not in result.output, result.output
+
+
+def test_forcing_periods_of_an_infinite_ratio_is_none():
+    from vrsweep.analysis.diagnostics import forcing_periods
+
+    slow = 2.0 * np.pi / 0.5
+    # Omega/omega = 8 = 8/1 repeats every period, 8.6 = 43/5 after 5; inf (Omega = 1e308) never.
+    periods = forcing_periods(np.full(3, slow), np.array([[0.5, 4.0], [0.5, 4.3], [0.5, 1.0e308]]), 8)
+    assert periods.tolist() == [1, 5, 0]
+
+
+def test_continuation_refuses_an_infinite_forcing_ratio_in_one_line():
+    from vrsweep.analysis.commensurate import check_commensurate
+    from vrsweep.errors import UsageError
+
+    with pytest.raises(UsageError, match="is not a ratio p/q"):
+        check_commensurate(dict(g=20.0, Omega=1.0e308, omega=0.5), "original", "g")
+    assert check_commensurate(dict(g=20.0, Omega=4.3, omega=0.5), "original", "g") == 5
+
+
 def test_sticking_under_a_very_fast_forcing_ends():
     """A mass that sticks at once while Omega = 1e12: the release scan (steps of 1/64 of the fast
     period) would need ~1e14 intervals for one slow period. It has the step cap as its budget."""

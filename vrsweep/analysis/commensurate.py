@@ -4,6 +4,8 @@ analysis/continuation.py and analysis/curves.py apply the same rule before they 
 
 from __future__ import annotations
 
+import math
+
 from vrsweep.errors import UsageError
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 
@@ -34,8 +36,9 @@ def check_commensurate(parameters, model, moving, max_period=CONTINUATION_DEFAUL
                 "continue {name} in the effective model (no fast force) instead",
                 {"parameter": "continuation.parameter"}, name=name)
     ratio = parameters["Omega"] / parameters["omega"]
-    fraction = Fraction(ratio).limit_denominator(max(int(max_period), 1))
-    if not abs(ratio - fraction) <= RATIO_TOLERANCE * abs(ratio):
+    # Omega = 1e308 over omega = 0.5 overflows to inf, which Fraction refuses (a traceback): no p/q.
+    fraction = Fraction(ratio).limit_denominator(max(int(max_period), 1)) if math.isfinite(ratio) else None
+    if fraction is None or not abs(ratio - fraction) <= RATIO_TOLERANCE * abs(ratio):
         raise UsageError.naming(
             "Omega/omega = {ratio} is not a ratio p/q of whole numbers with q at most {max_period} = {limit}: "
             "the original model's fast forcing then repeats after no orbit period continue looks for (it is "

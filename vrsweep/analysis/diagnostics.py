@@ -142,7 +142,11 @@ def forcing_periods(slow_period, frequencies, longest):
         for frequency in row:
             if frequency == 0.0:
                 continue
-            ratio = frequency * period / (2.0 * np.pi)
+            with np.errstate(over="ignore"):
+                ratio = frequency * period / (2.0 * np.pi)
+            if not np.isfinite(ratio):  # Omega = 1e308 overflows to inf, which Fraction refuses
+                q = 0
+                break
             fraction = Fraction(ratio).limit_denominator(max(int(longest), 1))
             if not abs(ratio - fraction) <= RATIO_TOLERANCE * abs(ratio):
                 q = 0
