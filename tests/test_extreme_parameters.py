@@ -142,6 +142,23 @@ def test_cli_omega_whose_phase_per_period_overflows_is_a_point_status(tmp_path, 
     assert "Traceback" not in result.output and "Error" not in result.output, result.output
 
 
+def test_simulate_of_a_failed_run_counts_only_the_periods_it_reached(tmp_path, invoke):
+    # The periods after a step_too_small have NaN records, which astype(int64) made -2**63: the
+    # file held that, and simulate said "0 impacts (-230584300921369408.00 per slow period)".
+    import h5py
+
+    config = tmp_path / "huge.yaml"
+    config.write_text("model: original\nparameters: {g: 20.0, Omega: 1.0e+308}\n"
+                      "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")
+    result = invoke("simulate", config, "-o", tmp_path / "huge.h5")
+    assert result.exit_code == 0, result.output
+    assert "step_too_small" in result.output and "0 impacts (0.00 per slow period)" in result.output, result.output
+    with h5py.File(tmp_path / "huge.h5", "r") as f:
+        counts = f["original/impacts_per_period"][()]
+    assert counts.min() >= -1 and (counts == -1).any()
+    assert invoke("plot", tmp_path / "huge.h5", "--kind", "impacts", "-o", tmp_path / "i.png").exit_code == 0
+
+
 def test_forcing_periods_of_an_infinite_ratio_is_none():
     from vrsweep.analysis.diagnostics import forcing_periods
 

@@ -58,6 +58,7 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
         per = "period T" if config.written else "slow period"  # a written model's period is its own
         for run in data.runs.values():
             counts = run.impacts_per_period
+            counts = counts[counts >= 0]  # the periods reached (a failed run stops early)
             click.echo(f"{run.model}: {run.status.name.lower()}, {len(run.t)} samples, {len(run.impacts)} impacts "
                        f"({counts.sum() / max(1, len(counts)):.2f} per {per}), "
                        f"{len(run.sticks)} sticking intervals", err=True)

@@ -38,8 +38,10 @@ class Trajectory:
 
     @property
     def impacts_per_period(self):
-        """Impacts in each slow period, transient included (Fig. impact_no)."""
-        return self.period_records[:, kernel.REC_IMPACTS].astype(np.int64)
+        """Impacts in each slow period, transient included (Fig. impact_no); -1 for the periods a
+        failed run did not reach (their records are NaN, which astype(int64) made -2**63)."""
+        counts = self.period_records[:, kernel.REC_IMPACTS]
+        return np.where(np.isfinite(counts), counts, -1.0).astype(np.int64)
 
 
 def simulate(coefficients, initial_state, settings, sample_times=(), impact_capacity=4096,

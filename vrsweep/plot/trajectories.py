@@ -184,6 +184,7 @@ def impacts_per_period_figure(datasets) -> Figure:
     for k, (ax, data, config) in enumerate(zip(axes, datasets, configs)):
         run = data.runs.get(data.model) or next(iter(data.runs.values()))
         counts = np.asarray(run.impacts_per_period)
+        counts = counts[counts >= 0]  # -1: periods a failed run did not reach, drawn as none
         periods = np.arange(1, len(counts) + 1)
         ax.plot(periods, counts, "o-", color="tab:blue", lw=0.7, ms=2.5, label=ROW_TITLES.get(run.model, run.model))
         if config is not None:

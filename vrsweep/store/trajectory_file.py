@@ -214,7 +214,9 @@ def _write_model_run(group, run: ModelRun):
     counts.dims[0].attach_scale(period)
     counts.attrs["units"] = "1"
     counts.attrs["long_name"] = ("impacts in each period T, transient included" if written else
-                                 "impacts in each slow period, transient included (Fig. impact_no)")
+                                 "impacts in each slow period, transient included (Fig. impact_no)") + (
+                                     "; -1: not reached (the run failed before)" if (run.impacts_per_period < 0).any()
+                                     else "")
     _variable(group, "strobe_x", run.strobe_x, period, "stroboscopic x at t = nT")
     _variable(group, "strobe_v", run.strobe_v, period, "stroboscopic velocity at t = nT")
 
