@@ -75,3 +75,10 @@ def test_continue_refuses_a_direction_that_is_neither(tmp_path, sweep_file, invo
     result = invoke("continue", config, "--start", path, "--at", "g=23", "--at", "direction=0",
                     "-o", tmp_path / "branch.h5")
     assert result.exit_code == 2 and "the direction is up or down" in result.output, result.output
+
+
+def test_a_value_that_is_no_number_names_the_axis_values_once(a_map, tmp_path, invoke):
+    # It said "g takes values 41 values from 0 to 40" for a long axis.
+    _, path = a_map
+    result = invoke("plot", path, "--kind", "map", "--at", "g=nan", "-o", tmp_path / "p.png")
+    assert result.exit_code == 2 and "not a finite number; the axis g: 10, 20" in result.output, result.output

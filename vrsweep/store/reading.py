@@ -213,10 +213,10 @@ def axis_index(name, values, wanted):
     try:
         wanted = float(wanted)
     except ValueError:
-        raise UsageError.naming("{at} {name}={value}: not a number; {name} takes values {span}",
+        raise UsageError.naming("{at} {name}={value}: not a number; the axis {name}: {span}",
                                 name=name, value=wanted, span=_axis_span(values)) from None
     if not np.isfinite(wanted):  # nan, inf, 1e400: argmin would answer with the first value
-        raise UsageError.naming("{at} {name}={value}: not a finite number; {name} takes values {span}",
+        raise UsageError.naming("{at} {name}={value}: not a finite number; the axis {name}: {span}",
                                 name=name, value=given, span=_axis_span(values))
     index = int(np.argmin(np.abs(values - wanted)))
     if not abs(values[index] - wanted) <= 1e-9 * max(1.0, abs(wanted)):
