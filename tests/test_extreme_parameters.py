@@ -131,12 +131,18 @@ def test_cli_overflowing_forcing_is_a_point_status(tmp_path, g, invoke):
     assert np.isnan(stored["R"].values)
 
 
-def test_cli_omega_whose_phase_per_period_overflows_is_a_point_status(tmp_path, invoke):
-    # docs/faults.md's Omega: 1.0e308: Omega T / (2 pi) = 2e308 is inf, and the forcing's period
-    # (analysis/diagnostics.forcing_periods) was a Fraction(inf) traceback after the kernel ran.
+def _overflowing_omega(tmp_path):
+    """A config at Omega = 1e308 (docs/faults.md): Omega T / (2 pi) = 2e308 overflows to inf."""
     config = tmp_path / "huge.yaml"
     config.write_text("model: original\nparameters: {g: 20.0, Omega: 1.0e+308}\n"
                       "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")
+    return config
+
+
+def test_cli_omega_whose_phase_per_period_overflows_is_a_point_status(tmp_path, invoke):
+    # docs/faults.md's Omega: 1.0e308: Omega T / (2 pi) = 2e308 is inf, and the forcing's period
+    # (analysis/diagnostics.forcing_periods) was a Fraction(inf) traceback after the kernel ran.
+    config = _overflowing_omega(tmp_path)
     result = invoke("run", config, "-o", tmp_path / "huge.h5")
     assert result.exit_code == 0, result.output
     assert "Traceback" not in result.output and "Error" not in result.output, result.output
@@ -147,9 +153,7 @@ def test_simulate_of_a_failed_run_counts_only_the_periods_it_reached(tmp_path, i
     # file held that, and simulate said "0 impacts (-230584300921369408.00 per slow period)".
     import h5py
 
-    config = tmp_path / "huge.yaml"
-    config.write_text("model: original\nparameters: {g: 20.0, Omega: 1.0e+308}\n"
-                      "integration: {transient_periods: 2, measure_periods: 2, strobe_periods: 2}\n")
+    config = _overflowing_omega(tmp_path)
     result = invoke("simulate", config, "-o", tmp_path / "huge.h5")
     assert result.exit_code == 0, result.output
     assert "step_too_small" in result.output and "0 impacts (0.00 per slow period)" in result.output, result.output
