@@ -259,13 +259,21 @@ def lyapunov_error(log_stretch, slow_period, period):
     return _T975.get(n_batches - 1, 1.96) * np.std(exponents, ddof=1) / np.sqrt(n_batches)
 
 
+def whole_cycles(m, period):
+    """Slow periods in the last whole cycles of an m-period window of a period-p orbit, (m // p) p
+    (ints or arrays): its rows m - whole_cycles .. m - 1. R, impacts_per_period and lambda_1 of a
+    periodic point are all taken over these rows (motion.whole_cycle_gain, whole_cycle_impacts,
+    whole_cycle_exponent), so that the three are the orbit's own and over one window."""
+    return (m // period) * period
+
+
 def whole_cycle_exponent(log_stretch, slow_period, period):
     """The largest exponent over the window's last whole cycles of a period-p orbit: the orbit's
     own, log |mu_1| / (p T) (mu_1 the largest Floquet multiplier of its p-period map). Over the
     whole window a period-p orbit's exponent would count the share of a cycle m mod p adds: at
     g = 10, Omega = 4 (period 3, 8 impacts a cycle, 100 periods) -0.4651 against the orbit's
     -0.4664, as R would be off by 1.6e-2 (motion.whole_cycle_gain). log_stretch: (m,)."""
-    whole = (len(log_stretch) // period) * period
+    whole = whole_cycles(len(log_stretch), period)
     return log_stretch[len(log_stretch) - whole:].sum() / (whole * slow_period)
 
 

@@ -78,6 +78,7 @@ import warnings
 
 import numpy as np
 
+from vrsweep.analysis.diagnostics import whole_cycles
 from vrsweep.numerics import kernel
 from vrsweep.numerics.coefficients import PERIOD, RESPONSE_SCALE
 from vrsweep.results import Motion, Status
@@ -220,7 +221,7 @@ def whole_cycle_gain(measured, coefficients, period):
     slow_period = coefficients[:, PERIOD]
     c = coefficients[:, RESPONSE_SCALE]
     n_points, m, _ = measured.shape
-    whole = (m // period) * period
+    whole = whole_cycles(m, period)
     sin_integral = np.zeros(n_points)
     cos_integral = np.zeros(n_points)
     for k in range(m):
@@ -242,7 +243,7 @@ def whole_cycle_impacts(measured, period):
     Over the whole window a period-p orbit counts part of a cycle once more: at g = 10, Omega = 4
     (period 3, 8 impacts a cycle) 2.67 a period over 100 periods, against the orbit's 8/3."""
     n_points, m, _ = measured.shape
-    whole = (m // period) * period
+    whole = whole_cycles(m, period)
     inside = np.arange(m)[None, :] >= (m - whole)[:, None]
     return np.where(inside, measured[:, :, kernel.REC_IMPACTS], 0.0).sum(axis=1) / whole
 
