@@ -44,8 +44,10 @@ def test_ctrl_c_inside_run_before_its_sweep_starts(monkeypatch, tmp_path):
 
 
 @pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs /proc to see numba loaded")
-def test_a_real_sigint_to_simulate(tmp_path):
-    """SIGINT once the command is running (numba, which only a command loads, is in memory)."""
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_real_signal_to_simulate(signum, tmp_path):
+    """SIGINT or SIGTERM once the command is running (numba, which only a command loads, is in
+    memory). SIGTERM ended it with exit 143 and nothing said."""
     out = tmp_path / "traj.h5"
     process = subprocess.Popen(
         [sys.executable, "-m", "vrsweep", "simulate", str(FIG3), "--set", "transient_periods=4000",
@@ -56,12 +58,12 @@ def test_a_real_sigint_to_simulate(tmp_path):
         while "llvmlite" not in Path(f"/proc/{process.pid}/maps").read_text():
             assert process.poll() is None and time.monotonic() < deadline, "simulate never started"
             time.sleep(0.02)
-        process.send_signal(signal.SIGINT)
+        process.send_signal(signum)
         _, stderr = process.communicate(timeout=120)
     finally:
         process.kill()
-    assert process.returncode == 130, stderr
-    assert stderr == "Interrupted (SIGINT)\n"
+    assert process.returncode == 128 + signum, stderr
+    assert stderr == f"Interrupted ({signal.Signals(signum).name})\n"
     assert not out.exists() and list(tmp_path.iterdir()) == []  # no output, no temporary file
 
 

@@ -73,10 +73,10 @@ class GracefulStop:
 
 def _exit_interrupted(signum, frame):
     # Nothing is written yet and nothing is held: say so in the one line every command uses, and
-    # leave with the shell's code for SIGINT, without unwinding an import half done.
-    newline = "\n" if sys.stderr.isatty() else ""
-    os.write(2, f"{newline}Interrupted (SIGINT)\n".encode())
-    os._exit(128 + signal.SIGINT)
+    # leave with the shell's code for the signal, without unwinding an import half done.
+    newline = "\n" if sys.stderr.isatty() and signum == signal.SIGINT else ""
+    os.write(2, f"{newline}Interrupted ({signal.Signals(signum).name})\n".encode())
+    os._exit(128 + signum)
 
 
 def exit_at_once_on_sigint() -> None:
@@ -117,6 +117,13 @@ def _raise_interrupted(signum, frame):
 
 def raise_on_sigint() -> None:
     """KeyboardInterrupt on SIGINT again (as :class:`Interrupted`), if exit_at_once_on_sigint set
-    it aside."""
-    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is _exit_interrupted:
+    it aside; and on SIGTERM, where nothing else handles it. Without a handler SIGTERM (scancel, a
+    SLURM time limit, `timeout`) ended simulate, plot or info with exit 143 and not a word in the
+    job's log; now it is the one line and code of any interrupted command (cli.py). Commands that
+    stop at a safe point (run, merge, continue) install their own for as long as they run."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGINT) is _exit_interrupted:
         signal.signal(signal.SIGINT, _raise_interrupted)
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _raise_interrupted)
