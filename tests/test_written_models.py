@@ -846,3 +846,27 @@ def test_every_frequency_of_the_forcing_is_found_with_or_without_a_phase():
     found = codegen.frequencies([acceleration], t)
     assert {sympy.srepr(sympy.expand(a)) for a in found} == {sympy.srepr(a) for a in (W, w, sympy.Integer(3))}
     assert codegen.frequencies([-x], t) == []
+
+
+@pytest.mark.parametrize("forcing, response, expected", [
+    ("F*cos(2*pi*f*t)", "2*pi*f", lambda f, k: [2 * math.pi * f]),
+    ("F*sin(sqrt(k)*t + 1) + F*cos(t/sqrt(2))", "sqrt(k)", lambda f, k: [math.sqrt(k), 1 / math.sqrt(2)]),
+    ("F*cos(exp(f)*t) + F*cos(abs(k - 3)*t) + F*cos(max(k, 3)*t)", "exp(f)", lambda f, k: [math.exp(f), abs(k - 3), max(k, 3)]),
+])
+def test_frequencies_with_named_functions_and_constants_are_computed(forcing, response, expected):
+    """A force written cos(2*pi*f*t), or with sqrt, exp or abs in a frequency: the generated frequency
+    functions (which the coefficient vectors and the forcing period read, before any kernel runs)
+    used numpy.pi and numpy.sqrt in a module that had imported numpy as np: NameError, a traceback
+    for every sweep of such a model."""
+    text = MODEL.replace("F*cos(omega*t)", forcing).replace("F: 1.0, omega: 0.8", "F: 1.0, f: 0.15, k: 2.0") \
+        .replace("2*pi/omega", "1/f").replace("frequency: omega", f"frequency: '{response}'")
+    config = parse_config(text, "m.yaml")
+    kernels = kernels_for(config.model)
+    values = np.array([kernels.coefficients(dict(config.parameters, f=f, k=k)) for f, k in [(0.15, 2.0), (0.2, 5.0)]])
+    from vrsweep.numerics.coefficients import RESPONSE_FREQUENCY
+
+    response_values = [expected(0.15, 2.0)[0], expected(0.2, 5.0)[0]]
+    np.testing.assert_allclose(values[:, RESPONSE_FREQUENCY], response_values, rtol=1e-15)
+    frequencies = kernels.forcing_frequencies(values)
+    for row, (f, k) in zip(frequencies, [(0.15, 2.0), (0.2, 5.0)]):
+        assert sorted(np.abs(row)) == pytest.approx(sorted(expected(f, k)), rel=1e-15)
