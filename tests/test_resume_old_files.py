@@ -148,17 +148,17 @@ def test_a_checkpoint_of_a_version_whose_points_differ_refuses_naming_it(tmp_pat
     assert out.read_bytes() == before
 
 
-def test_a_checkpoint_of_069_refuses_naming_what_changed(tmp_path):
-    """0.7.0 takes a periodic point's impacts_per_period and lyapunov over its last whole cycles:
-    a 0.6.9 checkpoint's points are not this version's, so it is not continued."""
+def test_a_checkpoint_of_070_refuses_naming_what_changed(tmp_path):
+    """0.7.1 reads a periodic point's R over whole cycles of the response frequency too: a 0.7.0
+    checkpoint's points are not this version's, so it is not continued."""
     from vrsweep.execution.job import run_job
 
     config = the_config()
     out = tmp_path / "old.h5"
     _run_interrupted(config, out)
     with h5py.File(out, "r+") as f:
-        f.attrs["vrsweep_version"] = "0.6.9"
+        f.attrs["vrsweep_version"] = "0.7.0"
     before = out.read_bytes()
-    with pytest.raises(ResultFileError, match="written by vrsweep 0.6.9.*over its last whole cycles since 0.7.0"):
+    with pytest.raises(ResultFileError, match="written by vrsweep 0.7.0.*no harmonic of it since 0.7.1"):
         run_job(config, out, threads=1, resume=True)
     assert out.read_bytes() == before

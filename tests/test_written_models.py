@@ -848,6 +848,58 @@ def test_every_frequency_of_the_forcing_is_found_with_or_without_a_phase():
     assert codegen.frequencies([-x], t) == []
 
 
+def test_a_response_at_no_harmonic_of_the_motion_is_zero_whatever_the_window():
+    """A linear oscillator forced at omega (and, with F2 > 0, at omega/2), the response read at
+    w = omega/2, over 21 periods T = 2 pi / omega (an odd number). The closed form: the steady
+    state holds omega and omega/2 only, so |Q(omega/2)| = F2 |H(omega/2)| with H(s) = 1 / (1 - s**2
+    + 2 i zeta s), which is 0 for F2 = 0. Over the period-1 motion (F2 = 0) the window was read as
+    21 whole cycles, which are not whole cycles of e^{iwt}: R was 0.06 with an R_err of 1e-13 (0
+    over any even number of periods). diagnostics.gain_cycles makes R's cycle span both."""
+    import vrsweep
+
+    zeta, omega, F = 0.05, 0.8, 1.0
+    model = {"acceleration": "-2*zeta*v - x + F*cos(omega*t) + F2*cos(omega*t/2)",
+             "parameters": {"zeta": zeta, "F": F, "F2": 0.0, "omega": omega, "Delta": 100.0, "r": 0.8},
+             "barriers": [{"position": "Delta", "side": "above", "restitution": "r"}],
+             "period": "2*pi/omega", "response": {"frequency": "omega/2", "scale": "F"}}
+    ds = vrsweep.sweep({"model": model, "initial": {"x": 0.0, "v": 0.0}, "sweep": {"F2": [0.0, 0.5]},
+                        "integration": {"transient_periods": 300, "measure_periods": 21}}, progress=False)
+    s = omega / 2
+    gain = 0.5 * abs(1.0 / complex(1.0 - s * s, 2.0 * zeta * s)) / F
+    assert list(ds["period"].values) == [1, 2]
+    assert float(ds["R"][0]) < 1e-9 and float(ds["R_err"][0]) < 1e-9
+    assert float(ds["R"][1]) == pytest.approx(gain, rel=1e-7)
+    assert float(ds["R_err"][1]) < 1e-7 * gain
+
+
+@pytest.mark.parametrize("F2", [0.0, 0.5])
+def test_a_continued_orbits_response_at_no_harmonic_of_it_is_zero(tmp_path, F2):
+    """The same oscillator and response w = omega/2 continued in Delta, out of reach: the period-1
+    orbit (F2 = 0) has no component at w, and its R, read over one cycle (half a cycle of
+    e^{iwt}), was 1.23 (the shipped linear example's at Delta = 3); the period-2 orbit (F2 = 0.5)
+    has F2 |H(omega/2)| / F there, the closed form."""
+    import vrsweep
+
+    zeta, omega, F = 0.05, 0.8, 1.0
+    text = textwrap.dedent(f"""\
+        model:
+          acceleration: "-2*zeta*v - x + F*cos(omega*t) + F2*cos(omega*t/2)"
+          parameters: {{zeta: {zeta}, F: {F}, F2: {F2}, omega: {omega}, Delta: 50.0, r: 0.8}}
+          barriers: [{{position: Delta, side: above, restitution: r}}]
+          period: "2*pi/omega"
+          response: {{frequency: omega/2, scale: F}}
+        initial: {{x: 0.0, v: 0.0}}
+        integration: {{rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 300}}
+        continuation: {{parameter: Delta, from: 50.0, to: [49.0, 51.0], max_step: 0.5}}
+        """)
+    branch = _continued(tmp_path, text + "sweep:", "")
+    s = omega / 2
+    with vrsweep.open_results(branch) as ds:
+        periods, R = ds["periods"].values, ds["R"].values
+    assert len(R) >= 3 and (periods == (2 if F2 else 1)).all()
+    np.testing.assert_allclose(R, F2 * abs(1.0 / complex(1.0 - s * s, 2.0 * zeta * s)) / F, rtol=1e-7, atol=1e-12)
+
+
 @pytest.mark.parametrize("forcing, response, expected", [
     ("F*cos(2*pi*f*t)", "2*pi*f", lambda f, k: [2 * math.pi * f]),
     ("F*sin(sqrt(k)*t + 1) + F*cos(t/sqrt(2))", "sqrt(k)", lambda f, k: [math.sqrt(k), 1 / math.sqrt(2)]),

@@ -47,7 +47,7 @@ import numpy as np
 
 from vrsweep.analysis import grazing
 from vrsweep.analysis.commensurate import RATIO_TOLERANCE, check_commensurate  # noqa: F401 - continuation's rule
-from vrsweep.analysis.diagnostics import detect_period
+from vrsweep.analysis.diagnostics import detect_period, orbit_gain
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
 from vrsweep.numerics.coefficients import N_BARRIERS, PERIOD, barrier_position, grazing_barrier
@@ -244,8 +244,9 @@ def _parameter_derivative(problem, state, value, periods, orbit_map):
 
 
 def _orbit(problem, state, value, periods, orbit_map, residual, iterations, derivative=None):
+    R, Q_amplitude = orbit_gain(problem.coefficients(value), periods, orbit_map.R, orbit_map.Q_amplitude)
     return Orbit(parameter=float(value), state=np.array(state, dtype=float), periods=periods,
-                 monodromy=orbit_map.monodromy.copy(), R=orbit_map.R, Q_amplitude=orbit_map.Q_amplitude,
+                 monodromy=orbit_map.monodromy.copy(), R=R, Q_amplitude=Q_amplitude,
                  impacts_per_period=orbit_map.impacts / periods, x_max=orbit_map.x_max,
                  slowest_impact=orbit_map.slowest_impact, residual=residual, newton_iterations=iterations,
                  parameter_derivative=derivative, free_x_max=orbit_map.free_x_max)

@@ -64,6 +64,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vrsweep.analysis import continuation, grazing
+from vrsweep.analysis.diagnostics import orbit_gain
 from vrsweep.errors import UsageError
 from vrsweep.numerics import model as model_metadata
 from vrsweep.numerics.coefficients import grazing_barrier
@@ -281,8 +282,9 @@ def _location_tolerance(problem, z):
 
 def _point(problem, kind, z, periods, orbit_map, residual, iterations, jacobian):
     delta = problem.delta(z[2:])
+    R, _ = orbit_gain(problem.coefficients(z[2:]), periods, orbit_map.R, orbit_map.Q_amplitude)
     point = CurvePoint(kind=kind, values=z[2:].copy(), state=z[:2].copy(), periods=periods,
-                       monodromy=orbit_map.monodromy.copy(), R=orbit_map.R,
+                       monodromy=orbit_map.monodromy.copy(), R=R,
                        impacts_per_period=orbit_map.impacts / periods, x_max=orbit_map.x_max,
                        barrier_distance=delta - orbit_map.x_max, slowest_impact=orbit_map.slowest_impact,
                        residual=residual, newton_iterations=iterations,

@@ -78,7 +78,7 @@ import warnings
 
 import numpy as np
 
-from vrsweep.analysis.diagnostics import whole_cycles
+from vrsweep.analysis.diagnostics import gain_cycles, whole_cycles
 from vrsweep.numerics import kernel
 from vrsweep.numerics.coefficients import PERIOD, RESPONSE_SCALE
 from vrsweep.results import Motion, Status
@@ -216,7 +216,8 @@ def quasi_periodic_gain(measured, coefficients):
 
 def whole_cycle_gain(measured, coefficients, period):
     """R (eq3.3) over the last whole cycles of each point's window, with Qs, Qc, Q_amplitude:
-    {"R", "Qs", "Qc", "Q_amplitude"} (n_points,) each; period (n_points,) > 0. The integrals are
+    {"R", "Qs", "Qc", "Q_amplitude"} (n_points,) each; period (n_points,) > 0, the cycle of R
+    (diagnostics.gain_cycles: the motion's period, or a multiple of it). The integrals are
     summed period by period in order, as the kernel sums the window (records.py)."""
     slow_period = coefficients[:, PERIOD]
     c = coefficients[:, RESPONSE_SCALE]
@@ -266,10 +267,15 @@ def motion_values(values, measured, statuses, coefficients, lyapunov=None):
     period = np.asarray(values["period"])
     motion = classify(measured, ok, period, *exponents)
     m = measured.shape[1]
-    # p dividing m: the window is whole cycles, and the kernel's R is already theirs
-    cut = (motion == Motion.PERIODIC) & (m % np.maximum(period, 1) != 0)
+    periodic = motion == Motion.PERIODIC
+    # a cycle dividing m: the window is whole cycles, and the kernel's value is already theirs.
+    # R's cycle spans whole cycles of the response's e^{iwt} too (diagnostics.gain_cycles).
+    cycles = gain_cycles(coefficients, period, m)
+    cut = periodic & (m % np.maximum(cycles, 1) != 0)
     if cut.any():
-        _replace(values, cut, whole_cycle_gain(measured[cut], coefficients[cut], period[cut]))
+        _replace(values, cut, whole_cycle_gain(measured[cut], coefficients[cut], cycles[cut]))
+    cut = periodic & (m % np.maximum(period, 1) != 0)
+    if cut.any():
         _replace(values, cut, {"impacts_per_period": whole_cycle_impacts(measured[cut], period[cut])})
     quasi = motion == Motion.QUASI_PERIODIC
     if quasi.any():
