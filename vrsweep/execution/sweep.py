@@ -12,6 +12,8 @@ This module knows nothing of files: finished chunks are handed to a callback. Th
 numba compiles are in vrsweep/numerics/lines.py.
 """
 
+import contextlib
+import threading
 import time
 
 import numba
@@ -39,6 +41,25 @@ from vrsweep.numerics.trajectory import settings_vector
 def integration_settings(integration):
     """The kernel's settings vector from a config's integration section."""
     return settings_vector(**vars(integration))
+
+
+_LAUNCH_LOCK = threading.Lock()
+
+
+def kernel_launch_lock():
+    """Held around a parallel kernel's launch where numba's threading layer is not threadsafe.
+
+    numba's own ``workqueue`` layer (its fallback where neither OpenMP nor TBB loads, or asked for
+    by NUMBA_THREADING_LAYER) aborts the whole process ("Concurrent access has been detected") when
+    two Python threads launch parallel loops at once: two ``vrsweep.sweep`` calls from a notebook's
+    threads killed the kernel and every result in it. Until the first launch has picked a layer it
+    is unknown, so those launches are serialised too; ``omp`` and ``tbb`` launch concurrently.
+    """
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # no parallel loop has run yet: the layer is chosen by the first
+        return _LAUNCH_LOCK
+    return _LAUNCH_LOCK if layer == "workqueue" else contextlib.nullcontext()
 
 
 class LineRunner:
@@ -92,7 +113,7 @@ class LineRunner:
         if self.device == "cuda":
             chunk.launch = self.run_lines.launch(*arrays)
         else:
-            with numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
+            with kernel_launch_lock(), numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
                 self.run_lines(*arrays)
         return chunk
 
