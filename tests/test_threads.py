@@ -45,3 +45,45 @@ def test_an_unreadable_numba_num_threads_is_no_traceback(tmp_path, write_config)
         assert "Traceback" not in done.stderr, done.stderr
         assert done.stderr.startswith(f"vrsweep: NUMBA_NUM_THREADS='abc' is not a whole number >= 1: "
                                       f"ignored, using the {len(os.sched_getaffinity(0))} CPUs"), done.stderr
+
+
+def test_sweeps_from_several_threads_under_numbas_workqueue_layer():
+    # numba's workqueue layer (its fallback where OpenMP and TBB do not load) aborts the process on
+    # concurrent parallel launches: two vrsweep.sweep calls from a notebook's threads killed it.
+    code = """
+import threading, numpy as np, vrsweep
+config = {"model": "effective", "sweep": {"g": np.linspace(0, 40, 9)},
+          "integration": {"transient_periods": 20, "measure_periods": 16}}
+reference = vrsweep.sweep(config, progress=False)
+start = threading.Barrier(3)
+results = []
+def work():
+    start.wait()
+    results.append(vrsweep.sweep(config, progress=False))
+threads = [threading.Thread(target=work) for _ in range(3)]
+[thread.start() for thread in threads]
+[thread.join() for thread in threads]
+assert len(results) == 3
+for result in results:
+    assert (result.R.fillna(-1).values == reference.R.fillna(-1).values).all()
+import numba
+print(numba.threading_layer())
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=dict(os.environ, NUMBA_THREADING_LAYER="workqueue"), timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == ["workqueue"]
+
+
+def test_threads_may_be_a_numpy_integer(tmp_path):
+    import numpy as np
+
+    import vrsweep
+    from vrsweep.errors import UsageError
+
+    config = {"model": "effective", "integration": {"transient_periods": 1, "measure_periods": 1, "strobe_periods": 1}}
+    one = vrsweep.sweep(config, threads=np.int64(1), progress=False)
+    assert int(one.status) == 0
+    for value in (np.bool_(True), np.int64(0), np.float64(1.0)):
+        with pytest.raises(UsageError, match=r"^threads must be a whole number of at least 1, got "):
+            vrsweep.sweep(config, threads=value, progress=False)

@@ -244,12 +244,17 @@ def _check_flags(**flags):
 
 
 def _capped_threads(threads):
+    import numpy as np
+
     from vrsweep.execution.threads import available_threads
 
     if threads is None:
         return None
-    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+    # numpy's integers are whole numbers too (threads=np.int64(4) was refused as not one); its
+    # booleans, like Python's, are not.
+    if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, numbers.Integral) or threads < 1:
         raise UsageError.naming("{threads} must be a whole number of at least 1, got {value!r}", value=threads)
+    threads = int(threads)
     available = available_threads()
     if threads > available:
         warnings.warn(f"threads={threads}: numba can run {available} thread{'s' if available != 1 else ''} here "
