@@ -336,6 +336,32 @@ def test_bad_overrides_are_reported_with_the_other_problems():
     ]  # and e=0.5 replaced the file's bad e, which is therefore no longer a problem
 
 
+def test_a_setting_given_twice_with_two_values_is_refused_naming_both():
+    # The later value was taken without a word (--set g=5 ... --set parameters.g=6), as plot --at
+    # once took the later of two values of one axis.
+    assert only_problem("", overrides=["g=5", "parameters.g=6"]) == (
+        "--set parameters.g=6: parameters.g is already set by --set g=5: give one value")
+    assert only_problem("", overrides=["x0=0.1", "initial.x=0.2"]) == (
+        "--set initial.x=0.2: initial.x is already set by --set x0=0.1: give one value")
+    assert only_problem("", overrides=["lyapunov=true", "integration.lyapunov=false"]).startswith(
+        "--set integration.lyapunov=false: integration.lyapunov is already set by --set lyapunov=true")
+    assert problems("", overrides=["continuation.to=1,2", "continuation.to=1,3"])[-1] == (
+        "--set continuation.to=1,3: continuation.to is already set by --set continuation.to=1,2: give one value")
+    assert len(problems("", overrides=["g=5", "g=6", "parameters.g=7"])) == 2
+    # The same value twice says one thing: taken.
+    assert parse_config("", overrides=["g=5", "parameters.g=5.0", "g=5"]).parameters["g"] == 5.0
+    assert parse_config("", overrides=["lyapunov=true", "lyapunov=true"]).integration.lyapunov is True
+
+
+def test_a_setting_given_twice_through_keyword_arguments_names_both():
+    import vrsweep
+
+    with pytest.raises(ConfigError) as info:
+        vrsweep.theory({"model": "effective"}, g=5, **{"parameters.g": 6})
+    assert info.value.problems == [
+        "keyword argument parameters.g=6: parameters.g is already set by keyword argument g=5: give one value"]
+
+
 def test_override_breaking_a_cross_field_rule():
     assert_words(only_problem("", overrides=["Delta=0.5"]), "--set Delta=0.5: parameters.Delta",
                  "above initial.x")

@@ -53,9 +53,11 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
 
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
+    words = {}
     if device is not None:  # --device is --set device=... spelled as an option
         overrides = (*overrides, f"integration.device={device}")
-    config = load_config(config_path, overrides)
+        words[f"integration.device={device}"] = f"--device {device}"  # a conflict names what was typed
+    config = load_config(config_path, overrides, override_words=words)
     if not dask_address or dask_address.startswith("local:"):  # remote workers run their own numba
         check_threading_layer()
     announce_fixed_axes(config_path, overrides, config)

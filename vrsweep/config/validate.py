@@ -224,6 +224,7 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
         """[(path, value, "NAME=VALUE")] for the good overrides; bad ones are reported."""
         targets = _override_targets(self.parameter_names)
         settings = []
+        given = {}  # path -> (value, setting) of the first override that set it
         for setting in self.overrides:
             setting = str(setting)
             name, sep, value_text = setting.partition("=")
@@ -250,7 +251,16 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
             except ValueError as error:
                 self.report_raw(self.setting_order(setting), f"{self.said(setting)}: {error}")
                 continue
-            settings.append((targets[name], value, setting))
+            path = targets[name]
+            if path in given and not _same_value(given[path][0], value):
+                # --set g=5 ... --set parameters.g=6 (a script's setting and its user's): which one
+                # was meant cannot be told, and the later one was taken without a word.
+                self.report_raw(self.setting_order(setting),
+                                f"{self.said(setting)}: {dotted(path)} is already set by {self.said(given[path][1])}: "
+                                f"give one value")
+                continue
+            given.setdefault(path, (value, setting))
+            settings.append((path, value, setting))
         return settings
 
     def apply_overrides(self, data, settings):
@@ -297,6 +307,13 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
                 else:
                     self.report_pydantic(item, ())
             return None
+
+
+def _same_value(a, b) -> bool:
+    """Two --set values that say the same (g=5 and parameters.g=5.0); a bool is no number here."""
+    if isinstance(a, bool) or isinstance(b, bool):
+        return type(a) is type(b) and a == b
+    return a == b
 
 
 def _continuation(section):
