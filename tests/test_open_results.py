@@ -127,3 +127,19 @@ def test_every_file_carries_the_cf_global_attributes(files, kind):
         assert len(lines) == 1 and command[kind] in lines[0]
     if kind == "shard":
         assert "--shard 0/2" in lines[0]
+
+
+def test_a_file_this_process_holds_open_is_not_called_corrupt(tmp_path):
+    # open_results is lazy and keeps its file open; resuming into that file then failed in HDF5
+    # ("already open for read-only") and was reported as "truncated or corrupt": a sound file a
+    # user might delete. It says what holds it, and closing the Dataset is enough.
+    config = {"model": "effective", "sweep": {"g": [1.0, 2.0]},
+              "integration": {"transient_periods": 1, "measure_periods": 2, "strobe_periods": 1}}
+    path = tmp_path / "sweep.h5"
+    vrsweep.sweep(config, output=path, progress=False)
+    opened = vrsweep.open_results(path)
+    with pytest.raises(ResultFileError) as info:
+        vrsweep.sweep(config, output=path, resume=True, progress=False)
+    assert "is open in this process" in str(info.value) and "corrupt" not in str(info.value)
+    opened.close()
+    assert int(vrsweep.sweep(config, output=path, resume=True, progress=False).done.sum()) == 2

@@ -254,8 +254,24 @@ def _read_through_checksums(dataset, path, finite=False):
                                   "a finite number")
 
 
+def open_in_this_process_error(path, error):
+    """The ResultFileError for a file that HDF5 refuses because this process holds it open in
+    another mode, or None. A Dataset of ``open_results`` (lazy: it keeps its file open) and then
+    ``sweep(..., output=that file, resume=True)`` was told the file is "truncated or corrupt", a
+    word that has files deleted; it is sound, and closing the Dataset is all it takes."""
+    text = str(error)
+    if "already open" in text or "close degree" in text:
+        return ResultFileError(
+            f"{path} is open in this process in another mode (a Dataset from vrsweep.open_results or "
+            "xarray, or an h5py File, still holds it): close it (ds.close()) and try again")
+    return None
+
+
 def corrupt_error(path, error):
     text = str(error)
+    in_use = open_in_this_process_error(path, error)
+    if in_use is not None:
+        return in_use
     if "unable to lock file" in text:  # not just "lock": "sblock" appears in truncation messages
         return ResultFileError(
             f"{path} is locked: another process (a run in progress?) has it open for writing; "

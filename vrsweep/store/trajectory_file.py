@@ -56,6 +56,7 @@ from vrsweep.results import MESSAGES, Status
 from vrsweep.store.fileio import LIBVER, has_file_kind, open_hdf5, output_target, write_bytes
 from vrsweep.store.layout import FORMAT_VERSION
 from vrsweep.store.provenance import WRITTEN
+from vrsweep.store.reader import open_in_this_process_error
 from vrsweep.store.sealing import (ATTRIBUTES_CHECKSUM, WHEN_AND_HOW, check_attributes, note_if_unprotected, seal_attributes,
                                    unless_changed)
 
@@ -268,7 +269,8 @@ def check_trajectory(path) -> None:
     except ResultFileError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as error:
-        raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
+        raise open_in_this_process_error(path, error) or ResultFileError(
+            f"{path} is truncated or corrupt (HDF5: {error})") from None
     note_if_unprotected(path, protected)
 
 
@@ -312,7 +314,8 @@ def read_trajectory(path) -> TrajectoryData:
     except ResultFileError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as error:
-        raise ResultFileError(f"{path} is truncated or corrupt (HDF5: {error})") from None
+        raise open_in_this_process_error(path, error) or ResultFileError(
+            f"{path} is truncated or corrupt (HDF5: {error})") from None
     if not runs:
         raise ResultFileError(f"{path} holds no trajectory (no 'original', 'effective' or 'written' group)")
     note_if_unprotected(path, protected)
