@@ -362,6 +362,16 @@ def test_a_setting_given_twice_through_keyword_arguments_names_both():
         "keyword argument parameters.g=6: parameters.g is already set by keyword argument g=5: give one value"]
 
 
+def test_a_tilde_in_the_configs_output_is_the_home_folder(monkeypatch, tmp_path):
+    # No shell expands a config's text: output: ~/results/x.h5 wrote ./~/results/x.h5.
+    monkeypatch.setenv("HOME", str(tmp_path))
+    config = parse_config("output: ~/results/x.h5\n")
+    assert config.output_path() == tmp_path / "results" / "x.h5"
+    assert config.output == "~/results/x.h5"  # the config as written: what --resume compares
+    assert parse_config("output: results/~x.h5\n").output_path() == Path("results/~x.h5")
+    assert config.output_path("~/given.h5") == Path("~/given.h5")  # -o: the shell's business
+
+
 def test_override_breaking_a_cross_field_rule():
     assert_words(only_problem("", overrides=["Delta=0.5"]), "--set Delta=0.5: parameters.Delta",
                  "above initial.x")

@@ -304,12 +304,15 @@ class Config:
         Relative paths are taken relative to the current directory, like any command-line path --
         never relative to the config file -- and the default file is written in the current
         directory too (``vrsweep run configs/fig1.yaml`` writes ``./fig1.h5``). A config read from
-        a string (no file name) defaults to ``vrsweep.h5``.
+        a string (no file name) defaults to ``vrsweep.h5``. The config's ``~`` or ``~user`` at the
+        start of ``output`` is that home folder, as in a shell.
         """
         if override is not None:
             return Path(override)
         if self.output is not None:
-            return Path(self.output)
+            # No shell reads a config: "~/results/x.h5" made a folder named "~" in the current
+            # directory (where `rm -r ~` is one slip away) and wrote the results there.
+            return Path(os.path.expanduser(self.output))
         if self.source_name.startswith("<"):
             return Path("vrsweep.h5")
         return Path(Path(self.source_name).stem + ".h5")
