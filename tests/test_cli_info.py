@@ -175,3 +175,25 @@ def test_a_simulate_output_is_described(tmp_path, info_json, invoke):
     assert summary["status_counts"], summary
     names = {variable["name"] for variable in summary["variables"]}
     assert any(name.endswith("/x") for name in names), names
+
+
+@pytest.mark.parametrize("suffix", [".svg", ".png", ".pdf"])
+def test_a_figure_another_program_wrote_has_no_vrsweep_description(tmp_path, invoke, suffix):
+    # matplotlib's SVG names its creator in a dc:title, which info printed as the figure's
+    # description ("figure / Matplotlib v3.11.2, https://matplotlib.org/"); a PNG or PDF with a
+    # Title of its own was described as if vrsweep had written it.
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots()
+    ax.plot([0, 1])
+    path = tmp_path / f"other{suffix}"
+    metadata = {"Title": "someone else's"} if suffix != ".png" else {"Title": "someone else's",
+                                                                      "Description": "not ours"}
+    fig.savefig(path, metadata=metadata)
+    plt.close(fig)
+    result = invoke("info", str(path))
+    assert result.exit_code == 0, result.output
+    assert result.output.strip() == f"{path}: a figure without a vrsweep description in its metadata"

@@ -540,6 +540,10 @@ def read_description(path) -> dict:
     .svg); empty strings where the file holds none (a figure not made by vrsweep)."""
     suffix = Path(path).suffix.lower()
     found = {"Title": "", "Description": ""}
+    if not made_by_vrsweep(path):
+        # Another program's title is no description of ours: matplotlib's own SVG names its
+        # creator in a dc:title ("Matplotlib v3.11.2, ..."), which info printed as the figure's.
+        return found
     if suffix == ".png":
         from PIL import Image
 
