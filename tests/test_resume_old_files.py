@@ -54,6 +54,33 @@ def test_the_stored_old_text_is_the_same_config():
     assert same_config(respelled, config)
 
 
+def test_what_changes_no_point_is_not_compared():
+    # A config given an output: key or a continuation section after its sweep stopped computes the
+    # same points: --resume refused it ("first difference ... 'output: null' vs ...").
+    config = the_config()
+    moved = HAND_EMITTED.replace('output: "out\\x09\u00e9.h5"', 'output: "elsewhere.h5"')
+    assert moved != HAND_EMITTED and same_config(moved, config)
+    assert same_config(HAND_EMITTED + "continuation: {parameter: g, from: 10, to: [5, 20]}\n", config)
+
+
+def test_a_run_resumes_after_its_config_gains_an_output_key(tmp_path, invoke, write_config):
+    config = write_config(tmp_path, """\
+        model: effective
+        sweep:
+          g: [1.0, 2.0, 3.0]
+        integration: {transient_periods: 1, measure_periods: 2, strobe_periods: 1}
+        """)
+    out = tmp_path / "run.h5"
+    assert invoke("run", config, "-o", out, "--shard", "0/3", "--quiet").exit_code == 0
+    assert invoke("merge", tmp_path / "run.shard0of3.h5", "-o", out, "--allow-missing").exit_code == 0
+    with open(config, "a", encoding="utf-8") as handle:
+        handle.write("output: results/elsewhere.h5\n")
+    done = invoke("run", config, "-o", out, "--resume", "--quiet")
+    assert done.exit_code == 0, done.output
+    with h5py.File(out, "r") as f:
+        assert f["done"][()].all()
+
+
 def test_another_config_is_not_the_same():
     config = the_config()
     assert not same_config(HAND_EMITTED.replace("alpha: 0.125", "alpha: 0.12"), config)

@@ -117,7 +117,11 @@ def same_config(stored_text: str, config: Config) -> bool:
         stored = parse_config(stored_text, "<the stored config>")
     except ConfigError:
         return False
-    return stored == config
+    # Where the file goes and how `continue` follows an orbit change no point of a sweep: a config
+    # given an output: key, or a continuation section, after its run stopped was refused to resume
+    # ("first difference at line 30: 'output: null' vs 'output: ...'"), and so was the file of
+    # `vrsweep run CONFIG` resumed by vrsweep.sweep, which leaves a config's output unused.
+    return dataclasses.replace(stored, output=config.output, continuation=config.continuation) == config
 
 
 class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
