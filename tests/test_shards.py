@@ -246,6 +246,22 @@ def test_merge_with_a_foreign_shard_fails_and_names_it(runs, tmp_path, invoke):
     assert "e: 0.9" in result.output
 
 
+def test_a_shard_whose_config_only_named_another_output_merges(runs, tmp_path, assert_same_result, invoke):
+    # The output key (and a continuation section) change no point: the shard was refused as "written
+    # from a different config", as --resume refused such a checkpoint.
+    config, single, shards = runs
+    renamed = tmp_path / "renamed.yaml"
+    renamed.write_text(Path(config).read_text(encoding="utf-8") + "output: results/elsewhere.h5\n"
+                       "continuation: {parameter: g, from: 10, to: [5, 20]}\n", encoding="utf-8")
+    other = tmp_path / "other.h5"
+    result = invoke("run", renamed, "-o", other, "--shard", f"1/{N_SHARDS}", "-q")
+    assert result.exit_code == 0, result.output
+    merged = tmp_path / "merged.h5"
+    result = invoke("merge", shards[0], tmp_path / f"other.shard1of{N_SHARDS}.h5", *shards[2:], "-o", merged)
+    assert result.exit_code == 0, result.output
+    assert_same_result(merged, single)
+
+
 def test_merge_refuses_to_overwrite(runs, tmp_path, invoke):
     _, _, shards = runs
     merged = tmp_path / "merged.h5"

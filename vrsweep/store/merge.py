@@ -335,6 +335,22 @@ def _root_attributes(ref):
     return attrs
 
 
+def _run_of(config_text):
+    """What of a stored config decides a shard's points: the text without its output and
+    continuation sections (config.same_config's rule for --resume), so that shards whose config
+    only named another output file still merge; a text that does not parse stands for itself."""
+    import dataclasses
+
+    from vrsweep.config import parse_config
+    from vrsweep.errors import ConfigError
+
+    try:
+        config = parse_config(config_text, "<the stored config>")
+    except ConfigError:
+        return ("unparsed", config_text)
+    return dataclasses.replace(config, output=None, continuation=None).to_yaml()
+
+
 def _check_one_run(shards):
     """The reference shard (for layout and attributes) and the warnings; raises if the shards are
     not of one run."""
@@ -342,10 +358,11 @@ def _check_one_run(shards):
     # so the message names the odd one out, not the innocent majority.
     groups = {}
     for s in shards:
-        groups.setdefault(s.attrs.get("config", ""), []).append(s)
-    reference_config = max(groups, key=lambda c: (len(groups[c]), -shards.index(groups[c][0])))
-    ref = groups[reference_config][0]
-    foreign = [s for s in shards if s.attrs.get("config", "") != reference_config]
+        groups.setdefault(_run_of(s.attrs.get("config", "")), []).append(s)
+    reference_run = max(groups, key=lambda c: (len(groups[c]), -shards.index(groups[c][0])))
+    ref = groups[reference_run][0]
+    reference_config = ref.attrs.get("config", "")
+    foreign = [s for s in shards if _run_of(s.attrs.get("config", "")) != reference_run]
     if foreign:
         s = foreign[0]
         raise ResultFileError(
