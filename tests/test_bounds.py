@@ -202,3 +202,31 @@ def test_a_trajectorys_records_are_bounded_too(tmp_path, invoke, write_config, t
     assert done.exit_code == 2, done.output
     assert len(done.output.strip().splitlines()) == 1 and "slow periods" in done.output, done.output
     assert not (tmp_path / "t.h5").exists()
+
+
+@pytest.mark.parametrize("command", [["validate"], ["run", "--allow-large", "--dry-run"], ["run", "--allow-large"]])
+def test_a_grid_past_int64_is_refused_in_one_line(tmp_path, invoke, write_config, command):
+    # Three axes of 10^7 values are 10^21 points: their indices and the file's bytes overflow
+    # int64. --dry-run ended in numpy's "array is too big" traceback, run in posix_fallocate's
+    # OverflowError; --allow-large cannot allow what cannot be done.
+    config = write_config(tmp_path, """\
+        model: effective
+        sweep:
+          g: {start: 0, stop: 40, num: 10000000}
+          Omega: {start: 1, stop: 5, num: 10000000}
+          e: {start: 0.5, stop: 1, num: 10000000}
+        """)
+    result = invoke(command[0], config, *command[1:], *(["-o", tmp_path / "out.h5"] if command[0] == "run" else []))
+    assert result.exit_code == 2, result.output
+    assert "a grid of 1000000000000000000000 points" in result.output and "int64" in result.output
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_a_grid_past_int64_is_a_config_error_in_python(tmp_path):
+    import vrsweep
+    from vrsweep.errors import ConfigError
+
+    axes = {name: {"start": low, "stop": high, "num": 10_000_000}
+            for name, low, high in (("g", 0, 40), ("Omega", 1, 5), ("e", 0.5, 1))}
+    with pytest.raises(ConfigError, match="int64"):
+        vrsweep.sweep({"model": "effective", "sweep": axes}, allow_large=True, progress=False)

@@ -12,7 +12,8 @@ import click
 from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
 from vrsweep.config import INTEGRATION_DEFAULTS, load_config
 from vrsweep.errors import ConfigError
-from vrsweep.execution.estimate import estimate, format_bytes, format_duration, memory_problem, size_problem
+from vrsweep.execution.estimate import (beyond_int64_problem, estimate, format_bytes, format_duration, memory_problem,
+                                        size_problem)
 from vrsweep.execution.threads import available_threads
 
 
@@ -31,9 +32,9 @@ def command(config_path, overrides, threads):
         _check_continuation(config)
     announce_fixed_axes(config_path, overrides, config)
     threads = threads or available_threads()  # not capped: the run may be planned for another machine
-    memory = memory_problem(config, threads)
-    if memory is not None:  # no machine-independent way to run it: refused as run refuses it
-        raise ConfigError([memory], source=config.source_name)
+    for problem in (beyond_int64_problem(config), memory_problem(config, threads)):
+        if problem is not None:  # no machine-independent way to run it: refused as run refuses it
+            raise ConfigError([problem], source=config.source_name)
     guess = estimate(config, threads)
 
     click.echo(f"{config.source_name}: valid")

@@ -150,6 +150,22 @@ def _cgroup_memory_limit():
     return min(limits) if limits else None
 
 
+# A point's index and a file's offset are int64: a grid past either cannot be run at all, allowed
+# or not (three axes of 10^7 values, 10^21 points, ended in numpy's "array is too big" traceback
+# under --dry-run and in posix_fallocate's "Python int too large to convert to C long" otherwise).
+INT64_MAX = 2**63 - 1
+
+
+def beyond_int64_problem(config) -> str | None:
+    """Why no run of ``config`` is possible (one line), or None: its points or its file's bytes do not
+    fit in int64. Not a matter of --allow-large."""
+    n_points, size = config.n_runs, stored_bytes(config)
+    if n_points <= INT64_MAX and size <= INT64_MAX:
+        return None
+    return (f"{config.source_name}: a grid of {n_points} points ({format_bytes(size)}) is past what a "
+            f"point's index or a file's size can be ({INT64_MAX}, int64): use fewer values on the axes")
+
+
 def memory_problem(config, threads=None) -> str | None:
     """Why the run cannot fit in the memory this process may use (one line), or None. Not a
     matter of --allow-large: a run past it would end in an allocation failure."""
@@ -236,6 +252,9 @@ def size_problem(config, threads=None, allow="allow_large=True") -> str | None:
 def check_size(config, threads=None, allow_large: bool = False, allow="allow_large=True") -> Estimate:
     """Raise ConfigError if the run cannot fit in memory (memory_problem), or is out of proportion
     (> 2 GB or > 24 h) and not allowed (``allow``: how the caller allows it, as in size_problem)."""
+    beyond = beyond_int64_problem(config)
+    if beyond is not None:  # whatever allow_large says
+        raise ConfigError([beyond], source=config.source_name)
     memory = memory_problem(config, threads)
     if memory is not None:  # whatever allow_large says
         raise ConfigError([memory], source=config.source_name)
