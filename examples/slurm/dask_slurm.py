@@ -4,9 +4,10 @@
     python examples/slurm/dask_slurm.py CONFIG.yaml [N_JOBS]         # or from a login node
 
 Starts a Dask scheduler here, asks SLURM for N_JOBS worker jobs (one Dask worker per job, one
-numba thread per CPU of the job), and runs `vrsweep run CONFIG --dask <scheduler address>`. The
-client (this job) is the only process that writes the result file, chunk by chunk as results come
-back; if anything stops it, running the same command again resumes (the run uses --resume).
+numba thread per CPU of the job: $CPUS_PER_WORKER, default 8), and runs
+`vrsweep run CONFIG --dask <scheduler address>`. The client (this job) is the only process that
+writes the result file, chunk by chunk as results come back; if anything stops it, running the
+same command again resumes (the run uses --resume).
 
 Needs the slurm extra (dask.distributed and dask-jobqueue): `pip install "vrsweep[slurm]"`, or in
 a clone of vrsweep `pip install -e ".[slurm]"`; and the same vrsweep installation on
@@ -17,6 +18,10 @@ balances the load dynamically and needs no merge step, but the client must outli
 import os
 import sys
 
+# Before vrsweep is imported: importing it sets NUMBA_CACHE_DIR (to its per-user folder when unset),
+# and this default, the folder the worker jobs are told to share, was then never used.
+cache = os.environ.setdefault("NUMBA_CACHE_DIR", os.path.expanduser("~/.cache/vrsweep-numba"))
+
 try:
     from dask_jobqueue import SLURMCluster
 except ModuleNotFoundError:
@@ -25,12 +30,11 @@ except ModuleNotFoundError:
 
 from vrsweep.cli import main as vrsweep
 
-CPUS_PER_WORKER = 8
+CPUS_PER_WORKER = int(os.environ.get("CPUS_PER_WORKER", 8))  # each worker job's CPUs
 
 config = sys.argv[1]
 n_jobs = int(sys.argv[2]) if len(sys.argv) > 2 else 4
 output = os.environ.get("OUT", f"results/{os.path.splitext(os.path.basename(config))[0]}.h5")
-cache = os.environ.setdefault("NUMBA_CACHE_DIR", os.path.expanduser("~/.cache/vrsweep-numba"))
 
 cluster = SLURMCluster(
     cores=CPUS_PER_WORKER,   # -> --cpus-per-task of each worker job, and the worker's nthreads
