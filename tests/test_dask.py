@@ -118,3 +118,27 @@ def test_without_dask_installed_dask_is_a_usage_error(single, tmp_path, monkeypa
     assert "pip install" in result.output and "vrsweep[dask]" in result.output
     assert 'pip install -e ".[dask]"' in result.output  # and how to do it in a clone
     assert not (tmp_path / "out.h5").exists()
+
+
+@pytest.mark.parametrize("threads", [None, 1])  # None: waits for a worker to size the chunks
+def test_a_stop_with_no_worker_connected_takes_effect_at_once(single, tmp_path, threads, done_count):
+    """SIGTERM (scancel) to a client whose SLURM worker jobs were still queued: the stop waited for
+    the next chunk to be saved, which no worker would ever compute, so the client stayed until
+    SIGKILL and never cancelled its worker jobs (examples/slurm/dask_slurm.py)."""
+    from dask.distributed import LocalCluster
+
+    from vrsweep.config import load_config
+    from vrsweep.execution.distributed import dask_executor
+    from vrsweep.execution.job import GracefulStop, Interrupted, run_job
+
+    config, _ = single
+    stop = GracefulStop()
+    stop.signum = signal.SIGTERM  # asked for before any worker came
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        executor = dask_executor(cluster.scheduler_address, threads, stop)
+        began = time.monotonic()
+        with pytest.raises(Interrupted) as stopped:
+            run_job(load_config(config), tmp_path / "out.h5", threads=threads, stop=stop, executor=executor)
+        assert time.monotonic() - began < 10
+    assert stopped.value.exit_code == 143
+    assert done_count(tmp_path / "out.h5") == 0  # the file is there, for --resume

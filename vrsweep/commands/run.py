@@ -80,11 +80,12 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
                          f"(points, or continuation lines), so at most {n_lines} shards")
     executor = None
     workers = 1
+    stop = GracefulStop()
     if dask_address:
         from vrsweep.execution.distributed import dask_executor
 
         try:
-            executor = dask_executor(dask_address, threads)
+            executor = dask_executor(dask_address, threads, stop)
         except InvalidArgument as error:
             raise error.as_option("--dask") from None
         workers = parse_local(dask_address) or 1  # a remote cluster's size is not known here
@@ -116,7 +117,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
 
     began = time.perf_counter()
     try:
-        with GracefulStop() as stop, flag_wording():
+        with stop, flag_wording():
             report = run_job(config, output, threads=threads, resume=resume, overwrite=overwrite,
                              shard=shard_pair, progress_factory=progress_factory, executor=executor,
                              stop=stop)

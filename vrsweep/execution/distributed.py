@@ -24,21 +24,24 @@ import functools
 import logging
 import signal
 import threading
+import time
 
 import numpy as np
 
 from vrsweep.errors import InvalidArgument, RunFailed, VrsweepError
+from vrsweep.execution.signals import Interrupted
 from vrsweep.execution.chunks import count_statuses, default_chunk_lines, max_chunk_lines, plan_lines
 from vrsweep.config.grid import Grid
 from vrsweep.execution.threads import machine_cpus
 
 LOCAL_PREFIX = "local:"
 CONNECT_TIMEOUT = "10s"  # a scheduler answers in milliseconds; a port that is none may never
+POLL_SECONDS = 0.2  # how often a client waiting for workers or chunks looks for a stop
 INSTALL_HINT = ('pip install "vrsweep[dask]", or in a clone of vrsweep: pip install -e ".[dask]" '
                 '(or just pip install "dask[distributed]")')
 
 
-def dask_executor(address, threads=None):
+def dask_executor(address, threads=None, stop=None):
     """A callable with run_sweep's signature that runs the chunks on dask.distributed.
 
     address: a scheduler address (``tcp://host:8786``, a scheduler file is not supported) or
@@ -46,6 +49,8 @@ def dask_executor(address, threads=None):
     Checks the address and that dask.distributed is installed now, so a bad address fails
     before any file is created (InvalidArgument; the run command words it as ``--dask ADDRESS``),
     and that a remote scheduler answers (VrsweepError, one line); connects again when called.
+    stop: the run's GracefulStop, if any: a stop asked for while no worker is connected (SLURM
+    worker jobs still queued, or all gone) takes effect at once, as no chunk is being computed.
     """
     n_local = parse_local(address)
     try:
@@ -53,7 +58,7 @@ def dask_executor(address, threads=None):
     except ModuleNotFoundError:
         raise InvalidArgument("Dask address", address,
                               f"needs dask.distributed, which is not installed: {INSTALL_HINT}") from None
-    executor = DaskExecutor(address, threads, n_local)
+    executor = DaskExecutor(address, threads, n_local, stop)
     if n_local is None:
         with executor._client():  # a scheduler that cannot be reached is known before any file is made
             pass
@@ -141,10 +146,11 @@ def _worker_threads():
 class DaskExecutor:
     """run_sweep's signature, run on Dask. Connects (or starts a LocalCluster) per call."""
 
-    def __init__(self, address, threads=None, n_local=None):
+    def __init__(self, address, threads=None, n_local=None, stop=None):
         self.address = address
         self.threads = threads
         self.n_local = n_local
+        self.stop = stop
 
     def __call__(self, config, *, threads=None, shard=(0, 1), done=None, on_chunk=None,
                  progress=None, chunk_lines=None):
@@ -160,7 +166,7 @@ class DaskExecutor:
 
             if chunk_lines is None:
                 if not threads:  # chunks sized for the workers' threads: wait for one to know them
-                    client.wait_for_workers(1)
+                    self._wait_for_a_worker(client)
                 chunk_lines = min(default_chunk_lines(threads or _largest_worker(client), plan.line_length),
                                   max_chunk_lines(config.integration, plan.line_length))
             # All chunks are submitted at once and Dask balances them over the workers. Each result
@@ -172,7 +178,7 @@ class DaskExecutor:
                 future = client.submit(run_chunk, config_text, chunk, threads, pure=False)
                 pending[future.key] = future
             try:
-                for future in as_completed(list(pending.values())):
+                for future in self._as_completed(client, as_completed(list(pending.values()))):
                     pending.pop(future.key)
                     try:
                         flat, values = future.result()
@@ -189,6 +195,35 @@ class DaskExecutor:
                 if pending and self.n_local is None:
                     client.cancel(list(pending.values()))
         return counts
+
+    # A stop (SIGINT, SIGTERM) only sets a flag, and run_job acts on it once the next chunk is saved.
+    # Blocked on Dask, this process would wait for that chunk forever when no worker is connected:
+    # a SLURM client scancelled while its worker jobs were queued stayed until SIGKILL, and never
+    # cancelled them. So the waits below look for a stop, and with no worker there is nothing in
+    # progress to save: the stop takes effect at once.
+
+    def _stop_now(self, client):
+        if self.stop is None or self.stop.signum is None:
+            return False
+        return not client.nthreads()  # asks the scheduler: the workers connected now
+
+    def _wait_for_a_worker(self, client):
+        while True:
+            try:
+                client.wait_for_workers(1, timeout=POLL_SECONDS)
+                return
+            except TimeoutError:
+                if self._stop_now(client):
+                    raise Interrupted(self.stop.signum) from None
+
+    def _as_completed(self, client, completed):
+        while not completed.is_empty():
+            if completed.has_ready():
+                yield next(completed)
+            elif self._stop_now(client):
+                raise Interrupted(self.stop.signum)
+            else:
+                time.sleep(POLL_SECONDS / 4)
 
     @contextlib.contextmanager
     def _client(self):
