@@ -16,7 +16,14 @@ balances the load dynamically and needs no merge step, but the client must outli
 """
 
 import os
+import shlex
+import signal
 import sys
+
+# SIGTERM (scancel) before or after vrsweep's own handling (while the cluster starts or closes):
+# exit through Python, so that the cluster is closed (finally below, or distributed's atexit) and
+# the worker jobs are cancelled; the default action ended the process and left them queued.
+signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
 
 # Before vrsweep is imported: importing it sets NUMBA_CACHE_DIR (to its per-user folder when unset),
 # and this default, the folder the worker jobs are told to share, was then never used.
@@ -60,5 +67,13 @@ arguments = ["run", config, "-o", output, "--dask", cluster.scheduler_address, "
 print("vrsweep", " ".join(arguments), flush=True)
 try:
     vrsweep(arguments)  # exits with vrsweep's exit code
+except SystemExit as end:
+    if end.code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+        # vrsweep's resume command names this scheduler, which closes with this script.
+        again = (f"sbatch examples/slurm/dask_slurm.sbatch {shlex.join(sys.argv[1:])}" if "SLURM_JOB_ID" in os.environ
+                 else f"python {shlex.join(sys.argv)}")
+        print(f"The scheduler closes with this client: to resume, run it again: {again}", file=sys.stderr,
+              flush=True)
+    raise
 finally:
     cluster.close()  # cancels the worker jobs
