@@ -468,3 +468,117 @@ def test_submit_sh_runs_as_written_and_gives_the_single_run_file(tmp_path, invok
     assert sorted(p.name for p in (tmp_path / out.parent).iterdir()) == sorted(
         [out.name] + [f"{out.stem}.shard{i}of3{out.suffix}" for i in range(3)])
     assert_same_result(single, tmp_path / out)
+
+
+# SLURM as dask-jobqueue uses it, for examples/slurm/dask_slurm.py: sbatch starts the job script at
+# once in the background, a process group of its own (job.pid: the script's process, job.rc: its
+# exit status), and scancel sends SIGTERM to the whole group, as SLURM does.
+DASK_SBATCH = r"""#!/bin/bash
+state=${FAKE_SLURM_DIR:?}
+mkdir -p "$state"
+while [[ $1 == -* ]]; do shift; done
+script=$1; shift
+job=100
+until mkdir "$state/job$job" 2>/dev/null; do job=$((job + 1)); done  # sbatch runs concurrently
+cp "$script" "$state/$job.sh"  # dask-jobqueue deletes its script once sbatch returns
+directive() { sed -n "s/^#SBATCH \($1\)[ =]//p" "$script" | tail -1; }
+name=$(directive '-J\|--job-name'); name=${name:-$(basename "$script")}
+out=$(directive '-o\|--output'); out=${out:-slurm-%j.out}
+err=$(directive '-e\|--error'); err=${err:-$out}
+out=${out//%[jJ]/$job}; out=${out//%x/$name}; err=${err//%[jJ]/$job}; err=${err//%x/$name}
+mkdir -p "$(dirname "$out")" "$(dirname "$err")"
+SLURM_JOB_ID=$job SLURM_JOB_NAME=$name SLURM_SUBMIT_DIR=$PWD setsid bash -c \
+    'job=$1; shift; bash "$job.sh" "$@" & echo $! > "$job.pid"; wait $!; echo $? > "$job.rc"' \
+    wrapper "$state/$job" "$@" >"$out" 2>"$err" </dev/null &
+echo $! > "$state/$job.pgid"
+echo "Submitted batch job $job"
+"""
+DASK_SCANCEL = r"""#!/bin/bash
+state=${FAKE_SLURM_DIR:?}
+for job; do
+    echo "$job" >> "$state/cancelled"
+    kill -TERM -- -"$(cat "$state/$job.pgid")" 2>/dev/null || true
+done
+"""
+DASK_SQUEUE = r"""#!/bin/bash
+state=${FAKE_SLURM_DIR:?}
+echo JOBID
+for f in "$state"/*.pgid; do [ -e "$f" ] && kill -0 -- -"$(cat "$f")" 2>/dev/null && basename "$f" .pgid; done
+exit 0
+"""
+
+
+def test_dask_slurm_runs_stops_on_sigterm_resumes_and_cancels_its_workers(tmp_path, invoke, write_config,
+                                                                           assert_same_result, done_count):
+    """dask_slurm.sbatch (the client as a job) -> dask_slurm.py -> SLURMCluster's worker jobs, with
+    sbatch and scancel standing in for SLURM: the workers are real processes that connect to the
+    scheduler. SIGTERM to the client saves what is done and cancels the worker jobs; running it
+    again resumes, and the file is the one a single run writes; no process is left."""
+    pytest.importorskip("dask_jobqueue", reason="examples/slurm/dask_slurm.py needs dask-jobqueue "
+                                                "(the slurm and test extras)")
+    config = write_config(tmp_path, """\
+        sweep:
+          g: {start: 0.0, stop: 40.0, num: 64}
+        integration: {transient_periods: 40, measure_periods: 40, strobe_periods: 8}
+        """, name="map.yaml")
+    assert invoke("run", config, "-o", tmp_path / "single.h5", "-q").exit_code == 0
+    (tmp_path / "examples").symlink_to(SLURM_EXAMPLES.parent)  # the job runs examples/... from its submit dir
+    bin_dir, state = tmp_path / "bin", tmp_path / "slurm"
+    bin_dir.mkdir()
+    for name, text in {"sbatch": DASK_SBATCH, "scancel": DASK_SCANCEL, "squeue": DASK_SQUEUE}.items():
+        (bin_dir / name).write_text(text)
+        (bin_dir / name).chmod(0o755)
+    repo = str(SLURM_EXAMPLES.parent.parent)  # the client and the workers import this vrsweep
+    env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}", FAKE_SLURM_DIR=str(state),
+               CPUS_PER_WORKER="1", PYTHONPATH=os.pathsep.join(filter(None, [repo, os.environ.get("PYTHONPATH")])))
+    out = tmp_path / "results" / "map.h5"
+
+    def groups():
+        return [int(p.read_text()) for p in state.glob("*.pgid") if p.read_text().strip()]
+
+    def alive(group):
+        try:
+            os.killpg(group, 0)
+        except ProcessLookupError:
+            return False
+        return True
+
+    def wait_for(condition, seconds):
+        deadline = time.monotonic() + seconds
+        while not condition() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return condition()
+
+    def logs():
+        return "\n".join(f"--- {p.name}\n{p.read_text()[-3000:]}" for p in sorted((tmp_path / "logs").glob("*")))
+
+    client_group = None
+    try:
+        submitted = subprocess.run(["sbatch", "examples/slurm/dask_slurm.sbatch", "map.yaml", "2"], cwd=tmp_path,
+                                   env=env, capture_output=True, text=True, check=True, timeout=30)
+        job = submitted.stdout.split()[-1]
+        client_group = int((state / f"{job}.pgid").read_text())
+        assert wait_for(lambda: (done_count(out) or 0) > 0, 120), logs()
+        os.kill(int((state / f"{job}.pid").read_text()), signal.SIGTERM)  # the client: python, exec'd
+        assert wait_for(lambda: (state / f"{job}.rc").exists(), 60), logs()
+        assert (state / f"{job}.rc").read_text().strip() == "143", logs()
+        client_log = (tmp_path / "logs" / f"vrsweep-dask-{job}.out").read_text()
+        assert "Interrupted (SIGTERM)" in client_log and "Traceback" not in client_log, client_log
+        assert "run it again: sbatch examples/slurm/dask_slurm.sbatch map.yaml 2" in client_log, client_log
+        saved = done_count(out)
+        assert 0 < saved < 64
+        workers = {"101", "102"}
+        assert set((state / "cancelled").read_text().split()) == workers
+        assert wait_for(lambda: not any(alive(g) for g in groups()), 30), logs()
+
+        resumed = subprocess.run([sys.executable, "examples/slurm/dask_slurm.py", "map.yaml", "2"], cwd=tmp_path,
+                                 env=env, capture_output=True, text=True, timeout=120, start_new_session=True)
+        assert resumed.returncode == 0, resumed.stderr + logs()
+        assert f"{64 - saved} of 64 points computed" in resumed.stderr, resumed.stderr
+        assert set((state / "cancelled").read_text().split()) == workers | {"103", "104"}
+        assert wait_for(lambda: not any(alive(g) for g in groups()), 30), logs()
+        assert_same_result(tmp_path / "single.h5", out)
+    finally:  # whatever failed: no job's process outlives the test
+        for group in groups() + [client_group]:
+            if group is not None and alive(group):
+                os.killpg(group, signal.SIGKILL)
