@@ -96,6 +96,19 @@ def test_the_other_integer_variables_name_their_special_values(files):
     assert [t.get_text() for t in fig.axes[1].get_yticklabels()] == ["ok", "diverged"]
 
 
+def test_a_map_of_motion_gives_each_kind_its_own_colour(files):
+    # Every flag but status's drew in one grey: --var motion was one grey block, its bar all grey.
+    ds = load_results(files["plane"])
+    ds["motion"].values[...] = np.resize([1, 2, 3, 1, 4], 12)[:, None]
+    fig = plot.map_figure(ds, "motion")
+    mesh = _mesh(fig.axes[0])
+    colours = {value: to_rgba(mesh.cmap(mesh.norm(value))) for value in (1, 2, 3, 4)}
+    assert len(set(colours.values())) == 4
+    assert colours[1] == to_rgba("tab:green") and colours[3] == to_rgba("tab:red")  # as --kind motion
+    assert [t.get_text() for t in fig.axes[1].get_yticklabels()] == [
+        "periodic", "quasi_periodic", "chaotic", "not_settled"]
+
+
 def test_an_integer_map_refuses_a_continuous_scale(files):
     with pytest.raises(UsageError, match="^vmin and vmax set a continuous colour scale; var period holds integers"):
         plot.plot(files["plane"], var="period", vmax=3)

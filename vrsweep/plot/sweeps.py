@@ -344,6 +344,11 @@ SPECIAL_VALUES = {"period": {0: "no period"}, "impacts_per_cycle": {-1: "no peri
                   "attractor": {-1: "failed"}}
 STATUS_COLOURS = {"not_computed": "0.85", "ok": "tab:green", "max_steps": "tab:orange", "diverged": "tab:red",
                   "chatter_limit": "tab:purple", "step_too_small": "tab:brown", "non_finite": "k"}
+# The colours --kind motion uses, so that --var motion reads the same; 'none' (the point failed) is
+# a value meaning none, dark grey as on every integer map.
+MOTION_FLAG_COLOURS = {"none": NO_VALUE_COLOUR, "periodic": "tab:green", "quasi_periodic": "tab:blue", "chaotic": "tab:red",
+                       "not_settled": "tab:orange"}
+FLAG_COLOURS = {**STATUS_COLOURS, **MOTION_FLAG_COLOURS}
 MAX_TICK_LABELS = 20  # an integer colour bar with more values labels every k-th only
 NARROW_FIGURE = 5.0   # inches: a figure narrower than this (a journal column) gets fewer colour-bar ticks
 
@@ -392,7 +397,9 @@ def discrete_scale(name, values, attrs=None):
         present = np.array([0])
     flags = _flag_names(attrs or {})
     special = SPECIAL_VALUES.get(name, {})
-    ordinary = [v for v in present if v not in special and v not in flags]
+    # A flag with no colour of its own takes one of the palette's, as a number would: one shared
+    # grey for all of them drew a map of motion as a single grey block.
+    ordinary = [v for v in present if v not in special and (v not in flags or flags[v] not in FLAG_COLOURS)]
     # Qualitative colours without their greys, which belong to 'no period' and 'not computed'.
     tab10 = [colormaps["tab10"](k) for k in range(10) if k != 7]
     tab20 = [colormaps["tab20"](k) for k in range(20) if k not in (14, 15)]
@@ -406,7 +413,7 @@ def discrete_scale(name, values, attrs=None):
     ordinary_colours = dict(zip(ordinary, palette))
     for value in present:
         if value in flags:
-            colours.append(STATUS_COLOURS.get(flags[value], "0.5"))
+            colours.append(FLAG_COLOURS.get(flags[value]) or ordinary_colours[value])
             labels.append(flags[value])
         elif value in special:
             colours.append(NO_VALUE_COLOUR)
