@@ -142,6 +142,22 @@ def test_the_lyapunov_scale_is_symmetric_about_zero_and_marks_values_within_thei
     assert "floored at -0.2" in fig.axes[1].get_ylabel()
 
 
+@pytest.mark.parametrize("size", [None, (3.4, 2.6)])
+def test_the_lyapunov_colour_bar_labels_each_tick_with_its_own_value(files, size):
+    # Eighths of the largest |lambda_1| = 1.9467, printed to two digits, put '1.5' at 1.46.
+    ds = load_results(files["plane"])
+    ds["lyapunov"].values[...] = np.linspace(-1.9467, 0.3, 120).reshape(12, 10)
+    ds["lyapunov_err"].values[...] = 0.001
+    fig = plot.map_figure(ds, "lyapunov", size=size)
+    fig.canvas.draw()
+    bar = fig.axes[1]
+    ticks, labels = bar.get_yticks(), [t.get_text().replace("\u2212", "-") for t in bar.get_yticklabels()]
+    assert len(ticks) >= 3 and 0.0 in ticks
+    for tick, label in zip(ticks, labels):
+        assert float(label) == pytest.approx(tick, abs=1e-12), (tick, label)
+    assert np.allclose(np.sort(ticks), -np.sort(ticks)[::-1])  # symmetric about zero
+
+
 # --- caps on a colour scale are stated -----------------------------------------------------------
 
 

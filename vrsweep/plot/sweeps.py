@@ -598,10 +598,14 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             bar.minorticks_off()
         elif cmap == "RdBu_r":  # zero in the middle, ticks symmetric about it
             # Nine ticks, five on a narrow figure (one journal column): their labels take its width.
+            # Round values, not eighths of the largest |lambda_1|: those, printed to two digits,
+            # put '1.5' at 1.46 (a label is read as the value where it sits).
+            from matplotlib.ticker import MaxNLocator
+
             count = 9 if fig.get_figwidth() >= NARROW_FIGURE else 5
-            ticks = np.linspace(norm.vmin, norm.vmax, count) if norm.vmin == -norm.vmax else None
-            if ticks is not None:
-                bar.set_ticks(ticks, labels=[f"{tick:.2g}" for tick in ticks])
+            if norm.vmin == -norm.vmax:
+                ticks = MaxNLocator(nbins=count - 1, symmetric=True).tick_values(norm.vmin, norm.vmax)
+                bar.set_ticks(ticks[(ticks >= norm.vmin) & (ticks <= norm.vmax)])
         resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
         if resonance is not None:
             handles["resonance"] = resonance
