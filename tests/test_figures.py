@@ -158,6 +158,21 @@ def test_the_lyapunov_colour_bar_labels_each_tick_with_its_own_value(files, size
     assert np.allclose(np.sort(ticks), -np.sort(ticks)[::-1])  # symmetric about zero
 
 
+def test_the_resonance_curve_keeps_a_dark_edge_over_the_white_middle_of_the_lyapunov_scale(files):
+    # The white dashed g_res(Omega) vanished over the cells with lambda_1 near 0 (white).
+    from matplotlib.colors import to_rgb
+    from matplotlib.patheffects import Stroke
+
+    ds = load_results(files["plane"])
+    fig = plot.map_figure(ds, "lyapunov")
+    (curve,) = fig.axes[0].findobj(lambda artist: artist.get_gid() == "resonance")
+    strokes = [effect for effect in curve.get_path_effects() if isinstance(effect, Stroke)]
+    assert strokes and max(to_rgb(strokes[0]._gc["foreground"])) < 0.3
+    assert strokes[0]._gc["linewidth"] > max(np.ravel(curve.get_linewidths()))
+    handle = next(h for h in fig.legends[0].legend_handles if "g_{res}" in h.get_label())
+    assert handle.get_path_effects()  # the legend's sample looks like the line
+
+
 # --- caps on a colour scale are stated -----------------------------------------------------------
 
 

@@ -111,9 +111,10 @@ def _resonance_label(axis, position):
     return f"$\\tilde\\omega^2 = \\omega^2$ (eq3.4) at {parameter_symbol(axis)} = {position:.4g}"
 
 
-def _draw_resonance_curve(ax, view, x_axis, y_axis):
+def _draw_resonance_curve(ax, view, x_axis, y_axis, outline=False):
     """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega); none for a
-    written model (the paper's theory is its own system's only: its nine parameters may be absent)."""
+    written model (the paper's theory is its own system's only: its nine parameters may be absent).
+    outline: a dark edge along the white line, for a scale whose middle is white (lambda_1)."""
     from vrsweep.analysis import theory
 
     if view.config is None or view.config.written:
@@ -126,8 +127,15 @@ def _draw_resonance_curve(ax, view, x_axis, y_axis):
     detuning = theory.effective_frequency_squared(mesh) - np.square(mesh["omega"])
     if not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
         return None
-    ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
-    return Line2D([], [], color="white", ls="--", lw=1.6,
+    from matplotlib.patheffects import Normal, Stroke
+
+    # On a diverging scale the cells near zero are white: a white line alone vanished over them.
+    edge = [Stroke(linewidth=3.2, foreground="0.1"), Normal()] if outline else None
+    contour = ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
+    contour.set_gid("resonance")
+    if edge:
+        contour.set_path_effects(edge)
+    return Line2D([], [], color="white", ls="--", lw=1.6, path_effects=edge,
                   label="$g_{res}(\\Omega)$: $\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
 
 

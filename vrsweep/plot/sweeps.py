@@ -606,7 +606,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             if norm.vmin == -norm.vmax:
                 ticks = MaxNLocator(nbins=count - 1, symmetric=True).tick_values(norm.vmin, norm.vmax)
                 bar.set_ticks(ticks[(ticks >= norm.vmin) & (ticks <= norm.vmax)])
-        resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
+        resonance = _draw_resonance_curve(ax, view, x_axis, y_axis, outline=cmap == "RdBu_r")
         if resonance is not None:
             handles["resonance"] = resonance
         if name in ("R", "Q_amplitude") and "status" in view.variables:
