@@ -356,6 +356,34 @@ def test_impacts_per_period_one_panel_per_file(files):
     assert "slow period number" in fig.axes[1].get_xlabel()
 
 
+LINEAR = """\
+model:
+  name: linear impact oscillator
+  acceleration: "-2*zeta*v - x + F*cos(omega*t)"
+  parameters: {zeta: 0.05, F: 1.0, omega: 0.8, Delta: 1.2, r: 0.8}
+  barriers: [{position: Delta, side: above, restitution: r}]
+  period: "4*pi/omega"
+  response: {frequency: omega, scale: F}
+integration: {transient_periods: 4, measure_periods: 6, strobe_periods: 3}
+"""
+
+
+def test_impacts_per_period_of_a_written_model_speak_of_its_own_period(files, tmp_path):
+    # They said 'slow period 2 pi/omega' and named the model 'written'.
+    linear = _run(tmp_path, "linear", LINEAR, "simulate")
+    fig = plot.plot(linear, kind="impacts")
+    assert fig.axes[0].get_xlabel() == "period number $n$ (period $T$ = 4 * pi / omega)"
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()][0] == "linear impact oscillator"
+    assert "slow period" not in plot.description(fig) and "2\\pi/\\omega" not in plot.description(fig)
+    # Files of two models share no caption, no period: refused in one line (a KeyError before).
+    with pytest.raises(UsageError, match="^kind impacts draws several trajectory files of one model.*traj.h5, "
+                                         "linear.h5 are of 2 models"):
+        plot.plot([files["traj"], linear], kind="impacts")
+    result = CliRunner().invoke(main, ["plot", str(files["traj"]), str(linear), "--kind", "impacts",
+                                       "-o", str(tmp_path / "two.png")])
+    assert result.exit_code == 2 and len(result.output.strip().splitlines()) == 1, result.output
+
+
 def test_slowflow_draws_the_effective_system_and_three_reconstructions(files):
     data = read_trajectory(files["traj"])
     fig = plot.plot(files["traj"], kind="slowflow")

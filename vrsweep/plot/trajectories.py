@@ -178,15 +178,23 @@ def impacts_per_period_figure(datasets) -> Figure:
     """
     from matplotlib.ticker import MaxNLocator
 
+    configs = [_parse_config(data.config_text) for data in datasets]
+    models = {_model_key(data, config) for data, config in zip(datasets, configs)}
+    if len(models) > 1:  # one caption, one count axis, one period: one model's
+        raise UsageError.naming("{kind} impacts draws several trajectory files of one model, which differ in "
+                                "its parameters; {paths} are of {n} models: plot them one at a time",
+                                paths=", ".join(os.path.basename(data.path or "") for data in datasets),
+                                n=len(models))
     fig = _new_figure(8.0, 2.7 * len(datasets) + 1.0)
     axes = fig.subplots(len(datasets), 1, squeeze=False, sharex=len(datasets) > 1)[:, 0]
-    configs = [_parse_config(data.config_text) for data in datasets]
     for k, (ax, data, config) in enumerate(zip(axes, datasets, configs)):
         run = data.runs.get(data.model) or next(iter(data.runs.values()))
         counts = np.asarray(run.impacts_per_period)
         counts = counts[counts >= 0]  # -1: periods a failed run did not reach, drawn as none
         periods = np.arange(1, len(counts) + 1)
-        ax.plot(periods, counts, "o-", color="tab:blue", lw=0.7, ms=2.5, label=ROW_TITLES.get(run.model, run.model))
+        model_title = config.model.title if config is not None and config.written else ROW_TITLES.get(run.model,
+                                                                                                      run.model)
+        ax.plot(periods, counts, "o-", color="tab:blue", lw=0.7, ms=2.5, label=model_title)
         if config is not None:
             n_transient = config.integration.transient_periods
             if 0 < n_transient < len(counts):
@@ -204,17 +212,28 @@ def impacts_per_period_figure(datasets) -> Figure:
         ax.set_xlim(0.5, len(counts) + 0.5)
         ax.grid(alpha=0.3)
         ax.legend(fontsize="x-small", loc="best")
-    axes[-1].set_xlabel(f"slow period number $n$ (period $T = 2\\pi/\\omega$)")
     config = configs[0]
+    # A written model's period is its own expression, not the paper's slow period 2 pi/omega.
+    period = (f"period number $n$ (period $T$ = {config.model.as_data()['period']})"
+              if config is not None and config.written else "slow period number $n$ (period $T = 2\\pi/\\omega$)")
+    axes[-1].set_xlabel(period)
     varying = {}
     if config is not None and len(datasets) > 1:
         varying = {name: config.parameters[name] for name in config.parameter_names
                    if any(c is not None and c.parameters[name] != config.parameters[name] for c in configs)}
     names = ", ".join(os.path.basename(data.path or "") for data in datasets)
-    _title(fig, "Impacts in each slow period $2\\pi/\\omega$, transient included"
+    _title(fig, f"Impacts in each {period_words()}, transient included"
                 + (f" (the panels differ in {', '.join(varying)})" if varying else ""),
            _caption(names, config, datasets[0].model, omit=varying, width=_width(fig)))
     return fig
+
+
+def _model_key(data, config):
+    """What makes two trajectory files the same model: the paper's by name, a written one by
+    everything its config writes but the parameters' values."""
+    if config is None or not config.written:
+        return (data.model, None)
+    return (data.model, repr({key: value for key, value in config.model.as_data().items() if key != "parameters"}))
 
 
 SLOW_FLOW_STYLES = {
