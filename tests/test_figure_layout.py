@@ -275,3 +275,18 @@ def test_var_draws_any_stored_variable_against_the_swept_parameter(files, tmp_pa
     assert result.exit_code == 0, result.output
     result = invoke("plot", files["both"], "--var", "impact_speed_min", "-o", tmp_path / "both.png")
     assert result.exit_code == 0, result.output
+
+
+def test_a_caption_item_wider_than_the_line_is_broken_at_its_spaces_outside_mathtext():
+    # A written model's equation (150 characters) was one item, never broken: it ran off the canvas.
+    from vrsweep.plot.labels import _wrap
+
+    equation = ("single-well Duffing impact oscillator with two forces: x'' = -2 * zeta * v - x - beta * x ** 3 "
+                "+ F1 * cos(omega * t) + F2 * cos(2 * omega * t + phi)")
+    text = _wrap(["duffing.h5", equation, "$\\zeta$ = 0.05", "$F_1$ = 0.6"], 100)
+    lines = text.split("\n")
+    assert all(len(line.replace("$", "").replace("\\", "")) <= 100 for line in lines), lines
+    assert " ".join(text.split()) == " ".join(f"duffing.h5 {equation},  $\\zeta$ = 0.05,  $F_1$ = 0.6".split())
+    assert all(line.count("$") % 2 == 0 for line in lines)  # no line ends inside mathtext
+    math = _wrap(["x", "$a \\cdot b \\cdot c \\cdot d$ " * 8], 30)  # only spaces inside $...$: kept whole
+    assert all(line.count("$") % 2 == 0 for line in math.split("\n"))

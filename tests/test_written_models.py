@@ -594,6 +594,9 @@ def test_the_bifurcation_diagram_of_a_written_model_draws_its_barrier_where_it_i
     [barrier] = [line for line in figure.axes[0].get_lines() if line.get_label() == "barrier"]
     np.testing.assert_allclose(barrier.get_ydata(), [0.3, 0.7, 1.2])
     np.testing.assert_allclose(barrier.get_xdata(), [0.2, 1.0, 2.0])
+    # Its own period, not the paper's slow one (the legend said 'last 16 slow periods').
+    legend = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    assert "x(nT), last 16 periods of each point" in legend, legend
 
 
 def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
@@ -630,6 +633,9 @@ def test_a_written_models_response_curve_and_basins_say_its_gain_is_over_the_sca
     with vrsweep.open_results(basins) as ds:
         title = " ".join(legend.get_title().get_text() for legend in plot.basin_figure(ds).legends)
     assert "gain R = |Q|/|F|" in title and "/c" not in title, title
+    with vrsweep.open_results(basins) as ds:
+        description = plot.description(plot.basin_figure(ds))
+    assert "4 transient + 16 measured periods T" in description and "slow" not in description, description
 
 
 def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names(tmp_path):

@@ -222,6 +222,7 @@ def _basin_caption(view, width):
             items[1] = f"{view.config.model.title}: x'' = {view.config.model.acceleration}"
         items += [f"{parameter_symbol(name)} = {_number(parameters[name])}" for name in view.config.parameter_names]
         run = view.config.integration
-        items.append(f"{run.transient_periods} transient + {run.measure_periods} measured slow periods")
+        items.append(f"{run.transient_periods} transient + {run.measure_periods} measured "
+                     f"{'periods T' if view.config.written else 'slow periods'}")
     items += ["all quantities dimensionless"] + ([_progress_note(view)] if not view.complete else [])
     return _wrap(items, width)

@@ -151,14 +151,38 @@ def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
 def _wrap(items, width):
     """Items joined by commas into lines of at most ``width`` visible characters (never broken
     inside an item)."""
+    def visible(text):
+        return len(text.replace("$", "").replace("\\", ""))  # mathtext markup takes no room
+
     lines, line = [], ""
     for item in items:
-        visible = len(item.replace("$", "").replace("\\", ""))  # mathtext markup takes no room
-        if line and len(line.replace("$", "").replace("\\", "")) + visible + 2 > width:
+        if line and visible(line) + visible(item) + 2 > width:
             lines.append(line)
             line = ""
         line = f"{line},  {item}" if line else item
+        # An item wider than the line (a written model's equation) ran off the canvas: broken at
+        # its spaces, never inside $...$.
+        while visible(line) > width:
+            cut = _break_at(line, width, visible)
+            if cut is None:
+                break
+            lines.append(line[:cut].rstrip())
+            line = line[cut:].lstrip()
     return "\n".join(lines + [line])
+
+
+def _break_at(text, width, visible):
+    """Where to break ``text``: after its last space outside mathtext that leaves at most ``width``
+    visible characters before it; None where there is none."""
+    best, in_math = None, False
+    for index, char in enumerate(text):
+        if char == "$":
+            in_math = not in_math
+        elif char == " " and not in_math and index > 0:
+            if visible(text[:index]) > width:
+                break
+            best = index
+    return best
 
 
 def _parse_config(text):

@@ -813,7 +813,7 @@ def _draw_bifurcation(ax, view, x_axis):
         strobe = view.along("strobe_x", x_axis, **where)  # (n_x, n_strobe)
         xs = np.repeat(x, strobe.shape[-1])
         ax.plot(xs, strobe.reshape(-1), ".", ms=2.5, color=colour,
-                label=label or f"x(nT), last {n_strobe} slow periods of each point")
+                label=label or f"x(nT), last {n_strobe} {period_words(symbol=False)}s of each point")
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
