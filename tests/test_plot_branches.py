@@ -164,3 +164,35 @@ def test_the_grey_bifurcation_lines_of_the_multipliers_panel_are_named_in_the_le
         entries = dict(zip([text.get_text() for text in fig.legends[0].get_texts()], fig.legends[0].legend_handles))
         assert label in entries, list(entries)
         assert to_hex(entries[label].get_color()) == to_hex(verticals[0].get_color())
+
+
+def test_a_sweep_over_a_second_axis_is_drawn_where_the_branch_is(tmp_path, invoke, write_config):
+    # Its first value of the other axis (Omega = 3) was drawn beside a branch at Omega = 4.
+    from handmade import write_grazing_branch_file
+
+    from vrsweep.errors import UsageError
+    from vrsweep.store.reading import load_results
+
+    branch = write_grazing_branch_file(tmp_path / "graze.h5", impacts_change=True)
+    import yaml
+
+    omega = float(yaml.safe_load(str(plot.load(branch).attrs["config"]))["parameters"]["Omega"])
+    assert omega == 4.0
+    for name, values in (("with", f"[3.0, {omega}]"), ("without", "[3.0, 5.0]")):
+        config = write_config(tmp_path, f"""\
+            model: effective
+            parameters: {{gamma: 0.05, alpha: 0.05}}
+            sweep:
+              g: [22.0, 24.0, 26.0]
+              Omega: {values}
+            integration: {{transient_periods: 3, measure_periods: 4, strobe_periods: 2}}
+            """, name=f"{name}.yaml")
+        assert invoke("run", config, "-o", tmp_path / f"{name}.h5", "--quiet").exit_code == 0
+    sweep = load_results(tmp_path / "with.h5")
+    sweep["R"].values[...] = [[1.0, 2.0], [1.0, 2.0], [1.0, 2.0]]  # the row at the branch's Omega: 2
+    fig = plot.plot([plot.load(branch), sweep])
+    (points,) = [line for line in fig.axes[0].get_lines() if line.get_label() == "sweep"]
+    np.testing.assert_array_equal(points.get_ydata(), [2.0, 2.0, 2.0])
+    with pytest.raises(UsageError, match="^without.h5 is swept over Omega too, and none of its values is the "
+                                         "branch's Omega = 4"):
+        plot.plot([branch, tmp_path / "without.h5"])

@@ -131,7 +131,7 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
     config = _stored_parameters(ds)
     _draw_branch_lines(top, bottom, datasets, values, config, name)
     for sweep_number, sweep in enumerate(sweeps):
-        _draw_sweep(top, sweep, name, sweep_number)
+        _draw_sweep(top, sweep, name, sweep_number, config)
     window, zoom_note = _zoom_window(values, places, zoom, xlim, name)
     if window is not None:
         top.set_xlim(*window)
@@ -333,6 +333,24 @@ MARK_SIZE = 3.0
 MULTIPLIER_WIDTHS = (1.4, 0.7)  # |mu_1|, |mu_2|
 
 
+def _branch_index(sweep, dim, config):
+    """The index of ``dim``'s value in ``sweep`` that the branch has; UsageError where it has none."""
+    from vrsweep.plot.selection import _path
+
+    values = np.asarray(sweep[dim].values, dtype=np.float64)
+    path = os.path.basename(str(_path(sweep) or "the sweep file"))
+    if config is None or dim not in config.parameters:
+        raise UsageError.naming("{path} is swept over {dim} too, and the branch file does not say its {dim}: "
+                                "draw a sweep over the branch's parameter alone", path=path, dim=dim)
+    wanted = float(config.parameters[dim])
+    close = np.flatnonzero(np.abs(values - wanted) <= 1e-9 * max(1.0, abs(wanted)))
+    if close.size == 0:
+        raise UsageError.naming("{path} is swept over {dim} too, and none of its values is the branch's "
+                                "{dim} = {value}: draw a sweep that has it", path=path, dim=dim,
+                                value=f"{wanted:g}")
+    return int(close[0])
+
+
 def _period_colours(periods):
     """{period: colour}: the first point's period in BRANCH_COLOUR, the others in turn."""
     order = list(dict.fromkeys(int(p) for p in periods))
@@ -347,13 +365,15 @@ def _period_marks(periods):
             for k, period in enumerate(order)}
 
 
-def _draw_sweep(ax, sweep, name, number):
+def _draw_sweep(ax, sweep, name, number, config=None):
     if name not in sweep.coords or "R" not in sweep:
         return
     data = sweep["R"]
     others = [dim for dim in data.dims if dim not in (name, "direction")]
-    if others:
-        data = data.isel({dim: 0 for dim in others})
+    # A sweep over more axes is drawn where the branch is: its first value of each (Omega = 3
+    # beside a branch at Omega = 4) was drawn as if it were the branch's.
+    for dim in others:
+        data = data.isel({dim: _branch_index(sweep, dim, config)})
     directions = sweep["direction"].values if "direction" in data.dims else [None]
     for direction in directions:
         line = data.sel(direction=direction) if direction is not None else data
