@@ -196,3 +196,22 @@ def test_a_sweep_over_a_second_axis_is_drawn_where_the_branch_is(tmp_path, invok
     with pytest.raises(UsageError, match="^without.h5 is swept over Omega too, and none of its values is the "
                                          "branch's Omega = 4"):
         plot.plot([branch, tmp_path / "without.h5"])
+
+
+def test_a_parameter_the_config_sweeps_is_stated_at_the_value_the_branch_held(tmp_path):
+    # Continuation ignores sweep axes; the caption left a swept Omega out as if it varied.
+    from handmade import CONFIG, orbit
+
+    from vrsweep.analysis.continuation import Branch
+    from vrsweep.config.validate import config_from_dict
+    from vrsweep.store import branch_file
+
+    config = config_from_dict({**CONFIG, "parameters": {**CONFIG["parameters"], "Omega": 4.5},
+                               "sweep": {"Omega": {"start": 3.0, "stop": 6.0, "num": 4}}})
+    orbits = [orbit(value, True) for value in np.linspace(22.0, 24.0, 5)]
+    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "g left"),
+                                                       "up": ("left_range", "g left")})]
+    path = tmp_path / "branch.h5"
+    branch_file.write_branch(path, branch_file.branch_arrays(branches, [], 23.0), config, "rk45")
+    description = plot.description(plot.plot(path))
+    assert "Ω = 4.5" in description, description

@@ -143,8 +143,12 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
     model_words = config.model.title if written else f"{ds.attrs.get('model', '')} model"
     what = f"Periodic orbits continued in {parameter_symbol(name)} ({model_words})"
     path = str(ds.encoding.get("source", "") or ds.attrs.get("path", "") or "branch")
-    _title(figure, what, _caption(os.path.basename(path), config, str(ds.attrs.get("model", "")), omit=(name,),
-                                  width=_width(figure)))
+    # Continuation holds every parameter but its own at the config's value, sweep axes too: the
+    # caption left out a swept one (omega = 0.8 of impact_linear) as if it varied.
+    held = {axis.name: config.parameters[axis.name] for axis in config.axes
+            if axis.name in config.parameters} if config is not None else {}
+    _title(figure, what, _caption(os.path.basename(path), config, str(ds.attrs.get("model", "")), held,
+                                  omit=(name,), width=_width(figure)))
     bottom.set_xlabel(parameter_label(name))
     if zoom_note:  # in the corner of the multipliers' panel, where the legend never goes
         bottom.text(0.99, 0.96, zoom_note, transform=bottom.transAxes, ha="right", va="top", fontsize="xx-small",
