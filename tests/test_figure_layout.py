@@ -288,5 +288,10 @@ def test_a_caption_item_wider_than_the_line_is_broken_at_its_spaces_outside_math
     assert all(len(line.replace("$", "").replace("\\", "")) <= 100 for line in lines), lines
     assert " ".join(text.split()) == " ".join(f"duffing.h5 {equation},  $\\zeta$ = 0.05,  $F_1$ = 0.6".split())
     assert all(line.count("$") % 2 == 0 for line in lines)  # no line ends inside mathtext
+    assert any("$\\zeta$ = 0.05" in line for line in lines) and any("$F_1$ = 0.6" in line for line in lines)
+    # Only the long item is broken, never a 'name = value' after it (ζ = on one line, 0.05 on the next).
+    model = "linear impact oscillator: x'' = -2 * zeta * v - x + F * cos(omega * t + phi)"
+    lines = _wrap(["impact_linear_branch.h5", model, "$\\zeta$ = 0.05", "F = 1"], 115).split("\n")
+    assert any("$\\zeta$ = 0.05" in line for line in lines) and any(model in line for line in lines), lines
     math = _wrap(["x", "$a \\cdot b \\cdot c \\cdot d$ " * 8], 30)  # only spaces inside $...$: kept whole
     assert all(line.count("$") % 2 == 0 for line in math.split("\n"))

@@ -159,15 +159,16 @@ def _wrap(items, width):
         if line and visible(line) + visible(item) + 2 > width:
             lines.append(line)
             line = ""
+        if not line:
+            # An item wider than the line (a written model's equation) ran off the canvas: broken
+            # at its own spaces, never inside $...$ (nor inside the items after it).
+            while visible(item) > width:
+                cut = _break_at(item, width, visible)
+                if cut is None:
+                    break
+                lines.append(item[:cut].rstrip())
+                item = item[cut:].lstrip()
         line = f"{line},  {item}" if line else item
-        # An item wider than the line (a written model's equation) ran off the canvas: broken at
-        # its spaces, never inside $...$.
-        while visible(line) > width:
-            cut = _break_at(line, width, visible)
-            if cut is None:
-                break
-            lines.append(line[:cut].rstrip())
-            line = line[cut:].lstrip()
     return "\n".join(lines + [line])
 
 
