@@ -50,6 +50,9 @@ def test_the_panel_draws_the_files_exponent_and_calls_chaos_by_its_band(line):
     (hollow,) = _lines(fig, "not_chaotic")
     np.testing.assert_array_equal(hollow.get_xdata(), g[~chaotic])
     assert any(list(l.get_ydata()) == [0.0, 0.0] for l in fig.axes[0].get_lines())  # the zero line
+    # Hollow is every point not beyond its band, a positive lambda_1 within it included (g = 20 of
+    # Fig. 1: +0.04, motion chaotic): the legend called them all "not chaotic".
+    assert "not chaotic" not in hollow.get_label() and "undecided" in hollow.get_label()
 
 
 def test_minus_infinity_is_drawn_at_the_bottom_and_counted(line):

@@ -78,7 +78,7 @@ def _draw_lyapunov(ax, view, x_axis):
                 label=None if k else f"{LYAPUNOV_SYMBOL} > 0 beyond its band: chaotic")
         calm = finite & ~chaotic
         ax.plot(x[calm], exponent[calm], "o", ms=3.5, mfc="none", mew=1.0, color=colour, ls="none", gid="not_chaotic",
-                label=None if k else "not chaotic: periodic (< 0) or quasi-periodic (= 0)")
+                label=None if k else "not beyond its band: periodic (< 0), quasi-periodic or undecided (≈ 0)")
         stuck = np.isneginf(exponent)
         n_stuck += int(np.sum(stuck))
         if np.any(stuck):
