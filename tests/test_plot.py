@@ -543,3 +543,22 @@ def test_axis_labels_of_the_initial_state_name_it_once():
     assert parameter_label("x0") == "initial position $x(0)$"
     assert parameter_label("v0") == r"initial velocity $\dot{x}(0)$"
     assert parameter_label("g") == "fast forcing amplitude $g$"
+
+
+def test_the_resonance_curve_is_named_g_res_of_omega_only_over_g_and_omega(tmp_path, invoke, write_config):
+    """Over (g, alpha) the dashed curve omega~^2 = omega^2 is g_res(alpha): its legend said
+    g_res(Omega), as over (Delta, alpha), where it is no g_res at all."""
+    config = write_config(tmp_path, """\
+        model: effective
+        sweep:
+          g: {start: 5.0, stop: 40.0, num: 7}
+          alpha: {start: 0.05, stop: 0.2, num: 6}
+        integration: {transient_periods: 10, measure_periods: 16}
+        """)
+    out = tmp_path / "g_alpha.h5"
+    assert invoke("run", config, "-o", out, "--quiet").exit_code == 0
+    fig = plot.plot(out)
+    labels = [t.get_text() for legend in [*fig.legends, *(ax.get_legend() for ax in fig.axes)] if legend
+              for t in legend.get_texts()]
+    resonance = [label for label in labels if "eq3.4" in label]
+    assert resonance and all("g_{res}" not in label and label.startswith("resonance") for label in resonance), labels

@@ -135,8 +135,10 @@ def _draw_resonance_curve(ax, view, x_axis, y_axis, outline=False):
     contour.set_gid("resonance")
     if edge:
         contour.set_path_effects(edge)
+    # g_res(Omega) names the curve only in the (g, Omega) plane; over (Delta, alpha) it is Delta_res(alpha)
+    name = "$g_{res}(\\Omega)$: " if {x_axis, y_axis} == {"g", "Omega"} else "resonance: "
     return Line2D([], [], color="white", ls="--", lw=1.6, path_effects=edge,
-                  label="$g_{res}(\\Omega)$: $\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
+                  label=name + "$\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
 
 
 def barrier_positions(config, parameters) -> list[float]:
