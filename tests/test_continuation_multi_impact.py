@@ -306,3 +306,36 @@ def test_past_a_graze_the_branch_goes_back_over_its_parameter_on_its_own_orbits(
         assert _impacts(run) == 6
         end_state = np.array([run["x_final"], run["v_final"]])
         assert np.max(np.abs(end_state - orbit.state)) < 1e-6 * max(1.0, np.max(np.abs(orbit.state)))
+
+
+@pytest.mark.slow
+def test_a_long_step_towards_the_corner_locates_the_graze_rather_than_passing_it():
+    """From g = 17.7 at the default max_step of 0.5 the steps grow as they near the corner at the
+    end of the period-3 window; one of them (from g = 17.7866, its smooth maximum 0.008 below Delta)
+    used to land beyond the corner on the other 10-impact orbit: the check for a passed graze ran
+    Newton on the windowed map from that orbit, whose full first step left the map's piece (two
+    of its other impacts gone) and diverged, and a graze not located counted as no graze. The
+    branch must instead reach the corner and turn onto the 11-impact orbits, the graze between
+    being one SciPy confirms (a fixed point of its windowed map that touches Delta)."""
+    problem = continuation.ContinuationProblem(dict(FIG1, g=17.7), "original", "g",
+                                               settings_vector(rtol=1e-12, atol=1e-14), "rk45",
+                                               dict(continuation.DEFAULTS, max_step=0.5))
+    start = continuation.find_start(problem, [0.99, 0.5], 17.7, 300, 8)
+    assert round(start.impacts_per_period * PERIODS) == 10
+    orbits, found, _ = continuation.follow(problem, start, +1, 17.6, 17.8, 12)
+    orbits = [start] + orbits
+    counts = [round(orbit.impacts_per_period * PERIODS) for orbit in orbits]
+    assert 11 in counts and set(counts) <= {10, 11}
+    turn = counts.index(11)
+    fewer, more = orbits[turn - 1], orbits[turn]
+    grazes = [orbit for kind, orbit in found if kind == "grazing"]
+    assert len(grazes) == 1
+    graze = grazes[0]
+    assert fewer.parameter < graze.parameter and more.parameter < graze.parameter  # the corner
+    # no step along the 10-impact orbits went over the graze's parameter
+    assert all(orbit.parameter < graze.parameter for orbit in orbits[:turn])
+    end_state, impacts, top = _scipy_windowed_map(graze, _touch_time(fewer))
+    assert np.max(np.abs(end_state - graze.state)) < 1e-7 * max(1.0, np.max(np.abs(graze.state)))
+    assert impacts == 10
+    assert top == pytest.approx(FIG1["Delta"], abs=1e-7)
+    assert not more.stable
