@@ -233,6 +233,37 @@ def test_two_barriers_must_face_each_other_and_not_overlap():
     assert any("must lie above the barrier below" in p for p in problems(crossed))
 
 
+@pytest.mark.parametrize("change, expected", [
+    (('"-2*zeta*v - x + F*cos(omega*t)"', "null"), "m.yaml:2: model.acceleration: is null"),
+    (("{zeta: 0.05, F: 1.0, omega: 0.8, Delta: 1.2, r: 0.8}", "null"), "m.yaml:3: model.parameters: is null"),
+    (('"2*pi/omega"', "null"), "m.yaml:6: model.period: is null"),
+    (("{frequency: omega, scale: F}", "null"), "m.yaml:7: model.response: is null"),
+    (("frequency: omega", "frequency: null"), "m.yaml:7: model.response.frequency: is null"),
+    (("position: Delta", "position: null"), "m.yaml:5: model.barriers[0].position: is null"),
+    (("restitution: r", "restitution: null"), "m.yaml:5: model.barriers[0].restitution: is null"),
+    (("side: above", "side: null"), "m.yaml:5: model.barriers[0].side: is null"),
+])
+def test_a_required_key_written_as_null_is_refused_as_missing(change, expected, tmp_path):
+    """A null passed the check for a missing key: ``acceleration: null`` was valid and the run a
+    traceback, ``position: null`` dropped the barrier without a word, ``response: null`` a traceback."""
+    assert problems(MODEL.replace(*change)) == [expected + ", which gives no value" + (
+        " (a written model needs acceleration, parameters, period and response)" if "[" not in expected
+        and "frequency" not in expected else ": the frequency of R's Fourier component"
+        if "frequency" in expected else "")]
+    path = tmp_path / "m.yaml"
+    path.write_text(MODEL.replace(*change))
+    result = CliRunner().invoke(main, ["validate", str(path)])
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+
+
+def test_a_bad_parameter_name_does_not_blame_the_acceleration_for_using_x():
+    """With a parameter refused, the acceleration was checked without x, v and t, and a second
+    line said "model.acceleration: depends on x, but it may depend on the parameters only"."""
+    found = problems(MODEL.replace("zeta: 0.05", "sin: 0.05").replace("-2*zeta*v - x + F*cos(omega*t)", "-x"))
+    assert len(found) == 1 and found[0].startswith("m.yaml:3: model.parameters.sin: sin is taken"), found
+
+
 def test_the_cli_refuses_a_bad_model_in_one_line_with_exit_2(tmp_path):
     path = tmp_path / "bad.yaml"
     path.write_text(MODEL.replace("F*cos(omega*t)", "F*cos(omega*t).real"))

@@ -95,9 +95,9 @@ class ModelSection:
                 self.report(("model", key), f"unknown key{did_you_mean(str(key), MODEL_KEYS)}",
                             allowed=", ".join(MODEL_KEYS))
         for key in REQUIRED_KEYS:
-            if key not in value:
-                self.report(("model", key), "missing (a written model needs acceleration, parameters, period "
-                                            "and response)")
+            if value.get(key) is None:
+                self.report(("model", key), f"{_absent(value, key)} (a written model needs acceleration, parameters, "
+                                            f"period and response)")
         name = value.get("name")
         if name is not None and not (isinstance(name, str) and 0 < len(name) <= MAX_NAME_LENGTH
                                      and name.isprintable()):
@@ -119,8 +119,9 @@ class ModelSection:
                 if key not in RESPONSE_KEYS:
                     self.report(("model", "response", key), f"unknown key{did_you_mean(str(key), RESPONSE_KEYS)}",
                                 allowed=", ".join(RESPONSE_KEYS))
-            if "frequency" not in response:
-                self.report(("model", "response", "frequency"), "missing: the frequency of R's Fourier component")
+            if response.get("frequency") is None:
+                self.report(("model", "response", "frequency"),
+                            f"{_absent(response, 'frequency')}: the frequency of R's Fourier component")
             frequency = self._expression(response, ("response", "frequency"), names, parameters)
             scale = self._expression(response, ("response", "scale"), names, parameters, default="1")
         max_step = self._expression(value, ("max_step",), names + ("period",), parameters)
@@ -229,10 +230,10 @@ class ModelSection:
                     self.report(where + (key,), f"unknown key{did_you_mean(str(key), BARRIER_KEYS)}",
                                 allowed=", ".join(BARRIER_KEYS))
             for key in BARRIER_KEYS:
-                if key not in item:
-                    self.report(where + (key,), "missing")
+                if item.get(key) is None:
+                    self.report(where + (key,), _absent(item, key))
             side = item.get("side")
-            if "side" in item and side not in SIDES:
+            if side is not None and side not in SIDES:
                 self.report(where + ("side",), f"must be above (the mass stays at x <= position) or below "
                                                f"(x >= position), got {show(side)}")
             position = self._expression(item, ("barriers", index, "position"), names, parameters)
@@ -259,15 +260,24 @@ class ModelSection:
             self.report(path, f"must be a finite number or an expression, got {show(value)}")
             return None
         text = value if isinstance(value, str) else repr(float(value))
-        known = names if parameters is not None else None
+        # With the parameters broken, ``names`` holds only what the field knows besides them (the
+        # acceleration's x, v, t; the step cap's period): still known, not "depends on x" blamed on
+        # an acceleration that may.
         try:
-            expressions.parse(text, known if known is not None else ())
+            expressions.parse(text, names)
         except expressions.ExpressionError as error:
-            if known is None and "unknown name" in str(error):
+            if parameters is None and "unknown name" in str(error):
                 return None  # the parameters themselves are broken: that is the problem reported
             self.report(path, str(error))
             return None
         return expressions.canonical(text)
+
+
+def _absent(mapping, key) -> str:
+    """A required key left out, or written as null (``period:`` with nothing after it): YAML reads
+    both as nothing, and a null passed the check for a missing key, leaving a model without its
+    acceleration (a traceback at the run) or a barrier silently dropped."""
+    return "missing" if key not in mapping else "is null, which gives no value"
 
 
 def _mathtext_problem(symbol) -> str | None:
