@@ -87,6 +87,8 @@ def test_expressions_evaluate_as_written(text, values, expected):
     ("x + (-8) ** (1 / 3)", "not a finite real number"),
     ("exp(1000) * x", "exp(1000) = inf"),
     ("-x\n+ 1", "spans lines"),  # a YAML literal block: "not a valid expression at character 1"
+    ("sin(*x)", "unpacks an argument with *"),  # was "calls sin with 1 argument(s), not 1"
+    ("max(*x)", "unpacks an argument with *"),
 ])
 def test_expressions_refuse_anything_but_the_whitelist(text, token):
     with pytest.raises(expressions.ExpressionError, match=None) as caught:

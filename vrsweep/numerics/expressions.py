@@ -127,8 +127,10 @@ def _check(node, names, depth):
                                   f"{', '.join(FUNCTIONS)}")
         if node.keywords:
             raise ExpressionError(f"passes a keyword to {node.func.id}: {_token(node)}")
+        if any(isinstance(arg, ast.Starred) for arg in node.args):  # counted as one: "1 argument(s), not 1"
+            raise ExpressionError(f"unpacks an argument with * in {_token(node)}: write the arguments out")
         wanted = 2 if node.func.id in ("min", "max") else 1
-        if len(node.args) != wanted or any(isinstance(arg, ast.Starred) for arg in node.args):
+        if len(node.args) != wanted:
             raise ExpressionError(f"calls {node.func.id} with {len(node.args)} argument(s), not {wanted}: "
                                   f"{_token(node)}")
         values = [_check(arg, names, depth + 1) for arg in node.args]
