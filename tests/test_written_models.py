@@ -961,3 +961,25 @@ def test_frequencies_with_named_functions_and_constants_are_computed(forcing, re
     frequencies = kernels.forcing_frequencies(values)
     for row, (f, k) in zip(frequencies, [(0.15, 2.0), (0.2, 5.0)]):
         assert sorted(np.abs(row)) == pytest.approx(sorted(expected(f, k)), rel=1e-15)
+
+
+@pytest.mark.slow
+def test_a_periodic_orbit_with_complex_multipliers_has_its_exact_exponent():
+    """x'' + 2 zeta x' + x = cos(omega t): both multipliers are exp(-zeta T) in modulus, so the
+    largest exponent is -zeta exactly; with one impact a period at a stop x <= 0 (Shaw and Holmes)
+    |det M| = r^2 exp(-2 zeta T), a complex pair: ln(r)/T - zeta. The mean stretch of one tangent
+    vector gave -0.04995985 with lyapunov_err 6.7e-6 at omega = 2.5 (6 half-widths off)."""
+    import vrsweep
+
+    text = MODEL + textwrap.dedent("""\
+        integration: {transient_periods: 200, measure_periods: 100, lyapunov: true}
+        """)
+    free = vrsweep.sweep(text.replace("initial:", "sweep: {omega: [0.8, 1.0, 2.5]}\ninitial:"), Delta=100.0,
+                         progress=False)
+    assert (free.impacts_per_cycle.values == 0).all() and (free.period.values == 1).all()
+    np.testing.assert_allclose(free.lyapunov.values, -0.05, atol=1e-8)
+    omega = 1.5
+    shaw = vrsweep.sweep(text.replace("{x: 0.0, v: 0.0}", "{x: -0.5, v: 0.0}"), Delta=0.0, omega=omega,
+                         progress=False)
+    assert int(shaw.period) == 1 and int(shaw.impacts_per_cycle) == 1
+    assert float(shaw.lyapunov) == pytest.approx(math.log(0.8) * omega / (2 * math.pi) - 0.05, abs=1e-8)
