@@ -66,7 +66,8 @@ Stroboscopic (Poincare) samples
     mean over the window's last whole cycles (whole_cycle_exponent), the orbit's log |mu_1| / (pT),
     as its R is; vrsweep 0.6.9 and earlier stored the window's mean and added the distance between
     the two to lyapunov_err. On an orbit whose two Floquet multipliers are a complex pair the per-period stretch oscillates with the pair's rotation and
-    the window's mean carries an O(1/m) bias, which the batches see as spread. A point that stuck
+    the window's mean carries an O(1/m) bias: there lyapunov is half the exponents' sum, from the
+    exact log areas (complex_pair_exponent, since 0.7.1), and lyapunov_err the batches'. A point that stuck
     in the window has lyapunov = -inf exactly (tangent.py) and lyapunov_err = 0.
     Measured as for R_err (24 runs per point: rtol 1e-8 ... 1e-11 times six x(0) moved by up to
     5e-9, paper parameters, Omega = 4, 100 + 100 periods): the fraction of runs within

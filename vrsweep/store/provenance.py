@@ -96,7 +96,8 @@ RESULT_EPOCHS = (
     ("0.2.0", "impacts are decided on each step's interpolant"),
     ("0.6.0", "R of a quasi-periodic point is a weighted Birkhoff average"),
     ("0.7.0", "a periodic point's impacts_per_period and lyapunov are its orbit's, over its last whole cycles"),
-    ("0.7.1", "a periodic point's R spans whole cycles of its response frequency too, 0 at no harmonic of it"),
+    ("0.7.1", "a periodic point's R spans whole cycles of its response frequency too, 0 at no harmonic of it, and "
+              "the lyapunov of an orbit with complex multipliers is log|mu|/(pT) from its log areas"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -105,7 +106,9 @@ by weighted Birkhoff averages (analysis/motion.py) and adds ``motion``; 0.7.0 ta
 point's impacts_per_period and lyapunov over its last whole cycles, as R, a written model's R as
 |Q| / |scale|, and a written model's forcing period from every frequency of its forces; 0.7.1
 reads a written model's R at a periodic point over whole cycles of both its motion and its
-response frequency w (0 where w is no harmonic of the orbit), on branches too. Versions of one epoch
+response frequency w (0 where w is no harmonic of the orbit), on branches too, and the lyapunov of
+a periodic orbit whose multipliers are a complex pair as log|mu|/(pT) from its exact log areas
+(the paper's models too). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
