@@ -391,6 +391,7 @@ def test_continue_locates_the_linear_oscillators_graze_and_follows_it_in_omega(t
             assert f["R"].attrs["long_name"].startswith("gain R = |Q|/|F| over the orbit, Q at the response "
                                                         "frequency omega"), path
             assert f["periods"].attrs["long_name"] == "orbit period in periods T = 2 * pi / omega", path
+            assert "Roy" not in f.attrs["references"], path
     np.testing.assert_allclose(delta, _free_amplitude(p["zeta"], p["F"], omega), rtol=0, atol=1e-6)
     for path in (branch, curve):
         assert runner.invoke(main, ["info", str(path)]).exit_code == 0
@@ -586,6 +587,9 @@ def test_sweeps_shards_merge_lyapunov_and_overflow_on_a_written_model(tmp_path):
         np.testing.assert_array_equal(merged["R"].values, whole["R"].values)
         statuses = merged["status"].values
         assert merged.attrs["model"] == "written" and "two-sided" in merged.attrs["model_name"]
+        # the paper is not this model's reference (every written model's file cited it), merged or not
+        for attrs in (merged.attrs, whole.attrs):
+            assert "Roy" not in attrs["references"] and "model_definition" in attrs["references"]
     assert list(statuses[:3]) == [Status.OK] * 3 and statuses[3] != Status.OK  # F = 1e300 overflows
     assert np.all(np.isfinite(whole["lyapunov"].values[:3]))
     info = runner.invoke(main, ["info", str(tmp_path / "merged.h5")])

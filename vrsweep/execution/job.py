@@ -201,7 +201,7 @@ def root_attributes(config, shard=(0, 1)):
         "vrsweep_version": __version__,
         "numba_version": numba.__version__,
         "numpy_version": np.__version__,
-        **cf_attributes(_title(config)),
+        **cf_attributes(_title(config), model=config.model),
     }
     if shard[1] > 1:
         attrs["shard"] = f"{shard[0]}/{shard[1]}"

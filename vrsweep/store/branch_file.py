@@ -140,7 +140,7 @@ def file_attributes(kind, config, method, title, complete=True, **more):
             "created": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "config": config.to_yaml(), **model_attributes(config.model), **more, "method": method,
             "vrsweep_version": __version__, "numba_version": numba.__version__, "numpy_version": np.__version__,
-            **cf_attributes(title)}
+            **cf_attributes(title, model=config.model)}
 
 
 def write_branch(path, arrays, config, method, overwrite=False, complete=True):

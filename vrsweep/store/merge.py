@@ -331,7 +331,8 @@ def _root_attributes(ref):
     (``created``: the merge time) and the shard label; ``history`` gains the merge's line."""
     attrs = {k: v for k, v in ref.attrs.items() if k not in RESERVED_ROOT_ATTRS and k != "shard"}
     if "history" in attrs:  # CF: the merge adds its own line to the first shard's history
-        attrs.update(cf_attributes(str(attrs.get("title", "")), history=str(attrs["history"])))
+        attrs.update(cf_attributes(str(attrs.get("title", "")), history=str(attrs["history"]),
+                                   references=str(attrs["references"]) if "references" in attrs else None))
     return attrs
 
 

@@ -20,6 +20,8 @@ REFERENCES = ("S. Roy and S. Gupta, \"Vibrational resonance in vibro-impact osci
               "fast harmonic excitation\", International Journal of Non-Linear Mechanics "
               "(arXiv:2407.17849); "
               "corrections in vrsweep's docs/errata.md")
+WRITTEN_REFERENCES = ("a model written in the config (the model_definition attribute), integrated by vrsweep's "
+                      "Dormand-Prince kernels with impact location (vrsweep's docs/models.md)")
 
 _command_line: str | None = None
 
@@ -58,8 +60,9 @@ def source() -> str:
     return f"vrsweep {__version__} (numba {numba.__version__}, numpy {numpy.__version__})"
 
 
-def cf_attributes(title: str, history: str | None = None) -> dict:
-    """The CF global attributes of a new file; ``history`` continues an earlier one (merge)."""
+def cf_attributes(title: str, history: str | None = None, model="original", references: str | None = None) -> dict:
+    """The CF global attributes of a new file; ``history`` continues an earlier one (merge), whose
+    ``references`` it keeps. A written model's file does not cite the paper, whose system it is not."""
     now = utc_now()
     line = f"{now} {command_line()}"
     return {
@@ -67,7 +70,7 @@ def cf_attributes(title: str, history: str | None = None) -> dict:
         "title": title,
         "history": f"{history}\n{line}" if history else line,
         "source": source(),
-        "references": REFERENCES,
+        "references": references or (REFERENCES if isinstance(model, str) else WRITTEN_REFERENCES),
         "date_created": now,
     }
 

@@ -134,7 +134,7 @@ def root_attributes(config):
     at = ", ".join(f"{name} = {config.parameters[name]:g}" for name in shown)
     return {"config": config.to_yaml(), "vrsweep_version": __version__, **model_attributes(config.model),
             "numba_version": numba.__version__, "numpy_version": np.__version__,
-            **cf_attributes(f"vrsweep trajectory of the {config.model} model at {at}")}
+            **cf_attributes(f"vrsweep trajectory of the {config.model} model at {at}", model=config.model)}
 
 
 def write_trajectory(path, data: TrajectoryData, config, overwrite=False):
