@@ -36,10 +36,31 @@ if "frequencies" in inspect.signature(point_values).parameters:
 best = float("inf")
 for _ in range(5):
     began = time.perf_counter()
-    point_values(*arguments, config.integration, threads=1)
+    values = point_values(*arguments, config.integration, threads=1)
     best = min(best, time.perf_counter() - began)
+np.savez(sys.argv[3], **{name: np.asarray(value) for name, value in values.items()})
 print(best)
 """
+
+
+def differences(old_path, new_path):
+    """Per variable of point_values: the points whose values differ (NaN equal to NaN), and by how much."""
+    old, new = np.load(old_path), np.load(new_path)
+    lines = []
+    for name in sorted(set(old.files) | set(new.files)):
+        if name not in old.files or name not in new.files:
+            lines.append(f"  {name}: only in {'new' if name in new.files else 'old'}")
+            continue
+        a, b = old[name], new[name]
+        if a.shape != b.shape:
+            lines.append(f"  {name}: shape {a.shape} -> {b.shape}")
+            continue
+        differ = ~((a == b) | (np.isnan(a) & np.isnan(b))) if a.dtype.kind == "f" else a != b
+        differ = differ.reshape(len(a), -1).any(axis=1) if differ.ndim > 1 else differ
+        if differ.any():
+            largest = np.nanmax(np.abs(a[differ].astype(float) - b[differ].astype(float)))
+            lines.append(f"  {name}: {int(differ.sum())} of {len(a)} points differ, by up to {largest:.3g}")
+    return lines or ["  every variable bit for bit"]
 
 
 def outputs(path):
@@ -73,12 +94,15 @@ def main():
         times = {"old": [], "new": []}
         for _ in range(args.rounds):
             for name, checkout in (("old", args.old), ("new", str(NEW))):
-                run = subprocess.run([sys.executable, "-c", CHILD, checkout, str(path)], capture_output=True,
-                                     text=True, check=True)
+                run = subprocess.run([sys.executable, "-c", CHILD, checkout, str(path),
+                                      str(Path(folder) / f"{name}.npz")], capture_output=True, text=True, check=True)
                 times[name].append(float(run.stdout.split()[-1]))
+        changed = differences(Path(folder) / "old.npz", Path(folder) / "new.npz")
     old, new = min(times["old"]), min(times["new"])
     print(f"point_values, 400 points with exponents: old {old * 1e3:.1f} ms, new {new * 1e3:.1f} ms, "
           f"new/old time {new / old:.3f}")
+    print("values, new against old:")
+    print("\n".join(changed))
 
 
 if __name__ == "__main__":
