@@ -987,3 +987,13 @@ def test_a_periodic_orbit_with_complex_multipliers_has_its_exact_exponent():
                          progress=False)
     assert int(shaw.period) == 1 and int(shaw.impacts_per_cycle) == 1
     assert float(shaw.lyapunov) == pytest.approx(math.log(0.8) * omega / (2 * math.pi) - 0.05, abs=1e-8)
+
+
+def test_a_long_flat_sum_is_refused_with_the_way_out_and_grouped_it_is_read():
+    # 79 terms of a sum are a chain of 78 operators, past MAX_DEPTH: the message called the flat
+    # sum "nested more than 60 deep" and said no more; grouped in two halves it is 40 deep.
+    terms = [f"sin({k}*x + v)" for k in range(1, 80)]
+    with pytest.raises(expressions.ExpressionError, match=r"group a long sum or product in parentheses"):
+        expressions.parse(" + ".join(terms), ["x", "v", "t"])
+    grouped = f"({' + '.join(terms[:40])}) + ({' + '.join(terms[40:])})"
+    assert expressions.parse(grouped, ["x", "v", "t"]) is not None

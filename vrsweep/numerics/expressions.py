@@ -88,7 +88,9 @@ def _check(node, names, depth):
     exact integers (sympy's) would let 2**10**10 run for ever and print 10**20 as an integer that
     numba cannot type, and 1/0 or sqrt(-1) would put inf or a complex number into the kernel."""
     if depth > MAX_DEPTH:
-        raise ExpressionError(f"is nested more than {MAX_DEPTH} deep")
+        # A sum of 61 terms is a chain of 60 operators: say so, or the message puzzles a flat sum.
+        raise ExpressionError(f"is nested more than {MAX_DEPTH} deep (each operator of a chain such as "
+                              f"a + b + c + ... is a level: group a long sum or product in parentheses)")
     if isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
             raise ExpressionError(f"may hold numbers but not {_token(node)} (only numbers, names and operators)")
