@@ -997,3 +997,16 @@ def test_a_long_flat_sum_is_refused_with_the_way_out_and_grouped_it_is_read():
         expressions.parse(" + ".join(terms), ["x", "v", "t"])
     grouped = f"({' + '.join(terms[:40])}) + ({' + '.join(terms[40:])})"
     assert expressions.parse(grouped, ["x", "v", "t"]) is not None
+
+
+def test_a_hash_inside_a_quoted_expression_is_refused_not_taken_as_a_comment(tmp_path):
+    # YAML keeps a # inside quotes; Python's parser then dropped the rest: the model ran as -x.
+    text = MODEL.replace('"-2*zeta*v - x + F*cos(omega*t)"', '"-x # - 2*zeta*v + F*cos(omega*t)"')
+    (problem,) = problems(text)
+    assert problem.startswith("m.yaml:2: model.acceleration: holds a '#'"), problem
+    with pytest.raises(expressions.ExpressionError, match="after the closing quote"):
+        expressions.parse("x + 1 # + v", ["x", "v", "t"])
+    config = tmp_path / "hash.yaml"
+    config.write_text(text)
+    result = CliRunner().invoke(main, ["validate", str(config)])
+    assert result.exit_code == 2 and "holds a '#'" in result.output and "Traceback" not in result.output

@@ -48,6 +48,11 @@ def parse(text, names) -> ast.expr:
         raise ExpressionError("must be an expression, got an empty string")
     if len(text) > MAX_LENGTH:
         raise ExpressionError(f"is longer than {MAX_LENGTH} characters")
+    if "#" in text:
+        # Inside YAML quotes a # is text, and Python's parser took it as a comment: "-x - 0.1*v # - x**3"
+        # ran as -x - 0.1*v, the rest of the model dropped without a word.
+        raise ExpressionError(f"holds a '#', which would silently end the expression there: a YAML comment "
+                              f"goes after the closing quote: {text.strip()!r}")
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as error:
