@@ -130,10 +130,10 @@ def orbit_gain(coefficients, periods, R, Q_amplitude):
     2 pi / (periods T); else 0, exactly. The orbit has no component at any other w, and its cycle
     is no whole number of cycles of e^{iwt} (gain_cycles, the sweep's rule). With w = omega/2, a
     period-1 branch of the linear impact oscillator stored R = 1.229 at Delta = 3 for this 0."""
-    ratio = coefficients[RESPONSE_FREQUENCY] * periods * coefficients[PERIOD] / (2.0 * np.pi)
-    if np.isfinite(ratio) and abs(ratio - round(ratio)) <= RATIO_TOLERANCE * max(abs(ratio), 1.0):
-        return R, Q_amplitude
-    return 0.0, 0.0
+    # w is a harmonic when e^{iwt} repeats after q periods T with q dividing the orbit's (forcing_periods)
+    q = forcing_periods(coefficients[None, PERIOD], coefficients[None, RESPONSE_FREQUENCY:RESPONSE_FREQUENCY + 1],
+                        periods)[0]
+    return (R, Q_amplitude) if q > 0 and periods % q == 0 else (0.0, 0.0)
 
 
 def forcing_periods(slow_period, frequencies, longest):
@@ -315,10 +315,10 @@ def complex_pair_exponent(log_stretch, log_area, slow_period, period):
     of the parallelogram grows by |det M| every cycle, without that bias. The pair is told from
     the per-cycle stretches: against half the per-cycle log area they tend to ln|mu_1 / mu_2| / 2
     > 0 for real multipliers, and swing to both sides for a complex pair."""
-    cycles = len(log_stretch) // period
+    used = whole_cycles(len(log_stretch), period)
+    cycles = used // period
     if cycles < 4 or not (np.isfinite(log_stretch).all() and np.isfinite(log_area).all()):
         return None
-    used = cycles * period
     stretch = log_stretch[len(log_stretch) - used:].reshape(cycles, period).sum(axis=1)
     area = log_area[len(log_area) - used:].reshape(cycles, period).sum(axis=1)
     swing = (stretch - area / 2)[cycles // 2:]
