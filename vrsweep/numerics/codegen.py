@@ -188,29 +188,26 @@ def run_lines_{method}{suffix}(coefficients, initial_states, settings, lines, pe
 
 
 def harmonics(expressions_, t, frequency):
-    """The frequencies a of the terms sin(a t), cos(a t) (a free of x, v, t) in ``expressions_``:
-    the response frequency first, then the first other one met (None if none): at most two,
-    the rotation scratch's (rhs.py)."""
+    """The response frequency and the first other frequency a of a term sin(a t) or cos(a t)
+    (a free of x, v, t; no phase) in ``expressions_`` (None if none): at most two, the rotation
+    scratch's (rhs.py). One scan with ``frequencies``, so the two never disagree on what a
+    frequency is (a and -a are one)."""
     import sympy
 
-    found = [frequency]
-    for expression in expressions_:
-        for term in sympy.preorder_traversal(expression):
-            slope = _slope(term, t)
-            if slope is not None and all(sympy.expand(slope - known) != 0 for known in found):
-                found.append(slope)
-    return found[0], (found[1] if len(found) > 1 else None)
+    others = [a for a in frequencies(expressions_, t, phase=False)
+              if sympy.expand(a - frequency) != 0 and sympy.expand(a + frequency) != 0]
+    return frequency, (others[0] if others else None)
 
 
-def frequencies(expressions_, t):
-    """Every frequency a of the terms sin(a t + b), cos(a t + b) (a and b free of x, v, t) in
-    ``expressions_``, once each (a and -a are one), in the order met."""
+def frequencies(expressions_, t, phase=True):
+    """Every frequency a of the terms sin(a t + b), cos(a t + b) (a and b free of x, v, t; b = 0
+    without ``phase``) in ``expressions_``, once each (a and -a are one), in the order met."""
     import sympy
 
     found = []
     for expression in expressions_:
         for term in sympy.preorder_traversal(expression):
-            slope = _slope(term, t, phase=True)
+            slope = _slope(term, t, phase=phase)
             if slope is not None and all(sympy.expand(slope - known) != 0 and sympy.expand(slope + known) != 0
                                          for known in found):
                 found.append(slope)
