@@ -218,6 +218,48 @@ def test_commands_name_real_options(page):
     assert not problems, problems
 
 
+def _synopsis():
+    """The Synopsis block of docs/commands.md, as {command: its lines} (a command's continuation
+    lines are indented; comments after two spaces and a # dropped)."""
+    text = (ROOT / "docs" / "commands.md").read_text(encoding="utf-8")
+    block = re.search(r"^## Synopsis\s+```text\n(.*?)^```", text, re.M | re.S).group(1)
+    lines, name = {}, None
+    for line in block.splitlines():
+        match = re.match(r"vrsweep (\w+)", line)
+        name = match.group(1) if match else name
+        lines[name] = lines.get(name, "") + line.split("  #")[0] + "\n"
+    return lines
+
+
+def test_the_synopsis_names_every_option_and_kind():
+    """docs/commands.md's Synopsis is where a user looks for an option: every option of every
+    command (and every --kind, every choice) is there, under its command. `theory --set`,
+    `continue --switch`, `merge --overwrite`, `--quiet` of three commands and `plot --kind motion`
+    were missing."""
+    synopsis, missing = _synopsis(), []
+    for name, command in main.commands.items():
+        lines = synopsis.get(name, "")
+        for param in command.params:
+            if not param.opts[0].startswith("-") or param.name == "help":
+                continue
+            names = param.opts + param.secondary_opts
+            if not any(re.search(re.escape(o) + r"(?![\w-])", lines) for o in names):
+                missing.append(f"vrsweep {name} {names[0]}")
+            choices = getattr(param.type, "choices", None) or ()
+            missing += [f"vrsweep {name} {names[0]} {c}" for c in choices
+                        if not re.search(r"(?<![\w+])" + re.escape(c) + r"(?![\w+])", lines)]
+    assert not missing, f"not in docs/commands.md's Synopsis: {missing}"
+
+
+@pytest.mark.parametrize("name", sorted(main.commands))
+def test_help_text_is_rendered(name, invoke):
+    """Click prints an option's help as written (no %-formatting): `plot --help` said
+    "span under 1 %% of the axis"."""
+    result = invoke(name, "--help")
+    assert result.exit_code == 0, result.output
+    assert "%%" not in result.output, result.output
+
+
 @pytest.mark.parametrize("page", [pytest.param(p, id=page_id(p)) for p in PAGES
                                   if any(bash for *_, bash in command_lines(p))])
 def test_bash_commands_on_shipped_configs_validate(page, invoke, tmp_path, monkeypatch):

@@ -90,7 +90,7 @@ def default_output(path, kind):
                    "below it would leave the panels under half the figure.")
 @click.option("--zoom", type=click.Choice(["bifurcations", "none"]), default=None,
               help="Branch files: narrow the parameter axis to where the bifurcations are (bifurcations), or "
-                   "never (none). Default: zoomed when they span under 1 %% of the axis, said on the figure.")
+                   "never (none). Default: zoomed when they span under 1 % of the axis, said on the figure.")
 @click.option("--table", is_flag=True,
               help="Branch files: list the bifurcations (tag, kind, parameter, R, branch) in a table below the "
                    "figure, which grows by a row each.")
