@@ -189,6 +189,25 @@ def test_the_guide_documents_every_status():
     assert not problems, f"docs/file-format.md lacks: {problems}"
 
 
+def _stored_variables():
+    class Integration:  # every optional variable on: lyapunov, lyapunov_err
+        strobe_periods = 16
+        lyapunov = True
+
+    stored = [name for name, *_ in point_variables(Integration)]
+    return stored + ["done", "A_theory", "A_theory_stable", "A_theory_max_stable", "g_res"]
+
+
+def test_the_guide_documents_every_stored_variable():
+    """docs/file-format.md's table of a sweep file is where a user learns what it holds:
+    `x_final`, `v_final`, `n_steps` and `n_rhs` were in every file but only in design.md."""
+    text = (ROOT / "docs" / "file-format.md").read_text(encoding="utf-8")
+    section = text.split("## What a sweep file holds", 1)[1].split("\n## ", 1)[0]
+    documented = " ".join(line.split("|")[1] for line in section.splitlines() if line.startswith("|"))
+    missing = [name for name in _stored_variables() if f"`{name}`" not in documented]
+    assert not missing, f"docs/file-format.md's sweep file table lacks: {missing}"
+
+
 def test_design_documents_every_status_and_stored_variable():
     problems, rows = _status_problems(DESIGN.read_text(encoding="utf-8"))
 
