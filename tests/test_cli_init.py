@@ -130,3 +130,24 @@ def test_every_command_quoted_in_an_example_parses(example, line, argv):
         config = load_config(REPOSITORY / config_path, context.params.get("overrides", ()))
         if argv[0] == "simulate":
             check_single_point(config)
+
+
+@pytest.mark.parametrize("name", list(shipped_examples()))
+def test_init_names_the_command_that_runs_the_example_itself(name, tmp_path, monkeypatch, invoke):
+    # continuation_hysteresis.yaml's comments first run the hysteresis sweep it reads: init said
+    # "run it with: vrsweep run configs/hysteresis_effective.yaml ..." (another example, not in the
+    # user's folder) and --list called it a `run` example; fig1_continue.yaml the same.
+    import shlex
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my dir").mkdir()
+    result = invoke("init", "--example", name, "my dir/mine.yaml")
+    assert result.exit_code == 0, result.output
+    command = shlex.split(result.stderr.split("run it with: ", 1)[1].splitlines()[0])
+    assert command[2] == "my dir/mine.yaml", command
+    config = load_config(tmp_path / "my dir" / "mine.yaml")
+    continuation_only = config.continuation is not None and not config.axes
+    assert command[1] == "continue" if continuation_only else command[1] in ("run", "simulate"), command
+    listed = invoke("init", "--list", env={"COLUMNS": "200"})
+    line = next(line for line in listed.stdout.splitlines() if line.split()[0] == name)
+    assert line.split()[1] == command[1], line

@@ -98,16 +98,32 @@ def description(text, width=None):
     return sentence
 
 
-def _command_of(text):
-    """'simulate' or 'continue' for an example whose comments run that command, else 'run'."""
-    match = re.search(r"^#\s+vrsweep (run|simulate|continue) ", text, flags=re.MULTILINE)
-    return match.group(1) if match else "run"
+def _own_command(text, path):
+    """The first `vrsweep run|simulate|continue PATH ...` of the config's comments that runs this
+    config (PATH), as one line; None if none does.
+
+    A config's comments may first make what it reads (continuation_hysteresis.yaml runs the
+    hysteresis sweep before continuing itself): the first command of any config was taken, and
+    `init` told the user to run another example's file, which their folder did not even hold."""
+    for match in re.finditer(r"^#\s+(vrsweep (?:run|simulate|continue) [^#]*)", text, flags=re.MULTILINE):
+        try:
+            words = shlex.split(match.group(1))  # a written path may be quoted: 'my runs/x.yaml'
+        except ValueError:
+            continue
+        if len(words) > 2 and words[2] == path:
+            return " ".join(match.group(1).split())
+    return None
+
+
+def _command_of(text, name):
+    """'simulate' or 'continue' for an example whose comments run it with that command, else 'run'."""
+    own = _own_command(text, f"configs/{name}.yaml")
+    return own.split()[1] if own else "run"
 
 
 def _run_command(text, written):
-    """The first `vrsweep run|simulate` command of the config's comments, else `vrsweep run PATH`."""
-    match = re.search(r"^#\s+(vrsweep (?:run|simulate|continue) [^#]*)", text, flags=re.MULTILINE)
-    return " ".join(match.group(1).split()) if match else f"vrsweep run {written}"
+    """The command of the config's comments that runs the written config, else `vrsweep run PATH`."""
+    return _own_command(text, shlex.split(written)[0]) or f"vrsweep run {written}"
 
 
 def _print_list(examples):
@@ -118,7 +134,7 @@ def _print_list(examples):
     click.echo("Shipped examples (vrsweep init --example NAME [PATH] writes one):")
     for example, resource in examples.items():
         text = resource.read_text(encoding="utf-8")
-        start = f"  {example:<{width}}  {_command_of(text):<8}  "
+        start = f"  {example:<{width}}  {_command_of(text, example):<8}  "
         click.echo(start + description(text, max(40, columns - 1 - len(start))))
 
 
