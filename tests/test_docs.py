@@ -176,6 +176,44 @@ def test_every_config_key_is_documented_with_its_default(document):
     assert not problems, problems
 
 
+def test_every_section_key_is_documented():
+    """The keys the config's other sections accept (the continuation section, a sweep axis, a
+    written model, its barriers and response) each have a row or a mention on the page that
+    documents the section, the continuation section's with the code's default, and a written
+    model's required keys are said to be required."""
+    from vrsweep.config.models import BARRIER_KEYS, MODEL_KEYS, REQUIRED_KEYS, RESPONSE_KEYS
+    from vrsweep.config.schema import CONTINUATION_KEYS, LINEAR_KEYS, VALUES_KEYS
+    from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
+
+    def page(name):
+        return (ROOT / "docs" / name).read_text(encoding="utf-8")
+
+    problems = []
+    continuation = page("continuation.md")
+    for key in CONTINUATION_KEYS:
+        row = _table_row(continuation, key)
+        if row is None:
+            problems.append(f"continuation.md: no row for continuation.{key}")
+        elif key in CONTINUATION_DEFAULTS and float(row[1]) != CONTINUATION_DEFAULTS[key]:
+            problems.append(f"continuation.md: continuation.{key} documented default {row[1]}, "
+                            f"code has {CONTINUATION_DEFAULTS[key]}")
+    config = page("config.md").split("## Sweep axes", 1)[1]
+    problems += [f"config.md, Sweep axes: no `{key}`" for key in set(LINEAR_KEYS + VALUES_KEYS)
+                 if not re.search(rf"\b{key}\b", config)]
+    models = page("models.md")
+    for key in MODEL_KEYS:
+        row = _table_row(models, key)
+        if row is None:
+            problems.append(f"models.md: no row for model.{key}")
+        elif key in REQUIRED_KEYS and not row[1].startswith("required"):
+            problems.append(f"models.md: model.{key} is required; its row does not say so")
+    problems += [f"models.md: model.barriers' key {key} not named" for key in BARRIER_KEYS
+                 if key not in " ".join(_table_row(models, "barriers") or [])]
+    problems += [f"models.md: model.response's key {key} not named" for key in RESPONSE_KEYS
+                 if f"`{key}`" not in " ".join(_table_row(models, "response") or [])]
+    assert not problems, problems
+
+
 def _status_problems(text):
     rows = [[cell.strip() for cell in line.strip().strip("|").split("|")]
             for line in text.splitlines() if line.startswith("|")]
