@@ -48,7 +48,8 @@ def say_if_compiling(is_cached, what="the numba kernel", duration="about 30 s", 
 set_option = click.option(
     "--set", "overrides", multiple=True, metavar="NAME=VALUE",
     help="Override a parameter (fixing it if it is swept), an integration setting, "
-         "initial.x/initial.v or model; repeatable. E.g. --set g=5 --set rtol=1e-10.",
+         "initial.x/initial.v, model or continuation.KEY; repeatable. E.g. --set g=5 --set rtol=1e-10 "
+         "--set continuation.max_step=0.05.",
 )
 device_option = click.option(
     "--device", type=click.Choice(["cpu", "cuda"]), default=None,
