@@ -146,6 +146,21 @@ def test_cited_sections_exist():
     assert not stale, f"cited sections that do not exist: {stale}"
 
 
+def test_every_test_the_docs_cite_exists():
+    """The docs cite their evidence as tests (`test_errors`, tests/test_kernel.py,
+    `test_global_error_falls_with_rtol`): each is a test file or a test function, so that a
+    renamed or removed test does not leave a claim pointing at nothing."""
+    files = {p.stem for p in (ROOT / "tests").glob("test_*.py")}
+    functions = {name for p in (ROOT / "tests").glob("test_*.py")
+                 for name in re.findall(r"^\s*def (test_\w+)", p.read_text(encoding="utf-8"), re.M)}
+    cited = {}
+    for path in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        for name in re.findall(r"\b(test_\w+?)(?:\.py)?\b", path.read_text(encoding="utf-8")):
+            cited.setdefault(name, path.name)
+    missing = {name: page for name, page in cited.items() if name not in files | functions}
+    assert cited and not missing, f"tests cited by the docs that do not exist: {missing}"
+
+
 def _table_row(text, key):
     """The cells of the Markdown table row whose first cell is `key` (in backticks)."""
     for line in text.splitlines():
