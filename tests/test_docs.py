@@ -212,6 +212,10 @@ def test_every_section_key_is_documented():
         elif key in CONTINUATION_DEFAULTS and float(row[1]) != CONTINUATION_DEFAULTS[key]:
             problems.append(f"continuation.md: continuation.{key} documented default {row[1]}, "
                             f"code has {CONTINUATION_DEFAULTS[key]}")
+    from vrsweep.config.schema import SECTIONS
+
+    problems += [f"config.md: no row for the section {key}" for key in SECTIONS
+                 if not any(line.startswith(f"| `{key}") for line in page("config.md").splitlines())]
     config = page("config.md").split("## Sweep axes", 1)[1]
     problems += [f"config.md, Sweep axes: no `{key}`" for key in set(LINEAR_KEYS + VALUES_KEYS)
                  if not re.search(rf"\b{key}\b", config)]
