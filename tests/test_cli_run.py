@@ -68,7 +68,14 @@ def test_the_quickstart_shows_the_resonance(quickstart):
         assert 17.0 <= g[np.argmax(R)] <= g_res and 20.0 < R.max() < 25.0  # Delta/c = 25: the barrier
         assert (ds["period"].values[after] == 1).all() and (ds["impacts_per_period"].values[after] == 0).all()
         assert np.all(ds["R_err"].values[after] < 1e-9 * R[after])
-        np.testing.assert_allclose(R[after], gain[after], rtol=5e-3)
+        np.testing.assert_allclose(R[after], gain[after], rtol=3e-3)  # README, index.md: "within 0.3 %"
+        # index.md: below g = 16 and at it no period (squares), "hollow, 8 of the 17" (the plots'
+        # rule: R's error bar R_err + R_solver_err |R| above 10 % of R); the committed figure drew
+        # 0.5.0's marks (two filled) until it was regenerated.
+        rattling = g <= 16.0
+        error_bar = ds["R_err"].values + float(ds.attrs["R_solver_err"]) * np.abs(R)
+        assert rattling.sum() == 17 and (ds["period"].values[rattling] == 0).all()
+        assert int((error_bar[rattling] > 0.1 * np.abs(R[rattling])).sum()) == 8
 
 
 def test_quiet_prints_nothing(tmp_path, invoke, write_config):
