@@ -124,6 +124,7 @@ def test_each_group_opens_in_xarray(compared):
         assert ds["impact_t"].attrs["units"] == "1"
     with xr.open_dataset(out, group="slow_flow/state", engine="h5netcdf") as ds:
         assert {"x", "v", "R", "theta"} <= set(ds.data_vars)
+        assert ds["theta"].attrs["units"] == "rad" and ds["R"].attrs["units"] == "1"  # a phase, an amplitude
 
 
 def test_a_swept_config_needs_set(tmp_path, invoke):

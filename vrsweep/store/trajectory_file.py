@@ -182,11 +182,12 @@ def _storage(values):
     return options
 
 
-def _variable(group, name, values, scale, long_name):
+def _variable(group, name, values, scale, long_name, units="1"):
+    """units "1": the paper's variables are dimensionless (eq2.4); a phase is in rad."""
     values = np.asarray(values, dtype=np.float64)
     ds = group.create_dataset(name, data=values, **_storage(values))
     ds.dims[0].attach_scale(scale)
-    ds.attrs["units"] = "1"
+    ds.attrs["units"] = units
     ds.attrs["long_name"] = long_name
     return ds
 
@@ -232,7 +233,7 @@ def _write_slow_flow(group, run: SlowFlowRun):
     _variable(group, "x", run.x, time, "reconstructed X = R cos(omega t + theta) (eq2.21)")
     _variable(group, "v", run.v, time, "reconstructed dX/dt = -omega R sin(omega t + theta) (eq2.21)")
     _variable(group, "R", run.R, time, "slow-flow amplitude R (amplitude of X, not a gain)")
-    _variable(group, "theta", run.theta, time, "slow-flow phase theta (not wrapped)")
+    _variable(group, "theta", run.theta, time, "slow-flow phase theta (not wrapped)", units="rad")
 
 
 # --------------------------------------------------------------------------------------------
