@@ -207,3 +207,28 @@ def test_an_unused_fast_frequency_cannot_overflow(method):
                      method=method)
     assert huge.status == Status.OK
     np.testing.assert_array_equal(huge.summary, plain.summary)
+
+
+def test_a_tiny_slow_amplitude_gives_a_finite_error_bar_or_a_status():
+    """R = |Q|/c (eq3.3) and R_err both scale as 1/c once c*cos(wt) is below the double's
+    resolution of the other forces: the trajectory, and so |Q| and its batch spread, are then
+    those of c = 0. At c = 1e-300 R was 1.6e298 and R_err inf, status ok (the squares of R's
+    deviations overflowed); at c = 1.2e-310, R still finite, R_err truly past the largest double:
+    the point is non_finite, as the kernel marks an R that overflows."""
+    text = ("model: effective\nparameters: {g: 5.0}\n"
+            "sweep:\n  c: [1.2e-310, 1.0e-300, 1.0e-150]\n"
+            "integration: {transient_periods: 5, measure_periods: 20}\n")
+    values = {}
+
+    def keep(flat, chunk):
+        for name in ("status", "R", "R_err", "Q_amplitude"):
+            values.setdefault(name, {}).update(zip(flat.tolist(), chunk[name].tolist()))
+
+    run_sweep(parse_config(text), threads=1, on_chunk=keep)
+    status, R, R_err, amplitude = ([values[name][k] for k in range(3)] for name in ("status", "R", "R_err", "Q_amplitude"))
+    assert [Status(code) for code in status] == [Status.NON_FINITE, Status.OK, Status.OK]
+    assert math.isnan(R[0]) and math.isnan(R_err[0]) and math.isnan(amplitude[0])
+    assert amplitude[1] == amplitude[2] > 0  # c*cos(wt) is lost beside the other forces
+    assert math.isclose(R[1] * 1e-300, R[2] * 1e-150, rel_tol=1e-14)
+    assert 0 < R_err[2] < math.inf
+    assert math.isclose(R_err[1] * 1e-300, R_err[2] * 1e-150, rel_tol=1e-12)

@@ -199,9 +199,9 @@ def forcing_period_detected(measured, period, forcing, max_period, tolerance):
     return found
 
 
-def _gain(sin_integral, cos_integral, duration, c):
-    """|Q|/c of eq3.1-eq3.3 from the two Fourier integrals over `duration`."""
-    return 2.0 * np.hypot(sin_integral, cos_integral) / duration / c
+def _amplitude(sin_integral, cos_integral, duration):
+    """|Q| of eq3.1-eq3.2 from the two Fourier integrals over `duration`."""
+    return 2.0 * np.hypot(sin_integral, cos_integral) / duration
 
 
 def _batches(n_measured, unit):
@@ -229,9 +229,11 @@ def r_error(sin_part, cos_part, slow_period, c, period):
     qs = sin_part[n_measured - used:].reshape(n_batches, batch_length).sum(axis=1)
     qc = cos_part[n_measured - used:].reshape(n_batches, batch_length).sum(axis=1)
     # Leave-one-out means of the batch integrals, each over (B - 1) batches.
-    r_loo = _gain(qs.sum() - qs, qc.sum() - qc, (n_batches - 1) * batch_length * slow_period, c)
-    variance = (n_batches - 1) / n_batches * np.sum((r_loo - r_loo.mean()) ** 2)
-    return _T975.get(n_batches - 1, 1.96) * np.sqrt(variance)
+    # The spread of |Q|, divided by |c| once at the end (R = |Q|/c, eq3.3): the squares of R's
+    # own deviations overflowed where R is large (c = 1e-300: R = 1.6e298 and R_err inf).
+    a_loo = _amplitude(qs.sum() - qs, qc.sum() - qc, (n_batches - 1) * batch_length * slow_period)
+    variance = (n_batches - 1) / n_batches * np.sum((a_loo - a_loo.mean()) ** 2)
+    return _T975.get(n_batches - 1, 1.96) * np.sqrt(variance) / abs(c)
 
 
 def window_records(records, integration):
@@ -265,9 +267,10 @@ def batch_error(measured, slow_period, c, period, ok):
         qs = np.ascontiguousarray(window[:, :, kernel.REC_QS]).reshape(len(rows), n_batches, batch_length).sum(axis=2)
         qc = np.ascontiguousarray(window[:, :, kernel.REC_QC]).reshape(len(rows), n_batches, batch_length).sum(axis=2)
         duration = (n_batches - 1) * batch_length * slow_period[rows]
-        r_loo = _gain(qs.sum(axis=1)[:, None] - qs, qc.sum(axis=1)[:, None] - qc, duration[:, None], c[rows, None])
-        variance = (n_batches - 1) / n_batches * np.sum((r_loo - r_loo.mean(axis=1)[:, None]) ** 2, axis=1)
-        r_err[rows] = _T975.get(n_batches - 1, 1.96) * np.sqrt(variance)
+        a_loo = _amplitude(qs.sum(axis=1)[:, None] - qs, qc.sum(axis=1)[:, None] - qc, duration[:, None])
+        variance = (n_batches - 1) / n_batches * np.sum((a_loo - a_loo.mean(axis=1)[:, None]) ** 2, axis=1)
+        with np.errstate(over="ignore"):  # past the largest double: the point is non_finite (sweep.py)
+            r_err[rows] = _T975.get(n_batches - 1, 1.96) * np.sqrt(variance) / np.abs(c[rows])
     return r_err
 
 

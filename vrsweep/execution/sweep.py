@@ -226,7 +226,33 @@ def point_values(records, summaries, statuses, coefficients, frequencies, integr
     return {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
 
 
+# What a point marked ok carries finite (docs/file-format.md): the kernel's summarize turns an
+# overflow of R, Qs or Qc into NON_FINITE; these are the host's own values that can overflow too.
+_FINITE_WHERE_OK = ("R", "Qs", "Qc", "Q_amplitude")
+# The summary's columns that records.summarize sets to NaN at a failed point.
+_SUMMARY_BLANKED = (kernel.SUM_R, kernel.SUM_QS, kernel.SUM_QC, kernel.SUM_Q_AMPLITUDE, kernel.SUM_IMPACTS_PER_PERIOD,
+                    kernel.SUM_LYAPUNOV, kernel.SUM_LYAPUNOV_SUM)
+
+
 def _point_values(records, summaries, statuses, coefficients, frequencies, integration):
+    values = _values_of(records, summaries, statuses, coefficients, frequencies, integration)
+    # R_err NaN is a window too short for two batches; inf (like an R overflowed by the host's
+    # whole-cycle or weighted averages) is an overflow, and the point is then NON_FINITE, as the
+    # kernel's summarize says of the same overflow: blanked as every failed point is.
+    ok = values["status"] == Status.OK
+    overflowed = ok & np.isinf(values["R_err"])
+    for name in _FINITE_WHERE_OK:
+        overflowed |= ok & ~np.isfinite(values[name])
+    if not overflowed.any():
+        return values
+    statuses = np.where(overflowed, Status.NON_FINITE, statuses).astype(statuses.dtype)
+    summaries = np.array(summaries, copy=True)
+    for k in _SUMMARY_BLANKED:
+        summaries[overflowed, k] = np.nan
+    return _values_of(records, summaries, statuses, coefficients, frequencies, integration)
+
+
+def _values_of(records, summaries, statuses, coefficients, frequencies, integration):
     values = {
         "R": summaries[:, kernel.SUM_R],
         "Qs": summaries[:, kernel.SUM_QS],
