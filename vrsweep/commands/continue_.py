@@ -7,7 +7,7 @@ import dataclasses
 import click
 
 from vrsweep.commands.options import (
-    OUTPUT_FLAGS, config_argument, flag_wording, output_option, overwrite_option, set_option,
+    OUTPUT_FLAGS, PathText, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
 
 
@@ -35,7 +35,7 @@ def _parse_at(values):
 @config_argument
 @set_option
 @output_option
-@click.option("--start", "start_path", type=click.Path(dir_okay=False), default=None,
+@click.option("--start", "start_path", type=PathText(dir_okay=False), default=None,
               help="A sweep file: the first orbit is looked for from the final state of its point --at.")
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="The grid point of --start (nearest value per axis), e.g. --at g=23; repeatable.")

@@ -21,6 +21,7 @@ import os
 import click
 import numpy as np
 
+from vrsweep.commands.options import PathText
 from vrsweep.errors import ResultFileError
 
 # The kind of a file of this format that is none of those this vrsweep writes (hand-made, or of a
@@ -33,7 +34,7 @@ _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "c
 
 
 @click.command("info")
-@click.argument("path", metavar="RESULTS.h5|FIGURE.png", type=click.Path(dir_okay=True))
+@click.argument("path", metavar="RESULTS.h5|FIGURE.png", type=PathText(dir_okay=True))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 @click.option("--config", "show_config", is_flag=True, help="Also print the config the file was run from.")
 def command(path, as_json, show_config):

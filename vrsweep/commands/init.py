@@ -12,11 +12,13 @@ from pathlib import Path
 
 import click
 
+from vrsweep.commands.options import PathText
+
 DEFAULT_EXAMPLE = "quickstart"
 
 
 @click.command("init")
-@click.argument("path", required=False, type=click.Path(), metavar="[PATH]")
+@click.argument("path", required=False, type=PathText(), metavar="[PATH]")
 @click.option("--example", "-e", "name", default=DEFAULT_EXAMPLE, show_default=True, metavar="NAME",
               help="The shipped example to start from (--list names them).")
 @click.option("--list", "list_only", is_flag=True, help="List the shipped examples and exit.")

@@ -6,12 +6,12 @@ import sys
 
 import click
 
-from vrsweep.commands.options import OUTPUT_FLAGS, file_name_only, flag_wording, overwrite_option, quiet_option
+from vrsweep.commands.options import PathText, OUTPUT_FLAGS, file_name_only, flag_wording, overwrite_option, quiet_option
 
 
 @click.command("merge")
-@click.argument("shards", nargs=-1, required=True, metavar="SHARD.h5...", type=click.Path(dir_okay=False))
-@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True, callback=file_name_only,
+@click.argument("shards", nargs=-1, required=True, metavar="SHARD.h5...", type=PathText(dir_okay=False))
+@click.option("-o", "--output", type=PathText(dir_okay=False), required=True, callback=file_name_only,
               help="The merged result file.")
 @overwrite_option
 @click.option("--allow-missing", is_flag=True,

@@ -45,6 +45,17 @@ def say_if_compiling(is_cached, what="the numba kernel", duration="about 30 s", 
         click.echo(f"Compiling {what} ({duration}, once: later runs load {pronoun} from {cache_dir()})", err=True)
 
 
+class PathText(click.Path):
+    """click.Path that refuses an empty path: '' named no file, and each command read it as its
+    own thing (``run -o ''`` as the folder ".", ``plot -o ''`` and ``init ''`` as no -o or PATH
+    at all, ``merge -o ''`` as a write failure, exit 1)."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and value == "":
+            self.fail("an empty path names no file: give the file's name", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 set_option = click.option(
     "--set", "overrides", multiple=True, metavar="NAME=VALUE",
     help="Override a parameter (fixing it if it is swept), an integration setting, "
@@ -68,7 +79,7 @@ def file_name_only(ctx, param, value):
 
 
 output_option = click.option(
-    "-o", "--output", type=click.Path(dir_okay=False), default=None, callback=file_name_only,
+    "-o", "--output", type=PathText(dir_okay=False), default=None, callback=file_name_only,
     help="Output file (overrides the config's 'output').",
 )
 class FiniteFloatRange(click.FloatRange):
@@ -92,7 +103,7 @@ threads_option = click.option(
 )
 quiet_option = click.option("--quiet", "-q", is_flag=True, help="No progress bar or summary.")
 overwrite_option = click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
-config_argument = click.argument("config_path", metavar="CONFIG.yaml", type=click.Path(dir_okay=False))
+config_argument = click.argument("config_path", metavar="CONFIG.yaml", type=PathText(dir_okay=False))
 
 
 def capped_threads(threads):

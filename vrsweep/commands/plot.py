@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from vrsweep.commands.options import file_name_only
+from vrsweep.commands.options import PathText, file_name_only
 
 FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
@@ -40,8 +40,8 @@ def default_output(path, kind):
 
 @click.command("plot")
 @click.argument("paths", nargs=-1, required=True, metavar="FILE.h5 [FILE.h5 ...]",
-                type=click.Path(dir_okay=True))
-@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None, callback=file_name_only,
+                type=PathText(dir_okay=True))
+@click.option("-o", "--output", type=PathText(dir_okay=False), default=None, callback=file_name_only,
               help="Figure file, .png, .pdf or .svg (default: FILE.png, or FILE.KIND.png with --kind).")
 @click.option("--kind", type=click.Choice(["response", "map", "impacts", "status", "motion", "bifurcation", "lyapunov",
                                            "bifurcation+lyapunov", "trajectory", "slowflow", "basin"]),

@@ -412,6 +412,8 @@ def refuse_a_folder_name(path, argument="output") -> None:
     pathlib, which drops the slash, would write ``x.png`` for ``x.png/``) is not what was asked.
     Called where a path arrives as text (an option, an argument, a config's ``output``): a
     pathlib.Path has already lost the slash. ``argument`` is worded by the caller's flags."""
+    if isinstance(path, str) and path == "":  # Path("") is ".", the current folder
+        raise UsageError.naming("{" + argument + "} is an empty path, which names no file: give the file's name")
     if ends_in_a_folder_separator(path):
         raise UsageError.naming("{" + argument + "} {path} ends in a slash, which names a folder: give the "
                                 "file's name (without the slash)", path=path)
@@ -440,6 +442,14 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
     given = os.fspath(path)
     target = os.path.realpath(given) if os.path.islink(given) else given
     shown = given if target == given else f"{given} (a link to {target})"
+    if os.pardir in target.split(os.sep)[:-1]:
+        # "x/../y.h5": the checks below and the temporary file beside it read the folder
+        # lexically (abspath: "./y.h5"), and the system, which opens x first, refused the write
+        # where x does not exist (exit 1, after checks that had all passed) and went elsewhere
+        # where x is a link. realpath follows the links a ".." steps out of, as the system
+        # does, and drops a missing folder with its "..": the file is written where it says.
+        folder, name = os.path.split(target)
+        target = os.path.join(os.path.realpath(folder), name)
     for item in inputs:
         item = os.fspath(item)
         try:

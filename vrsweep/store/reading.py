@@ -108,6 +108,8 @@ def open_results(path, group: str | None = None):
     if not isinstance(path, (str, bytes, os.PathLike)):  # bytes: os.fspath keeps it, as it always did
         raise PathTypeError("path", path)
     path = os.fspath(path)
+    if not path:  # not "results file not found: " with nothing after it
+        raise ResultFileError("an empty path names no results file: give the file's name")
     kind = file_kind(path)
     if kind == "trajectory":
         runs, slow, root_attrs = _trajectory_groups(path)

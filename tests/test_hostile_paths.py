@@ -1,0 +1,66 @@
+"""Paths as typed: an empty one, one through '..' past a folder that is missing or a link, and
+environment variables in a config's ``output`` (docs/faults.md, "Paths")."""
+
+import os
+
+import pytest
+
+import vrsweep
+from vrsweep.errors import ResultFileError, UsageError
+
+TINY = """
+model: effective
+sweep:
+  g: [0.0, 10.0]
+integration: {transient_periods: 2, measure_periods: 16}
+"""
+
+
+@pytest.mark.parametrize("args", [
+    ("run", "CONFIG", "-o", ""), ("simulate", "CONFIG", "--set", "g=1", "-o", ""), ("continue", "CONFIG", "-o", ""),
+    ("plot", "CONFIG", "-o", ""), ("merge", "CONFIG", "-o", ""), ("init", ""), ("info", ""), ("run", ""),
+    ("validate", ""), ("merge", "", "-o", "m.h5"),
+])
+def test_an_empty_path_is_refused_by_name(tmp_path, monkeypatch, write_config, invoke, args):
+    # run -o '' wrote at "." ("output . is a directory"), plot -o '' and init '' took it as no path
+    # at all (the default figure, quickstart.yaml), merge -o '' failed writing, exit 1.
+    monkeypatch.chdir(tmp_path)
+    config = write_config(tmp_path, TINY)
+    result = invoke(*[config if a == "CONFIG" else a for a in args])
+    assert result.exit_code == 2, result.output
+    assert "an empty path names no file" in result.output, result.output
+    assert sorted(os.listdir(tmp_path)) == ["sweep.yaml"]
+
+
+def test_an_empty_path_in_the_api_is_refused(tmp_path):
+    with pytest.raises(ResultFileError, match="empty path"):
+        vrsweep.open_results("")
+    with pytest.raises(UsageError, match="output is an empty path"):
+        vrsweep.sweep(TINY, output="", progress=False)
+
+
+def test_a_path_through_a_missing_folder_and_dotdot(tmp_path, monkeypatch, invoke):
+    # x/../c.yaml: every check read the folder lexically (".") and passed; the system, which opens
+    # x first, refused (init: "directory x/.. does not exist"; run: "cannot create", exit 1).
+    monkeypatch.chdir(tmp_path)
+    result = invoke("init", "x/../c.yaml")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "c.yaml").is_file() and not (tmp_path / "x").exists()
+    result = invoke("run", "c.yaml", "--set", "g=1", "--set", "transient_periods=2",
+                    "--set", "measure_periods=16", "-o", "x/../y.h5", "-q")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "y.h5").is_file() and not (tmp_path / "x").exists()
+    assert invoke("run", "c.yaml", "--set", "g=1", "--set", "transient_periods=2",
+                  "--set", "measure_periods=16", "-o", "x/../y.h5", "-q", "--resume").exit_code == 0
+
+
+def test_a_path_through_a_link_and_dotdot_goes_where_the_system_goes(tmp_path, monkeypatch, invoke):
+    # link/../c.yaml is other/c.yaml to the system; the checks and the temporary file went to ./
+    (tmp_path / "other" / "d").mkdir(parents=True)
+    (tmp_path / "work").mkdir()
+    os.symlink(tmp_path / "other" / "d", tmp_path / "work" / "link")
+    monkeypatch.chdir(tmp_path / "work")
+    result = invoke("init", "link/../c.yaml")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "other" / "c.yaml").is_file()
+    assert sorted(os.listdir(tmp_path / "work")) == ["link"]
