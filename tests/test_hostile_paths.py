@@ -64,3 +64,24 @@ def test_a_path_through_a_link_and_dotdot_goes_where_the_system_goes(tmp_path, m
     assert result.exit_code == 0, result.output
     assert (tmp_path / "other" / "c.yaml").is_file()
     assert sorted(os.listdir(tmp_path / "work")) == ["link"]
+
+
+def test_environment_variables_in_the_config_output(tmp_path, monkeypatch, write_config, invoke):
+    # "$VRS_OUT/x.h5" made a folder named "$VRS_OUT" in the current directory (docs/config.md).
+    monkeypatch.chdir(tmp_path)
+    config = write_config(tmp_path, TINY + "output: $VRS_OUT/${VRS_NAME}_$$.h5\n")
+    monkeypatch.delenv("VRS_OUT", raising=False)
+    monkeypatch.setenv("VRS_NAME", "map")
+    for command in ("validate", "run"):
+        result = invoke(command, config, "-q") if command == "run" else invoke(command, config)
+        assert result.exit_code == 2, result.output
+        assert "sweep.yaml:6: output: '$VRS_OUT/${VRS_NAME}_$$.h5' uses the environment variable VRS_OUT, " \
+               "which is not set" in result.output, result.output
+    assert sorted(os.listdir(tmp_path)) == ["sweep.yaml"]
+    (tmp_path / "out").mkdir()
+    monkeypatch.setenv("VRS_OUT", str(tmp_path / "out"))
+    result = invoke("run", config, "-q")
+    assert result.exit_code == 0, result.output
+    assert os.listdir(tmp_path / "out") == ["map_$$.h5"]  # a $ before no name stays
+    with vrsweep.open_results(tmp_path / "out" / "map_$$.h5") as ds:
+        assert "output: \"$VRS_OUT/${VRS_NAME}_$$.h5\"" in ds.attrs["config"]  # stored as written

@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -232,6 +233,11 @@ class Continuation:
         return {key: getattr(self, key) for key in CONTINUATION_DEFAULTS}
 
 
+# $NAME or ${NAME} in a config's output (Config.output_path), and the line that sets output.
+_VARIABLE = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)\}|\$([A-Za-z_][A-Za-z0-9_]*)")
+_OUTPUT_KEY = re.compile(r"^output\s*:")
+
+
 @dataclass(frozen=True)
 class Config:
     """A validated config with every default filled in and every override applied.
@@ -311,11 +317,30 @@ class Config:
             return Path(override)
         if self.output is not None:
             # No shell reads a config: "~/results/x.h5" made a folder named "~" in the current
-            # directory (where `rm -r ~` is one slip away) and wrote the results there.
-            return Path(os.path.expanduser(self.output))
+            # directory (where `rm -r ~` is one slip away) and wrote the results there, and
+            # "$SCRATCH/x.h5" a folder named "$SCRATCH". Expanded here, where the path is used,
+            # not when the config is read: a stored config is read again on other machines.
+            return Path(self._expand_variables(os.path.expanduser(self.output)))
         if self.source_name.startswith("<"):
             return Path("vrsweep.h5")
         return Path(Path(self.source_name).stem + ".h5")
+
+    def _expand_variables(self, text: str) -> str:
+        """``$NAME`` and ``${NAME}`` replaced by the environment's values, as a shell does after
+        ``~`` (a value's own ``~`` stays); a variable that is not set is a ConfigError naming it,
+        where a shell would leave the path's start empty (``/x.h5``). Any other ``$`` is kept."""
+        def value(match):
+            name = match.group(1) or match.group(2)
+            if name not in os.environ:
+                line = next((f":{number}" for number, row in enumerate(self.source_text.splitlines(), 1)
+                             if _OUTPUT_KEY.match(row)), "")
+                from vrsweep.errors import ConfigError
+
+                raise ConfigError([f"{self.source_name}{line}: output: {show(self.output)} uses the environment "
+                                   f"variable {name}, which is not set: set it, or give the path with -o"])
+            return os.environ[name]
+
+        return _VARIABLE.sub(value, text)
 
     def to_yaml(self) -> str:
         """Canonical YAML of this config, fully resolved (defaults filled, overrides applied).
