@@ -1,5 +1,5 @@
 """Paths as typed: an empty one, one through '..' past a folder that is missing or a link, and
-environment variables in a config's ``output``: docs/faults.md, the table's rows on paths.
+environment variables in a config's ``output``: docs/faults.md, the table's rows on paths."""
 
 import os
 
