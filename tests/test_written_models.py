@@ -1010,3 +1010,10 @@ def test_a_hash_inside_a_quoted_expression_is_refused_not_taken_as_a_comment(tmp
     config.write_text(text)
     result = CliRunner().invoke(main, ["validate", str(config)])
     assert result.exit_code == 2 and "holds a '#'" in result.output and "Traceback" not in result.output
+
+
+def test_a_greek_parameter_name_is_told_to_use_latin_letters_and_a_symbol():
+    """'ζ' is a letter, and "must be a name (letters, digits and _ ...)" refused it as if not."""
+    found = problems(MODEL.replace("zeta", "ζ"))
+    assert found[0].startswith("m.yaml:3: model.parameters.ζ: must be a name in ASCII letters, digits and _, "
+                               "got 'ζ': write it in Latin letters"), found

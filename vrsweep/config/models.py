@@ -297,8 +297,12 @@ def _mathtext_problem(symbol) -> str | None:
 
 
 def _bad_name(name) -> str | None:
+    if isinstance(name, str) and name.isidentifier() and not name.isascii():
+        # 'ζ' is a letter to Python, and was refused as "must be letters, digits and _"
+        return (f"must be a name in ASCII letters, digits and _, got {show(name)}: write it in Latin letters "
+                f"(zeta) and give its typeset look under model.symbols (zeta: '\\zeta')")
     if not isinstance(name, str) or not name.isidentifier() or not name.isascii():
-        return f"must be a name (letters, digits and _, not starting with a digit), got {show(name)}"
+        return f"must be a name (ASCII letters, digits and _, not starting with a digit), got {show(name)}"
     if keyword.iskeyword(name):
         return f"{name} is a Python keyword and cannot name a parameter"
     if name in expressions.RESERVED:
