@@ -85,3 +85,22 @@ def test_environment_variables_in_the_config_output(tmp_path, monkeypatch, write
     assert os.listdir(tmp_path / "out") == ["map_$$.h5"]  # a $ before no name stays
     with vrsweep.open_results(tmp_path / "out" / "map_$$.h5") as ds:
         assert "output: \"$VRS_OUT/${VRS_NAME}_$$.h5\"" in ds.attrs["config"]  # stored as written
+
+
+@pytest.mark.parametrize("args", [("info", "PIPE"), ("plot", "PIPE"), ("merge", "PIPE", "-o", "m.h5"),
+                                  ("info", "/dev/zero"), ("plot", "/dev/zero")])
+def test_a_pipe_or_a_device_as_a_file_to_read_is_refused(tmp_path, monkeypatch, vrsweep_process, args):
+    # info FIFO waited forever inside HDF5's open; /dev/zero was "empty (0 bytes)". A real
+    # process, so that a hang is a timeout here, not a stuck test run.
+    monkeypatch.chdir(tmp_path)
+    os.mkfifo(tmp_path / "pipe")
+    process = vrsweep_process(*[tmp_path / "pipe" if a == "PIPE" else a for a in args])
+    try:
+        _, err = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert process.returncode == 2, err
+    assert "is not a regular file (a device, a pipe or a socket), so not a vrsweep file" in err, err
+    assert "Traceback" not in err
+    with pytest.raises(ResultFileError, match="not a regular file"):
+        vrsweep.open_results(tmp_path / "pipe")

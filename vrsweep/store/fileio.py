@@ -76,13 +76,33 @@ def hdf5_locking_kwargs() -> dict:
     return {"locking": "best-effort"}
 
 
+def refuse_a_special_file(path) -> None:
+    """ResultFileError for a path that is there but is no regular file nor folder: HDF5 waited
+    forever on a pipe (``vrsweep info FIFO`` hung), and a device or a /proc file, whose size reads
+    0, was called "empty (0 bytes): truncated or never written"."""
+    import stat
+
+    from vrsweep.errors import ResultFileError
+
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return  # missing or unreadable: the caller's own message says which
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise ResultFileError(f"{os.fsdecode(path)} is not a regular file (a device, a pipe or a socket), "
+                              "so not a vrsweep file")
+
+
 def open_hdf5(path, mode="r", **kwargs) -> h5py.File:
     """``h5py.File(path, mode, **kwargs)`` with vrsweep's locking policy (hdf5_locking_kwargs).
 
     On an HDF5 without the locking property the file is opened without it: HDF5 then locks as it
-    always did, and ``HDF5_USE_FILE_LOCKING=FALSE`` still switches locking off.
+    always did, and ``HDF5_USE_FILE_LOCKING=FALSE`` still switches locking off. Every reader and
+    writer of vrsweep opens its files here, so a pipe or a device is refused here for all.
     """
     global _locking_argument_supported
+    if isinstance(path, (str, bytes, os.PathLike)):
+        refuse_a_special_file(path)
     locking = hdf5_locking_kwargs()
     if locking:
         try:

@@ -16,7 +16,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError
-from vrsweep.store.fileio import open_hdf5
+from vrsweep.store.fileio import open_hdf5, refuse_a_special_file
 from vrsweep.store.layout import (
     BOOKKEEPING, FORMAT_VERSION, VariableSpec, clean_attrs, decode, point_label, point_variables_of, scale_names,
 )
@@ -38,6 +38,7 @@ def open_checked(path, mode="r"):
         raise ResultFileError(f"results file not found: {path}")
     if os.path.isdir(path):
         raise ResultFileError(f"{path} is a directory, not a results file")
+    refuse_a_special_file(path)
     if os.path.getsize(path) == 0:
         raise ResultFileError(f"{path} is empty (0 bytes): truncated or never written")
     try:
