@@ -249,6 +249,10 @@ def test_the_synopsis_names_every_option_and_kind():
             missing += [f"vrsweep {name} {names[0]} {c}" for c in choices
                         if not re.search(r"(?<![\w+])" + re.escape(c) + r"(?![\w+])", lines)]
     assert not missing, f"not in docs/commands.md's Synopsis: {missing}"
+    for name, lines in synopsis.items():  # and nothing there that the command lacks
+        known = {o for p in main.commands[name].params for o in p.opts + p.secondary_opts}
+        listed = set(re.findall(r"(?<![\w-])(--?[a-zA-Z][\w-]*)", lines))
+        assert listed <= known, f"vrsweep {name}: the Synopsis lists {sorted(listed - known)}, which it lacks"
 
 
 @pytest.mark.parametrize("name", sorted(main.commands))
