@@ -104,3 +104,23 @@ def test_a_pipe_or_a_device_as_a_file_to_read_is_refused(tmp_path, monkeypatch, 
     assert "Traceback" not in err
     with pytest.raises(ResultFileError, match="not a regular file"):
         vrsweep.open_results(tmp_path / "pipe")
+
+
+@pytest.mark.parametrize("args", [("run", "CONFIG", "-o", "out.h5/."), ("plot", "CONFIG", "-o", "fig.png/."),
+                                  ("simulate", "CONFIG", "--set", "g=1", "-o", "t.h5/.")])
+def test_a_path_ending_in_slash_dot_names_a_folder(tmp_path, monkeypatch, write_config, invoke, args):
+    # pathlib drops a trailing '/.' as it drops '/': run -o out.h5/. wrote a file out.h5
+    monkeypatch.chdir(tmp_path)
+    config = write_config(tmp_path, TINY)
+    result = invoke(*[config if a == "CONFIG" else a for a in args])
+    assert result.exit_code == 2, result.output
+    assert "ends in '/.', which names a folder" in result.output, result.output
+    assert sorted(os.listdir(tmp_path)) == ["sweep.yaml"]
+
+
+def test_a_config_output_ending_in_slash_dot_names_a_folder(tmp_path, write_config, invoke):
+    config = write_config(tmp_path, TINY + "output: out.h5/.\n")
+    result = invoke("validate", config)
+    assert result.exit_code == 2, result.output
+    assert "sweep.yaml:6: output: must name a file, got 'out.h5/.', which ends in '/.' (a folder): give the " \
+           "file's name, e.g. out.h5/results.h5" in result.output, result.output

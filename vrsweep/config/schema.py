@@ -397,10 +397,12 @@ def _check_path(value: str) -> str:
         raise PydanticCustomError("bad_path", "must be a file path, got a string containing a NUL character")
     if any("\ud800" <= char <= "\udfff" for char in value):
         raise PydanticCustomError("bad_path", "must be a file path, got a string with an unpaired surrogate")
-    if value.endswith(("/", os.sep)):  # a folder: Path() drops the slash and a file of its name was written
+    if value.endswith(("/", os.sep, "/.", os.sep + ".")):  # a folder: Path() drops the slash (and a '/.') and a file of its name was written
+        folder = value[:-1] if value.endswith(".") else value
+        ending = "'/.'" if value.endswith(".") else "a slash"
         raise PydanticCustomError("bad_path", "{message}", {"message": (
-            f"must name a file, got {show(value)}, which ends in a slash (a folder): give the file's name, "
-            f"e.g. {value}{'results.h5' if value.strip('/') else ''}")})
+            f"must name a file, got {show(value)}, which ends in {ending} (a folder): give the file's name, "
+            f"e.g. {folder}{'results.h5' if folder.strip('/') else ''}")})
     return value
 
 

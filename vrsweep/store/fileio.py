@@ -423,8 +423,12 @@ def reserve_space(fd, length, offset=0) -> None:
 
 
 def ends_in_a_folder_separator(path) -> bool:
-    """Whether ``path``, as typed, ends in ``/`` (or the system's other separator)."""
-    return isinstance(path, str) and path.endswith(tuple(sep for sep in (os.sep, os.altsep) if sep))
+    """Whether ``path``, as typed, ends in ``/`` (or the system's other separator), or in a ``/.``
+    that pathlib drops too (``-o x.h5/.`` wrote a file ``x.h5``): either way it names a folder."""
+    if not isinstance(path, str):
+        return False
+    separators = tuple(sep for sep in (os.sep, os.altsep) if sep)
+    return path.endswith(separators) or any(path.endswith(sep + ".") for sep in separators)
 
 
 def refuse_a_folder_name(path, argument="output") -> None:
@@ -435,8 +439,10 @@ def refuse_a_folder_name(path, argument="output") -> None:
     if isinstance(path, str) and path == "":  # Path("") is ".", the current folder
         raise UsageError.naming("{" + argument + "} is an empty path, which names no file: give the file's name")
     if ends_in_a_folder_separator(path):
-        raise UsageError.naming("{" + argument + "} {path} ends in a slash, which names a folder: give the "
-                                "file's name (without the slash)", path=path)
+        ending = "'/.'" if path.endswith(".") else "a slash"
+        raise UsageError.naming("{" + argument + "} {path} ends in " + ending + ", which names a folder: give the "
+                                "file's name (without the " + ("'/.'" if path.endswith(".") else "slash") + ")",
+                                path=path)
 
 
 def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None,
