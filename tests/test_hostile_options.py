@@ -251,6 +251,21 @@ def test_measure_periods_beyond_ulimit_is_one_line(tmp_path, write_config):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("command", [["validate"], ["run", "--dry-run"], ["run", "--allow-large"]])
+def test_a_grid_too_large_to_order_is_one_line(tmp_path, write_config, invoke, command):
+    """Three axes of 3000 values, 2.7e10 points: ordering them (config/grid.py shuffled_lines, 24
+    bytes a point, measured 24.1) needs 648 GB before any point runs. `run --dry-run` ended in
+    "out of memory", exit 1; it is refused first, with the remedy, on any machine."""
+    config = write_config(tmp_path, "sweep:\n  g: {start: 1, stop: 30, num: 3000}\n"
+                                    "  Omega: {start: 1, stop: 6, num: 3000}\n  c: {start: 0.05, stop: 0.2, num: 3000}\n")
+    out = tmp_path / "out.h5"
+    result = invoke(command[0], config, *command[1:], *(["-o", out] if command[0] == "run" else []))
+    _one_error_line(result)
+    assert "27000000000 points needs 648.0 GB to order its points" in result.output, result.output
+    assert "use fewer values on the axes" in result.output
+    assert not out.exists()
+
+
 # ---------------------------------------------------------------------------------------------
 # The Python API
 # ---------------------------------------------------------------------------------------------

@@ -166,15 +166,26 @@ def beyond_int64_problem(config) -> str | None:
             f"point's index or a file's size can be ({INT64_MAX}, int64): use fewer values on the axes")
 
 
+# Bytes a grid point costs to order before any is run, in every process, shard or not
+# (config/grid.py shuffled_lines): its flat index, the shuffled copy, the permutation of lines.
+ORDERING_BYTES_PER_POINT = 24
+
+
 def memory_problem(config, threads=None) -> str | None:
     """Why the run cannot fit in the memory this process may use (one line), or None. Not a
-    matter of --allow-large: a run past it would end in an allocation failure."""
-    held = memory_bytes(config, threads)
+    matter of --allow-large: a run past it would end in an allocation failure. What it holds: one
+    chunk's per-period records (memory_bytes) and the ordering of the whole grid's points."""
+    records = memory_bytes(config, threads)
+    ordering = ORDERING_BYTES_PER_POINT * config.n_runs
     limit, whose = memory_allowance()
-    if held <= limit:
+    if records + ordering <= limit:
         return None
+    if ordering >= records:  # three axes of 3000 values: 27e9 points ended "out of memory", exit 1
+        return (f"{config.source_name}: a grid of {config.n_runs} points needs {format_bytes(ordering)} "
+                f"to order its points ({ORDERING_BYTES_PER_POINT} bytes a point, in every shard), more than "
+                f"the {format_bytes(limit)} {whose}: use fewer values on the axes")
     return (f"{config.source_name}: measure_periods = {config.integration.measure_periods} needs "
-            f"{format_bytes(held)} of per-period records at once, more than the {format_bytes(limit)} "
+            f"{format_bytes(records)} of per-period records at once, more than the {format_bytes(limit)} "
             f"{whose}: lower integration.measure_periods")
 
 
