@@ -31,6 +31,17 @@ def test_a_bad_dask_address_is_worded_without_the_flag():
     assert str(caught.value.as_option("--dask")) == "--dask local:0: expected local:N with N >= 1 workers (e.g. local:4)"
 
 
+def test_the_advice_for_steps_too_small_names_extreme_parameters_too():
+    """c = 1e300 ends every point step_too_small; loosening the tolerances, the only advice, cannot help."""
+    from types import SimpleNamespace
+
+    from vrsweep.execution.job import _remedy
+
+    advice, setting = _remedy(Status.STEP_TOO_SMALL, SimpleNamespace(rtol=1e-9, atol=1e-11))
+    assert advice.startswith("loosen integration.rtol/atol (now 1e-09/1e-11), unless the parameters") and setting is None
+    assert "extreme" in advice
+
+
 def test_failure_advice_is_data_the_command_words():
     from types import SimpleNamespace
 

@@ -43,7 +43,10 @@ def _remedy(status, run):
         return (f"if the motion is bounded, raise integration.divergence_bound (now {run.divergence_bound:g}); "
                 "otherwise these parameters blow up", None)
     if status == Status.STEP_TOO_SMALL:
-        return f"loosen integration.rtol/atol (now {run.rtol:g}/{run.atol:g})", None
+        # The step fell below what a double can add to t: a tolerance the motion's scale cannot
+        # meet, or a scale no tolerance meets (c = 1e300 makes every step too small).
+        return (f"loosen integration.rtol/atol (now {run.rtol:g}/{run.atol:g}), unless the parameters there are "
+                "extreme (a force of 1e300 moves beyond what doubles integrate, at any tolerance)", None)
     return "check the parameters of those points (vrsweep info FILE lists them)", None
 
 
