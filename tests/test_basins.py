@@ -86,9 +86,9 @@ def test_continuation_along_a_parameter_with_x0_axes_is_allowed():
     assert config.axes[0].continuation == "up"
 
 
-def test_x0_at_or_above_the_barrier_is_refused():
-    with pytest.raises(ConfigError, match=r"sweep.x0: every x0 must be below parameters.Delta = 1.0"):
-        parse_config(SHORT + "sweep: {x0: [0, 1.0]}\n")
+def test_x0_above_the_barrier_is_refused():
+    with pytest.raises(ConfigError, match=r"sweep.x0: every x0 must be at or below parameters.Delta = 1.0"):
+        parse_config(SHORT + "sweep: {x0: [0, 1.01]}\n")
     # With x0 swept, initial.x is not used: above the barrier it does not matter.
     config = parse_config(SHORT.replace("Omega: 4.0}", "Omega: 4.0, Delta: 2}")
                           + "initial: {x: 5}\nsweep: {x0: [0, 1.5]}\n")

@@ -94,7 +94,7 @@ def test_bad_config_exit_2_with_every_problem_and_its_line(tmp_path, monkeypatch
     result, output = invoke("validate", "fig1.yaml")
     assert result.exit_code == 2, output
     assert "fig1.yaml:3: parameters.e: must be in (0, 1], got 1.5" in output
-    assert "fig1.yaml:4: parameters.Delta: must be above initial.x = 0.99" in output
+    assert "fig1.yaml:4: parameters.Delta: must be at or above initial.x = 0.99" in output
     assert "fig1.yaml:6: sweep.gg: not a parameter (did you mean 'g'?)" in output
     assert "fig1.yaml:7: sweep.g.stop: must be >= start" in output
     assert "fig1.yaml:9: integration.rtoll: unknown key (did you mean 'rtol'?)" in output

@@ -374,13 +374,13 @@ def test_a_tilde_in_the_configs_output_is_the_home_folder(monkeypatch, tmp_path)
 
 def test_override_breaking_a_cross_field_rule():
     assert_words(only_problem("", overrides=["Delta=0.5"]), "--set Delta=0.5: parameters.Delta",
-                 "above initial.x")
+                 "at or above initial.x")
 
 
 def test_override_is_blamed_for_a_broken_rule_even_if_the_file_set_the_other_field():
     assert only_problem("parameters: {Delta: 1.2}\n", overrides=["initial.x=1.3"]) == (
-        "--set initial.x=1.3: initial.x: must be below parameters.Delta = 1.2 "
-        "(the mass starts below the barrier), got 1.3")
+        "--set initial.x=1.3: initial.x: must be at or below parameters.Delta = 1.2 "
+        "(the mass starts below or on the barrier), got 1.3")
     assert_words(only_problem("integration: {strobe_periods: 10}\n", overrides=["measure_periods=5"]),
                  "--set measure_periods=5: integration.measure_periods: must be >= integration.strobe_periods = 10")
 

@@ -142,7 +142,7 @@ def test_a_written_model_is_read_with_its_parameters():
     (("zeta: 0.05", "x: 0.05"), "m.yaml:3: model.parameters.x: x is taken"),
     (("r: 0.8}", "r: 1.5}"), "m.yaml:5: model.barriers[0].restitution: must be in [0, 1]"),
     (("omega: 0.8", "omega: -0.8"), "m.yaml:6: model.period: must be > 0 and finite, got -7.85"),
-    (("x: 0.0,", "x: 1.5,"), "m.yaml:8: initial.x: must be below model.barriers[0]"),
+    (("x: 0.0,", "x: 1.5,"), "m.yaml:8: initial.x: must be below or on model.barriers[0]"),
     (("acceleration:", "acceleraton:"), "m.yaml:2: model.acceleraton: unknown key (did you mean 'acceleration'?)"),
 ])
 def test_bad_models_name_the_file_line_and_field(change, expected):
@@ -203,7 +203,7 @@ def test_a_start_the_user_never_wrote_is_called_the_default():
     initial.x = 0.99 named a value the config does not hold."""
     text = MODEL.replace("initial: {x: 0.0, v: 0.0}\n", "").replace("Delta: 1.2", "Delta: 0.5")
     (problem,) = problems(text)
-    assert problem.startswith("m.yaml:1: initial.x: must be below model.barriers[0]"), problem
+    assert problem.startswith("m.yaml:1: initial.x: must be below or on model.barriers[0]"), problem
     assert "the config gives no initial.x, and the default start is the paper's (x, v) = (0.99, 0.5)" in problem
     (problem,) = problems(MODEL.replace("x: 0.0,", "x: 1.5,"))
     assert "default" not in problem, problem

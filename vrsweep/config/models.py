@@ -333,7 +333,7 @@ def _follows_the_period(model: WrittenModel) -> bool:
 
 
 def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, initial: dict, swept_initial: dict,
-                        initial_given=True):
+                        initial_given=True, velocity_given=True):
     """The rules a written model's values must keep at every grid point (or along each axis through
     the fixed values, for a grid beyond FULL_CHECK_POINTS): each reported once, at the model's field.
 
@@ -403,20 +403,40 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
         x_values = swept_initial.get("x0", initial.get("x"))
         if x_values is None:
             return
+        v_values = swept_initial.get("v0", initial.get("v"))
         for index, barrier in enumerate(model.barriers):
             position = header[f"barriers.{index}.position"]
-            x = np.asarray(x_values, dtype=np.float64)
-            if barrier.side == "above":
-                inside = (np.max(x) < position) if x.ndim else (x < position)
-            else:
-                inside = (np.min(x) > position) if x.ndim else (x > position)
-            found = first_bad(np.where(inside, 1.0, -1.0), lambda a: a > 0)
+            side = 1.0 if barrier.side == "above" else -1.0
+            # The start nearest the barrier, measured towards it (x for a barrier above, -x below).
+            nearest = float(np.max(side * np.asarray(x_values, dtype=np.float64)))
+            found = first_bad(side * position, lambda level: nearest <= level)
             if found is not None:
                 field = "sweep.x0" if "x0" in swept_initial else "initial.x"
                 relation = "below" if barrier.side == "above" else "above"
                 report(("sweep", "x0") if "x0" in swept_initial else ("initial", "x"),
-                       f"must be {relation} model.barriers[{index}] (the mass starts between its barriers), "
-                       f"got {field} = {show(float(np.max(x) if barrier.side == 'above' else np.min(x)))} and the "
-                       f"barrier at {show(float(np.broadcast_to(position, np.shape(position) or (1,)).reshape(-1)[0]))}"
+                       f"must be {relation} or on model.barriers[{index}] (the mass starts between its barriers), "
+                       f"got {field} = {show(side * nearest)} and the barrier at {show(side * found[0])}"
                        f"{found[1]}{'' if initial_given or 'x0' in swept_initial else _DEFAULT_START}")
+                return
+            if v_values is None:
+                continue  # reported at the velocity itself
+            # On the barrier the mass may rest or move away (a rebound's or a release's state);
+            # moving into it, it is the state just before an impact, which has no after.
+            into = float(np.max(side * np.asarray(v_values, dtype=np.float64)))
+            found = first_bad(side * position, lambda level: (nearest < level) | (into <= 0.0))
+            if found is not None and "v0" not in swept_initial and not velocity_given:
+                report(("sweep", "x0") if "x0" in swept_initial else ("initial", "x"),
+                       f"must be {'below' if side > 0 else 'above'} model.barriers[{index}], or on it only at rest "
+                       f"or moving away: the config gives no initial.v, and the default {show(side * into)} moves "
+                       f"into the barrier (the instant before an impact, not a state), got the barrier at "
+                       f"{show(side * found[0])}{found[1]}")
+                return
+            if found is not None:
+                field = "sweep.v0" if "v0" in swept_initial else "initial.v"
+                start = "sweep.x0 reaches" if "x0" in swept_initial else "initial.x is on"
+                sign = "<=" if barrier.side == "above" else ">="
+                report(("sweep", "v0") if "v0" in swept_initial else ("initial", "v"),
+                       f"must be {sign} 0 where the mass starts on a barrier ({start} model.barriers[{index}] at "
+                       f"{show(side * found[0])}{found[1]}): a velocity into the barrier is the instant before an "
+                       f"impact, not a state; give the velocity after it, got {field} = {show(side * into)}")
                 return

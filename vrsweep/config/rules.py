@@ -34,28 +34,33 @@ class CrossFieldRules:
 
         sweep = data.get("sweep") if isinstance(data.get("sweep"), dict) else {}
         x = _valid(initial, "x", INITIAL_DEFAULTS, INITIAL_DOMAINS)
+        v = _valid(initial, "v", INITIAL_DEFAULTS, INITIAL_DOMAINS)
         if isinstance(self.model, WrittenModel):
-            self.check_written_rules(parameters, initial, sweep, axes, x)
+            self.check_written_rules(parameters, initial, sweep, axes, x, v)
         elif "x0" in sweep:
             if "x0" in axes:
                 self.check_x0_axis(axes["x0"][0], axes["Delta"][0] if "Delta" in axes else None,
                                    None if "Delta" in sweep else
                                    _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS))
+                self.check_start_on_barrier(float(np.max(axes["x0"][0])), sweep, axes, parameters, initial, v)
         elif x is not None:
             if "Delta" in sweep:
                 if "Delta" in axes:
                     self.check_delta_axis(axes["Delta"], sweep["Delta"], x)
             else:
                 delta = _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS)
-                if delta is not None and not delta > x:
+                if delta is not None and not delta >= x:
                     if self.blame(("parameters", "Delta"), ("initial", "x"), "Delta" in parameters, "x" in initial):
                         self.report(("parameters", "Delta"),
-                                    f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
-                                    f"got {show(delta)}")
+                                    f"must be at or above initial.x = {show(x)} (the mass starts below or on the "
+                                    f"barrier), got {show(delta)}")
                     else:
                         self.report(("initial", "x"),
-                                    f"must be below parameters.Delta = {show(delta)} (the mass starts below "
-                                    f"the barrier), got {show(x)}")
+                                    f"must be at or below parameters.Delta = {show(delta)} (the mass starts below "
+                                    f"or on the barrier), got {show(x)}")
+                    x = None
+            if x is not None:
+                self.check_start_on_barrier(x, sweep, axes, parameters, initial, v)
 
         strobe = _valid(integration, "strobe_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
         measure = _valid(integration, "measure_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
@@ -75,7 +80,7 @@ class CrossFieldRules:
             self.report(("sweep", name, "continuation"),
                         f"only one axis may have continuation, and sweep.{with_continuation[0]} has it")
 
-    def check_written_rules(self, parameters, initial, sweep, axes, x):
+    def check_written_rules(self, parameters, initial, sweep, axes, x, v):
         """A written model's rules at the grid's points (config/models.check_written_model), once
         every value they read is valid on its own."""
         fixed = {}
@@ -84,12 +89,12 @@ class CrossFieldRules:
             if value is None and name not in axes:
                 return  # reported at the parameter itself
             fixed[name] = value
-        if any(name in sweep and name not in axes for name in self.parameter_names + ("x0",)):
+        if any(name in sweep and name not in axes for name in self.parameter_names + ("x0", "v0")):
             return  # a broken axis is reported on its own
         swept = {name: values for name, (values, _, _) in axes.items() if name in self.parameter_names}
         swept_initial = {name: axes[name][0] for name in ("x0", "v0") if name in axes}
-        check_written_model(self.report, self.model, fixed, swept, {"x": x}, swept_initial,
-                            initial_given="x" in initial)
+        check_written_model(self.report, self.model, fixed, swept, {"x": x, "v": v}, swept_initial,
+                            initial_given="x" in initial, velocity_given="v" in initial)
 
     def check_continuation_start(self, parameters, section):
         """continuation.from inside the model's domain (config/domains.py, the rule every point of
@@ -121,28 +126,54 @@ class CrossFieldRules:
         highest = float(np.max(x0_values))
         if delta_values is not None:
             lowest = float(np.min(delta_values))
-            if not lowest > highest:
-                self.report(("sweep", "x0"), f"every x0 must be below every swept Delta (the mass starts below "
-                                             f"the barrier), got x0 up to {show(highest)} and Delta from "
-                                             f"{show(lowest)}")
-        elif delta is not None and not delta > highest:
-            self.report(("sweep", "x0"), f"every x0 must be below parameters.Delta = {show(delta)} (the mass "
-                                         f"starts below the barrier), got {show(highest)}")
+            if not lowest >= highest:
+                self.report(("sweep", "x0"), f"every x0 must be at or below every swept Delta (the mass starts "
+                                             f"below or on the barrier), got x0 up to {show(highest)} and Delta "
+                                             f"from {show(lowest)}")
+        elif delta is not None and not delta >= highest:
+            self.report(("sweep", "x0"), f"every x0 must be at or below parameters.Delta = {show(delta)} (the "
+                                         f"mass starts below or on the barrier), got {show(highest)}")
+
+    def check_start_on_barrier(self, x, sweep, axes, parameters, initial, v):
+        """A start on the barrier (x = Delta) rests or moves away from it: the state after a rebound
+        or a release. Moving into it (v > 0) is the instant before an impact, which has no after."""
+        if "Delta" in sweep:
+            if "Delta" not in axes:
+                return  # reported at the axis
+            on = bool(np.any(np.asarray(axes["Delta"][0], dtype=np.float64) == x))
+        else:
+            delta = _valid(parameters, "Delta", DEFAULT_PARAMETERS, PARAMETER_DOMAINS)
+            on = delta is not None and delta == x
+        velocities = axes["v0"][0] if "v0" in axes else (None if "v0" in sweep else v)
+        if not on or velocities is None:
+            return
+        into = float(np.max(velocities))
+        if into > 0.0 and "v0" not in axes and "v" not in initial:
+            self.report(("sweep", "x0") if "x0" in axes else ("initial", "x"),
+                        f"must be below parameters.Delta = {show(x)}, or on it only at rest or moving away: the "
+                        f"config gives no initial.v, and the default {show(into)} moves into the barrier (the "
+                        f"instant before an impact, not a state), got {show(x)}")
+        elif into > 0.0:
+            field = "sweep.v0" if "v0" in axes else "initial.v"
+            self.report(("sweep", "v0") if "v0" in axes else ("initial", "v"),
+                        f"must be <= 0 where the mass starts on the barrier (x = Delta = {show(x)}): a velocity "
+                        f"into the barrier is the instant before an impact, not a state; give the velocity after "
+                        f"it, got {field} = {show(into)}")
 
     def check_delta_axis(self, axis, spec, x):
         values, _, kind = axis
         if kind == "linear":
-            if not values[0] > x:  # start is the lowest value
+            if not values[0] >= x:  # start is the lowest value
                 self.report(("sweep", "Delta", "start"),
-                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
-                            f"got {show(float(values[0]))}")
+                            f"must be at or above initial.x = {show(x)} (the mass starts below or on the "
+                            f"barrier), got {show(float(values[0]))}")
             return
         item_path = ("sweep", "Delta") if kind == "list" else ("sweep", "Delta", "values")
         for index, value in enumerate(values):
-            if not value > x:
+            if not value >= x:
                 self.report(item_path + (index,),
-                            f"must be above initial.x = {show(x)} (the mass starts below the barrier), "
-                            f"got {show(float(value))}")
+                            f"must be at or above initial.x = {show(x)} (the mass starts below or on the "
+                            f"barrier), got {show(float(value))}")
 
 
 def _section(data, name) -> dict:
