@@ -21,6 +21,7 @@ from scipy.optimize import brentq
 from vrsweep.config import parse_config
 from vrsweep.errors import ConfigError
 from vrsweep.numerics import kernel
+from vrsweep.numerics.coefficients import SCAN_STEP
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.trajectory import settings_vector, simulate
 from vrsweep.results import Status
@@ -269,3 +270,32 @@ def test_a_start_on_a_barrier_with_the_default_velocity_blames_the_position_writ
         parse_config(text, "m.yaml")
     (problem,) = caught.value.problems
     assert problem.startswith(expected), problem
+
+
+DIP = LINEAR.replace('"-2*zeta*v - x + F*cos(omega*t + phi)"', '"-2*zeta*v - x + F*cos(omega*t + phi) + F2*cos(9*omega*t)"') \
+    .replace("phi: 0.0, Delta: 0.5", "phi: 0.0, F2: 0.3, Delta: 0.64")
+
+
+def test_the_release_scan_follows_the_fastest_forcing_not_the_step_cap():
+    """-Delta + cos(omega t) + 0.3 cos(9 omega t) at rest on the stop turns negative for 0.031 rad
+    of omega t at a time (0.3482-0.3794, 5.9038-5.9350), shorter than the scan of max_step / 8 =
+    T / 64 = 0.098 rad: the mass stayed stuck through both (stuck_fraction 0.216 for 0.196).
+    Now the scan is 1/64 of the shortest forcing period, 2 pi / (9 omega), as the paper's models'
+    is: every stick ends where that force turns negative, and none holds a moment where it is."""
+    config, run = _run(DIP, 0, 6)
+    p = config.parameters
+    T = 2 * math.pi / p["omega"]
+
+    def force(t):
+        return -p["Delta"] + p["F"] * np.cos(p["omega"] * t) + p["F2"] * np.cos(9 * p["omega"] * t)
+
+    assert run.status == Status.OK and len(run.sticks) > 6
+    for start, end in run.sticks[:-1]:  # the last one may last to the run's end
+        inside = np.linspace(start, end, 20000)[1:-1]
+        assert np.all(force(inside) > 0.0), (start, end)
+        assert force(end) == pytest.approx(0.0, abs=1e-12) and force(end + 1e-6) < 0.0
+    phases = np.mod(p["omega"] * run.sticks[:-1, 1], 2 * math.pi)
+    roots = [brentq(lambda u: force(u / p["omega"]), a, b, xtol=1e-14) for a, b in ((0.34, 0.35), (5.90, 5.91))]
+    assert np.min(np.abs(phases[:, None] - np.array(roots)[None, :])) < 1e-9  # a short pull releases it
+    vectors = kernels_for(config.model).coefficients(config.parameters)
+    assert vectors[SCAN_STEP] == pytest.approx(2 * math.pi / (9 * p["omega"]) / 64, rel=1e-15)

@@ -14,6 +14,8 @@ paper's two models (model.py, kernel.py, lines.py) and for a written one (writte
 
 from __future__ import annotations
 
+import numpy as np
+
 from vrsweep.numerics import kernel, lines, rhs
 from vrsweep.numerics.model import MODELS, kernel_coefficients
 from vrsweep.numerics.written import WrittenModel
@@ -70,13 +72,22 @@ class WrittenKernels:
 
     def coefficients(self, parameters):
         from vrsweep.numerics import codegen
-        from vrsweep.numerics.coefficients import HARMONIC, N_HEADER
+        from vrsweep.numerics.coefficients import HARMONIC, N_HEADER, SCAN_STEP, STICK_SCAN_FRACTION
         from vrsweep.numerics.written import coefficients
 
         vectors = coefficients(self.model, parameters)
+        module = codegen.compiled(self.model)
         # The frequencies whose phases dop853 rotates: found in the equation when it was generated.
-        vectors[..., HARMONIC:HARMONIC + 2] = codegen.compiled(self.model).harmonic_frequencies(
-            vectors[..., N_HEADER:])
+        vectors[..., HARMONIC:HARMONIC + 2] = module.harmonic_frequencies(vectors[..., N_HEADER:])
+        # The release scan of a stuck mass steps 1/64 of the shortest forcing period, as the paper's
+        # models do: max_step / 8 alone (T / 64 by default) stepped over a pull of cos(9 omega t)
+        # that lasted 0.03 rad, and the mass stayed stuck (stuck_fraction 0.216 for 0.196).
+        frequencies = np.abs(module.forcing_frequencies(vectors[..., N_HEADER:]))
+        if frequencies.shape[-1]:
+            fastest = np.max(frequencies, axis=-1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                scan = np.where(fastest > 0.0, STICK_SCAN_FRACTION * (2.0 * np.pi) / fastest, np.inf)
+            vectors[..., SCAN_STEP] = np.minimum(vectors[..., SCAN_STEP], scan)
         return vectors
 
     def forcing_frequencies(self, vectors):
