@@ -385,6 +385,14 @@ def test_override_is_blamed_for_a_broken_rule_even_if_the_file_set_the_other_fie
                  "--set measure_periods=5: integration.measure_periods: must be >= integration.strobe_periods = 10")
 
 
+def test_a_measure_window_below_the_default_strobe_periods_names_that_default():
+    """measure_periods: 10 alone was refused as below "integration.strobe_periods = 16", a key the
+    config never wrote: the message says it is the default and what to set."""
+    assert only_problem("integration: {measure_periods: 10}\n").endswith(
+        "integration.measure_periods: must be >= integration.strobe_periods = 16 (its default; set "
+        "integration.strobe_periods <= 10 for a shorter window), got 10")
+
+
 def test_override_name_in_the_wrong_form_gets_a_hint():
     assert_words(only_problem("", overrides=["x=0.5"]), "--set x=0.5: unknown name 'x' (did you mean initial.x?)")
 

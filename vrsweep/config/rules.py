@@ -70,8 +70,12 @@ class CrossFieldRules:
                 self.report(("integration", "strobe_periods"),
                             f"must be <= integration.measure_periods = {measure}, got {strobe}")
             else:
+                # strobe_periods unset: name its default, which the user never wrote (measure_periods: 10
+                # was refused as below "integration.strobe_periods = 16" with no strobe_periods in sight)
+                default = "" if "strobe_periods" in integration else \
+                    f" (its default; set integration.strobe_periods <= {measure} for a shorter window)"
                 self.report(("integration", "measure_periods"),
-                            f"must be >= integration.strobe_periods = {strobe}, got {measure}")
+                            f"must be >= integration.strobe_periods = {strobe}{default}, got {measure}")
 
         self.check_continuation_start(parameters, _section(data, "continuation"))
 
