@@ -291,8 +291,16 @@ def test_override_of_the_continuation_section():
                                            "continuation.max_step=0.05", "continuation.switch=true"])
     section = config.continuation
     assert (section.start, section.low, section.high, section.max_step, section.switch) == (30.0, 18.0, 40.0, 0.05, True)
-    assert only_problem(text, overrides=["continuation.to=18"]) == \
-        "--set continuation.to=18: expected LOW,HIGH, e.g. --set continuation.to=20,27"
+    # the range as the config writes it, [LOW, HIGH], as well (it was split at its comma and read as
+    # the scalars "[18" and " 40]": "VALUE is not a YAML scalar (expected ',' or ']', but got
+    # '<stream end>')")
+    for written in ("[18, 40]", " [18,40] "):
+        bracketed = parse_config(text, overrides=[f"continuation.to={written}"]).continuation
+        assert (bracketed.low, bracketed.high) == (18.0, 40.0)
+    for wrong in ("18", "[18]", "18,30,40", "[18,]", ""):
+        assert only_problem(text, overrides=[f"continuation.to={wrong}"]) == (
+            f"--set continuation.to={wrong}: continuation.to: expected two numbers LOW,HIGH, e.g. --set "
+            f"continuation.to=20,27 or '[20, 27]', got {wrong.strip()!r}")
     assert only_problem(text, overrides=["continuation.max_step=-1"]) == \
         "--set continuation.max_step=-1: continuation.max_step: must be > 0, got -1.0"
     # max_period is an integration key too: without the section's name it stays the integration's

@@ -124,6 +124,28 @@ def same_config(stored_text: str, config: Config) -> bool:
     return dataclasses.replace(stored, output=config.output, continuation=config.continuation) == config
 
 
+
+# What --set continuation.to takes: the pair as the config writes it, [20, 27], or bare, 20,27.
+RANGE_EXPECTED = "continuation.to: expected two numbers LOW,HIGH, e.g. --set continuation.to=20,27 or '[20, 27]'"
+
+
+def _range_value(text):
+    """[low, high] of a --set continuation.to VALUE: "20,27" or the config's own "[20, 27]".
+    Each part is a YAML scalar (the schema then says which is not a number); anything else is one
+    ValueError naming the field and what it takes (a "[20, 27]" was split at its comma and read
+    as the scalars "[20" and " 27]", refused as "not a YAML scalar (expected ',' or ']', but got
+    '<stream end>')", up to 0.7.1)."""
+    inner = text.strip()
+    if inner.startswith("[") and inner.endswith("]"):
+        inner = inner[1:-1]
+    parts = inner.split(",")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return [parse_scalar(part) for part in parts]
+    except ValueError:
+        raise ValueError(f"{RANGE_EXPECTED}, got {text.strip()!r}") from None
+
 class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
     """One validation run: reads the YAML, applies overrides, collects problems, builds the Config."""
 
@@ -245,11 +267,7 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
                 continue
             try:
                 if targets[name] == ("continuation", "to"):
-                    # The range is a pair: --set continuation.to=17.8,17.9
-                    parts = value_text.split(",")
-                    if len(parts) != 2:
-                        raise ValueError("expected LOW,HIGH, e.g. --set continuation.to=20,27")
-                    value = [parse_scalar(part) for part in parts]
+                    value = _range_value(value_text)
                 else:
                     value = parse_scalar(value_text)
             except ValueError as error:
