@@ -79,6 +79,16 @@ START_STROBE_PERIODS = 64
 # 1e-4 from its fixed point after 200 periods; the period found is only Newton's candidate, and
 # Newton's convergence on P^p is what proves the orbit.
 START_PERIOD_TOLERANCE = 1e-3
+# _graze_between's verdicts on a step that is refused: it landed on another branch, or a graze it
+# passes (or may pass) could not be located. A step refused as UNLOCATED down to min_step is taken
+# all the same, with an UNLOCATED_GRAZING record where its impact count changes (follow).
+JUMP = "jump"
+UNLOCATED = "unlocated"
+# The record of a change of the impact count between two consecutive orbits whose graze could not
+# be located (Newton on the map without that impact, and the bisection on the count, failed): its
+# orbit is the step's first one, the graze lies between it and the branch's next orbit. Kept, not
+# dropped, so that info and the figure show where the branch is not smooth (docs/continuation.md).
+UNLOCATED_GRAZING = "unlocated_grazing"
 # Branch ends
 ENDED_RANGE = "left_range"
 ENDED_MAX_POINTS = "max_points"
@@ -439,10 +449,11 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
     if graze is not None:
         found.append(("grazing", _graze_orbit(problem, graze)))
     elif previous.impacts_per_period != current.impacts_per_period:
-        # No map without the new impact (no room for a window): bisection on the impact count.
+        # No map without the new impact (no room for a window, or Newton on it failed): bisection on
+        # the impact count; where that fails too, the change is recorded all the same, bracketed by
+        # the two orbits (UNLOCATED_GRAZING), never dropped.
         orbit = _locate(problem, previous, tangent, step, "grazing", previous.impacts_per_period, 1.0, periods)
-        if orbit is not None:
-            found.append(("grazing", orbit))
+        found.append(("grazing", orbit) if orbit is not None else (UNLOCATED_GRAZING, previous))
     return found
 
 
@@ -498,7 +509,8 @@ def _heading_for_graze(problem, before, previous, current):
 
 def _graze_between(problem, previous, current, before=None, memo=None):
     """Where the corrector stepped from ``previous`` to an orbit with another impact count:
-    (the grazing.Graze located between them, or None, and whether the step is a jump).
+    (the grazing.Graze located between them, or None; the verdict on the step: None (it stands),
+    JUMP (it landed on another branch) or UNLOCATED (a graze it may pass could not be located)).
 
     A graze on the arc is located on the map without the impact that appeared (or went), from the
     side without it, and must lie between the two parameters; when it does not, the corrector
@@ -518,7 +530,7 @@ def _graze_between(problem, previous, current, before=None, memo=None):
         if site is None and _heading_for_graze(problem, before, previous, current):
             site = _graze_site(problem, previous, np.inf)
         if site is None:
-            return None, False
+            return None, None
         memo = {} if memo is None else memo
         known = memo.get("graze")
         if (known is not None and memo.get("impacts") == previous.impacts_per_period
@@ -528,24 +540,31 @@ def _graze_between(problem, previous, current, before=None, memo=None):
             located = grazing.locate_graze(problem, previous.z, previous.periods,
                                            _tolerance(problem, previous.state), site[1])
             memo.update(graze=located, impacts=previous.impacts_per_period)
-        passed = located is not None and (located.z[2] - previous.parameter) * (
-            current.parameter - located.z[2]) > 0.0
+        if located is None:
+            # Not located is not "not there": a step that the gaps' trend says passes a graze is
+            # refused (retried shorter, so that it stops short of the graze: from closer, the graze
+            # is located) rather than taken as one that passes none (up to 0.7.1).
+            return None, UNLOCATED if _heading_for_graze(problem, before, previous, current) else None
+        passed = (located.z[2] - previous.parameter) * (current.parameter - located.z[2]) > 0.0
         # Passing the graze's parameter is a jump only where the step passes by the grazing orbit
         # itself: an orbit far from it (0.05 in state beyond Fig. 1's g = 39.844991, after a fold)
         # may cross that parameter value on its own branch, with the same impacts.
-        return None, passed and _passes_near(located.z, previous.z, current.z)
+        return None, JUMP if passed and _passes_near(located.z, previous.z, current.z) else None
     free_side, impacting_side = sorted((previous, current), key=lambda orbit: orbit.impacts_per_period)
     if round((impacting_side.impacts_per_period - free_side.impacts_per_period) * free_side.periods) > 1:
-        return None, True
+        return None, JUMP
     window = _new_impact_window(problem, free_side, impacting_side)
     if window is False:
-        return None, False
+        return None, None
     located = grazing.locate_graze(problem, free_side.z, free_side.periods, _tolerance(problem, free_side.state),
                                    window)
-    if located is None or not (min(previous.parameter, current.parameter) <= located.z[2]
-                               <= max(previous.parameter, current.parameter)):
-        return None, True
-    return located, False
+    if located is None:
+        # Newton on the map without the new impact failed: that says nothing about a jump (until
+        # 0.7.1 it was taken for one, and the branch ended "keeps jumping to another branch").
+        return None, UNLOCATED
+    if not (min(previous.parameter, current.parameter) <= located.z[2] <= max(previous.parameter, current.parameter)):
+        return None, JUMP
+    return located, None
 
 
 def _passes_near(point, start, end):
@@ -659,13 +678,15 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                           f"{_section_note(problem, current)}")
                 return orbits, bifurcations, (status, reason)
         else:
-            located, jumped = _graze_between(problem, current, orbit, before, memo)
-            if jumped:
+            located, verdict = _graze_between(problem, current, orbit, before, memo)
+            if verdict is not None and step * 0.5 >= options["min_step"]:
                 step *= 0.5
-                if step >= options["min_step"]:
-                    continue
+                continue
+            if verdict == JUMP:
                 return orbits, bifurcations, (ENDED_NEWTON, f"the corrector keeps jumping to another branch at "
                                                             f"{problem.parameter} = {current.parameter:.8g}")
+            # verdict UNLOCATED at the smallest step: the step stands; a change of the impact count
+            # in it is recorded as a graze not located (_detect).
             if _bends(before, current, orbit) and step * 0.5 >= options["min_step"]:
                 step *= 0.5
                 continue

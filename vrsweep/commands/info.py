@@ -143,7 +143,23 @@ def _describe_branches(parameter, values) -> dict:
     bifurcations = [{"kind": _plain(kind), "tag": tag, "branch": int(b), "parameter": _number(p), "R": _number(r)}
                     for kind, tag, b, p, r in zip(values["bifurcation_kind"], tags, values["bifurcation_branch"],
                                                   values["bifurcation_parameter"], values["bifurcation_R"])]
+    for row in bifurcations:
+        if row["kind"] == "unlocated_grazing":
+            row["between"] = _unlocated_bracket(values, row)
     return {"parameter": str(parameter), "branches": rows, "bifurcations": bifurcations}
+
+
+def _unlocated_bracket(values, row):
+    """[the parameter of an unlocated graze's orbit, that of the branch's neighbouring orbit with
+    another impact count]: where the graze lies (None where the file holds no such neighbour)."""
+    mine = np.flatnonzero((values["branch"] == row["branch"]) & (values["parameter"] == row["parameter"]))
+    impacts = values["impacts_per_period"]
+    for index in mine:
+        for other in (index - 1, index + 1):
+            if (0 <= other < len(impacts) and values["branch"][other] == row["branch"]
+                    and impacts[other] != impacts[index]):
+                return [row["parameter"], _number(values["parameter"][other])]
+    return None
 
 
 def _describe_curves(names, values) -> dict:
@@ -204,9 +220,14 @@ def _format_branches(branches) -> list[str]:
                      f"({row['stable_points']} stable), {name} from {_short(row['min'])} to {_short(row['max'])}")
         lines += _format_ends(row)
     for row in branches["bifurcations"]:
-        lines.append(f"bifurcation: {row['kind']} at {name} = {_precise(row['parameter'])} ({row['tag']} on the "
-                     f"figure, branch {row['branch']}, "
-                     f"R = {_short(row['R'])})")
+        line = (f"bifurcation: {row['kind']} at {name} = {_precise(row['parameter'])} ({row['tag']} on the "
+                f"figure, branch {row['branch']}, R = {_short(row['R'])})")
+        if row["kind"] == "unlocated_grazing":
+            between = row.get("between")
+            where = (f"between {name} = {_precise(between[0])} and {_precise(between[1])}" if between
+                     else f"next to {name} = {_precise(row['parameter'])}")
+            line += f": the impact count changes {where}, where the graze could not be located"
+        lines.append(line)
     return lines
 
 

@@ -21,7 +21,8 @@ from vrsweep.plot.labels import (
 from vrsweep.store.branch_file import TAG_PREFIXES, bifurcation_tags
 
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
-                       "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing")}
+                       "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing"),
+                       "unlocated_grazing": ("v", "grazing, not located")}
 BRANCH_COLOUR = "C0"
 # Where a bifurcation is, across the multipliers' panel; named in the legend.
 BIFURCATION_LINE = "0.7"
@@ -228,7 +229,7 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
     for d, offset in zip(datasets, offsets):
         for kind, at, R, number in zip(d["bifurcation_kind"].values, d["bifurcation_parameter"].values,
                                        d["bifurcation_R"].values, d["bifurcation_branch"].values):
-            if _text(kind) == "grazing":
+            if _text(kind) in ("grazing", "unlocated_grazing"):
                 grazes.setdefault(int(number) + int(offset), []).append((float(at), float(R)))
     colours = _period_colours(periods)
     if config is not None and config.model == "effective" and values.size:
