@@ -339,3 +339,158 @@ def test_a_long_step_towards_the_corner_locates_the_graze_rather_than_passing_it
     assert impacts == 10
     assert top == pytest.approx(FIG1["Delta"], abs=1e-7)
     assert not more.stable
+
+
+def _unlocatable(monkeypatch, bisection_too=False):
+    """Make every graze fail to be located: Newton on the map without the impact (and, with
+    bisection_too, the bisection on the impact count) returns nothing, as where they diverge."""
+    from vrsweep.analysis import grazing
+
+    monkeypatch.setattr(grazing, "locate_graze", lambda *args, **kwargs: None)
+    if bisection_too:
+        locate = continuation._locate
+        monkeypatch.setattr(continuation, "_locate",
+                            lambda *args: None if args[4] == "grazing" else locate(*args))
+
+
+def _count(orbit):
+    return round(orbit.impacts_per_period * PERIODS)
+
+
+def test_a_graze_newton_cannot_locate_is_bisected_not_taken_for_a_jump(monkeypatch):
+    """Down from g = 17.7 the period-3 orbit loses an impact at g = 17.6496 and another at 17.6172.
+    Where Newton on the windowed map fails, the step over the graze was refused as a jump onto
+    another branch, down to the smallest step, and the branch ended "keeps jumping to another
+    branch" at 17.649647 (up to 0.7.1): a graze not located counted as proof of a jump. It is now
+    bracketed by bisection on the impact count, and the branch goes on through both."""
+    _unlocatable(monkeypatch)
+    problem = _problem(1e-10)
+    start = continuation.find_start(problem, [0.99, 0.5], 17.7, 300, 8)
+    orbits, found, end = continuation.follow(problem, start, -1, 17.6, 17.8, 40)
+    assert "jumping" not in end[1], end
+    orbits = [start] + orbits
+    assert {_count(orbit) for orbit in orbits} == {8, 9, 10}
+    grazes = [orbit.parameter for kind, orbit in found if kind == "grazing"]
+    assert len(grazes) == 2, found
+    for before, after in zip(orbits, orbits[1:]):
+        if _count(before) != _count(after):
+            assert sum(after.parameter <= g <= before.parameter for g in grazes) == 1
+
+
+def test_a_change_of_impacts_whose_graze_cannot_be_located_is_recorded_with_its_bracket(monkeypatch, tmp_path):
+    """Where the bisection fails too, the change of the impact count between two orbits was
+    dropped: no graze in the table, nothing on the figure. It is now an unlocated_grazing record
+    (its orbit the one before the change), in the file, in info's lines (with the bracket: the
+    next orbit's parameter) and on the figure (G?1)."""
+    from click.testing import CliRunner
+
+    from vrsweep.cli import main
+
+    _unlocatable(monkeypatch, bisection_too=True)
+    branch = tmp_path / "branch.h5"
+    result = CliRunner().invoke(main, ["continue", "configs/fig1_continue.yaml", "-o", str(branch), "-q",
+                                       "--set", "continuation.from=17.7", "--set", "continuation.to=17.64,17.7001",
+                                       "--set", "continuation.max_step=0.05", "--set", "continuation.switch=false",
+                                       "--set", "integration.rtol=1e-10", "--set", "integration.atol=1e-12"])
+    assert result.exit_code == 0, result.output
+    import vrsweep
+
+    with vrsweep.open_results(branch) as ds:
+        kinds = [str(kind) for kind in ds["bifurcation_kind"].values]
+        assert kinds == ["unlocated_grazing"], kinds
+        at = float(ds["bifurcation_parameter"].values[0])
+        counts = np.round(ds["impacts_per_period"].values * PERIODS)
+        k = int(np.flatnonzero(ds["parameter"].values == at)[0])
+        neighbours = [j for j in (k - 1, k + 1) if 0 <= j < len(counts) and counts[j] != counts[k]]
+        assert len(neighbours) == 1 and {counts[k], counts[neighbours[0]]} == {9, 10}
+        other = float(ds["parameter"].values[neighbours[0]])
+    assert 17.6496 - 1e-3 < min(at, other) < max(at, other) < 17.6496 + 1e-3
+    info = CliRunner().invoke(main, ["info", str(branch)])
+    assert info.exit_code == 0, info.output
+    line = next(line for line in info.output.splitlines() if "unlocated_grazing" in line)
+    assert "G?1" in line and "could not be located" in line and f"{other:.8g}"[:8] in line, line
+    figure = CliRunner().invoke(main, ["plot", str(branch), "-o", str(tmp_path / "branch.png")])
+    assert figure.exit_code == 0, figure.output
+
+
+def _three_legs(g, state, touch, fine):
+    """SciPy's real map of three slow periods from ``state``, with steps of at most ``fine`` within
+    HALF_WINDOW of ``touch`` (where a slow impact's short flight past Delta must be seen) and 0.05
+    elsewhere: (end state, [the impacts' speeds x'(-)])."""
+    legs = ((0.0, touch - HALF_WINDOW, 0.05), (touch - HALF_WINDOW, touch + HALF_WINDOW, fine),
+            (touch + HALF_WINDOW, PERIODS * SLOW_PERIOD, 0.05))
+    speeds = []
+    for t0, t1, max_step in legs:
+        run = _real(g, state, t0, t1, max_step)
+        speeds += list(run["v_before"])
+        state = [run["x_final"], run["v_final"]]
+    return np.array(state), speeds
+
+
+def _scipy_monodromy(g, state, touch, fine, h=1e-7):
+    """The Jacobian of SciPy's map by central differences."""
+    columns = []
+    for k in range(2):
+        d = np.zeros(2)
+        d[k] = h
+        columns.append((_three_legs(g, state + d, touch, fine)[0] - _three_legs(g, state - d, touch, fine)[0]) / (2 * h))
+    return np.array(columns).T
+
+
+@pytest.mark.slow
+def test_the_step_that_leaves_the_11_impact_orbits_crosses_their_graze_onto_the_free_side():
+    """Past the corner at the end of the period-3 window the branch turns up in g on unstable orbits
+    with 11 impacts whose 11th impact slows (u = 0.030 at g = 17.796388, mu = -67.6) and then one
+    step lands on a stable orbit with 10 impacts at g = 17.798257, the graze recorded between at
+    17.797473. A jump onto another branch? A straight line through u^2 puts the 11th impact's end
+    at g = 17.7969, not at the graze. SciPy says no jump:
+    - the graze is a fixed point of SciPy's windowed map touching Delta, and the 10-impact orbit
+      after the step is on that map's branch from it: SciPy's fixed points of the real map at g
+      between, each from the last, keep 10 impacts with the touch below Delta, and end on it;
+    - the 11-impact orbits approach the same graze as Nordmark's square-root map says they must:
+      in its normal form x' = mu - gamma sqrt(x), an impacting fixed point of speed u ~ sqrt(x) has
+      multiplier -gamma / (2 sqrt(x)) and lies at mu = x + gamma sqrt(x) ~ u^2 (1 + 2 |multiplier|)
+      from the graze: linear in u where |multiplier| >> 1 (here 60), whence the u^2 line's miss.
+      SciPy's u and multiplier at two such orbits predict the ratio of their distances in g from
+      the graze to 1 %; a graze at 17.7969 would be 5 % off.
+    The start is the referee's own SciPy fixed point at g = 17.796388 (Newton on its own map)."""
+    problem = _problem(1e-12)
+    start, failure = continuation.correct(problem, np.array([-2.64913976, 2.10337494, 17.796388]), PERIODS)
+    assert failure is None and _count(start) == 11
+    after, found, _ = continuation.follow(problem, start, +1, 17.78, 17.8, 1)
+    # an 11-impact orbit 6e-5 lower in g, by Newton at that g from the start's state
+    earlier, failure = continuation.correct(problem, start.z - [0.0, 0.0, 6e-5], PERIODS)
+    assert failure is None
+    fewer = after[0]
+    assert _count(fewer) == 10 and _count(earlier) == 11
+    grazes = [orbit for kind, orbit in found if kind == "grazing"]
+    assert len(grazes) == 1
+    graze = grazes[0]
+    assert start.parameter < graze.parameter < fewer.parameter
+    touch = _touch_time(fewer)
+    end_state, impacts, top = _scipy_windowed_map(graze, touch)
+    assert np.max(np.abs(end_state - graze.state)) < 1e-7 * max(1.0, np.max(np.abs(graze.state)))
+    assert impacts == 10 and top == pytest.approx(FIG1["Delta"], abs=1e-7)
+    # The free side: natural continuation in g with SciPy's Newton, from the graze to `fewer`.
+    state, touches = graze.state.copy(), []
+    for g in np.linspace(graze.parameter, fewer.parameter, 4)[1:]:
+        for _ in range(8):
+            end, speeds = _three_legs(g, state, touch, 0.05)
+            if np.max(np.abs(end - state)) < 1e-11:
+                break
+            state = state - np.linalg.solve(_scipy_monodromy(g, state, touch, 0.05) - np.eye(2), end - state)
+        assert len(speeds) == 10
+        window = _real(g, state, 0.0, touch + HALF_WINDOW, 0.05)["sol"](np.linspace(touch - HALF_WINDOW, touch + HALF_WINDOW, 2001))[0]
+        touches.append(window.max())
+    assert np.all(np.diff(touches) < 0) and touches[0] < FIG1["Delta"]
+    assert np.max(np.abs(state - fewer.state)) < 1e-7
+    # The impacting side: the normal form's ratio of distances from the graze.
+    predicted = []
+    for orbit in (earlier, start):
+        end, speeds = _three_legs(orbit.parameter, orbit.state, touch, min(orbit.slowest_impact / 20.0, 0.05))
+        assert len(speeds) == 11 and np.max(np.abs(end - orbit.state)) < 1e-7
+        u = min(speeds)
+        mu = np.linalg.eigvals(_scipy_monodromy(orbit.parameter, orbit.state, touch, u / 20.0))
+        predicted.append(u ** 2 * (1.0 + 2.0 * np.max(np.abs(mu))))
+    measured = (graze.parameter - earlier.parameter) / (graze.parameter - start.parameter)
+    assert measured == pytest.approx(predicted[0] / predicted[1], rel=1e-2)
