@@ -411,6 +411,11 @@ def test_a_change_of_impacts_whose_graze_cannot_be_located_is_recorded_with_its_
     assert "G?1" in line and "could not be located" in line and f"{other:.8g}"[:8] in line, line
     figure = CliRunner().invoke(main, ["plot", str(branch), "-o", str(tmp_path / "branch.png")])
     assert figure.exit_code == 0, figure.output
+    curve = CliRunner().invoke(main, ["continue", str(branch), "--point", "0", "--along", "Omega", "--to", "3.9", "4.1",
+                                      "-o", str(tmp_path / "curve.h5")])
+    assert curve.exit_code == 2 and curve.output.strip().endswith(
+        "could not be located (unlocated_grazing): it has no grazing orbit to start a curve from"), curve.output
+    assert len(curve.output.strip().splitlines()) == 1
 
 
 def _three_legs(g, state, touch, fine):

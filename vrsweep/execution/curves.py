@@ -69,6 +69,10 @@ def read_request(path, point, along, to=None, within=None, overrides=()):
     if not np.all(np.isfinite([value, *state])):
         raise UsageError.naming("{point} = {index} has no finite {name}, x and v in {path}: there is no point to "
                                 "start the curve from", {"point": "point"}, index=point, name=first, path=str(path))
+    if kind == "unlocated_grazing":
+        raise UsageError.naming("{point} = {index} is a change of the impact count whose graze could not be "
+                                "located (unlocated_grazing): it has no grazing orbit to start a curve from",
+                                {"point": "point"}, index=point)
     if kind not in curves.KINDS:
         raise UsageError.naming("{point} = {index} is a {kind} point: only fold, period_doubling and grazing "
                                 "points can be followed in two parameters", {"point": "point"}, index=point,
