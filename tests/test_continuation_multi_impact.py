@@ -499,3 +499,33 @@ def test_the_step_that_leaves_the_11_impact_orbits_crosses_their_graze_onto_the_
         predicted.append(u ** 2 * (1.0 + 2.0 * np.max(np.abs(mu))))
     measured = (graze.parameter - earlier.parameter) / (graze.parameter - start.parameter)
     assert measured == pytest.approx(predicted[0] / predicted[1], rel=1e-2)
+
+
+@pytest.mark.slow
+def test_the_corrector_follows_a_branch_that_curves_steeply_in_g_through_its_doubling_and_fold():
+    """Beyond the corner's graze the stable 10-impact orbits of the period-3 branch period-double at
+    g = 17.79903 and fold at 17.79904 (a multiplier from -2.2 at 17.799 to +1 within 4e-5 in g).
+    F_lam, a forward difference of 1e-6 * g = 1.8e-5 in g, spans that curvature: Newton failed at
+    every step down to min_step and the branch ended at g = 17.798989 (newton_failed, residual
+    1.6e-7; up to 0.7.1). The corrector now retries with a difference 1000 times shorter, and the
+    branch goes through the doubling and the fold onto unstable orbits with 10 impacts back down
+    in g. SciPy: the first orbit beyond is a fixed point of its map with 10 impacts and the same
+    larger multiplier (1e-3). (The referee's SciPy orbits at fixed g, continued from 17.799 in steps
+    of 4e-6, converge up to 17.79904, their impact times moving faster and faster: the fold.)"""
+    problem = _problem(1e-12)
+    # the referee's SciPy fixed point at g = 17.799 (stable side, multiplier -2.156)
+    start, failure = continuation.correct(problem, np.array([-2.65006053, 2.10441267, 17.799]), PERIODS)
+    assert failure is None and _count(start) == 10
+    orbits, found, end = continuation.follow(problem, start, +1, 17.79, 17.81, 2)
+    assert "did not converge" not in end[1], end
+    kinds = {kind: orbit.parameter for kind, orbit in found}
+    assert set(kinds) == {"fold", "period_doubling"}, found
+    assert 17.799 < kinds["period_doubling"] < kinds["fold"] < 17.79906
+    beyond = orbits[0]
+    assert beyond.parameter < kinds["fold"] and _count(beyond) == 10 and beyond.multipliers[0].real > 1.0
+    touch = _touch_time(beyond)
+    end_state, speeds = _three_legs(beyond.parameter, beyond.state, touch, 0.05)
+    assert len(speeds) == 10
+    assert np.max(np.abs(end_state - beyond.state)) < 1e-7 * max(1.0, np.max(np.abs(beyond.state)))
+    mu = np.linalg.eigvals(_scipy_monodromy(beyond.parameter, beyond.state, touch, 0.05))
+    assert np.max(np.abs(mu)) == pytest.approx(abs(beyond.multipliers[0]), rel=1e-3)

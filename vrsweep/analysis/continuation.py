@@ -70,6 +70,9 @@ EASY_NEWTON = 3
 # 100 times shorter when both directions straddle a graze.
 PARAMETER_DIFFERENCE = 1e-6
 PARAMETER_DIFFERENCE_TRIES = 3
+# Where Newton fails, it is tried again with the parameter's difference this much shorter (correct):
+# at rtol 1e-12 a difference of 1e-9 * lam still holds F_lam to about 1e-3 * |y| / |lam|.
+SHORT_DIFFERENCE = 1e-3
 # An impact slower than sqrt(SLOW_IMPACT * max(1, |Delta|)) makes the map curve like 1/u^3 in the
 # parameter: F_lam is then a central difference (_parameter_derivative).
 SLOW_IMPACT = 0.1
@@ -220,7 +223,7 @@ def _failure(orbit_map):
     return None
 
 
-def _parameter_derivative(problem, state, value, periods, orbit_map):
+def _parameter_derivative(problem, state, value, periods, orbit_map, relative=None):
     """F_lam = d P^p / d lam by a forward difference (module doc), on the same side of every
     graze as the orbit: a difference whose other end gains or loses an impact measures the jump,
     not the derivative (next to a graze an orbit can be 1e-6 from it in lam, the difference's own
@@ -231,7 +234,8 @@ def _parameter_derivative(problem, state, value, periods, orbit_map):
     1's g = 17.8978, u = 0.11: 258 for 437 in one component), enough for Newton to diverge with
     multipliers of only -4.4. There the difference is central (its error goes with the square of
     the step), when both ends keep the orbit's impacts."""
-    step = PARAMETER_DIFFERENCE * max(1.0, abs(value))
+    relative = PARAMETER_DIFFERENCE if relative is None else relative
+    step = relative * max(1.0, abs(value))
     scale = max(1.0, abs(grazing_barrier(problem.coefficients(value))))
     if orbit_map.slowest_impact ** 2 < SLOW_IMPACT * scale:
         ends = [evaluate(problem, state, value + direction * step, periods) for direction in (1.0, -1.0)]
@@ -245,7 +249,7 @@ def _parameter_derivative(problem, state, value, periods, orbit_map):
         step *= 0.01
     # Every difference straddles a graze (or fails): the forward one, as before; only the
     # predictor and Newton's rate depend on it, never a converged point.
-    step = PARAMETER_DIFFERENCE * max(1.0, abs(value))
+    step = relative * max(1.0, abs(value))
     moved = evaluate(problem, state, value + step, periods)
     if _failure(moved):
         step = -step
@@ -266,9 +270,28 @@ def _tolerance(problem, state):
     return problem.options["newton_tolerance"] * max(1.0, float(np.max(np.abs(state))))
 
 
-def correct(problem, z_guess, periods, tangent=None, z_predicted=None):
+def correct(problem, z_guess, periods, tangent=None, z_predicted=None, short_difference=False):
     """Newton on F = 0, with the arclength condition tangent . (z - z_predicted) = 0 when tangent is
-    given, else at the fixed parameter z_guess[2]. Returns (Orbit, None) or (None, (status, reason))."""
+    given, else at the fixed parameter z_guess[2]. Returns (Orbit, None) or (None, (status, reason)).
+
+    With ``short_difference`` (follow's step along the branch and the arc's points that locate a
+    bifurcation on it; a crossing's or a march's
+    correctors keep their own rules), where Newton does not converge it is tried once more with F_lam's difference
+    SHORT_DIFFERENCE times shorter: where the map curves steeply in lam (Fig. 1's period-3
+    branch at g = 17.799, a period doubling and a fold 1e-5 apart, the multiplier moving 2.5e4 per
+    unit g) the difference of 1.8e-5 in g spans the curvature, F_lam is wrong, and Newton failed
+    at every step down to min_step: the branch ended there (newton_failed, up to 0.7.1)."""
+    orbit, failure = _newton(problem, z_guess, periods, tangent, z_predicted, None)
+    if (short_difference and orbit is None and failure[0] == ENDED_NEWTON
+            and failure[1].startswith("Newton did not converge")):
+        retried, _ = _newton(problem, z_guess, periods, tangent, z_predicted, PARAMETER_DIFFERENCE * SHORT_DIFFERENCE)
+        if retried is not None:
+            return retried, None
+    return orbit, failure
+
+
+def _newton(problem, z_guess, periods, tangent, z_predicted, relative):
+    """correct's Newton, F_lam's difference ``relative`` (None: PARAMETER_DIFFERENCE)."""
     z = np.array(z_guess, dtype=float)
     failure = None
     residual = np.inf
@@ -295,7 +318,7 @@ def correct(problem, z_guess, periods, tangent=None, z_predicted=None):
         jacobian_state = orbit_map.monodromy - np.eye(2)
         if tangent is None:
             if residual <= _tolerance(problem, z[:2]):
-                derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map)
+                derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map, relative)
                 return _orbit(problem, z[:2], z[2], periods, orbit_map, residual, iteration, derivative), None
             try:
                 step = np.linalg.solve(jacobian_state, -residual_vector)
@@ -304,7 +327,7 @@ def correct(problem, z_guess, periods, tangent=None, z_predicted=None):
             last_step = np.concatenate([step, [0.0]])
             z = z + last_step
             continue
-        derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map)
+        derivative = _parameter_derivative(problem, z[:2], z[2], periods, orbit_map, relative)
         arc = float(tangent @ (z - z_predicted))
         if residual <= _tolerance(problem, z[:2]) and abs(arc) <= _tolerance(problem, z[:2]):
             return _orbit(problem, z[:2], z[2], periods, orbit_map, residual, iteration, derivative), None
@@ -405,7 +428,7 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
 
     def point_at(s):
         z_predicted = start.z + s * tangent
-        return correct(problem, z_predicted, periods, tangent, z_predicted)
+        return correct(problem, z_predicted, periods, tangent, z_predicted, short_difference=True)
 
     def narrow(low, high, value):
         # The parameter interval between the bracket's ends: tangent[2] * (high - low) to first order.
@@ -626,7 +649,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if len(orbits) >= max_points:
             return orbits, bifurcations, (ENDED_MAX_POINTS, f"{max_points} points reached")
         z_predicted = current.z + step * tangent
-        orbit, failure = correct(problem, z_predicted, start.periods, tangent, z_predicted)
+        orbit, failure = correct(problem, z_predicted, start.periods, tangent, z_predicted, short_difference=True)
         edge = None
         if failure is None and outside(problem, orbit.parameter) is not None:
             # Beyond the model's domain (e > 1 gains energy at each impact, R = |Q|/c has no
