@@ -81,6 +81,26 @@ def test_a_huge_canvas_is_one_line_at_the_command_line(branch, tmp_path, invoke,
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("args, words", [
+    (("plot", "F.h5", "--dpi", "5"), "--dpi 5: expected a whole number from 20 to 1200"),
+    (("plot", "F.h5", "--dpi", "0"), "--dpi 0: expected a whole number from 20 to 1200"),
+    (("plot", "F.h5", "--dpi", "-1"), "--dpi -1: expected a whole number from 20 to 1200"),
+    (("plot", "F.h5", "--dpi", "1e9"), "--dpi 1e9: expected a whole number from 20 to 1200"),
+    (("plot", "F.h5", "--kind", "nope"), "'--kind': 'nope' is not one of"),
+    (("plot", "F.h5", "--vmin", "abc"), "'--vmin'"),
+    (("plot", "F.h5", "--bogus"), "No such option '--bogus'"),
+    (("plot",), "Missing argument"),
+    (("simulate", "c.yaml", "--samples-per-period", "0"), "--samples-per-period 0: expected a whole number of at least 1"),
+    (("run", "c.yaml", "--threads", "0"), "--threads 0: expected a whole number from 1 to"),
+    (("nope",), "No such command 'nope'"),
+])
+def test_an_option_click_refuses_is_one_line(tmp_path, invoke, args, words):
+    """click's own refusals were four lines (usage, a hint, a blank line, the error): one now, with
+    the help to read, exit 2, as every other bad input."""
+    line = _one_error_line(invoke(*args))
+    assert words in line and line.endswith("--help)"), line
+
+
 @pytest.mark.parametrize("where", ["style", "matplotlibrc"])
 @pytest.mark.parametrize("suffix", ["png", "pdf"])
 def test_usetex_without_latex_is_one_line(branch, tmp_path, invoke, monkeypatch, where, suffix):

@@ -33,6 +33,11 @@ class _Group(click.Group):
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"vrsweep\.")
                 return super().invoke(ctx)
+        except click.UsageError as error:
+            # click's own refusal of an option (--dpi 5, --kind nope, a missing argument) is four
+            # lines: usage, a hint, a blank line, the error. One line, as every other bad input.
+            click.echo(f"Error: {_one_line(error)}", err=True)
+            ctx.exit(2)
         except VrsweepError as error:
             problems = getattr(error, "problems", None)
             if problems and len(problems) > 1:
@@ -63,6 +68,13 @@ class _Group(click.Group):
             newline = "\n" if sys.stderr.isatty() else ""  # off the terminal's "^C"
             click.echo(f"{newline}Interrupted ({str(interrupt) or 'SIGINT'})", err=True)
             ctx.exit(getattr(interrupt, "exit_code", 130))
+
+
+def _one_line(error):
+    """click's message for a refused option or argument, on one line, with the help to read."""
+    message = " ".join(error.format_message().split())
+    command = error.ctx.command_path if error.ctx is not None else "vrsweep"
+    return f"{message.rstrip('.')} (see {command} --help)"
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})

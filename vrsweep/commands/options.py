@@ -95,10 +95,27 @@ class FiniteFloatRange(click.FloatRange):
         return number
 
 
+class WholeNumberRange(click.IntRange):
+    """click's IntRange, refusing in words: '1e9' was "not a valid integer range" and 5 "not in
+    the range 20<=x<=1200"; now "--dpi 1e9: expected a whole number from 20 to 1200"."""
+
+    def _bounds(self):
+        if self.max is None:
+            return f"of at least {self.min}"
+        return f"from {self.min} to {self.max}"
+
+    def convert(self, value, param, ctx):
+        try:
+            return super().convert(value, param, ctx)
+        except click.BadParameter:
+            name = param.opts[0] if param is not None and param.opts else "the value"
+            raise click.UsageError(f"{name} {value}: expected a whole number {self._bounds()}", ctx) from None
+
+
 # More threads than any machine has CPUs: a number past it is a typo, not a request to cap.
 MAX_THREADS = 65536
 threads_option = click.option(
-    "--threads", type=click.IntRange(min=1, max=MAX_THREADS), default=None,
+    "--threads", type=WholeNumberRange(min=1, max=MAX_THREADS), default=None,
     help="Numba threads (default: all cores, or NUMBA_NUM_THREADS).",
 )
 quiet_option = click.option("--quiet", "-q", is_flag=True, help="No progress bar or summary.")

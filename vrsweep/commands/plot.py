@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from vrsweep.commands.options import PathText, file_name_only
+from vrsweep.commands.options import PathText, WholeNumberRange, file_name_only
 
 FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
@@ -62,7 +62,7 @@ def default_output(path, kind):
                    "plots choose log when the values span two decades or more, maps are linear.")
 @click.option("--periods", default=None, metavar="FIRST:LAST",
               help="Trajectory files: show slow periods FIRST to LAST only (1-based), e.g. 1:20.")
-@click.option("--dpi", type=click.IntRange(min=20, max=1200), default=150, show_default=True,
+@click.option("--dpi", type=WholeNumberRange(min=20, max=1200), default=150, show_default=True,
               help="Resolution of a .png (pixels = --size x --dpi).")
 @click.option("--title/--no-title", "title", default=True, show_default=True,
               help="Draw the title and caption above the figure. Either way the full description is in "

@@ -5,7 +5,7 @@ from pathlib import Path
 import click
 
 from vrsweep.commands.options import (
-    OUTPUT_FLAGS, config_argument, flag_wording, output_option, overwrite_option, set_option,
+    OUTPUT_FLAGS, WholeNumberRange, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
 from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
 
@@ -14,7 +14,7 @@ from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
 @config_argument
 @set_option
 @output_option
-@click.option("--samples-per-period", type=click.IntRange(min=1), default=DEFAULT_SAMPLES_PER_PERIOD,
+@click.option("--samples-per-period", type=WholeNumberRange(min=1), default=DEFAULT_SAMPLES_PER_PERIOD,
               show_default=True,
               help="Samples of x and v per slow period 2 pi/omega (a written model's period T), taken from "
                    "the solver's dense output.")
