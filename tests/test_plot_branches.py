@@ -215,3 +215,37 @@ def test_a_parameter_the_config_sweeps_is_stated_at_the_value_the_branch_held(tm
     branch_file.write_branch(path, branch_file.branch_arrays(branches, [], 23.0), config, "rk45")
     description = plot.description(plot.plot(path))
     assert "Ω = 4.5" in description, description
+
+
+def test_one_symbol_one_meaning_bifurcations_periods_and_sweeps(tmp_path, invoke, write_config):
+    """A sweep's points were "^", the grazing tag's marker, and the second and third periods' line
+    markers "o" and "s" were the fold's and the period doubling's: two meanings, one symbol."""
+    from handmade import write_grazing_branch_file, write_switched_branch_file
+
+    from vrsweep.plot.branches import BIFURCATION_MARKERS, PERIOD_MARKERS, SWEEP_MARKERS, UNKNOWN_BIFURCATION_MARKER
+
+    vocabularies = [{marker for marker, _ in BIFURCATION_MARKERS.values()} | {UNKNOWN_BIFURCATION_MARKER},
+                    set(PERIOD_MARKERS), set(SWEEP_MARKERS.values())]
+    for k, one in enumerate(vocabularies):
+        for other in vocabularies[k + 1:]:
+            assert not one & other, (one, other)
+    sweeps = []
+    for name, axis in (("both", "{values: [22.0, 24.0, 26.0], continuation: both}"), ("plain", "[23.0, 25.0]")):
+        config = write_config(tmp_path, f"""\
+            model: effective
+            parameters: {{gamma: 0.05, alpha: 0.05, Omega: 4.0}}
+            sweep:
+              g: {axis}
+            integration: {{transient_periods: 3, measure_periods: 4, strobe_periods: 2}}
+            """, name=f"{name}.yaml")
+        assert invoke("run", config, "-o", tmp_path / f"{name}.h5", "--quiet").exit_code == 0
+        sweeps.append(tmp_path / f"{name}.h5")
+    fig = plot.plot([write_grazing_branch_file(tmp_path / "graze.h5"), write_switched_branch_file(tmp_path / "pd.h5"),
+                     *sweeps])
+    top = fig.axes[0]
+    drawn = [line for line in top.get_lines() if np.size(line.get_xdata()) > 0]
+    swept = {line.get_marker() for line in drawn if line.get_gid() == "sweep"}
+    tagged = {line.get_marker() for line in drawn if (line.get_gid() or "").startswith("bifurcation ")}
+    along = {line.get_marker() for line in drawn if line.get_gid() is None and line.get_marker() != "None"}
+    assert swept == {">", "<", "x"} and tagged == {"^", "s"} and along, (swept, tagged, along)
+    assert not swept & tagged and not swept & along and not tagged & along, (swept, tagged, along)

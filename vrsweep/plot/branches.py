@@ -20,9 +20,16 @@ from vrsweep.plot.labels import (
 )
 from vrsweep.store.branch_file import TAG_PREFIXES, bifurcation_tags
 
+# One symbol, one meaning: the bifurcations' markers, the periods' markers along the lines and
+# the sweeps' markers are three disjoint sets (a sweep's points were "^", the grazing tag's marker;
+# the second and third periods' "o" and "s" were the fold's and the period doubling's).
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
                        "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing"),
-                       "unlocated_grazing": ("v", "grazing, not located")}
+                       "unlocated_grazing": ("p", "grazing, not located")}
+UNKNOWN_BIFURCATION_MARKER = "8"
+# A sweep's points: the direction the parameter moved, along the horizontal axis; "x" where no
+# direction (every point from the config's initial state).
+SWEEP_MARKERS = {None: "x", 1: ">", -1: "<"}
 BRANCH_COLOUR = "C0"
 # Where a bifurcation is, across the multipliers' panel; named in the legend.
 BIFURCATION_LINE = "0.7"
@@ -281,7 +288,7 @@ def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
     bottom_y, top_y = top.get_ylim()
     for index in np.argsort(places):
         kind, at, R, tag = kinds[index], places[index], heights[index], tags[index]
-        marker, _ = BIFURCATION_MARKERS.get(kind, ("x", kind))
+        marker, _ = BIFURCATION_MARKERS.get(kind, (UNKNOWN_BIFURCATION_MARKER, kind))
         top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=MARKER_SIZE, zorder=5, ls="none",
                  gid=f"bifurcation {tag}")
         bottom.axvline(at, color=BIFURCATION_LINE, lw=0.8, zorder=0, gid=f"bifurcation line {tag}")
@@ -293,7 +300,7 @@ def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
         note._vrsweep_tag = True
         note._vrsweep_marker_points = MARKER_SIZE / 2 + 0.6  # the marker's half width and half its edge
     for kind in dict.fromkeys(kinds):
-        marker, words = BIFURCATION_MARKERS.get(kind, ("x", kind))
+        marker, words = BIFURCATION_MARKERS.get(kind, (UNKNOWN_BIFURCATION_MARKER, kind))
         prefix = TAG_PREFIXES.get(kind, kind)
         top.plot([], [], marker=marker, color="k", mfc="w", mew=1.2, ms=6, ls="none", label=f"{prefix}: {words}")
     if kinds:  # the grey verticals of the multipliers' panel would otherwise be unexplained
@@ -317,7 +324,7 @@ def _table_ratio(figure, rows):
 def _bifurcation_table(ax, tags, kinds, places, heights, numbers, name):
     """The bifurcations as a table (tag, kind, parameter to the digits stored, R, branch)."""
     ax.axis("off")
-    rows = [[tag, BIFURCATION_MARKERS.get(kind, ("x", kind))[1], f"{at:.8g}", f"{R:.5g}", str(int(number))]
+    rows = [[tag, BIFURCATION_MARKERS.get(kind, (UNKNOWN_BIFURCATION_MARKER, kind))[1], f"{at:.8g}", f"{R:.5g}", str(int(number))]
             for tag, kind, at, R, number in zip(tags, kinds, places, heights, numbers)]
     table = ax.table(cellText=rows, colLabels=["", "bifurcation", parameter_symbol(name), "R", "branch"],
                      loc="upper center", cellLoc="left", edges="horizontal")
@@ -332,7 +339,7 @@ def _bifurcation_table(ax, tags, kinds, places, heights, numbers, name):
 PERIOD_COLOURS = ("C4", "C5", "C6", "C9", "C8", "C7")
 # Markers along the periods' lines after the first, which has none: the periods stay apart in
 # greyscale, where C0 and C4 are the same grey.
-PERIOD_MARKERS = ("o", "s", "D", "v", "P", "X")
+PERIOD_MARKERS = ("v", "P", "X", "*", "h", "1")
 MARK_EVERY = 0.08   # a marker every this share of the panel's diagonal, however dense the points
 MARK_SIZE = 3.0
 MULTIPLIER_WIDTHS = (1.4, 0.7)  # |mu_1|, |mu_2|
@@ -383,5 +390,6 @@ def _draw_sweep(ax, sweep, name, number, config=None):
     for direction in directions:
         line = data.sel(direction=direction) if direction is not None else data
         label = "sweep" if direction is None else f"sweep {'up' if direction > 0 else 'down'}"
-        ax.plot(sweep[name].values, line.values, ls="none", marker="v" if direction is not None and direction < 0
-                else "^", ms=5, mfc="none", mew=1.0, color=f"C{2 + number}", label=label, zorder=4)
+        marker = SWEEP_MARKERS[None if direction is None else int(np.sign(direction))]
+        ax.plot(sweep[name].values, line.values, ls="none", marker=marker, ms=5, mfc="none", mew=1.0,
+                color=f"C{2 + number}", label=label, zorder=4, gid="sweep")
