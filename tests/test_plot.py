@@ -284,6 +284,33 @@ def test_bifurcation_draws_every_strobe_sample(files):
     assert "x(nT)" in ax.get_ylabel() and "[1]" not in ax.get_ylabel()
 
 
+def test_samples_not_at_the_forcings_period_are_marked_apart_and_explained(tmp_path):
+    """At Omega/omega = 1/10 the forcing repeats after 10 periods T: a motion locked to it shows 10
+    dots at t = nT, drawn as the same dots as a period-1 orbit's, with no word: a cloud read as
+    chaos. Omega/omega = p/q in lowest terms: q = 10 at Omega = 0.05, 5 at 4.3 (43/5), 1 at 0.5."""
+    from fractions import Fraction
+
+    path = _run(tmp_path, "omega", "parameters: {g: 5.0}\nsweep:\n  Omega: [0.05, 0.5, 4.3]\n" + SHORT, "run")
+    omega = DEFAULT_PARAMETERS["omega"]
+    expected = {Omega: Fraction(Omega / omega).limit_denominator(100).denominator for Omega in (0.05, 0.5, 4.3)}
+    assert expected == {0.05: 10, 0.5: 1, 4.3: 5}
+    fig = plot.plot(path, kind="bifurcation")
+    lines = {line.get_gid(): line for line in fig.axes[0].get_lines()}
+    np.testing.assert_array_equal(lines["strobe"].get_xdata(), [0.5] * 8)
+    off = lines["strobe off the forcing's period"]
+    np.testing.assert_array_equal(off.get_xdata(), [0.05] * 8 + [4.3] * 8)
+    assert off.get_marker() != lines["strobe"].get_marker() and off.get_mfc() == "none"
+    words = plot.description(fig)
+    assert "at 2 of 3 points the forcing repeats only after q periods T (q = 10 at Ω = 0.05, q = 5 at Ω = 4.3)" \
+        in words, words
+    assert any("hollow" in text for text in legend_texts(fig))
+    # Where the forcing repeats every T (g = 0: no fast force), nothing is said.
+    fig = plot.plot(_run(tmp_path, "still", "parameters: {g: 0.0}\nsweep:\n  Omega: [0.05, 4.3]\n" + SHORT, "run"),
+                    kind="bifurcation")
+    assert "repeats only" not in plot.description(fig)
+    assert not [line for line in fig.axes[0].get_lines() if line.get_gid() == "strobe off the forcing's period"]
+
+
 def test_bifurcation_draws_the_barrier_where_each_point_had_it(files, tmp_path):
     """A sweep in Delta moves the barrier: it is drawn at Delta at each value (the line x = Delta),
     not as one horizontal line at the config's default Delta; elsewhere, one line at Delta."""

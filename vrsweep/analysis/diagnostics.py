@@ -167,6 +167,32 @@ def forcing_periods(slow_period, frequencies, longest):
     return periods
 
 
+def sampling_of_forcing(model, parameter_sets, longest):
+    """What samples taken once, or evenly, per period T see of each parameter set's forcing.
+
+    model: the config's (``"original"``, ``"effective"`` or a written one); parameter_sets: a list
+    of {name: value}. Returns (q, cycles), two (n,) arrays: q the periods T after which the
+    forcing repeats (forcing_periods: 1 where it repeats every T, 0 where it does not within
+    ``longest``), cycles the fastest forcing's cycles per period T (h T / 2 pi; 0 where nothing
+    forces). A figure sampling x at t = nT draws the motion's own stroboscopic map only where q is
+    1 (Omega/omega = 1/10 repeats after q = 10: a motion locked to it shows 10 dots); a figure
+    sampling N times per T resolves the fastest force only with several samples per cycle (at
+    Omega = 50, omega = 0.5: 100 cycles per T, 200 samples are 2 per cycle, which alias)."""
+    from vrsweep.numerics.models import kernels_for
+
+    kernels = kernels_for(model)
+    names = list(parameter_sets[0]) if parameter_sets else []
+    table = {name: np.array([float(values[name]) for values in parameter_sets]) for name in names}
+    vectors = np.asarray(kernels.coefficients(table), dtype=np.float64).reshape(len(parameter_sets), -1)
+    frequencies = np.abs(np.asarray(kernels.forcing_frequencies(vectors), dtype=np.float64))
+    frequencies = frequencies.reshape(len(parameter_sets), -1)
+    period = vectors[:, PERIOD]
+    q = forcing_periods(period, frequencies, longest)
+    with np.errstate(invalid="ignore", over="ignore"):
+        cycles = np.max(frequencies, axis=1, initial=0.0) * period / (2.0 * np.pi)
+    return q, cycles
+
+
 def gain_cycles(coefficients, period, m):
     """The slow periods in one cycle of a point's R: the least common multiple of its motion's
     period p and the number q of periods T after which the response's e^{iwt} repeats

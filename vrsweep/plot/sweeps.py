@@ -804,16 +804,30 @@ def bifurcation_figure(ds, x_axis=None) -> Figure:
 
 
 def _draw_bifurcation(ax, view, x_axis):
-    """The bifurcation diagram's panel; returns the failure note for the caption."""
+    """The bifurcation diagram's panel; returns the notes for the caption (failures, samples not
+    at the forcing's period)."""
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     n_strobe = view.variables["strobe_x"].shape[-1]
     curves = view.curve_coordinates(x_axis)
+    unlocked = np.zeros(len(x), dtype=bool)  # over every curve: where the forcing does not repeat every T
+    repeats = {}
     for k, (where, label) in enumerate(curves):
         colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
         strobe = view.along("strobe_x", x_axis, **where)  # (n_x, n_strobe)
-        xs = np.repeat(x, strobe.shape[-1])
-        ax.plot(xs, strobe.reshape(-1), ".", ms=2.5, color=colour,
-                label=label or f"x(nT), last {n_strobe} {period_words(symbol=False)}s of each point")
+        q = _forcing_repeats(view, x_axis, x, where)
+        at_period = q == 1
+        unlocked |= ~at_period
+        repeats.update({float(value): int(n) for value, n in zip(x[~at_period], q[~at_period])})
+        ax.plot(np.repeat(x[at_period], n_strobe), strobe[at_period].reshape(-1), ".", ms=2.5, color=colour,
+                label=label or f"x(nT), last {n_strobe} {period_words(symbol=False)}s of each point", gid="strobe")
+        if not at_period.all():
+            # Samples at t = nT where the forcing repeats only after q periods T (Omega/omega = 1/10:
+            # q = 10) or never: a motion locked to the forcing shows q dots, or a curve, where its
+            # own stroboscopic map would show one. Another mark, so that they are not read as chaos.
+            ax.plot(np.repeat(x[~at_period], n_strobe), strobe[~at_period].reshape(-1), "o", ms=1.6, mew=0.5,
+                    mfc="none", color=colour, gid="strobe off the forcing's period",
+                    label=(f"{label}: " if label else "") + "hollow: x(nT) where the forcing repeats only after "
+                          "q > 1 periods T, or never (caption)")
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
@@ -821,6 +835,7 @@ def _draw_bifurcation(ax, view, x_axis):
     if failure_note:
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ms=2.0, ls="none",
                 label="integration failed: no samples")  # ms x markerscale 3 = the drawn marks
+    strobe_note = _unlocked_note(unlocked, repeats, len(x), x_axis)
     _draw_resonance_lines(ax, view, x_axis, x)
     if view.config is not None:
         levels = _barrier_levels(view, x_axis, x)
@@ -836,7 +851,43 @@ def _draw_bifurcation(ax, view, x_axis):
     ax.set_ylabel(f"stroboscopic position $x(nT)$, {period}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize="x-small", loc="best", markerscale=3)
-    return failure_note
+    return "; ".join(note for note in (failure_note, strobe_note) if note)
+
+
+LONGEST_REPEAT = 1000  # periods T: a forcing that repeats after more is said to repeat never
+
+
+def _forcing_repeats(view, x_axis, x, where):
+    """q at each value of ``x``: the periods T after which the forcing repeats (1: every T; 0:
+    not within LONGEST_REPEAT), the other axes at ``where``. 1 throughout without a config."""
+    if view.config is None:
+        return np.ones(len(x), dtype=np.int64)
+    from vrsweep.analysis.diagnostics import sampling_of_forcing
+
+    fixed = {axis: float(view.axes[axis][index]) for axis, index in where.items()
+             if axis != "direction" and axis in view.config.parameters}
+    sets = [view.parameters(**fixed, **({x_axis: float(value)} if x_axis in view.config.parameters else {}))
+            for value in x]
+    return sampling_of_forcing(view.config.model, sets, LONGEST_REPEAT)[0]
+
+
+def _unlocked_note(unlocked, repeats, n_points, x_axis):
+    """The caption's words for the points whose samples at t = nT are not at the forcing's period."""
+    if not unlocked.any():
+        return ""
+    finite = sorted({q for q in repeats.values() if q > 1})
+    never = sum(1 for q in repeats.values() if q == 0)
+    examples = ", ".join(f"q = {q} at {_symbol(x_axis)} = {_number(value)}"
+                         for value, q in sorted(repeats.items()) if q > 1)
+    parts = []
+    if finite:
+        parts.append(f"after q periods T ({examples})" if len(repeats) <= 3 else
+                     f"after q = {finite[0]}{'' if len(finite) == 1 else f' to {finite[-1]}'} periods T")
+    if never:
+        parts.append(f"not within {LONGEST_REPEAT} periods at {never} of them")
+    return (f"at {int(unlocked.sum())} of {n_points} points the forcing repeats only {' and '.join(parts)} "
+            "(hollow dots): sampled at t = nT, not once per the forcing's period, a motion locked to it "
+            "shows q dots, or a closed curve, not chaos")
 
 
 def _barrier_levels(view, x_axis, x):
