@@ -163,3 +163,30 @@ def test_bad_config_and_bad_set_exit_2(tmp_path, invoke):
     assert result.exit_code == 2 and "parameters.e" in result.output
     result = invoke("simulate", write(tmp_path, POINT), "--set", "gg=3", "-o", tmp_path / "t.h5")
     assert result.exit_code == 2
+
+
+@pytest.mark.parametrize("model, Omega, g, expected", [
+    # 20 samples per cycle of the fastest force, Omega T / 2 pi = Omega/omega cycles a slow period
+    ("original", 50.0, 5.0, 20 * 100), ("original", 17.25, 5.0, 690),
+    ("original", 4.0, 5.0, 200),        # 8 cycles: 160 < the 200 a slow period
+    ("original", 50.0, 0.0, 200),       # no fast force: only omega, 1 cycle
+    ("effective", 50.0, 5.0, 200),      # averaged out (eq2.10)
+])
+def test_the_default_samples_resolve_the_fastest_force(tmp_path, invoke, model, Omega, g, expected):
+    """At Omega = 50 the default 200 samples a slow period were 2 per cycle of the fast force, each
+    at a zero of sin(Omega t): the velocity's fast wiggle, g/Omega = 0.1, vanished from the figure."""
+    config = write(tmp_path, f"""\
+        model: {model}
+        parameters: {{Omega: {Omega}, g: {g}}}
+        integration: {{transient_periods: 1, measure_periods: 2, strobe_periods: 1}}
+        """)
+    assert invoke("simulate", config, "-o", tmp_path / "t.h5", "-q").exit_code == 0
+    data = read_trajectory(tmp_path / "t.h5")
+    assert int(data.attrs["samples_per_period"]) == expected
+    run = data.runs[model]
+    assert len(run.t) == 3 * expected + 1
+    if expected > 200:  # the fast force's wiggle in the velocity is drawn: v changes sign of slope
+        # on every half cycle of Omega, i.e. 2 * Omega/omega * 3 times over 3 slow periods
+        slopes = np.sign(np.diff(run.v))
+        turns = int(np.sum(slopes[1:] != slopes[:-1]))
+        assert turns >= 2 * (Omega / 0.5) * 3 * 0.9, turns

@@ -478,14 +478,47 @@ def test_a_bifurcation_diagram_spans_the_grid_and_marks_failed_points(files):
 
 
 def test_the_response_axis_turns_logarithmic_when_the_values_span_decades(files):
-    """Paper parameters: A/c ~ 48 at g = 0 and ~1.4 at g = 40, numerical R down to ~0.1."""
-    results = load_results(files["g"])
-    values = np.concatenate([results["R"].values, [48.2]])
-    assert values.max() / values.min() > plot.LOG_SPAN
-    fig = plot.plot(files["g"])
-    assert fig.axes[0].get_yscale() == "log" and "log axis" in fig._suptitle.get_text()
-    assert plot.plot(files["g"], log=False).axes[0].get_yscale() == "linear"
-    assert "log axis" not in plot.plot(files["g"], log=True)._suptitle.get_text()  # asked for: no note
+    """The measured R decide: spanning two decades or more, a log axis, said in the caption (the
+    theory, A/c ~ 48 at g = 0, decided it too until it forced 7 decades at small Omega)."""
+    ds = load_results(files["g"])
+    ds["R"].values[:] = np.geomspace(0.01, 2.0, ds["R"].size)
+    fig = plot.plot([ds])
+    assert fig.axes[0].get_yscale() == "log" and "log axis: the measured values span 2.3 decades" in \
+        fig._suptitle.get_text()
+    assert plot.plot([ds], log=False).axes[0].get_yscale() == "linear"
+    assert "log axis" not in plot.plot([ds], log=True)._suptitle.get_text()  # asked for: no note
+    ds["R"].values[:] = np.linspace(0.1, 2.0, ds["R"].size)  # 1.3 decades: linear, the theory clipped and said
+    fig = plot.plot([ds])
+    assert fig.axes[0].get_yscale() == "linear" and fig.axes[0].get_ylim()[1] <= 2.0 * 3.0 * 1.05
+    assert "the analytic curves go on beyond the view (up to 48)" in " ".join(fig._suptitle.get_text().split())
+
+
+def test_the_response_axis_follows_the_data_not_a_theory_far_from_them(tmp_path):
+    """At small Omega the first-order theory's A/c falls to ~1e-6 (g = 5, Omega = 0.05): it made
+    the axis logarithmic over 7 decades for measured R of one decade. The axis now follows the
+    measured values (and the theory within THEORY_REACH of them); the rest is clipped, and said."""
+    from vrsweep.plot.sweeps import THEORY_REACH
+
+    path = _run(tmp_path, "small", "parameters: {g: 5.0}\nsweep:\n  Omega: [0.05, 0.5, 1.0]\n" + SHORT, "run")
+    ds = load_results(path)
+    ds["R"].values[:] = [1.0, 2.0, 3.0]
+    branches = plot.analytic_branches(dict(DEFAULT_PARAMETERS, g=5.0), "Omega", np.array([0.05]), gain=True)
+    lowest = min(float(np.nanmin(y)) for _, y, _ in branches)
+    assert lowest < 1e-5  # the theory far below the data: what forced the log axis
+    fig = plot.plot([ds])
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "linear", plot.description(fig)
+    assert ax.get_ylim()[0] == 0.0 and 3.0 <= ax.get_ylim()[1] <= 3.0 * 1.1
+    assert f"the analytic curves go on beyond the view (down to {lowest:.2g})" not in plot.description(fig)
+    assert "log axis" not in plot.description(fig)
+    assert THEORY_REACH == 10.0
+    # Measured values that span decades themselves still get a log axis, and say so.
+    ds["R"].values[:] = [0.01, 1.0, 5.0]
+    fig = plot.plot([ds])
+    assert fig.axes[0].get_yscale() == "log" and "log axis: the measured values span 2.7 decades" in \
+        plot.description(fig)
+    low, high = fig.axes[0].get_ylim()  # whole decades around the data and the theory within one of them
+    assert 1e-4 <= low <= 1e-3 and high == 1e2 and f"down to {lowest:.2g}" in " ".join(plot.description(fig).split()), (low, high)
 
 
 def test_log_on_a_map_is_a_logarithmic_colour_scale(files):
@@ -589,3 +622,22 @@ def test_the_resonance_curve_is_named_g_res_of_omega_only_over_g_and_omega(tmp_p
               for t in legend.get_texts()]
     resonance = [label for label in labels if "eq3.4" in label]
     assert resonance and all("g_{res}" not in label and label.startswith("resonance") for label in resonance), labels
+
+
+def test_a_trajectory_says_when_its_samples_alias_the_fast_force(files, tmp_path):
+    """20 samples a slow period at Omega/omega = 10 are 2 per cycle of the fast force: the lines
+    alias its oscillation, and the figure said nothing. The title says so (wrapped onto the
+    canvas), with the samples that resolve it; 50 samples (5 a cycle) too; none for 2000 (200)."""
+    from vrsweep.plot.layout import renderer_of
+
+    for name, per_cycle in (("traj20", "2"), ("traj", "5")):
+        fig = plot.plot(files[name])
+        what = plot.description(fig)
+        assert f"NOT RESOLVED: {per_cycle} samples per cycle of the fastest force (10 cycles per slow period)" in what
+        assert "simulating with 200 samples per slow period resolves it" in what, what
+        box = fig._suptitle.get_window_extent(renderer_of(fig))
+        assert box.x0 >= 0 and box.x1 <= fig.bbox.width, (box, fig.bbox)
+    fine = _run(tmp_path, "fine", "parameters: {g: 20.0, Omega: 5.0}\n"
+                                  "integration: {transient_periods: 1, measure_periods: 2, strobe_periods: 1}\n",
+                "simulate", "--samples-per-period", "2000")
+    assert "NOT RESOLVED" not in plot.description(plot.plot(fine))

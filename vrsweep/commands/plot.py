@@ -59,7 +59,7 @@ def default_output(path, kind):
                    "default for one axis); default R (|Q| with --amplitude).")
 @click.option("--log/--linear", "log", default=None,
               help="Logarithmic (or linear) response axis; on maps, colour scale. Default: response "
-                   "plots choose log when the values span two decades or more, maps are linear.")
+                   "plots choose log when the measured values span two decades or more, maps are linear.")
 @click.option("--periods", default=None, metavar="FIRST:LAST",
               help="Trajectory files: show slow periods FIRST to LAST only (1-based), e.g. 1:20.")
 @click.option("--dpi", type=WholeNumberRange(min=20, max=1200), default=150, show_default=True,
@@ -132,7 +132,7 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     On response plots a filled marker is an R to trust (R_err <= 10% of R), a hollow one is not
     (R depends on the window: chaos or a transient); a circle is a motion with a period, a
     square one without (period 0). Failed points are x marks along the bottom edge. The response
-    axis turns logarithmic by itself when the values span two decades (--log/--linear to choose).
+    axis turns logarithmic by itself when the measured values span two decades (--log/--linear to choose).
     """
     from vrsweep.errors import VrsweepError
 

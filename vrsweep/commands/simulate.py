@@ -7,17 +7,17 @@ import click
 from vrsweep.commands.options import (
     OUTPUT_FLAGS, WholeNumberRange, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
-from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
+from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD, SAMPLES_PER_CYCLE
 
 
 @click.command("simulate")
 @config_argument
 @set_option
 @output_option
-@click.option("--samples-per-period", type=WholeNumberRange(min=1), default=DEFAULT_SAMPLES_PER_PERIOD,
-              show_default=True,
+@click.option("--samples-per-period", type=WholeNumberRange(min=1), default=None,
               help="Samples of x and v per slow period 2 pi/omega (a written model's period T), taken from "
-                   "the solver's dense output.")
+                   f"the solver's dense output. Default: {DEFAULT_SAMPLES_PER_PERIOD}, or {SAMPLES_PER_CYCLE} per "
+                   "cycle of the fastest force when that is more (Omega = 50, omega = 0.5: 2000).")
 @click.option("--compare", type=click.Choice(["effective"]), default=None,
               help="Also integrate the effective system (eq2.10) from the same initial state, and "
                    "reconstruct it from the slow flow (eq2.21, eq2.24) -- Fig. 3-6 of the paper.")

@@ -30,7 +30,6 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from vrsweep.errors import FlagTypeError, PathTypeError, UsageError, VrsweepError
-from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD
 
 __all__ = ["sweep", "simulate", "theory", "resolve_config", "setting_text"]
 
@@ -297,7 +296,7 @@ def _progress_factory(config, bars):
 # -- simulate --------------------------------------------------------------------------------
 
 
-def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare=None,
+def simulate(config, *, output=None, samples_per_period=None, compare=None,
              overwrite=False, **overrides):
     """Integrate the config's single point densely, as ``vrsweep simulate`` does.
 
@@ -309,8 +308,9 @@ def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERI
     output : str or os.PathLike, optional
         Also keep the trajectory file (``vrsweep simulate -o``) here; without it nothing is
         written.
-    samples_per_period : int
-        Samples of x and v per slow period 2 pi/omega (from the solver's dense output).
+    samples_per_period : int, optional
+        Samples of x and v per slow period 2 pi/omega (from the solver's dense output). Default:
+        200, or 20 per cycle of the fastest force when that is more (as ``vrsweep simulate``).
     compare : None or "effective"
         ``"effective"``: also integrate the effective system (eq2.10) from the same initial state
         and reconstruct it from the slow flow (eq2.21, eq2.24), as ``--compare effective``.
@@ -337,10 +337,11 @@ def simulate(config, *, output=None, samples_per_period=DEFAULT_SAMPLES_PER_PERI
     from vrsweep.store.trajectory_file import write_trajectory
 
     _check_flags(overwrite=overwrite)
-    if isinstance(samples_per_period, bool) or not isinstance(samples_per_period, numbers.Integral):
-        raise UsageError.naming("{samples_per_period} must be a whole number of at least 1, got {value!r}",
-                                value=samples_per_period)
-    samples_per_period = int(samples_per_period)
+    if samples_per_period is not None:
+        if isinstance(samples_per_period, bool) or not isinstance(samples_per_period, numbers.Integral):
+            raise UsageError.naming("{samples_per_period} must be a whole number of at least 1, got {value!r}",
+                                    value=samples_per_period)
+        samples_per_period = int(samples_per_period)
     _check_path("output", output)
     resolved = resolve_config(config, overrides)
     if compare is not None and compare not in COMPARE_CHOICES:

@@ -14,9 +14,13 @@ from vrsweep.results import Status
 from vrsweep.store.trajectory_file import ModelRun, SlowFlowRun, TrajectoryData
 
 DEFAULT_SAMPLES_PER_PERIOD = 200
-"""Samples per slow period T = 2 pi/omega. With the paper's omega = 0.5 and Omega = 4 or 5 a slow
-period holds 8 or 10 fast periods, so 200 samples give 20-25 per fast period: enough to draw the
-fast wiggle of Fig. 3-5. Impacts are stored exactly besides, and the plots insert them."""
+"""Samples per slow period T = 2 pi/omega, at least. With the paper's omega = 0.5 and Omega = 4 or 5
+a slow period holds 8 or 10 fast periods, so 200 samples give 20-25 per fast period: enough to draw
+the fast wiggle of Fig. 3-5. Impacts are stored exactly besides, and the plots insert them."""
+SAMPLES_PER_CYCLE = 20
+"""Samples per cycle of the fastest force that the default gives, at least (``default_samples``):
+at Omega = 50, 200 samples a slow period were 2 a cycle, each at a zero of sin(Omega t), and the
+velocity's fast wiggle (g/Omega = 0.1) vanished from the figure."""
 MAX_SAMPLES = 20_000_000  # per model: 320 MB of x and v; more is a typo, not a figure
 # A trajectory keeps every period's record, transient included (impacts per period are stored):
 # 80 bytes a period (numerics/records.py), 320 MB at most, as for the samples.
@@ -51,6 +55,19 @@ def sample_times(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD):
     return np.linspace(0.0, n_periods * stroboscopic_period(config), n_samples)
 
 
+def default_samples(config) -> int:
+    """Samples per period T when none is asked for: DEFAULT_SAMPLES_PER_PERIOD, or SAMPLES_PER_CYCLE
+    per cycle of the fastest force when that is more (Omega = 50: 100 cycles a slow period, 2000
+    samples), within MAX_SAMPLES for the run."""
+    from vrsweep.analysis.diagnostics import sampling_of_forcing
+
+    cycles = float(sampling_of_forcing(config.model, [config.parameters], 1)[1][0])
+    wanted = int(np.ceil(SAMPLES_PER_CYCLE * cycles)) if np.isfinite(cycles) else DEFAULT_SAMPLES_PER_PERIOD
+    n_periods = max(1, config.integration.transient_periods + config.integration.measure_periods)
+    room = (MAX_SAMPLES - 1) // n_periods
+    return max(DEFAULT_SAMPLES_PER_PERIOD, min(wanted, room))
+
+
 def stroboscopic_period(config) -> float:
     """T at the config's fixed parameters: 2 pi / omega for the paper's models, a written model's period."""
     from vrsweep.numerics.coefficients import PERIOD
@@ -71,8 +88,9 @@ def check_single_point(config):
             + example, {"set": ""}, source=config.source_name, swept=swept)
 
 
-def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compare_effective=False):
-    """Integrate the single point of ``config``; returns TrajectoryData (not yet written)."""
+def simulate_point(config, samples_per_period=None, compare_effective=False):
+    """Integrate the single point of ``config``; returns TrajectoryData (not yet written).
+    samples_per_period: None for ``default_samples``."""
     from vrsweep.numerics import trajectory
     from vrsweep.numerics.models import kernels_for
     from vrsweep.store.provenance import model_key
@@ -82,6 +100,8 @@ def simulate_point(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD, compar
         raise UsageError.naming("{compare_effective} compares the original model with the effective one, but "
                                 "the config's model is already effective: drop {compare}, or {model_original}",
                                 {"compare": "compare_effective", "model_original": "use model: original"})
+    if samples_per_period is None:
+        samples_per_period = default_samples(config)
     times = sample_times(config, samples_per_period)
     settings = trajectory.settings_vector(**vars(config.integration))
     initial_state = np.array([config.initial["x"], config.initial["v"]])

@@ -94,7 +94,7 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     ``load`` or ``vrsweep.open_results``; a trajectory's TrajectoryData). at: {axis: value} fixing
     sweep axes; x_axis: the swept parameter to draw against; log: True for a logarithmic response
     axis (or colour scale of a map), False for a linear one, None to choose (response plots: log
-    when the values span two decades or more; maps: linear); periods: (first, last) slow periods
+    when the measured values span two decades or more; maps: linear); periods: (first, last) slow periods
     of a trajectory to show; var: the stored variable a map shows (default R, or Q_amplitude with
     ``amplitude``). title, size, style: as every figure function takes them (``figure_options``):
     False for no title at all (the description stays in ``description(fig)``, the file's metadata),

@@ -43,7 +43,7 @@ FAILED_COLOUR = "tab:red"
 FAILED_ROW_HEIGHT = 0.035  # axes fraction per row of failed-point marks at the bottom edge
 MARKERS = {False: "o", True: "s"}  # period found: circle; none found (period 0): square
 LYAPUNOV_SYMBOL = "$\\lambda_1$"  # the largest Lyapunov exponent, on every figure that shows it
-LOG_SPAN = 100.0  # drawn values spanning this ratio (two decades) or more get a log axis
+LOG_SPAN = 100.0  # measured values spanning this ratio (two decades) or more get a log axis
 
 
 # --------------------------------------------------------------------------------------------
@@ -215,7 +215,10 @@ def _new_figure(width, height):
 def _title(fig, what, caption):
     """The figure's title: what it shows, then the caption. Also kept as the figure's description
     (``description``), which goes into the file's metadata even when the title is left off."""
-    fig.suptitle(f"{what}\n{caption}", fontsize="small")  # relative: follows the style's font size
+    # Wrapped as the caption is: a title wider than the figure (a trajectory's, with its warning
+    # that the samples alias the fast force) ran off both edges of the canvas.
+    shown = _wrap([what], _width(fig))
+    fig.suptitle(f"{shown}\n{caption}", fontsize="small")  # relative: follows the style's font size
     fig._vrsweep_description = (what, caption)
 
 

@@ -51,8 +51,9 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     and counted in the title.
 
     log: True/False for a logarithmic/linear response axis; None chooses: logarithmic when the
-    drawn values (numerical and analytic) span LOG_SPAN or more -- the analytic gain A/c reaches
-    ~50 with the paper's parameters while the numerical R may go down to 0.01.
+    measured values span LOG_SPAN or more. The theory counts for the limits only near the
+    measured values, and is clipped beyond, said in the caption (``_response_axes``): at small
+    Omega its A/c fell to 1e-6 and forced a log axis of 7 decades on R of 0.2 to 44.
 
     In pieces: ``_curve_colours`` (a legend's colours, or a colour scale), ``_draw_measured``
     (each curve's points by trust and kind), ``_draw_analytic`` (the theory's branches, the
@@ -77,7 +78,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
         ("numerical |Q| (eq3.1-3.2)" if amplitude else "numerical R = |Q|/c (eq3.3)")
     # The barrier level Delta (or Delta/c) is the same for every curve unless Delta or c is swept.
     analytic = _Analytic(barrier_shared=not any(axis in ("Delta", "c") for axis in others))
-    curve_handles, drawn = [], []  # drawn: every value on the response axis, to choose its scale
+    curve_handles, drawn, theory = [], [], []  # the values measured and the theory's: to choose the scale
     kinds_seen = {"aperiodic": False, "untrusted": False}
     for k, (where, label) in enumerate(curves):
         colour = colour_of(k, where)
@@ -89,12 +90,12 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
             curve_handles.append(Line2D([], [], ls=":", lw=0.8, marker="o", color="0.3", ms=4,
                                         label=f"{what}; colour: {_symbol(scale_axis)} (colour bar)"))
         if view.config is not None and not written:
-            drawn += _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic)
+            theory += _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic)
     failure_note = _failure_note(view, "along the bottom edge")
     handles = _response_legend(curve_handles, kinds_seen, failure_note, len(curves), amplitude,
                                analytic if view.config is not None and not written else None)
     fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
-    scale_note = _response_axes(ax, view, x_axis, x, drawn, amplitude, log)
+    scale_note = _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, analytic.barrier_levels)
     quantity = "amplitude |Q|" if amplitude else "gain R"
     notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note) if note)
     theory_note = ("" if written else "; analytic: first-order theory of the effective system "
@@ -163,6 +164,7 @@ class _Analytic:
         self.barrier_drawn = False
         self.done = set()  # the parameter values whose branches are drawn
         self.resonance_handles = []
+        self.barrier_levels = []  # A/c = Delta/c (or A = Delta) of each curve: said when out of view
 
 
 def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic):
@@ -194,6 +196,7 @@ def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, an
         elif not analytic.resonance_handles:
             analytic.resonance_handles.append(Line2D([], [], color="0.3", ls="-.", lw=0.9,
                                                      label="resonance (eq3.4), in the curve's colour"))
+    analytic.barrier_levels.append(np.atleast_1d(barrier_level))
     return [branch_y for _, branch_y, _ in branches]
 
 
@@ -225,9 +228,19 @@ def _response_legend(curve_handles, kinds_seen, failure_note, n_curves, amplitud
     return handles + analytic.resonance_handles
 
 
-def _response_axes(ax, view, x_axis, x, drawn, amplitude, log):
-    """Axis labels, the response axis' scale (chosen when ``log`` is None), the grid; returns the
-    caption's note on a scale chosen logarithmic, '' otherwise."""
+THEORY_REACH = 10.0  # on a log axis the theory's curves count for its limits within this factor of the data
+LINEAR_THEORY_REACH = 3.0  # on a linear one, up to this many times the largest measured value
+
+
+def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_levels=()):
+    """Axis labels, the response axis' scale (chosen when ``log`` is None), its limits, the grid;
+    returns the caption's notes: a scale chosen logarithmic, a theory curve that leaves the view.
+
+    drawn: the measured values; theory: the analytic curves' values. The axis follows the data:
+    log or linear by the measured values' span alone, its limits by them and the theory near
+    them (within THEORY_REACH on a log axis, LINEAR_THEORY_REACH times the largest on a linear
+    one), so that a theory far from them (A/c ~ 1e-6 at small Omega, where first-order averaging
+    says nothing) neither makes the axis logarithmic nor stretches it; it is clipped, and said."""
     ax.set_xlabel(parameter_label(x_axis))
     if view.config is not None and view.config.written:
         response = view.config.model.as_data()["response"]
@@ -237,19 +250,51 @@ def _response_axes(ax, view, x_axis, x, drawn, amplitude, log):
         ax.set_ylabel("amplitude $|Q|$ of x at $\\omega$, analytic $A$")
     else:
         ax.set_ylabel("gain $R = |Q|/c$, analytic $A/c$")
-    scale_note = ""
-    span = _decades(drawn)
+    notes = []
+    measured = np.concatenate([np.ravel(a) for a in drawn]) if drawn else np.array([])
+    measured = measured[np.isfinite(measured) & (measured > 0)]
+    analytic = np.concatenate([np.ravel(a) for a in theory]) if theory else np.array([])
+    analytic = analytic[np.isfinite(analytic)]
+    # The scale follows the measured values alone; the theory, drawn for comparison, then counts
+    # for the limits where it is near them (a decade either way on a log axis, 3 times the
+    # largest on a linear one), and what lies beyond is clipped and said.
+    decided = measured if measured.size >= 2 else np.concatenate([measured, analytic[analytic > 0]])
+    span = _decades([decided])
     if log is None:
         log = span >= np.log10(LOG_SPAN)
         if log:
-            scale_note = f"log axis: the values span {span:.1f} decades (a linear one on request)"
+            notes.append(f"log axis: the measured values span {span:.1f} decades (a linear one on request)")
     if log:
         ax.set_yscale("log")
+    if measured.size >= 2:
+        reach_low, reach_high = (measured.min() / THEORY_REACH, measured.max() * THEORY_REACH) if log else \
+            (-np.inf, measured.max() * LINEAR_THEORY_REACH)
+        shown = np.concatenate([measured, analytic[(analytic >= reach_low) & (analytic <= reach_high)]])
     else:
+        shown = decided
+    positive = shown[shown > 0]
+    if log and positive.size:  # out to whole decades: a labelled tick at either end
+        low, high = 10.0 ** np.floor(np.log10(positive.min() / 1.2)), 10.0 ** np.ceil(np.log10(positive.max() * 1.2))
+    else:
+        low, high = 0.0, 1.05 * float(shown.max()) if shown.size else 1.0
+    below, above = analytic[analytic < low], analytic[analytic > high]
+    if measured.size >= 2 and (below.size or above.size):
+        ax.set_ylim(low, high)
+        ends = ([f"down to {float(below.min()):.2g}"] if below.size else []) + \
+               ([f"up to {float(above.max()):.2g}"] if above.size else [])
+        reach = (f"more than {THEORY_REACH:g} times from the measured values" if log else
+                 f"above {LINEAR_THEORY_REACH:g} times the largest measured value")
+        notes.append(f"the analytic curves go on beyond the view ({' and '.join(ends)}), {reach}")
+        levels = np.concatenate([np.ravel(level) for level in barrier_levels]) if barrier_levels else np.array([])
+        levels = levels[np.isfinite(levels)]
+        if levels.size and (np.all(levels > high) or np.all(levels < low)):  # its legend entry would name no line
+            notes.append(f"the barrier's level {'A = Δ' if amplitude else 'A/c = Δ/c'} "
+                         f"({float(levels.min()):.3g}) lies {'above' if np.all(levels > high) else 'below'} the view")
+    elif not log:
         ax.set_ylim(bottom=0.0)
     _span_grid(ax, x)
     ax.grid(alpha=0.3, which="both" if log else "major")
-    return scale_note
+    return "; ".join(notes)
 
 
 @figure_options

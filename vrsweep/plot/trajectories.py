@@ -128,6 +128,8 @@ def trajectory_figure(data, periods=None) -> Figure:
     slow_period = float(data.attrs.get("slow_period", 0.0))
     t_transient = config.integration.transient_periods * slow_period if config is not None else 0.0
     runs = list(data.runs.values())
+    if runs and len(runs[0].t):  # split at a sample: nT computed apart differs from the sample's time by roundoff
+        t_transient = float(runs[0].t[np.argmin(np.abs(runs[0].t - t_transient))])
     fig = _new_figure(13.0, 3.3 * len(runs) + 0.9)
     grid = fig.subplots(len(runs), 3, squeeze=False)
     letters = iter("abcdef")
@@ -162,10 +164,31 @@ def trajectory_figure(data, periods=None) -> Figure:
         ax_phase.set_ylabel(f"velocity $\\dot{{x}}$")
     samples = data.attrs.get("samples_per_period", "?")
     _title(fig, f"Trajectory at {_point_text(config)}, {_window_text(window, data)}: position, velocity, "
-                f"phase portrait ({samples} dense-output samples per {period_words(symbol=False)}, impacts exact; dashed: barrier)",
+                f"phase portrait ({samples} dense-output samples per {period_words(symbol=False)}, impacts exact; dashed: barrier)"
+                + _aliasing_note(config, samples, runs),
            _caption(data.path or "", config, " and ".join(ROW_TITLES.get(m, m) for m in data.runs),
                     width=_width(fig)))
     return fig
+
+
+RESOLVED_SAMPLES_PER_CYCLE = 10  # fewer samples a cycle of the fastest force do not draw its wiggle
+
+
+def _aliasing_note(config, samples, runs):
+    """The title's warning where the samples do not resolve the fastest force: at Omega = 50 with
+    omega = 0.5, 200 samples a slow period are 2 a cycle, every one at a zero of sin(Omega t), and
+    the velocity's fast wiggle vanished from the figure without a word. '' where they do."""
+    if config is None or not isinstance(samples, (int, np.integer)) or not any(run.model != "effective" for run in runs):
+        return ""
+    from vrsweep.analysis.diagnostics import sampling_of_forcing
+
+    cycles = float(sampling_of_forcing(config.model, [config.parameters], 1)[1][0])
+    if not cycles > 0 or samples / cycles >= RESOLVED_SAMPLES_PER_CYCLE:
+        return ""
+    needed = int(np.ceil(2 * RESOLVED_SAMPLES_PER_CYCLE * cycles))
+    return (f". NOT RESOLVED: {samples / cycles:.3g} samples per cycle of the fastest force ({cycles:.4g} cycles per "
+            f"{period_words(symbol=False)}), so the lines alias its oscillation; simulating with "
+            f"{needed} samples per {period_words(symbol=False)} resolves it")
 
 
 @figure_options
