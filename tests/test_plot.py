@@ -641,3 +641,17 @@ def test_a_trajectory_says_when_its_samples_alias_the_fast_force(files, tmp_path
                                   "integration: {transient_periods: 1, measure_periods: 2, strobe_periods: 1}\n",
                 "simulate", "--samples-per-period", "2000")
     assert "NOT RESOLVED" not in plot.description(plot.plot(fine))
+
+
+def test_the_transient_and_the_rest_meet_at_a_sample(tmp_path):
+    """The split at t = transient_periods * T fell between two samples when the sample's time was
+    above the product by roundoff: the grey line ended one sample before the blue one began."""
+    path = _run(tmp_path, "split", "parameters: {g: 5.0, Omega: 5.0}\n"
+                                   "integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 1}\n",
+                "simulate", "--samples-per-period", "200")
+    times = np.linspace(0.0, 5 * 4 * np.pi, 1001)
+    assert times[400] != 2 * (4 * np.pi)  # the sample at the split is not the product, by roundoff
+    fig = plot.plot(path)
+    ax = fig.axes[0]
+    grey, blue = [line for line in ax.get_lines() if len(line.get_xdata()) > 2][:2]
+    assert grey.get_xdata()[-1] == blue.get_xdata()[0] and grey.get_ydata()[-1] == blue.get_ydata()[0]
