@@ -253,6 +253,7 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     notes = []
     measured = np.concatenate([np.ravel(a) for a in drawn]) if drawn else np.array([])
     measured = measured[np.isfinite(measured) & (measured > 0)]
+    theory = list(theory) + list(barrier_levels)  # the barrier's level A/c = Delta/c is the theory's too
     analytic = np.concatenate([np.ravel(a) for a in theory]) if theory else np.array([])
     analytic = analytic[np.isfinite(analytic)]
     # The scale follows the measured values alone; the theory, drawn for comparison, then counts
@@ -278,6 +279,8 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     else:
         low, high = 0.0, 1.05 * float(shown.max()) if shown.size else 1.0
     below, above = analytic[analytic < low], analytic[analytic > high]
+    if measured.size >= 2 and not log:
+        ax.set_ylim(low, high)
     if measured.size >= 2 and (below.size or above.size):
         ax.set_ylim(low, high)
         ends = ([f"down to {float(below.min()):.2g}"] if below.size else []) + \
