@@ -667,6 +667,9 @@ def test_a_written_models_response_curve_and_basins_say_its_gain_is_over_the_sca
     with vrsweep.open_results(curve) as ds:
         label = plot.response_figure(ds).axes[0].get_ylabel()
     assert label.startswith("gain $R = |Q|$ / |F|"), label
+    # A bare parameter as the response frequency by its symbol, as on the x axis: the label read
+    # 'Q at frequency omega' beside 'parameter $\omega$'.
+    assert label.endswith("$Q$ at frequency $\\omega$"), label
     with vrsweep.open_results(basins) as ds:
         title = " ".join(legend.get_title().get_text() for legend in plot.basin_figure(ds).legends)
     assert "gain R = |Q|/|F|" in title and "/c" not in title, title

@@ -87,8 +87,15 @@ def gain_words() -> str:
     """What R is: the paper's |Q|/c (eq3.3), or a written model's |Q| over its response scale."""
     model = _WRITTEN_MODEL.get()
     if model is not None:
-        return f"gain R = |Q|/|{model.response_scale}|"
+        return f"gain R = |Q|/|{written_expression(model.response_scale)}|"
     return "gain R = |Q|/c (eq3.3)"
+
+
+def written_expression(text) -> str:
+    """A written model's expression (its response frequency or scale) as a label shows it: a bare
+    parameter by its symbol ($\\omega$, where the ylabel read 'Q at frequency omega' beside an
+    x axis of $\\omega$), anything else as written."""
+    return _written_symbol(str(text).strip()) or str(text)
 
 
 def _written_symbol(name):
