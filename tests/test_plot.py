@@ -655,3 +655,24 @@ def test_the_transient_and_the_rest_meet_at_a_sample(tmp_path):
     ax = fig.axes[0]
     grey, blue = [line for line in ax.get_lines() if len(line.get_xdata()) > 2][:2]
     assert grey.get_xdata()[-1] == blue.get_xdata()[0] and grey.get_ydata()[-1] == blue.get_ydata()[0]
+
+
+def _lightness(colour):
+    """CIE L* of a colour: what a greyscale page keeps of it."""
+    from matplotlib.colors import to_rgb
+
+    rgb = np.array(to_rgb(colour))
+    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    y = float(linear @ [0.2126, 0.7152, 0.0722])
+    return 116.0 * np.cbrt(y) - 16.0 if y > 0.008856 else 903.3 * y
+
+
+def test_the_kinds_of_motion_stay_apart_in_greyscale(files):
+    """The motion map's chaotic (tab:red, L* 47) and quasi-periodic (tab:blue, L* 48) cells were one
+    grey on a greyscale page, and periodic green against chaotic red is the pair colour-blind
+    readers lose. Every two colours of the map (the greys of 'none' included) differ by 8 in L*."""
+    for fig in (plot.plot(files["map"], kind="motion"), plot.plot(files["map"], kind="map", var="motion")):
+        (mesh,) = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)]
+        colours = [mesh.cmap(k) for k in range(mesh.cmap.N)]
+        light = sorted(_lightness(colour) for colour in colours)
+        assert len(light) >= 2 and min(np.diff(light)) >= 8.0, light

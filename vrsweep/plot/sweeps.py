@@ -391,12 +391,17 @@ NOT_COMPUTED_COLOUR = "0.85"  # the axes' background, seen where a cell has no v
 # analysis/attractors.py): drawn grey and named on the colour bar.
 SPECIAL_VALUES = {"period": {0: "no period"}, "impacts_per_cycle": {-1: "no period"},
                   "attractor": {-1: "failed"}}
+# The kinds of motion (periodic, quasi-periodic, chaotic, not settled): Paul Tol's high-contrast
+# scheme (blue, yellow, red) and black, apart in lightness (CIE L* 29, 72, 50, 0; the greys of
+# 'none' 38 and 87) and for colour-blind readers. tab:green, tab:blue, tab:red were red against
+# green, and blue and red of one lightness (L* 48 and 47): one grey on a greyscale page.
+MOTION_KIND_COLOURS = ("#004488", "#DDAA33", "#BB5566", "#000000")
 STATUS_COLOURS = {"not_computed": "0.85", "ok": "tab:green", "max_steps": "tab:orange", "diverged": "tab:red",
                   "chatter_limit": "tab:purple", "step_too_small": "tab:brown", "non_finite": "k"}
 # The colours --kind motion uses, so that --var motion reads the same; 'none' (the point failed) is
 # a value meaning none, dark grey as on every integer map.
-MOTION_FLAG_COLOURS = {"none": NO_VALUE_COLOUR, "periodic": "tab:green", "quasi_periodic": "tab:blue", "chaotic": "tab:red",
-                       "not_settled": "tab:orange"}
+MOTION_FLAG_COLOURS = {"none": NO_VALUE_COLOUR, **dict(zip(("periodic", "quasi_periodic", "chaotic", "not_settled"),
+                                                             MOTION_KIND_COLOURS))}
 FLAG_COLOURS = {**STATUS_COLOURS, **MOTION_FLAG_COLOURS}
 MAX_TICK_LABELS = 20  # an integer colour bar with more values labels every k-th only
 NARROW_FIGURE = 5.0   # inches: a figure narrower than this (a journal column) gets fewer colour-bar ticks
@@ -759,8 +764,8 @@ def status_figure(ds, x_axis=None) -> Figure:
 
 
 # One colour per kind of motion (results.Motion's order): none (failed) grey as the status
-# figure's not-computed, periodic green, quasi-periodic blue, chaotic red, not settled orange.
-MOTION_COLOURS = ["0.85", "tab:green", "tab:blue", "tab:red", "tab:orange"]
+# figure's not-computed, then periodic, quasi-periodic, chaotic, not settled (MOTION_KIND_COLOURS).
+MOTION_COLOURS = ["0.85", *MOTION_KIND_COLOURS]
 
 
 @figure_options
