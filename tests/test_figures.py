@@ -104,7 +104,9 @@ def test_a_map_of_motion_gives_each_kind_its_own_colour(files):
     mesh = _mesh(fig.axes[0])
     colours = {value: to_rgba(mesh.cmap(mesh.norm(value))) for value in (1, 2, 3, 4)}
     assert len(set(colours.values())) == 4
-    assert colours[1] == to_rgba("tab:green") and colours[3] == to_rgba("tab:red")  # as --kind motion
+    from vrsweep.plot.sweeps import MOTION_COLOURS
+
+    assert all(colours[k] == to_rgba(MOTION_COLOURS[k]) for k in (1, 2, 3, 4))  # as --kind motion
     assert [t.get_text() for t in fig.axes[1].get_yticklabels()] == [
         "periodic", "quasi_periodic", "chaotic", "not_settled"]
 
