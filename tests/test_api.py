@@ -257,7 +257,7 @@ def test_a_bad_keyword_argument_is_named_as_one(tmp_path, config):
              "Config": load_config(path)}[config]
     cases = [({"g": "abc"}, "keyword argument g='abc': parameters.g: must be a number, got 'abc'"),
              ({"gg": 5}, "keyword argument gg=5: unknown name 'gg' (did you mean 'g'?)"),
-             ({"initial.x": 2.0}, "keyword argument initial.x=2.0: initial.x: must be below parameters.Delta")]
+             ({"initial.x": 2.0}, "keyword argument initial.x=2.0: initial.x: must be at or below parameters.Delta")]
     for overrides, words in cases:
         with pytest.raises(ConfigError) as error:
             vrsweep.theory(given, **overrides)
