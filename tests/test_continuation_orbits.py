@@ -392,3 +392,56 @@ def test_fold_lies_where_a_down_sweep_jumps_in_the_original_model():
     jumped = int(np.argmax(periods != 3))
     assert periods[jumped] != 3 and np.all(periods[:jumped] == 3), periods
     assert any(abs(grid[jumped] - fold) <= 0.05 + 1e-12 for fold in folds), (folds, grid[jumped])
+
+
+def test_a_fold_that_cannot_be_located_is_recorded_with_its_bracket_not_dropped(monkeypatch, tmp_path):
+    """Where the corrector fails at the first point of a fold's location, the fold was dropped
+    without a word (as a graze not located was until 0.7.2): no row in the table, nothing on the
+    figure. It is now an unlocated_fold (tag F?1), its orbit the step's first one; info names the
+    bracket (two orbits of the branch), whose ends have multipliers on either side of +1 and
+    between which lies the fold that the same run locates when the corrector does not fail."""
+    from click.testing import CliRunner
+
+    import vrsweep
+    from vrsweep.cli import main
+
+    def follow(name):
+        out = tmp_path / f"{name}.h5"
+        result = CliRunner().invoke(main, ["continue", "configs/continuation_hysteresis.yaml", "-o", str(out), "-q",
+                                           "--set", "continuation.to=22.5,27"])
+        assert result.exit_code == 0, result.output
+        return out
+
+    located = follow("located")
+    with vrsweep.open_results(located) as ds:
+        kinds = [str(kind) for kind in ds["bifurcation_kind"].values]
+        fold = float(ds["bifurcation_x"].values[kinds.index("fold")])
+    locate = continuation._locate
+    monkeypatch.setattr(continuation, "_locate", lambda *args: None if args[4] == "fold" else locate(*args))
+    unlocated = follow("unlocated")
+    with vrsweep.open_results(unlocated) as ds:
+        kinds = [str(kind) for kind in ds["bifurcation_kind"].values]
+        assert "fold" not in kinds and kinds.count("unlocated_fold") == 1, kinds
+        at = float(ds["bifurcation_parameter"].values[kinds.index("unlocated_fold")])
+        parameter = ds["parameter"].values
+        k = int(np.flatnonzero(parameter == at)[0])
+        mu = ds["multiplier_real"].values + 1j * ds["multiplier_imag"].values
+        x = ds["x"].values
+    info = CliRunner().invoke(main, ["info", str(unlocated)])
+    assert info.exit_code == 0, info.output
+    line = next(line for line in info.output.splitlines() if "unlocated_fold" in line)
+    assert "F?1" in line and "fold test function changes sign between the branch's orbits at g = " in line, line
+    other = float(line.split(" and ")[1].split(",")[0])
+    j = int(np.argmin(np.abs(parameter - other)))  # info prints 8 digits
+    assert abs(j - k) == 1 and abs(parameter[j] - other) < 1e-6 * abs(other)
+    # a multiplier passes +1 across the bracket: det(M - I) changes sign
+    assert ((1 - mu[k, 0]) * (1 - mu[k, 1])).real * ((1 - mu[j, 0]) * (1 - mu[j, 1])).real < 0
+    # g turns at the fold, x goes on: the located fold's x lies between the bracket's
+    assert min(x[k], x[j]) < fold < max(x[k], x[j])
+    figure = CliRunner().invoke(main, ["plot", str(unlocated), "-o", str(tmp_path / "branch.png")])
+    assert figure.exit_code == 0, figure.output
+    curve = CliRunner().invoke(main, ["continue", str(unlocated), "--point", str(kinds.index("unlocated_fold")),
+                                      "--along", "Omega", "--to", "3.9", "4.1", "-o", str(tmp_path / "curve.h5")])
+    assert curve.exit_code == 2 and "unlocated_fold point: it was not located" in curve.output, curve.output
+    assert len(curve.output.strip().splitlines()) == 1
+

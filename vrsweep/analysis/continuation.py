@@ -92,6 +92,10 @@ UNLOCATED = "unlocated"
 # orbit is the step's first one, the graze lies between it and the branch's next orbit. Kept, not
 # dropped, so that info and the figure show where the branch is not smooth (docs/continuation.md).
 UNLOCATED_GRAZING = "unlocated_grazing"
+# Likewise a fold, period doubling or Neimark-Sacker point whose test function changes sign between
+# two consecutive orbits away from any graze, where the corrector failed at the first point of the
+# location: "unlocated_fold" ... , its orbit the step's first one (it was dropped without a word).
+UNLOCATED_PREFIX = "unlocated_"
 # Branch ends
 ENDED_RANGE = "left_range"
 ENDED_MAX_POINTS = "max_points"
@@ -467,7 +471,10 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
         a, b = test(previous), test(current)
         if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
             orbit = _locate(problem, previous, tangent, step, kind, a, b, periods)
-            if orbit is not None and (not crosses_graze or _is_critical(kind, orbit)):
+            if orbit is None:
+                if not crosses_graze:  # across a graze the sign change may be the jump, not a bifurcation
+                    found.append((UNLOCATED_PREFIX + kind, previous))
+            elif not crosses_graze or _is_critical(kind, orbit):
                 found.append((kind, orbit))
     if graze is not None:
         found.append(("grazing", _graze_orbit(problem, graze)))

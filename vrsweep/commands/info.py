@@ -144,20 +144,30 @@ def _describe_branches(parameter, values) -> dict:
                     for kind, tag, b, p, r in zip(values["bifurcation_kind"], tags, values["bifurcation_branch"],
                                                   values["bifurcation_parameter"], values["bifurcation_R"])]
     for row in bifurcations:
-        if row["kind"] == "unlocated_grazing":
+        if row["kind"].startswith("unlocated_"):
             row["between"] = _unlocated_bracket(values, row)
     return {"parameter": str(parameter), "branches": rows, "bifurcations": bifurcations}
 
 
 def _unlocated_bracket(values, row):
-    """[the parameter of an unlocated graze's orbit, that of the branch's neighbouring orbit with
-    another impact count]: where the graze lies (None where the file holds no such neighbour)."""
+    """[the parameter of an unlocated point's orbit, that of the branch's neighbouring orbit on its
+    other side]: where it lies (None where the file holds no such neighbour). The other side of a
+    graze is another impact count; of a fold, period doubling or Neimark-Sacker point, the other
+    sign of its test function (analysis/continuation.py), from the stored multipliers."""
+    kind = row["kind"].removeprefix("unlocated_")
     mine = np.flatnonzero((values["branch"] == row["branch"]) & (values["parameter"] == row["parameter"]))
-    impacts = values["impacts_per_period"]
+    if kind == "grazing":
+        side = values["impacts_per_period"]
+    else:
+        mu = values["multiplier_real"] + 1j * values["multiplier_imag"]
+        with np.errstate(invalid="ignore"):
+            test = {"fold": ((1 - mu[:, 0]) * (1 - mu[:, 1])).real, "period_doubling": ((1 + mu[:, 0]) * (1 + mu[:, 1])).real,
+                    "neimark_sacker": np.abs(mu[:, 0] * mu[:, 1]) - 1}.get(kind, np.full(len(mu), np.nan))
+        side = np.sign(test)
     for index in mine:
         for other in (index - 1, index + 1):
-            if (0 <= other < len(impacts) and values["branch"][other] == row["branch"]
-                    and impacts[other] != impacts[index]):
+            if (0 <= other < len(side) and values["branch"][other] == row["branch"]
+                    and side[other] != side[index]):
                 return [row["parameter"], _number(values["parameter"][other])]
     return None
 
@@ -222,11 +232,18 @@ def _format_branches(branches) -> list[str]:
     for row in branches["bifurcations"]:
         line = (f"bifurcation: {row['kind']} at {name} = {_precise(row['parameter'])} ({row['tag']} on the "
                 f"figure, branch {row['branch']}, R = {_short(row['R'])})")
-        if row["kind"] == "unlocated_grazing":
+        if row["kind"].startswith("unlocated_"):
             between = row.get("between")
             where = (f"between {name} = {_precise(between[0])} and {_precise(between[1])}" if between
                      else f"next to {name} = {_precise(row['parameter'])}")
-            line += f": the impact count changes {where}, where the graze could not be located"
+            kind = row["kind"].removeprefix("unlocated_")
+            # a fold's parameter turns between the two orbits: the point lies between them along the
+            # branch, not between their parameter values
+            orbits = (f"between the branch's orbits at {name} = {_precise(between[0])} and {_precise(between[1])}"
+                      if between else f"next to the orbit at {name} = {_precise(row['parameter'])}")
+            line += (f": the impact count changes {where}, where the graze could not be located" if kind == "grazing"
+                     else f": the {kind.replace('_', ' ')} test function changes sign {orbits}, where the point "
+                          "could not be located")
         lines.append(line)
     return lines
 

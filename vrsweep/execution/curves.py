@@ -73,6 +73,9 @@ def read_request(path, point, along, to=None, within=None, overrides=()):
         raise UsageError.naming("{point} = {index} is a change of the impact count whose graze could not be "
                                 "located (unlocated_grazing): it has no grazing orbit to start a curve from",
                                 {"point": "point"}, index=point)
+    if kind.startswith("unlocated_"):
+        raise UsageError.naming("{point} = {index} is a {kind} point: it was not located, so there is no "
+                                "bifurcating orbit to start a curve from", {"point": "point"}, index=point, kind=kind)
     if kind not in curves.KINDS:
         raise UsageError.naming("{point} = {index} is a {kind} point: only fold, period_doubling and grazing "
                                 "points can be followed in two parameters", {"point": "point"}, index=point,

@@ -25,7 +25,10 @@ from vrsweep.store.branch_file import TAG_PREFIXES, bifurcation_tags
 # the second and third periods' "o" and "s" were the fold's and the period doubling's).
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
                        "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing"),
-                       "unlocated_grazing": ("p", "grazing, not located")}
+                       # not located: one symbol for it, the tag (G?1, F?1, ...) saying which kind
+                       "unlocated_grazing": ("p", "grazing, not located"), "unlocated_fold": ("p", "fold, not located"),
+                       "unlocated_period_doubling": ("p", "period doubling, not located"),
+                       "unlocated_neimark_sacker": ("p", "Neimark-Sacker, not located")}
 UNKNOWN_BIFURCATION_MARKER = "8"
 # A sweep's points: the direction the parameter moved, along the horizontal axis; "x" where no
 # direction (every point from the config's initial state).

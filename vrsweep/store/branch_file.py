@@ -20,10 +20,10 @@ root attributes: ``vrsweep_file = "branch"``, ``vrsweep_format_version``, ``vrsw
     stable (point)                1 when both |mu| < 1
     residual (point)              max |P^p(y) - y| at convergence
     bifurcation (dim)             the located bifurcation points
-    bifurcation_kind (bifurcation)  fold, period_doubling, neimark_sacker, grazing, unlocated_grazing
-                                  (the impact count changes between this point, the branch's orbit
-                                  before the change, and the branch's next one, and the graze
-                                  between them could not be located)
+    bifurcation_kind (bifurcation)  fold, period_doubling, neimark_sacker, grazing; or unlocated_KIND
+                                  of any of them: it lies between this point, the branch's orbit
+                                  before it, and the branch's next one (for grazing: the impact
+                                  count changes there), and could not be located
     bifurcation_branch, bifurcation_parameter, bifurcation_x, bifurcation_v, bifurcation_R (bifurcation)
     bifurcation_multiplier_real, bifurcation_multiplier_imag (bifurcation, multiplier)
     branch_id (dim)               one entry per branch
@@ -171,7 +171,7 @@ def write_branch(path, arrays, config, method, overwrite=False, complete=True):
         bifurcation = _dimension(f, "bifurcation", np.arange(len(table["kind"]), dtype=np.int64),
                                  "located bifurcation point")
         _variable(f, "bifurcation_kind", np.asarray(table["kind"], dtype=object), (bifurcation,),
-                  "kind: fold, period_doubling, neimark_sacker, grazing or unlocated_grazing", None)
+                  "kind: fold, period_doubling, neimark_sacker, grazing, or unlocated_ and one of them", None)
         for key, long_name in (("branch", "branch of the bifurcation point"),
                                ("parameter", f"{parameter} at the bifurcation"),
                                ("x", "position x at t = 0 mod T"), ("v", "velocity at t = 0 mod T"),
@@ -241,10 +241,12 @@ def is_branch_file(path) -> bool:
 # "s" text). A file written by this version has all of them.
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
             "interrupted", "domain_edge")
-KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "unlocated_grazing")
+KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "unlocated_grazing", "unlocated_fold",
+         "unlocated_period_doubling", "unlocated_neimark_sacker")
 # The short names of the bifurcations, numbered per kind in the file's order (F1, F2, PD1, G1...):
 # the same on a branch figure as in ``vrsweep info`` (bifurcation_tags).
-TAG_PREFIXES = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G", "unlocated_grazing": "G?"}
+TAG_PREFIXES = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G", "unlocated_grazing": "G?",
+                "unlocated_fold": "F?", "unlocated_period_doubling": "PD?", "unlocated_neimark_sacker": "NS?"}
 
 
 def bifurcation_tags(kinds) -> list[str]:
