@@ -101,6 +101,8 @@ RESULT_EPOCHS = (
     ("0.7.0", "a periodic point's impacts_per_period and lyapunov are its orbit's, over its last whole cycles"),
     ("0.7.1", "a periodic point's R spans whole cycles of its response frequency too, 0 at no harmonic of it, and "
               "the lyapunov of an orbit with complex multipliers is log|mu|/(pT) from its log areas"),
+    ("0.7.2", "R_err is the spread of |Q| divided by c once (its last digits), and a written model's stuck mass "
+              "is released on a scan of its fastest force"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -111,7 +113,10 @@ point's impacts_per_period and lyapunov over its last whole cycles, as R, a writ
 reads a written model's R at a periodic point over whole cycles of both its motion and its
 response frequency w (0 where w is no harmonic of the orbit), on branches too, and the lyapunov of
 a periodic orbit whose multipliers are a complex pair as log|mu|/(pT) from its exact log areas
-(the paper's models too). Versions of one epoch
+(the paper's models too); 0.7.2 takes R_err from the spread of |Q| and divides by |c| once (R's
+own squared deviations overflowed at c = 1e-300; every R_err may differ in its last digits, 2.6e-15
+at most on a 400-point map), and releases a written model's stuck mass on a scan of 1/64 of its
+fastest force's period (max_step/8 stepped over short pulls). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
