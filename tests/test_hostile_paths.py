@@ -24,11 +24,16 @@ integration: {transient_periods: 2, measure_periods: 16}
 def test_an_empty_path_is_refused_by_name(tmp_path, monkeypatch, write_config, invoke, args):
     # run -o '' wrote at "." ("output . is a directory"), plot -o '' and init '' took it as no path
     # at all (the default figure, quickstart.yaml), merge -o '' failed writing, exit 1.
+    _refused_before_writing(tmp_path, monkeypatch, write_config, invoke, args, "an empty path names no file")
+
+
+def _refused_before_writing(tmp_path, monkeypatch, write_config, invoke, args, words):
+    """The command (CONFIG: a small sweep's config) exits 2 saying ``words`` and writes nothing."""
     monkeypatch.chdir(tmp_path)
     config = write_config(tmp_path, TINY)
     result = invoke(*[config if a == "CONFIG" else a for a in args])
     assert result.exit_code == 2, result.output
-    assert "an empty path names no file" in result.output, result.output
+    assert words in result.output, result.output
     assert sorted(os.listdir(tmp_path)) == ["sweep.yaml"]
 
 
@@ -110,12 +115,7 @@ def test_a_pipe_or_a_device_as_a_file_to_read_is_refused(tmp_path, monkeypatch, 
                                   ("simulate", "CONFIG", "--set", "g=1", "-o", "t.h5/.")])
 def test_a_path_ending_in_slash_dot_names_a_folder(tmp_path, monkeypatch, write_config, invoke, args):
     # pathlib drops a trailing '/.' as it drops '/': run -o out.h5/. wrote a file out.h5
-    monkeypatch.chdir(tmp_path)
-    config = write_config(tmp_path, TINY)
-    result = invoke(*[config if a == "CONFIG" else a for a in args])
-    assert result.exit_code == 2, result.output
-    assert "ends in '/.', which names a folder" in result.output, result.output
-    assert sorted(os.listdir(tmp_path)) == ["sweep.yaml"]
+    _refused_before_writing(tmp_path, monkeypatch, write_config, invoke, args, "ends in '/.', which names a folder")
 
 
 def test_a_config_output_ending_in_slash_dot_names_a_folder(tmp_path, write_config, invoke):
