@@ -334,8 +334,8 @@ def test_bad_overrides_are_reported_with_the_other_problems():
     assert found == [
         "fig1.yaml:3: parameters.omega: must be > 0, got 0.0",
         "--set gg=5: unknown name 'gg' (did you mean 'g'?) "
-        "(allowed: a parameter, an integration key, initial.x (or x0), initial.v (or v0), model or "
-        "continuation.KEY)",
+        "(allowed: a parameter (gamma, alpha, c, omega0, omega, Delta, e, g, Omega), an integration key, "
+        "initial.x (or x0), initial.v (or v0), model or continuation.KEY)",
         "--set rtol=abc: integration.rtol: must be a number, got 'abc' (allowed: a number in [1e-14, 0.01])",
         "--set g: expected NAME=VALUE, e.g. --set g=5",
         "--set g=[1: VALUE is not a YAML scalar (expected ',' or ']', but got '<stream end>')",

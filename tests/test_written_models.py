@@ -128,6 +128,14 @@ def test_a_written_model_is_read_with_its_parameters():
     assert parse_config(config.to_yaml()) == config  # stored configs read back as the same run
 
 
+def test_an_unknown_set_names_the_written_models_own_parameters():
+    """--set of a name the model lacks listed the kinds of names only: a written model's parameters
+    are the user's own, so the message lists them."""
+    (problem,) = problems(MODEL, ["Fx=3"])
+    assert problem.startswith("--set Fx=3: unknown name 'Fx' (did you mean 'F'?) "
+                              "(allowed: a parameter (zeta, F, omega, Delta, r), an integration key"), problem
+
+
 @pytest.mark.parametrize("change, expected", [
     (("F*cos(omega*t)", "G*cos(omega*t)"), "m.yaml:2: model.acceleration: refers to an unknown name 'G'"),
     (("F*cos(omega*t)", "__import__('os')"), "m.yaml:2: model.acceleration: calls __import__"),

@@ -255,8 +255,9 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
             setting = str(setting)
             name, sep, value_text = setting.partition("=")
             name = name.strip()
-            allowed = ("a parameter, an integration key, initial.x (or x0), initial.v (or v0), model or "
-                       "continuation.KEY")
+            # the model's own parameter names: a written model's are the user's, not the paper's
+            allowed = (f"a parameter ({', '.join(self.parameter_names)}), an integration key, initial.x (or x0), "
+                       "initial.v (or v0), model or continuation.KEY")
             if not sep or not name:
                 self.report_raw(self.setting_order(setting), f"{self.said(setting)}: expected NAME=VALUE, e.g. --set g=5")
                 continue
