@@ -445,3 +445,17 @@ def test_a_fold_that_cannot_be_located_is_recorded_with_its_bracket_not_dropped(
     assert curve.exit_code == 2 and "unlocated_fold point: it was not located" in curve.output, curve.output
     assert len(curve.output.strip().splitlines()) == 1
 
+
+
+def test_a_sticking_orbit_ends_a_branch_saying_it_is_not_followed_not_that_it_is_singular():
+    """A plastic stop's orbit (r = 0) rests on the barrier: continuation ended it saying "its
+    monodromy is singular there", which sent a researcher looking for a defect in a valid orbit."""
+    from types import SimpleNamespace
+
+    from vrsweep.results import Status
+
+    status, reason = continuation._failure(SimpleNamespace(status=Status.OK, stuck_time=0.3))
+    assert status == continuation.ENDED_STICKING == "sticking"
+    assert "sticks to the barrier" in reason and "follows only orbits that do not stick" in reason
+    assert "singular" not in reason
+    assert continuation._failure(SimpleNamespace(status=Status.OK, stuck_time=0.0)) is None

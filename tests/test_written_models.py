@@ -686,6 +686,16 @@ def test_a_written_models_response_curve_and_basins_say_its_gain_is_over_the_sca
     assert "4 transient + 16 measured periods T" in description and "slow" not in description, description
 
 
+def test_a_response_scale_of_one_is_no_division_in_the_labels():
+    """response.scale: 1 labelled R as "|Q| / |1.0|"; R is then |Q| itself."""
+    from vrsweep.plot.labels import written_gain
+
+    assert written_gain("1") == written_gain(1.0) == "gain $R = |Q|$"
+    assert written_gain("1.0", mathtext=False) == "gain R = |Q|"
+    assert written_gain("2") == "gain $R = |Q|$ / |2|"
+    assert written_gain("F", mathtext=False) == "gain R = |Q|/|F|"
+
+
 def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names(tmp_path):
     """A branch figure labelled a written model's parameters as the paper's: the axis of a branch in
     D read 'D D' and a parameter named c was set as the paper's $c$. No kernel: orbits by hand."""

@@ -223,7 +223,10 @@ def _failure(orbit_map):
     if orbit_map.status != Status.OK:
         return ENDED_INTEGRATION, f"integration stopped: {orbit_map.status.name.lower()}"
     if orbit_map.stuck_time > 0.0:
-        return ENDED_STICKING, "the orbit sticks to the barrier (its monodromy is singular there)"
+        # Not a numerical failure: the shooting map has no sticking phases (a stuck mass's monodromy
+        # is 0 there); "singular" sent users looking for a defect in a valid orbit.
+        return ENDED_STICKING, ("the orbit sticks to the barrier for part of its period: continuation follows only "
+                                "orbits that do not stick (sweep or simulate it instead)")
     return None
 
 

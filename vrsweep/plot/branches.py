@@ -16,7 +16,7 @@ from vrsweep.plot.analytic import _draw_branches, analytic_branches
 from vrsweep.plot.layout import fit_y_to_view
 from vrsweep.plot.labels import (
     parameter_symbol,
-    _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label, written_expression,
+    _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label, written_gain,
 )
 from vrsweep.store.branch_file import TAG_PREFIXES, bifurcation_tags
 
@@ -150,7 +150,7 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
             fit_y_to_view(ax)
     _mark_bifurcations(top, bottom, kinds, places, heights, tags)
     written = config is not None and config.written
-    top.set_ylabel(f"gain $R = |Q|$ / |{written_expression(config.model.response_scale)}|" if written
+    top.set_ylabel(written_gain(config.model.response_scale) if written
                    else "gain $R = |Q|/c$")
     model_words = config.model.title if written else f"{ds.attrs.get('model', '')} model"
     what = f"Periodic orbits continued in {parameter_symbol(name)} ({model_words})"

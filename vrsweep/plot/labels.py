@@ -87,7 +87,7 @@ def gain_words() -> str:
     """What R is: the paper's |Q|/c (eq3.3), or a written model's |Q| over its response scale."""
     model = _WRITTEN_MODEL.get()
     if model is not None:
-        return f"gain R = |Q|/|{written_expression(model.response_scale)}|"
+        return written_gain(model.response_scale, mathtext=False)
     return "gain R = |Q|/c (eq3.3)"
 
 
@@ -96,6 +96,18 @@ def written_expression(text) -> str:
     parameter by its symbol ($\\omega$, where the ylabel read 'Q at frequency omega' beside an
     x axis of $\\omega$), anything else as written."""
     return _written_symbol(str(text).strip()) or str(text)
+
+
+def written_gain(scale, mathtext=True) -> str:
+    """'gain R = |Q| / |s|' of a written model with response scale ``scale``; 'gain R = |Q|' where
+    the scale is 1 (the label read "|Q| / |1.0|")."""
+    gain = "gain $R = |Q|$" if mathtext else "gain R = |Q|"
+    try:
+        if float(str(scale)) == 1.0:
+            return gain
+    except ValueError:
+        pass
+    return f"{gain} / |{written_expression(scale)}|" if mathtext else f"{gain}/|{written_expression(scale)}|"
 
 
 def _written_symbol(name):

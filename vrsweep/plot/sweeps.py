@@ -18,7 +18,7 @@ from vrsweep.plot.labels import (
     parameter_symbol,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
     _caption, _legend_columns, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
-    period_words, written_expression, written_model,
+    period_words, written_expression, written_gain, written_model,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
@@ -244,9 +244,9 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     ax.set_xlabel(parameter_label(x_axis))
     if view.config is not None and view.config.written:
         response = view.config.model.as_data()["response"]
-        frequency, scale = written_expression(response["frequency"]), written_expression(response["scale"])
+        frequency = written_expression(response["frequency"])
         ax.set_ylabel(f"amplitude $|Q|$ of x at {frequency}" if amplitude
-                      else f"gain $R = |Q|$ / |{scale}|, $Q$ at frequency {frequency}")
+                      else f"{written_gain(response['scale'])}, $Q$ at frequency {frequency}")
     elif amplitude:
         ax.set_ylabel("amplitude $|Q|$ of x at $\\omega$, analytic $A$")
     else:
@@ -355,7 +355,7 @@ def _map_words(name):
     """MAP_LABELS' words for ``name``, in a written model's own terms where the paper's differ."""
     model = written_model()
     if model is not None and name == "R":
-        return f"gain $R = |Q|$ / |{written_expression(model.response_scale)}|"
+        return written_gain(model.response_scale)
     if name == "impacts_per_period":
         return f"mean impacts per {period_words()}"
     return MAP_LABELS.get(name)
