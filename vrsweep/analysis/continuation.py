@@ -91,11 +91,11 @@ UNLOCATED = "unlocated"
 # be located (Newton on the map without that impact, and the bisection on the count, failed): its
 # orbit is the step's first one, the graze lies between it and the branch's next orbit. Kept, not
 # dropped, so that info and the figure show where the branch is not smooth (docs/continuation.md).
-UNLOCATED_GRAZING = "unlocated_grazing"
 # Likewise a fold, period doubling or Neimark-Sacker point whose test function changes sign between
 # two consecutive orbits away from any graze, where the corrector failed at the first point of the
 # location: "unlocated_fold" ... , its orbit the step's first one (it was dropped without a word).
-UNLOCATED_PREFIX = "unlocated_"
+UNLOCATED_PREFIX = "unlocated_"  # as the branch file names them (store/branch_file.UNLOCATED)
+UNLOCATED_GRAZING = UNLOCATED_PREFIX + "grazing"
 # Branch ends
 ENDED_RANGE = "left_range"
 ENDED_MAX_POINTS = "max_points"

@@ -136,7 +136,7 @@ def _describe_branches(parameter, values) -> dict:
             "first_end": _end(values, "branch", "first", number),
             "last_end": _end(values, "branch", "last", number),
         })
-    from vrsweep.store.branch_file import bifurcation_tags
+    from vrsweep.store.branch_file import UNLOCATED, bifurcation_tags
 
     # The tag (F1, PD1, G1...) is the one the branch figure writes beside the point.
     tags = bifurcation_tags(_plain(kind) for kind in values["bifurcation_kind"])
@@ -144,7 +144,7 @@ def _describe_branches(parameter, values) -> dict:
                     for kind, tag, b, p, r in zip(values["bifurcation_kind"], tags, values["bifurcation_branch"],
                                                   values["bifurcation_parameter"], values["bifurcation_R"])]
     for row in bifurcations:
-        if row["kind"].startswith("unlocated_"):
+        if row["kind"].startswith(UNLOCATED):
             row["between"] = _unlocated_bracket(values, row)
     return {"parameter": str(parameter), "branches": rows, "bifurcations": bifurcations}
 
@@ -154,7 +154,9 @@ def _unlocated_bracket(values, row):
     other side]: where it lies (None where the file holds no such neighbour). The other side of a
     graze is another impact count; of a fold, period doubling or Neimark-Sacker point, the other
     sign of its test function (analysis/continuation.py), from the stored multipliers."""
-    kind = row["kind"].removeprefix("unlocated_")
+    from vrsweep.store.branch_file import UNLOCATED
+
+    kind = row["kind"].removeprefix(UNLOCATED)
     mine = np.flatnonzero((values["branch"] == row["branch"]) & (values["parameter"] == row["parameter"]))
     if kind == "grazing":
         side = values["impacts_per_period"]
@@ -221,6 +223,8 @@ def _format_ends(row) -> list[str]:
 
 
 def _format_branches(branches) -> list[str]:
+    from vrsweep.store.branch_file import UNLOCATED
+
     if not branches:
         return []
     name = branches["parameter"]
@@ -232,11 +236,11 @@ def _format_branches(branches) -> list[str]:
     for row in branches["bifurcations"]:
         line = (f"bifurcation: {row['kind']} at {name} = {_precise(row['parameter'])} ({row['tag']} on the "
                 f"figure, branch {row['branch']}, R = {_short(row['R'])})")
-        if row["kind"].startswith("unlocated_"):
+        if row["kind"].startswith(UNLOCATED):
             between = row.get("between")
             where = (f"between {name} = {_precise(between[0])} and {_precise(between[1])}" if between
                      else f"next to {name} = {_precise(row['parameter'])}")
-            kind = row["kind"].removeprefix("unlocated_")
+            kind = row["kind"].removeprefix(UNLOCATED)
             # a fold's parameter turns between the two orbits: the point lies between them along the
             # branch, not between their parameter values
             orbits = (f"between the branch's orbits at {name} = {_precise(between[0])} and {_precise(between[1])}"

@@ -15,6 +15,7 @@ from vrsweep.config.domains import domain_test, outside_domain
 from vrsweep.errors import UsageError
 from vrsweep.execution.sweep import integration_settings
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
+from vrsweep.store.branch_file import UNLOCATED
 
 
 # The branch file's grazing orbit and the barrier-free orbit Newton finds from it are the same orbit
@@ -69,11 +70,11 @@ def read_request(path, point, along, to=None, within=None, overrides=()):
     if not np.all(np.isfinite([value, *state])):
         raise UsageError.naming("{point} = {index} has no finite {name}, x and v in {path}: there is no point to "
                                 "start the curve from", {"point": "point"}, index=point, name=first, path=str(path))
-    if kind == "unlocated_grazing":
+    if kind == UNLOCATED + "grazing":
         raise UsageError.naming("{point} = {index} is a change of the impact count whose graze could not be "
                                 "located (unlocated_grazing): it has no grazing orbit to start a curve from",
                                 {"point": "point"}, index=point)
-    if kind.startswith("unlocated_"):
+    if kind.startswith(UNLOCATED):
         raise UsageError.naming("{point} = {index} is a {kind} point: it was not located, so there is no "
                                 "bifurcating orbit to start a curve from", {"point": "point"}, index=point, kind=kind)
     if kind not in curves.KINDS:

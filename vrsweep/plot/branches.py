@@ -18,17 +18,16 @@ from vrsweep.plot.labels import (
     parameter_symbol,
     _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label, written_gain,
 )
-from vrsweep.store.branch_file import TAG_PREFIXES, bifurcation_tags
+from vrsweep.store.branch_file import TAG_PREFIXES, UNLOCATED, bifurcation_tags
 
 # One symbol, one meaning: the bifurcations' markers, the periods' markers along the lines and
 # the sweeps' markers are three disjoint sets (a sweep's points were "^", the grazing tag's marker;
 # the second and third periods' "o" and "s" were the fold's and the period doubling's).
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
-                       "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing"),
-                       # not located: one symbol for it, the tag (G?1, F?1, ...) saying which kind
-                       "unlocated_grazing": ("p", "grazing, not located"), "unlocated_fold": ("p", "fold, not located"),
-                       "unlocated_period_doubling": ("p", "period doubling, not located"),
-                       "unlocated_neimark_sacker": ("p", "Neimark-Sacker, not located")}
+                       "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing")}
+# Not located: one symbol for it, the tag (G?1, F?1, ...) saying which kind.
+BIFURCATION_MARKERS.update({UNLOCATED + kind: ("p", f"{words}, not located")
+                            for kind, (_, words) in list(BIFURCATION_MARKERS.items())})
 UNKNOWN_BIFURCATION_MARKER = "8"
 # A sweep's points: the direction the parameter moved, along the horizontal axis; "x" where no
 # direction (every point from the config's initial state).
@@ -240,7 +239,7 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
     for d, offset in zip(datasets, offsets):
         for kind, at, R, number in zip(d["bifurcation_kind"].values, d["bifurcation_parameter"].values,
                                        d["bifurcation_R"].values, d["bifurcation_branch"].values):
-            if _text(kind) in ("grazing", "unlocated_grazing"):
+            if _text(kind) in ("grazing", UNLOCATED + "grazing"):
                 grazes.setdefault(int(number) + int(offset), []).append((float(at), float(R)))
     colours = _period_colours(periods)
     if config is not None and config.model == "effective" and values.size:

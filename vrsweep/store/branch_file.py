@@ -241,12 +241,15 @@ def is_branch_file(path) -> bool:
 # "s" text). A file written by this version has all of them.
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
             "interrupted", "domain_edge")
-KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "unlocated_grazing", "unlocated_fold",
-         "unlocated_period_doubling", "unlocated_neimark_sacker")
+LOCATED_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
+# A bifurcation the continuation passed but could not locate (analysis/continuation.py): its kind
+# with this prefix, tagged with a "?" (G?1: a graze not located).
+UNLOCATED = "unlocated_"
+KINDS = LOCATED_KINDS + tuple(UNLOCATED + kind for kind in LOCATED_KINDS)
 # The short names of the bifurcations, numbered per kind in the file's order (F1, F2, PD1, G1...):
 # the same on a branch figure as in ``vrsweep info`` (bifurcation_tags).
-TAG_PREFIXES = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G", "unlocated_grazing": "G?",
-                "unlocated_fold": "F?", "unlocated_period_doubling": "PD?", "unlocated_neimark_sacker": "NS?"}
+TAG_PREFIXES = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G"}
+TAG_PREFIXES.update({UNLOCATED + kind: f"{prefix}?" for kind, prefix in list(TAG_PREFIXES.items())})
 
 
 def bifurcation_tags(kinds) -> list[str]:
