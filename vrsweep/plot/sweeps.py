@@ -280,10 +280,10 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     else:
         low, high = 0.0, 1.05 * float(shown.max()) if shown.size else 1.0
     below, above = analytic[analytic < low], analytic[analytic > high]
-    if measured.size >= 2 and not log:
+    clipped = measured.size >= 2 and bool(below.size or above.size)
+    if measured.size >= 2 and (clipped or not log):
         ax.set_ylim(low, high)
-    if measured.size >= 2 and (below.size or above.size):
-        ax.set_ylim(low, high)
+    if clipped:
         ends = ([f"down to {float(below.min()):.2g}"] if below.size else []) + \
                ([f"up to {float(above.max()):.2g}"] if above.size else [])
         reach = (f"more than {THEORY_REACH:g} times from the measured values" if log else

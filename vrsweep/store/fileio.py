@@ -441,8 +441,7 @@ def refuse_a_folder_name(path, argument="output") -> None:
     if ends_in_a_folder_separator(path):
         ending = "'/.'" if path.endswith(".") else "a slash"
         raise UsageError.naming("{" + argument + "} {path} ends in " + ending + ", which names a folder: give the "
-                                "file's name (without the " + ("'/.'" if path.endswith(".") else "slash") + ")",
-                                path=path)
+                                "file's name (without " + ending.replace("a slash", "the slash") + ")", path=path)
 
 
 def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None,
