@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vrsweep.analysis.sampling import SAMPLES_PER_CYCLE
 from vrsweep.errors import UsageError
 from vrsweep.results import Status
 from vrsweep.store.trajectory_file import ModelRun, SlowFlowRun, TrajectoryData
@@ -17,10 +18,6 @@ DEFAULT_SAMPLES_PER_PERIOD = 200
 """Samples per slow period T = 2 pi/omega, at least. With the paper's omega = 0.5 and Omega = 4 or 5
 a slow period holds 8 or 10 fast periods, so 200 samples give 20-25 per fast period: enough to draw
 the fast wiggle of Fig. 3-5. Impacts are stored exactly besides, and the plots insert them."""
-SAMPLES_PER_CYCLE = 20
-"""Samples per cycle of the fastest force that the default gives, at least (``default_samples``):
-at Omega = 50, 200 samples a slow period were 2 a cycle, each at a zero of sin(Omega t), and the
-velocity's fast wiggle (g/Omega = 0.1) vanished from the figure."""
 MAX_SAMPLES = 20_000_000  # per model: 320 MB of x and v; more is a typo, not a figure
 # A trajectory keeps every period's record, transient included (impacts per period are stored):
 # 80 bytes a period (numerics/records.py), 320 MB at most, as for the samples.

@@ -171,9 +171,6 @@ def trajectory_figure(data, periods=None) -> Figure:
     return fig
 
 
-RESOLVED_SAMPLES_PER_CYCLE = 10  # fewer samples a cycle of the fastest force do not draw its wiggle
-
-
 def _aliasing_note(config, samples, runs):
     """The title's warning where the samples do not resolve the fastest force: at Omega = 50 with
     omega = 0.5, 200 samples a slow period are 2 a cycle, every one at a zero of sin(Omega t), and
@@ -181,11 +178,12 @@ def _aliasing_note(config, samples, runs):
     if config is None or not isinstance(samples, (int, np.integer)) or not any(run.model != "effective" for run in runs):
         return ""
     from vrsweep.analysis.diagnostics import sampling_of_forcing
+    from vrsweep.analysis.sampling import RESOLVED_SAMPLES_PER_CYCLE, SAMPLES_PER_CYCLE
 
     cycles = float(sampling_of_forcing(config.model, [config.parameters], 1)[1][0])
     if not cycles > 0 or samples / cycles >= RESOLVED_SAMPLES_PER_CYCLE:
         return ""
-    needed = int(np.ceil(2 * RESOLVED_SAMPLES_PER_CYCLE * cycles))
+    needed = int(np.ceil(SAMPLES_PER_CYCLE * cycles))  # what simulate's default gives
     return (f". NOT RESOLVED: {samples / cycles:.3g} samples per cycle of the fastest force ({cycles:.4g} cycles per "
             f"{period_words(symbol=False)}), so the lines alias its oscillation; simulating with "
             f"{needed} samples per {period_words(symbol=False)} resolves it")
