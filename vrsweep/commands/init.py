@@ -42,10 +42,11 @@ def command(path, name, list_only, overwrite):
         raise UsageError(f"--example {name}: no such example; shipped: {', '.join(examples)} "
                          "(vrsweep init --list describes them)")
     target = Path(path) if path else Path(f"{name}.yaml")
-    from vrsweep.store.fileio import ends_in_a_folder_separator, output_target, write_bytes
+    from vrsweep.config.wording import folder_ending
+    from vrsweep.store.fileio import output_target, write_bytes
 
     # PATH/ names a folder (Path() drops the slash): written into when it exists, never as a file
-    if ends_in_a_folder_separator(path) and not target.is_dir():
+    if folder_ending(path) and not target.is_dir():
         raise UsageError(f"PATH {path} ends in a slash, which names a folder, and there is no such folder: "
                          "create it first, or give the file's name (without the slash)")
     if target.is_dir():

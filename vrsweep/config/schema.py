@@ -20,7 +20,7 @@ import numpy as np
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, create_model
 from pydantic_core import PydanticCustomError
 
-from vrsweep.config.wording import show_number, show
+from vrsweep.config.wording import folder_ending, show_number, show
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS, DEFAULT_METHOD, SETTING_DEFAULTS as KERNEL_SETTING_DEFAULTS
 from vrsweep.numerics.model import (
     DEFAULT_PARAMETERS, INITIAL_STATE_AXES, INITIAL_STATE_KEYS, MODELS, PARAMETER_NAMES,
@@ -397,9 +397,9 @@ def _check_path(value: str) -> str:
         raise PydanticCustomError("bad_path", "must be a file path, got a string containing a NUL character")
     if any("\ud800" <= char <= "\udfff" for char in value):
         raise PydanticCustomError("bad_path", "must be a file path, got a string with an unpaired surrogate")
-    if value.endswith(("/", os.sep, "/.", os.sep + ".")):  # a folder: Path() drops the slash (and a '/.') and a file of its name was written
+    ending = folder_ending(value)
+    if ending:  # a folder: Path() drops the slash (and a '/.') and a file of its name was written
         folder = value[:-1] if value.endswith(".") else value
-        ending = "'/.'" if value.endswith(".") else "a slash"
         raise PydanticCustomError("bad_path", "{message}", {"message": (
             f"must name a file, got {show(value)}, which ends in {ending} (a folder): give the file's name, "
             f"e.g. {folder}{'results.h5' if folder.strip('/') else ''}")})

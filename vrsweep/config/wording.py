@@ -1,6 +1,7 @@
 """Small text helpers shared by the config's messages: how a value, a path or a near miss is shown."""
 
 import difflib
+import os
 
 
 def did_you_mean(word, choices) -> str:
@@ -41,3 +42,18 @@ def and_list(items) -> str:
     """[2, 5, 7] -> '2, 5 and 7'."""
     items = [str(item) for item in items]
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def folder_ending(path) -> str | None:
+    """How ``path``, as typed, ends when it names a folder, worded for a message: "a slash" for a
+    ``/`` (or the system's other separator), "'/.'" for a ``/.``; None for a file's name (and for a
+    pathlib.Path, which has already dropped both). pathlib drops either ending, so ``-o x.h5/.``
+    wrote a file ``x.h5``: every path arriving as text is asked this before it becomes a Path."""
+    if not isinstance(path, str):
+        return None
+    separators = tuple(sep for sep in (os.sep, os.altsep) if sep)
+    if path.endswith(separators):
+        return "a slash"
+    if any(path.endswith(sep + ".") for sep in separators):
+        return "'/.'"
+    return None

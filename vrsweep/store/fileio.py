@@ -38,6 +38,7 @@ from typing import Callable
 
 import h5py
 
+from vrsweep.config.wording import folder_ending
 from vrsweep.errors import OutputError, UsageError
 
 # The HDF5 format every file vrsweep writes uses: v108 and later checksum object headers and index
@@ -422,15 +423,6 @@ def reserve_space(fd, length, offset=0) -> None:
 # --------------------------------------------------------------------------------------------
 
 
-def ends_in_a_folder_separator(path) -> bool:
-    """Whether ``path``, as typed, ends in ``/`` (or the system's other separator), or in a ``/.``
-    that pathlib drops too (``-o x.h5/.`` wrote a file ``x.h5``): either way it names a folder."""
-    if not isinstance(path, str):
-        return False
-    separators = tuple(sep for sep in (os.sep, os.altsep) if sep)
-    return path.endswith(separators) or any(path.endswith(sep + ".") for sep in separators)
-
-
 def refuse_a_folder_name(path, argument="output") -> None:
     """UsageError when ``path`` ends in a slash: it names a folder, and a file written there (as
     pathlib, which drops the slash, would write ``x.png`` for ``x.png/``) is not what was asked.
@@ -438,8 +430,8 @@ def refuse_a_folder_name(path, argument="output") -> None:
     pathlib.Path has already lost the slash. ``argument`` is worded by the caller's flags."""
     if isinstance(path, str) and path == "":  # Path("") is ".", the current folder
         raise UsageError.naming("{" + argument + "} is an empty path, which names no file: give the file's name")
-    if ends_in_a_folder_separator(path):
-        ending = "'/.'" if path.endswith(".") else "a slash"
+    ending = folder_ending(path)
+    if ending:
         raise UsageError.naming("{" + argument + "} {path} ends in " + ending + ", which names a folder: give the "
                                 "file's name (without " + ending.replace("a slash", "the slash") + ")", path=path)
 
