@@ -232,3 +232,17 @@ def test_a_tiny_slow_amplitude_gives_a_finite_error_bar_or_a_status():
     assert math.isclose(R[1] * 1e-300, R[2] * 1e-150, rel_tol=1e-14)
     assert 0 < R_err[2] < math.inf
     assert math.isclose(R_err[1] * 1e-300, R_err[2] * 1e-150, rel_tol=1e-12)
+    # Only the overflowed point's values are redone: those of its chunk's other points are the
+    # ones they have in a chunk of their own, every value, bit for bit.
+    def every_value(config_text):
+        by_point = {}
+        run_sweep(parse_config(config_text), threads=1, on_chunk=lambda flat, chunk: by_point.update(
+            {int(k): {name: np.asarray(column)[i] for name, column in chunk.items()} for i, k in enumerate(flat)}))
+        return [by_point[k] for k in sorted(by_point)]
+
+    alone, shared = every_value(text.replace("1.2e-310, ", "")), every_value(text)[1:]
+    assert len(alone) == len(shared) == 2
+    for own, beside in zip(alone, shared):
+        assert set(own) == set(beside)
+        for name in own:
+            np.testing.assert_array_equal(beside[name], own[name], err_msg=name)

@@ -245,11 +245,16 @@ def _point_values(records, summaries, statuses, coefficients, frequencies, integ
         overflowed |= ok & ~np.isfinite(values[name])
     if not overflowed.any():
         return values
-    statuses = np.where(overflowed, Status.NON_FINITE, statuses).astype(statuses.dtype)
-    summaries = np.array(summaries, copy=True)
-    for k in _SUMMARY_BLANKED:
-        summaries[overflowed, k] = np.nan
-    return _values_of(records, summaries, statuses, coefficients, frequencies, integration)
+    # A point's values are a function of its own outputs: only the overflowed rows are redone.
+    rows = np.flatnonzero(overflowed)
+    blanked = np.array(summaries[rows], copy=True)
+    blanked[:, list(_SUMMARY_BLANKED)] = np.nan
+    redone = _values_of(records[rows], blanked, np.full(len(rows), Status.NON_FINITE, dtype=statuses.dtype),
+                        coefficients[rows], frequencies[rows], integration)
+    for name, column in redone.items():
+        values[name] = np.array(values[name], copy=True)  # some are views of the kernel's summaries
+        values[name][rows] = column
+    return values
 
 
 def _values_of(records, summaries, statuses, coefficients, frequencies, integration):
