@@ -501,8 +501,20 @@ def test_the_step_that_leaves_the_11_impact_orbits_crosses_their_graze_onto_the_
     assert measured == pytest.approx(predicted[0] / predicted[1], rel=1e-2)
 
 
+@pytest.fixture(scope="module")
+def steep_branch():
+    """Two orbits of the period-3 branch from the referee's SciPy fixed point at g = 17.799 (stable
+    side, multiplier -2.156), up in g through its period doubling and fold: (problem, start,
+    orbits, bifurcations, end)."""
+    problem = _problem(1e-12)
+    start, failure = continuation.correct(problem, np.array([-2.65006053, 2.10441267, 17.799]), PERIODS)
+    assert failure is None and _count(start) == 10
+    orbits, found, end = continuation.follow(problem, start, +1, 17.79, 17.81, 2)
+    return problem, start, orbits, found, end
+
+
 @pytest.mark.slow
-def test_the_corrector_follows_a_branch_that_curves_steeply_in_g_through_its_doubling_and_fold():
+def test_the_corrector_follows_a_branch_that_curves_steeply_in_g_through_its_doubling_and_fold(steep_branch):
     """Beyond the corner's graze the stable 10-impact orbits of the period-3 branch period-double at
     g = 17.79903 and fold at 17.79904 (a multiplier from -2.2 at 17.799 to +1 within 4e-5 in g).
     F_lam, a forward difference of 1e-6 * g = 1.8e-5 in g, spans that curvature: Newton failed at
@@ -512,11 +524,7 @@ def test_the_corrector_follows_a_branch_that_curves_steeply_in_g_through_its_dou
     in g. SciPy: the first orbit beyond is a fixed point of its map with 10 impacts and the same
     larger multiplier (1e-3). (The referee's SciPy orbits at fixed g, continued from 17.799 in steps
     of 4e-6, converge up to 17.79904, their impact times moving faster and faster: the fold.)"""
-    problem = _problem(1e-12)
-    # the referee's SciPy fixed point at g = 17.799 (stable side, multiplier -2.156)
-    start, failure = continuation.correct(problem, np.array([-2.65006053, 2.10441267, 17.799]), PERIODS)
-    assert failure is None and _count(start) == 10
-    orbits, found, end = continuation.follow(problem, start, +1, 17.79, 17.81, 2)
+    problem, start, orbits, found, end = steep_branch
     assert "did not converge" not in end[1], end
     kinds = {kind: orbit.parameter for kind, orbit in found}
     assert set(kinds) == {"fold", "period_doubling"}, found
@@ -529,3 +537,26 @@ def test_the_corrector_follows_a_branch_that_curves_steeply_in_g_through_its_dou
     assert np.max(np.abs(end_state - beyond.state)) < 1e-7 * max(1.0, np.max(np.abs(beyond.state)))
     mu = np.linalg.eigvals(_scipy_monodromy(beyond.parameter, beyond.state, touch, 0.05))
     assert np.max(np.abs(mu)) == pytest.approx(abs(beyond.multipliers[0]), rel=1e-3)
+
+
+@pytest.mark.slow
+def test_a_located_doubling_and_fold_have_their_multipliers_at_minus_and_plus_one(steep_branch):
+    """The period doubling and the fold beyond the corner lie 1.1e-5 apart in g, inside the
+    location's bracket in the parameter (1e-6 * g = 1.8e-5), and the multiplier moves 7e4 per unit
+    g there: located to the parameter's bracket alone they were recorded with multipliers -0.989
+    and 1.0097 (up to 0.7.2). A located point has its multiplier at its critical value to
+    LOCATED_MULTIPLIER (1e-3). SciPy: each located orbit is a fixed point of its map, and its
+    monodromy (central differences of 1e-8: at 1e-7 the map's curvature, d mu / d y ~ 5e4, costs
+    2e-3) has a real multiplier within 1e-3 of -1 and of +1."""
+    problem, _, _, found, _ = steep_branch
+    located = {kind: orbit for kind, orbit in found}
+    assert set(located) == {"fold", "period_doubling"}, found
+    assert located["fold"].parameter - located["period_doubling"].parameter == pytest.approx(1.1e-5, rel=0.05)
+    for kind, critical in (("period_doubling", -1.0), ("fold", 1.0)):
+        orbit = located[kind]
+        assert np.min(np.abs(orbit.multipliers - critical)) <= 1e-3, (kind, orbit.multipliers)
+        touch = _touch_time(orbit)
+        end_state, speeds = _three_legs(orbit.parameter, orbit.state, touch, 0.05)
+        assert len(speeds) == 10 and np.max(np.abs(end_state - orbit.state)) < 1e-7
+        mu = np.linalg.eigvals(_scipy_monodromy(orbit.parameter, orbit.state, touch, 0.05, h=1e-8))
+        assert np.min(np.abs(mu - critical)) < 1e-3, (kind, mu)

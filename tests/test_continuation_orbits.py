@@ -85,6 +85,36 @@ def test_branch_has_stable_and_unstable_orbits_and_both_bifurcations(hysteresis_
     assert "fold" in kinds and "neimark_sacker" in kinds
 
 
+def test_each_located_fold_and_neimark_sacker_point_has_its_multiplier_critical(hysteresis_branch):
+    """A located fold has a real multiplier at +1, a Neimark-Sacker point a complex pair on the unit
+    circle, each to 1e-3 (continuation.LOCATED_MULTIPLIER), not only its parameter in a bracket."""
+    _, _, bifurcations = hysteresis_branch
+    for bifurcation in bifurcations:
+        mu = bifurcation.orbit.multipliers
+        if bifurcation.kind == "fold":
+            assert np.min(np.abs(mu - 1.0)) <= 1e-3, mu
+        elif bifurcation.kind == "neimark_sacker":
+            assert abs(mu[0].imag) > 0 and abs(abs(mu[0]) - 1.0) <= 1e-3, mu
+
+
+def test_a_bifurcation_whose_multiplier_cannot_be_brought_to_critical_is_recorded_unlocated(monkeypatch):
+    """Where the location pins the parameter but not the multiplier (asked here for a distance from
+    critical below zero, which no orbit has), the point is not given a location it does not have: it is recorded as unlocated_fold
+    and unlocated_neimark_sacker, the step's first orbit its row (as when the corrector fails),
+    never as a fold whose multiplier is elsewhere. Up to 0.7.2 a bracket in the parameter alone
+    made a point located, whatever its multiplier (-0.989 for a period doubling at g = 17.799 on
+    Fig. 1's period-3 branch)."""
+    monkeypatch.setattr(continuation, "LOCATED_MULTIPLIER", -1.0, raising=False)
+    problem = _problem()
+    start = continuation.find_start(problem, [0.0, 0.0], 23.0, 200, 16)
+    branch, bifurcations = continuation.continue_branch(problem, start, 21.0, 27.0, 120)
+    kinds = sorted(b.kind for b in bifurcations)
+    assert "fold" not in kinds and "neimark_sacker" not in kinds, kinds
+    assert "unlocated_fold" in kinds and "unlocated_neimark_sacker" in kinds, kinds
+    parameters = [orbit.parameter for orbit in branch.orbits]
+    assert all(b.orbit.parameter in parameters for b in bifurcations if b.kind.startswith("unlocated_"))
+
+
 @pytest.mark.slow
 def test_every_sampled_point_is_a_fixed_point_of_scipys_map(hysteresis_branch, impacting_branch):
     _, branch, bifurcations = hysteresis_branch

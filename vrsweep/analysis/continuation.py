@@ -383,9 +383,21 @@ def _torus_test(orbit):
 
 
 TEST_FUNCTIONS = {"fold": _fold_test, "period_doubling": _doubling_test, "neimark_sacker": _torus_test}
-# How near its critical value (+1, -1, the unit circle) a multiplier of a located fold, period
-# doubling or Neimark-Sacker point must be where the arc crosses a graze (_detect). A genuine one,
-# located to location_tolerance, is far nearer (the coarsest of Fig. 1's cascade: -1.009).
+# A located fold, period doubling or Neimark-Sacker point has its critical multiplier this close
+# to its critical value (a real one to +1 or -1, the modulus of a complex pair to 1): the location
+# narrows past location_tolerance in the parameter until it is. A bracket in the parameter alone
+# is not enough where the multiplier moves fast: on Fig. 1's period-3 branch at g = 17.799 it
+# moves 7e4 per unit g, and a period doubling and a fold 1.1e-5 apart in g, inside the bracket of
+# 1e-6 * g = 1.8e-5, were recorded with multipliers -0.989 and 1.0097 (up to 0.7.2). The
+# multiplier of a corrected orbit is known far better (its noise there, at rtol 1e-12: ~5e-5).
+LOCATED_MULTIPLIER = 1e-3
+# Iterations of the location after the parameter's bracket is narrow, while the multiplier is not
+# yet within LOCATED_MULTIPLIER: regula falsi on a smooth root needs a few; more means no root.
+EXTRA_LOCATION_ITERATIONS = 20
+# How near its critical value a multiplier of a point located where the arc crosses a graze must
+# be to be a bifurcation at all (_detect): across a graze the test functions jump with the
+# monodromy (a free orbit's 0.57 +- 0.64i to an impacting one's -10.9), and a sign change may be
+# that jump, where the multiplier never comes near its critical value.
 CRITICAL_DISTANCE = 0.1
 
 
@@ -430,36 +442,60 @@ def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, i
 def _locate(problem, start, tangent, step, kind, value_start, value_end, periods):
     """The orbit on the arc from ``start`` (0 < s < step along tangent) where the test function of
     ``kind`` vanishes, by Illinois regula falsi (grazing: bisection on the impact count), to
-    location_tolerance in the parameter. Returns the Orbit nearest the root, or None."""
+    location_tolerance in the parameter and, for a fold, period doubling or Neimark-Sacker point,
+    until its critical multiplier is within LOCATED_MULTIPLIER of its critical value (_located;
+    at most EXTRA_LOCATION_ITERATIONS more). Returns the Orbit nearest the root, or None."""
     tolerance = problem.options["location_tolerance"] * max(1.0, abs(start.parameter))
+    last = [None]  # the last orbit corrected on the arc
+    extra = [0]
 
     def point_at(s):
         z_predicted = start.z + s * tangent
-        return correct(problem, z_predicted, periods, tangent, z_predicted, short_difference=True)
+        orbit, failure = correct(problem, z_predicted, periods, tangent, z_predicted, short_difference=True)
+        last[0] = orbit
+        return orbit, failure
 
     def narrow(low, high, value):
+        if (high - low) <= 1e-14 * step:
+            return True
         # The parameter interval between the bracket's ends: tangent[2] * (high - low) to first order.
-        return (abs(tangent[2]) * (high - low) <= tolerance or (high - low) <= 1e-14 * step
-                or (kind != "grazing" and abs(value) <= 1e-12))
+        if not (abs(tangent[2]) * (high - low) <= tolerance or (kind != "grazing" and abs(value) <= 1e-12)):
+            return False
+        if kind == "grazing":
+            return True
+        distance = critical_distance(kind, last[0])
+        if distance <= LOCATED_MULTIPLIER or distance >= CRITICAL_DISTANCE:
+            # Located; or the multiplier is nowhere near critical with the parameter pinned: a jump
+            # of the monodromy (across a graze), not a root that more iterations would reach.
+            return True
+        extra[0] += 1
+        return extra[0] > EXTRA_LOCATION_ITERATIONS
 
     if kind == "grazing":
         # -1 on the start's side (the same impact count), +1 beyond
         return locate_on_arc(point_at, lambda orbit: -1.0 if orbit.impacts_per_period == value_start else 1.0,
                              step, -1.0, 1.0, narrow, 60, illinois=False)
-    return locate_on_arc(point_at, TEST_FUNCTIONS[kind], step, value_start, value_end, narrow, 60)
+    return locate_on_arc(point_at, TEST_FUNCTIONS[kind], step, value_start, value_end, narrow,
+                         60 + EXTRA_LOCATION_ITERATIONS)
 
 
-def _is_critical(kind, orbit):
-    """Whether a located fold, period doubling or Neimark-Sacker point has its multiplier at the
-    critical value, to CRITICAL_DISTANCE: a real one at +1, a real one at -1, a complex pair on
-    the unit circle."""
+def critical_distance(kind, orbit):
+    """How far the multiplier of a fold, period doubling or Neimark-Sacker point ``orbit`` lies
+    from its critical value: the real multiplier nearest +1 (fold) or -1 (period doubling) from
+    it, or the complex pair's modulus from 1 (inf where there is no such multiplier)."""
     mu = orbit.multipliers
     real = np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))
-    if kind == "fold":
-        return bool(np.any(real & (np.abs(mu - 1.0) < CRITICAL_DISTANCE)))
-    if kind == "period_doubling":
-        return bool(np.any(real & (np.abs(mu + 1.0) < CRITICAL_DISTANCE)))
-    return bool(not real[0] and abs(abs(mu[0]) - 1.0) < CRITICAL_DISTANCE)
+    if kind in ("fold", "period_doubling"):
+        target = 1.0 if kind == "fold" else -1.0
+        distances = np.abs(mu.real[real] - target)
+        return float(distances.min()) if distances.size else np.inf
+    return abs(abs(mu[0]) - 1.0) if not real[0] else np.inf
+
+
+def _located(kind, orbit):
+    """Whether a fold, period doubling or Neimark-Sacker point is located: its critical multiplier
+    within LOCATED_MULTIPLIER of the critical value."""
+    return critical_distance(kind, orbit) <= LOCATED_MULTIPLIER
 
 
 def _detect(problem, previous, current, tangent, step, periods, graze=None):
@@ -474,11 +510,14 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
         a, b = test(previous), test(current)
         if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
             orbit = _locate(problem, previous, tangent, step, kind, a, b, periods)
-            if orbit is None:
-                if not crosses_graze:  # across a graze the sign change may be the jump, not a bifurcation
-                    found.append((UNLOCATED_PREFIX + kind, previous))
-            elif not crosses_graze or _is_critical(kind, orbit):
+            if orbit is not None and _located(kind, orbit):
                 found.append((kind, orbit))
+            elif not crosses_graze or (orbit is not None and critical_distance(kind, orbit) < CRITICAL_DISTANCE):
+                # A sign change with no point whose multiplier is critical (the corrector failed on
+                # the arc, or the location stalled short of LOCATED_MULTIPLIER): recorded, never
+                # given a location it does not have. Across a graze a sign change whose multiplier
+                # never comes near critical is the monodromy's jump, not a bifurcation.
+                found.append((UNLOCATED_PREFIX + kind, previous))
     if graze is not None:
         found.append(("grazing", _graze_orbit(problem, graze)))
     elif previous.impacts_per_period != current.impacts_per_period:
