@@ -115,6 +115,21 @@ def test_a_bifurcation_whose_multiplier_cannot_be_brought_to_critical_is_recorde
     assert all(b.orbit.parameter in parameters for b in bifurcations if b.kind.startswith("unlocated_"))
 
 
+def test_a_branch_ends_with_its_orbits_at_both_ends_of_a_narrow_range():
+    """continuation.to = [22.99, 23.01] around the start at 23: the first step (initial_step 0.05)
+    leaves the range both ways, and up to 0.7.2 the branch was its start alone, "left_range".
+    It now ends at the orbits at g = 22.99 and 23.01 exactly, each a fixed point of SciPy's map."""
+    problem = _problem()
+    start = continuation.find_start(problem, [0.0, 0.0], 23.0, 200, 16)
+    branch, _ = continuation.continue_branch(problem, start, 22.99, 23.01, 20)
+    assert [orbit.parameter for orbit in (branch.orbits[0], branch.orbits[-1])] == [22.99, 23.01]
+    assert [status for status, _ in branch.ends.values()] == ["left_range", "left_range"]
+    assert "g reached the end of [22.99, 23.01] at g = 23.01" in branch.ends["up"][1]
+    for orbit in (branch.orbits[0], branch.orbits[-1]):
+        state, _ = _one_period(_coefficients(orbit.parameter), orbit.state, 0, _resolving_step(orbit))
+        assert np.max(np.abs(state - orbit.state)) < 1e-7 * max(1.0, np.max(np.abs(orbit.state)))
+
+
 @pytest.mark.slow
 def test_every_sampled_point_is_a_fixed_point_of_scipys_map(hysteresis_branch, impacting_branch):
     _, branch, bifurcations = hysteresis_branch

@@ -767,7 +767,28 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if ended is not None:
             return orbits, bifurcations, ended
         if not lo <= orbit.parameter <= hi:
-            return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]")
+            if crossed:  # the orbits a march in the new impact's speed found inside the range are kept
+                orbits.extend(passed for passed in beyond[:-1] if lo <= passed.parameter <= hi)
+                return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}] beyond a "
+                                                           f"graze, where no orbit at its end is looked for")
+            end, reason = _range_end(problem, current, orbit, tangent, lo, hi, before, memo)
+            if end is not None:
+                end_orbit, s_end, located = end
+                if stop is not None and stop(current, end_orbit) is not None:
+                    return orbits, bifurcations, stop(current, end_orbit)
+                for kind, found_orbit in _detect(problem, current, end_orbit, tangent, s_end, start.periods, located):
+                    if kind == "grazing":
+                        _record_graze(problem, bifurcations, found_orbit)
+                    else:
+                        bifurcations.append((kind, found_orbit))
+                orbits.append(end_orbit)
+                if progress is not None:
+                    try:
+                        progress(end_orbit)
+                    except KeyboardInterrupt as interrupt:  # a stop asked for: the other way is not followed
+                        return orbits, bifurcations, (ENDED_INTERRUPTED, f"stopped by {interrupt or 'SIGINT'} at "
+                                                                         f"{problem.parameter} = {end_orbit.parameter:.8g}")
+            return orbits, bifurcations, (ENDED_RANGE, reason)
         if outside(problem, orbit.parameter) is not None:  # e.g. an orbit beyond a graze: never kept
             return orbits, bifurcations, _domain_end(problem, current, outside(problem, orbit.parameter))
         if crossed:
@@ -798,6 +819,35 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         failed_crossing = failed_crossing and _near_grazing(problem, orbit)
         if not failed_crossing:
             grazing_reason = None
+
+
+def _range_end(problem, current, beyond, tangent, lo, hi, before, memo):
+    """The orbit at the end of the range [lo, hi] that the step from ``current`` (inside) to
+    ``beyond`` (outside) passes: Newton at that end's parameter from the chord's point there, kept
+    when it lies by the chord (within its length) and the step to it is one the branch takes (no
+    jump, _graze_between). Returns ((Orbit, its arclength along ``tangent``, the graze located on
+    the way or None) or None, the branch end's reason). A user asking for [a, b] gets
+    the branch's orbit at b, not the last one before it: a first step of initial_step from the
+    start could leave a narrow range with nothing kept (up to 0.7.2)."""
+    name = problem.parameter
+    bound = hi if beyond.parameter > hi else lo
+    fraction = (bound - current.parameter) / (beyond.parameter - current.parameter)
+    guess = current.z + fraction * (beyond.z - current.z)
+    guess[2] = bound  # exactly: a fraction's roundoff would leave it 1e-16 outside
+    orbit, failure = correct(problem, guess, current.periods)
+    if failure is not None:
+        return None, (f"{name} left [{lo:g}, {hi:g}] between {name} = {current.parameter:.8g} and "
+                      f"{beyond.parameter:.8g}; the orbit at {name} = {bound:g} did not converge: {failure[1]}")
+    chord = np.linalg.norm(beyond.z - current.z)
+    located, verdict = _graze_between(problem, current, orbit, before, memo)
+    if np.linalg.norm(orbit.z - guess) > chord or verdict is not None:
+        return None, (f"{name} left [{lo:g}, {hi:g}] between {name} = {current.parameter:.8g} and "
+                      f"{beyond.parameter:.8g}; Newton at {name} = {bound:g} went to another orbit")
+    s_end = float(tangent @ (orbit.z - current.z))
+    if not s_end > 0.0:
+        return None, (f"{name} left [{lo:g}, {hi:g}] between {name} = {current.parameter:.8g} and "
+                      f"{beyond.parameter:.8g}; Newton at {name} = {bound:g} went back along the branch")
+    return (orbit, s_end, located), f"{name} reached the end of [{lo:g}, {hi:g}] at {name} = {bound:g}"
 
 
 def _domain_end(problem, last, reason):
