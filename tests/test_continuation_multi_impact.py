@@ -560,3 +560,30 @@ def test_a_located_doubling_and_fold_have_their_multipliers_at_minus_and_plus_on
         assert len(speeds) == 10 and np.max(np.abs(end_state - orbit.state)) < 1e-7
         mu = np.linalg.eigvals(_scipy_monodromy(orbit.parameter, orbit.state, touch, 0.05, h=1e-8))
         assert np.min(np.abs(mu - critical)) < 1e-3, (kind, mu)
+
+
+@pytest.mark.slow
+def test_the_doubling_beyond_the_corner_switches_onto_orbits_of_six_periods(steep_branch):
+    """At the period doubling at g = 17.799031 the branch of six slow periods lives within 1e-5 of
+    the doubling in state (its multiplier falls from +1 to 0.1 within 2e-5) and its g moves 1e-10
+    there: the switch's first amplitude, 1e-4 * |y|, lay far outside it, and its corrector went to
+    an orbit at g = 8.8 (up to 0.7.2: "no period-doubled branch"; the doubling was also located
+    with its multiplier at -0.989). Now a 6-orbit is found and followed down in g, where the
+    3-orbit is unstable (a supercritical flip). SciPy: two of its orbits are fixed points of SciPy's
+    map of six slow periods (10 impacts in three periods, 20 in six) and not of its map of three
+    (|P^3(y) - y| above 1e-5), so they are orbits of six periods, not the 3-orbit again."""
+    from vrsweep.analysis import period_doubling
+
+    problem, _, _, found, _ = steep_branch
+    doubling = next(orbit for kind, orbit in found if kind == "period_doubling")
+    branch, detail, _ = period_doubling.doubled_branch(problem, doubling, 17.7986, 17.79905, 12)
+    assert branch is not None, detail
+    six = [orbit for orbit in branch.orbits if orbit.parameter < doubling.parameter - 1e-6]
+    assert branch.periods == 6 and len(six) >= 3
+    assert all(orbit.parameter < doubling.parameter for orbit in branch.orbits[1:])
+    for orbit in (six[0], six[len(six) // 2]):
+        run = _real(orbit.parameter, orbit.state, 0.0, 6 * SLOW_PERIOD, 0.05)
+        assert _impacts(run) == 20
+        assert np.max(np.abs([run["x_final"], run["v_final"]] - orbit.state)) < 1e-7
+        half = _real(orbit.parameter, orbit.state, 0.0, 3 * SLOW_PERIOD, 0.05)
+        assert np.max(np.abs([half["x_final"], half["v_final"]] - orbit.state)) > 1e-5

@@ -27,6 +27,8 @@ already reached (a period-doubling "bubble" closes on the p-branch at its second
 not switched twice.
 """
 
+import dataclasses
+
 import numpy as np
 
 from vrsweep.analysis import continuation
@@ -36,14 +38,23 @@ ENDED_PERIOD_DOUBLING = "period_doubling"
 # Amplitudes along w of the first 2p-orbit, relative to max(1, |y*|): the smallest that converges
 # onto a genuine 2p-orbit next to the doubling wins (the pitchfork's corrector is conditioned like
 # eps, and its basin shrinks with the curvature of the 2p-branch: at one phase of the original
-# model's orbit of period 2 at g = 17.833 only 1e-4 converges).
-SWITCH_AMPLITUDES = (1e-4, 1e-3, 4e-3, 1.6e-2)
+# model's orbit of period 2 at g = 17.833 only 1e-4 converges; at the doubling of Fig. 1's
+# period-3 branch at g = 17.799031, where the multiplier moves 7e4 per unit g, the 2p-orbit's own
+# multiplier falls from +1 to 0 within 1e-5 of the doubling in state, and only 3e-6 converges
+# onto an orbit Newton's tolerance tells from the p-orbit: up to 0.7.2 no 2p-orbit was found
+# there).
+SWITCH_AMPLITUDES = (1e-6, 3e-6, 1e-5, 1e-4, 1e-3, 4e-3, 1.6e-2)
+# The pitchfork's corrector is conditioned like eps: at the smallest amplitudes Newton converges
+# linearly, in up to 30 iterations at g = 17.799031; it gets this many times max_newton_iterations.
+SWITCH_NEWTON_FACTOR = 4
 # ... and it is accepted only this many amplitudes from the doubling point in (x, v, lam): a
 # corrector that wandered to another orbit far away did not find the 2p-branch born here.
 NEAR_AMPLITUDES = 4.0
-# A 2p-orbit is genuine when |P^p(y) - y| exceeds this many Newton tolerances; an orbit on the
-# switched branch below it is the p-orbit again.
+# A 2p-orbit is genuine (not the p-orbit) when |P^p(y) - y| exceeds GENUINE_DISTANCE Newton
+# tolerances, or GENUINE_MARGIN times what a p-orbit converged as a 2p-orbit could show
+# (_is_p_orbit); an orbit on the switched branch that is neither is the p-orbit again.
 GENUINE_DISTANCE = 1e3
+GENUINE_MARGIN = 10.0
 # A located doubling is switched only when a real multiplier is this close to -1 (a sign change of
 # det(M + I) across a grazing, where the monodromy jumps, is not a period doubling). Not tighter:
 # the doubling is located to location_tolerance in the parameter, and where the multiplier moves
@@ -83,25 +94,45 @@ def _genuine_threshold(problem, state):
     return GENUINE_DISTANCE * continuation._tolerance(problem, state)
 
 
+def _is_p_orbit(problem, orbit, periods):
+    """Whether ``orbit``, a converged 2p-orbit, is the p-orbit again (as far as the Newton
+    tolerance can tell). A point y = y_p + delta w by the p-orbit y_p passes the 2p corrector when
+    its residual r = |P^2p(y) - y| = |mu_p^2 - 1| |delta w| is below the tolerance, and then
+    |P^p(y) - y| = |mu_p - 1| |delta w| ~ 2 r / |mu_p^2 - 1|, where mu_p^2 is the multiplier of
+    its M^2p nearest +1: up to 1000 tolerances next to a doubling, where mu_p ~ -1. A genuine
+    2p-orbit of amplitude a has |P^p(y) - y| ~ 2a. So: the p-orbit when |P^p(y) - y| is below
+    GENUINE_DISTANCE tolerances and below GENUINE_MARGIN times 2 r / |mu - 1|. (Up to 0.7.2 the
+    first bound alone: a 2p-orbit of amplitude below 1000 tolerances, 2.6e-5 at Fig. 1's g =
+    17.799, where the 2p-branch lives within 1e-5 of its doubling, counted as the p-orbit.)"""
+    distance = distance_from_p_orbit(problem, orbit, periods)
+    if distance > _genuine_threshold(problem, orbit.state):
+        return False
+    mu = orbit.multipliers
+    gap = float(np.min(np.abs(mu - 1.0)))
+    residual = max(orbit.residual, np.finfo(float).eps * max(1.0, float(np.max(np.abs(orbit.state)))))
+    return not (gap > 0.0 and distance > GENUINE_MARGIN * 2.0 * residual / gap)
+
+
 def first_doubled_orbit(problem, doubling):
     """The 2p-orbit next to the period doubling ``doubling`` (an Orbit of period p): (Orbit of
     period 2p, None) or (None, reason)."""
     w, _ = doubling_vectors(doubling)
     tangent = np.array([w[0], w[1], 0.0])
     scale = max(1.0, float(np.max(np.abs(doubling.state))))
-    threshold = _genuine_threshold(problem, doubling.state)
+    iterations = SWITCH_NEWTON_FACTOR * problem.options["max_newton_iterations"]
+    patient = dataclasses.replace(problem, options=dict(problem.options, max_newton_iterations=iterations))
     reason = "no 2p-orbit found next to the period doubling"
     for amplitude in SWITCH_AMPLITUDES:
         for sign in (1.0, -1.0):
             z_predicted = doubling.z + sign * amplitude * scale * tangent
-            orbit, failure = continuation.correct(problem, z_predicted, 2 * doubling.periods, tangent, z_predicted)
+            orbit, failure = continuation.correct(patient, z_predicted, 2 * doubling.periods, tangent, z_predicted)
             if failure is not None:
                 reason = failure[1]
                 continue
             if np.linalg.norm(orbit.z - doubling.z) > NEAR_AMPLITUDES * amplitude * scale:
                 reason = f"the corrector went to an orbit at {problem.parameter} = {orbit.parameter:.8g}"
                 continue
-            if distance_from_p_orbit(problem, orbit, doubling.periods) > threshold:
+            if not _is_p_orbit(problem, orbit, doubling.periods):
                 return orbit, None
             reason = "the corrector returned to the period-p orbit"
     return None, reason
@@ -113,7 +144,6 @@ def _back_on_the_p_branch(problem, doublings, periods):
     anywhere else, else None. Returns (stop, met): ``met`` collects the doublings it stopped at."""
     name = problem.parameter
     frames = [(doubling, doubling_vectors(doubling)[1]) for doubling in doublings]
-    threshold = _genuine_threshold(problem, doublings[0].state)
     met = []
 
     def stop(previous, orbit):
@@ -127,7 +157,7 @@ def _back_on_the_p_branch(problem, doublings, periods):
                 met.append(doubling)
                 return (ENDED_PERIOD_DOUBLING, f"meets the period-{periods} branch at its period doubling "
                                                f"at {name} = {doubling.parameter:.8g}")
-        if distance_from_p_orbit(problem, orbit, periods) <= threshold:
+        if _is_p_orbit(problem, orbit, periods):
             # The corrector crossed onto the p-branch itself; next to a doubling (within the
             # step just taken) that is the pitchfork's crossing too.
             nearest = min(doublings, key=lambda d: np.linalg.norm(previous.z - d.z))
