@@ -128,6 +128,10 @@ def test_a_branch_ends_with_its_orbits_at_both_ends_of_a_narrow_range():
     for orbit in (branch.orbits[0], branch.orbits[-1]):
         state, _ = _one_period(_coefficients(orbit.parameter), orbit.state, 0, _resolving_step(orbit))
         assert np.max(np.abs(state - orbit.state)) < 1e-7 * max(1.0, np.max(np.abs(orbit.state)))
+    # a start at an end of the range is that end's orbit: nothing more is looked for there
+    branch, _ = continuation.continue_branch(problem, start, 23.0, 23.2, 20)
+    assert branch.orbits[0] is start and branch.orbits[-1].parameter == 23.2
+    assert branch.ends["down"] == ("left_range", "g reached the end of [23, 23.2] at g = 23")
 
 
 @pytest.mark.slow

@@ -831,6 +831,10 @@ def _range_end(problem, current, beyond, tangent, lo, hi, before, memo):
     start could leave a narrow range with nothing kept (up to 0.7.2)."""
     name = problem.parameter
     bound = hi if beyond.parameter > hi else lo
+    if current.parameter == bound:  # the branch's last orbit is that end's already (a start there)
+        return None, f"{name} reached the end of [{lo:g}, {hi:g}] at {name} = {bound:g}"
+    if outside(problem, bound) is not None:
+        return None, f"{name} left [{lo:g}, {hi:g}]; its end {name} = {bound:g} lies outside the model's domain"
     fraction = (bound - current.parameter) / (beyond.parameter - current.parameter)
     guess = current.z + fraction * (beyond.z - current.z)
     guess[2] = bound  # exactly: a fraction's roundoff would leave it 1e-16 outside
