@@ -9,6 +9,7 @@ around the touch. SciPy checks each one with a map of its own: its DOP853 with i
 The touch time comes from SciPy's own run of the branch's orbit next to the graze.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -587,3 +588,34 @@ def test_the_doubling_beyond_the_corner_switches_onto_orbits_of_six_periods(stee
         assert np.max(np.abs([run["x_final"], run["v_final"]] - orbit.state)) < 1e-7
         half = _real(orbit.parameter, orbit.state, 0.0, 3 * SLOW_PERIOD, 0.05)
         assert np.max(np.abs([half["x_final"], half["v_final"]] - orbit.state)) > 1e-5
+
+
+@pytest.mark.slow
+def test_the_doubling_of_the_11_impact_orbits_switches_onto_a_branch_that_leaves_it():
+    """The 11-impact orbits past the corner double at g = 17.793014. The switch's first orbit lies
+    8e-6 from the doubling, and the first step away from it landed on the period-3 branch, which
+    passes there too, 2e-4 away: taken for the switched branch meeting its doubling, the branch
+    ended at once with its first orbit (and up to 0.7.2 no orbit was found at all: the corrector
+    went to g = 7.85). That step is now refused and retried shorter, and the branch of six periods
+    is followed away from the doubling, up in g where the 3-orbit is unstable. SciPy: its last
+    orbit is a fixed point of SciPy's map of six slow periods, with 22 impacts, and not of three."""
+    from vrsweep.analysis import period_doubling
+
+    # a short first step: one of 0.05 from here passes the doubling and the graze at 17.797473 at once
+    problem = dataclasses.replace(_problem(1e-12), options=dict(continuation.DEFAULTS, max_step=0.05, initial_step=2e-5))
+    # an 11-impact orbit of the branch below the doubling (multiplier -0.58), from the branch's state there
+    start, failure = continuation.correct(problem, np.array([-2.64694289, 2.10048646, 17.793004]), PERIODS)
+    assert failure is None and _count(start) == 11 and -1.0 < start.multipliers[0].real < 0.0
+    _, found, _ = continuation.follow(problem, start, +1, 17.79, 17.80, 1)
+    doubling = next(orbit for kind, orbit in found if kind == "period_doubling")
+    # switched as `continue` does, its first step the default initial_step
+    branch, detail, _ = period_doubling.doubled_branch(_problem(1e-12), doubling, 17.79, 17.80, 8)
+    assert branch is not None, detail
+    away = [orbit for orbit in branch.orbits if orbit.parameter > doubling.parameter + 1e-6]
+    assert branch.periods == 6 and len(away) >= 3, branch.ends
+    last = max(away, key=lambda orbit: orbit.parameter)
+    run = _real(last.parameter, last.state, 0.0, 6 * SLOW_PERIOD, _resolving_step(last))
+    assert _impacts(run) == 22
+    assert np.max(np.abs([run["x_final"], run["v_final"]] - last.state)) < 1e-7
+    half = _real(last.parameter, last.state, 0.0, 3 * SLOW_PERIOD, _resolving_step(last))
+    assert np.max(np.abs([half["x_final"], half["v_final"]] - last.state)) > 1e-5

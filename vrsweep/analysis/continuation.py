@@ -96,6 +96,8 @@ UNLOCATED = "unlocated"
 # location: "unlocated_fold" ... , its orbit the step's first one (it was dropped without a word).
 UNLOCATED_PREFIX = "unlocated_"  # as the branch file names them (store/branch_file.UNLOCATED)
 UNLOCATED_GRAZING = UNLOCATED_PREFIX + "grazing"
+# follow's stop(previous, orbit) may refuse a step with (REFUSED, reason): retried shorter.
+REFUSED = "refused"
 # Branch ends
 ENDED_RANGE = "left_range"
 ENDED_MAX_POINTS = "max_points"
@@ -439,12 +441,14 @@ def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, i
     return best
 
 
-def _locate(problem, start, tangent, step, kind, value_start, value_end, periods):
+def _locate(problem, start, tangent, step, kind, value_start, value_end, periods, across_graze=False):
     """The orbit on the arc from ``start`` (0 < s < step along tangent) where the test function of
     ``kind`` vanishes, by Illinois regula falsi (grazing: bisection on the impact count), to
     location_tolerance in the parameter and, for a fold, period doubling or Neimark-Sacker point,
     until its critical multiplier is within LOCATED_MULTIPLIER of its critical value (_located;
-    at most EXTRA_LOCATION_ITERATIONS more). Returns the Orbit nearest the root, or None."""
+    at most EXTRA_LOCATION_ITERATIONS more; ``across_graze``: the arc crosses a graze, and a
+    multiplier CRITICAL_DISTANCE or more from critical once the parameter is narrow is the
+    monodromy's jump, not looked at further). Returns the Orbit nearest the root, or None."""
     tolerance = problem.options["location_tolerance"] * max(1.0, abs(start.parameter))
     last = [None]  # the last orbit corrected on the arc
     extra = [0]
@@ -464,9 +468,11 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
         if kind == "grazing":
             return True
         distance = critical_distance(kind, last[0])
-        if distance <= LOCATED_MULTIPLIER or distance >= CRITICAL_DISTANCE:
-            # Located; or the multiplier is nowhere near critical with the parameter pinned: a jump
-            # of the monodromy (across a graze), not a root that more iterations would reach.
+        if distance <= LOCATED_MULTIPLIER or (across_graze and distance >= CRITICAL_DISTANCE):
+            # Located; or, across a graze, the multiplier nowhere near critical with the parameter
+            # pinned: the monodromy's jump, not a root that more iterations would reach. (Away from
+            # grazes a root is narrowed on even from far: at the fold at g = 17.799042 the
+            # multiplier moves 1.8 within the parameter's bracket.)
             return True
         extra[0] += 1
         return extra[0] > EXTRA_LOCATION_ITERATIONS
@@ -509,7 +515,7 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
     for kind, test in TEST_FUNCTIONS.items():
         a, b = test(previous), test(current)
         if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
-            orbit = _locate(problem, previous, tangent, step, kind, a, b, periods)
+            orbit = _locate(problem, previous, tangent, step, kind, a, b, periods, crosses_graze)
             if orbit is not None and _located(kind, orbit):
                 found.append((kind, orbit))
             elif not crosses_graze or (orbit is not None and critical_distance(kind, orbit) < CRITICAL_DISTANCE):
@@ -678,7 +684,9 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
     """Orbits from ``start`` (excluded) in ``direction`` (+1: parameter increasing at first).
 
     stop(previous, orbit): None, or the (status, reason) that ends the branch before ``orbit``
-    (analysis/period_doubling.py: a switched branch back on the branch it was born on).
+    (analysis/period_doubling.py: a switched branch back on the branch it was born on), or
+    (REFUSED, reason): ``orbit`` is not on this branch, and the step is retried shorter (down to
+    min_step, where the branch ends newton_failed with that reason).
 
     Returns (orbits, bifurcations [(kind, Orbit)], (status, reason)).
     """
@@ -764,6 +772,11 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 continue
             new_tangent = tangent_of(orbit, tangent)
         ended = None if stop is None else stop(current, orbit)
+        if ended is not None and ended[0] == REFUSED:  # not this branch's orbit: retried shorter
+            if not crossed and step * 0.5 >= options["min_step"]:
+                step *= 0.5
+                continue
+            return orbits, bifurcations, (ENDED_NEWTON, f"{ended[1]} with the smallest step")
         if ended is not None:
             return orbits, bifurcations, ended
         if not lo <= orbit.parameter <= hi:

@@ -40,7 +40,7 @@ ENDED_PERIOD_DOUBLING = "period_doubling"
 # eps, and its basin shrinks with the curvature of the 2p-branch: at one phase of the original
 # model's orbit of period 2 at g = 17.833 only 1e-4 converges; at the doubling of Fig. 1's
 # period-3 branch at g = 17.799031, where the multiplier moves 7e4 per unit g, the 2p-orbit's own
-# multiplier falls from +1 to 0 within 1e-5 of the doubling in state, and only 3e-6 converges
+# multiplier falls from +1 to 0.1 within 2e-5 of the doubling in state, and only 3e-6 converges
 # onto an orbit Newton's tolerance tells from the p-orbit: up to 0.7.2 no 2p-orbit was found
 # there).
 SWITCH_AMPLITUDES = (1e-6, 3e-6, 1e-5, 1e-4, 1e-3, 4e-3, 1.6e-2)
@@ -148,6 +148,7 @@ def _back_on_the_p_branch(problem, doublings, periods):
 
     def stop(previous, orbit):
         chord = np.linalg.norm(orbit.z - previous.z)
+        # (continuation.REFUSED, reason) refuses the step: follow retries it shorter.
         for doubling, u in frames:
             # The amplitude along w from the p-branch; the p-branch's own drift with the parameter
             # is of second order in it.
@@ -161,6 +162,13 @@ def _back_on_the_p_branch(problem, doublings, periods):
             # The corrector crossed onto the p-branch itself; next to a doubling (within the
             # step just taken) that is the pitchfork's crossing too.
             nearest = min(doublings, key=lambda d: np.linalg.norm(previous.z - d.z))
+            if (nearest.z - previous.z) @ (orbit.z - previous.z) <= 0.0:
+                # A step away from the doubling that lands on the p-branch, which passes there too,
+                # jumped off this branch (at the doubling at g = 17.793014 of Fig. 1's period-3
+                # branch the first step went from amplitude 8e-6 to a p-orbit 2e-4 away, and the
+                # branch ended at once, up to 0.7.2): retried shorter.
+                return (continuation.REFUSED, f"the corrector lands on the period-{periods} branch at "
+                                              f"{name} = {orbit.parameter:.8g}, away from its doubling")
             if np.linalg.norm(previous.z - nearest.z) <= chord:
                 met.append(nearest)
                 return (ENDED_PERIOD_DOUBLING, f"meets the period-{periods} branch at its period doubling "
