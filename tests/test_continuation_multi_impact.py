@@ -619,3 +619,26 @@ def test_the_doubling_of_the_11_impact_orbits_switches_onto_a_branch_that_leaves
     assert np.max(np.abs([run["x_final"], run["v_final"]] - last.state)) < 1e-7
     half = _real(last.parameter, last.state, 0.0, 3 * SLOW_PERIOD, _resolving_step(last))
     assert np.max(np.abs([half["x_final"], half["v_final"]] - last.state)) > 1e-5
+
+
+def test_a_doubling_and_a_fold_on_one_long_arc_are_both_located_with_critical_multipliers():
+    """From g = 17.7 at max_step 0.5 (the docs' run) one step goes from the orbit at 17.798989
+    (multiplier -2.34) to 17.798971 (+10.3) over the period doubling and the fold, 1.1e-5 apart in
+    g. Within the location's bracket of 1.8e-5 in g the multiplier moves by 1.8 at the fold: up to
+    0.7.2 both were recorded with multipliers 1.12 and -0.92, and a location that stops where the
+    multiplier is 0.1 from critical records the fold unlocated. Both are located, each multiplier
+    within 1e-3 of its critical value."""
+    problem = _problem(1e-12)
+    # the two orbits of that step, from the docs' run's states
+    previous, failure = continuation.correct(problem, np.array([-2.6500579256, 2.1044122480, 17.798989128]), PERIODS)
+    assert failure is None and previous.multipliers[0].real < -1.0
+    current, failure = continuation.correct(problem, np.array([-2.6499159843, 2.1041701301, 17.798971060]), PERIODS)
+    assert failure is None and current.multipliers[0].real > 1.0
+    chord = current.z - previous.z
+    tangent = continuation.tangent_of(previous, chord)
+    found = continuation._detect(problem, previous, current, tangent, float(tangent @ chord), PERIODS)
+    located = {kind: orbit for kind, orbit in found}
+    assert set(located) == {"fold", "period_doubling"}, found
+    assert located["period_doubling"].parameter < located["fold"].parameter
+    assert np.min(np.abs(located["fold"].multipliers - 1.0)) <= 1e-3
+    assert np.min(np.abs(located["period_doubling"].multipliers + 1.0)) <= 1e-3
