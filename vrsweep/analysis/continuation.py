@@ -787,8 +787,11 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             end, reason = _range_end(problem, current, orbit, tangent, lo, hi, before, memo)
             if end is not None:
                 end_orbit, s_end, located = end
-                if stop is not None and stop(current, end_orbit) is not None:
-                    return orbits, bifurcations, stop(current, end_orbit)
+                ended = None if stop is None else stop(current, end_orbit)
+                if ended is not None and ended[0] == REFUSED:  # not this branch's: the branch ends before it
+                    return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]; {ended[1]}")
+                if ended is not None:
+                    return orbits, bifurcations, ended
                 for kind, found_orbit in _detect(problem, current, end_orbit, tangent, s_end, start.periods, located):
                     if kind == "grazing":
                         _record_graze(problem, bifurcations, found_orbit)
