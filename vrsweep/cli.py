@@ -80,7 +80,9 @@ def _one_line(error):
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="vrsweep")
 def main():
-    """Vibrational resonance sweeps of a vibro-impact Van der Pol-Duffing oscillator."""
+    """Vibrational resonance in impacting oscillators: sweeps, trajectories and continuation of the
+    paper's vibro-impact Van der Pol-Duffing oscillator, or of one written in the config (vrsweep
+    init --example impact_linear writes one)."""
 
 
 def _register():
