@@ -418,7 +418,8 @@ job=$((RANDOM + 1))
 IFS=, read -ra pairs <<< "$exports"
 envs=()
 for pair in "${pairs[@]}"; do [[ $pair == ALL ]] || envs+=("$pair"); done
-task() { env "${envs[@]}" SLURM_JOB_ID=$job SLURM_CPUS_PER_TASK=1 "$@" bash "$script" >> sbatch.log 2>&1 || exit $?; }
+task() { echo "== $script $*" >> sbatch.log
+        env "${envs[@]}" SLURM_JOB_ID=$job SLURM_CPUS_PER_TASK=1 "$@" bash "$script" >> sbatch.log 2>&1 || exit $?; }
 if [[ -n $array ]]; then
     first=${array%-*}; last=${array#*-}
     for ((t = first; t <= last; t++)); do
@@ -450,13 +451,7 @@ def test_submit_sh_runs_as_written_and_gives_the_single_run_file(tmp_path, invok
     config = write_config(tmp_path, TINY, name="map.yaml")
     single = tmp_path / "single.h5"
     assert invoke("run", config, "-o", single, "-q").exit_code == 0
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    for name, text in {"sbatch": FAKE_SBATCH, "srun": '#!/bin/bash\nexec "$@"\n',
-                       "vrsweep": f'#!/bin/bash\nexec "{sys.executable}" -m vrsweep "$@"\n'}.items():
-        (bin_dir / name).write_text(text)
-        (bin_dir / name).chmod(0o755)
-    env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}")
+    env = dict(os.environ, PATH=_slurm_stand_ins(tmp_path))
     if out is not None:
         env["OUT"] = out
     out = Path(out or "results/map.h5")
@@ -468,6 +463,44 @@ def test_submit_sh_runs_as_written_and_gives_the_single_run_file(tmp_path, invok
     assert sorted(p.name for p in (tmp_path / out.parent).iterdir()) == sorted(
         [out.name] + [f"{out.stem}.shard{i}of3{out.suffix}" for i in range(3)])
     assert_same_result(single, tmp_path / out)
+
+
+def _slurm_stand_ins(tmp_path):
+    """PATH with sbatch (FAKE_SBATCH), srun and vrsweep standing in for SLURM's and the install's."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for name, text in {"sbatch": FAKE_SBATCH, "srun": '#!/bin/bash\nexec "$@"\n',
+                       "vrsweep": f'#!/bin/bash\nexec "{sys.executable}" -m vrsweep "$@"\n'}.items():
+        (bin_dir / name).write_text(text)
+        (bin_dir / name).chmod(0o755)
+    return f"{bin_dir}{os.pathsep}{os.environ['PATH']}"
+
+
+@pytest.mark.slow
+def test_the_warm_up_compiles_the_kernel_the_array_runs(tmp_path, write_config, assert_same_result, invoke):
+    """Each model, method, lyapunov setting and device has a kernel of its own. warmup.sbatch ran
+    warmup.yaml (the effective model, rk45, no Lyapunov exponent) whatever the array's config, so
+    an array of a config with lyapunov: true (or dop853, or a written model) found no kernel in the
+    cache it had just warmed, and its tasks compiled, each saying so. Here the cache is empty
+    before submit.sh: the warm-up's compile is the only one."""
+    config = write_config(tmp_path, TINY.replace("strobe_periods: 2}", "strobe_periods: 2, lyapunov: true}"),
+                          name="map.yaml")
+    env = dict(os.environ, PATH=_slurm_stand_ins(tmp_path), NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    done = subprocess.run(["bash", str(SLURM_EXAMPLES / "submit.sh"), config.name, "3"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=600)
+    log = (tmp_path / "sbatch.log").read_text() if (tmp_path / "sbatch.log").exists() else ""
+    assert done.returncode == 0, done.stderr + log
+    jobs = {}
+    for part in log.split("== ")[1:]:
+        script, _, output = part.partition("\n")
+        jobs.setdefault(Path(script.split()[0]).name, []).append(output)
+    assert len(jobs["array.sbatch"]) == 3 and len(jobs["merge.sbatch"]) == 1, log
+    for task in jobs["array.sbatch"]:
+        assert "Compiling" not in task, log
+    assert "Compiling" in "".join(jobs["warmup.sbatch"]), log
+    single = tmp_path / "single.h5"
+    assert invoke("run", config, "-o", single, "-q").exit_code == 0
+    assert_same_result(single, tmp_path / "results" / "map.h5")
 
 
 # SLURM as dask-jobqueue uses it, for examples/slurm/dask_slurm.py: sbatch starts the job script at

@@ -23,7 +23,7 @@ export NUMBA_CACHE_DIR="${NUMBA_CACHE_DIR:-$HOME/.cache/vrsweep-numba}"
 mkdir -p logs "$(dirname "$OUT")" "$NUMBA_CACHE_DIR"
 vrsweep validate "$CONFIG"   # a broken config fails here, not in N queued jobs
 
-warmup=$(sbatch --parsable --export="ALL,WARMUP_CONFIG=$HERE/warmup.yaml" "$HERE/warmup.sbatch")
+warmup=$(sbatch --parsable --export="ALL,CONFIG=$CONFIG" "$HERE/warmup.sbatch")  # compiles the kernel of CONFIG
 array=$(sbatch --parsable --array="1-$SHARDS" --dependency="afterok:$warmup" \
         --export="ALL,CONFIG=$CONFIG,OUT=$OUT" "$HERE/array.sbatch")
 merge=$(sbatch --parsable --dependency="afterok:$array" --kill-on-invalid-dep=yes \
