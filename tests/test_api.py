@@ -325,6 +325,53 @@ def test_simulate_returns_the_command_lines_trajectory(tmp_path, invoke):
         assert_same_dataset(load_results(kept, group), load_results(out, group))
 
 
+def _drawn(fig):
+    """What a figure draws: every line's and collection's data, axes by axes."""
+    return [([line.get_xydata().tobytes() for line in ax.get_lines()],
+             [np.asarray(c.get_offsets()).tobytes() for c in ax.collections]) for ax in fig.axes]
+
+
+def test_the_figures_take_what_the_functions_return(tmp_path, invoke, sweep_yaml, api_dataset, cli_file):
+    """vrsweep.plot.plot(ds) read a Dataset as the names of its variables, each then refused as a
+    missing file ("results file not found: R"); a trajectory's Dataset (vrsweep.simulate's,
+    open_results') failed in a KeyError, and simulate's dict was read as paths too. Each is now drawn
+    as its file is: the trajectory the same arrays and attributes, the figures the same lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from vrsweep import plot
+    from vrsweep.store.trajectory_file import from_datasets, read_trajectory
+
+    config = tmp_path / "point.yaml"
+    config.write_text(POINT_TEXT)
+    out = tmp_path / "traj.h5"
+    groups = vrsweep.simulate(config, output=out, samples_per_period=10, compare="effective")
+    from_file, from_api = read_trajectory(out), from_datasets(groups)
+    assert list(from_api.runs) == list(from_file.runs) and list(from_api.slow_flow) == list(from_file.slow_flow)
+    for name, run in from_file.runs.items():
+        for field, value in vars(run).items():
+            assert np.asarray(getattr(from_api.runs[name], field)).tobytes() == np.asarray(value).tobytes(), field
+    for name, flow in from_file.slow_flow.items():
+        assert vars(from_api.slow_flow[name]).keys() == vars(flow).keys()
+        for field, value in vars(flow).items():
+            assert np.asarray(getattr(from_api.slow_flow[name], field)).tobytes() == np.asarray(value).tobytes()
+    assert ({k: v for k, v in from_api.attrs.items() if k not in WHEN_AND_HOW}
+            == {k: v for k, v in from_file.attrs.items() if k not in WHEN_AND_HOW})
+
+    for kind in ("trajectory", "slowflow", "impacts"):
+        assert _drawn(plot.plot(groups, kind=kind)) == _drawn(plot.plot(out, kind=kind)), kind
+    alone = vrsweep.simulate(config, samples_per_period=10)  # the original run only: no file behind it
+    assert _drawn(plot.plot(alone)) == _drawn(plot.plot([vrsweep.open_results(out)]))
+    assert _drawn(plot.plot(api_dataset)) == _drawn(plot.plot(cli_file))
+    assert _drawn(plot.plot(api_dataset, kind="map")) == _drawn(plot.plot([cli_file], kind="map"))
+
+    for source, words in [(api_dataset.R, "a DataArray ('R'): pass its Dataset"),
+                          (groups["slow_flow/state"], "a slow flow alone is no trajectory"),
+                          (3, "cannot plot int 3")]:
+        with pytest.raises(UsageError, match=re.escape(words)):
+            plot.plot(source)
+
+
 def test_theory_is_what_theory_json_prints(sweep_yaml, invoke):
     result = invoke("theory", str(sweep_yaml), "--json", "--set", "alpha=0.12")
     assert result.exit_code == 0, result.output

@@ -90,8 +90,9 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
          table=False) -> Figure:
     """The figure ``vrsweep plot`` draws for ``sources`` (one file; several for trajectory impacts).
 
-    sources: a path, or a list of paths or of what ``load`` returned (a sweep's Dataset, from
-    ``load`` or ``vrsweep.open_results``; a trajectory's TrajectoryData). at: {axis: value} fixing
+    sources: a path, what ``load`` returned (a sweep's Dataset, a trajectory's TrajectoryData), what
+    the Python API returns (``vrsweep.sweep``'s or ``vrsweep.open_results``'s Dataset,
+    ``vrsweep.simulate``'s Dataset or its dict of them), or a list of these. at: {axis: value} fixing
     sweep axes; x_axis: the swept parameter to draw against; log: True for a logarithmic response
     axis (or colour scale of a map), False for a linear one, None to choose (response plots: log
     when the measured values span two decades or more; maps: linear); periods: (first, last) slow periods
@@ -108,11 +109,11 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
 
     options = dict(title=title, size=size, style=style, xlim=xlim, ylim=ylim, legend=legend)
     limits = dict(vmin=vmin, vmax=vmax)
-    if isinstance(sources, (str, os.PathLike)):
+    if not isinstance(sources, (list, tuple)):  # one source; a Dataset or a dict iterates over names
         sources = [sources]
     if not sources:
         raise UsageError.naming("no file to plot")
-    data = [load(s) if isinstance(s, (str, os.PathLike)) else s for s in sources]
+    data = [_loaded(s) for s in sources]
     if any(is_curves(d) for d in data):
         return _curves_plot(data, kind, amplitude, at, x_axis, log, periods, var, options, limits)
     if is_branch(data[0]):
@@ -184,6 +185,39 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if kind in ("lyapunov", "bifurcation+lyapunov"):
         return lyapunov_figure(ds, x_axis=x_axis, bifurcation=kind == "bifurcation+lyapunov", **options, **limits)
     return bifurcation_figure(ds, x_axis=x_axis, **options, **limits)
+
+
+def _loaded(source):
+    """One source of ``plot``, in the form the figures draw: a path loaded (``load``); a sweep's,
+    branch's or curves' Dataset as it is; a trajectory's Dataset, or simulate's dict of them, as
+    the TrajectoryData its file gives. Anything else is a UsageError saying what is accepted (a
+    Dataset was iterated as the names of its variables, each then refused as a missing file; a
+    trajectory's Dataset failed in a KeyError)."""
+    from vrsweep.store.trajectory_file import TrajectoryData, from_datasets, is_trajectory_dataset
+
+    if isinstance(source, (str, os.PathLike)):
+        return load(source)
+    if isinstance(source, TrajectoryData):
+        return source
+    if is_trajectory_dataset(source) or isinstance(source, dict):
+        try:
+            return from_datasets(source)
+        except ValueError as error:
+            raise UsageError.naming("cannot plot {what}: {reason}", what=type(source).__name__,
+                                    reason=error) from None
+    attrs = getattr(source, "attrs", None)
+    if hasattr(source, "data_vars") and isinstance(attrs, dict) and attrs.get("vrsweep_file"):
+        return source
+    raise UsageError.naming("cannot plot {what}: give a result file's path, or a Dataset that vrsweep.sweep, "
+                            "vrsweep.simulate or vrsweep.open_results returned", what=_what(source))
+
+
+def _what(source):
+    if hasattr(source, "dims") and not hasattr(source, "data_vars"):
+        return f"a DataArray ({getattr(source, 'name', None)!r}): pass its Dataset"
+    if hasattr(source, "data_vars"):
+        return "a Dataset that no vrsweep file or function made (no vrsweep_file attribute)"
+    return f"{type(source).__name__} {source!r}"[:120]
 
 
 # What a branch figure cannot do with each option it is given: one line each, never ignored quietly.

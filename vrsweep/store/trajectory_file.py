@@ -395,6 +395,64 @@ def _read_slow_flow(group) -> SlowFlowRun:
         t=group["time"][()], x=group["x"][()], v=group["v"][()], R=group["R"][()], theta=group["theta"][()])
 
 
+# The attributes open_results gives a group's Dataset beside the file's root ones (its own taking
+# precedence): a run's, a slow flow's, and which group it is.
+RUN_ATTRIBUTES = ("model", "status", "status_name", "status_message")
+SLOW_FLOW_ATTRIBUTES = ("start", "literal", "R0", "theta0", "description")
+GROUP_ATTRIBUTE = "vrsweep_group"
+
+
+def is_trajectory_dataset(ds) -> bool:
+    """Whether ``ds`` is one group of a trajectory file as ``vrsweep.simulate`` or ``open_results``
+    gives it (an xarray Dataset whose attributes name the group)."""
+    attrs = getattr(ds, "attrs", None)
+    return (hasattr(ds, "data_vars") and isinstance(attrs, dict) and attrs.get("vrsweep_file") == FILE_KIND
+            and isinstance(attrs.get(GROUP_ATTRIBUTE), str))
+
+
+def from_datasets(datasets) -> TrajectoryData:
+    """A trajectory as the Python API hands it out -- one group's Dataset (``vrsweep.simulate``,
+    ``open_results``) or ``{group: Dataset}`` of every group (``simulate(..., compare="effective")``)
+    -- as the :class:`TrajectoryData` that ``read_trajectory`` makes of its file, which the
+    trajectory figures draw. Raises ValueError naming what is not a trajectory's group."""
+    if is_trajectory_dataset(datasets):
+        datasets = {datasets.attrs[GROUP_ATTRIBUTE]: datasets}
+    runs, slow_flow, root = {}, {}, None
+    for name, ds in datasets.items():
+        if not is_trajectory_dataset(ds):
+            raise ValueError(f"{name!r} is not a group of a trajectory (what vrsweep.simulate returns)")
+        group = ds.attrs[GROUP_ATTRIBUTE]
+        if group in RUN_GROUPS:
+            impacts = np.stack([ds[key].values for key in ("impact_t", "impact_v_before", "impact_v_after")], axis=-1)
+            sticks = np.stack([ds["stick_start"].values, ds["stick_end"].values], axis=-1)
+            runs[group] = ModelRun(
+                model=_text(ds.attrs["model"]), status=Status(int(ds.attrs["status"])),
+                t=ds["time"].values, x=ds["x"].values, v=ds["v"].values,
+                impacts=impacts.reshape(-1, 3), sticks=sticks.reshape(-1, 2),
+                impacts_per_period=ds["impacts_per_period"].values,
+                strobe_x=ds["strobe_x"].values, strobe_v=ds["strobe_v"].values)
+        elif group.startswith("slow_flow/"):
+            slow_flow[group.split("/", 1)[1]] = SlowFlowRun(
+                start=_text(ds.attrs["start"]), literal=bool(ds.attrs["literal"]), R0=float(ds.attrs["R0"]),
+                theta0=float(ds.attrs["theta0"]), description=_text(ds.attrs["description"]),
+                t=ds["time"].values, x=ds["x"].values, v=ds["v"].values, R=ds["R"].values,
+                theta=ds["theta"].values)
+        else:
+            raise ValueError(f"{name!r} is group {group!r}, which no trajectory file holds")
+        if root is None or not group.startswith("slow_flow/"):
+            root = ds  # a run's attributes, or a slow flow's where there is no run
+    if not runs:
+        raise ValueError("a slow flow alone is no trajectory: give the model's run with it (the dict "
+                         "vrsweep.simulate(..., compare='effective') returns)")
+    own = (*RUN_ATTRIBUTES, *SLOW_FLOW_ATTRIBUTES, GROUP_ATTRIBUTE)
+    attrs = {key: _text(value) for key, value in root.attrs.items() if key not in own}
+    # The file's model is the config's: the first run (original before effective), as in the file.
+    attrs["model"] = next(name for name in RUN_GROUPS if name in runs)
+    ordered = {name: runs[name] for name in RUN_GROUPS if name in runs}
+    source = root.encoding.get("source")
+    return TrajectoryData(runs=ordered, slow_flow=slow_flow, attrs=attrs, path=source)
+
+
 def _text(value):
     if isinstance(value, bytes):
         return value.decode("utf-8")
@@ -405,4 +463,5 @@ def _text(value):
 
 __all__ = [
     "ModelRun", "SlowFlowRun", "TrajectoryData", "write_trajectory", "read_trajectory", "is_trajectory_file",
+    "is_trajectory_dataset", "from_datasets",
 ]
