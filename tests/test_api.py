@@ -92,6 +92,16 @@ def test_sweep_returns_the_command_lines_file_bit_for_bit(api_dataset, cli_file)
     assert api_dataset.attrs["vrsweep_file"] == "sweep"
 
 
+def test_a_continuation_both_sweep_has_its_direction_last():
+    """sweep's docstring: one dimension per axis in the config's order (config.shape), then
+    direction (up, down) for continuation: both."""
+    config = {"model": "effective", "sweep": {"g": {"start": 21.0, "stop": 22.0, "num": 3, "continuation": "both"}},
+              "integration": {"transient_periods": 2, "measure_periods": 3, "strobe_periods": 1}}
+    ds = vrsweep.sweep(config, progress=False)
+    assert ds["R"].dims == ("g", "direction") and ds["R"].shape == (*resolve_config(config).shape, 2)
+    assert list(ds["direction"].values) == [1, -1]
+
+
 def test_a_dict_a_yaml_string_and_a_path_give_the_same_result(sweep_yaml, api_dataset):
     assert resolve_config(SWEEP_DICT) == resolve_config(SWEEP_TEXT) == load_config(sweep_yaml)
     assert_same_dataset(vrsweep.sweep(SWEEP_DICT, progress=False), api_dataset)

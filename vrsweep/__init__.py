@@ -33,7 +33,7 @@ _threads.drop_unreadable_setting()
 
 
 def open_results(path, **kwargs):
-    """Open a vrsweep sweep, shard or trajectory file as a lazily read ``xarray.Dataset``.
+    """Open a vrsweep sweep, shard, trajectory, branch or curves file as a lazily read ``xarray.Dataset``.
 
     See :func:`vrsweep.store.reading.open_results`; xarray is imported only when this is called, so the
     command line starts as fast as before.

@@ -167,8 +167,9 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
     xarray.Dataset
         Loaded into memory (no file left open): the variables, coordinates and attributes of the
         result file, one dimension per sweep axis in the config's order (``R``: shape
-        ``config.shape``). Attributes as the file's: ``config`` (the resolved YAML), versions,
-        provenance.
+        ``config.shape``), and a last one, ``direction``, of 2 for a ``continuation: both`` sweep.
+        Attributes as the file's: ``config`` (the resolved YAML), versions, provenance.
+        ``vrsweep.plot.plot(dataset)`` draws it as ``vrsweep plot`` draws the file.
 
     Raises
     ------
@@ -331,6 +332,7 @@ def simulate(config, *, output=None, samples_per_period=None, compare=None,
         "effective": ..., "slow_flow/state": ..., "slow_flow/paper": ...,
         "slow_flow/paper_literal": ...}``, each a Dataset as above (a slow-flow group holds
         ``x``, ``v``, ``R``, ``theta`` over ``time``). All loaded into memory.
+        ``vrsweep.plot.plot`` draws either as ``vrsweep plot`` draws the trajectory file.
     """
     from vrsweep.execution.simulate import check_single_point, simulate_point
     from vrsweep.store.fileio import output_target, prepare_output_directory
