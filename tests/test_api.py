@@ -380,6 +380,8 @@ def test_the_figures_take_what_the_functions_return(tmp_path, invoke, sweep_yaml
                           (3, "cannot plot int 3")]:
         with pytest.raises(UsageError, match=re.escape(words)):
             plot.plot(source)
+    with pytest.raises(UsageError, match="^the trajectory holds no effective trajectory"):  # not "None holds"
+        plot.plot(alone, kind="slowflow")
 
 
 def test_theory_is_what_theory_json_prints(sweep_yaml, invoke):

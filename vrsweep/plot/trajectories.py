@@ -273,7 +273,8 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
     if "effective" not in data.runs or not data.slow_flow:
         raise UsageError.naming("{path} holds no effective trajectory and slow flow: make it with "
                                 "{simulate_compare} (or a config with model: effective)",
-                                {"simulate_compare": "a simulation with compare_effective"}, path=data.path)
+                                {"simulate_compare": "a simulation with compare_effective"},
+                                path=data.path or "the trajectory")  # vrsweep.simulate's has no file
     config = _parse_config(data.config_text)
     delta = config.parameters["Delta"] if config is not None else None
     window = _time_window(data, periods)
