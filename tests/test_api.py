@@ -275,6 +275,27 @@ def test_a_bad_keyword_argument_is_named_as_one(tmp_path, config):
         assert problem.startswith(words) and "--set" not in problem, problem
 
 
+def test_a_misspelt_keyword_of_the_function_is_named(tmp_path):
+    """A misspelt keyword (progres=False) is a setting to the function, and was refused among the
+    config's names only: the refusal names the keyword meant, and nothing runs or is written."""
+    path = tmp_path / "c.yaml"
+    path.write_text("model: effective\nsweep:\n  g: [1, 2]\n")
+    cases = [(vrsweep.sweep, {"progres": False}, "keyword argument progres=False (did you mean the keyword progress?)"),
+             (vrsweep.sweep, {"overwite": True}, "keyword argument overwite=True (did you mean the keyword overwrite?)"),
+             (vrsweep.sweep, {"alow_large": True}, "(did you mean the keyword allow_large?)"),
+             (vrsweep.simulate, {"samples_per_perod": 3}, "(did you mean the keyword samples_per_period?)")]
+    for function, overrides, words in cases:
+        with pytest.raises(ConfigError) as error:
+            function(path, output=str(tmp_path / "o.h5"), **overrides)
+        (problem,) = error.value.problems
+        assert words in problem and "unknown name" in problem, problem
+    assert not (tmp_path / "o.h5").exists()
+    with pytest.raises(ConfigError) as error:  # a setting's own near miss keeps its own hint alone
+        vrsweep.sweep(path, Omgea=3)
+    (problem,) = error.value.problems
+    assert "(did you mean 'Omega'?)" in problem and "the keyword" not in problem, problem
+
+
 def test_a_bad_dict_names_the_field_without_a_line():
     with pytest.raises(ConfigError) as error:
         vrsweep.sweep({"parameters": {"e": 1.5, "gama": 0.2}, "integration": {"lyapunov": "yes"}})

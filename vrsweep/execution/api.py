@@ -98,7 +98,7 @@ def _looks_like_path(text: str) -> bool:
             or (":" not in text and not text.lstrip().startswith("{")))
 
 
-def resolve_config(config, overrides=None):
+def resolve_config(config, overrides=None, *, keywords=()):
     """``config`` (a path, YAML text, a dict nested as the YAML, or a Config) with ``overrides``
     ({name: value}, as keyword arguments give them) applied, validated: a
     :class:`vrsweep.config.Config`.
@@ -114,7 +114,10 @@ def resolve_config(config, overrides=None):
     overrides = overrides or {}
     settings = tuple(setting_text(name, value) for name, value in overrides.items())
     # A problem names the keyword argument as the caller wrote it: this user never typed --set.
-    words = {text: f"keyword argument {name}={value!r}" for text, (name, value) in zip(settings, overrides.items())}
+    # ``keywords``: the calling function's own (progress, overwrite...): a misspelt one (progres=False)
+    # arrives here as a setting, and its near miss is named beside the config's own names.
+    words = {text: f"keyword argument {name}={value!r}{_near_keyword(name, keywords)}"
+             for text, (name, value) in zip(settings, overrides.items())}
     if isinstance(config, Config):
         return with_overrides(config, settings, override_words=words) if settings else config
     if isinstance(config, os.PathLike):
@@ -127,6 +130,22 @@ def resolve_config(config, overrides=None):
         return config_from_dict(config, "<dict>", settings, override_words=words)
     raise UsageError.naming("{config} must be a path, YAML text, a dict or a vrsweep Config, got {kind}",
                             kind=type(config).__name__)
+
+
+def _near_keyword(name, keywords) -> str:
+    """`` (did you mean the keyword progress?)`` where ``name`` is a near miss of one of ``keywords``."""
+    import difflib
+
+    close = difflib.get_close_matches(name, [word for word in keywords if word != name], n=1, cutoff=0.75)
+    return f" (did you mean the keyword {close[0]}?)" if close else ""
+
+
+def _keywords(function):
+    """A function's own keyword-only arguments: what is not a setting."""
+    import inspect
+
+    return tuple(name for name, parameter in inspect.signature(function).parameters.items()
+                 if parameter.kind is inspect.Parameter.KEYWORD_ONLY)
 
 
 # -- sweep -----------------------------------------------------------------------------------
@@ -185,7 +204,7 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
 
     _check_flags(progress=progress, overwrite=overwrite, resume=resume, allow_large=allow_large)
     _check_path("output", output)
-    resolved = resolve_config(config, overrides)
+    resolved = resolve_config(config, overrides, keywords=_keywords(sweep))
     if resume and overwrite:
         raise UsageError.naming("{resume} and {overwrite} exclude each other", ARGUMENT_WORDS)
     if resume and output is None:
@@ -345,7 +364,7 @@ def simulate(config, *, output=None, samples_per_period=None, compare=None,
                                     value=samples_per_period)
         samples_per_period = int(samples_per_period)
     _check_path("output", output)
-    resolved = resolve_config(config, overrides)
+    resolved = resolve_config(config, overrides, keywords=_keywords(simulate))
     if compare is not None and compare not in COMPARE_CHOICES:
         raise UsageError.naming("{compare} {value}: must be None or one of {choices}",
                                 value=repr(compare), choices=", ".join(map(repr, COMPARE_CHOICES)))
