@@ -174,8 +174,9 @@ def test_the_issues_example_gamma_in_the_stored_config(files, tmp_path, invoke):
         assert "gamma: 0.22" in text
         f.attrs["config"] = text.replace("gamma: 0.22", "gamma: 0.27")
     line = invoke("info", copy).output.strip()
-    assert line == f"Error: {copy} is corrupt: its attributes (config, model, parameters, labels) do not match " \
-                   "their checksum", line
+    assert line == f"Error: {copy} is corrupt or was changed after vrsweep wrote it (edited, or re-saved by another " \
+                   "tool such as xarray's to_netcdf: open the file vrsweep wrote): its attributes (config, model, " \
+                   "parameters, labels) do not match their checksum", line
 
 
 @pytest.mark.parametrize("kind,name,value", [("sweep", "history", "edited"), ("sweep", "created", "2000-01-01T00:00:00Z"),
@@ -218,3 +219,16 @@ def test_a_merge_is_sealed_as_a_single_run(files, tmp_path, invoke):
     with h5py.File(files["sweep"], "r") as whole, h5py.File(merged, "r") as joined:
         assert joined.attrs[ATTRIBUTES_CHECKSUM] == whole.attrs[ATTRIBUTES_CHECKSUM]
         assert joined.attrs[ATTRIBUTES_CHECKSUM] == attributes_digest(joined, SWEEP_UNSEALED)
+
+
+def test_a_copy_re_saved_by_xarray_is_named_as_changed_not_only_corrupt(files, tmp_path):
+    """xarray's to_netcdf adds attributes of its own (_Netcdf4Dimid, _FillValue): the copy fails
+    the checksum as a damaged file does, and "is corrupt" sent its user looking for damage."""
+    import xarray as xr
+
+    copy = tmp_path / "resaved.h5"
+    with xr.open_dataset(files["sweep"], engine="h5netcdf") as ds:
+        ds.load().to_netcdf(copy, engine="h5netcdf")
+    with pytest.raises(ResultFileError) as error:
+        vrsweep.open_results(copy)
+    assert "re-saved by another tool such as xarray's to_netcdf" in str(error.value), error.value

@@ -77,6 +77,13 @@ def seal_attributes(f, skip_root=()) -> None:
     f.attrs[ATTRIBUTES_CHECKSUM] = attributes_digest(f, skip_root)
 
 
+# Not "is corrupt" alone: a file re-saved by xarray's to_netcdf gains attributes of its own
+# (_Netcdf4Dimid, _FillValue) and fails the check as a damaged one does.
+CHANGED = ("is corrupt or was changed after vrsweep wrote it (edited, or re-saved by another tool such as xarray's "
+           "to_netcdf: open the file vrsweep wrote): its attributes (config, model, parameters, labels) do not "
+           "match their checksum")
+
+
 def check_attributes(f, path, skip_root=()) -> bool:
     """ResultFileError when the attributes of ``f`` fail their checksum. Returns whether the file
     has one: a file written before (no ATTRIBUTES_CHECKSUM) passes unprotected
@@ -87,8 +94,7 @@ def check_attributes(f, path, skip_root=()) -> bool:
     if isinstance(stored, bytes):
         stored = stored.decode("utf-8", "replace")
     if not isinstance(stored, str) or stored != attributes_digest(f, skip_root):
-        raise ResultFileError(f"{path} is corrupt: its attributes (config, model, parameters, labels) do not "
-                              "match their checksum")
+        raise ResultFileError(f"{path} {CHANGED}")
     return True
 
 
@@ -103,8 +109,7 @@ def check_attributes_of_any_kind(f, path) -> None:
             return
         except ResultFileError:
             continue
-    raise ResultFileError(f"{path} is corrupt: its attributes (config, model, parameters, labels) do not "
-                          "match their checksum")
+    raise ResultFileError(f"{path} {CHANGED}")
 
 
 def unless_changed(f, path) -> str:
@@ -115,7 +120,7 @@ def unless_changed(f, path) -> str:
     try:
         check_attributes_of_any_kind(f, path)
     except ResultFileError:
-        return "; or it is corrupt: its attributes do not match their checksum"
+        return f"; or it {CHANGED}"
     return ""
 
 
