@@ -13,8 +13,8 @@ streaming merge (8 shards of it peaked at 1.19 GB).
 Each merge is a fresh subprocess, `python -m vrsweep merge SHARDS -o OUT -q`; its peak resident set
 size is its own ru_maxrss from os.wait4, taken by a small launcher process (see LAUNCHER). Start-up is the same command merging 2 shards of a
 10-point grid of the same config. The baseline is the merge of revision REV (default 5bae00a, the
-last one that read each shard whole): its vrsweep/store.py, taken with `git show`, is loaded by
-the same kind of subprocess and its merge_results called on the same files, with its own start-up
+last one that read each shard whole): its vrsweep package, taken with `git archive`, is imported
+by the same kind of subprocess and its store's merge_results called on the same files, with its own start-up
 measured the same way. Each merge runs --repeat times; the lowest peak is kept (the noise of a
 shared machine only adds).
 
@@ -94,11 +94,10 @@ def synthetic_values(specs, points):
 
 
 BASELINE_LAUNCHER = """\
-import importlib.util, sys
-spec = importlib.util.spec_from_file_location("baseline_store", sys.argv[1])
-store = sys.modules["baseline_store"] = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(store)
-store.merge_results(sys.argv[3:], sys.argv[2], overwrite=True)
+import sys
+sys.path.insert(0, sys.argv[1])  # the revision's own package: its store imported its own modules
+from vrsweep.store import merge_results
+merge_results(sys.argv[3:], sys.argv[2], overwrite=True)
 """
 
 
@@ -138,16 +137,19 @@ def measure(command, repeat):
 
 
 def baseline_store(directory, revision):
-    """vrsweep/store.py of ``revision`` written to ``directory``, or None if git cannot show it."""
+    """The folder holding ``revision``'s vrsweep package (git archive), or None if git cannot give it.
+    The whole package, not its store.py alone: that imported modules (vrsweep.model) which the
+    current package no longer has, and the baseline failed in ModuleNotFoundError."""
+    folder = Path(directory) / "baseline"
+    folder.mkdir()
     try:
-        text = subprocess.run(["git", "-C", str(REPOSITORY), "show", f"{revision}:vrsweep/store.py"],
-                              capture_output=True, text=True, check=True).stdout
+        archive = subprocess.run(["git", "-C", str(REPOSITORY), "archive", revision, "vrsweep"],
+                                 capture_output=True, check=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(folder)], input=archive, check=True)
     except (OSError, subprocess.CalledProcessError) as error:
-        print(f"no baseline: git show {revision}:vrsweep/store.py failed ({error})")
+        print(f"no baseline: git archive {revision} vrsweep failed ({error})")
         return None
-    path = Path(directory) / "baseline_store.py"
-    path.write_text(text)
-    return path
+    return folder
 
 
 def main():
