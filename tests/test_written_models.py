@@ -912,6 +912,67 @@ def test_every_frequency_of_the_forcing_is_found_with_or_without_a_phase():
     assert codegen.frequencies([-x], t) == []
 
 
+def test_the_forcings_spectrum_holds_the_frequencies_of_products_and_powers():
+    """Product-to-sum: cos(w t)**9 = (126 cos(w t) + 84 cos(3 w t) + 36 cos(5 w t) + 9 cos(7 w t)
+    + cos(9 w t)) / 256, sin(w t) cos(2 w t) = (sin(3 w t) - sin(w t)) / 2, x cos(w t/2)**2 =
+    x (1 + cos(w t)) / 2. Only the terms' own frequencies were found (w, w, w/2): a stuck mass's
+    release scan stepped over pulls of cos(w t)**9, and a force cos(w t/2)**2, which repeats every
+    2 pi / w, was said to repeat after two such periods."""
+    import sympy
+
+    from vrsweep.numerics import codegen
+
+    t, w, W, phi, a, b = sympy.symbols("t omega W phi a b", real=True)
+    x, v = sympy.symbols("x v", real=True)
+
+    def spectrum(expression):
+        return {sympy.srepr(sympy.expand(f)) for f in codegen.forcing_spectrum(expression, t)}
+
+    def expected(*frequencies):
+        return {sympy.srepr(sympy.expand(f)) for f in frequencies}
+
+    assert spectrum(sympy.cos(w * t) ** 9) == expected(w, 3 * w, 5 * w, 7 * w, 9 * w)
+    assert spectrum(sympy.sin(w * t) * sympy.cos(2 * w * t)) == expected(w, 3 * w)
+    assert spectrum(-x + x * sympy.cos(w * t / 2) ** 2) == expected(w)
+    assert spectrum(sympy.cos(w * t + phi) ** 2 - v * sympy.sin(W * t)) == expected(2 * w, W)
+    assert spectrum(sympy.sin(x + w * t)) == expected(w)  # on a stop x is a constant: a phase
+    assert spectrum(t * sympy.cos(w * t) + sympy.sin(t ** 2) + sympy.sin(x * t)) == expected(w)
+    # not polynomials in them: their arguments' frequencies, harmonics of which they hold
+    assert spectrum(sympy.exp(sympy.cos(w * t)) * sympy.cos(2 * w * t)) == expected(w, 2 * w, 3 * w)
+    assert spectrum(1 / (2 + sympy.cos(w * t))) == expected(w)
+    assert spectrum(-x) == set()
+    # too many to list: the terms' frequencies and the bound n max|a| of a degree-n polynomial
+    assert spectrum((sympy.cos(a * t) + sympy.cos(b * t) + sympy.cos(w * t)) ** 64) == expected(
+        a, b, w, 64 * a, 64 * b, 64 * w)
+
+
+@pytest.mark.parametrize("acceleration, repeats, cycles", [
+    ("-x + F*cos(omega*t/2)**2", 1, 1.0),
+    ("-x + F*cos(omega*t)**9", 1, 9.0),
+    ("-x + F*sin(omega*t)*cos(2*omega*t)", 1, 3.0),
+    ("-x + F*cos(omega*t/3)*cos(omega*t/3)", 3, 2.0 / 3.0),
+])
+def test_when_a_written_forcing_repeats_and_how_fast_it_varies(acceleration, repeats, cycles):
+    """analysis.diagnostics.sampling_of_forcing of forces written as products and powers: the
+    periods T = 2 pi / omega after which each repeats, and its fastest cycles per T, from the
+    product-to-sum identities (cos(omega t/3)**2 = (1 + cos(2 omega t/3)) / 2: three periods)."""
+    from vrsweep.analysis.diagnostics import sampling_of_forcing
+    from vrsweep.config import parse_config
+
+    text = textwrap.dedent(f"""\
+        model:
+          acceleration: "{acceleration}"
+          parameters: {{F: 1.0, omega: 0.8}}
+          period: "2*pi/omega"
+          response: {{frequency: omega, scale: F}}
+        initial: {{x: 0.0, v: 0.0}}
+        """)
+    config = parse_config(text, "m.yaml")
+    q, fastest = sampling_of_forcing(config.model, [config.parameters], 8)
+    assert int(q[0]) == repeats
+    assert float(fastest[0]) == pytest.approx(cycles, rel=1e-14)
+
+
 def test_a_response_at_no_harmonic_of_the_motion_is_zero_whatever_the_window():
     """A linear oscillator forced at omega (and, with F2 > 0, at omega/2), the response read at
     w = omega/2, over 21 periods T = 2 pi / omega (an odd number). The closed form: the steady

@@ -299,3 +299,40 @@ def test_the_release_scan_follows_the_fastest_forcing_not_the_step_cap():
     assert np.min(np.abs(phases[:, None] - np.array(roots)[None, :])) < 1e-9  # a short pull releases it
     vectors = kernels_for(config.model).coefficients(config.parameters)
     assert vectors[SCAN_STEP] == pytest.approx(2 * math.pi / (9 * p["omega"]) / 64, rel=1e-15)
+
+
+POWER = """\
+model:
+  acceleration: "-2*zeta*v - x + F0 - F2*cos(omega*t + phi)**9"
+  parameters: {zeta: 0.1, F0: 1.0, F2: 0.5005, omega: 0.8, phi: 1.0, Delta: 0.5, r: 0.0}
+  barriers:
+    - {position: Delta, side: above, restitution: r}
+  period: "2*pi/omega"
+  response: {frequency: omega, scale: F0}
+initial: {x: 0.0, v: 0.0}
+"""
+
+
+def test_the_release_scan_follows_a_power_of_a_cosine_at_its_highest_harmonic():
+    """At rest on the stop the force 0.5 - 0.5005 cos(omega t + 1)**9 pulls away only where
+    cos(...)**9 > 0.999, for 0.047 rad of omega t a period: shorter than a scan of 1/64 of
+    2 pi / omega (0.098 rad), which was the step because cos(omega t + 1) was the only term
+    found. The mass stayed stuck through 7 of the 8 pulls (2 impacts in 8 periods for the
+    reference's 9, stuck 0.52 too long). cos**9 holds cos(9 (omega t + 1)): the scan is 1/64 of
+    2 pi / (9 omega) (codegen.forcing_spectrum), and R, the impacts and the stuck time are the
+    reference's."""
+    n_transient, n_measure = 0, 8
+    config, run = _run(POWER, n_transient, n_measure)
+    p = config.parameters
+
+    def acc(t, x, v):
+        return -2 * p["zeta"] * v - x + p["F0"] - p["F2"] * math.cos(p["omega"] * t + p["phi"]) ** 9
+
+    ref = reference(acc, [(p["Delta"], 1.0, 0.0)], 0.0, 0.0, p["omega"], n_transient, n_measure)
+    window = run.period_records[n_transient:]
+    assert run.status == Status.OK
+    assert window[:, kernel.REC_IMPACTS].sum() == ref["impacts"] == 9
+    assert window[:, kernel.REC_STUCK_TIME].sum() == pytest.approx(ref["stuck"], abs=1e-7)
+    assert run.summary[kernel.SUM_R] == pytest.approx(ref["Q"] / p["F0"], rel=1e-9)
+    vectors = kernels_for(config.model).coefficients(config.parameters)
+    assert vectors[SCAN_STEP] == pytest.approx(2 * math.pi / (9 * p["omega"]) / 64, rel=1e-15)
