@@ -1,5 +1,6 @@
 """``vrsweep validate``: exit codes, what it prints, and that it compiles nothing."""
 
+import os
 import subprocess
 import sys
 import textwrap
@@ -258,3 +259,57 @@ def test_a_continued_parameter_is_shown_fixed_when_a_sweep_holds_it(tmp_path):
     fixed = next(line for line in output.splitlines() if line.startswith("fixed:"))
     assert "g" not in [token.split("=")[0] for token in fixed.split()[1:]], fixed  # only continue uses it
     assert "Omega=4" in fixed, fixed
+
+
+WRITTEN = """\
+model:
+  acceleration: "-2*zeta*v - x + F*cos(omega*t)"
+  parameters: {zeta: 0.05, F: 1.0, omega: 0.8, Delta: 1.2, r: 0.8}
+  barriers: [{position: Delta, side: above, restitution: r}]
+  period: "2*pi/omega"
+  response: {frequency: omega, scale: F}
+initial: {x: 0.0, v: 0.0}
+"""
+
+
+@pytest.mark.parametrize("name, text", [("quickstart.yaml", None), ("written.yaml", WRITTEN)])
+def test_validate_says_a_first_run_compiles_its_kernel_first(tmp_path, name, text):
+    """With nothing in the numba cache the estimate said 0.1 s for a run whose kernel then
+    compiled for 30 s. It says so now, still importing no numba."""
+    path = CONFIGS / name if text is None else write(tmp_path, text, name)
+    script = textwrap.dedent(f"""\
+        import sys
+        from vrsweep.cli import main
+        try:
+            main(["validate", {str(path)!r}], standalone_mode=False)
+        finally:
+            print("numba imported:", "numba" in sys.modules)
+        """)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty cache")}
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=tmp_path, timeout=120,
+                          env=env)
+    assert done.returncode == 0, done.stderr
+    (line,) = [line for line in done.stdout.splitlines() if line.startswith("estimate:")]
+    assert line.endswith("after compiling the numba kernel (about 30 s, once: it is not in the cache yet)"), line
+    assert "numba imported: False" in done.stdout
+
+
+def test_the_numba_free_cache_lookup_finds_what_numba_cached(tmp_path):
+    """execution.estimate.compiles_first looks for numba's index file by the function's file and
+    name, without importing it (numba_cache.is_cached_function): it must find what numba writes,
+    and nothing that numba did not."""
+    import importlib.util
+
+    from vrsweep.numerics import numba_cache
+
+    numba_cache.configure()
+    source = tmp_path / "cached_module.py"
+    source.write_text("import numba\n\n\n@numba.njit(cache=True)\ndef twice(x):\n    return 2 * x\n\n\n"
+                      "@numba.njit(cache=True)\ndef thrice(x):\n    return 3 * x\n")
+    spec = importlib.util.spec_from_file_location("cached_module", source)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert not numba_cache.is_cached_function(source, "twice")
+    assert module.twice(2.0) == 4.0
+    assert numba_cache.is_cached_function(source, "twice") and numba_cache.is_compiled(module.twice)
+    assert not numba_cache.is_cached_function(source, "thrice") and not numba_cache.is_compiled(module.thrice)

@@ -12,8 +12,8 @@ import click
 from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
 from vrsweep.config import INTEGRATION_DEFAULTS, load_config
 from vrsweep.errors import ConfigError
-from vrsweep.execution.estimate import (beyond_int64_problem, estimate, format_bytes, format_duration, memory_problem,
-                                        size_problem)
+from vrsweep.execution.estimate import (beyond_int64_problem, compiles_first, estimate, format_bytes, format_duration,
+                                        memory_problem, size_problem)
 from vrsweep.execution.threads import available_threads
 
 
@@ -77,12 +77,28 @@ def command(config_path, overrides, threads):
     click.echo(f"output:      {config.output_path()}")
     duration = format_duration(guess.seconds)
     click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
-               f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)")
+               f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)"
+               f"{_compiling(config)}")
     click.echo(f"memory:      {format_bytes(guess.memory_bytes)} of per-period records held at once")
     problem = size_problem(config, threads, allow="--allow-large")
     if problem is not None:
         # A valid config, just a big one: `run` will ask for --allow-large.
         click.echo(f"warning:     {problem}")
+
+
+def _compiling(config) -> str:
+    """What a first run adds to the estimate: its kernel's compilation (30 s where the estimate
+    said 0.1 s for a written model's first run)."""
+    from vrsweep.execution.api import COMPILE_SECONDS, GPU_COMPILE_SECONDS
+    from vrsweep.numerics.numba_cache import enabled
+
+    first = compiles_first(config)
+    if first is None:
+        return f", after compiling the CUDA kernel where it is not cached ({GPU_COMPILE_SECONDS})"
+    if not first:
+        return ""
+    return (f", after compiling the numba kernel ({COMPILE_SECONDS}, "
+            f"{'once: it is not in the cache yet' if enabled() else 'on every run: not cached'})")
 
 
 def _check_continuation(config):

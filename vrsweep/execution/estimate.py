@@ -209,6 +209,29 @@ def estimate(config, threads=None) -> Estimate:
                     memory_bytes=memory_bytes(config, threads))
 
 
+def compiles_first(config) -> bool | None:
+    """Whether a run of ``config`` compiles its sweep kernel before its first point (a hint, as
+    numba_cache.is_compiled), found without importing numba (validate imports none): the paper's
+    run_lines_* in numerics/lines.py, or a written model's in its generated module, which a first
+    run also has to write (sympy). None on a GPU, whose kernel's cache only numba-cuda reads.
+    The run's time estimate is the integration's alone: a first run adds about 30 s to it."""
+    from pathlib import Path
+
+    from vrsweep.numerics import codegen, numba_cache
+
+    integration = config.integration
+    if integration.device == "cuda":
+        return None
+    name = f"run_lines_{integration.method}{'_lyapunov' if integration.lyapunov else ''}"
+    if config.written:
+        source = codegen.module_path(codegen.module_name(config.model))
+        if not source.exists():
+            return True
+    else:
+        source = Path(numba_cache.__file__).with_name("lines.py")
+    return not numba_cache.is_cached_function(source, name)
+
+
 def stored_arrays(config):
     """(name, bytes per grid point, dimension names beyond the grid) of every array a run stores:
     the point variables (vrsweep.store.variables), the done mask and the analytic columns

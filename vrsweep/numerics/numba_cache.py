@@ -241,12 +241,21 @@ def is_compiled(dispatcher) -> bool:
     function = getattr(dispatcher, "py_func", None)
     if function is None:  # NUMBA_DISABLE_JIT=1: njit hands back the Python function, nothing compiles
         return True
-    source = Path(os.path.abspath(function.__code__.co_filename))  # abspath, not resolve(): as numba does
-    subfolder = f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
-    index = (cache_dir() / subfolder /
-             f"{source.stem}.{function.__qualname__}-{function.__code__.co_firstlineno}"
-             f".py{sys.version_info.major}{sys.version_info.minor}.nbi")
+    return is_cached_function(function.__code__.co_filename, function.__qualname__, function.__code__.co_firstlineno)
+
+
+def is_cached_function(source, qualname, first_line=None) -> bool:
+    """is_compiled for the function ``qualname`` of the file ``source`` (defined at ``first_line``;
+    None: at any line), without importing it or numba: `validate`, which imports no numba, says
+    whether the run will compile first."""
+    if not enabled():
+        return False
+    source = Path(os.path.abspath(source))  # abspath, not resolve(): as numba does
+    subfolder = cache_dir() / f"{source.parent.name}_{hashlib.sha1(str(source.parent).encode()).hexdigest()}"
+    pattern = (f"{source.stem}.{qualname}-{'*' if first_line is None else first_line}"
+               f".py{sys.version_info.major}{sys.version_info.minor}.nbi")
     try:
-        return index.stat().st_mtime >= source.stat().st_mtime
+        built = source.stat().st_mtime
+        return any(index.stat().st_mtime >= built for index in subfolder.glob(pattern))
     except OSError:
         return False
