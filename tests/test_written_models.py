@@ -932,6 +932,7 @@ def test_the_forcings_spectrum_holds_the_frequencies_of_products_and_powers():
         return {sympy.srepr(sympy.expand(f)) for f in frequencies}
 
     assert spectrum(sympy.cos(w * t) ** 9) == expected(w, 3 * w, 5 * w, 7 * w, 9 * w)
+    assert spectrum(sympy.cos(w * t) ** sympy.Float(3.0)) == expected(w, 3 * w)  # written cos(w*t)**3.0
     assert spectrum(sympy.sin(w * t) * sympy.cos(2 * w * t)) == expected(w, 3 * w)
     assert spectrum(-x + x * sympy.cos(w * t / 2) ** 2) == expected(w)
     assert spectrum(sympy.cos(w * t + phi) ** 2 - v * sympy.sin(W * t)) == expected(2 * w, W)

@@ -309,12 +309,15 @@ def _spectrum(expression, t):
                 _add_frequency(generators, value)
             degree += factor_degree
         return frequencies, generators, degree
-    if (isinstance(expression, sympy.Pow) and expression.exp.is_Integer and 0 < int(expression.exp) <= 64):
+    # A whole power, written 9 or 9.0 (a constant power is at most 64: expressions.py)
+    if (isinstance(expression, sympy.Pow) and expression.exp.is_Number and float(expression.exp).is_integer()
+            and 0 < int(expression.exp) <= 64):
+        power = int(expression.exp)
         base_frequencies, generators, base_degree = _spectrum(expression.base, t)
         frequencies = zero
-        for _ in range(int(expression.exp)):
+        for _ in range(power):
             frequencies = _combined(frequencies, base_frequencies)
-        return frequencies, generators, int(expression.exp) * base_degree
+        return frequencies, generators, power * base_degree
     # Not a polynomial in sines and cosines (t itself, exp(cos(w t)), a negative power, abs, a
     # chirp sin(t**2)): periodic, if at all, with its arguments' frequencies, and a constant part.
     frequencies, generators, degree = dict(zero), {}, 0
