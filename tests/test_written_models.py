@@ -67,6 +67,7 @@ def test_expressions_evaluate_as_written(text, values, expected):
     ("x < v", "a comparison"),
     ("x and v", "a logical operator"),
     ("x // 2", "FloorDiv"),
+    ("-x + a*x^3", "writes ^, which is not a power here: write ** for a power (x**2, not x^2)"),
     ("x ** 1000", "power beyond"),
     ("cos(x=1)", "keyword"),
     ("True", "True"),

@@ -149,6 +149,10 @@ def _check(node, names, depth):
             ast.DictComp: "a comprehension", ast.SetComp: "a comprehension", ast.JoinedStr: "a string",
             ast.NamedExpr: "an assignment", ast.Await: "an await", ast.Starred: "a starred argument"}
     what = next((word for cls, word in kind.items() if isinstance(node, cls)), "an operator")
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.BitXor):
+        # x^2 is a square in Matlab, Maple and LaTeX: "the operator BitXor" told a researcher nothing
+        raise ExpressionError(f"writes ^, which is not a power here: write ** for a power (x**2, not x^2): "
+                              f"{_token(node)}")
     if isinstance(node, ast.BinOp):
         what = f"the operator {type(node.op).__name__}"
     raise ExpressionError(f"may not hold {what}: {_token(node)} (only numbers, names, + - * / ** and the "
