@@ -318,7 +318,7 @@ initial: {x: 0.0, v: 0.0}
 
 def test_the_release_scan_follows_a_power_of_a_cosine_at_its_highest_harmonic():
     """At rest on the stop the force 0.5 - 0.5005 cos(omega t + 1)**9 pulls away only where
-    cos(...)**9 > 0.999, for 0.047 rad of omega t a period: shorter than a scan of 1/64 of
+    cos(...)**9 > 0.999, for 0.030 rad of omega t a period: shorter than a scan of 1/64 of
     2 pi / omega (0.098 rad), which was the step because cos(omega t + 1) was the only term
     found. The mass stayed stuck through 7 of the 8 pulls (2 impacts in 8 periods for the
     reference's 9, stuck 0.52 too long). cos**9 holds cos(9 (omega t + 1)): the scan is 1/64 of

@@ -92,9 +92,9 @@ UNRESOLVED_STEP_FACTOR = 0.125
 # A rebound at speed v against a force a (the acceleration of a mass at rest there, into the stop)
 # rises v**2 / (2 a). Below this many ulps of max(1, |position|) its flight is rounding: x stays
 # Delta or moves by an ulp, and whether the next impact is seen at all depends on the method's
-# arithmetic. With a stiff spring (a = 1e4) a rebound at the stick speed 1e-7 rises 5e-19, and the
-# Zeno tail from 8e-6 down gave 71 to 176 impacts a period with dop853, 72 to 76 with rk45, for
-# one orbit. Such a rebound sticks: the mass is at rest on the stop to rounding.
+# arithmetic. Against a = 2e4 a rebound at the stick speed 1e-7 rises 2.5e-19, and the Zeno tail
+# from 1e-5 down gave 178 impacts a period with rk45, 181 to 186 with dop853, for one orbit
+# (tests/test_written_sticking.py). Such a rebound sticks: the mass is at rest on the stop to rounding.
 STICK_HEIGHT_ULPS = 16.0
 STICK_HEIGHT = STICK_HEIGHT_ULPS * 2.220446049250313e-16
 
