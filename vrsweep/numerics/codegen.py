@@ -219,7 +219,10 @@ def frequencies(expressions_, t, phase=True):
 # The forcing's spectrum (forcing_spectrum) is computed exactly while it stays this small; beyond,
 # a bound takes its place. (cos(a t) + cos(b t) + cos(c t))**64 has some 10**5 frequencies.
 SPECTRUM_LIMIT = 256
-_PAIRS_LIMIT = 4096
+# The products formed in all (pairs of frequencies) before the bound takes the place of the rest:
+# forty terms (cos(a t) + cos(2 a t) + cos(3 a t) + cos(4 a t) + k_i)**64, 2000 characters, took
+# 160 s with a limit per product only.
+SPECTRUM_BUDGET = 20000
 
 
 def forcing_spectrum(expression, t):
@@ -232,13 +235,13 @@ def forcing_spectrum(expression, t):
     scan of a stuck mass steps 1/64 of the fastest one, and the forcing repeats where each of
     them does (analysis/diagnostics.forcing_periods): cos(w t/2)**2 = (1 + cos(w t))/2 every 2 pi/w.
     A polynomial in such terms is computed exactly here, with the frequencies sympy's arithmetic
-    merges (2w - 2w is 0) merged; where that spectrum would exceed SPECTRUM_LIMIT, the
-    terms' frequencies a and n * a take its place (n the polynomial's degree in them: no
-    frequency of it exceeds n max |a|; every one is an integer combination of the a, so the
-    forcing repeats where they all do). Any other function of them (exp(cos(w t)),
+    merges (2w - 2w is 0) merged; where that spectrum would exceed SPECTRUM_LIMIT frequencies, or
+    SPECTRUM_BUDGET products of two of them to compute, the terms' frequencies a and n * a take
+    its place (n the polynomial's degree in them: no frequency of it exceeds n max |a|; every one
+    is an integer combination of the a, so the forcing repeats where they all do). Any other function of them (exp(cos(w t)),
     1/(2 + cos(w t)), abs) has infinitely many harmonics of its arguments' frequencies; those
     frequencies stand for it."""
-    frequencies, generators, degree = _spectrum(expression, t)
+    frequencies, generators, degree = _spectrum(expression, t, [SPECTRUM_BUDGET])
     if frequencies is None:
         frequencies = dict(generators)
         for key, value in generators.items():
@@ -257,11 +260,13 @@ def _add_frequency(found, value):
         found[value] = value
 
 
-def _combined(first, second):
+def _combined(first, second, budget):
     """The frequencies of a product of two terms of frequencies ``first`` and ``second``:
-    cos(a t) cos(b t) = (cos((a + b) t) + cos((a - b) t)) / 2. None beyond the limits."""
-    if first is None or second is None or len(first) * len(second) > _PAIRS_LIMIT:
+    cos(a t) cos(b t) = (cos((a + b) t) + cos((a - b) t)) / 2. None beyond the limits (budget:
+    [pairs left to form], spent here)."""
+    if first is None or second is None or len(first) * len(second) > budget[0]:
         return None
+    budget[0] -= len(first) * len(second)
     found = {}
     for a in first.values():
         for b in second.values():
@@ -270,7 +275,7 @@ def _combined(first, second):
     return found if len(found) <= SPECTRUM_LIMIT else None
 
 
-def _spectrum(expression, t):
+def _spectrum(expression, t, budget):
     """(frequencies, generators, degree) of ``expression`` in t: its spectrum as a trigonometric
     polynomial (canonical form -> frequency; 0 stands for a constant part) or None beyond the
     limits, the frequencies of its sine and cosine terms, and its degree in them."""
@@ -288,7 +293,7 @@ def _spectrum(expression, t):
     if isinstance(expression, sympy.Add):
         frequencies, generators, degree = {}, {}, 0
         for term in expression.args:
-            term_frequencies, term_generators, term_degree = _spectrum(term, t)
+            term_frequencies, term_generators, term_degree = _spectrum(term, t, budget)
             if frequencies is not None and term_frequencies is not None:
                 for value in term_frequencies.values():
                     _add_frequency(frequencies, value)
@@ -303,8 +308,8 @@ def _spectrum(expression, t):
     if isinstance(expression, sympy.Mul):
         frequencies, generators, degree = zero, {}, 0
         for factor in expression.args:
-            factor_frequencies, factor_generators, factor_degree = _spectrum(factor, t)
-            frequencies = _combined(frequencies, factor_frequencies)
+            factor_frequencies, factor_generators, factor_degree = _spectrum(factor, t, budget)
+            frequencies = _combined(frequencies, factor_frequencies, budget)
             for value in factor_generators.values():
                 _add_frequency(generators, value)
             degree += factor_degree
@@ -313,16 +318,16 @@ def _spectrum(expression, t):
     if (isinstance(expression, sympy.Pow) and expression.exp.is_Number and float(expression.exp).is_integer()
             and 0 < int(expression.exp) <= 64):
         power = int(expression.exp)
-        base_frequencies, generators, base_degree = _spectrum(expression.base, t)
+        base_frequencies, generators, base_degree = _spectrum(expression.base, t, budget)
         frequencies = zero
         for _ in range(power):
-            frequencies = _combined(frequencies, base_frequencies)
+            frequencies = _combined(frequencies, base_frequencies, budget)
         return frequencies, generators, power * base_degree
     # Not a polynomial in sines and cosines (t itself, exp(cos(w t)), a negative power, abs, a
     # chirp sin(t**2)): periodic, if at all, with its arguments' frequencies, and a constant part.
     frequencies, generators, degree = dict(zero), {}, 0
     for argument in expression.args:
-        argument_frequencies, argument_generators, argument_degree = _spectrum(argument, t)
+        argument_frequencies, argument_generators, argument_degree = _spectrum(argument, t, budget)
         for value in (argument_frequencies if argument_frequencies is not None else argument_generators).values():
             _add_frequency(frequencies, value)
         for value in argument_generators.values():
