@@ -228,6 +228,23 @@ def test_a_bad_period_is_not_also_blamed_on_the_step_cap_it_sets():
     assert any(problem.startswith("m.yaml:8: model.max_step: must be > 0") for problem in found), found
 
 
+@pytest.mark.parametrize("acceleration", ["-x + 1/(x - x)", "sqrt(-1 - x**2) + F*cos(omega*t)",
+                                          "log(-exp(v)) - x", "F*cos(omega*t) + 1/(0*t)"])
+def test_an_acceleration_undefined_everywhere_is_refused(acceleration):
+    """0/0 or the root of a negative number at every state: every point ended non_finite, after a
+    30 s compile, with nothing said when the config was read."""
+    (problem,) = problems(MODEL.replace("-2*zeta*v - x + F*cos(omega*t)", acceleration))
+    assert problem.startswith("m.yaml:2: model.acceleration: is NaN or infinite at every one of the 105 states "
+                              "tried"), problem
+
+
+def test_an_acceleration_singular_at_some_states_is_a_status_not_a_refusal():
+    """1/x is infinite at x = 0 only: a start there is that point's non_finite (a numerical
+    failure is a status on its grid point), and the config is valid."""
+    config = parse_config(MODEL.replace("-2*zeta*v - x + F*cos(omega*t)", "-x + F*cos(omega*t)/x"), "m.yaml")
+    assert config.model.acceleration.replace(" ", "") == "-x+F*cos(omega*t)/x"
+
+
 def test_swept_values_are_checked_at_every_grid_point():
     found = problems(MODEL + "sweep: {r: [0.5, 0.9, 1.2]}\n")
     assert any("model.barriers[0].restitution: must be in [0, 1] (eq2.2: a rebound cannot gain energy), got 1.2 "

@@ -332,6 +332,31 @@ def _follows_the_period(model: WrittenModel) -> bool:
         expressions.parse(model.max_step, tuple(model.parameter_names) + ("period",)))
 
 
+# The states at which an acceleration must be finite somewhere: x and v over a few units, t over a
+# period, at irrational-looking values that no written singularity (x = 1, v = 0) sits on.
+_TRIED_X = (-2.713, -0.917, -0.131, 0.277, 0.853, 1.619, 3.141)
+_TRIED_V = (-1.733, -0.293, 0.0, 0.419, 2.237)
+_TRIED_PHASES = (0.0, 0.318, 0.707)
+
+
+def _undefined_everywhere(report, model: WrittenModel, values, period) -> bool:
+    """Report an acceleration that is NaN or infinite at every state tried (1/(x - x), sqrt(-1 -
+    x**2)) at the first grid point: every point would end non_finite, after the kernel's compile.
+    One singular state (1/x at a start on x = 0) stays a status on its grid point."""
+    point = {name: float(np.asarray(values[name], dtype=np.float64).reshape(-1)[0]) for name in model.parameter_names}
+    first_period = float(np.asarray(period, dtype=np.float64).reshape(-1)[0])
+    x, v, phase = np.meshgrid(_TRIED_X, _TRIED_V, _TRIED_PHASES, indexing="ij")
+    tree = expressions.parse(model.acceleration, model.parameter_names + expressions.STATE_NAMES)
+    acceleration = expressions.evaluate(tree, {**point, "x": x, "v": v, "t": phase * first_period})
+    if np.isfinite(acceleration).any():
+        return False
+    where = ", ".join(f"{name} = {show(value)}" for name, value in point.items())
+    report(("model", "acceleration"), f"is NaN or infinite at every one of the {acceleration.size} states tried "
+                                      f"(x in [{_TRIED_X[0]}, {_TRIED_X[-1]}], v in [{_TRIED_V[0]}, {_TRIED_V[-1]}], "
+                                      f"t over a period, at {where}): every point would end non_finite")
+    return True
+
+
 def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, initial: dict, swept_initial: dict,
                         initial_given=True, velocity_given=True):
     """The rules a written model's values must keep at every grid point (or along each axis through
@@ -389,6 +414,8 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
                 failed = True
                 period_failed = period_failed or key_path == ("period",)
         if failed:
+            return
+        if _undefined_everywhere(report, model, values, header["period"]):
             return
         if len(model.barriers) == 2:
             above = next(i for i, b in enumerate(model.barriers) if b.side == "above")
