@@ -396,3 +396,91 @@ def test_a_written_models_greek_symbols_are_letters_in_the_description():
         r"Response gain R against $\omega$",
         r"$\zeta$ = 0.05,  $\varphi$ = 0,  $\Delta$ = 1.2,  $\varepsilon$ = 1,  $\tilde\omega$,  $\omega_0$"))
     assert description(figure) == "Response gain R against ω\nζ = 0.05,  φ = 0,  Δ = 1.2,  ε = 1,  ω̃,  ω0"
+
+
+# --- categorical colours: apart on a greyscale page ---------------------------------------------
+
+
+def _lightness(colour):
+    """CIE L* of a colour (sRGB, D65): what a greyscale page keeps of it."""
+    from matplotlib.colors import to_rgb
+
+    rgb = np.array(to_rgb(colour))
+    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    y = float(linear @ [0.2126, 0.7152, 0.0722])
+    return 116.0 * np.cbrt(y) - 16.0 if y > 0.008856 else 903.3 * y
+
+
+def _apart_in_grey(colours):
+    """The smallest difference in CIE L* between two of ``colours``."""
+    light = sorted(_lightness(colour) for colour in colours)
+    return min(np.diff(light))
+
+
+def _six_attractors(ds):
+    """The basin file's slice with six attractors over its six starts, the table to match."""
+    import xarray as xr
+
+    count = 6
+    ds = ds.drop_dims("attractor_label")
+    ds["attractor"].values[...] = np.arange(count).reshape(ds["attractor"].shape)
+    ds["attractor_count"] = xr.DataArray(count)
+    table = {"attractor_period": np.ones(count, dtype=int), "attractor_R": np.linspace(1.0, 2.0, count),
+             "attractor_fraction": np.full(count, 1.0 / count),
+             "attractor_impacts_per_cycle": np.ones(count, dtype=int)}
+    for name, values in table.items():
+        ds[name] = xr.DataArray(values, dims=("attractor_label",))
+    return ds
+
+
+def test_every_categorical_palette_stays_apart_in_greyscale():
+    """tab10's orange and green (L* 67, 58) and blue and red (48, 47) printed as one grey: every
+    palette of categories, with the greys and black and white drawn beside it, differs by 8 in L*
+    between any two colours; beyond the qualitative colours, the categories go dark to light."""
+    from vrsweep.plot.palettes import LIGHTNESS_STEP, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, categorical
+    from vrsweep.plot.labels import RELIABLE_COLOURS
+    from vrsweep.plot.sweeps import LEGEND_CURVES
+
+    assert LIGHTNESS_STEP == 8.0
+    for count in range(1, 7):
+        assert _apart_in_grey(categorical(count) + [NO_VALUE_GREY, NOT_COMPUTED_GREY, "black", "white"]) >= 8.0, count
+    many = [_lightness(colour) for colour in categorical(9)]
+    assert np.all(np.diff(many) > 0), many
+    assert _apart_in_grey(list(STATUS_COLOURS.values())) >= 8.0
+    assert _apart_in_grey(list(RELIABLE_COLOURS[:LEGEND_CURVES])) >= 8.0  # curves told apart by colour alone
+
+
+def test_six_attractors_six_periods_and_every_status_are_apart_in_greyscale(files):
+    """The colours a basin plot, an integer map and a status map draw with, read off their meshes."""
+    fig = plot.basin_figure(_six_attractors(load_results(files["basins"])))
+    mesh = _mesh(fig.axes[0])
+    assert _apart_in_grey([mesh.cmap(k) for k in range(mesh.cmap.N)]) >= 8.0  # failed, missing, 6 basins
+    ds = load_results(files["plane"])
+    ds["period"].values[...] = np.resize([0, 1, 2, 3, 4, 5, 6], 12)[:, None]
+    mesh = _mesh(plot.map_figure(ds, "period").axes[0])
+    assert mesh.cmap.N == 7 and _apart_in_grey([mesh.cmap(k) for k in range(7)] + ["0.85"]) >= 8.0
+    ds["status"].values[...] = np.resize([0, 1, 2, 3, 4, 5], 12)[:, None]
+    for fig in (plot.status_figure(ds), plot.map_figure(ds, "status")):
+        mesh = _mesh(fig.axes[0])
+        colours = {tuple(mesh.cmap(k)) for k in range(mesh.cmap.N)} | {to_rgba("0.85")}  # the background
+        assert len(colours) >= 6 and _apart_in_grey(colours) >= 8.0
+
+
+def test_an_attractors_dots_stand_out_on_its_own_basin(files):
+    """The dots of attractor 0 lie in its basin: filled with its colour and edged black, they were
+    one blue on blue. A black rim outside a white ring: one of them stands out on any cell."""
+    from matplotlib.colors import to_rgb
+    from matplotlib.patheffects import Stroke
+
+    fig = plot.basin_plot(files["basins"])
+    ax = fig.axes[0]
+    marks = [line for line in ax.get_lines() if (line.get_gid() or "").startswith("attractor ")]
+    assert marks
+    for mark in marks:
+        (rim,) = [effect for effect in mark.get_path_effects() if isinstance(effect, Stroke)]
+        ring, outer = mark.get_markeredgecolor(), rim._gc["foreground"]
+        assert abs(_lightness(ring) - _lightness(outer)) >= 90.0, (ring, outer)
+        assert rim._gc["linewidth"] > mark.get_markeredgewidth()  # the rim shows outside the ring
+        assert to_rgb(mark.get_markerfacecolor()) != to_rgb(ring)
+    handle = next(h for h in fig.legends[0].legend_handles if "x(nT), v(nT)" in h.get_label())
+    assert handle.get_path_effects()  # the legend's sample looks like the dots

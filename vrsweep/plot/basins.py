@@ -13,6 +13,7 @@ from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words, gain_words
+from vrsweep.plot.palettes import QUALITATIVE, categorical
 from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
@@ -21,8 +22,10 @@ from vrsweep.results import Status
 # Basins of attraction (issue 13): sweeps with x0 / v0 axes
 # --------------------------------------------------------------------------------------------
 
-BASIN_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
-                 "tab:pink", "tab:olive", "tab:cyan", "gold")
+# Apart in lightness on a greyscale page (palettes.py; tab10's orange and green were one grey), and
+# from the black of failed points and the white of missing ones. Beyond six attractors: in order
+# from dark to light (``categorical``).
+BASIN_COLOURS = QUALITATIVE
 BASIN_FAILED = "black"        # a point whose integration failed (label -1)
 BASIN_NOT_COMPUTED = "white"  # an unfinished file's missing points
 OUTSIDE_PLANE = "0.9"         # around the swept plane, where the view widens to show an orbit
@@ -90,7 +93,7 @@ def basin_figure(ds) -> Figure:
     labels = np.asarray(view.variables["attractor"])
     status = np.asarray(view.variables["status"])
     count = int(np.asarray(view.variables["attractor_count"]))
-    colours = [BASIN_COLOURS[k % len(BASIN_COLOURS)] for k in range(count)]
+    colours = categorical(count)
     # Colour index: 0 not computed, 1 failed, 2 + label.
     index = np.where(status == Status.NOT_COMPUTED, 0, np.where(labels < 0, 1, labels + 2))
     cmap = ListedColormap([BASIN_NOT_COMPUTED, BASIN_FAILED] + colours)
@@ -111,8 +114,7 @@ def basin_figure(ds) -> Figure:
     outside = _mark_attractors(ax, ds, view, labels, colours, state_axes)
     handles = [_basin_handle(view, label, colours[label]) for label in range(count)]
     if count and "strobe_x" in view.variables:
-        handles.append(Line2D([], [], marker="o", ls="", color="0.6", mec="k", mew=1.2, markersize=7,
-                              label="ringed dot: an attractor's points x(nT), v(nT) in its colour"))
+        handles.append(_ringed_dot("0.6", "ringed dot: an attractor's points x(nT), v(nT) in its colour"))
     if outside:
         handles.append(Patch(facecolor=OUTSIDE_PLANE, edgecolor="k", ls="--",
                              label="dashed frame: the swept plane; outside it, no start was tried"))
@@ -156,7 +158,10 @@ def _mark_attractors(ax, ds, view, labels, colours, state_axes):
             continue
         xs = points[state_axes[0]][finite]
         ys = points[state_axes[1]][finite] if len(state_axes) == 2 else np.full(xs.shape, 0.5)
-        ax.plot(xs, ys, "o", ls="", color=colour, mec="k", mew=1.2, ms=7, zorder=5, gid=f"attractor {label}")
+        # The points lie in their own basin, where a dot of its colour with a black edge vanished
+        # on the dark cells: a black rim around a white ring around the colour stands out on any cell.
+        ax.plot(xs, ys, "o", ls="", color=colour, mec=RING_INNER, mew=RING_WIDTH, ms=RING_SIZE, zorder=5,
+                path_effects=_rim(), gid=f"attractor {label}")
         for name, values in zip(state_axes, (xs, ys)):
             drawn[name].append(values)
     outside = False
@@ -187,6 +192,23 @@ def _mark_attractors(ax, ds, view, labels, colours, state_axes):
                                gid="swept plane"))
         ax.set_facecolor(OUTSIDE_PLANE)
     return outside
+
+
+RING_OUTER, RING_INNER = "black", "white"  # an attractor's dots: black rim, white ring, its colour inside
+RING_SIZE, RING_WIDTH, RIM_WIDTH = 7.0, 1.4, 1.2  # points
+
+
+def _rim():
+    """The black rim drawn under a dot's white edge (a path effect: the legend's sample has it too)."""
+    from matplotlib.patheffects import Normal, Stroke
+
+    return [Stroke(linewidth=RING_WIDTH + 2 * RIM_WIDTH, foreground=RING_OUTER), Normal()]
+
+
+def _ringed_dot(colour, label):
+    """A legend entry drawn as the attractors' dots are: black rim, white ring, ``colour`` inside."""
+    return Line2D([], [], marker="o", ls="", color=colour, mec=RING_INNER, mew=RING_WIDTH, markersize=RING_SIZE,
+                  path_effects=_rim(), label=label)
 
 
 def _state_label(name):

@@ -14,6 +14,7 @@ from vrsweep.plot.analytic import (
     barrier_positions,
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
 )
+from vrsweep.plot.palettes import NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, categorical
 from vrsweep.plot.labels import (
     parameter_symbol,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
@@ -385,8 +386,8 @@ MAP_LABELS = {"R": "gain $R = |Q|/c$", "Q_amplitude": "amplitude $|Q|$",
 LONG_NAME_IN_LABEL = 45  # characters of a variable's long_name that fit beside a colour bar
 CAP_PERCENTILE = 99      # a linear map's default top: one wild point must not wash out the map ...
 CAP_MARGIN = 0.1         # ... if the largest value is more than 10 % of the scale above it (else no cap)
-NO_VALUE_COLOUR = "0.35"  # an integer map's 'no period' / 'failed' value: dark grey, set apart
-NOT_COMPUTED_COLOUR = "0.85"  # the axes' background, seen where a cell has no value
+NO_VALUE_COLOUR = NO_VALUE_GREY  # an integer map's 'no period' / 'failed' value: dark grey, set apart
+NOT_COMPUTED_COLOUR = NOT_COMPUTED_GREY  # the axes' background, seen where a cell has no value
 # Integer variables whose special values mean 'none' rather than a number (store/variables.py,
 # analysis/attractors.py): drawn grey and named on the colour bar.
 SPECIAL_VALUES = {"period": {0: "no period"}, "impacts_per_cycle": {-1: "no period"},
@@ -396,8 +397,6 @@ SPECIAL_VALUES = {"period": {0: "no period"}, "impacts_per_cycle": {-1: "no peri
 # 'none' 38 and 87) and for colour-blind readers. tab:green, tab:blue, tab:red were red against
 # green, and blue and red of one lightness (L* 48 and 47): one grey on a greyscale page.
 MOTION_KIND_COLOURS = ("#004488", "#DDAA33", "#BB5566", "#000000")
-STATUS_COLOURS = {"not_computed": "0.85", "ok": "tab:green", "max_steps": "tab:orange", "diverged": "tab:red",
-                  "chatter_limit": "tab:purple", "step_too_small": "tab:brown", "non_finite": "k"}
 # The colours --kind motion uses, so that --var motion reads the same; 'none' (the point failed) is
 # a value meaning none, dark grey as on every integer map.
 MOTION_FLAG_COLOURS = {"none": NO_VALUE_COLOUR, **dict(zip(("periodic", "quasi_periodic", "chaotic", "not_settled"),
@@ -443,8 +442,6 @@ def discrete_scale(name, values, attrs=None):
     tick_labels): a ListedColormap of exactly len(ticks) colours, a BoundaryNorm putting each
     value present in its own colour, and where on a uniformly spaced colour bar to name each.
     """
-    from matplotlib import colormaps
-
     finite = np.asarray(values, dtype=np.float64)
     present = np.unique(finite[np.isfinite(finite)]).astype(np.int64)
     if present.size == 0:
@@ -454,15 +451,9 @@ def discrete_scale(name, values, attrs=None):
     # A flag with no colour of its own takes one of the palette's, as a number would: one shared
     # grey for all of them drew a map of motion as a single grey block.
     ordinary = [v for v in present if v not in special and (v not in flags or flags[v] not in FLAG_COLOURS)]
-    # Qualitative colours without their greys, which belong to 'no period' and 'not computed'.
-    tab10 = [colormaps["tab10"](k) for k in range(10) if k != 7]
-    tab20 = [colormaps["tab20"](k) for k in range(20) if k not in (14, 15)]
-    if len(ordinary) <= len(tab10):
-        palette = tab10[: len(ordinary)]
-    elif len(ordinary) <= len(tab20):
-        palette = tab20[: len(ordinary)]
-    else:
-        palette = list(colormaps["viridis"](np.linspace(0.0, 1.0, len(ordinary))))
+    # Apart in lightness from each other and from the greys of 'no period' and 'not computed' (tab10's
+    # were pairs of one grey on a greyscale page); beyond six values, in order from dark to light.
+    palette = categorical(len(ordinary))
     colours, labels = [], []
     ordinary_colours = dict(zip(ordinary, palette))
     for value in present:
@@ -758,7 +749,8 @@ def status_figure(ds, x_axis=None) -> Figure:
     """How each point ended (ok, max_steps, diverged, ...): a strip (1 axis) or a map (2 axes)."""
     view = _Sweep(ds)
     view.require("status")
-    colours = ["0.85", "tab:green", "tab:orange", "tab:red", "tab:purple", "tab:brown", "k"]
+    # The colours --var status draws in (one list: the strip and the map of --var status agree).
+    colours = [STATUS_COLOURS[s.name.lower()] for s in Status]
     return _flag_figure(view, "status", [int(s) for s in Status], [s.name.lower() for s in Status], colours,
                         x_axis, "status of the point", "How each point's integration ended")
 

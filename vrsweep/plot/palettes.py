@@ -1,0 +1,65 @@
+"""Categorical colours that stay apart on a greyscale page, and the lightness that decides it.
+
+A journal figure is often read printed in grey, or by a reader who cannot tell red from green:
+what keeps two categories apart then is their lightness alone, CIE L* (0 black, 100 white). Two
+colours closer than LIGHTNESS_STEP in L* print as one grey. tab10's orange and green (L* 67 and
+58) or blue and red (48 and 47) did: a basin plot of four attractors printed as two greys.
+
+Every categorical palette that fills areas (basins, integer maps, status, kinds of motion) takes
+its colours from here, and tests/test_figures.py checks every pair of each, with the greys it is
+drawn beside ('no value' NO_VALUE_GREY, 'not computed' NOT_COMPUTED_GREY, black), for
+LIGHTNESS_STEP.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+LIGHTNESS_STEP = 8.0  # CIE L*: two colours closer than this are one grey on a greyscale page
+
+# Paul Tol's colours (personal.sron.nl/~pault), chosen in turn so that each, with the ones before
+# it and the greys below, is at least LIGHTNESS_STEP from every other in L*: dark blue 29, light
+# orange 67, red 46, teal 57, light cyan 77, navy 16 (L* of the greys: 38 and 87; black 0). The
+# first two, the commonest case (two attractors, two periods), are 38 apart.
+QUALITATIVE = ("#004488", "#EE8866", "#CC3311", "#009988", "#66CCEE", "#222255")
+
+NO_VALUE_GREY = "0.35"       # L* 38: a value that means none ('no period', 'failed')
+NOT_COMPUTED_GREY = "0.85"   # L* 87: a point not computed (a map's background)
+
+# How each point's integration ended: ok in teal, the failures darker or lighter than it, each a
+# colour of its own (they used tab10's green, orange, red, purple, brown: red 47 and purple 52,
+# green 58 and orange 67 were pairs of one grey).
+STATUS_COLOURS = {"not_computed": NOT_COMPUTED_GREY, "ok": "#009988", "max_steps": "#EE8866",
+                  "diverged": "#CC3311", "chatter_limit": "#66CCEE", "step_too_small": "#004488",
+                  "non_finite": "#000000"}
+
+SEQUENTIAL = "viridis"  # more categories than QUALITATIVE holds: in order, lighter and lighter
+
+
+def lightness(colour) -> float:
+    """CIE L* of a matplotlib colour: what a greyscale page keeps of it (sRGB, D65)."""
+    from matplotlib.colors import to_rgb
+
+    rgb = np.array(to_rgb(colour))
+    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    luminance = float(linear @ [0.2126, 0.7152, 0.0722])
+    return 116.0 * np.cbrt(luminance) - 16.0 if luminance > 216.0 / 24389.0 else luminance * 24389.0 / 27.0
+
+
+def categorical(count) -> list:
+    """``count`` colours for categories: QUALITATIVE's first ``count`` (apart in lightness), or,
+    for more categories than it holds, SEQUENTIAL sampled from dark to light. No palette keeps
+    more than about six categories and two greys apart in grey; in order of lightness the first
+    and last of many can still be told, and the colour bar or legend names each."""
+    from matplotlib import colormaps
+
+    if count <= len(QUALITATIVE):
+        return list(QUALITATIVE[:count])
+    return [tuple(colour) for colour in colormaps[SEQUENTIAL](np.linspace(0.0, 1.0, count))]
+
+
+def contrasting(colour) -> str:
+    """The casing for a line of ``colour`` drawn over cells of any colour: black around a light
+    line, white around a dark one, so that core and casing differ by at least 50 in L* and
+    one of them stands out against any cell (white vanished over yellow, dark red over navy)."""
+    return "black" if lightness(colour) >= 50.0 else "white"
