@@ -484,3 +484,31 @@ def test_an_attractors_dots_stand_out_on_its_own_basin(files):
         assert to_rgb(mark.get_markerfacecolor()) != to_rgb(ring)
     handle = next(h for h in fig.legends[0].legend_handles if "x(nT), v(nT)" in h.get_label())
     assert handle.get_path_effects()  # the legend's sample looks like the dots
+
+
+# --- a map of few cells is ticked at its cells ---------------------------------------------------
+
+
+@pytest.mark.parametrize("size", [None, (3.4, 2.6)])
+def test_a_map_of_few_cells_is_ticked_at_its_cells(files, size):
+    """Omega from 3 to 6 in 10 rows was ticked at 3.5, 4.5..., between rows, where a reader looks
+    for a row computed at 3.5. Every tick of both axes sits on a grid value, its label reads that
+    value (to 2 % of a cell), labels do not overlap, and the first row and column are ticked."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    ds = load_results(files["plane"])
+    for fig in (plot.map_figure(ds, "R", size=size), plot.status_figure(ds, size=size)):
+        FigureCanvasAgg(fig).draw()
+        ax = fig.axes[0]
+        for axis, name in ((ax.xaxis, "g"), (ax.yaxis, "Omega")):
+            grid = ds[name].values
+            step = np.min(np.diff(grid))
+            ticks = [tick for tick in axis.get_major_ticks() if tick.label1.get_visible() and tick.label1.get_text()]
+            located = np.array([tick.get_loc() for tick in ticks])
+            assert len(located) >= 2 and located[0] == grid[0], (name, located)
+            assert np.all(np.min(np.abs(located[:, None] - grid[None, :]), axis=1) == 0.0), (name, located)
+            for tick in ticks:
+                assert abs(float(tick.label1.get_text().replace("\u2212", "-")) - tick.get_loc()) <= 0.02 * step
+            boxes = [tick.label1.get_window_extent() for tick in ticks]
+            for first, second in zip(boxes, boxes[1:]):
+                assert not first.overlaps(second), (name, size)

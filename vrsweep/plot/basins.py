@@ -14,7 +14,7 @@ from matplotlib.patches import Patch
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words, gain_words
 from vrsweep.plot.palettes import QUALITATIVE, categorical
-from vrsweep.plot.selection import _grid_axes, _path, _progress_note, _Sweep, load, select
+from vrsweep.plot.selection import cell_ticks, _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
 
 
@@ -112,6 +112,8 @@ def basin_figure(ds) -> Figure:
         ax.set_yticks([])
     ax.set_xlabel(_state_label(x_axis))
     outside = _mark_attractors(ax, ds, view, labels, colours, state_axes)
+    if not outside:  # a view widened to orbits outside the plane keeps round ticks across it
+        cell_ticks(ax, view.axes[x_axis], view.axes[y_axis] if len(state_axes) == 2 else None)
     handles = [_basin_handle(view, label, colours[label]) for label in range(count)]
     if count and "strobe_x" in view.variables:
         handles.append(_ringed_dot("0.6", "ringed dot: an attractor's points x(nT), v(nT) in its colour"))

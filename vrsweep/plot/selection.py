@@ -280,3 +280,70 @@ def _map_panels(view):
 def _limits(values):
     values = np.asarray(values, dtype=np.float64)
     return float(values.min()), float(values.max())
+
+
+# --------------------------------------------------------------------------------------------
+# A map's ticks: at its cells when there are few
+# --------------------------------------------------------------------------------------------
+
+CELL_TICKS = 12  # a map axis of at most this many cells is ticked at the cells, each labelled with its value
+
+
+def cell_ticks(ax, x_values=None, y_values=None):
+    """Tick a map's axes at its cells' centres (the grid values) where an axis has at most
+    CELL_TICKS cells: round ticks between them (Omega = 3.5 ticked in the cell of 3.75 on a map
+    of five rows) were read as rows computed there. Labels are the values, as few digits as keep
+    each within 2 % of a cell of where it sits; every k-th is labelled where all would not fit."""
+    from matplotlib.ticker import FuncFormatter, NullLocator
+
+    for values, axis in ((x_values, ax.xaxis), (y_values, ax.yaxis)):
+        if values is None:
+            continue
+        values = np.asarray(values, dtype=np.float64)
+        if not 1 <= len(values) <= CELL_TICKS or not np.all(np.isfinite(values)):
+            continue
+        texts = _cell_texts(values)
+        axis.set_major_locator(_CellLocator(values, texts))
+        axis.set_major_formatter(FuncFormatter(
+            lambda value, _, values=values, texts=texts: texts[int(np.argmin(np.abs(values - value)))]))
+        axis.set_minor_locator(NullLocator())
+
+
+def _cell_texts(values):
+    """The grid values as labels: the fewest significant digits (up to 6) that put each label
+    within 2 % of a cell of its value and tell every two apart."""
+    step = float(np.min(np.diff(np.sort(values)))) if len(values) > 1 else max(abs(float(values[0])), 1.0)
+    for digits in range(1, 7):
+        texts = [f"{value:.{digits}g}" for value in values]
+        if len(set(texts)) == len(texts) and all(abs(float(text) - value) <= 0.02 * step
+                                                 for text, value in zip(texts, values)):
+            break
+    return [text.replace("-", "\u2212") for text in texts]  # matplotlib's minus sign
+
+
+from matplotlib.ticker import Locator  # noqa: E402
+
+
+class _CellLocator(Locator):
+    """Ticks at every k-th cell centre, k the smallest that leaves room between the labels (from
+    the axis' length when drawn and the longest label; a vertical axis needs a line a label)."""
+
+    def __init__(self, values, texts):
+        self.values = np.asarray(values, dtype=np.float64)
+        self.longest = max(len(text) for text in texts)
+
+    def __call__(self):
+        from matplotlib.font_manager import FontProperties
+        import matplotlib
+
+        horizontal = self.axis.axis_name == "x"
+        size = FontProperties(size=matplotlib.rcParams[f"{self.axis.axis_name}tick.labelsize"]).get_size_in_points()
+        box = self.axis.axes.get_window_extent()
+        length = (box.width if horizontal else box.height) * 72.0 / self.axis.axes.figure.dpi
+        room = (0.6 * self.longest + 1.5) * size if horizontal else 1.8 * size
+        fits = max(1, int(length // room))
+        step = int(np.ceil(len(self.values) / fits))
+        return self.values[::step]
+
+    def tick_values(self, vmin, vmax):
+        return self.values

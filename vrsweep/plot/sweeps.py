@@ -23,7 +23,7 @@ from vrsweep.plot.labels import (
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
-    _progress_note, _span_grid, _Sweep, _sweep_default,
+    _progress_note, _span_grid, _Sweep, _sweep_default, cell_ticks,
 )
 from vrsweep.results import Motion, Status
 
@@ -672,6 +672,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
                                            label="integration failed (status ≠ ok)")
         ax.set_xlabel(parameter_label(x_axis, ds[x_axis].attrs.get("units")))
         ax.set_ylabel(parameter_label(y_axis, ds[y_axis].attrs.get("units")))
+        cell_ticks(ax, view.axes[x_axis], view.axes[y_axis])
         if panel_title:
             ax.set_title(panel_title, fontsize="medium")
     if handles:
@@ -790,6 +791,7 @@ def _flag_figure(view, name, codes, names, colours, x_axis, y_label, title):
             bar.ax.set_yticklabels(names, fontsize="x-small")
             ax.set_xlabel(parameter_label(x_axis))
             ax.set_ylabel(parameter_label(y_axis))
+            cell_ticks(ax, view.axes[x_axis], view.axes[y_axis])
             if panel_title:
                 ax.set_title(panel_title, fontsize="medium")
     else:
