@@ -29,20 +29,23 @@ def write_branch_file(path):
     return path
 
 
-def _curve_point(g, Omega):
-    return curves.CurvePoint(kind="fold", values=np.array([g, Omega]), state=np.array([0.1, -0.2]), periods=1,
+def _curve_point(g, Omega, kind="fold"):
+    return curves.CurvePoint(kind=kind, values=np.array([g, Omega]), state=np.array([0.1, -0.2]), periods=1,
                              monodromy=np.diag([1.0, 0.3]), R=10.0, impacts_per_period=0.0, x_max=0.8,
                              barrier_distance=0.2, slowest_impact=np.inf, residual=1e-11, newton_iterations=2,
                              jacobian=np.zeros((3, 4)))
 
 
-def write_curves_file(path):
-    """One fold curve of five points in (g, Omega) with a cusp on it."""
-    points = [_curve_point(24.0 + 0.1 * k, 3.9 + 0.05 * k) for k in range(5)]
-    curve = curves.Curve("fold", 1, points, {"first": ("left_range", "g left"), "last": ("max_points", "enough")})
+def write_curves_file(path, kinds=("fold",)):
+    """A curve of five points in (g, Omega) of each kind in ``kinds``, each 0.5 further in g, with a
+    cusp on the first."""
+    made = []
+    for number, kind in enumerate(kinds):
+        points = [_curve_point(24.0 + 0.5 * number + 0.1 * k, 3.9 + 0.05 * k, kind) for k in range(5)]
+        made.append(curves.Curve(kind, 1, points, {"first": ("left_range", "g left"), "last": ("max_points", "enough")}))
     names = ("g", "Omega")
-    curve_file.write_curves(path, curve_file.curve_arrays([curve], [curves.SpecialPoint("cusp", points[2])], names),
-                            names, config_from_dict(CONFIG), "rk45")
+    special = [curves.SpecialPoint("cusp", made[0].points[2])]
+    curve_file.write_curves(path, curve_file.curve_arrays(made, special, names), names, config_from_dict(CONFIG), "rk45")
     return path
 
 

@@ -295,3 +295,51 @@ def test_a_caption_item_wider_than_the_line_is_broken_at_its_spaces_outside_math
     assert any("$\\zeta$ = 0.05" in line for line in lines) and any(model in line for line in lines), lines
     math = _wrap(["x", "$a \\cdot b \\cdot c \\cdot d$ " * 8], 30)  # only spaces inside $...$: kept whole
     assert all(line.count("$") % 2 == 0 for line in math.split("\n"))
+
+
+def _lightness(colour):
+    """CIE L* of a colour (sRGB, D65): what a greyscale page keeps of it."""
+    from matplotlib.colors import to_rgb
+
+    rgb = np.array(to_rgb(colour))
+    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    y = float(linear @ [0.2126, 0.7152, 0.0722])
+    return 116.0 * np.cbrt(y) - 16.0 if y > 0.008856 else 903.3 * y
+
+
+def test_every_line_over_a_map_is_cased_in_a_contrasting_colour(files, tmp_path):
+    """Over a map the cells run from dark to light: the orange period-doubling curve, edged white,
+    vanished over yellow cells (and on a greyscale page); the white g_res curve over white ones. Every line over the map (the curves of each kind, the theory's, g_res) has a
+    casing wider than itself whose lightness differs from its own by 50 in L*, so that one of
+    them stands out on any cell; every mark, an edge that does."""
+    from matplotlib.collections import QuadMesh
+    from matplotlib.colors import to_rgba
+    from matplotlib.patheffects import Stroke
+
+    from handmade import write_curves_file
+
+    kinds = ("fold", "period_doubling", "grazing")
+    curves = write_curves_file(tmp_path / "four.h5", kinds=kinds)
+    for var in ("R", "impacts_per_period"):
+        fig = plot.plot([files["effective"], curves], var=var)
+        ax = fig.axes[0]
+        seen = set()
+        for artist in ax.get_lines() + [c for c in ax.collections if not isinstance(c, QuadMesh)]:
+            if isinstance(artist, Line2D) and artist.get_linestyle() in ("None", "", " "):
+                edge, face = artist.get_markeredgecolor(), artist.get_markerfacecolor()
+                strokes = [effect for effect in artist.get_path_effects() if isinstance(effect, Stroke)]
+                if strokes:  # a mark with no face ('x'): cased as a line
+                    edge, face = strokes[0]._gc["foreground"], artist.get_color()
+                assert abs(_lightness(edge) - _lightness(face)) >= 50.0, (artist.get_gid(), edge, face)
+                continue
+            core = artist.get_color() if isinstance(artist, Line2D) else to_rgba(artist.get_edgecolor()[0])
+            width = artist.get_linewidth() if isinstance(artist, Line2D) else np.max(artist.get_linewidths())
+            strokes = [effect for effect in artist.get_path_effects() if isinstance(effect, Stroke)]
+            assert strokes, artist.get_gid()
+            assert strokes[0]._gc["linewidth"] > width, artist.get_gid()
+            assert abs(_lightness(strokes[0]._gc["foreground"]) - _lightness(core)) >= 50.0, (artist.get_gid(), core)
+            seen.add(artist.get_gid())
+        assert {f"curve_{kind}" for kind in kinds} | {"resonance"} <= seen, seen
+
+
+from matplotlib.lines import Line2D  # noqa: E402

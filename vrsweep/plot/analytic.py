@@ -111,10 +111,10 @@ def _resonance_label(axis, position):
     return f"$\\tilde\\omega^2 = \\omega^2$ (eq3.4) at {parameter_symbol(axis)} = {position:.4g}"
 
 
-def _draw_resonance_curve(ax, view, x_axis, y_axis, outline=False):
+def _draw_resonance_curve(ax, view, x_axis, y_axis):
     """The curve wt2 = omega^2 (eq3.4) in the plane of the two axes, e.g. g_res(Omega); none for a
     written model (the paper's theory is its own system's only: its nine parameters may be absent).
-    outline: a dark edge along the white line, for a scale whose middle is white (lambda_1)."""
+    White, in a dark casing: readable over any cell."""
     from vrsweep.analysis import theory
 
     if view.config is None or view.config.written:
@@ -127,14 +127,14 @@ def _draw_resonance_curve(ax, view, x_axis, y_axis, outline=False):
     detuning = theory.effective_frequency_squared(mesh) - np.square(mesh["omega"])
     if not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
         return None
-    from matplotlib.patheffects import Normal, Stroke
+    from vrsweep.plot.palettes import cased
 
-    # On a diverging scale the cells near zero are white: a white line alone vanished over them.
-    edge = [Stroke(linewidth=3.2, foreground="0.1"), Normal()] if outline else None
+    # A white line alone vanished over white cells (lambda_1 near 0) and yellow ones (viridis' top,
+    # light grey on a greyscale page): a dark casing keeps it on every scale.
+    edge = cased("white", 1.6)
     contour = ax.contour(X, Y, detuning, levels=[0.0], colors="white", linewidths=1.6, linestyles="--")
     contour.set_gid("resonance")
-    if edge:
-        contour.set_path_effects(edge)
+    contour.set_path_effects(edge)
     # g_res(Omega) names the curve only in the (g, Omega) plane; over (Delta, alpha) it is Delta_res(alpha)
     name = "$g_{res}(\\Omega)$: " if {x_axis, y_axis} == {"g", "Omega"} else "resonance: "
     return Line2D([], [], color="white", ls="--", lw=1.6, path_effects=edge,

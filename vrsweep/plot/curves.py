@@ -23,13 +23,14 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from vrsweep.errors import UsageError
+from vrsweep.plot.palettes import cased
 from vrsweep.plot.labels import _legend_columns, _parse_config, _title, _width, figure_options
 from vrsweep.plot.selection import _limits, _map_axes, _Sweep
 
 FILE_KIND = "curves"
 
-# Colours that stay apart from each other and from viridis and the discrete maps' colours:
-# white edges keep every line readable on dark and light cells alike.
+# Colours that stay apart from each other and from viridis and the discrete maps' colours; each
+# line is cased in black or white (palettes.cased), readable on dark and light cells alike.
 CURVE_STYLES = {
     "fold": dict(color="#d62728", ls="-", label="fold (saddle-node): $\\mu = 1$"),
     "period_doubling": dict(color="#ff7f0e", ls=(0, (6, 2)), label="period doubling: $\\mu = -1$"),
@@ -185,10 +186,12 @@ def _draw_curves(ax, curves, x_axis, y_axis):
             continue
         style = CURVE_STYLES.get(kind, {**OTHER_CURVE, "label": kind.replace("_", " ")})
         line_style = {key: value for key, value in style.items() if key != "label"}
-        ax.plot(xs[mine], ys[mine], lw=CURVE_WIDTH + 1.6, color="white", solid_capstyle="round", zorder=5,
-                gid=f"curve_edge_{kind}")
-        ax.plot(xs[mine], ys[mine], lw=CURVE_WIDTH, zorder=6, gid=f"curve_{kind}", **line_style)
-        handles[f"curve_{kind}"] = Line2D([], [], lw=CURVE_WIDTH, **style)
+        # Cased in the contrasting colour: a white edge alone vanished with the orange and pink
+        # cores over the yellow and green cells (and on a greyscale page).
+        ax.plot(xs[mine], ys[mine], lw=CURVE_WIDTH, zorder=6, gid=f"curve_{kind}",
+                path_effects=cased(style["color"], CURVE_WIDTH), **line_style)
+        handles[f"curve_{kind}"] = Line2D([], [], lw=CURVE_WIDTH, path_effects=cased(style["color"], CURVE_WIDTH),
+                                          **style)
     if "special_kind" in curves.variables:
         special_x = np.atleast_1d(np.asarray(curves[f"special_{x_axis}"].values, dtype=float))
         special_y = np.atleast_1d(np.asarray(curves[f"special_{y_axis}"].values, dtype=float))
@@ -242,7 +245,8 @@ def _draw_analytic(ax, view, x_axis, y_axis):
         contour = ax.contour(x_values, y_values, field, levels=[0.0], colors=[style["color"]],
                              linewidths=style["lw"], linestyles=[style["ls"]], zorder=4)
         contour.set_gid(f"analytic_{kind}")
-        handles[f"analytic_{kind}"] = Line2D([], [], **style)
+        contour.set_path_effects(cased(style["color"], style["lw"]))
+        handles[f"analytic_{kind}"] = Line2D([], [], path_effects=cased(style["color"], style["lw"]), **style)
     return handles
 
 

@@ -63,3 +63,15 @@ def contrasting(colour) -> str:
     line, white around a dark one, so that core and casing differ by at least 50 in L* and
     one of them stands out against any cell (white vanished over yellow, dark red over navy)."""
     return "black" if lightness(colour) >= 50.0 else "white"
+
+
+CASING = 1.6  # points of casing beyond a line's width (0.8 a side)
+
+
+def cased(colour, width):
+    """Path effects that draw a line of ``colour`` and ``width`` over a map with a casing in the
+    contrasting colour (``contrasting``) under it: every line and mark drawn over cells, whose
+    colours run from dark to light, takes them (the legend's sample too)."""
+    from matplotlib.patheffects import Normal, Stroke
+
+    return [Stroke(linewidth=width + CASING, foreground=contrasting(colour)), Normal()]

@@ -14,7 +14,7 @@ from vrsweep.plot.analytic import (
     barrier_positions,
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
 )
-from vrsweep.plot.palettes import NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, categorical
+from vrsweep.plot.palettes import NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, cased, categorical
 from vrsweep.plot.labels import (
     parameter_symbol,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
@@ -651,7 +651,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             if norm.vmin == -norm.vmax:
                 ticks = MaxNLocator(nbins=count - 1, symmetric=True).tick_values(norm.vmin, norm.vmax)
                 bar.set_ticks(ticks[(ticks >= norm.vmin) & (ticks <= norm.vmax)])
-        resonance = _draw_resonance_curve(ax, view, x_axis, y_axis, outline=cmap == "RdBu_r")
+        resonance = _draw_resonance_curve(ax, view, x_axis, y_axis)
         if resonance is not None:
             handles["resonance"] = resonance
         if name in ("R", "Q_amplitude") and "status" in view.variables:
@@ -662,13 +662,16 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
                 computed = view.along("status", x_axis, **where, **{y_axis: j}) == Status.OK
                 untrusted[:, j], failed[:, j] = computed & ~trusted, f
             if untrusted.any():
-                ax.plot(X[untrusted], Y[untrusted], ".", color="white", ms=2.5, gid="untrusted")
+                # Edged black as in the legend: a white dot alone vanished on yellow cells.
+                ax.plot(X[untrusted], Y[untrusted], ".", color="white", mec="k", mew=0.3, ms=2.5, gid="untrusted")
                 handles["untrusted"] = Line2D(
                     [], [], ls="none", marker=".", color="white", mec="k", mew=0.3,
                     label=f"white dot: $R_{{err}}$ > {RELATIVE_ERROR_LIMIT:.0%} of R (R depends on the window)")
             if failed.any():
-                ax.plot(X[failed], Y[failed], "x", color=FAILED_COLOUR, ms=4, gid="failed")
+                ax.plot(X[failed], Y[failed], "x", color=FAILED_COLOUR, ms=4, gid="failed",
+                        path_effects=cased(FAILED_COLOUR, 1.0))
                 handles["failed"] = Line2D([], [], ls="none", marker="x", color=FAILED_COLOUR,
+                                           path_effects=cased(FAILED_COLOUR, 1.0),
                                            label="integration failed (status ≠ ok)")
         ax.set_xlabel(parameter_label(x_axis, ds[x_axis].attrs.get("units")))
         ax.set_ylabel(parameter_label(y_axis, ds[y_axis].attrs.get("units")))
