@@ -267,6 +267,35 @@ SLOW_FLOW_STYLES = {
 }
 
 
+STROKES_PER_WIDTH = 3.0  # a line at most a third of the room between two strokes: no solid block
+
+
+def _line_scale(fig, ax, curves):
+    """The factor (at most 1) on the slow-flow figure's line widths that keeps the strokes of its
+    time panels apart: over 40 periods lines 1.6 points wide, four of them one over another, drew
+    solid blocks. A stroke is a crossing of a curve's mid-height (two a cycle of the position,
+    more of the velocity, which jumps at impacts); each line is then at most 1/STROKES_PER_WIDTH
+    of the room between the strokes of the busiest curve (1 where that leaves the lines their
+    widths: 15 periods across a panel of the default figure). ``curves``: the values drawn against
+    time."""
+    strokes = max([_strokes(values) for values in curves] or [1])
+    width = ax.get_position().width * fig.get_figwidth() * 72.0  # points, before the layout trims it
+    room = width * LAYOUT_SHARE / max(strokes, 1)
+    return float(min(1.0, room / STROKES_PER_WIDTH / 1.6))
+
+
+def _strokes(values):
+    """How many times ``values`` cross their mid-height."""
+    values = np.asarray(values, dtype=np.float64)
+    values = values[np.isfinite(values)]
+    if values.size < 2:
+        return 0
+    return int(np.count_nonzero(np.diff(np.sign(values - (values.max() + values.min()) / 2.0)) != 0))
+
+
+LAYOUT_SHARE = 0.9  # of an axes' first width that the constrained layout leaves it, about
+
+
 @figure_options
 def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_literal")) -> Figure:
     """The effective system (numerical) against the first-order reconstruction eq2.21 (Fig. 6)."""
@@ -283,8 +312,10 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
     t, x, v = _in_window(t, window, x, v)
     fig = _new_figure(13.0, 4.8)
     ax_x, ax_v, ax_phase = fig.subplots(1, 3)
-    numerical = dict(color="tab:red", lw=1.6, alpha=0.8, label="effective system eq2.10, numerical (with impacts)")
-    ax_x.plot(t, x, **numerical)
+    flows = [_in_window(flow.t, window, flow.x, flow.v)[1:] for start, flow in data.slow_flow.items() if start in starts]
+    thin = _line_scale(fig, ax_x, [x, v] + [values for pair in flows for values in pair])
+    numerical = dict(color="tab:red", lw=1.6 * thin, alpha=0.8, label="effective system eq2.10, numerical (with impacts)")
+    ax_x.plot(t, x, **numerical)[0]._vrsweep_thinned = True
     ax_v.plot(t, v, **numerical)
     ax_phase.plot(x, v, **numerical)
     for start in starts:
@@ -293,9 +324,10 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
         flow = data.slow_flow[start]
         flow_t, flow_x, flow_v = _in_window(flow.t, window, flow.x, flow.v)
         style = dict(SLOW_FLOW_STYLES.get(start, dict(label=start)))
+        style["lw"] = style.get("lw", 1.1) * thin
         if not np.isfinite(flow_x).any():  # say so rather than list a curve that draws nothing
             style["label"] += ": no finite value (not drawn)"
-        ax_x.plot(flow_t, flow_x, **style)
+        ax_x.plot(flow_t, flow_x, **style)[0]._vrsweep_thinned = True
         ax_v.plot(flow_t, flow_v, **style)
         ax_phase.plot(flow_x, flow_v, **style)
     if delta is not None:
@@ -312,6 +344,12 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
     ax_phase.set_xlabel(f"position $x$, $X$")
     ax_phase.set_ylabel(f"velocity $\\dot{{x}}$, $\\dot{{X}}$")
     handles, labels = ax_x.get_legend_handles_labels()
+    if thin < 1.0:  # the legend's samples at the lines' full widths: thinned, the dotted one vanished
+        from matplotlib.lines import Line2D
+
+        handles = [Line2D([], [], color=line.get_color(), ls=line.get_linestyle(), alpha=line.get_alpha(),
+                          lw=line.get_linewidth() / (thin if getattr(line, "_vrsweep_thinned", False) else 1.0))
+                   for line in handles]
     fig.legend(handles, labels, loc="outside lower center", ncol=_legend_columns(fig, 2), fontsize="x-small")
     _title(fig, f"Effective system against the slow-flow reconstruction X = R cos(ωt + θ) (eq2.21) at "
                 f"{_point_text(config)}, {_window_text(window, data)}; the first-order theory ignores the barrier",
