@@ -425,6 +425,41 @@ def test_slowflow_draws_the_effective_system_and_three_reconstructions(files):
     assert "$X$" in x_ax.get_ylabel()
 
 
+def _strokes_apart(fig):
+    """For each line of the slow-flow figure's time panels: (its width, the room in points between
+    two of its strokes, counted as crossings of its mid-height in the view)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    found = []
+    for ax in fig.axes[:2]:
+        width = ax.get_window_extent().width * 72.0 / fig.dpi
+        for line in ax.get_lines():
+            y = np.asarray(line.get_ydata(), dtype=float)
+            y = y[np.isfinite(y)]
+            if len(y) < 10:
+                continue
+            crossings = np.count_nonzero(np.diff(np.sign(y - (y.max() + y.min()) / 2)) != 0)
+            found.append((line.get_linewidth(), width / max(crossings, 1), line.get_label()))
+    return found
+
+
+def test_the_slow_flow_over_many_periods_draws_strokes_not_blocks(files, tmp_path):
+    """Over 45 slow periods four lines 1.1 to 1.6 points wide, one over another, drew solid blocks:
+    each line is at most 1/2.5 of the room between two of its strokes, and over 10 periods,
+    where they fit, the lines keep their widths."""
+    long = _run(tmp_path, "long", "parameters: {g: 5.0, Omega: 5.0}\n"
+                                  "integration: {transient_periods: 5, measure_periods: 40, strobe_periods: 10}\n",
+                "simulate", "--compare", "effective", "--samples-per-period", "50")
+    for size in (None, (7.0, 3.0)):
+        found = _strokes_apart(plot.plot(long, kind="slowflow", size=size))
+        assert len(found) >= 6
+        for width, room, label in found:
+            assert width <= room / 2.5, (size, width, room, label)
+    widths = {label: width for width, _, label in _strokes_apart(plot.plot(files["traj"], kind="slowflow"))}
+    assert widths["effective system eq2.10, numerical (with impacts)"] == 1.6
+
+
 def test_slowflow_needs_the_effective_run(files):
     with pytest.raises(UsageError, match="compare_effective"):
         plot.plot(files["traj20"], kind="slowflow")
@@ -519,6 +554,29 @@ def test_the_response_axis_follows_the_data_not_a_theory_far_from_them(tmp_path)
         plot.description(fig)
     low, high = fig.axes[0].get_ylim()  # whole decades around the data and the theory within one of them
     assert 1e-4 <= low <= 1e-3 and high == 1e2 and f"down to {lowest:.2g}" in " ".join(plot.description(fig).split()), (low, high)
+
+
+def test_what_the_view_leaves_out_is_said_of_the_view_asked_for(tmp_path):
+    """The note 'the analytic curves go on beyond the view' was made for the automatic limits:
+    with --ylim holding the whole theory it still said so, and with --ylim cutting the curves and
+    the measured points it said nothing of either. It is said of the view as drawn."""
+    path = _run(tmp_path, "small", "parameters: {g: 5.0}\nsweep:\n  Omega: [0.05, 0.5, 1.0]\n" + SHORT, "run")
+    ds = load_results(path)
+    ds["R"].values[:] = [0.01, 1.0, 5.0]
+    branches = plot.analytic_branches(dict(DEFAULT_PARAMETERS, g=5.0), "Omega", np.array([0.05]), gain=True)
+    lowest = min(float(np.nanmin(y)) for _, y, _ in branches)
+    said = " ".join(plot.description(plot.plot([ds])).split())
+    assert f"go on beyond the view (down to {lowest:.2g})" in said  # the automatic view clips it
+    fig = plot.plot([ds], ylim=(1e-9, 1e3))
+    theory = [line for line in fig.axes[0].get_lines() if getattr(line, "_vrsweep_context", False)]
+    assert theory and all(1e-9 <= np.nanmin(line.get_ydata()) and np.nanmax(line.get_ydata()) <= 1e3 for line in theory)
+    said = " ".join(plot.description(fig).split())
+    assert "beyond the view" not in said and "outside the limits" not in said, said
+    said = " ".join(plot.description(plot.plot([ds], ylim=(0.5, 2.0))).split())
+    assert f"go on beyond the view (down to {lowest:.2g}" in said and "outside the limits asked for" in said, said
+    assert "2 measured points outside the limits asked for (1 below, 1 above)" in said, said
+    said = " ".join(plot.description(plot.plot([ds], ylim=(0.5, 2.0), title=False)).split())
+    assert "2 measured points outside" in said  # in the file's metadata, with no title drawn
 
 
 def test_log_on_a_map_is_a_logarithmic_colour_scale(files):

@@ -464,9 +464,11 @@ def figure_options(function):
                 fig._vrsweep_style = style
                 fig._vrsweep_title = bool(title)
                 fig._vrsweep_ylim_given = ylim is not None  # the layout may not raise a panel's top then
+                layout.apply_limits(fig, None if takes_xlim else xlim, ylim)
+                if (xlim is not None or ylim is not None) and hasattr(fig, "_vrsweep_after_limits"):
+                    fig._vrsweep_after_limits()  # notes on what the view leaves out, of the view asked for
                 if not title:
                     _drop_titles(fig)
-                layout.apply_limits(fig, None if takes_xlim else xlim, ylim)
                 layout.place_legend(fig, legend)
                 # Under the style: labels are measured in the fonts they are drawn in.
                 fig._vrsweep_legend_note = layout.arrange(fig, legend)

@@ -339,7 +339,23 @@ def _arrange(fig, legend=None):
         if ax.get_legend() is not None and small(fig) and not getattr(ax.get_legend(), "_vrsweep_strip", False):
             _compact(ax)
         _separate_tags(ax)
+    if small(fig):
+        _shrink_cell_labels(fig)
     return note
+
+
+def _shrink_cell_labels(fig):
+    """A map's axes ticked at its cells (``selection.cell_ticks``) label them with their values,
+    '3.6' where round ticks read '4': at one journal column the wider labels left the panels under
+    AXES_SHARE of the figure. Those labels are set smaller, as an axis label is (``fit_labels``),
+    until the panels have their share."""
+    axes = [(ax, name) for ax in data_axes(fig) for name in getattr(ax, "_vrsweep_cell_ticks", ())]
+    for size in ("small", "x-small"):
+        if not axes or axes_share(fig) >= AXES_SHARE:
+            return
+        for ax, name in axes:
+            ax.tick_params(axis=name, labelsize=size)
+        fig.draw_without_rendering()
 
 
 # A legend abbreviated to fit a journal column: small text, short handles, no frame (the frame's

@@ -307,6 +307,7 @@ def cell_ticks(ax, x_values=None, y_values=None):
         axis.set_major_formatter(FuncFormatter(
             lambda value, _, values=values, texts=texts: texts[int(np.argmin(np.abs(values - value)))]))
         axis.set_minor_locator(NullLocator())
+        ax._vrsweep_cell_ticks = getattr(ax, "_vrsweep_cell_ticks", ()) + (axis.axis_name,)  # layout may shrink them
 
 
 def _cell_texts(values):

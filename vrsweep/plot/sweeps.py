@@ -96,13 +96,21 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     handles = _response_legend(curve_handles, kinds_seen, failure_note, len(curves), amplitude,
                                analytic if view.config is not None and not written else None)
     fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
-    scale_note = _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, analytic.barrier_levels)
+    scale_note, reach = _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, analytic.barrier_levels)
     quantity = "amplitude |Q|" if amplitude else "gain R"
-    notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note) if note)
     theory_note = ("" if written else "; analytic: first-order theory of the effective system "
                    f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})")
-    _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
-           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
+
+    def entitle(asked=False):
+        """The title, with what the view leaves out as it is now: after --xlim/--ylim (``asked``),
+        again (``figure_options``), since the note made for the automatic limits would be wrong."""
+        beyond = _beyond_view(ax, drawn, theory, analytic.barrier_levels, amplitude, None if asked else reach)
+        notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note, beyond) if note)
+        _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
+               _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
+
+    entitle()
+    fig._vrsweep_after_limits = lambda: entitle(asked=True)
     return fig
 
 
@@ -137,7 +145,7 @@ def _curve_colours(fig, ax, ds, view, scale_axis):
 
 def _draw_measured(ax, view, name, x_axis, x, where, colour, k, n_curves, kinds_seen):
     """One curve's points: joined by a dotted line, marked by trust (filled or hollow) and kind
-    (circle: a period; square: none), failed points along the bottom edge. Returns the values
+    (circle: a period; square: none), failed points along the bottom edge. Returns (x, values)
     drawn; records in ``kinds_seen`` which kinds of mark appeared (for the legend)."""
     y = view.along(name, x_axis, **where)
     trusted, aperiodic, failed = _point_classes(view, x_axis, where)
@@ -154,7 +162,7 @@ def _draw_measured(ax, view, name, x_axis, x, where, colour, k, n_curves, kinds_
                     mfc=colour if trust else "none", ms=4 if trust else 4.5, mew=1.0, zorder=4,
                     gid=f"{'trusted' if trust else 'untrusted'} {'aperiodic' if no_period else 'periodic'}")
     _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if n_curves == 1 else colour)
-    return y[shown]
+    return x[shown], y[shown]
 
 
 class _Analytic:
@@ -165,13 +173,14 @@ class _Analytic:
         self.barrier_drawn = False
         self.done = set()  # the parameter values whose branches are drawn
         self.resonance_handles = []
-        self.barrier_levels = []  # A/c = Delta/c (or A = Delta) of each curve: said when out of view
+        self.barrier_levels = []  # (x, A/c = Delta/c or A = Delta) of each curve: said when out of view
 
 
 def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic):
     """The corrected theory's branches (stable solid, unstable dashed), the barrier's level and
     the resonance g_res (eq3.4) at one curve's parameters, once per set of parameter values (it
-    depends on the parameters only, not on the continuation direction). Returns the values drawn."""
+    depends on the parameters only, not on the continuation direction). Returns the branches drawn,
+    [(x, values)]."""
     parameter_where = {axis: index for axis, index in where.items() if axis != "direction"}
     key = tuple(sorted(parameter_where.items()))
     if key in analytic.done:
@@ -197,8 +206,8 @@ def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, an
         elif not analytic.resonance_handles:
             analytic.resonance_handles.append(Line2D([], [], color="0.3", ls="-.", lw=0.9,
                                                      label="resonance (eq3.4), in the curve's colour"))
-    analytic.barrier_levels.append(np.atleast_1d(barrier_level))
-    return [branch_y for _, branch_y, _ in branches]
+    analytic.barrier_levels.append((fine, np.broadcast_to(barrier_level, fine.shape)))
+    return [(branch_x, branch_y) for branch_x, branch_y, _ in branches]
 
 
 def _response_legend(curve_handles, kinds_seen, failure_note, n_curves, amplitude, analytic):
@@ -253,10 +262,10 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     else:
         ax.set_ylabel("gain $R = |Q|/c$, analytic $A/c$")
     notes = []
-    measured = np.concatenate([np.ravel(a) for a in drawn]) if drawn else np.array([])
+    measured = np.concatenate([np.ravel(y) for _, y in drawn]) if drawn else np.array([])
     measured = measured[np.isfinite(measured) & (measured > 0)]
     theory = list(theory) + list(barrier_levels)  # the barrier's level A/c = Delta/c is the theory's too
-    analytic = np.concatenate([np.ravel(a) for a in theory]) if theory else np.array([])
+    analytic = np.concatenate([np.ravel(y) for _, y in theory]) if theory else np.array([])
     analytic = analytic[np.isfinite(analytic)]
     # The scale follows the measured values alone; the theory, drawn for comparison, then counts
     # for the limits where it is near them (a decade either way on a log axis, 3 times the
@@ -284,21 +293,56 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     clipped = measured.size >= 2 and bool(below.size or above.size)
     if measured.size >= 2 and (clipped or not log):
         ax.set_ylim(low, high)
-    if clipped:
+    elif not log:
+        ax.set_ylim(bottom=0.0)
+    reach = (f"more than {THEORY_REACH:g} times from the measured values" if log else
+             f"above {LINEAR_THEORY_REACH:g} times the largest measured value")
+    _span_grid(ax, x)
+    ax.grid(alpha=0.3, which="both" if log else "major")
+    return "; ".join(notes), reach
+
+
+def _beyond_view(ax, drawn, theory, barrier_levels, amplitude, reach=None):
+    """What the view of ``ax`` leaves out, as its limits are now: the analytic curves' values
+    beyond it, the barrier's level when wholly out of it, measured points above or below it
+    (only where --xlim/--ylim put it: the automatic limits hold every measured value).
+
+    drawn, theory, barrier_levels: [(x, values)] of the measured curves, the theory's branches
+    and the barrier's level. reach: why the automatic limits leave the theory out ('more than 10
+    times from the measured values'); None where the limits were asked for. From the view as
+    drawn, not from the limits first chosen: a note made before --ylim said the curves went on
+    beyond a view that then held them, and said nothing of a view that cut them."""
+    (x_low, x_high), (low, high) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
+
+    def in_view(pairs):
+        """The finite values of ``pairs`` whose x is in view."""
+        if not pairs:
+            return np.array([])
+        x = np.concatenate([np.ravel(x) for x, _ in pairs])
+        y = np.concatenate([np.ravel(y) for _, y in pairs]).astype(np.float64)
+        return y[(x >= x_low) & (x <= x_high) & np.isfinite(y)]
+
+    def outside(pairs):
+        """(values below the view, values above it) of those in view horizontally."""
+        y = in_view(pairs)
+        return y[y < low], y[y > high]
+
+    notes = []
+    below, above = outside(list(theory) + list(barrier_levels))
+    if below.size or above.size:
         ends = ([f"down to {float(below.min()):.2g}"] if below.size else []) + \
                ([f"up to {float(above.max()):.2g}"] if above.size else [])
-        reach = (f"more than {THEORY_REACH:g} times from the measured values" if log else
-                 f"above {LINEAR_THEORY_REACH:g} times the largest measured value")
-        notes.append(f"the analytic curves go on beyond the view ({' and '.join(ends)}), {reach}")
-        levels = np.concatenate([np.ravel(level) for level in barrier_levels]) if barrier_levels else np.array([])
-        levels = levels[np.isfinite(levels)]
+        notes.append(f"the analytic curves go on beyond the view ({' and '.join(ends)}), "
+                     f"{reach or 'outside the limits asked for'}")
+        levels = in_view(barrier_levels)
         if levels.size and (np.all(levels > high) or np.all(levels < low)):  # its legend entry would name no line
             notes.append(f"the barrier's level {'A = Δ' if amplitude else 'A/c = Δ/c'} "
                          f"({float(levels.min()):.3g}) lies {'above' if np.all(levels > high) else 'below'} the view")
-    elif not log:
-        ax.set_ylim(bottom=0.0)
-    _span_grid(ax, x)
-    ax.grid(alpha=0.3, which="both" if log else "major")
+    hidden_below, hidden_above = outside(list(drawn))
+    if reach is None and hidden_below.size + hidden_above.size:
+        count = hidden_below.size + hidden_above.size
+        notes.append(f"{count} measured point{'s' if count != 1 else ''} outside the limits asked for "
+                     f"({hidden_below.size} below, {hidden_above.size} above)")
     return "; ".join(notes)
 
 
