@@ -512,3 +512,37 @@ def test_a_map_of_few_cells_is_ticked_at_its_cells(files, size):
             boxes = [tick.label1.get_window_extent() for tick in ticks]
             for first, second in zip(boxes, boxes[1:]):
                 assert not first.overlaps(second), (name, size)
+
+
+# --- a written model's equation in its caption ------------------------------------------------------
+
+
+@pytest.mark.parametrize("example", ["impact_linear", "impact_two_sided", "impact_duffing_two_forces",
+                                     "paper_written"])
+def test_a_written_models_caption_prints_its_equation_in_its_symbols(example):
+    """The caption printed the acceleration as the config wrote it, "x'' = -2 * zeta * v - x +
+    F * cos(omega * t + phi)", beside parameters named by their symbols (ζ = 0.05): it is
+    mathtext in the model's symbols, which matplotlib draws; the description (the figure file's
+    metadata) keeps the config's text."""
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from matplotlib.mathtext import MathTextParser
+
+    from vrsweep.config.validate import load_config
+    from vrsweep.plot.labels import _caption, description
+
+    config = load_config(Path(plot.__file__).parents[1] / "examples" / f"{example}.yaml")
+    caption = _caption("f.h5", config, "written", width=400)
+    (equation,) = [part for part in caption.split("$") if part.startswith("\\ddot{x} = ")]
+    MathTextParser("path").parse(f"${equation}$")  # matplotlib draws it
+    assert "*" not in equation and "\\dot{x}" in equation, equation
+    used = [name for name in config.model.parameter_names if name in config.model.acceleration.replace("*", " ")
+            .replace("(", " ").replace(")", " ").split()]
+    for name in used:  # every parameter the acceleration uses, by its symbol where it has one
+        symbol = config.model.symbol(name)
+        if symbol:
+            assert symbol in equation, (name, symbol, equation)
+        assert f" {name} " not in f" {equation} " or not symbol, (name, equation)
+    said = description(SimpleNamespace(_vrsweep_description=("R", caption)))
+    assert f"x'' = {config.model.acceleration}" in " ".join(said.split())

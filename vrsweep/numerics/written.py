@@ -165,3 +165,22 @@ def coefficients(model: WrittenModel, parameters):
 
 
 assert STICK_SCAN_FRACTION * SCAN_STEPS_PER_MAX_STEP == 1.0 / 8.0  # the paper's share, see above
+
+
+def acceleration_latex(model: WrittenModel) -> str:
+    """The acceleration as LaTeX (no $), in the model's symbols: '\\ddot{x} = F \\cos{\\left(\\omega
+    t + \\varphi \\right)} - x - 2 \\zeta \\dot{x}' where the config wrote '-2*zeta*v - x +
+    F*cos(omega*t + phi)'. A parameter without a symbol prints as sympy names it (zeta as
+    \\zeta, F1 as F_{1}); v as \\dot{x}. For a figure's caption, which printed the config's text
+    with the parameters' names. sympy orders the terms."""
+    import sympy
+
+    x, t = sympy.Symbol("x", real=True), sympy.Symbol("t", real=True)
+    v = sympy.Symbol("~v", real=True)  # named to sort after the parameters: 2 zeta x' as written, not 2 x' zeta
+    symbols, names = {"x": x, "v": v, "t": t}, {v: "\\dot{x}"}
+    for name in model.parameter_names:
+        symbols[name] = sympy.Symbol(name, real=True)
+        if model.symbol(name):
+            names[symbols[name]] = model.symbol(name)
+    tree = expressions.parse(model.acceleration, model.parameter_names + expressions.STATE_NAMES)
+    return "\\ddot{x} = " + sympy.latex(expressions.to_sympy(tree, symbols), symbol_names=names)

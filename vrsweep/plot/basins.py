@@ -12,7 +12,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.plot.labels import MODEL_EQUATIONS, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words, gain_words
+from vrsweep.plot.labels import MODEL_EQUATIONS, written_equation, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words, gain_words
 from vrsweep.plot.palettes import QUALITATIVE, categorical
 from vrsweep.plot.selection import cell_ticks, _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
@@ -243,7 +243,7 @@ def _basin_caption(view, width):
     if view.config is not None:
         parameters = view.parameters()
         if view.config.written:
-            items[1] = f"{view.config.model.title}: x'' = {view.config.model.acceleration}"
+            items[1] = written_equation(view.config.model)
         items += [f"{parameter_symbol(name)} = {_number(parameters[name])}" for name in view.config.parameter_names]
         run = view.config.integration
         items.append(f"{run.transient_periods} transient + {run.measure_periods} measured "

@@ -154,7 +154,7 @@ def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
     items = [os.path.basename(path), MODEL_EQUATIONS.get(model, model)]
     if config is not None:
         if config.written:
-            items[1] = f"{config.model.title}: x'' = {config.model.acceleration}"
+            items[1] = written_equation(config.model)
         swept = ({axis.name for axis in config.axes} - set(selected)) | set(omit)
         parameters = dict(config.parameters, **selected)
         run = config.integration
@@ -165,6 +165,27 @@ def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
                   f"{'periods T' if config.written else 'slow periods'}"]
     items += ["all quantities dimensionless"] + ([extra] if extra else [])
     return _wrap(items, width)
+
+
+_PLAIN_EQUATIONS = {}  # a written model's equation as mathtext -> as its config wrote it (``description``)
+
+
+def written_equation(model) -> str:
+    """'name: $\\ddot{x} = ...$' of a written model, in its symbols (``written.acceleration_latex``),
+    for a caption; as the config wrote it ("x'' = -2*zeta*v - x + ...") where matplotlib's mathtext
+    cannot draw sympy's LaTeX. The figure's description (its file's metadata) keeps the config's text."""
+    from matplotlib.mathtext import MathTextParser
+
+    from vrsweep.numerics.written import acceleration_latex
+
+    written = f"{model.title}: x'' = {model.acceleration}"
+    try:
+        latex = f"${acceleration_latex(model)}$"
+        MathTextParser("path").parse(latex)
+    except Exception:  # noqa: BLE001 -- anything sympy prints that mathtext does not draw
+        return written
+    _PLAIN_EQUATIONS[latex] = f"x'' = {model.acceleration}"
+    return f"{model.title}: {latex}"
 
 
 def _wrap(items, width):
@@ -494,6 +515,8 @@ def description(fig) -> str:
     """The figure's full title and caption as plain text (mathtext's $ and \\ dropped)."""
     what, caption = getattr(fig, "_vrsweep_description", ("", ""))
     text = f"{what}\n{caption}".strip()
+    for equation, plain in _PLAIN_EQUATIONS.items():  # a written model's, as its config wrote it
+        text = text.replace(equation, plain)
     for markup, plain in MATHTEXT_PLAIN.items():
         text = text.replace(markup, plain)
     return text.replace("$", "").replace("\\", "")
