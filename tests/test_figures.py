@@ -436,7 +436,8 @@ def _six_attractors(ds):
 def test_every_categorical_palette_stays_apart_in_greyscale():
     """tab10's orange and green (L* 67, 58) and blue and red (48, 47) printed as one grey: every
     palette of categories, with the greys and black and white drawn beside it, differs by 8 in L*
-    between any two colours; beyond the qualitative colours, the categories go dark to light."""
+    between any two colours; beyond the qualitative colours, the categories go dark to light,
+    clear of the greys (viridis sampled evenly put period 3 of eight on the grey of 'no period')."""
     from vrsweep.plot.palettes import LIGHTNESS_STEP, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, categorical
     from vrsweep.plot.labels import RELIABLE_COLOURS
     from vrsweep.plot.sweeps import LEGEND_CURVES
@@ -444,8 +445,10 @@ def test_every_categorical_palette_stays_apart_in_greyscale():
     assert LIGHTNESS_STEP == 8.0
     for count in range(1, 7):
         assert _apart_in_grey(categorical(count) + [NO_VALUE_GREY, NOT_COMPUTED_GREY, "black", "white"]) >= 8.0, count
-    many = [_lightness(colour) for colour in categorical(9)]
-    assert np.all(np.diff(many) > 0), many
+    for count in (7, 9, 16):  # dark to light, and none a grey of 'no period' or 'not computed'
+        many = [_lightness(colour) for colour in categorical(count)]
+        assert np.all(np.diff(many) > 0), many
+        assert min(abs(light - _lightness(grey)) for light in many for grey in (NO_VALUE_GREY, NOT_COMPUTED_GREY)) >= 8
     assert _apart_in_grey(list(STATUS_COLOURS.values())) >= 8.0
     assert _apart_in_grey(list(RELIABLE_COLOURS[:LEGEND_CURVES])) >= 8.0  # curves told apart by colour alone
 

@@ -48,14 +48,26 @@ def lightness(colour) -> float:
 
 def categorical(count) -> list:
     """``count`` colours for categories: QUALITATIVE's first ``count`` (apart in lightness), or,
-    for more categories than it holds, SEQUENTIAL sampled from dark to light. No palette keeps
-    more than about six categories and two greys apart in grey; in order of lightness the first
-    and last of many can still be told, and the colour bar or legend names each."""
+    for more categories than it holds, SEQUENTIAL from dark to light at even steps of lightness
+    that skip the greys drawn beside them (NO_VALUE_GREY, NOT_COMPUTED_GREY): viridis sampled
+    evenly put period 3 of eight at L* 37, one grey with 'no period' (38). No palette keeps more
+    than about six categories and two greys apart in grey; in order of lightness the first and
+    last of many can still be told, and the colour bar or legend names each."""
     from matplotlib import colormaps
 
     if count <= len(QUALITATIVE):
         return list(QUALITATIVE[:count])
-    return [tuple(colour) for colour in colormaps[SEQUENTIAL](np.linspace(0.0, 1.0, count))]
+    scale = colormaps[SEQUENTIAL]
+    positions = np.linspace(0.0, 1.0, 2001)
+    light = np.array([lightness(scale(position)) for position in positions])
+    greys = [lightness(grey) for grey in (NO_VALUE_GREY, NOT_COMPUTED_GREY)]
+    allowed = np.all([np.abs(light - grey) >= LIGHTNESS_STEP for grey in greys], axis=0)
+    # Lightness gained along the scale where it is allowed: equal steps of it for the categories.
+    gained = np.concatenate([[0.0], np.cumsum(np.where(allowed[1:] & allowed[:-1], np.diff(light), 0.0))])
+    chosen = np.searchsorted(gained, np.linspace(0.0, gained[-1], count))
+    chosen = np.minimum(chosen, len(positions) - 1)
+    chosen = np.array([index if allowed[index] else index + np.argmax(allowed[index:]) for index in chosen])
+    return [tuple(scale(positions[index])) for index in chosen]
 
 
 def contrasting(colour) -> str:
