@@ -460,6 +460,24 @@ def test_the_slow_flow_over_many_periods_draws_strokes_not_blocks(files, tmp_pat
     assert widths["effective system eq2.10, numerical (with impacts)"] == 1.6
 
 
+def test_the_slow_flows_lines_of_one_style_differ_in_grey(files):
+    """The numerical line (tab:red) and the slow flow from x(0) (tab:blue), both solid, were one
+    grey on a greyscale page (L* 47 and 48): lines of one style differ by 8 in L* (as drawn on
+    white, their transparency included)."""
+    from matplotlib.colors import to_rgb
+
+    fig = plot.plot(files["traj"], kind="slowflow")
+    by_style = {}
+    for line in fig.axes[0].get_lines():
+        alpha = line.get_alpha() if line.get_alpha() is not None else 1.0
+        seen = alpha * np.array(to_rgb(line.get_color())) + (1.0 - alpha)  # over white
+        by_style.setdefault(str(line.get_linestyle()), []).append(_lightness(tuple(seen)))
+    assert len(by_style.get("-", [])) >= 2
+    for style, light in by_style.items():
+        light = sorted(light)
+        assert all(b - a >= 8.0 for a, b in zip(light, light[1:])), (style, light)
+
+
 def test_slowflow_needs_the_effective_run(files):
     with pytest.raises(UsageError, match="compare_effective"):
         plot.plot(files["traj20"], kind="slowflow")

@@ -257,10 +257,12 @@ def _model_key(data, config):
     return (data.model, repr({key: value for key, value in config.model.as_data().items() if key != "parameters"}))
 
 
+# Told apart by line style and by lightness (palettes.QUALITATIVE's dark blue and teal, the numerical
+# line red): tab:blue and tab:red, both solid, were one grey on a greyscale page (L* 48 and 47).
 SLOW_FLOW_STYLES = {
-    "state": dict(color="tab:blue", ls="-", lw=1.1,
+    "state": dict(color="#004488", ls="-", lw=1.1,
                   label="slow flow (corrected eq2.24) from $R_0, \\theta_0$ of x(0), $\\dot{x}(0)$ (ERRATA 9)"),
-    "paper": dict(color="tab:green", ls="--", lw=1.1,
+    "paper": dict(color="#009988", ls="--", lw=1.1,
                   label="slow flow (corrected eq2.24) from the paper's $R_0 = \\Delta$, $\\theta_0 = 0$ (eq2.22)"),
     "paper_literal": dict(color="0.35", ls=":", lw=1.1,
                           label="slow flow as printed in the paper (sin/cos swapped, ERRATA 1), paper's start"),
@@ -314,7 +316,7 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
     ax_x, ax_v, ax_phase = fig.subplots(1, 3)
     flows = [_in_window(flow.t, window, flow.x, flow.v)[1:] for start, flow in data.slow_flow.items() if start in starts]
     thin = _line_scale(fig, ax_x, [x, v] + [values for pair in flows for values in pair])
-    numerical = dict(color="tab:red", lw=1.6 * thin, alpha=0.8, label="effective system eq2.10, numerical (with impacts)")
+    numerical = dict(color="#CC3311", lw=1.6 * thin, alpha=0.8, label="effective system eq2.10, numerical (with impacts)")
     ax_x.plot(t, x, **numerical)[0]._vrsweep_thinned = True
     ax_v.plot(t, v, **numerical)
     ax_phase.plot(x, v, **numerical)
