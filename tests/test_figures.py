@@ -549,3 +549,17 @@ def test_a_written_models_caption_prints_its_equation_in_its_symbols(example):
         assert f" {name} " not in f" {equation} " or not symbol, (name, equation)
     said = description(SimpleNamespace(_vrsweep_description=("R", caption)))
     assert f"x'' = {config.model.acceleration}" in " ".join(said.split())
+
+
+def test_the_curves_of_a_variable_stay_apart_in_greyscale(files):
+    """Five curves of --var x_max took tab10's blue, orange, green, red and purple, all drawn 'o':
+    red, blue and purple (L* 47, 48, 52) were one grey. Any two curves differ in their marker or
+    by 8 in L*; so do those of the impacts figure."""
+    ds = load_results(files["plane"]).isel(Omega=slice(0, 5))
+    for fig in (plot.variable_figure(ds, "x_max", x_axis="g"), plot.impacts_figure(ds, x_axis="g")):
+        curves = [line for line in fig.axes[0].get_lines() if len(line.get_xdata()) == len(ds["g"])]
+        assert len(curves) == 5
+        for k, first in enumerate(curves):
+            for second in curves[k + 1:]:
+                assert first.get_marker() != second.get_marker() or \
+                    abs(_lightness(first.get_color()) - _lightness(second.get_color())) >= 8.0

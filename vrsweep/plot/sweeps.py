@@ -34,6 +34,9 @@ from vrsweep.results import Motion, Status
 
 
 LEGEND_CURVES = 3        # more curves over one other parameter than this: a colour scale, not a legend
+# Each curve of a --var or impacts figure its own marker as well as colour: beyond the third,
+# RELIABLE_COLOURS (tab10) repeat greys (red 47, blue 48, purple 52), and the marks mean nothing else there.
+CURVE_MARKERS = "os^Dv<>p"
 MAX_SCALED_CURVES = 16   # with a colour scale, curves stay apart up to this many
 CURVE_SCALE = "viridis"
 BARRIER_COLOUR = "0.35"
@@ -376,7 +379,8 @@ def variable_figure(ds, name, x_axis=None, log=None) -> Figure:
         y = np.where(done & np.isfinite(y), y, np.nan)
         missing += int(np.sum(np.isnan(y)))
         drawn.append(y[np.isfinite(y)])
-        ax.plot(x, y, "o-", ms=3.5, lw=0.9, color=colour, label=label or None)
+        ax.plot(x, y, "-", marker=CURVE_MARKERS[k % len(CURVE_MARKERS)], ms=3.5, lw=0.9, color=colour,
+                label=label or None)
     values = np.concatenate(drawn) if drawn else np.array([])
     if log is None:
         log = values.size > 1 and bool(np.all(values > 0)) and _decades([values]) >= np.log10(LOG_SPAN)
@@ -765,7 +769,8 @@ def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
     for k, (where, label) in enumerate(curves):
         colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
         y = view.along("impacts_per_period", x_axis, **where)
-        ax.plot(x, y, "o-", ms=3.5, lw=0.9, color=colour, label=label or "measurement window")
+        ax.plot(x, y, "-", marker=CURVE_MARKERS[k % len(CURVE_MARKERS)], ms=3.5, lw=0.9, color=colour,
+                label=label or "measurement window")
         top = max(top, float(np.nanmax(y, initial=0.0)))
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
