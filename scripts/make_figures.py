@@ -35,8 +35,9 @@ FIGURES = Path("docs/figures")
 RESULTS = Path("results")
 DPI = "110"  # ~100 kB per PNG, sharp enough for the README
 # Maps whose curves are told apart by colour: a 32-colour palette merges an orange curve into
-# viridis' yellow and bands the colour bar, so these stay full-colour (~150 kB).
-FULL_COLOUR = {"curves_g_Omega_effective", "curves_original"}
+# viridis' yellow and bands the colour bar, so these stay full-colour (~150 kB). So does the map of
+# R: banded into eight colours, its continuous scale read as eight levels of R.
+FULL_COLOUR = {"curves_g_Omega_effective", "curves_original", "map_g_Omega"}
 
 COMMANDS = {
     # The README's first figure: configs/quickstart.yaml as a new user runs and plots it.
@@ -152,10 +153,12 @@ COMMANDS = {
         *[["continue", f"configs/curves_branch_original_{branch}.yaml", "-o",
            f"results/curves_branch_original_{branch}.h5", "--overwrite"] for branch in ("free", "p1", "p3", "p2")],
         # The free orbit's graze is bifurcation 1: the branch crosses it onto impacting orbits, whose
-        # own graze at a lower g (bifurcation 0) cannot be followed in two parameters.
+        # own graze at a lower g (bifurcation 0) cannot be followed in two parameters. The period-1
+        # fold (g = 23.51) is bifurcation 1 of its branch: a graze at g = 22.74 (an impact reaching
+        # zero speed, which no curve follows) is located before it.
         *[["continue", f"results/curves_branch_original_{branch}.h5", "--point", point, "--along", "Delta",
            "--to", "1.0", "3.0", "-o", f"results/curves_original_{branch}.h5", "--overwrite"]
-          for branch, point in (("free", "1"), ("p1", "0"), ("p3", "0"))],
+          for branch, point in (("free", "1"), ("p1", "1"), ("p3", "0"))],
         # The period doubling of the orbit of two periods wanders in g: its range is all of the map's.
         ["continue", "results/curves_branch_original_p2.h5", "--point", "0", "--along", "Delta", "--to", "1.0", "3.0",
          "--within", "0", "40", "-o", "results/curves_original_p2.h5", "--overwrite"],

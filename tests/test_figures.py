@@ -436,8 +436,7 @@ def _six_attractors(ds):
 def test_every_categorical_palette_stays_apart_in_greyscale():
     """tab10's orange and green (L* 67, 58) and blue and red (48, 47) printed as one grey: every
     palette of categories, with the greys and black and white drawn beside it, differs by 8 in L*
-    between any two colours; beyond the qualitative colours, the categories go dark to light,
-    clear of the greys (viridis sampled evenly put period 3 of eight on the grey of 'no period')."""
+    between any two colours; beyond six, the rarer categories are told apart in colour."""
     from vrsweep.plot.palettes import LIGHTNESS_STEP, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, categorical
     from vrsweep.plot.labels import RELIABLE_COLOURS
     from vrsweep.plot.sweeps import LEGEND_CURVES
@@ -445,10 +444,11 @@ def test_every_categorical_palette_stays_apart_in_greyscale():
     assert LIGHTNESS_STEP == 8.0
     for count in range(1, 7):
         assert _apart_in_grey(categorical(count) + [NO_VALUE_GREY, NOT_COMPUTED_GREY, "black", "white"]) >= 8.0, count
-    for count in (7, 9, 16):  # dark to light, and none a grey of 'no period' or 'not computed'
-        many = [_lightness(colour) for colour in categorical(count)]
-        assert np.all(np.diff(many) > 0), many
-        assert min(abs(light - _lightness(grey)) for light in many for grey in (NO_VALUE_GREY, NOT_COMPUTED_GREY)) >= 8
+    for count in (7, 12):  # the first six as before, the rest apart in colour
+        many = categorical(count)
+        assert many[:6] == categorical(6) and len({to_rgba(colour) for colour in many}) == count
+    many = [_lightness(colour) for colour in categorical(16)]  # beyond: dark to light
+    assert np.all(np.diff(many) > 0), many
     assert _apart_in_grey(list(STATUS_COLOURS.values())) >= 8.0
     assert _apart_in_grey(list(RELIABLE_COLOURS[:LEGEND_CURVES])) >= 8.0  # curves told apart by colour alone
 
@@ -462,6 +462,11 @@ def test_six_attractors_six_periods_and_every_status_are_apart_in_greyscale(file
     ds["period"].values[...] = np.resize([0, 1, 2, 3, 4, 5, 6], 12)[:, None]
     mesh = _mesh(plot.map_figure(ds, "period").axes[0])
     assert mesh.cmap.N == 7 and _apart_in_grey([mesh.cmap(k) for k in range(7)] + ["0.85"]) >= 8.0
+    # Eight periods: the six of most cells (here 1 to 6, periods 7 and 8 one cell each) apart in grey.
+    ds["period"].values[...] = np.resize([1, 2, 3, 4, 5, 6], 12)[:, None]
+    ds["period"].values[0, 0], ds["period"].values[0, 1] = 7, 8
+    mesh = _mesh(plot.map_figure(ds, "period").axes[0])
+    assert mesh.cmap.N == 8 and _apart_in_grey([mesh.cmap(k) for k in range(6)] + ["0.85"]) >= 8.0
     ds["status"].values[...] = np.resize([0, 1, 2, 3, 4, 5], 12)[:, None]
     for fig in (plot.status_figure(ds), plot.map_figure(ds, "status")):
         mesh = _mesh(fig.axes[0])

@@ -33,7 +33,7 @@ STATUS_COLOURS = {"not_computed": NOT_COMPUTED_GREY, "ok": "#009988", "max_steps
                   "diverged": "#CC3311", "chatter_limit": "#66CCEE", "step_too_small": "#004488",
                   "non_finite": "#000000"}
 
-SEQUENTIAL = "viridis"  # more categories than QUALITATIVE holds: in order, lighter and lighter
+SEQUENTIAL = "viridis"  # more categories than QUALITATIVE and EXTRA hold: in order, lighter and lighter
 
 
 def lightness(colour) -> float:
@@ -46,28 +46,23 @@ def lightness(colour) -> float:
     return 116.0 * np.cbrt(luminance) - 16.0 if luminance > 216.0 / 24389.0 else luminance * 24389.0 / 27.0
 
 
+# Beyond six categories no palette keeps them apart in grey: Paul Tol's muted colours, of hues
+# QUALITATIVE does not use, tell the rarer ones apart in colour (callers give QUALITATIVE to the
+# largest categories: a basin plot's labels run by basin size, an integer map orders by cells).
+EXTRA = ("#AA4499", "#999933", "#DDCC77", "#117733", "#882255", "#88CCEE")
+
+
 def categorical(count) -> list:
-    """``count`` colours for categories: QUALITATIVE's first ``count`` (apart in lightness), or,
-    for more categories than it holds, SEQUENTIAL from dark to light at even steps of lightness
-    that skip the greys drawn beside them (NO_VALUE_GREY, NOT_COMPUTED_GREY): viridis sampled
-    evenly put period 3 of eight at L* 37, one grey with 'no period' (38). No palette keeps more
-    than about six categories and two greys apart in grey; in order of lightness the first and
-    last of many can still be told, and the colour bar or legend names each."""
+    """``count`` colours for categories: QUALITATIVE's first ``count`` (apart in lightness), then
+    EXTRA's (apart in hue), then, for more than both hold, SEQUENTIAL from dark to light. A
+    sequential scale for seven or more (viridis) drew periods 1 and 3 of a map of eight periods
+    in two dark purples, and period 3 on the grey of 'no period'."""
     from matplotlib import colormaps
 
-    if count <= len(QUALITATIVE):
-        return list(QUALITATIVE[:count])
-    scale = colormaps[SEQUENTIAL]
-    positions = np.linspace(0.0, 1.0, 2001)
-    light = np.array([lightness(scale(position)) for position in positions])
-    greys = [lightness(grey) for grey in (NO_VALUE_GREY, NOT_COMPUTED_GREY)]
-    allowed = np.all([np.abs(light - grey) >= LIGHTNESS_STEP for grey in greys], axis=0)
-    # Lightness gained along the scale where it is allowed: equal steps of it for the categories.
-    gained = np.concatenate([[0.0], np.cumsum(np.where(allowed[1:] & allowed[:-1], np.diff(light), 0.0))])
-    chosen = np.searchsorted(gained, np.linspace(0.0, gained[-1], count))
-    chosen = np.minimum(chosen, len(positions) - 1)
-    chosen = np.array([index if allowed[index] else index + np.argmax(allowed[index:]) for index in chosen])
-    return [tuple(scale(positions[index])) for index in chosen]
+    named = QUALITATIVE + EXTRA
+    if count <= len(named):
+        return list(named[:count])
+    return [tuple(colour) for colour in colormaps[SEQUENTIAL](np.linspace(0.0, 1.0, count))]
 
 
 def contrasting(colour) -> str:

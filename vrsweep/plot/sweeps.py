@@ -500,8 +500,11 @@ def discrete_scale(name, values, attrs=None):
     # grey for all of them drew a map of motion as a single grey block.
     ordinary = [v for v in present if v not in special and (v not in flags or flags[v] not in FLAG_COLOURS)]
     # Apart in lightness from each other and from the greys of 'no period' and 'not computed' (tab10's
-    # were pairs of one grey on a greyscale page); beyond six values, in order from dark to light.
-    palette = categorical(len(ordinary))
+    # were pairs of one grey on a greyscale page), the six that are: to the values of most cells.
+    finite_values = finite[np.isfinite(finite)].astype(np.int64)
+    by_cells = sorted(ordinary, key=lambda value: (-int(np.count_nonzero(finite_values == value)), value))
+    palette = dict(zip(by_cells, categorical(len(ordinary))))
+    palette = [palette[value] for value in ordinary]
     colours, labels = [], []
     ordinary_colours = dict(zip(ordinary, palette))
     for value in present:
