@@ -12,7 +12,7 @@ import warnings
 import click
 
 from vrsweep import __version__
-from vrsweep.errors import VrsweepError
+from vrsweep.errors import VrsweepError, one_line
 from vrsweep.store.provenance import record_command_line
 
 
@@ -21,6 +21,17 @@ class _Group(click.Group):
         # history (CF) records the exact command line, as typed
         record_command_line(sys.argv[1:] if args is None else args)
         return super().main(args, *pos, **kwargs)
+
+    def parse_args(self, ctx, args):
+        # An option of vrsweep itself refused (`vrsweep --bogus`) is parsed here, before invoke's
+        # handler: click printed four lines, usage, hint, blank, error. One line, as a command's.
+        try:
+            return super().parse_args(ctx, args)
+        except click.exceptions.NoArgsIsHelpError:
+            raise  # `vrsweep` alone: the help, which is what was asked for
+        except click.UsageError as error:
+            click.echo(f"Error: {_one_line(error)}", err=True)
+            ctx.exit(2)
 
     def invoke(self, ctx):
         try:
@@ -39,13 +50,15 @@ class _Group(click.Group):
             click.echo(f"Error: {_one_line(error)}", err=True)
             ctx.exit(2)
         except VrsweepError as error:
+            # Each problem one line, whatever the names it quotes hold (one_line: a newline in a
+            # file name or a YAML key made a second line that read as vrsweep's own).
             problems = getattr(error, "problems", None)
             if problems and len(problems) > 1:
                 click.echo(f"Error: {len(problems)} problems:", err=True)
                 for problem in problems:
-                    click.echo(f"  {problem}", err=True)
+                    click.echo(f"  {one_line(problem)}", err=True)
             else:
-                click.echo(f"Error: {error}", err=True)
+                click.echo(f"Error: {one_line(error)}", err=True)
             ctx.exit(error.exit_code)
         except BrokenPipeError:  # `vrsweep info ... | head`: the reader has all it wants
             # Later writes (Python flushes stdout on exit) would fail too: send them nowhere.
@@ -55,7 +68,7 @@ class _Group(click.Group):
                 pass
             ctx.exit(141)  # 128 + SIGPIPE, what a shell reports for a writer killed by it
         except OSError as error:  # disk full, permission denied, ...: a message, not a traceback
-            click.echo(f"Error: {error.strerror or error}: {error.filename or ''}".rstrip(": "), err=True)
+            click.echo(one_line(f"Error: {error.strerror or error}: {error.filename or ''}".rstrip(": ")), err=True)
             ctx.exit(1)
         except MemoryError:  # a safety net: runs count what they hold first (estimate.memory_problem)
             click.echo("Error: out of memory: this command needs more than the process may have; ask for less "
@@ -72,7 +85,7 @@ class _Group(click.Group):
 
 def _one_line(error):
     """click's message for a refused option or argument, on one line, with the help to read."""
-    message = " ".join(error.format_message().split())
+    message = one_line(" ".join(error.format_message().split()))
     command = error.ctx.command_path if error.ctx is not None else "vrsweep"
     return f"{message.rstrip('.')} (see {command} --help)"
 

@@ -1,5 +1,38 @@
 """The project's own exceptions. The CLI turns each into one clear message and an exit code."""
 
+import unicodedata
+
+# What one line of a message may not hold raw: controls (a newline or a carriage return in a file
+# name or a YAML key began a second line, an escape sequence restyled the terminal), Unicode's
+# line and paragraph separators, the halves of a byte that is not UTF-8 (surrogateescape), and the
+# marks that reverse the direction of the text after them (a name shown backwards).
+_ESCAPED_CATEGORIES = {"Cc", "Zl", "Zp", "Cs"}
+_BIDI_CONTROLS = set("\u061c\u200e\u200f") | {chr(c) for c in range(0x202A, 0x202F)} | \
+    {chr(c) for c in range(0x2066, 0x206A)}
+_SHORT_ESCAPES = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def one_line(text) -> str:
+    """``text`` as one line of a terminal: every character that would break the line or change
+    how the rest reads written as its escape, as Python writes it (a newline as \\n, a byte that
+    is not UTF-8 as \\xNN, as a file's ``history`` writes it); the rest as it is (ω, Δ, é).
+
+    Messages quote what the user typed or named (paths, YAML keys, settings): a file named
+    "a<newline>b.h5" made an error two lines, the second looking like vrsweep's own."""
+    text = str(text)
+    out = []
+    for char in text:
+        if char in _SHORT_ESCAPES:
+            out.append(_SHORT_ESCAPES[char])
+        elif "\udc80" <= char <= "\udcff":  # a byte that is not UTF-8, as os.fsdecode holds it
+            out.append(f"\\x{ord(char) - 0xdc00:02x}")
+        elif char in _BIDI_CONTROLS or unicodedata.category(char) in _ESCAPED_CATEGORIES:
+            code = ord(char)
+            out.append(f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}")
+        else:
+            out.append(char)
+    return "".join(out)
+
 
 class VrsweepError(Exception):
     """Base class. ``exit_code`` is what the CLI exits with.

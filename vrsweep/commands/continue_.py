@@ -9,6 +9,7 @@ import click
 from vrsweep.commands.options import (
     OUTPUT_FLAGS, PathText, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
+from vrsweep.errors import one_line
 
 
 def _parse_at(values):
@@ -154,7 +155,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
         for value, reason in missed:
             click.echo(f"period doubling at {name} = {value:.8g}: no branch of twice its period found ({reason})",
                        err=True)
-        click.echo(f"-> {path}", err=True)
+        click.echo(f"-> {one_line(path)}", err=True)
 
 
 def _curves(path, overrides, output, start_path, point, along, to, within, overwrite, quiet):
@@ -219,7 +220,7 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
         for special in specials:
             click.echo(f"{special.kind} at {first} = {special.values[0]:.8g}, {second} = {special.values[1]:.8g} "
                        f"(curve {special.curve})", err=True)
-        click.echo(f"-> {path}", err=True)
+        click.echo(f"-> {one_line(path)}", err=True)
 
 
 # As issue 35 measured it: the first continue, with an empty cache, was silent for up to 3 minutes.
@@ -233,10 +234,10 @@ def _say_interrupted(signum, path, count, stopped, what, whole):
 
     name = signal.Signals(signum).name
     if stopped:
-        click.echo(f"Interrupted ({name}): the {count} {what} followed so far are in {path}, marked incomplete "
+        click.echo(f"Interrupted ({name}): the {count} {what} followed so far are in {one_line(path)}, marked incomplete "
                    f"(info and plot read it); run vrsweep continue again for the whole {whole}", err=True)
     else:
-        click.echo(f"Interrupted ({name}) as the continuation finished: {path} is complete", err=True)
+        click.echo(f"Interrupted ({name}) as the continuation finished: {one_line(path)} is complete", err=True)
     sys.exit(128 + signum)
 
 

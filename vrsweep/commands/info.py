@@ -22,7 +22,7 @@ import click
 import numpy as np
 
 from vrsweep.commands.options import PathText
-from vrsweep.errors import ResultFileError
+from vrsweep.errors import ResultFileError, one_line
 
 # The kind of a file of this format that is none of those this vrsweep writes (hand-made, or of a
 # later kind of output): described from its groups.
@@ -69,9 +69,10 @@ def _describe_figure(path, as_json):
     if as_json:
         click.echo(json.dumps({"file": os.fspath(path), "kind": "figure", **found}, indent=2))
     elif not (found["Title"] or found["Description"]):
-        click.echo(f"{path}: a figure without a vrsweep description in its metadata")
+        click.echo(f"{one_line(path)}: a figure without a vrsweep description in its metadata")
     else:
-        click.echo(f"{path}: figure\n{found['Description'] or found['Title']}")
+        description = (found["Description"] or found["Title"]).split("\n")
+        click.echo("\n".join([f"{one_line(path)}: figure"] + [one_line(line) for line in description]))
 
 
 # --------------------------------------------------------------------------------------------
@@ -596,7 +597,9 @@ def format_summary(summary, show_config=False) -> str:
         written += f" ({', '.join(others)})"
     lines.append(f"written:     {written}")
     for key, value in summary["attributes"].items():
-        lines.append(f"{key + ':':<12} {value}")
+        # a value of several lines (a merged file's history) is continued under its first
+        for index, piece in enumerate(str(value).split("\n")):
+            lines.append(f"{key + ':' if index == 0 else '':<12} {piece}")
     lines.append("variables:")
     name_width = max((len(v["name"]) for v in summary["variables"]), default=0)
     dims_width = max((len(_dims(v)) for v in summary["variables"]), default=0)
@@ -608,6 +611,9 @@ def format_summary(summary, show_config=False) -> str:
         if variable["derived"]:
             text += "  (derived)"
         lines.append(text)
+    # A file's name, its attributes and its variables' names are anyone's text: one line each,
+    # whatever they hold ("a<newline>b.h5" printed as two lines, the second passing for a field).
+    lines = [one_line(line) for line in lines]
     if show_config and summary["config"]:
         lines.append("config:")
         lines += [f"  {line}" for line in summary["config"].splitlines()]

@@ -13,6 +13,7 @@ from pathlib import Path
 import click
 
 from vrsweep.commands.options import PathText
+from vrsweep.errors import one_line
 
 DEFAULT_EXAMPLE = "quickstart"
 
@@ -68,7 +69,7 @@ def command(path, name, list_only, overwrite):
     # Written beside and renamed into place: a full disk leaves the old file or none, never a
     # 0-byte config that validate would then accept.
     write_bytes(target, text.encode("utf-8"), doing="write the config")
-    click.echo(f"-> {target} (example {name}); run it with: {_run_command(text, written)}", err=True)
+    click.echo(f"-> {one_line(target)} (example {name}); run it with: {_run_command(text, written)}", err=True)
     _make_output_folder(target)
 
 
@@ -150,5 +151,5 @@ def _make_output_folder(target):
     folder = output.parent
     if not output.is_absolute() and not folder.exists():
         folder.mkdir(parents=True)
-        click.echo(f"   created {folder}/ for its output {output} (relative to the directory you run it in)",
+        click.echo(f"   created {one_line(folder)}/ for its output {one_line(output)} (relative to the directory you run it in)",
                    err=True)

@@ -7,6 +7,7 @@ import sys
 import click
 
 from vrsweep.commands.options import PathText, OUTPUT_FLAGS, file_name_only, flag_wording, overwrite_option, quiet_option
+from vrsweep.errors import one_line
 
 
 @click.command("merge")
@@ -45,14 +46,14 @@ def command(shards, output, overwrite, allow_missing, quiet):
         name = str(interrupt) if getattr(interrupt, "signum", None) else "SIGINT"
         newline = "\n" if sys.stderr.isatty() else ""  # off the terminal's "^C"
         if _identity(output) not in (before, None):  # the signal came after the rename
-            click.echo(f"{newline}Interrupted ({name}) as the merge finished: {output} is complete", err=True)
+            click.echo(f"{newline}Interrupted ({name}) as the merge finished: {one_line(output)} is complete", err=True)
         else:
             state = "left as it was" if before is not None else "not written"
-            click.echo(f"{newline}Interrupted ({name}): merge stopped, {output} {state} (no partial file)",
+            click.echo(f"{newline}Interrupted ({name}): merge stopped, {one_line(output)} {state} (no partial file)",
                        err=True)
         sys.exit(128 + getattr(interrupt, "signum", signal.SIGINT))
     if not quiet:
-        click.echo(str(report), err=True)
+        click.echo("\n".join(one_line(line) for line in str(report).split("\n")), err=True)
 
 
 def _identity(path):

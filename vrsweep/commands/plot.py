@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from vrsweep.commands.options import PathText, WholeNumberRange, file_name_only
+from vrsweep.errors import one_line
 
 FORMATS = (".png", ".pdf", ".svg")
 # The library names its arguments (vrsweep.plot); messages at the command line name these flags.
@@ -154,12 +155,12 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
 
     if legend_note(figure):  # the other places, never the one it took
         places = "outside or best to draw it" if "left off" in legend_note(figure) else "outside or none to choose"
-        click.echo(f"Note: {path}: {legend_note(figure)} (--legend {places})", err=True)
+        click.echo(f"Note: {one_line(path)}: {legend_note(figure)} (--legend {places})", err=True)
     if layout_note(figure):
         # Only what was not already done: --no-title given is never advised again.
         advice = ("--no-title, " if title else "") + "a larger --size" + (", --legend none" if legend != "none" else "")
-        click.echo(f"Note: {path}: {layout_note(figure)} ({advice})", err=True)
-    click.echo(f"-> {path}", err=True)
+        click.echo(f"Note: {one_line(path)}: {layout_note(figure)} ({advice})", err=True)
+    click.echo(f"-> {one_line(path)}", err=True)
 
 
 def _output(paths, output, kind, overwrite):
@@ -201,21 +202,21 @@ def _figure(paths, kind, amplitude, at_items, x_axis, log, periods, var, options
         else:  # a sweep's Dataset
             shard, complete = loaded.attrs.get("shard"), bool(loaded.attrs.get("vrsweep_complete", 0))
         if shard:
-            click.echo(f"Note: {path_in} is shard {shard}: plotting its points only "
+            click.echo(f"Note: {one_line(path_in)} is shard {shard}: plotting its points only "
                        "(vrsweep merge joins the shards into the whole grid)", err=True)
         elif not complete and not isinstance(loaded, TrajectoryData) and \
                 loaded.attrs.get("vrsweep_file") in ("branch", "curves"):
-            click.echo(f"Warning: {path_in} is a continuation stopped by a signal: plotting what it had "
+            click.echo(f"Warning: {one_line(path_in)} is a continuation stopped by a signal: plotting what it had "
                        "followed (vrsweep continue again follows the whole of it)", err=True)
         elif not complete:
-            click.echo(f"Warning: {path_in} is unfinished: plotting the points done so far "
+            click.echo(f"Warning: {one_line(path_in)} is unfinished: plotting the points done so far "
                        "(finish it with vrsweep run CONFIG --resume)", err=True)
     window = plot.parse_periods(periods) if periods else None
     if window is not None and window[1] is not None:
         for path_in, loaded in zip(paths, data):
             n_periods = plot.slow_periods_in(loaded) if isinstance(loaded, TrajectoryData) else None
             if n_periods is not None and window[0] <= n_periods < window[1]:
-                click.echo(f"--periods {periods}: {path_in} has {n_periods} slow periods; showing "
+                click.echo(f"--periods {periods}: {one_line(path_in)} has {n_periods} slow periods; showing "
                            f"{window[0]}-{n_periods}", err=True)
     if kind is None and var is None and len(data) == 1 and not isinstance(data[0], TrajectoryData) \
             and "attractor" in data[0].data_vars:

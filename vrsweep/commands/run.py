@@ -10,6 +10,7 @@ from vrsweep.commands.options import (
     FiniteFloatRange, announce_fixed_axes, capped_threads, config_argument, device_option, flag_wording, output_option,
     overwrite_option, quiet_option, set_option, threads_option,
 )
+from vrsweep.errors import one_line
 
 PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
 
@@ -157,7 +158,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
         note = report.motion_note()
         if note:
             click.echo(note, err=True)
-        click.echo(report.summary_line(), err=True)
+        click.echo(one_line(report.summary_line()), err=True)
     for item in report.advice():  # even with --quiet: the file holds mostly failures
         example = f", e.g. --set {item.setting}" if item.setting else ""
         click.echo(f"Warning: {item.n} of {item.n_run} points ({item.n / item.n_run:.0%}) ended with "

@@ -7,6 +7,7 @@ import click
 from vrsweep.commands.options import (
     OUTPUT_FLAGS, WholeNumberRange, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
+from vrsweep.errors import one_line
 from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD, SAMPLES_PER_CYCLE
 
 
@@ -62,4 +63,4 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
             click.echo(f"{run.model}: {run.status.name.lower()}, {len(run.t)} samples, {len(run.impacts)} impacts "
                        f"({counts.sum() / max(1, len(counts)):.2f} per {per}), "
                        f"{len(run.sticks)} sticking intervals", err=True)
-        click.echo(f"-> {path}", err=True)
+        click.echo(f"-> {one_line(path)}", err=True)

@@ -11,7 +11,7 @@ import click
 
 from vrsweep.commands.options import announce_fixed_axes, config_argument, set_option, threads_option
 from vrsweep.config import INTEGRATION_DEFAULTS, load_config
-from vrsweep.errors import ConfigError
+from vrsweep.errors import ConfigError, one_line
 from vrsweep.execution.estimate import (beyond_int64_problem, compiles_first, estimate, format_bytes, format_duration,
                                         memory_problem, size_problem)
 from vrsweep.execution.threads import available_threads
@@ -37,7 +37,7 @@ def command(config_path, overrides, threads):
             raise ConfigError([problem], source=config.source_name)
     guess = estimate(config, threads)
 
-    click.echo(f"{config.source_name}: valid")
+    click.echo(f"{one_line(config.source_name)}: valid")
     click.echo(f"model:       {config.model}")
     if config.written:
         model = config.model
@@ -74,7 +74,7 @@ def command(config_path, overrides, threads):
                f"{'periods T' if config.written else 'slow periods'}{_other_settings(integration)}")
     if config.continuation is not None:
         click.echo(f"continuation: {_describe_continuation(config.continuation)}")
-    click.echo(f"output:      {config.output_path()}")
+    click.echo(f"output:      {one_line(config.output_path())}")
     duration = format_duration(guess.seconds)
     click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
                f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)"

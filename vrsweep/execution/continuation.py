@@ -21,7 +21,7 @@ def check_section(config):
     model's rule, commensurability, is plain Python: analysis/commensurate.py)."""
     section = config.continuation
     if section is None:
-        raise UsageError.naming("{source} has no continuation section: add one, e.g.\n"
+        raise UsageError.naming("{source} has no continuation section: add one, e.g. "
                                 "continuation: {{parameter: g, from: 23.0, to: [21.0, 27.0]}}",
                                 source=config.source_name)
     if not section.low <= section.start <= section.high:

@@ -39,7 +39,7 @@ from typing import Callable
 import h5py
 
 from vrsweep.config.wording import folder_ending
-from vrsweep.errors import OutputError, UsageError
+from vrsweep.errors import OutputError, UsageError, one_line
 
 # The HDF5 format every file vrsweep writes uses: v108 and later checksum object headers and index
 # chunks with version-2 B-trees that carry checksums (with the earliest format one flipped bit in a
@@ -53,8 +53,9 @@ except ImportError:  # pragma: no cover - Windows
 
 
 def notice(message: str) -> None:
-    """One line on stderr about something done on the user's behalf (not an error)."""
-    print(message, file=sys.stderr, flush=True)
+    """One line on stderr about something done on the user's behalf (not an error), whatever the
+    names in it hold."""
+    print(one_line(message), file=sys.stderr, flush=True)
 
 
 # --------------------------------------------------------------------------------------------

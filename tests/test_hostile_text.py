@@ -1,0 +1,86 @@
+"""Text from outside in one line: a file name, a YAML key or a setting holding a newline, a
+carriage return, a terminal escape or a byte that is not UTF-8 is shown escaped wherever vrsweep
+quotes it (errors, notices, `info`), so that one problem stays one line (docs/faults.md)."""
+
+import shutil
+
+import pytest
+
+from vrsweep.errors import one_line
+
+TINY = """
+model: effective
+integration: {transient_periods: 2, measure_periods: 16}
+"""
+
+
+@pytest.mark.parametrize("raw, shown", [
+    ("a\nb", "a\\nb"), ("a\rb", "a\\rb"), ("a\tb", "a\\tb"), ("\x1b[2J", "\\x1b[2J"), ("\x7f", "\\x7f"),
+    ("\x85", "\\x85"), ("a\u2028b", "a\\u2028b"), ("\u202eevil", "\\u202eevil"),
+    ("\udcff.h5", "\\xff.h5"),  # os.fsdecode of the byte 0xff: as a file's history writes it
+    ("ω Δ é ü ≤ ẋ", "ω Δ é ü ≤ ẋ"), ("plain: text (1, 2)", "plain: text (1, 2)"),
+])
+def test_one_line_escapes_what_breaks_a_line_and_keeps_the_rest(raw, shown):
+    assert one_line(raw) == shown
+    assert len(one_line(raw).splitlines()) == 1
+
+
+def _lines(result):
+    return result.output.splitlines()
+
+
+@pytest.mark.parametrize("args", [("info", "a\nb.h5"), ("plot", "a\nb.h5"), ("validate", "a\nb.yaml"),
+                                  ("run", "a\nb.yaml"), ("info", "a\rb.h5")])
+def test_a_missing_file_whose_name_breaks_the_line_is_one_line(tmp_path, monkeypatch, invoke, args):
+    # "Error: results file not found: a" and then "b.h5" on a line of its own
+    monkeypatch.chdir(tmp_path)
+    result = invoke(*args)
+    assert result.exit_code == 2
+    assert len(_lines(result)) == 1 and one_line(args[1]) in result.output, result.output
+
+
+def test_each_problem_of_a_config_is_one_line(tmp_path, write_config, invoke):
+    config = write_config(tmp_path, 'parameters: {"g\\nh": 5, "bad\\rkey": 1}\nintegration: {"x\\ty": 1}\n')
+    result = invoke("validate", config)
+    assert result.exit_code == 2
+    lines = _lines(result)
+    assert lines[0] == "Error: 3 problems:" and len(lines) == 4, result.output
+    assert "parameters.g\\nh" in lines[1] and "parameters.bad\\rkey" in lines[2] and "integration.x\\ty" in lines[3]
+
+
+def test_one_problem_with_a_newline_in_its_key_is_one_line(tmp_path, write_config, invoke):
+    result = invoke("validate", write_config(tmp_path, 'parameters: {"g\\nOmega": 5}\n'))
+    assert result.exit_code == 2 and len(_lines(result)) == 1 and "parameters.g\\nOmega: unknown key" in result.output
+
+
+def test_info_of_a_file_whose_name_breaks_the_line(tmp_path, sweep_file, invoke):
+    _, made = sweep_file(tmp_path, TINY)
+    odd = tmp_path / "a\nb\x1b[2J.h5"
+    shutil.copy(made, odd)
+    result = invoke("info", odd)
+    assert result.exit_code == 0
+    first = _lines(result)[0]
+    assert first.endswith("a\\nb\\x1b[2J.h5: vrsweep sweep, format 1, complete"), result.output
+    assert "\x1b" not in result.output and _lines(result)[1].startswith("points:")
+
+
+def test_the_result_line_and_notices_name_an_odd_output_in_one_line(tmp_path, write_config, invoke):
+    config = write_config(tmp_path, TINY)
+    output = tmp_path / "new\nfolder" / "o\r.h5"
+    result = invoke("run", config, "-o", output)
+    assert result.exit_code == 0 and output.exists()
+    created = [line for line in _lines(result) if line.startswith("Created the output folder")]
+    assert len(created) == 1 and created[0].endswith("new\\nfolder"), result.output
+    assert _lines(result)[-1].endswith("-> " + one_line(str(output))), result.output
+
+
+def test_a_click_refusal_of_vrsweeps_own_option_is_one_line(invoke):
+    # `vrsweep --bogus` printed click's four lines (usage, hint, blank, error), as commands did
+    result = invoke("--bogus")
+    assert result.exit_code == 2 and len(_lines(result)) == 1, result.output
+    assert result.output.startswith("Error: No such option '--bogus' (see ") and "--help)" in result.output
+
+
+def test_a_click_refusal_quoting_a_newline_is_one_line(invoke):
+    result = invoke("plot", "x.h5", "--kind", "a\nb")
+    assert result.exit_code == 2 and len(_lines(result)) == 1 and "'a\\nb'" in result.output, result.output
