@@ -84,3 +84,42 @@ def test_a_click_refusal_of_vrsweeps_own_option_is_one_line(invoke):
 def test_a_click_refusal_quoting_a_newline_is_one_line(invoke):
     result = invoke("plot", "x.h5", "--kind", "a\nb")
     assert result.exit_code == 2 and len(_lines(result)) == 1 and "'a\\nb'" in result.output, result.output
+
+
+LINE = """
+model: effective
+sweep:
+  g: [1.0, 2.0, 3.0]
+integration: {transient_periods: 2, measure_periods: 16}
+"""
+
+
+def test_a_figures_description_does_not_depend_on_where_the_canvas_broke_its_lines(tmp_path, sweep_file, invoke):
+    # A PDF's Subject made each of the caption's line breaks a "; ": "γ = 0.22; α = 0.1" at one
+    # size, "γ = 0.22,  α = 0.1" at another, and a long note broken mid-phrase ("the; barrier's").
+    from vrsweep.plot.labels import read_description
+
+    _, made = sweep_file(tmp_path, LINE)
+    found = {}
+    for size in ("3.5,3", "9,5"):
+        for suffix in (".pdf", ".png", ".svg"):
+            figure = tmp_path / f"f{size.replace(',', 'x')}{suffix}"
+            assert invoke("plot", made, "-o", figure, "--size", size).exit_code == 0
+            found[size, suffix] = read_description(figure)["Description"]
+    first, *others = found.values()
+    assert all(text.replace("\n", "; ") == first.replace("\n", "; ") for text in others), found
+    title, _, caption = found["3.5,3", ".png"].partition("\n")
+    assert title.startswith("Response gain R against g") and "\n" not in caption
+    assert "γ = 0.22, α = 0.1, c = 0.04, ω0 = 0.1, ω = 0.5, Δ = 1, e = 0.95, Ω = 4, x(0) = 0.99, ẋ(0) = 0.5" in caption
+    assert "the barrier's level" in caption
+
+
+def test_a_wrapped_caption_keeps_its_items_on_one_line():
+    from vrsweep.plot.labels import Wrapped, _wrap, caption_lines, plain_text
+
+    items = ["file.h5", "a long item of many words " * 4, "$\\gamma$ = 0.22", "x = 1"]
+    wrapped = _wrap(items, 30)
+    assert "\n" in wrapped and plain_text(wrapped) == ", ".join(items)
+    both = caption_lines(wrapped, Wrapped("curves:\nc.h5", "curves: c.h5"))
+    assert plain_text(both) == ", ".join(items) + "\ncurves: c.h5" and str(both).count("\n") > 2
+    assert plain_text("a note\nof its own") == "a note\nof its own"

@@ -24,7 +24,7 @@ from matplotlib.lines import Line2D
 
 from vrsweep.errors import UsageError
 from vrsweep.plot.palettes import cased
-from vrsweep.plot.labels import _legend_columns, _parse_config, _title, _width, figure_options
+from vrsweep.plot.labels import Wrapped, _legend_columns, _parse_config, _title, _width, caption_lines, figure_options
 from vrsweep.plot.selection import _limits, _map_axes, _Sweep
 
 FILE_KIND = "curves"
@@ -125,7 +125,8 @@ def curves_figure(ds, curve_files, name="R", x_axis=None, log=False, vmin=None, 
     head, grey, tail = what.partition(" (light grey")  # the map's note on grey cells stays last
     if curve_files:
         what = f"{head} with bifurcation curves{grey}{tail}"
-        caption = f"{caption}\n{_wrapped(['curves:'] + files + ([f'({counts})'] if counts else []), _width(fig))}"
+        caption = caption_lines(caption, _wrapped(['curves:'] + files + ([f'({counts})'] if counts else []),
+                                                  _width(fig)))
     elif handles:
         what = f"{head} with the corrected theory's fold and Hopf curves{grey}{tail}"
     _title(fig, what, caption)
@@ -133,7 +134,8 @@ def curves_figure(ds, curve_files, name="R", x_axis=None, log=False, vmin=None, 
 
 
 def _wrapped(words, width):
-    """Words joined by spaces, a new line before one that would pass ``width`` characters."""
+    """Words joined by spaces, a new line before one that would pass ``width`` characters (a
+    :class:`Wrapped`: unbroken in the figure's metadata)."""
     lines, line = [], ""
     for word in words:
         if line and len(line) + 1 + len(word) > width:
@@ -141,7 +143,7 @@ def _wrapped(words, width):
             line = word
         else:
             line = f"{line} {word}" if line else word
-    return "\n".join(lines + [line])
+    return Wrapped("\n".join(lines + [line]), " ".join(words))
 
 
 def _check_same_system(view, curves):

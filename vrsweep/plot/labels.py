@@ -188,9 +188,31 @@ def written_equation(model) -> str:
     return f"{model.title}: {latex}"
 
 
+class Wrapped(str):
+    """A caption as drawn, broken into lines to fit the canvas, that keeps its text unbroken
+    (``plain``) for the figure's metadata: where the canvas broke a line says nothing about the
+    text, and a PDF's Subject made each break a "; " (γ = 0.22; α = 0.1, "the; barrier's")."""
+
+    def __new__(cls, shown, plain):
+        text = super().__new__(cls, shown)
+        text.plain = plain
+        return text
+
+
+def plain_text(caption) -> str:
+    """``caption`` without the line breaks the canvas put in (a :class:`Wrapped`'s ``plain``);
+    a caption's own separate lines (a note of its own) are kept."""
+    return getattr(caption, "plain", caption)
+
+
+def caption_lines(*captions) -> Wrapped:
+    """Captions drawn one below the other; unbroken, each its own line."""
+    return Wrapped("\n".join(captions), "\n".join(plain_text(caption) for caption in captions))
+
+
 def _wrap(items, width):
     """Items joined by commas into lines of at most ``width`` visible characters (never broken
-    inside an item)."""
+    inside an item), as a :class:`Wrapped`: its ``plain`` text is the items on one line."""
     def visible(text):
         return len(text.replace("$", "").replace("\\", ""))  # mathtext markup takes no room
 
@@ -209,7 +231,7 @@ def _wrap(items, width):
                 lines.append(item[:cut].rstrip())
                 item = item[cut:].lstrip()
         line = f"{line},  {item}" if line else item
-    return "\n".join(lines + [line])
+    return Wrapped("\n".join(lines + [line]), ", ".join(items))
 
 
 def _break_at(text, width, visible):
@@ -514,7 +536,7 @@ def _drop_titles(fig):
 def description(fig) -> str:
     """The figure's full title and caption as plain text (mathtext's $ and \\ dropped)."""
     what, caption = getattr(fig, "_vrsweep_description", ("", ""))
-    text = f"{what}\n{caption}".strip()
+    text = f"{what}\n{plain_text(caption)}".strip()
     for equation, plain in _PLAIN_EQUATIONS.items():  # a written model's, as its config wrote it
         text = text.replace(equation, plain)
     for markup, plain in MATHTEXT_PLAIN.items():
