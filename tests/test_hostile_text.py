@@ -123,3 +123,63 @@ def test_a_wrapped_caption_keeps_its_items_on_one_line():
     both = caption_lines(wrapped, Wrapped("curves:\nc.h5", "curves: c.h5"))
     assert plain_text(both) == ", ".join(items) + "\ncurves: c.h5" and str(both).count("\n") > 2
     assert plain_text("a note\nof its own") == "a note\nof its own"
+
+
+ODD_VALUES = {"a number": 3, "an array": [1, 2], "bytes not UTF-8": b"\xff\xfe"}
+# Root attributes info reads for itself: as a number (R_solver_err_rtol) and as text (a version);
+# the rest it lists through the same conversion (info._json_ready).
+READ_BY_INFO = ("numba_version", "R_solver_err_rtol")
+
+
+def test_info_describes_a_file_whose_attributes_another_tool_wrote(tmp_path, sweep_file, invoke):
+    # A file without a checksum (an earlier vrsweep's, or h5py's by hand) is read as it is, with one
+    # note: numba_version written as a number failed json.dumps (info --json), R_solver_err_rtol
+    # as '' or an array failed float() (info), each a traceback.
+    import json
+
+    import h5py
+    import numpy as np
+
+    _, made = sweep_file(tmp_path, LINE)
+    for odd, value in ODD_VALUES.items():
+        value = np.bytes_(value) if isinstance(value, bytes) else np.array(value) if isinstance(value, list) else value
+        for name in READ_BY_INFO:
+            odd_file = tmp_path / f"{name}.h5"
+            shutil.copy(made, odd_file)
+            with h5py.File(odd_file, "r+") as f:
+                del f.attrs["vrsweep_attributes_sha256"]
+                f.attrs[name] = value
+            text, as_json = invoke("info", odd_file), invoke("info", odd_file, "--json")
+            assert text.exit_code in (0, 2) and as_json.exit_code == text.exit_code, (name, odd, text.output)
+            if text.exit_code == 2:  # refused: one line, naming the file
+                assert len(text.output.strip().splitlines()) == 1 and odd_file.name in text.output, (name, text.output)
+            else:
+                json.loads(as_json.output[as_json.output.index("{"):])
+
+
+@pytest.mark.parametrize("group, name, value, words", [
+    ("/", "title", b"\xff\xfe", "attribute title must be text"),  # open_results: UnicodeDecodeError
+    ("/", "numba_version", 5, "attribute numba_version must be text"),
+    ("effective", "model", [1, 2], "attribute /effective.model must be text"),  # plot: unhashable type
+    ("effective", "model", "original", "/effective is the run of another model ('original')"),
+])
+def test_a_trajectory_file_with_attributes_of_another_kind_is_refused_by_every_reader(
+        tmp_path, write_config, invoke, group, name, value, words):
+    # As a branch file's text attributes are checked where it is opened (branch_file._texts_are_text).
+    import h5py
+    import numpy as np
+
+    import vrsweep
+    from vrsweep.errors import ResultFileError
+
+    trajectory = tmp_path / "traj.h5"
+    config = write_config(tmp_path, TINY)
+    assert invoke("simulate", config, "-o", trajectory, "-q").exit_code == 0
+    with h5py.File(trajectory, "r+") as f:
+        del f.attrs["vrsweep_attributes_sha256"]  # as an earlier vrsweep's file, or one made by hand
+        f[group].attrs[name] = np.bytes_(value) if isinstance(value, bytes) else value
+    for args in (("info", trajectory), ("info", trajectory, "--json"), ("plot", trajectory, "-o", tmp_path / "t.png")):
+        result = invoke(*args)
+        assert result.exit_code == 2 and result.output.strip().splitlines()[-1] == f"Error: {trajectory} is corrupt: {words}"
+    with pytest.raises(ResultFileError, match="is corrupt: " + words.replace("(", r"\(").replace(")", r"\)")):
+        vrsweep.open_results(trajectory)

@@ -82,6 +82,10 @@ def _describe_figure(path, as_json):
 
 def describe(path) -> dict:
     """The summary of a vrsweep file as a JSON-ready dict; ResultFileError for a bad file."""
+    return _json_ready(_describe(path))
+
+
+def _describe(path) -> dict:
     from vrsweep.store.reading import file_kind, load_results
 
     try:
@@ -120,6 +124,17 @@ def describe(path) -> dict:
     # Every variable is read, not only what the summary shows: each chunk's checksum is checked,
     # so a damaged file is reported as such instead of described (tests/test_errors.py).
     return _describe_sweep(path, load_results(path))
+
+
+def _json_ready(value):
+    """The summary with every value one json.dumps writes (and the text shows): attributes are the
+    file's, of whatever type its writer chose (a numba_version written as a number failed
+    json.dumps: a traceback from info --json)."""
+    if isinstance(value, dict):
+        return {str(key): _json_ready(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(item) for item in value]
+    return _plain(value)
 
 
 def _describe_branches(parameter, values) -> dict:
@@ -256,7 +271,9 @@ def _format_branches(branches) -> list[str]:
 def _describe_sweep(path, ds) -> dict:
     from vrsweep.store.reading import grid_axes, point_variables, stored_variables
 
-    attrs = {key: value for key, value in ds.attrs.items() if key != "vrsweep_file"}  # open_results' own
+    # Plain values, whatever their HDF5 type: a file of an earlier vrsweep (no checksum) or of
+    # another tool may hold a version as a number or a rtol as an array, as _describe_groups reads them.
+    attrs = {key: _plain(value) for key, value in ds.attrs.items() if key != "vrsweep_file"}  # open_results' own
     done = np.asarray(ds["done"].values, dtype=bool)
     owned = np.asarray(ds["owned"].values, dtype=bool) if "owned" in ds else np.ones(done.shape, dtype=bool)
     n_total = int(owned.sum())
@@ -495,8 +512,13 @@ def _integration(config) -> dict:
 
 
 def _number(value):
-    value = float(value)
-    return value if math.isfinite(value) else None  # JSON has no NaN
+    """A finite float, or None: JSON has no NaN, and an attribute another tool wrote may be no
+    number at all (a rtol of '' or [1, 2] was a traceback in info)."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return value if math.isfinite(value) else None
 
 
 def _plain(value):
@@ -582,7 +604,8 @@ def format_summary(summary, show_config=False) -> str:
                          "rerun; R_err says how far R is from converged)")
         else:
             lines.append(f"solver:      R's error from the integration about {solver['relative']:.1e} relative "
-                         f"({solver['points']} converged points rerun at rtol {solver['rtol']:.0e}); "
+                         f"({solver['points']} converged points rerun at rtol "
+                         f"{'?' if solver['rtol'] is None else format(solver['rtol'], '.0e')}); "
                          "add it to R_err for R's error bar")
     lines += _format_attractors(summary.get("attractors") or [])
     lines += _format_branches(summary.get("branches"))

@@ -339,6 +339,18 @@ def _corrupt(path, what):
 
 
 def _check_root(f, path):
+    from vrsweep.store.branch_file import TEXT_ATTRS, _texts_are_text
+
+    # As a branch file's: every attribute stored as text is UTF-8, and those vrsweep writes as text
+    # are text (a title of bytes that are not UTF-8 was a UnicodeDecodeError from open_results).
+    _texts_are_text(f, path, "attribute ", tuple(name for name in TEXT_ATTRS if name in f.attrs))
+    for name in RUN_GROUPS:
+        if name in f:
+            _texts_are_text(f[name], path, f"attribute /{name}.", ("model",) if "model" in f[name].attrs else ())
+            # a run's model names its group: the figure's rows are titled by it (an array there was
+            # an "unhashable type" traceback from plot)
+            if _text(f[name].attrs.get("model", name)) != name:
+                raise _corrupt(path, f"/{name} is the run of another model ({_text(f[name].attrs['model'])!r})")
     for name in ("config", "model"):
         if name in f.attrs and not isinstance(_text(f.attrs[name]), str):
             raise _corrupt(path, f"attribute {name} must be text, got {_text(f.attrs[name])!r}")
