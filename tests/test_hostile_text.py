@@ -2,6 +2,7 @@
 carriage return, a terminal escape or a byte that is not UTF-8 is shown escaped wherever vrsweep
 quotes it (errors, notices, `info`), so that one problem stays one line (docs/faults.md)."""
 
+import os
 import shutil
 
 import pytest
@@ -183,3 +184,30 @@ def test_a_trajectory_file_with_attributes_of_another_kind_is_refused_by_every_r
         assert result.exit_code == 2 and result.output.strip().splitlines()[-1] == f"Error: {trajectory} is corrupt: {words}"
     with pytest.raises(ResultFileError, match="is corrupt: " + words.replace("(", r"\(").replace(")", r"\)")):
         vrsweep.open_results(trajectory)
+
+
+@pytest.mark.parametrize("command", ["run", "simulate", "init"])
+def test_a_link_into_a_missing_folder_is_refused_and_no_folder_is_made(tmp_path, monkeypatch, write_config, invoke,
+                                                                        command):
+    # A stale link (a purged scratch folder, a network mount not mounted): the folder was created
+    # and the results written on whatever disk held the mount point.
+    monkeypatch.chdir(tmp_path)
+    config = write_config(tmp_path, TINY)
+    gone = tmp_path / "mount" / "gone"
+    link = tmp_path / ("out.yaml" if command == "init" else "out.h5")
+    link.symlink_to(gone / link.name)
+    args = {"run": ("run", config, "-o", link), "simulate": ("simulate", config, "-o", link),
+            "init": ("init", link)}[command]
+    result = invoke(*args)
+    assert result.exit_code == 2 and len(result.output.strip().splitlines()) == 1, result.output
+    assert f"the link's folder {gone} does not exist" in result.output
+    assert not (tmp_path / "mount").exists() and os.path.islink(link)
+
+
+def test_a_link_into_an_existing_folder_is_still_followed(tmp_path, write_config, invoke):
+    config = write_config(tmp_path, TINY)
+    (tmp_path / "there").mkdir()
+    link = tmp_path / "out.h5"
+    link.symlink_to(tmp_path / "there" / "x.h5")
+    assert invoke("run", config, "-o", link, "-q").exit_code == 0
+    assert (tmp_path / "there" / "x.h5").is_file() and os.path.islink(link)

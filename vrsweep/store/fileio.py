@@ -444,7 +444,7 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
 
     - A symbolic link is followed, always and only once here: the file written, replaced or
       resumed is the link's target, and the link stays a link (a dangling link: its target is
-      created). Callers write at the returned path, so every later step sees the same file.
+      created where its folder exists; a link into a missing folder is refused). Callers write at the returned path, so every later step sees the same file.
     - Only a regular file is ever replaced. A folder, a device, a pipe or a socket at the path is
       refused, with or without ``overwrite``.
     - An existing regular file is replaced only with ``overwrite`` (else ``exists_error()`` is
@@ -460,6 +460,12 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
     given = os.fspath(path)
     target = os.path.realpath(given) if os.path.islink(given) else given
     shown = given if target == given else f"{given} (a link to {target})"
+    if target != given and not os.path.isdir(os.path.dirname(target)):
+        # A link into a folder that is gone is a stale link (a purged scratch folder, a network
+        # mount not mounted): creating the folder, as for a folder named in the path itself, put
+        # the results on whatever disk holds the mount point, hidden once the mount is back.
+        raise UsageError(f"output {shown}: the link's folder {os.path.dirname(target)} does not exist: create it, "
+                         "or point the link elsewhere (vrsweep creates only a folder the output path itself names)")
     if os.pardir in target.split(os.sep)[:-1]:
         # "x/../y.h5": the checks below and the temporary file beside it read the folder
         # lexically (abspath: "./y.h5"), and the system, which opens x first, refused the write
