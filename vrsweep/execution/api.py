@@ -29,7 +29,7 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from vrsweep.errors import FlagTypeError, PathTypeError, UsageError, VrsweepError
+from vrsweep.errors import ConfigError, FlagTypeError, PathTypeError, UsageError, VrsweepError
 
 __all__ = ["sweep", "simulate", "theory", "resolve_config", "setting_text"]
 
@@ -119,7 +119,17 @@ def resolve_config(config, overrides=None, *, keywords=()):
     words = {text: f"keyword argument {name}={value!r}{_near_keyword(name, keywords)}"
              for text, (name, value) in zip(settings, overrides.items())}
     if isinstance(config, Config):
-        return with_overrides(config, settings, override_words=words) if settings else config
+        # Validated again, settings or none: a Config is a dataclass, and one changed with
+        # dataclasses.replace (e = 1.5, rtol = 5, g = "abc") ran as given, outside the model's domain
+        # and the tolerances' bounds, or ended in a traceback.
+        try:
+            return with_overrides(config, settings, override_words=words)
+        except ConfigError:
+            raise
+        except Exception as error:  # noqa: BLE001 - a field of a type no config holds: its YAML cannot be written
+            raise ConfigError([f"{config.source_name}: this Config cannot be read back as a config "
+                               f"({type(error).__name__}: {error}); make it with vrsweep.config.load_config or "
+                               "parse_config, and change it with keyword settings"], source=config.source_name) from None
     if isinstance(config, os.PathLike):
         return load_config(os.fspath(config), settings, override_words=words)
     if isinstance(config, str):
