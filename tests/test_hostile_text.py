@@ -127,9 +127,10 @@ def test_a_wrapped_caption_keeps_its_items_on_one_line():
 
 
 ODD_VALUES = {"a number": 3, "an array": [1, 2], "bytes not UTF-8": b"\xff\xfe"}
-# Root attributes info reads for itself: as a number (R_solver_err_rtol) and as text (a version);
-# the rest it lists through the same conversion (info._json_ready).
-READ_BY_INFO = ("numba_version", "R_solver_err_rtol")
+# Attributes info reads for itself: as a number (R_solver_err_rtol), as text (a version), as
+# codes (status's flag_values: text there failed int()); the rest it lists through the same
+# conversion (info._json_ready).
+READ_BY_INFO = (("/", "numba_version"), ("/", "R_solver_err_rtol"), ("status", "flag_values"))
 
 
 def test_info_describes_a_file_whose_attributes_another_tool_wrote(tmp_path, sweep_file, invoke):
@@ -144,12 +145,12 @@ def test_info_describes_a_file_whose_attributes_another_tool_wrote(tmp_path, swe
     _, made = sweep_file(tmp_path, LINE)
     for odd, value in ODD_VALUES.items():
         value = np.bytes_(value) if isinstance(value, bytes) else np.array(value) if isinstance(value, list) else value
-        for name in READ_BY_INFO:
+        for owner, name in READ_BY_INFO:
             odd_file = tmp_path / f"{name}.h5"
             shutil.copy(made, odd_file)
             with h5py.File(odd_file, "r+") as f:
                 del f.attrs["vrsweep_attributes_sha256"]
-                f.attrs[name] = value
+                f[owner].attrs[name] = value
             text, as_json = invoke("info", odd_file), invoke("info", odd_file, "--json")
             assert text.exit_code in (0, 2) and as_json.exit_code == text.exit_code, (name, odd, text.output)
             if text.exit_code == 2:  # refused: one line, naming the file

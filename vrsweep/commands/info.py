@@ -341,10 +341,7 @@ def _status_counts(ds, owned) -> list[dict]:
     from vrsweep.results import MESSAGES, Status
 
     status = np.asarray(ds["status"].values)[owned]
-    status_attrs = ds["status"].attrs
-    flag_values = [int(v) for v in np.atleast_1d(status_attrs.get("flag_values", []))]
-    flag_meanings = str(status_attrs.get("flag_meanings", "")).split()
-    names = dict(zip(flag_values, flag_meanings))
+    names = _flag_names(ds["status"].attrs)
     counts = []
     for code, n in zip(*np.unique(status, return_counts=True)):
         code = int(code)
@@ -357,6 +354,17 @@ def _status_counts(ds, owned) -> list[dict]:
     return counts
 
 
+def _flag_names(attrs) -> dict:
+    """{code: name} of a CF flag variable, from its own flag_values and flag_meanings; {} where they
+    are not whole numbers and words (a file another tool wrote: the codes are then 'unknown code
+    N', where flag_values of text was a traceback)."""
+    try:
+        values = [int(value) for value in np.atleast_1d(attrs.get("flag_values", []))]
+    except (TypeError, ValueError, OverflowError):
+        return {}
+    return dict(zip(values, str(_plain(attrs.get("flag_meanings", ""))).split()))
+
+
 def _motion_counts(ds, owned) -> dict:
     """Points per kind of motion (0.6.0 on) over the computed points this file owns, by the
     file's own flag_meanings; {} for files without ``motion``."""
@@ -366,9 +374,7 @@ def _motion_counts(ds, owned) -> dict:
 
     computed = np.asarray(ds["status"].values)[owned] != Status.NOT_COMPUTED
     motion = np.asarray(ds["motion"].values)[owned][computed]
-    attrs = ds["motion"].attrs
-    names = dict(zip((int(v) for v in np.atleast_1d(attrs.get("flag_values", []))),
-                     str(attrs.get("flag_meanings", "")).split()))
+    names = _flag_names(ds["motion"].attrs)
     return {names.get(int(code), f"unknown code {int(code)}"): int(n)
             for code, n in zip(*np.unique(motion, return_counts=True))}
 
