@@ -175,11 +175,12 @@ def test_a_checkpoint_of_a_version_whose_points_differ_refuses_naming_it(tmp_pat
     assert out.read_bytes() == before
 
 
-@pytest.mark.parametrize("written_by", ["0.7.0", "0.7.1"])
+@pytest.mark.parametrize("written_by", ["0.7.0", "0.7.1", "0.7.2"])
 def test_a_checkpoint_of_070_refuses_naming_what_changed(tmp_path, written_by):
-    """0.7.1 reads a periodic point's R over whole cycles of the response frequency too, and 0.7.2
-    takes R_err from the spread of |Q| (its last digits): a checkpoint of either is not this
-    version's, so it is not continued; the message names the latest change."""
+    """0.7.1 reads a periodic point's R over whole cycles of the response frequency too, 0.7.2
+    takes R_err from the spread of |Q| (its last digits), and 0.7.3 sticks a rebound whose flight
+    is below rounding: a checkpoint of any is not this version's, so it is not continued; the
+    message names the latest change."""
     from vrsweep.execution.job import run_job
 
     config = the_config()
@@ -188,6 +189,6 @@ def test_a_checkpoint_of_070_refuses_naming_what_changed(tmp_path, written_by):
     with h5py.File(out, "r+") as f:
         f.attrs["vrsweep_version"] = written_by
     before = out.read_bytes()
-    with pytest.raises(ResultFileError, match=f"written by vrsweep {written_by}.*spread of .Q. divided by c once.*since 0.7.2"):
+    with pytest.raises(ResultFileError, match=f"written by vrsweep {written_by}.*16 ulps of the stop's position sticks.*since 0.7.3"):
         run_job(config, out, threads=1, resume=True)
     assert out.read_bytes() == before

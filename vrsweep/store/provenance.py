@@ -119,6 +119,8 @@ RESULT_EPOCHS = (
               "the lyapunov of an orbit with complex multipliers is log|mu|/(pT) from its log areas"),
     ("0.7.2", "R_err is the spread of |Q| divided by c once (its last digits), and a written model's stuck mass "
               "is released on a scan of its fastest force"),
+    ("0.7.3", "a rebound whose flight rises less than 16 ulps of the stop's position sticks, and a written model's "
+              "force counts the frequencies of its products and powers"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -132,7 +134,11 @@ a periodic orbit whose multipliers are a complex pair as log|mu|/(pT) from its e
 (the paper's models too); 0.7.2 takes R_err from the spread of |Q| and divides by |c| once (R's
 own squared deviations overflowed at c = 1e-300; every R_err may differ in its last digits, 2.6e-15
 at most on a 400-point map), and releases a written model's stuck mass on a scan of 1/64 of its
-fastest force's period (max_step/8 stepped over short pulls). Versions of one epoch
+fastest force's period (max_step/8 stepped over short pulls); 0.7.3 sticks a rebound whose flight
+v^2/2a rises less than 16 ulps of max(1, |position|) (kernel.STICK_HEIGHT: a stiff chatter's tail
+was decided by rounding, 178 against 181-186 impacts a period for one orbit), in every model, and
+finds a written force's frequencies in its products and powers (cos(omega t)**9 holds 9 omega: the
+release scan and the forcing's period q follow). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
