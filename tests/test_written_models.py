@@ -238,6 +238,13 @@ def test_an_acceleration_undefined_everywhere_is_refused(acceleration):
                               "tried"), problem
 
 
+def test_an_acceleration_undefined_at_every_point_of_a_sweep_is_refused_and_at_some_is_not():
+    text = MODEL.replace("-2*zeta*v - x + F*cos(omega*t)", "-x + sqrt(-c**2)").replace("{zeta: 0.05,", "{c: 1.0, zeta: 0.05,")
+    (problem,) = problems(text + "sweep: {c: [1.0, 2.0, 3.0]}\n")
+    assert "at each of 3 grid points tried, e.g. c = 1.0" in problem, problem
+    parse_config(text + "sweep: {c: [3.0, 2.0, 0.0]}\n", "m.yaml")  # c = 0: sqrt(-0) = 0, a motion
+
+
 def test_an_acceleration_singular_at_some_states_is_a_status_not_a_refusal():
     """1/x is infinite at x = 0 only: a start there is that point's non_finite (a numerical
     failure is a status on its grid point), and the config is valid."""
@@ -778,10 +785,13 @@ def test_large_exact_numbers_and_imaginary_parts_compile_as_doubles(tmp_path):
     assert int(result["status"]) == Status.OK
     assert float(result["R"]) == pytest.approx(1 / math.hypot(1 - w * w, 2 * zeta * w), rel=1e-7)
 
-    (tmp_path / "i.yaml").write_text(MODEL.replace("F*cos(omega*t)", "F*cos(omega*t) + sqrt(-F**2)") + settings)
+    # sqrt(-c**2) is I*|c| to sympy, NaN in the kernel at every c; numpy's sqrt(-0) = 0 at c = 0
+    # lets the config through (an acceleration NaN at every point is refused when it is read)
+    imaginary = MODEL.replace("F*cos(omega*t)", "F*cos(omega*t) + sqrt(-c**2)").replace("{zeta: 0.05,", "{c: 0.0, zeta: 0.05,")
+    (tmp_path / "i.yaml").write_text(imaginary + settings + "sweep: {c: [0.0, 1.0]}\n")
     with pytest.warns(RuntimeWarning, match="non_finite"):
         result = vrsweep.sweep(str(tmp_path / "i.yaml"), output=str(tmp_path / "i.h5"))
-    assert int(result["status"]) == Status.NON_FINITE
+    assert [Status(int(s)) for s in result["status"].values] == [Status.NON_FINITE, Status.NON_FINITE]
 
 
 def test_a_written_models_trajectory_file_names_its_own_barrier_and_period(tmp_path):

@@ -337,23 +337,34 @@ def _follows_the_period(model: WrittenModel) -> bool:
 _TRIED_X = (-2.713, -0.917, -0.131, 0.277, 0.853, 1.619, 3.141)
 _TRIED_V = (-1.733, -0.293, 0.0, 0.419, 2.237)
 _TRIED_PHASES = (0.0, 0.318, 0.707)
+_TRIED_POINTS = 64
 
 
 def _undefined_everywhere(report, model: WrittenModel, values, period) -> bool:
     """Report an acceleration that is NaN or infinite at every state tried (1/(x - x), sqrt(-1 -
-    x**2)) at the first grid point: every point would end non_finite, after the kernel's compile.
-    One singular state (1/x at a start on x = 0) stays a status on its grid point."""
-    point = {name: float(np.asarray(values[name], dtype=np.float64).reshape(-1)[0]) for name in model.parameter_names}
-    first_period = float(np.asarray(period, dtype=np.float64).reshape(-1)[0])
+    x**2)) at every grid point tried (up to _TRIED_POINTS, spread over the grid): every point would
+    end non_finite, after the kernel's compile. One singular state (1/x at a start on x = 0), or one
+    grid point (sqrt(-c**2) at c = 1 of c in [0, 1]), stays a status on its grid point."""
+    shape = np.broadcast_shapes(*(np.shape(values[name]) for name in model.parameter_names), np.shape(period))
+    n_points = math.prod(shape)
+    rows = np.unique(np.linspace(0, n_points - 1, min(n_points, _TRIED_POINTS)).astype(np.int64))
+    column = (slice(None), None, None, None)  # points along the first axis, states along the others
+
+    def tried(array):
+        return np.broadcast_to(np.asarray(array, dtype=np.float64), shape).reshape(-1)[rows][column]
+
+    point = {name: tried(values[name]) for name in model.parameter_names}
     x, v, phase = np.meshgrid(_TRIED_X, _TRIED_V, _TRIED_PHASES, indexing="ij")
     tree = expressions.parse(model.acceleration, model.parameter_names + expressions.STATE_NAMES)
-    acceleration = expressions.evaluate(tree, {**point, "x": x, "v": v, "t": phase * first_period})
+    acceleration = expressions.evaluate(tree, {**point, "x": x, "v": v, "t": phase * tried(period)})
     if np.isfinite(acceleration).any():
         return False
-    where = ", ".join(f"{name} = {show(value)}" for name, value in point.items())
-    report(("model", "acceleration"), f"is NaN or infinite at every one of the {acceleration.size} states tried "
+    first = {name: float(array.reshape(-1)[0]) for name, array in point.items()}
+    where = ", ".join(f"{name} = {show(value)}" for name, value in first.items())
+    points = f"at each of {len(rows)} grid points tried, e.g." if len(rows) > 1 else "at"
+    report(("model", "acceleration"), f"is NaN or infinite at every one of the {x.size} states tried "
                                       f"(x in [{_TRIED_X[0]}, {_TRIED_X[-1]}], v in [{_TRIED_V[0]}, {_TRIED_V[-1]}], "
-                                      f"t over a period, at {where}): every point would end non_finite")
+                                      f"t over a period, {points} {where}): every point would end non_finite")
     return True
 
 
