@@ -3,6 +3,7 @@ comparing result files bit for bit. Each is a session fixture that hands out a p
 (``def test_x(invoke): invoke("run", ...)``), so module-scoped fixtures can use them too."""
 
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -22,6 +23,19 @@ from vrsweep.cli import main
 settings.register_profile("repeatable", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("VRSWEEP_HYPOTHESIS", "repeatable"))
+
+
+@pytest.fixture(autouse=True)
+def _signal_handlers_as_found():
+    """Each test leaves this process's SIGINT and SIGTERM handling as it found it. A test in the
+    same worker that changed it (dask_jobqueue's runner installs its own SIGINT handler when it is
+    imported; a SIG_IGN is inherited by every child process) made a later test's children start
+    with SIGINT ignored: test_process_edges' 'importing vrsweep leaves SIGINT alone' failed so."""
+    found = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    yield
+    for signum, handler in found.items():
+        if signal.getsignal(signum) is not handler and handler is not None:
+            signal.signal(signum, handler)
 
 
 def _write_config(tmp_path, text, name="sweep.yaml"):
