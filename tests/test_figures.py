@@ -15,6 +15,7 @@ from vrsweep.errors import UsageError
 from vrsweep.plot.basins import BASIN_COLOURS
 from vrsweep.plot.sweeps import NO_VALUE_COLOUR
 from vrsweep.store.reading import load_results
+from greyscale import lightness as _lightness
 
 PLANE = """\
 sweep:
@@ -399,16 +400,6 @@ def test_a_written_models_greek_symbols_are_letters_in_the_description():
 
 
 # --- categorical colours: apart on a greyscale page ---------------------------------------------
-
-
-def _lightness(colour):
-    """CIE L* of a colour (sRGB, D65): what a greyscale page keeps of it."""
-    from matplotlib.colors import to_rgb
-
-    rgb = np.array(to_rgb(colour))
-    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
-    y = float(linear @ [0.2126, 0.7152, 0.0722])
-    return 116.0 * np.cbrt(y) - 16.0 if y > 0.008856 else 903.3 * y
 
 
 def _apart_in_grey(colours):

@@ -18,6 +18,7 @@ from vrsweep.numerics.model import DEFAULT_PARAMETERS
 from vrsweep.commands.plot import FLAGS
 from vrsweep.store.reading import load_results
 from vrsweep.store.trajectory_file import read_trajectory
+from greyscale import lightness as _lightness
 
 SHORT = "integration: {transient_periods: 5, measure_periods: 16, strobe_periods: 8}\n"
 G_RES_4 = float(theory.g_res(0.1, 0.1, 0.5, 4.0))   # 21.065 (ERRATA 7)
@@ -731,16 +732,6 @@ def test_the_transient_and_the_rest_meet_at_a_sample(tmp_path):
     ax = fig.axes[0]
     grey, blue = [line for line in ax.get_lines() if len(line.get_xdata()) > 2][:2]
     assert grey.get_xdata()[-1] == blue.get_xdata()[0] and grey.get_ydata()[-1] == blue.get_ydata()[0]
-
-
-def _lightness(colour):
-    """CIE L* of a colour: what a greyscale page keeps of it."""
-    from matplotlib.colors import to_rgb
-
-    rgb = np.array(to_rgb(colour))
-    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
-    y = float(linear @ [0.2126, 0.7152, 0.0722])
-    return 116.0 * np.cbrt(y) - 16.0 if y > 0.008856 else 903.3 * y
 
 
 def test_the_kinds_of_motion_stay_apart_in_greyscale(files):
