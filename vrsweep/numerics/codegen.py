@@ -244,7 +244,7 @@ def forcing_spectrum(expression, t):
     frequencies, generators, degree = _spectrum(expression, t, [SPECTRUM_BUDGET])
     if frequencies is None:
         frequencies = dict(generators)
-        for key, value in generators.items():
+        for value in generators.values():
             _add_frequency(frequencies, degree * value)
     return [value for value in frequencies.values() if value != 0]
 
@@ -252,8 +252,6 @@ def forcing_spectrum(expression, t):
 def _add_frequency(found, value):
     """Adds the frequency ``value`` to ``found`` (canonical form -> value) unless it or its
     negative is there: the sign of a frequency is that of the phase, not of the frequency."""
-    import sympy
-
     if value.could_extract_minus_sign():
         value = -value
     if value not in found and -value not in found:

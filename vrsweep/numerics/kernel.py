@@ -96,7 +96,7 @@ UNRESOLVED_STEP_FACTOR = 0.125
 # from 1e-5 down gave 178 impacts a period with rk45, 181 to 186 with dop853, for one orbit
 # (tests/test_written_sticking.py). Such a rebound sticks: the mass is at rest on the stop to rounding.
 STICK_HEIGHT_ULPS = 16.0
-STICK_HEIGHT = STICK_HEIGHT_ULPS * 2.220446049250313e-16
+STICK_HEIGHT = STICK_HEIGHT_ULPS * float(np.finfo(np.float64).eps)
 
 
 # Each method's constants for _integrate: (grid_steps, hold_after_reject, initial_order, n_stages).
