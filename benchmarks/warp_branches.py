@@ -217,8 +217,8 @@ def costs_on_cpu(model, method, seed, n_points, captured, passes):
         f = np.empty_like(y)
         scratch = np.empty(1)
         for i in range(n):
-            v_before, v_after, stuck = restitute(y, t * (1.0 + 1e-16 * (i & 1)), c, force, barrier, side, restitution,
-                                                 stick_velocity)
+            v_before, v_after, stuck, push = restitute(y, t * (1.0 + 1e-16 * (i & 1)), c, force, barrier, side,
+                                                       restitution, stick_velocity)
             rhs(t, 0.0, -1, 0.0, y, c, f, scratch)  # the derivative after the rebound
             total += v_after + f[1]
         return total

@@ -653,8 +653,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                 # Speeds and accelerations into the barrier (side * ...): eq2.2 and the saltation
                 # matrix are written for a barrier above; seen in -x, one below is the same.
                 acceleration_before = side * f[V]
-                v_before, v_after, stuck = _restitution(y, t, coefficients, barrier_force, hit, side, restitution,
-                                                        stick_velocity)
+                v_before, v_after, stuck, push = _restitution(y, t, coefficients, barrier_force, hit, side,
+                                                              restitution, stick_velocity)
                 log_impact(impact_log, n_impacts, t, side * v_before, side * v_after)
                 record_impact(record, v_before, response_frequency * t)
                 if stuck:
@@ -668,7 +668,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                     if tangents:
                         apply_saltation(y, v_before, acceleration_before, side * f[V], restitution)
                         tangent(t, y, coefficients, f)  # f of the jumped tangent vectors
-                    h = _rebound_step(h, t, v_after, coefficients, barrier_force, hit)
+                    h = _rebound_step(h, v_after, push)
                 err_previous = 1.0
 
             if tangents and monodromy_log.shape[0] == 0 and tangents_out_of_range(y):
@@ -719,7 +719,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
 @kernel_jit(inline="always")
 def _restitution(y, t, coefficients, barrier_force, barrier, side, restitution, stick_velocity):
     """The impact law at a barrier: v -> -e v (eq2.2), or sticking. Returns (v_before, v_after,
-    stuck), the speeds into the barrier (side * v).
+    stuck, force), the speeds into the barrier (side * v) and the force at rest on it, which
+    _rebound_step reuses (one evaluation an impact).
 
     The mass sticks when chatter has died out and the force at rest on the barrier presses it
     there: the rebound is slower than stick_velocity, or its flight rises less than the rounding of
@@ -733,14 +734,14 @@ def _restitution(y, t, coefficients, barrier_force, barrier, side, restitution, 
     if stuck:
         v_after = 0.0
     y[V] = side * v_after
-    return v_before, v_after, stuck
+    return v_before, v_after, stuck, force
 
 
 @kernel_jit(inline="always")
-def _rebound_step(h, t, v_after, coefficients, barrier_force, barrier):
-    """The next step size after a rebound: a slow rebound against a force pushing back returns
-    after about 2 |v| / a, so the step stays well inside that flight and its return is seen."""
-    push = barrier_force(t, coefficients, barrier)
+def _rebound_step(h, v_after, push):
+    """The next step size after a rebound: a slow rebound against a force pushing back (push, the
+    force at rest on the barrier at the impact) returns after about 2 |v| / a, so the step stays
+    well inside that flight and its return is seen."""
     if push > 0.0:
         return min(h, REBOUND_STEP_FRACTION * 2.0 * -v_after / push)
     return h
