@@ -503,7 +503,54 @@ def test_a_killed_sweeps_temporary_folder_is_removed_by_the_next(sweep_yaml, tmp
     for folder in (stale, alive, elsewhere):
         folder.mkdir()
         (folder / "sweep.h5").write_bytes(b"a partial sweep")
+        pid = folder.name.split(".")[1]
+        (folder / fileio.SCRATCH_MARKER).write_text(fileio._scratch_marker_text(folder.name[8:].split(".")[0], pid))
     dataset = vrsweep.sweep(sweep_yaml, progress=False)
     assert int(dataset.done.sum()) == dataset.done.size
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([alive.name, elsewhere.name])
     assert f"Removed {stale}, left by an interrupted vrsweep (process {gone.pid})" in capfd.readouterr().err
+
+
+def test_a_folder_named_like_a_scratch_folder_is_removed_only_if_vrsweep_made_it(tmp_path, monkeypatch, capfd):
+    """scratch_folder removed any folder of TMPDIR named vrsweep-HOST.PID.anything whose process
+    was gone, with everything in it: a user's own folder (vrsweep-myhost.123.results, their
+    results) was deleted by the next vrsweep.sweep(). Only a folder with vrsweep's marker that
+    holds nothing but what vrsweep writes there is removed now."""
+    import tempfile
+
+    from vrsweep.store import fileio
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    host = fileio._HOST
+
+    def folder(tag, files, with_marker=None):
+        path = tmp_path / f"vrsweep-{host}.{gone.pid}.{tag}"
+        path.mkdir()
+        for name in files:
+            (path / name).write_bytes(b"data")
+        if with_marker is not None:
+            (path / fileio.SCRATCH_MARKER).write_text(with_marker)
+        return path
+
+    users = folder("results", ["sweep.h5", "notes.txt"])   # a user's, named like ours
+    no_marker = folder("abc123", ["sweep.h5"])              # as vrsweep made them before the marker
+    with fileio.scratch_folder():
+        pass
+    assert (users / "notes.txt").read_bytes() == b"data" and (no_marker / "sweep.h5").exists()
+
+    marker = fileio._scratch_marker_text(host, gone.pid)
+    other_pid = folder("def456", ["sweep.h5"], with_marker=fileio._scratch_marker_text(host, gone.pid + 1))
+    extra = folder("ghi789", ["sweep.h5", "thesis.tex"], marker)             # a file vrsweep never writes
+    ours = folder("jkl012", ["sweep.h5", f".sweep.h5.{host}.{gone.pid}.0123abcd.tmp"], marker)
+    link = folder("mno345", [], marker)
+    (link / "trajectory.h5").symlink_to(users / "notes.txt")                 # never followed, never removed
+    with fileio.scratch_folder() as made:
+        assert (tmp_path / os.path.basename(made) / fileio.SCRATCH_MARKER).is_file()
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+            [users.name, no_marker.name, other_pid.name, extra.name, link.name, os.path.basename(made)])
+    assert (users / "notes.txt").read_bytes() == b"data" and (extra / "thesis.tex").exists()
+    assert not os.path.exists(made)
+    err = capfd.readouterr().err
+    assert err.count("Removed") == 1 and f"Removed {ours}, left by an interrupted vrsweep" in err

@@ -618,16 +618,48 @@ def clean_stale_temporaries(path) -> None:
 
 
 _SCRATCH_TAIL = re.compile(r"(?P<host>[A-Za-z0-9_-]+)\.(?P<pid>\d+)\.[A-Za-z0-9_]+")
+# The file that marks a folder as scratch_folder's own, and what it says: a folder of the user's
+# named like one (vrsweep-HOST.PID.anything, a pid long gone) was removed with all it held.
+SCRATCH_MARKER = ".vrsweep-scratch"
+# What vrsweep writes in its scratch folder: the marker, its results file, their temporary names.
+_SCRATCH_FILES = re.compile(r"\.vrsweep-scratch|(?:\.)?(?:sweep|trajectory)\.h5(?:\..+\.tmp)?")
+
+
+def _scratch_marker_text(host, pid) -> str:
+    return f"vrsweep scratch folder of process {pid} on {host}: removed when that process is gone\n"
+
+
+def _own_stale_scratch(folder, host, pid) -> bool:
+    """Whether ``folder`` is a scratch folder vrsweep made (its marker says so, for this host and
+    process), holding only what vrsweep writes there, none of it being written."""
+    try:
+        if not os.path.isdir(folder) or os.path.islink(folder) or os.stat(folder).st_uid != os.getuid():
+            return False  # another user's folder in a shared TMPDIR is theirs to remove
+        marker = os.path.join(folder, SCRATCH_MARKER)
+        if os.path.islink(marker) or not os.path.isfile(marker):
+            return False
+        with open(marker, encoding="utf-8", errors="replace") as handle:
+            if handle.read(4096) != _scratch_marker_text(host, pid):
+                return False
+        items = os.listdir(folder)
+        return all(_SCRATCH_FILES.fullmatch(item) and not os.path.islink(os.path.join(folder, item))
+                   and os.path.isfile(os.path.join(folder, item)) for item in items) \
+            and not any(being_written(os.path.join(folder, item)) for item in items)
+    except (OSError, AttributeError):  # AttributeError: no os.getuid (Windows)
+        return False
 
 
 @contextmanager
 def scratch_folder():
     """A new folder in the system's temporary folder (``TMPDIR``), removed when the block ends;
-    its name says which host and process made it, like a temporary file beside an output.
+    its name says which host and process made it, like a temporary file beside an output, and a
+    marker file in it (SCRATCH_MARKER) that vrsweep made it.
 
     A process killed inside the block (``kill -9``, a notebook's kernel restarted) cannot remove
     it, and it holds a file as large as the grid: so the folders of this host's processes that
-    are gone are removed first, with a line each, as :func:`clean_stale_temporaries` does.
+    are gone are removed first, with a line each, as :func:`clean_stale_temporaries` does. Only
+    a folder with vrsweep's marker, holding nothing but what vrsweep writes there, is removed: a
+    folder of the user's that is merely named like one is never touched.
     """
     import tempfile
 
@@ -641,17 +673,23 @@ def scratch_folder():
         if not match or match.group("host") != _HOST or _process_alive(int(match.group("pid"))):
             continue
         folder = os.path.join(root, name)
+        if not _own_stale_scratch(folder, match.group("host"), match.group("pid")):
+            continue  # not vrsweep's, or its process id was reused, or a file is shared: leave it
+        for item in os.listdir(folder):
+            if not _SCRATCH_FILES.fullmatch(item):
+                continue  # appeared since the check: not vrsweep's, and the folder stays
+            try:
+                os.remove(os.path.join(folder, item))
+            except OSError:
+                pass
         try:
-            # another user's folder in a shared TMPDIR is theirs to remove
-            if not os.path.isdir(folder) or os.path.islink(folder) or os.stat(folder).st_uid != os.getuid() \
-                    or any(being_written(os.path.join(folder, item)) for item in os.listdir(folder)):
-                continue  # or its process id was reused, or the file is shared: leave it
-        except (OSError, AttributeError):  # AttributeError: no os.getuid (Windows)
+            os.rmdir(folder)
+        except OSError:
             continue
-        shutil.rmtree(folder, ignore_errors=True)
-        if not os.path.exists(folder):
-            notice(f"Removed {folder}, left by an interrupted vrsweep (process {match.group('pid')})")
+        notice(f"Removed {folder}, left by an interrupted vrsweep (process {match.group('pid')})")
     with tempfile.TemporaryDirectory(prefix=f"vrsweep-{_HOST}.{os.getpid()}.") as folder:
+        with open(os.path.join(folder, SCRATCH_MARKER), "w", encoding="utf-8") as handle:
+            handle.write(_scratch_marker_text(_HOST, os.getpid()))
         yield folder
 
 
