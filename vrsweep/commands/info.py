@@ -30,7 +30,8 @@ UNKNOWN_KIND = "unknown"
 # Root attributes shown in their own lines (or not at all), not under "attributes".
 _KNOWN_ROOT_ATTRS = ("vrsweep_format_version", "vrsweep_complete", "created", "config", "model",
                      "vrsweep_version", "numba_version", "numpy_version", "shard", "vrsweep_attributes_sha256",
-                     "R_solver_err", "R_solver_err_points", "R_solver_err_rtol")
+                     "R_solver_err", "R_solver_err_points", "R_solver_err_rtol",
+                     "vrsweep_unreadable_points")  # the last: open_results' own (store/reading._as_done)
 
 
 @click.command("info")
@@ -308,6 +309,9 @@ def _describe_sweep(path, ds) -> dict:
         "shard": shard,
         "points_done": n_done,
         "points_total": n_total,
+        # Points that may have been done but cannot be read back (a kill cut their chunk's write):
+        # they read as not computed, and --resume computes them again (store/torn.py).
+        "points_unreadable": int(attrs.get("vrsweep_unreadable_points", 0)),
         "grid_points": int(math.prod(done.shape)),
         "model": attrs.get("model") or _model(config),
         "axes": axes,
@@ -454,6 +458,7 @@ def _describe_groups(path, kind) -> dict | None:
         "shard": None,
         "points_done": None,
         "points_total": None,
+        "points_unreadable": None,
         "grid_points": None,
         "model": attrs.get("model") or _model(config),
         "axes": [],
@@ -560,6 +565,9 @@ def format_summary(summary, show_config=False) -> str:
         progress = f"{summary['points_done']} of {summary['points_total']} points done"
         if kind == "shard":
             progress += f" (shard {summary['shard']} of a {summary['grid_points']}-point grid)"
+        if summary.get("points_unreadable"):
+            progress += (f"; {summary['points_unreadable']} more unreadable (a kill cut the write of their chunk: "
+                         "`vrsweep run CONFIG --resume` computes them again)")
         state = "complete" if summary["complete"] else "NOT complete"
         if not summary["complete"]:
             # A checkpoint: either a run still writing it (read with file locking off) or one

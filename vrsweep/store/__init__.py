@@ -11,6 +11,7 @@ concern:
   :class:`StoredLayout`, its metadata without its values. Values are read lazily through xarray
   (``vrsweep.open_results``, ``vrsweep/store/reading.py``), which follows the same layout.
 - ``merge``: :func:`merge_results`, the shards of one run streamed into one file.
+- ``torn``: chunks whose write a kill cut, in an unfinished file: found and recovered.
 
 Every HDF5 file is opened through ``fileio.open_hdf5`` (the locking policy).
 
@@ -24,7 +25,9 @@ Life of a result file
    and checks before each write that the path still names its file (a run with ``--overwrite``
    or a scratch purge may have replaced or removed it; see ``fileio``).
 2. :meth:`ResultWriter.write_points` fills finished points chunk by chunk and flushes: this file
-   *is* the checkpoint. A ``kill -9`` at any moment loses at most the chunk in flight.
+   *is* the checkpoint. A ``kill -9`` at any moment loses at most the chunk in flight. A kill in the
+   middle of a chunk's write leaves that chunk failing its checksum; ``torn`` recovers what it held
+   (on resume, and for every reader of an unfinished file).
 3. :meth:`ResultWriter.finish` copies the file it holds, adds derived variables (theory
    columns) to the copy, sets ``vrsweep_complete = 1`` and renames the copy into place.
 

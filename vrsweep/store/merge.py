@@ -107,12 +107,28 @@ class _Shard(StoredLayout):
         try:
             super().__init__(path, f)
             self._identity = _identity(path)
+            if not self.complete:
+                self._refuse_torn_chunks(f)
         except ResultFileError:
             raise
         except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
             raise corrupt_error(path, error) from None
         finally:
             f.close()
+
+    def _refuse_torn_chunks(self, f):
+        """ResultFileError for an unfinished shard holding chunks whose write a kill cut (their
+        checksums fail, store/torn.py): --resume repairs them (and computes again what it cannot
+        recover); the merge reads chunks whole and would fail on them, or name no cause."""
+        from vrsweep.store import torn
+
+        recovery, _ = torn.find(f)
+        if recovery is not None:
+            again = f" (computing again {recovery.n_lost} point(s) it cannot recover)" if recovery.n_lost else ""
+            raise ResultFileError.naming(
+                "{path} holds {n} chunk(s) whose write a kill cut (their checksums fail): resume that shard "
+                "with {resume}, which repairs them{again}, then merge again", ARGUMENT_WORDS,
+                path=self.path, n=recovery.n_torn, again=again)
 
     def read(self, name, selection=()):
         """``name[selection]`` as an array (the file opened for this read, with no chunk cache:

@@ -209,7 +209,14 @@ def _check_flags(f, path, complete):
         if not isinstance(mask, h5py.Dataset) or mask.dtype != np.int8 or mask.shape != shape:
             got = f"{mask.shape} of {mask.dtype}" if isinstance(mask, h5py.Dataset) else "a group"
             raise ResultFileError(f"{path} is corrupt: {name} must be int8 flags over the grid {shape}, got {got}")
-        flags[name] = np.asarray(mask[()])
+        if name == "done" and not complete:
+            # A kill may have cut a chunk of done mid-write: store/torn.py reads what it can
+            # (its flags are recovered where --resume opens the file, and by every reader).
+            from vrsweep.store.torn import failing_chunks
+
+            flags[name] = failing_chunks(mask, keep=True)[1]
+        else:
+            flags[name] = np.asarray(mask[()])
         if not np.isin(flags[name], (0, 1)).all():
             raise ResultFileError(f"{path} is corrupt: {name} must hold only 0 and 1")
     if complete:

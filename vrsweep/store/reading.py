@@ -10,7 +10,8 @@ h5netcdf backend reads it as it is; this module adds only what xarray cannot kno
 
 Nothing is read until it is used: variables stay on disk until indexed, computed or loaded
 (``ds.R.sel(Omega=4).values``, ``ds.load()``). Close the Dataset (or use ``with``) to release the
-file. ``status`` keeps its int8 codes with the CF attributes ``flag_values`` and ``flag_meanings``
+file. An unfinished sweep or shard file is the exception: it is read whole when opened, so that
+its points not done read as not computed (:func:`_as_done`). ``status`` keeps its int8 codes with the CF attributes ``flag_values`` and ``flag_meanings``
 (no fill-value masking, so -1 = not computed stays -1); :func:`status_names` turns codes into
 names, and CF-aware tools (cf_xarray's ``ds.status.cf == "ok"``) decode them as well.
 """
@@ -132,6 +133,10 @@ def open_results(path, group: str | None = None):
 
     try:
         ds = _open_dataset(path, group)
+        if kind in ("sweep", "shard") and not ds.attrs.get("vrsweep_complete", 0):
+            ds = _as_done(path, ds)
+    except ResultFileError:
+        raise
     except Exception as error:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
         from vrsweep.store.reader import corrupt_error
 
@@ -139,6 +144,38 @@ def open_results(path, group: str | None = None):
     if kind == "trajectory":
         ds.attrs = {**root_attrs, **ds.attrs, "vrsweep_group": group}
     ds.attrs.setdefault("vrsweep_file", kind)
+    return ds
+
+
+def _as_done(path, ds):
+    """An unfinished sweep or shard file as its ``done`` flags say, read whole and the file closed.
+
+    A point not done reads as not computed (its fill value: NaN, status -1), whatever its bytes:
+    a run writes a chunk's values before it marks them done, so a file read while it is written
+    (``HDF5_USE_FILE_LOCKING=FALSE``), or left by a kill, holds values of points not yet done, and
+    they showed, R without its ``done``. A chunk whose write a kill cut (its checksum fails) is
+    recovered as ``--resume`` recovers it (store/torn.py); points that cannot be read back read as
+    not computed, with one line, and their number is the Dataset's attribute
+    ``vrsweep_unreadable_points``."""
+    from vrsweep.store import torn
+    from vrsweep.store.fileio import notice, open_hdf5
+
+    try:
+        with open_hdf5(path, "r") as f:
+            recovery, values = torn.find(f, keep=True)
+            fills = {name: f[name].fillvalue for name in values}
+        done = values.pop("done").astype(bool)
+        ds["done"] = ds["done"].copy(data=done.astype(np.int8))
+        for name, array in values.items():
+            array[~done] = fills[name]  # extra dimensions follow the grid's
+            ds[name] = ds[name].copy(data=array)
+        ds.load()
+    finally:
+        ds.close()
+    if recovery is not None:
+        notice(f"Note: {recovery.describe(path, reading=True)}")
+        if recovery.n_lost:
+            ds.attrs["vrsweep_unreadable_points"] = recovery.n_lost
     return ds
 
 

@@ -7,7 +7,9 @@ touches few chunks), uncompressed and allocated at creation time (``H5D_ALLOC_TI
 ``create`` the file's metadata therefore never changes while points are written: a write only
 overwrites raw bytes at fixed places. ``write_points`` writes the values, flushes and fsyncs, and
 only then sets ``done`` and flushes again, so a point is never marked done before its values are
-on disk. ``finish`` works on a copy and renames it into place, so a crash while finishing leaves the
+on disk. A chunk is rewritten in place, with the points already in it unchanged: a kill in the
+middle of that write leaves it part new, part old, failing its checksum, and ``open_for_resume``
+recovers it (store/torn.py). ``finish`` works on a copy and renames it into place, so a crash while finishing leaves the
 checkpoint as it was. Compression is deliberately off: compressed chunks change size and would
 make every write a metadata update.
 
@@ -30,7 +32,7 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.store.fileio import (
-    LIBVER, check_still_at_path, close_without_writing, fsync_path, identity,
+    LIBVER, check_still_at_path, close_without_writing, fsync_path, identity, notice,
     lock_for_writing, output_target, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
     writing_hdf5,
 )
@@ -133,6 +135,8 @@ class ResultWriter:
         self._fd = h5file.id.get_vfd_handle()
         self._identity = identity(self._fd)
         lock_for_writing(self._fd, self.path, action)  # refuses a second writer (held already after create)
+        if action == "resume" and not decode(h5file.attrs["vrsweep_complete"]):
+            self._repair_torn_chunks(h5file)
         done = h5file["done"]
         self.axis_names = scale_names(done) if done.ndim else ()
         self.grid_shape = tuple(done.shape)
@@ -234,6 +238,18 @@ class ResultWriter:
         except (OSError, KeyError, ValueError) as error:
             f.close()
             raise corrupt_error(path, error) from None
+
+    def _repair_torn_chunks(self, h5file):
+        """Put back what a kill cut mid-write (store/torn.py): chunks whose checksum fails are
+        recovered exactly where their checksum confirms it, else their points are computed again;
+        one line says which. Every chunk is read once to find them."""
+        from vrsweep.store import torn
+
+        recovery, _ = torn.find(h5file)  # an error: open_for_resume's "corrupt", the file closed
+        if recovery is None:
+            return
+        torn.repair(h5file, recovery, _fsync)
+        notice(f"Note: {recovery.describe(self.path)}")
 
     # -- state ----------------------------------------------------------------------------
 

@@ -1,0 +1,281 @@
+"""Chunks whose write a kill cut: finding them in an unfinished file, and what can be recovered.
+
+Why this exists
+---------------
+Point variables are allocated whole when a file is created and each HDF5 chunk (a few kB, with a
+fletcher32 checksum at its end) is rewritten in place whenever a point in it is written. The
+system writes a chunk page by page, so a ``kill -9`` (or a node failure) in the middle of that
+write can leave a chunk part new and part old: a *torn* chunk, whose checksum fails, so HDF5
+refuses to read any of it, the points finished before among them. ``--resume`` refused the whole
+file ("filter returned failure during read").
+
+What a torn chunk still holds
+-----------------------------
+The writer rewrites a chunk as read-modify-write: every point already in it is written back with
+the very bytes it had, and the points being written are marked ``done`` only after their values
+were flushed and fsynced (``writer.write_points``). So in a torn chunk of a point variable the
+points marked done hold their own values, whichever half of the write reached them; only the
+points not done (the write in flight) may be half new. The chunk as it was before the cut write is
+therefore the torn bytes with the points not done set back to their fill value; when the checksum
+stored at the chunk's end (the old one: the write goes from the chunk's start to its end) is that
+chunk's, the recovery is exact and verified, and nothing is lost. When it is not (the points not
+done held values of an earlier write cut by a kill, or the damage is something else), the points
+of the chunk are not trusted: their ``done`` flags are cleared and they are computed again.
+
+A torn chunk of ``done`` holds 0 or 1 per point, old or new: a 1 is only ever written after the
+point's values were on disk, so either is true. Its bytes are accepted when every one is 0 or 1,
+and a point marked done whose every variable holds its fill value (never computed: a flipped bit)
+is not done; otherwise the chunk's flags are all cleared.
+
+Only an unfinished file is read this way: a finished file must read back whole through every
+checksum (reader.check_structure), and a failing chunk there is damage.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import h5py
+import numpy as np
+
+from vrsweep.store.layout import point_variables_of
+
+CHECKSUM_BYTES = 4  # fletcher32, after the chunk's data
+# Bytes read at a time while looking for failing chunks (reader.CHECK_BLOCK_BYTES's reason).
+SCAN_BLOCK_BYTES = 4 * 2 ** 20
+
+
+def _offset(selection, chunks):
+    """The offset of the chunk that holds the start of ``selection`` (a tuple of slices)."""
+    return tuple(s.start // c * c for s, c in zip(selection, chunks))
+
+
+def _chunk_slices(ds, offset):
+    """The part of the chunk at ``offset`` that lies inside the dataset."""
+    return tuple(slice(o, min(o + c, n)) for o, c, n in zip(offset, ds.chunks, ds.shape))
+
+
+def failing_chunks(ds, keep=False):
+    """The offsets of the chunks of ``ds`` that fail their checksum, in file order; with ``keep``,
+    also the dataset's values (its fill value in those chunks). One read of the dataset, a few MiB
+    at a time; only a block that fails is read again chunk by chunk."""
+    values = np.full(ds.shape, ds.fillvalue, dtype=ds.dtype) if keep else None
+    if ds.chunks is None or not ds.fletcher32:
+        if keep:
+            values[...] = ds[()]
+        return [], values
+    row_bytes = max(1, ds.dtype.itemsize * math.prod(ds.shape[1:]))
+    step = max(ds.chunks[0], SCAN_BLOCK_BYTES // row_bytes // ds.chunks[0] * ds.chunks[0])
+    failing = []
+    for start in range(0, ds.shape[0], step):
+        block = (slice(start, min(start + step, ds.shape[0])),) + tuple(slice(0, n) for n in ds.shape[1:])
+        try:
+            data = ds[block]
+        except OSError:
+            for piece in ds.iter_chunks(block):
+                try:
+                    data = ds[piece]
+                except OSError:
+                    failing.append(_offset(piece, ds.chunks))
+                    continue
+                if keep:
+                    values[piece] = data
+            continue
+        if keep:
+            values[block] = data
+    return failing, values
+
+
+def _raw_chunk(ds, offset):
+    """The chunk's stored values (the whole chunk, edges included) and its stored checksum."""
+    _, raw = ds.id.read_direct_chunk(offset)
+    data = np.frombuffer(raw[:-CHECKSUM_BYTES], dtype=ds.dtype)
+    if data.size != math.prod(ds.chunks):  # not a chunk as vrsweep stores them (compressed?)
+        return None, None
+    return data.reshape(ds.chunks).copy(), raw[-CHECKSUM_BYTES:]
+
+
+def chunk_bytes(ds, array):
+    """The bytes HDF5 stores for a chunk of ``ds`` holding ``array`` (the whole chunk), checksum
+    included: made by HDF5 itself, in a file in memory with the same chunk layout."""
+    with h5py.File(f"vrsweep-chunk-{id(array)}", "w", driver="core", backing_store=False) as scratch:
+        copy = scratch.create_dataset("chunk", shape=ds.chunks, dtype=ds.dtype, chunks=ds.chunks, fletcher32=True)
+        copy[()] = array
+        return copy.id.read_direct_chunk((0,) * len(ds.chunks))[1]
+
+
+def _is_fill(values, fill):
+    if isinstance(fill, float) or np.issubdtype(np.asarray(fill).dtype, np.floating):
+        if np.isnan(fill):
+            return np.isnan(values)
+    return values == fill
+
+
+@dataclass
+class Recovery:
+    """What an unfinished file holds where a kill cut a chunk's write.
+
+    torn: {variable: [chunk offsets]} of the chunks that fail their checksum; done: the ``done``
+    flags to trust (a torn chunk of ``done`` read from its bytes, the points of a chunk that could
+    not be recovered cleared); chunks: {variable: {offset: the whole chunk to store}}; lost: the
+    points that were marked done but whose values (or flag) cannot be trusted: computed again.
+    """
+
+    torn: dict
+    done: np.ndarray
+    chunks: dict = field(default_factory=dict)
+    lost: np.ndarray = None
+    recovered: int = 0  # done points of torn chunks whose values were recovered, verified
+
+    @property
+    def n_torn(self):
+        return sum(len(offsets) for offsets in self.torn.values())
+
+    @property
+    def n_lost(self):
+        return int(np.count_nonzero(self.lost))
+
+    def describe(self, path, reading=False):
+        """One line: what was cut, and what is computed again (``reading``: what a reader shows)."""
+        what = (f"{path}: a kill cut the write of {self.n_torn} chunk(s) of "
+                f"{', '.join(name for name, offsets in self.torn.items() if offsets)} (their checksums fail)")
+        checked = f"{self.recovered} point(s) done before recovered, checked against the chunks' checksums"
+        if not self.n_lost:
+            return f"{what}: every point done before is recovered, checked against the chunks' checksums"
+        unreadable = f"{self.n_lost} point(s) that may have been done cannot be read back"
+        then = ("they read as not computed (resuming the run computes them again)" if reading
+                else "they are computed again")
+        return f"{what}: {unreadable}, {then}" + (f"; {checked}" if self.recovered else "")
+
+
+def find(f, keep=False):
+    """(Recovery or None if every chunk reads, {variable: values} with ``keep``) of the open file ``f``.
+
+    With ``keep`` every point variable and ``done`` is read whole (a reader of an unfinished file),
+    recovered chunks in place; without, only failing chunks are remembered (the writer's resume).
+    """
+    names = ("done",) + point_variables_of(f)
+    torn, values = {}, {}
+    for name in names:
+        torn[name], values[name] = failing_chunks(f[name], keep)
+    if not any(torn.values()):
+        return None, values
+    done_ds = f["done"]
+    done = np.asarray(values["done"] if keep else _readable(done_ds, torn["done"]), dtype=np.int8)
+    grid_ndim = done_ds.ndim
+    lost = np.zeros(done.shape, dtype=bool)
+    chunks = {name: {} for name in names}
+    suspect = np.zeros(done.shape, dtype=bool)  # points whose done flag came from a torn chunk
+    for offset in torn["done"]:
+        where = _chunk_slices(done_ds, offset)
+        stored, _ = _raw_chunk(done_ds, offset)
+        inside = tuple(slice(0, s.stop - s.start) for s in where)
+        if stored is not None and np.isin(stored, (0, 1)).all():
+            done[where] = stored[inside]
+            suspect[where] = True
+        else:  # not flags: which points were done is unknown, and all are computed again
+            lost[where] = True
+            done[where] = 0
+        chunks["done"][offset] = None  # written from the final flags below
+    kept = np.zeros(done.shape, dtype=bool)  # done points of chunks recovered exactly
+    for name in names[1:]:
+        ds = f[name]
+        for offset in torn[name]:
+            where = _chunk_slices(ds, offset)
+            grid = where[:grid_ndim]
+            inside = tuple(slice(0, s.stop - s.start) for s in where)
+            stored, checksum = _raw_chunk(ds, offset)
+            flags = done[grid].astype(bool)
+            if stored is not None:
+                candidate = stored.copy()
+                part = candidate[inside]
+                part[~flags] = ds.fillvalue  # the points in flight, back to what they were
+                candidate[inside] = part
+                if chunk_bytes(ds, candidate)[-CHECKSUM_BYTES:] == checksum:
+                    chunks[name][offset] = candidate
+                    kept[grid] |= flags
+                    if keep:
+                        values[name][where] = part
+                    continue
+            # Not the chunk as it was: none of its points is trusted.
+            lost[grid] |= flags
+            done[grid] = 0
+            chunks[name][offset] = np.full(ds.chunks, ds.fillvalue, dtype=ds.dtype)
+            if keep:
+                values[name][where] = ds.fillvalue
+    if suspect.any():
+        # A point marked done whose every variable still holds its fill value was never computed.
+        box = tuple(slice(int(w.min()), int(w.max()) + 1) for w in np.nonzero(suspect)) if suspect.ndim else ()
+        never = suspect[box] & (done[box] == 1)
+        for name in names[1:]:
+            ds = f[name]
+            data = values[name][box] if keep else _region(ds, box, chunks[name])
+            blank = _is_fill(np.asarray(data), ds.fillvalue)
+            never &= blank.reshape(never.shape + (-1,)).all(axis=-1) if blank.ndim > grid_ndim else blank
+        done[box] = np.where(never, 0, done[box])
+    recovered = int(np.count_nonzero(kept & (done == 1)))
+    for offset in chunks["done"]:
+        array = np.zeros(done_ds.chunks, dtype=np.int8)
+        where = _chunk_slices(done_ds, offset)
+        array[tuple(slice(0, s.stop - s.start) for s in where)] = done[where]
+        chunks["done"][offset] = array
+    if keep:
+        values["done"] = done
+    return Recovery(torn={k: v for k, v in torn.items()}, done=done.astype(bool), chunks=chunks, lost=lost,
+                    recovered=recovered), values
+
+
+def _readable(ds, failing):
+    """``ds`` whole, its failing chunks read as its fill value."""
+    values = np.full(ds.shape, ds.fillvalue, dtype=ds.dtype)
+    failing = set(failing)
+    for piece in ds.iter_chunks():
+        if _offset(piece, ds.chunks) not in failing:
+            values[piece] = ds[piece]
+    return values
+
+
+def _region(ds, box, recovered):
+    """``ds`` over the grid slices ``box`` (extra dimensions whole), with the recovered chunks in place
+    of the failing ones: for checking a few points without reading the variable whole."""
+    box = box + tuple(slice(0, n) for n in ds.shape[len(box):])
+    values = np.empty(tuple(s.stop - s.start for s in box), dtype=ds.dtype)
+    for piece in ds.iter_chunks(box):
+        offset = _offset(piece, ds.chunks)
+        target = tuple(slice(p.start - b.start, p.stop - b.start) for p, b in zip(piece, box))
+        if offset in recovered:
+            values[target] = recovered[offset][tuple(slice(p.start - o, p.stop - o) for p, o in zip(piece, offset))]
+        else:
+            values[target] = ds[piece]
+    return values
+
+
+def repair(f, recovery, fsync):
+    """Store the recovered chunks in the open file ``f`` (``done`` first: a point is never left
+    marked done over values not yet put back), each flushed and fsynced. A kill during the repair
+    leaves chunks that the next resume recovers the same way. ``fsync(f)`` pushes the file to disk."""
+    done_ds = f["done"]
+    for offset, array in recovery.chunks["done"].items():
+        done_ds.id.write_direct_chunk(offset, chunk_bytes(done_ds, array))
+    # Points of a recovered data chunk that could not be trusted, in chunks of done that read.
+    cleared = recovery.lost & ~_in_chunks(done_ds, recovery.chunks["done"])
+    if cleared.any():
+        done_ds[...] = np.where(cleared, 0, done_ds[()]).astype(np.int8)
+    f.flush()
+    fsync(f)
+    for name, chunks in recovery.chunks.items():
+        if name == "done":
+            continue
+        ds = f[name]
+        for offset, array in chunks.items():
+            ds.id.write_direct_chunk(offset, chunk_bytes(ds, array))
+    f.flush()
+    fsync(f)
+
+
+def _in_chunks(ds, offsets):
+    mask = np.zeros(ds.shape, dtype=bool)
+    for offset in offsets:
+        mask[_chunk_slices(ds, offset)] = True
+    return mask
