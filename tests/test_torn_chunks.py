@@ -49,6 +49,11 @@ def cut(tmp_path, name, where, first=FIRST, second=SECOND, **create):
     writer = ResultWriter.create(path, GRID, specs(), ATTRS, **create)
     writer.write_points(first, values_for(first))
     writer.close()
+    return cut_write(tmp_path, path, name, where, second)
+
+
+def cut_write(tmp_path, path, name, where, second):
+    """``cut``'s kill, in the checkpoint at ``path`` as it is."""
     after = tmp_path / "after.h5"
     shutil.copy(path, after)
     writer = ResultWriter.open_for_resume(after, CONFIG)
@@ -116,6 +121,34 @@ def test_a_cut_chunk_loses_no_point_done_before(tmp_path, capfd, assert_identica
         assert np.array_equal(np.flatnonzero(done), np.sort(FIRST))
     result = stored_values_are(path, np.flatnonzero(done))
     assert np.isnan(result["R"].values.reshape(-1)[~done]).all()
+    finish_and_compare(path, tmp_path, assert_identical)
+
+
+def test_a_second_kill_after_a_first_loses_nothing_either(tmp_path, capfd, assert_identical):
+    """A kill between a write's values and its flags leaves values of points not done; a later cut
+    of their chunk could then not be told from damage (the chunk as it was held those values, not
+    fill), and its points done were computed again. --resume puts such values back to their fill
+    value, so the cut chunk is recovered, every point done before kept."""
+    from vrsweep.store.writer import _write_selection
+
+    path = tmp_path / "ckpt.h5"
+    writer = ResultWriter.create(path, GRID, specs(), ATTRS)
+    writer.write_points(FIRST, values_for(FIRST))
+    left = SECOND[:2]
+    for name, values in values_for(left).items():  # the first kill: values on disk, no flags
+        _write_selection(writer._file[name], writer.grid_shape, left, values)
+    writer._file.flush()
+    writer.close()
+    ResultWriter.open_for_resume(path, CONFIG).close()
+    with h5py.File(path, "r") as f:
+        assert np.isnan(f["R"][()].reshape(-1)[left]).all() and (f["status"][()].reshape(-1)[left] == -1).all()
+        assert np.isnan(f["roots"][()].reshape(N, -1)[left]).all()
+    assert capfd.readouterr().err == ""  # nothing was cut: nothing to say
+    cut_write(tmp_path, path, "R", "half", SECOND)  # the second kill, while the resume writes them and more
+    writer = ResultWriter.open_for_resume(path, CONFIG)
+    assert np.array_equal(np.flatnonzero(writer.done_mask()), np.sort(FIRST))
+    writer.close()
+    assert "every point done before is recovered" in capfd.readouterr().err
     finish_and_compare(path, tmp_path, assert_identical)
 
 

@@ -123,7 +123,7 @@ class _Shard(StoredLayout):
         from vrsweep.store import torn
 
         recovery, _ = torn.find(f)
-        if recovery is not None:
+        if recovery is not None and recovery.n_torn:
             again = f" (computing again {recovery.n_lost} point(s) it cannot recover)" if recovery.n_lost else ""
             raise ResultFileError.naming(
                 "{path} holds {n} chunk(s) whose write a kill cut (their checksums fail): resume that shard "

@@ -56,14 +56,18 @@ def _chunk_slices(ds, offset):
     return tuple(slice(o, min(o + c, n)) for o, c, n in zip(offset, ds.chunks, ds.shape))
 
 
-def failing_chunks(ds, keep=False):
+def failing_chunks(ds, keep=False, seen=None):
     """The offsets of the chunks of ``ds`` that fail their checksum, in file order; with ``keep``,
     also the dataset's values (its fill value in those chunks). One read of the dataset, a few MiB
-    at a time; only a block that fails is read again chunk by chunk."""
+    at a time; only a block that fails is read again chunk by chunk. ``seen(selection, values)`` is
+    called with every part that reads."""
     values = np.full(ds.shape, ds.fillvalue, dtype=ds.dtype) if keep else None
     if ds.chunks is None or not ds.fletcher32:
+        data = ds[()]
         if keep:
-            values[...] = ds[()]
+            values[...] = data
+        if seen is not None:
+            seen(tuple(slice(0, n) for n in ds.shape), np.asarray(data))
         return [], values
     row_bytes = max(1, ds.dtype.itemsize * math.prod(ds.shape[1:]))
     step = max(ds.chunks[0], SCAN_BLOCK_BYTES // row_bytes // ds.chunks[0] * ds.chunks[0])
@@ -81,9 +85,13 @@ def failing_chunks(ds, keep=False):
                     continue
                 if keep:
                     values[piece] = data
+                if seen is not None:
+                    seen(piece, data)
             continue
         if keep:
             values[block] = data
+        if seen is not None:
+            seen(block, data)
     return failing, values
 
 
@@ -127,6 +135,13 @@ class Recovery:
     chunks: dict = field(default_factory=dict)
     lost: np.ndarray = None
     recovered: int = 0  # done points of torn chunks whose values were recovered, verified
+    stale: np.ndarray = None  # points not done that hold values (a write its kill stopped before its flags)
+
+    def __post_init__(self):
+        if self.lost is None:
+            self.lost = np.zeros(self.done.shape, dtype=bool)
+        if not self.chunks:
+            self.chunks = {name: {} for name in self.torn}
 
     @property
     def n_torn(self):
@@ -156,14 +171,28 @@ def find(f, keep=False):
     recovered chunks in place; without, only failing chunks are remembered (the writer's resume).
     """
     names = ("done",) + point_variables_of(f)
-    torn, values = {}, {}
-    for name in names:
-        torn[name], values[name] = failing_chunks(f[name], keep)
-    if not any(torn.values()):
-        return None, values
     done_ds = f["done"]
-    done = np.asarray(values["done"] if keep else _readable(done_ds, torn["done"]), dtype=np.int8)
     grid_ndim = done_ds.ndim
+    torn, values = {}, {}
+    torn["done"], values["done"] = failing_chunks(done_ds, keep=True)
+    written = np.asarray(values["done"]) == 1  # as read: a torn chunk of done reads as not done
+    # Values of points not done: a write that a kill stopped before its flags. Put back to their
+    # fill value on resume, so that the chunk as it was is always "points done, and fill".
+    stale = np.zeros(done_ds.shape, dtype=bool)
+
+    def seen(selection, data):
+        grid = selection[:grid_ndim]
+        blank = _is_fill(np.asarray(data), ds.fillvalue)
+        if blank.ndim > grid_ndim:
+            blank = blank.reshape(blank.shape[:grid_ndim] + (-1,)).all(axis=-1)
+        stale[grid] |= ~blank & ~written[grid]
+
+    for name in names[1:]:
+        ds = f[name]
+        torn[name], values[name] = failing_chunks(ds, keep, seen=None if keep else seen)
+    if not any(torn.values()):
+        return (Recovery(torn=torn, done=written, stale=stale) if stale.any() else None), values
+    done = np.asarray(values["done"], dtype=np.int8)
     lost = np.zeros(done.shape, dtype=bool)
     chunks = {name: {} for name in names}
     suspect = np.zeros(done.shape, dtype=bool)  # points whose done flag came from a torn chunk
@@ -222,8 +251,9 @@ def find(f, keep=False):
         chunks["done"][offset] = array
     if keep:
         values["done"] = done
-    return Recovery(torn={k: v for k, v in torn.items()}, done=done.astype(bool), chunks=chunks, lost=lost,
-                    recovered=recovered), values
+    done = done.astype(bool)
+    return Recovery(torn=torn, done=done, chunks=chunks, lost=lost, recovered=recovered,
+                    stale=(stale | lost) & ~done), values
 
 
 def _readable(ds, failing):
@@ -270,8 +300,28 @@ def repair(f, recovery, fsync):
         ds = f[name]
         for offset, array in chunks.items():
             ds.id.write_direct_chunk(offset, chunk_bytes(ds, array))
+        if recovery.stale is not None and recovery.stale.any():
+            _clear(ds, recovery.stale, set(chunks))
     f.flush()
     fsync(f)
+
+
+def _clear(ds, points, skip):
+    """Set ``points`` (a mask over the grid) of ``ds`` to its fill value, chunk by chunk (but the
+    chunks in ``skip``, stored whole already)."""
+    grid_ndim = points.ndim
+    if grid_ndim == 0 or ds.chunks is None:
+        ds[...] = ds.fillvalue
+        return
+    corners = {tuple(int(i) // c * c for i, c in zip(where, ds.chunks)) for where in zip(*np.nonzero(points))}
+    for corner in sorted(corners):
+        offset = corner + (0,) * (ds.ndim - grid_ndim)
+        if offset in skip:
+            continue
+        where = _chunk_slices(ds, offset)
+        data = ds[where]
+        data[points[where[:grid_ndim]]] = ds.fillvalue
+        ds[where] = data
 
 
 def _in_chunks(ds, offsets):

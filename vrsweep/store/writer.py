@@ -242,14 +242,17 @@ class ResultWriter:
     def _repair_torn_chunks(self, h5file):
         """Put back what a kill cut mid-write (store/torn.py): chunks whose checksum fails are
         recovered exactly where their checksum confirms it, else their points are computed again;
-        one line says which. Every chunk is read once to find them."""
+        one line says which. Values of points not done (a write a kill stopped before its flags)
+        go back to their fill value, so that a later cut chunk is always one that can be told.
+        Every chunk is read once."""
         from vrsweep.store import torn
 
         recovery, _ = torn.find(h5file)  # an error: open_for_resume's "corrupt", the file closed
         if recovery is None:
             return
         torn.repair(h5file, recovery, _fsync)
-        notice(f"Note: {recovery.describe(self.path)}")
+        if recovery.n_torn:
+            notice(f"Note: {recovery.describe(self.path)}")
 
     # -- state ----------------------------------------------------------------------------
 
