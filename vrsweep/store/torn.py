@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import h5py
 import numpy as np
 
-from vrsweep.store.layout import point_variables_of
+from vrsweep.store.layout import point_label, point_variables_of, scale_names
 
 CHECKSUM_BYTES = 4  # fletcher32, after the chunk's data
 # Bytes read at a time while looking for failing chunks (reader.CHECK_BLOCK_BYTES's reason).
@@ -136,6 +136,7 @@ class Recovery:
     lost: np.ndarray = None
     recovered: int = 0  # done points of torn chunks whose values were recovered, verified
     stale: np.ndarray = None  # points not done that hold values (a write its kill stopped before its flags)
+    examples: list = field(default_factory=list)  # labels of the first points lost (g=1.5, Omega=4)
 
     def __post_init__(self):
         if self.lost is None:
@@ -158,7 +159,9 @@ class Recovery:
         checked = f"{self.recovered} point(s) done before recovered, checked against the chunks' checksums"
         if not self.n_lost:
             return f"{what}: every point done before is recovered, checked against the chunks' checksums"
-        unreadable = f"{self.n_lost} point(s) that may have been done cannot be read back"
+        more = ", ..." if self.n_lost > len(self.examples) else ""
+        unreadable = (f"{self.n_lost} point(s) that may have been done cannot be read back "
+                      f"({'; '.join(self.examples)}{more})")
         then = ("they read as not computed (resuming the run computes them again)" if reading
                 else "they are computed again")
         return f"{what}: {unreadable}, {then}" + (f"; {checked}" if self.recovered else "")
@@ -252,7 +255,9 @@ def find(f, keep=False):
     if keep:
         values["done"] = done
     done = done.astype(bool)
-    return Recovery(torn=torn, done=done, chunks=chunks, lost=lost, recovered=recovered,
+    axes = {name: f[name][()] for name in (scale_names(done_ds) if grid_ndim else ())}
+    examples = [point_label(axes, index) for index in np.flatnonzero(lost.reshape(-1))[:3]]
+    return Recovery(torn=torn, done=done, chunks=chunks, lost=lost, recovered=recovered, examples=examples,
                     stale=(stale | lost) & ~done), values
 
 
