@@ -54,9 +54,10 @@ INTERNAL_ATTRS = frozenset(
 )
 BOOKKEEPING = ("done", "owned")
 
-# ~128 KiB chunks: well under HDF5's 1 MiB default chunk cache, a few chunks per variable for a
-# 10^5-point grid, and small enough that a chunk cache holds every chunk a write touches.
-CHUNK_TARGET_BYTES = 4 * 1024  # small: a sweep chunk writes shuffled points, touching many HDF5 chunks
+# 4 KiB chunks (each with its checksum): a sweep chunk writes shuffled points, touching many HDF5
+# chunks, each read and written whole, so small ones cost less per point written; small, too, is
+# what a kill cutting a chunk's write puts at stake (store/torn.py recovers it).
+CHUNK_TARGET_BYTES = 4 * 1024
 
 
 def utc_now_iso():

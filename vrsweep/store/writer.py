@@ -2,7 +2,7 @@
 
 Why crash-safe
 --------------
-Datasets are chunked (about 128 KiB per chunk, trailing axes whole, so a C-order run of points
+Datasets are chunked (about 4 KiB per chunk, trailing axes whole, so a C-order run of points
 touches few chunks), uncompressed and allocated at creation time (``H5D_ALLOC_TIME_EARLY``). After
 ``create`` the file's metadata therefore never changes while points are written: a write only
 overwrites raw bytes at fixed places. ``write_points`` writes the values, flushes and fsyncs, and
