@@ -203,8 +203,9 @@ def test_a_chunk_that_cannot_be_told_is_computed_again(tmp_path, capfd, assert_i
     assert np.array_equal(done, np.isin(np.arange(N), FIRST) & ~lost)
     err = capfd.readouterr().err
     # named by their parameters: the first three points of the chunk done before (0, 7, 14: g = 0)
-    assert err.count("\n") == 1 and (f"{lost.sum()} point(s) that may have been done cannot be read back (g=0, Omega=3; "
-                                     "g=0, Omega=3.42857; g=0, Omega=3.85714, ...), they are computed again") in err
+    assert err.count("\n") == 1 and (f"{lost.sum()} point(s) that may have been done cannot be read back "
+                                     "(g=0, Omega=3; g=0, Omega=3.42857; g=0, Omega=3.85714, ...), "
+                                     "they are computed again") in err
     finish_and_compare(path, tmp_path, assert_identical)
 
 
@@ -265,7 +266,8 @@ def test_merge_of_a_shard_with_a_cut_chunk_says_to_resume_it(tmp_path):
     with h5py.File(path, "r+") as f:
         f.attrs["shard"] = "0/2"
     reseal(path)
-    with pytest.raises(ResultFileError, match=r"holds 1 chunk\(s\) whose write a kill cut \(their checksums fail\): "
-                                              r"resume that shard with ResultWriter.open_for_resume, which repairs them"):
+    with pytest.raises(ResultFileError, match=r"holds 1 chunk\(s\) whose write a kill cut \(their checksums "
+                                              r"fail\): resume that shard with ResultWriter.open_for_resume, "
+                                              r"which repairs them"):
         merge_results([path], tmp_path / "merged.h5", allow_missing=True)
     assert not (tmp_path / "merged.h5").exists()

@@ -11,7 +11,8 @@ h5netcdf backend reads it as it is; this module adds only what xarray cannot kno
 Nothing is read until it is used: variables stay on disk until indexed, computed or loaded
 (``ds.R.sel(Omega=4).values``, ``ds.load()``). Close the Dataset (or use ``with``) to release the
 file. An unfinished sweep or shard file is the exception: it is read whole when opened, so that
-its points not done read as not computed (:func:`_as_done`). ``status`` keeps its int8 codes with the CF attributes ``flag_values`` and ``flag_meanings``
+its points not done read as not computed (:func:`_as_done`). ``status`` keeps its int8 codes
+with the CF attributes ``flag_values`` and ``flag_meanings``
 (no fill-value masking, so -1 = not computed stays -1); :func:`status_names` turns codes into
 names, and CF-aware tools (cf_xarray's ``ds.status.cf == "ok"``) decode them as well.
 """
