@@ -10,8 +10,8 @@ only then sets ``done`` and flushes again, so a point is never marked done befor
 on disk. A chunk is rewritten in place, with the points already in it unchanged: a kill in the
 middle of that write leaves it part new, part old, failing its checksum, and ``open_for_resume``
 recovers it (store/torn.py). ``finish`` works on a copy and renames it into place, so a crash
-while finishing leaves the checkpoint as it was. Compression is deliberately off: compressed chunks change size and would
-make every write a metadata update.
+while finishing leaves the checkpoint as it was. Compression is deliberately off: compressed
+chunks change size and would make every write a metadata update.
 
 File locking (shared and NFS file systems)
 ------------------------------------------
