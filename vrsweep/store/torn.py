@@ -154,7 +154,10 @@ class Recovery:
 
     def describe(self, path, reading=False):
         """One line: what was cut, and what is computed again (``reading``: what a reader shows)."""
-        what = (f"{path}: a kill cut the write of {self.n_torn} chunk(s) of "
+        # A reader may open a file a live run is writing (HDF5_USE_FILE_LOCKING=FALSE) and catch a
+        # chunk mid-write: it cannot tell that from a kill, so it names both.
+        cause = "a kill, or the run still writing the file," if reading else "a kill"
+        what = (f"{path}: {cause} cut the write of {self.n_torn} chunk(s) of "
                 f"{', '.join(name for name, offsets in self.torn.items() if offsets)} (their checksums fail)")
         checked = f"{self.recovered} point(s) done before recovered, checked against the chunks' checksums"
         if not self.n_lost:
