@@ -112,6 +112,32 @@ def test_a_map_of_motion_gives_each_kind_its_own_colour(files):
         "periodic", "quasi_periodic", "chaotic", "not_settled"]
 
 
+def test_a_motion_figure_sets_failed_points_apart_from_points_not_computed(files):
+    """--kind motion drew a failed point (motion 'none') in the light grey of a point not computed,
+    and a strip of a file not finished ended in a ValueError on the stored fill (-1). Failed,
+    not computed and every kind differ by 8 in L*, each named on the colour bar (the strip's
+    ticks), and the title counts both."""
+    ds = load_results(files["plane"])
+    ds["motion"].values[0, :], ds["status"].values[0, :] = 0, 1  # failed: no motion
+    ds["done"].values[1, :], ds["motion"].values[1, :] = False, -1  # not computed: the fill
+    fig = plot.motion_figure(ds)
+    mesh = _mesh(fig.axes[0])
+    failed, missing = (to_rgba(mesh.cmap(mesh.norm(value))) for value in mesh.get_array().reshape(
+        len(ds["Omega"]), len(ds["g"]))[0, :2])
+    assert abs(_lightness(failed) - _lightness(missing)) >= 8.0, (failed, missing)
+    assert _apart_in_grey([mesh.cmap(k) for k in range(mesh.cmap.N)]) >= 8.0
+    names = [t.get_text() for t in fig.axes[1].get_yticklabels()]
+    assert "not computed" in names and "failed (none)" in names
+    assert to_rgba(mesh.cmap(mesh.norm(names.index("failed (none)") - 1))) == failed  # named where drawn
+    title = fig._vrsweep_description[0]
+    assert f"{len(ds['Omega'])} not computed" in title and f"{len(ds['Omega'])} failed" in title
+    strip = plot.motion_figure(ds.isel(Omega=0))  # a ValueError before
+    ticks = [t.get_text() for t in strip.axes[0].get_yticklabels()]
+    (dots,) = strip.axes[0].collections
+    drawn = [to_rgba(colour) for colour in dots.get_facecolors()[:2]]
+    assert drawn == [failed, missing] and "not computed" in ticks
+
+
 def test_an_integer_map_refuses_a_continuous_scale(files):
     with pytest.raises(UsageError, match="^vmin and vmax set a continuous colour scale; var period holds integers"):
         plot.plot(files["plane"], var="period", vmax=3)

@@ -118,6 +118,15 @@ class _Sweep:
                                     path=self.path)
         return dict(self.config.parameters, **self.selected, **coordinates)
 
+    def with_variable(self, name, values):
+        """This view with ``name``'s values replaced (the same shape; the Dataset given is untouched)."""
+        import copy
+
+        other = copy.copy(self)
+        other.ds = self.ds.assign({name: self.ds[name].copy(data=values)})
+        other.variables = _Values(other.ds)
+        return other
+
     def require(self, *names):
         missing = [name for name in names if name not in self.variables]
         if missing:

@@ -811,9 +811,15 @@ def status_figure(ds, x_axis=None) -> Figure:
                         x_axis, "status of the point", "How each point's integration ended")
 
 
-# One colour per kind of motion (results.Motion's order): none (failed) grey as the status
-# figure's not-computed, then periodic, quasi-periodic, chaotic, not settled (MOTION_KIND_COLOURS).
-MOTION_COLOURS = ["0.85", *MOTION_KIND_COLOURS]
+# {code: colour} of --kind motion: a point not computed (the stored fill, -1) light grey as on every
+# figure, one that failed (Motion.NONE) dark grey as a value meaning none on every integer map (both
+# were light grey: a failed point read as one not yet run), then periodic, quasi-periodic, chaotic,
+# not settled (MOTION_KIND_COLOURS), as --var motion draws them.
+NOT_COMPUTED_CODE = -1
+MOTION_COLOURS = {NOT_COMPUTED_CODE: NOT_COMPUTED_GREY, int(Motion.NONE): NO_VALUE_GREY,
+                  **dict(zip((int(kind) for kind in Motion if kind != Motion.NONE), MOTION_KIND_COLOURS))}
+MOTION_NAMES = {NOT_COMPUTED_CODE: "not computed", int(Motion.NONE): "failed (none)",
+                **{int(kind): kind.name.lower().replace("_", "-") for kind in Motion if kind != Motion.NONE}}
 
 
 @figure_options
@@ -824,13 +830,24 @@ def motion_figure(ds, x_axis=None) -> Figure:
     if "motion" not in view.variables:
         raise ResultFileError(f"{view.path} has no motion (written by vrsweep before 0.6.0): run the sweep "
                               "again to classify its points")
-    names = [kind.name.lower().replace("_", "-") for kind in Motion]
-    return _flag_figure(view, "motion", [int(kind) for kind in Motion], names, MOTION_COLOURS, x_axis,
-                        "kind of motion", "The kind of motion at each point")
+    codes = list(MOTION_COLOURS)
+    return _flag_figure(view, "motion", codes, [MOTION_NAMES[code] for code in codes],
+                        [MOTION_COLOURS[code] for code in codes], x_axis, "kind of motion",
+                        "The kind of motion at each point")
 
 
 def _flag_figure(view, name, codes, names, colours, x_axis, y_label, title):
-    """A flag variable (one code per point, one colour per code): a strip (1 axis) or a map (2)."""
+    """A flag variable (one code per point, one colour per code): a strip (1 axis) or a map (2).
+
+    codes: every code drawn, NOT_COMPUTED_CODE among them; a point not done (or holding a value
+    that is no code: a fill) is drawn and counted as not computed, never taken for another code
+    (motion's fill -1 was drawn as 'none', and a strip of a partial file ended in a ValueError)."""
+    codes = list(codes)
+    flags = np.asarray(view.variables[name])
+    if "done" in view.variables:
+        flags = np.where(np.asarray(view.variables["done"], dtype=bool), flags, NOT_COMPUTED_CODE)
+    flags = np.where(np.isin(flags, codes), flags, NOT_COMPUTED_CODE)
+    view = view.with_variable(name, flags)
     cmap = ListedColormap(colours)
     norm = BoundaryNorm(np.arange(min(codes) - 0.5, max(codes) + 1.5), cmap.N)
     panels = _map_panels(view)
