@@ -29,6 +29,14 @@ sweep:
   g: {start: 0.0, stop: 30.0, num: 4, continuation: both}
 integration: {transient_periods: 3, measure_periods: 4, strobe_periods: 2}
 """
+CUBE = """\
+model: effective
+sweep:
+  g: {start: 0.0, stop: 30.0, num: 3}
+  Omega: [4.0, 5.0]
+  Delta: [1.0, 1.5, 2.0, 2.5]
+integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 2}
+"""
 BASINS = """\
 parameters: {g: 5.0, Omega: 5.0}
 sweep:
@@ -42,7 +50,7 @@ integration: {transient_periods: 10, measure_periods: 6, strobe_periods: 3}
 def files(tmp_path_factory, invoke, write_config):
     folder = tmp_path_factory.mktemp("figures")
     made = {}
-    for name, text in (("plane", PLANE), ("line", LINE), ("basins", BASINS)):
+    for name, text in (("plane", PLANE), ("line", LINE), ("basins", BASINS), ("cube", CUBE)):
         out = folder / f"{name}.h5"
         result = invoke("run", write_config(folder, text, name=f"{name}.yaml"), "-o", out, "--quiet")
         assert result.exit_code == 0, result.output
@@ -456,8 +464,6 @@ def test_every_categorical_palette_stays_apart_in_greyscale():
     between any two colours; beyond six, the rarer categories are told apart in colour."""
     from vrsweep.plot.palettes import LIGHTNESS_STEP, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, categorical
     from vrsweep.plot.labels import RELIABLE_COLOURS
-    from vrsweep.plot.sweeps import LEGEND_CURVES
-
     assert LIGHTNESS_STEP == 8.0
     for count in range(1, 7):
         assert _apart_in_grey(categorical(count) + [NO_VALUE_GREY, NOT_COMPUTED_GREY, "black", "white"]) >= 8.0, count
@@ -467,7 +473,7 @@ def test_every_categorical_palette_stays_apart_in_greyscale():
     many = [_lightness(colour) for colour in categorical(16)]  # beyond: dark to light
     assert np.all(np.diff(many) > 0), many
     assert _apart_in_grey(list(STATUS_COLOURS.values())) >= 8.0
-    assert _apart_in_grey(list(RELIABLE_COLOURS[:LEGEND_CURVES])) >= 8.0  # curves told apart by colour alone
+    assert _apart_in_grey(list(RELIABLE_COLOURS)) >= 8.0  # every curve a figure draws with a legend
 
 
 def test_six_attractors_six_periods_and_every_status_are_apart_in_greyscale(files):
@@ -585,3 +591,55 @@ def test_the_curves_of_a_variable_stay_apart_in_greyscale(files):
             for second in curves[k + 1:]:
                 assert first.get_marker() != second.get_marker() or \
                     abs(_lightness(first.get_color()) - _lightness(second.get_color())) >= 8.0
+
+
+def test_as_many_curves_as_a_figure_allows_keep_apart_in_greyscale(files):
+    """From the fourth curve on, response, lambda_1 and bifurcation figures took tab10's red, purple,
+    brown... in turn: red, blue and purple are L* 47, 48 and 52, one grey on a greyscale page. With
+    as many curves as a figure draws with a legend (MAX_CURVES), every two differ by 8 in L*, and
+    a ninth is refused rather than drawn in a repeated colour."""
+    from matplotlib.colors import to_rgb
+
+    from vrsweep.plot.labels import MAX_CURVES
+
+    assert MAX_CURVES == 8
+    plane = load_results(files["plane"]).isel(Omega=slice(0, MAX_CURVES))
+    cube = load_results(files["cube"])  # Omega x Delta: 8 curves over g, each in the legend
+    figures = {"response": (plot.response_figure(cube, x_axis="g"), "periodic"),  # the marks, whatever their kind
+               "variable": (plot.variable_figure(plane, "x_max", x_axis="g"), None),
+               "impacts": (plot.impacts_figure(plane, x_axis="g"), None),
+               "lyapunov": (plot.lyapunov_figure(plane, x_axis="g"), "lyapunov"),
+               "bifurcation": (plot.bifurcation_figure(plane, x_axis="g"), "strobe")}
+    for kind, (fig, gid) in figures.items():
+        ax = fig.axes[0]
+        curves = [line for line in ax.get_lines() if (gid is None and len(line.get_xdata()) == len(plane["g"]))
+                  or (gid is not None and gid in (line.get_gid() or ""))]
+        colours = {to_rgb(line.get_color()) for line in curves}
+        assert len(colours) == MAX_CURVES, (kind, colours)
+        assert _apart_in_grey(colours) >= 8.0, (kind, sorted(_lightness(colour) for colour in colours))
+    nine = load_results(files["plane"]).isel(Omega=slice(0, MAX_CURVES + 1))
+    for draw in (plot.lyapunov_figure, plot.bifurcation_figure, plot.impacts_figure):
+        with pytest.raises(UsageError, match="^9 curves"):
+            draw(nine, x_axis="g")
+
+
+def test_the_resonance_lines_of_several_curves_are_each_curves_own(files):
+    """Bifurcation and lambda_1 figures of curves over Omega drew one line g_res = 21.065, the
+    resonance at the config's Omega = 4, which none of the curves had. Each curve gets its own,
+    Omega^2 sqrt(2 (omega^2 + omega0^2) / (3 alpha)) (eq3.4, written out here), in its colour."""
+    from matplotlib.colors import to_rgb
+
+    ds = load_results(files["plane"]).isel(Omega=slice(0, 4))
+    alpha, omega0, omega = 0.1, 0.1, 0.5  # the paper's, the plane's config
+    expected = [Omega ** 2 * np.sqrt(2 * (omega ** 2 + omega0 ** 2) / (3 * alpha)) for Omega in ds["Omega"].values]
+    for fig in (plot.bifurcation_figure(ds, x_axis="g"), plot.lyapunov_figure(ds, x_axis="g")):
+        ax = fig.axes[0]
+        lines = [line for line in ax.get_lines() if "g_{res}" in line.get_label()]
+        positions = sorted(float(line.get_xdata()[0]) for line in lines)
+        in_view = [g for g in expected if g <= float(ds["g"].max())]
+        assert len(in_view) >= 2 and np.allclose(positions, in_view, rtol=1e-12), (positions, expected)
+        curves = {line.get_label(): to_rgb(line.get_color()) for line in ax.get_lines()
+                  if line.get_gid() in ("strobe", "lyapunov")}
+        for line in lines:
+            owner = line.get_label().split(":")[0]
+            assert curves[owner] == to_rgb(line.get_color()), (owner, line.get_label())

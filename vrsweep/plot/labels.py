@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError
 from vrsweep.plot import layout
+from vrsweep.plot.palettes import LINE_COLOURS
 
 from vrsweep.numerics.model import (
     INITIAL_STATE_LONG_NAMES, INITIAL_STATE_SYMBOLS, PARAMETER_LONG_NAMES, PARAMETER_SYMBOLS,
@@ -37,8 +38,9 @@ DIMENSIONLESS = ("1", "")  # the paper's model is dimensionless: such axes show 
 
 MODEL_EQUATIONS = {"original": "original system eq2.1-eq2.2", "effective": "effective system eq2.10"}
 DIRECTION_NAMES = {1: "up", -1: "down"}
-RELIABLE_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
-                    "tab:pink", "tab:olive")
+# One colour per curve, every two apart on a greyscale page (palettes.LINE_COLOURS): as many as
+# MAX_CURVES, so that no figure with a legend repeats a colour or a grey.
+RELIABLE_COLOURS = LINE_COLOURS
 FAILED_COLOUR = "tab:red"
 FAILED_ROW_HEIGHT = 0.035  # axes fraction per row of failed-point marks at the bottom edge
 MARKERS = {False: "o", True: "s"}  # period found: circle; none found (period 0): square

@@ -9,16 +9,17 @@ from matplotlib.figure import Figure
 from vrsweep.errors import ResultFileError
 from vrsweep.plot.labels import (
     parameter_symbol,
-    FAILED_COLOUR, FAILED_ROW_HEIGHT, LYAPUNOV_SYMBOL, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
+    FAILED_COLOUR, FAILED_ROW_HEIGHT, LYAPUNOV_SYMBOL, MAX_CURVES, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _point_classes, _progress_note, _span_grid, _Sweep,
 )
-from vrsweep.plot.sweeps import _draw_bifurcation, _draw_resonance_lines
+from vrsweep.plot.sweeps import _draw_bifurcation, _draw_resonance_lines, _refuse_too_many_curves
 
 
 
 STUCK_COLOUR = "tab:cyan"
+CURVE_STYLES = ("-", "--", ":")  # not "-.": the resonance lines (eq3.4) are dash-dot
 
 
 @figure_options
@@ -61,9 +62,13 @@ def _draw_lyapunov(ax, view, x_axis):
     """lambda_1 with its band, the zero line, -inf and failed points; returns the -inf note."""
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     curves = view.curve_coordinates(x_axis)
+    _refuse_too_many_curves(view, curves, MAX_CURVES, "lyapunov", x_axis)  # no more than colours apart in grey
     n_stuck = 0
     for k, (where, label) in enumerate(curves):
         colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
+        # Each curve its own line style as well as its colour: the lines cross and overlap, and the
+        # zero line is black and solid.
+        style = CURVE_STYLES[k % len(CURVE_STYLES)] if len(curves) > 1 else "-"
         exponent = view.along("lyapunov", x_axis, **where)
         error = view.along("lyapunov_err", x_axis, **where) if "lyapunov_err" in view.variables \
             else np.zeros_like(exponent)
@@ -73,7 +78,8 @@ def _draw_lyapunov(ax, view, x_axis):
         band = np.where(finite, error, np.nan)
         ax.fill_between(x, exponent - band, exponent + band, where=finite, color=colour, alpha=0.2, lw=0,
                         label=None if k else "95 % band (lyapunov_err)")
-        ax.plot(x, np.where(finite, exponent, np.nan), "-", color=colour, lw=0.8, label=label or None, gid="lyapunov")
+        ax.plot(x, np.where(finite, exponent, np.nan), ls=style, color=colour, lw=0.8 if style == "-" else 1.0,
+                label=label or None, gid="lyapunov")
         ax.plot(x[chaotic], exponent[chaotic], "o", ms=3.5, color=colour, ls="none", gid="chaotic",
                 label=None if k else f"{LYAPUNOV_SYMBOL} > 0 beyond its band: chaotic")
         calm = finite & ~chaotic

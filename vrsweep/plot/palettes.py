@@ -33,6 +33,14 @@ STATUS_COLOURS = {"not_computed": NOT_COMPUTED_GREY, "ok": "#009988", "max_steps
                   "diverged": "#CC3311", "chatter_limit": "#66CCEE", "step_too_small": "#004488",
                   "non_finite": "#000000"}
 
+# The curves of one figure (a response, --var, impacts, lambda_1 or bifurcation figure with a legend,
+# up to labels.MAX_CURVES of them), in turn: each two at least LIGHTNESS_STEP apart in L* (48, 67, 58,
+# 39, 77, 28, 16, 0), so that none repeats another's grey. tab10 in turn repeated them from the
+# fourth curve on: its red, blue and purple are L* 47, 48 and 52. The first three are tab10's, as
+# before (one to three curves look as they did); the rest fill the gaps in lightness, in hues of
+# their own (magenta, light cyan, brown, navy, black).
+LINE_COLOURS = ("tab:blue", "tab:orange", "tab:green", "#993388", "#66CCEE", "#663333", "#222255", "#000000")
+
 SEQUENTIAL = "viridis"  # more categories than QUALITATIVE and EXTRA hold: in order, lighter and lighter
 
 

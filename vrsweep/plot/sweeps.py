@@ -34,8 +34,9 @@ from vrsweep.results import Motion, Status
 
 
 LEGEND_CURVES = 3        # more curves over one other parameter than this: a colour scale, not a legend
-# Each curve of a --var or impacts figure its own marker as well as colour: beyond the third,
-# RELIABLE_COLOURS (tab10) repeat greys (red 47, blue 48, purple 52), and the marks mean nothing else there.
+# Each curve of a --var or impacts figure its own marker as well as its colour (RELIABLE_COLOURS,
+# every two apart in grey): the marks mean nothing else there, and tell the curves apart where the
+# colours alone do not (a legend's small samples).
 CURVE_MARKERS = "os^Dv<>p"
 MAX_SCALED_CURVES = 16   # with a colour scale, curves stay apart up to this many
 CURVE_SCALE = "viridis"
@@ -929,6 +930,9 @@ def _draw_bifurcation(ax, view, x_axis):
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     n_strobe = view.variables["strobe_x"].shape[-1]
     curves = view.curve_coordinates(x_axis)
+    # No more curves than colours apart in grey (an x axis asked for on a map drew a curve per row,
+    # their colours in turn).
+    _refuse_too_many_curves(view, curves, MAX_CURVES, "strobe_x", x_axis)
     unlocked = np.zeros(len(x), dtype=bool)  # over every curve: where the forcing does not repeat every T
     repeats = {}
     for k, (where, label) in enumerate(curves):
@@ -1026,9 +1030,20 @@ def _barrier_levels(view, x_axis, x):
 
 def _draw_resonance_lines(ax, view, x_axis, x):
     """g_res (eq3.4) as vertical lines, where it falls on the drawn range (the paper's theory:
-    none for a written model, whose parameters are its own)."""
+    none for a written model, whose parameters are its own): at each curve's parameters, in its
+    colour and named by its label where the curves' resonances differ. At the config's parameters
+    alone, the curves of Omega = 3 ... 6 got one line, g_res at the config's Omega = 4."""
     if view.config is None or view.config.written:
         return
-    parameters = view.parameters()
-    for position in resonance_positions(parameters, x_axis, np.linspace(x.min(), x.max(), FINE_POINTS)):
-        ax.axvline(position, color="0.4", ls="-.", lw=0.9, label=_resonance_label(x_axis, position))
+    fine = np.linspace(x.min(), x.max(), FINE_POINTS)
+    lines = {}  # {positions: [(curve number, label)]}: one line for curves that share their resonance
+    for k, (where, label) in enumerate(view.curve_coordinates(x_axis)):
+        fixed = {axis: float(view.axes[axis][index]) for axis, index in where.items() if axis != "direction"}
+        positions = tuple(resonance_positions(view.parameters(**fixed), x_axis, fine))
+        lines.setdefault(positions, []).append((k, label))
+    for positions, owners in lines.items():
+        k, label = owners[0]
+        several = len(lines) > 1
+        for position in positions:
+            ax.axvline(position, color=RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)] if several else "0.4", ls="-.",
+                       lw=0.9, label=(f"{label}: " if several and label else "") + _resonance_label(x_axis, position))
