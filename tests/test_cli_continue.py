@@ -206,7 +206,9 @@ def test_plot_draws_the_branch_with_a_sweep(branch_file, invoke, tmp_path, write
     # one legend entry per kind of bifurcation, each bifurcation tagged on the curve (F1, ...)
     assert "F: fold" in labels, labels
     assert any(text.get_text().startswith("F1") for text in axes[0].texts)
-    styles = {line.get_linestyle() for line in axes[0].lines if line.get_color() == "C0"}
+    from vrsweep.plot.branches import BRANCH_COLOUR
+
+    styles = {line.get_linestyle() for line in axes[0].lines if line.get_color() == BRANCH_COLOUR}
     assert {"-", "--"} <= styles  # stable solid, unstable dashed
     assert figure._suptitle is not None and "continued in" in figure._suptitle.get_text()
     paper = plot([path, sweep], title=False, size=(3.4, 3.6))  # the options of every figure

@@ -249,3 +249,24 @@ def test_one_symbol_one_meaning_bifurcations_periods_and_sweeps(tmp_path, invoke
     along = {line.get_marker() for line in drawn if line.get_gid() is None and line.get_marker() != "None"}
     assert swept == {">", "<", "x"} and tagged == {"^", "s"} and along, (swept, tagged, along)
     assert not swept & tagged and not swept & along and not tagged & along, (swept, tagged, along)
+
+
+def test_the_periods_colours_are_the_projects_and_apart_in_grey(tmp_path):
+    """The periods took tab10's C0, C4, C5...: the first two (L* 48 and 52) were one grey. The
+    periods drawn, and up to six periods of any branch figure, differ by 8 in L* (computed in
+    tests/greyscale.py); the theory's grey, unmarked, differs so from the one unmarked period."""
+    from matplotlib.colors import to_hex
+
+    from greyscale import lightness
+    from handmade import write_switched_branch_file
+    from vrsweep.plot.branches import THEORY_COLOUR, _period_colours
+    from vrsweep.plot.palettes import QUALITATIVE
+
+    fig = plot.plot(write_switched_branch_file(tmp_path / "switched.h5"))
+    drawn = {to_hex(line.get_color()) for line in _data_lines(fig.axes[0])}
+    assert drawn == {to_hex(colour) for colour in QUALITATIVE[:2]}, drawn
+    for count in range(1, 7):
+        colours = list(_period_colours([2 ** k for k in range(count)]).values())
+        light = sorted(lightness(colour) for colour in colours)
+        assert count == 1 or min(np.diff(light)) >= 8.0, (count, light)
+        assert abs(lightness(colours[0]) - lightness(THEORY_COLOUR)) >= 8.0

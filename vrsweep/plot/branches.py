@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import UsageError
 from vrsweep.plot.analytic import _draw_branches, analytic_branches
 from vrsweep.plot.layout import fit_y_to_view
+from vrsweep.plot.palettes import LINE_COLOURS, QUALITATIVE, categorical
 from vrsweep.plot.labels import (
     parameter_symbol,
     _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label, written_gain,
@@ -32,7 +33,12 @@ UNKNOWN_BIFURCATION_MARKER = "8"
 # A sweep's points: the direction the parameter moved, along the horizontal axis; "x" where no
 # direction (every point from the config's initial state).
 SWEEP_MARKERS = {None: "x", 1: ">", -1: "<"}
-BRANCH_COLOUR = "C0"
+# The sweeps' colours in turn (the sweeps of a figure, apart in grey: palettes.LINE_COLOURS).
+SWEEP_COLOURS = LINE_COLOURS[2:]
+BRANCH_COLOUR = QUALITATIVE[0]  # the first period's: palettes.categorical's first
+# The corrected theory's branches (effective model), under the orbits: a light grey (L* 63) that
+# is not the first period's (29), the one period drawn without markers; the others carry markers.
+THEORY_COLOUR = "0.6"
 # Where a bifurcation is, across the multipliers' panel; named in the legend.
 BIFURCATION_LINE = "0.7"
 BIFURCATION_LINE_LABEL = "bifurcation, in $|\\mu|$"
@@ -246,8 +252,8 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
         low, high = values.min(), values.max()
         span = high - low or 1.0
         fine = np.linspace(low - 0.05 * span, high + 0.05 * span, FINE_POINTS)
-        _draw_branches(top, analytic_branches(config.parameters, name, fine, gain=True), "0.6")
-        top.plot([], [], color="0.6", label="theory (corrected)")
+        _draw_branches(top, analytic_branches(config.parameters, name, fine, gain=True), THEORY_COLOUR)
+        top.plot([], [], color=THEORY_COLOUR, label="theory (corrected)")
     marks = _period_marks(periods)
     for number in np.unique(branch):
         mine = branch == number
@@ -338,10 +344,9 @@ def _bifurcation_table(ax, tags, kinds, places, heights, numbers, name):
     table.auto_set_column_width(list(range(5)))
 
 
-# Colours of the periods after the first (BRANCH_COLOUR); C2, C3 are the sweeps'.
-PERIOD_COLOURS = ("C4", "C5", "C6", "C9", "C8", "C7")
-# Markers along the periods' lines after the first, which has none: the periods stay apart in
-# greyscale, where C0 and C4 are the same grey.
+# Markers along the periods' lines after the first, which has none: a second cue beside the colour,
+# and the only one between a seventh period and the rest (palettes.categorical: six colours apart in
+# grey, then others apart in hue only).
 PERIOD_MARKERS = ("v", "P", "X", "*", "h", "1")
 MARK_EVERY = 0.08   # a marker every this share of the panel's diagonal, however dense the points
 MARK_SIZE = 3.0
@@ -367,10 +372,11 @@ def _branch_index(sweep, dim, config):
 
 
 def _period_colours(periods):
-    """{period: colour}: the first point's period in BRANCH_COLOUR, the others in turn."""
+    """{period: colour}: the periods in the order they come, in palettes.categorical's colours
+    (the first BRANCH_COLOUR; up to six every two 8 apart in L*, from the greys too). tab10's C0
+    and C4, the first two periods' colours, were one grey (L* 48 and 52)."""
     order = list(dict.fromkeys(int(p) for p in periods))
-    return {period: BRANCH_COLOUR if k == 0 else PERIOD_COLOURS[(k - 1) % len(PERIOD_COLOURS)]
-            for k, period in enumerate(order)}
+    return dict(zip(order, categorical(len(order))))
 
 
 def _period_marks(periods):
@@ -395,4 +401,4 @@ def _draw_sweep(ax, sweep, name, number, config=None):
         label = "sweep" if direction is None else f"sweep {'up' if direction > 0 else 'down'}"
         marker = SWEEP_MARKERS[None if direction is None else int(np.sign(direction))]
         ax.plot(sweep[name].values, line.values, ls="none", marker=marker, ms=5, mfc="none", mew=1.0,
-                color=f"C{2 + number}", label=label, zorder=4, gid="sweep")
+                color=SWEEP_COLOURS[number % len(SWEEP_COLOURS)], label=label, zorder=4, gid="sweep")
