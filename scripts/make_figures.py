@@ -34,6 +34,41 @@ ROOT = Path(__file__).resolve().parent.parent
 FIGURES = Path("docs/figures")
 RESULTS = Path("results")
 DPI = "110"  # ~100 kB per PNG, sharp enough for the README
+
+
+class Bifurcation:
+    """The ``--point`` of a branch file's bifurcation, named by its kind and where it lies (a value of
+    the branch's parameter, to ``within``), found in the file when the command runs. An index
+    written here picked whatever the branch listed there: a change in the branch (a graze located
+    first, one bifurcation more) silently followed another point, or stopped the recipe."""
+
+    def __init__(self, branch, kind, near, within=0.01):
+        self.branch, self.kind, self.near, self.within = branch, kind, near, within
+
+    def __str__(self):
+        import h5py
+
+        with h5py.File(self.branch, "r") as f:
+            kinds = [k.decode() if isinstance(k, bytes) else str(k) for k in f["bifurcation_kind"][()]]
+            places = [float(p) for p in f["bifurcation_parameter"][()]]
+        found = [index for index, (kind, at) in enumerate(zip(kinds, places))
+                 if kind == self.kind and abs(at - self.near) <= self.within]
+        if len(found) != 1:
+            listed = ", ".join(f"{index}: {kind} at {at:.6g}" for index, (kind, at) in enumerate(zip(kinds, places)))
+            sys.exit(f"make_figures: {self.branch} has {len(found)} {self.kind} points within {self.within:g} of "
+                     f"{self.near:g}, not one (it lists {listed or 'none'}); the recipe names the wrong point")
+        return str(found[0])
+
+    def __repr__(self):
+        return f"{self.kind} near {self.near:g} of {self.branch}"
+
+
+def resolve(words):
+    """A command's words as text, each Bifurcation replaced by its index in its branch file (read now:
+    the file is made by the commands before)."""
+    return [str(word) for word in words]
+
+
 # Maps whose curves are told apart by colour: a 32-colour palette merges an orange curve into
 # viridis' yellow and bands the colour bar, so these stay full-colour (~150 kB). So does the map of
 # R: banded into eight colours, its continuous scale read as eight levels of R.
@@ -128,21 +163,25 @@ COMMANDS = {
         ["plot", "results/map_g_Omega.h5", "-o", "docs/figures/map_g_Omega.png"],
     ],
     # Not in the paper: bifurcation curves over maps (docs/bifurcation-curves.md). --point K is the
-    # bifurcation's index in the branch file (vrsweep info lists them).
+    # bifurcation's index in the branch file (vrsweep info lists them), found by its kind and place.
     "curves_g_Omega_effective": [
         ["run", "configs/curves_g_Omega_effective.yaml", "--overwrite"],
         ["continue", "configs/curves_branch_effective.yaml", "-o", "results/curves_branch_effective.h5",
          "--overwrite"],
-        ["continue", "results/curves_branch_effective.h5", "--point", "2", "--along", "Omega", "--to", "3.5", "5.0",
+        ["continue", "results/curves_branch_effective.h5", "--point",
+         Bifurcation("results/curves_branch_effective.h5", "fold", 25.2675), "--along", "Omega", "--to", "3.5", "5.0",
          "-o", "results/curves_effective_fold.h5", "--overwrite"],
-        ["continue", "results/curves_branch_effective.h5", "--point", "1", "--along", "Omega", "--to", "3.5",
+        ["continue", "results/curves_branch_effective.h5", "--point",
+         Bifurcation("results/curves_branch_effective.h5", "grazing", 25.0849), "--along", "Omega", "--to", "3.5",
          "5.0", "-o", "results/curves_effective_grazing.h5", "--overwrite"],
         ["continue", "configs/curves_branch_effective_large.yaml", "-o", "results/curves_branch_effective_large.h5",
          "--overwrite"],
-        ["continue", "results/curves_branch_effective_large.h5", "--point", "0", "--along", "Omega", "--to", "3.5",
-         "5.0", "-o", "results/curves_effective_period_doubling_large.h5", "--overwrite"],
-        ["continue", "results/curves_branch_effective_large.h5", "--point", "1", "--along", "Omega", "--to", "3.5",
-         "5.0", "-o", "results/curves_effective_grazing_large.h5", "--overwrite"],
+        ["continue", "results/curves_branch_effective_large.h5", "--point",
+         Bifurcation("results/curves_branch_effective_large.h5", "period_doubling", 27.8371), "--along", "Omega",
+         "--to", "3.5", "5.0", "-o", "results/curves_effective_period_doubling_large.h5", "--overwrite"],
+        ["continue", "results/curves_branch_effective_large.h5", "--point",
+         Bifurcation("results/curves_branch_effective_large.h5", "grazing", 29.5122), "--along", "Omega",
+         "--to", "3.5", "5.0", "-o", "results/curves_effective_grazing_large.h5", "--overwrite"],
         ["plot", "results/curves_g_Omega_effective.h5", "results/curves_effective_fold.h5",
          "results/curves_effective_grazing.h5", "results/curves_effective_period_doubling_large.h5",
          "results/curves_effective_grazing_large.h5",
@@ -152,16 +191,18 @@ COMMANDS = {
         ["run", "configs/curves_original.yaml", "--overwrite"],
         *[["continue", f"configs/curves_branch_original_{branch}.yaml", "-o",
            f"results/curves_branch_original_{branch}.h5", "--overwrite"] for branch in ("free", "p1", "p3", "p2")],
-        # The free orbit's graze is bifurcation 1: the branch crosses it onto impacting orbits, whose
-        # own graze at a lower g (bifurcation 0) cannot be followed in two parameters. The period-1
-        # fold (g = 23.51) is bifurcation 1 of its branch: a graze at g = 22.74 (an impact reaching
-        # zero speed, which no curve follows) is located before it.
-        *[["continue", f"results/curves_branch_original_{branch}.h5", "--point", point, "--along", "Delta",
+        # The free orbit's graze (g = 37.98): the branch crosses it onto impacting orbits, whose own
+        # graze at a lower g (37.54) cannot be followed in two parameters. The period-1 fold (g =
+        # 23.51): a graze at g = 22.74 (an impact reaching zero speed, which no curve follows) is
+        # located before it. The period-3 fold at g = 6.24.
+        *[["continue", f"results/curves_branch_original_{branch}.h5", "--point",
+           Bifurcation(f"results/curves_branch_original_{branch}.h5", kind, near), "--along", "Delta",
            "--to", "1.0", "3.0", "-o", f"results/curves_original_{branch}.h5", "--overwrite"]
-          for branch, point in (("free", "1"), ("p1", "1"), ("p3", "0"))],
+          for branch, kind, near in (("free", "grazing", 37.982), ("p1", "fold", 23.51), ("p3", "fold", 6.24))],
         # The period doubling of the orbit of two periods wanders in g: its range is all of the map's.
-        ["continue", "results/curves_branch_original_p2.h5", "--point", "0", "--along", "Delta", "--to", "1.0", "3.0",
-         "--within", "0", "40", "-o", "results/curves_original_p2.h5", "--overwrite"],
+        ["continue", "results/curves_branch_original_p2.h5", "--point",
+         Bifurcation("results/curves_branch_original_p2.h5", "period_doubling", 17.833051), "--along", "Delta",
+         "--to", "1.0", "3.0", "--within", "0", "40", "-o", "results/curves_original_p2.h5", "--overwrite"],
         ["plot", "results/curves_original.h5", "results/curves_original_free.h5", "results/curves_original_p1.h5",
          "results/curves_original_p3.h5", "results/curves_original_p2.h5", "--var", "period",
          "-o", "docs/figures/curves_original.png"],
@@ -197,7 +238,7 @@ def main():
     started = time.monotonic()
     for figure in args.figures or COMMANDS:
         for words in COMMANDS[figure]:
-            words = list(words)
+            words = resolve(words)
             if words[0] == "plot":
                 words += ["--dpi", DPI]
             else:

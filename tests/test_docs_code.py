@@ -346,12 +346,13 @@ def test_make_figures_follows_the_free_orbits_graze(invoke, tmp_path, monkeypatc
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     steps = [words for words in module.COMMANDS["curves_original"]
-             if words[0] == "continue" and "curves_branch_original_free" in " ".join(words)]
+             if words[0] == "continue" and "curves_branch_original_free" in " ".join(map(repr, words))]
     assert len(steps) == 2, steps
     monkeypatch.chdir(tmp_path)
     (tmp_path / "configs").symlink_to(ROOT / "configs")
     (tmp_path / "results").mkdir()
     for words in steps:
+        words = module.resolve(words)  # the --point of the graze at 37.98, found in the branch just made
         result = invoke(*words)
         assert result.exit_code == 0, f"vrsweep {shlex.join(words)}\n{result.output}"
     with h5py.File(tmp_path / steps[1][steps[1].index("-o") + 1], "r") as f:
@@ -359,3 +360,27 @@ def test_make_figures_follows_the_free_orbits_graze(invoke, tmp_path, monkeypatc
         g, delta = f["g"][()], f["Delta"][()]
     # The curve passes through the branch's own graze: Delta = 2.5 (the config's) near g = 37.98.
     assert kinds == ["grazing"] and abs(np.interp(37.98, np.sort(g), delta[np.argsort(g)]) - 2.5) < 0.01
+
+
+def test_make_figures_names_each_followed_bifurcation_by_its_kind_and_place(tmp_path, monkeypatch):
+    """The recipes gave --point as the bifurcation's index in its branch file (--point 2): a change
+    in the branch (a graze located first, one bifurcation more) followed another point with no word
+    said, and changed the figure. Every --point is named by kind and parameter, and found in the
+    file when the command runs; none, or two, stop the recipe naming what the file lists."""
+    from handmade import write_switched_branch_file
+
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "scripts" / "make_figures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    points = [words[words.index("--point") + 1] for commands in module.COMMANDS.values() for words in commands
+              if "--point" in words]
+    assert len(points) == 8 and all(isinstance(point, module.Bifurcation) for point in points), points
+    # The doublings of the handmade branch file: g = 24 (listed first) and g = 25.
+    path = write_switched_branch_file(tmp_path / "switched.h5")
+    words = ["continue", str(path), "--point", module.Bifurcation(path, "period_doubling", 25.0)]
+    assert module.resolve(words) == ["continue", str(path), "--point", "1"]
+    assert module.resolve([module.Bifurcation(path, "period_doubling", 24.0)]) == ["0"]
+    with pytest.raises(SystemExit, match="has 0 fold points within 0.01 of 24.*0: period_doubling at 24"):
+        module.resolve([module.Bifurcation(path, "fold", 24.0)])
+    with pytest.raises(SystemExit, match="has 2 period_doubling points within 2 of 24.5"):
+        module.resolve([module.Bifurcation(path, "period_doubling", 24.5, within=2.0)])
