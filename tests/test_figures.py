@@ -643,3 +643,18 @@ def test_the_resonance_lines_of_several_curves_are_each_curves_own(files):
         for line in lines:
             owner = line.get_label().split(":")[0]
             assert curves[owner] == to_rgb(line.get_color()), (owner, line.get_label())
+
+
+def test_a_log_map_draws_zero_counts_in_its_bottom_colour_not_as_no_value(files):
+    """A logarithmic norm masks values <= 0 as it masks NaN: cells with no impacts were drawn in
+    the background's light grey, which the title reads as 'no value: not computed or failed',
+    while the caption said they were below the scale, in its bottom colour. They are drawn there."""
+    ds = load_results(files["plane"])
+    ds["impacts_per_period"].values[:2, :] = 0.0
+    fig = plot.map_figure(ds, "impacts_per_period", log=True)
+    mesh = _mesh(fig.axes[0])
+    drawn = mesh.to_rgba(mesh.get_array()).reshape(len(ds["Omega"]), len(ds["g"]), 4)
+    zero = drawn[:, :2].reshape(-1, 4)
+    assert np.all(zero[:, 3] == 1.0)  # opaque: not the background showing through
+    assert np.allclose(zero, to_rgba(mesh.cmap.get_under()))
+    assert f"{2 * len(ds['Omega'])} cells below, down to 0" in fig._vrsweep_description[1]

@@ -670,6 +670,12 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
         ax.set_facecolor(NOT_COMPUTED_COLOUR)  # NaN cells (not computed, or failed) show the background
         minus_infinity = np.isneginf(z)  # lyapunov where the mass stuck: no colour can say -inf
         z = np.where(minus_infinity, np.nan, z)
+        if log and not integer:
+            # A logarithmic norm masks values <= 0 as it masks NaN: a count of no impacts was drawn
+            # as the background, 'no value', where the colour bar's arrow and the caption put it in
+            # the bottom colour. Below the scale's bottom, they are drawn there (under).
+            with np.errstate(invalid="ignore"):
+                z = np.where(np.isfinite(z) & (z <= 0.0), norm.vmin / 2.0, z)
         mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap,
                              norm=norm)
         if name == "lyapunov" and "lyapunov_err" in view.variables:
