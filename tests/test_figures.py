@@ -658,3 +658,18 @@ def test_a_log_map_draws_zero_counts_in_its_bottom_colour_not_as_no_value(files)
     assert np.all(zero[:, 3] == 1.0)  # opaque: not the background showing through
     assert np.allclose(zero, to_rgba(mesh.cmap.get_under()))
     assert f"{2 * len(ds['Omega'])} cells below, down to 0" in fig._vrsweep_description[1]
+
+
+def test_measured_values_at_zero_on_a_log_axis_are_said_not_dropped(files):
+    """On a logarithmic axis matplotlib leaves out values <= 0 without a mark: R = 0 (a written
+    model's response frequency no harmonic of the orbit) vanished from the response and --var
+    figures, and no caption said so. The caption counts them."""
+    ds = load_results(files["plane"]).isel(Omega=0)
+    ds["R"].values[:3] = 0.0
+    ds["Q_amplitude"].values[:3] = 0.0
+    for fig, symbol in ((plot.response_figure(ds, log=True), "R"), (plot.response_figure(ds, log=True, amplitude=True), "|Q|"),
+                        (plot.variable_figure(ds, "R", log=True), "R")):
+        caption = " ".join(fig._vrsweep_description[1].split())
+        assert f"3 measured points with {symbol} = 0 not drawn: below the logarithmic axis" in caption, caption
+    linear = plot.response_figure(ds, log=False)
+    assert "not drawn" not in linear._vrsweep_description[1]  # drawn at zero there

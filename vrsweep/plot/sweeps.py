@@ -342,7 +342,11 @@ def _beyond_view(ax, drawn, theory, barrier_levels, amplitude, reach=None):
         if levels.size and (np.all(levels > high) or np.all(levels < low)):  # its legend entry would name no line
             notes.append(f"the barrier's level {'A = Δ' if amplitude else 'A/c = Δ/c'} "
                          f"({float(levels.min()):.3g}) lies {'above' if np.all(levels > high) else 'below'} the view")
+    nonpositive = _nonpositive_note(ax, in_view(list(drawn)), "|Q|" if amplitude else "R")
+    if nonpositive:
+        notes.append(nonpositive)
     hidden_below, hidden_above = outside(list(drawn))
+    hidden_below = hidden_below[hidden_below > 0] if ax.get_yscale() == "log" else hidden_below  # said above
     if reach is None and hidden_below.size + hidden_above.size:
         count = hidden_below.size + hidden_above.size
         notes.append(f"{count} measured point{'s' if count != 1 else ''} outside the limits asked for "
@@ -394,8 +398,9 @@ def variable_figure(ds, name, x_axis=None, log=None) -> Figure:
     if len(curves) > 1:
         ax.legend(fontsize="x-small", loc="best")
     long_name = str(ds[name].attrs.get("long_name", "")).split(" (")[0]  # its first words: the title is one line
+    nonpositive = _nonpositive_note(ax, values, name)
     notes = "; ".join(note for note in (_progress_note(view), f"{missing} points with no value left out"
-                                        if missing else "") if note)
+                                        if missing else "", nonpositive) if note)
     _title(fig, f"{name} against {parameter_symbol(x_axis)}" + (f" ({long_name})" if long_name else ""),
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
@@ -418,6 +423,20 @@ def _line_label(ds, name):
         long_name = str(ds[name].attrs.get("long_name", "")).split(" (")[0]
         words = f"{name}: {long_name}" if long_name else name
     return f"{words}{units_suffix(ds[name].attrs.get('units'))}"
+
+
+def _nonpositive_note(ax, values, symbol):
+    """The caption's words for measured ``values`` <= 0 on a logarithmic vertical axis, which
+    matplotlib leaves out without a mark (a written model's R = 0 where its response frequency is
+    no harmonic of the orbit; no impacts): '' where there are none or the axis is linear."""
+    values = np.asarray(values, dtype=np.float64)
+    count = int(np.sum(np.isfinite(values) & (values <= 0.0)))
+    if ax.get_yscale() != "log" or not count:
+        return ""
+    zero = bool(np.all(values[np.isfinite(values) & (values <= 0.0)] == 0.0))
+    what = f"{symbol} = 0" if zero else f"{symbol} ≤ 0"
+    return (f"{count} measured point{'s' if count != 1 else ''} with {what} not drawn: "
+            "below the logarithmic axis (a linear one on request)")
 
 
 def _decades(arrays):
