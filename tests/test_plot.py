@@ -380,6 +380,9 @@ def test_impacts_per_period_one_panel_per_file(files):
         assert name + ".h5" in ax.get_title()
         mean_lines = [c for c in ax.collections if c.get_label().startswith("mean")]
         assert mean_lines and f"{counts[4:].mean():.2f}" in mean_lines[0].get_label()
+        # The mean lies on the counts where they hardly vary: tab:red on tab:blue (L* 47 and 48) was
+        # one grey on a greyscale page.
+        assert abs(_lightness(mean_lines[0].get_colors()[0]) - _lightness(line.get_color())) >= 8.0
     assert "(a) g = 5" in fig.axes[0].get_title() and "(b) g = 20" in fig.axes[1].get_title()
     assert "slow period number" in fig.axes[1].get_xlabel()
 

@@ -113,6 +113,7 @@ def _window_text(window, data):
 ROW_TITLES = {"original": "original system (eq2.1-eq2.2)", "effective": "effective system (eq2.10)"}
 TRANSIENT_COLOUR = "0.65"
 STEADY_COLOUR = "tab:blue"
+MEAN_COLOUR = "black"  # the impacts figure's mean over the measured periods, over the counts in STEADY_COLOUR
 
 
 @figure_options
@@ -215,13 +216,15 @@ def impacts_per_period_figure(datasets) -> Figure:
         periods = np.arange(1, len(counts) + 1)
         model_title = config.model.title if config is not None and config.written else ROW_TITLES.get(run.model,
                                                                                                       run.model)
-        ax.plot(periods, counts, "o-", color="tab:blue", lw=0.7, ms=2.5, label=model_title)
+        ax.plot(periods, counts, "o-", color=STEADY_COLOUR, lw=0.7, ms=2.5, label=model_title)
         if config is not None:
             n_transient = config.integration.transient_periods
             if 0 < n_transient < len(counts):
                 mean = counts[n_transient:].mean()
                 ax.axvline(n_transient + 0.5, color="0.4", ls=":", lw=1.0, label="end of the transient")
-                ax.hlines(mean, n_transient + 0.5, len(counts) + 0.5, color="tab:red", lw=1.4,
+                # Black: tab:red (L* 47) was the counts' tab:blue (48) on a greyscale page, and the
+                # mean lies on the counts where they hardly vary.
+                ax.hlines(mean, n_transient + 0.5, len(counts) + 0.5, color=MEAN_COLOUR, lw=1.4,
                           label=f"mean over the measured periods: {mean:.2f}")
         letter = f"({'abcdefgh'[k]}) " if len(datasets) > 1 else ""
         ax.set_title(f"{letter}{_point_text(config)}  ·  {os.path.basename(data.path or '')}  ·  "
