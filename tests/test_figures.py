@@ -673,3 +673,23 @@ def test_measured_values_at_zero_on_a_log_axis_are_said_not_dropped(files):
         assert f"3 measured points with {symbol} = 0 not drawn: below the logarithmic axis" in caption, caption
     linear = plot.response_figure(ds, log=False)
     assert "not drawn" not in linear._vrsweep_description[1]  # drawn at zero there
+
+
+def test_every_sweep_figure_labels_its_axes_with_the_units_the_file_gives(files):
+    """Only maps and --var curves took a coordinate's units from the file: the response, impacts,
+    status, motion, bifurcation and lambda_1 figures labelled the same axis without them."""
+    ds = load_results(files["plane"]).isel(Omega=slice(0, 2))
+    ds["g"].attrs["units"] = "m s-2"
+    ds["Omega"].attrs["units"] = "rad s-1"
+    figures = [plot.response_figure(ds, x_axis="g"), plot.impacts_figure(ds, x_axis="g"),
+               plot.status_figure(ds, x_axis="g"), plot.motion_figure(ds, x_axis="g"),
+               plot.bifurcation_figure(ds, x_axis="g"), plot.lyapunov_figure(ds, x_axis="g"),
+               plot.variable_figure(ds, "x_max", x_axis="g")]
+    for fig in figures:
+        assert fig.axes[0].get_xlabel().endswith("[m s-2]") or fig.axes[-1].get_xlabel().endswith("[m s-2]"), \
+            [ax.get_xlabel() for ax in fig.axes]
+    plane = load_results(files["plane"])
+    plane["g"].attrs["units"], plane["Omega"].attrs["units"] = "m s-2", "rad s-1"
+    for fig in (plot.map_figure(plane, "R"), plot.status_figure(plane), plot.motion_figure(plane)):
+        ax = fig.axes[0]
+        assert ax.get_xlabel().endswith("[m s-2]") and ax.get_ylabel().endswith("[rad s-1]"), fig

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import ResultFileError
 from vrsweep.plot.labels import (
     parameter_symbol,
-    FAILED_COLOUR, FAILED_ROW_HEIGHT, LYAPUNOV_SYMBOL, MAX_CURVES, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
+    FAILED_COLOUR, FAILED_ROW_HEIGHT, LYAPUNOV_SYMBOL, MAX_CURVES, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _point_classes, _progress_note, _span_grid, _Sweep,
@@ -48,7 +48,7 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     note = _draw_lyapunov(ax, view, x_axis)
     if not bifurcation:
         failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
-    ax.set_xlabel(parameter_label(x_axis))
+    ax.set_xlabel(view.axis_label(x_axis))
     notes = "; ".join(n for n in (_progress_note(view), failure_note, note) if n)
     what = (f"Bifurcation diagram (top) and largest Lyapunov exponent {LYAPUNOV_SYMBOL} (bottom)" if bifurcation
             else f"Largest Lyapunov exponent {LYAPUNOV_SYMBOL}")

@@ -11,7 +11,7 @@ import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.plot.labels import (
-    parameter_symbol, use_model,
+    parameter_label, parameter_symbol, use_model,
     CURVES_NOT_MAP, DIRECTION_NAMES, FAILED_COLOUR, FAILED_ROW_HEIGHT, RELATIVE_ERROR_LIMIT, _number, _parse_config,
 )
 from vrsweep.results import Status
@@ -117,6 +117,12 @@ class _Sweep:
             raise UsageError.naming("{path} holds no readable config: cannot compute the analytic side",
                                     path=self.path)
         return dict(self.config.parameters, **self.selected, **coordinates)
+
+    def axis_label(self, name):
+        """The label of axis ``name``: its words and symbol, with the units its coordinate's
+        attributes give (only the maps' axes took them: the curves' did not)."""
+        units = self.ds[name].attrs.get("units") if name in self.ds.coords else None
+        return parameter_label(name, units)
 
     def with_variable(self, name, values):
         """This view with ``name``'s values replaced (the same shape; the Dataset given is untouched)."""

@@ -255,7 +255,7 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     them (within THEORY_REACH on a log axis, LINEAR_THEORY_REACH times the largest on a linear
     one), so that a theory far from them (A/c ~ 1e-6 at small Omega, where first-order averaging
     says nothing) neither makes the axis logarithmic nor stretches it; it is clipped, and said."""
-    ax.set_xlabel(parameter_label(x_axis))
+    ax.set_xlabel(view.axis_label(x_axis))
     if view.config is not None and view.config.written:
         response = view.config.model.as_data()["response"]
         frequency = written_expression(response["frequency"])
@@ -391,7 +391,7 @@ def variable_figure(ds, name, x_axis=None, log=None) -> Figure:
         log = values.size > 1 and bool(np.all(values > 0)) and _decades([values]) >= np.log10(LOG_SPAN)
     if log:
         ax.set_yscale("log")
-    ax.set_xlabel(parameter_label(x_axis, ds[x_axis].attrs.get("units")))
+    ax.set_xlabel(view.axis_label(x_axis))
     ax.set_ylabel(_line_label(ds, name))
     _span_grid(ax, x)
     ax.grid(alpha=0.3, which="both" if log else "major")
@@ -750,8 +750,8 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
                 handles["failed"] = Line2D([], [], ls="none", marker="x", color=FAILED_COLOUR,
                                            path_effects=cased(FAILED_COLOUR, 1.0),
                                            label="integration failed (status ≠ ok)")
-        ax.set_xlabel(parameter_label(x_axis, ds[x_axis].attrs.get("units")))
-        ax.set_ylabel(parameter_label(y_axis, ds[y_axis].attrs.get("units")))
+        ax.set_xlabel(view.axis_label(x_axis))
+        ax.set_ylabel(view.axis_label(y_axis))
         cell_ticks(ax, view.axes[x_axis], view.axes[y_axis])
         if panel_title:
             ax.set_title(panel_title, fontsize="medium")
@@ -808,7 +808,7 @@ def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
     if failure_note:
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ls="none",
                 label="integration failed (no count)")
-    ax.set_xlabel(parameter_label(x_axis))
+    ax.set_xlabel(view.axis_label(x_axis))
     ax.set_ylabel(f"mean impacts per {period_words()}")
     if log:
         ax.set_yscale("symlog", linthresh=1.0)  # zero counts stay on the axis
@@ -887,8 +887,8 @@ def _flag_figure(view, name, codes, names, colours, x_axis, y_label, title):
             mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap, norm=norm)
             bar = fig.colorbar(mesh, ax=ax, ticks=codes)
             bar.ax.set_yticklabels(names, fontsize="x-small")
-            ax.set_xlabel(parameter_label(x_axis))
-            ax.set_ylabel(parameter_label(y_axis))
+            ax.set_xlabel(view.axis_label(x_axis))
+            ax.set_ylabel(view.axis_label(y_axis))
             cell_ticks(ax, view.axes[x_axis], view.axes[y_axis])
             if panel_title:
                 ax.set_title(panel_title, fontsize="medium")
@@ -909,7 +909,7 @@ def _flag_figure(view, name, codes, names, colours, x_axis, y_label, title):
         ax.set_yticks(codes, names, fontsize="small")
         ax.set_ylim(min(codes) - 0.5, max(codes) + 0.5)
         _span_grid(ax, view.axes[x_axis])
-        ax.set_xlabel(parameter_label(x_axis))
+        ax.set_xlabel(view.axis_label(x_axis))
         ax.set_ylabel(y_label)
         ax.grid(alpha=0.3)
         if len(curves) > 1:
@@ -940,7 +940,7 @@ def bifurcation_figure(ds, x_axis=None) -> Figure:
     fig = _new_figure(8.0, 5.0)
     ax = fig.subplots()
     failure_note = _draw_bifurcation(ax, view, x_axis)
-    ax.set_xlabel(parameter_label(x_axis))
+    ax.set_xlabel(view.axis_label(x_axis))
     notes = "; ".join(note for note in (_progress_note(view), failure_note) if note)
     _title(fig, f"Bifurcation diagram: x sampled once per {period_words(symbol=False)} against "
                 f"{parameter_symbol(x_axis)} "
