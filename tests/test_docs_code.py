@@ -384,3 +384,40 @@ def test_make_figures_names_each_followed_bifurcation_by_its_kind_and_place(tmp_
         module.resolve([module.Bifurcation(path, "fold", 24.0)])
     with pytest.raises(SystemExit, match="has 2 period_doubling points within 2 of 24.5"):
         module.resolve([module.Bifurcation(path, "period_doubling", 24.5, within=2.0)])
+
+
+def test_make_figures_shrinks_a_figure_without_moving_its_lines_colours(tmp_path):
+    """make_figures re-saves the docs' PNGs with a palette; a median cut to 32 colours spent them
+    on antialiased greys and drew the branch figure's red period (#CC3311) 97 levels off, dark
+    brown. Thin lines in every colour a curve or a period takes keep their colour to 3 levels."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    from vrsweep.plot.palettes import LINE_COLOURS, QUALITATIVE
+    from matplotlib.colors import to_rgb
+
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "scripts" / "make_figures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    colours = list(dict.fromkeys(LINE_COLOURS + QUALITATIVE))
+    fig = Figure(figsize=(7.5, 6.5))
+    ax = fig.subplots()
+    x = np.linspace(0.0, 1.0, 200)
+    for k, colour in enumerate(colours):
+        ax.plot(x, np.sin(3 * x + k) + 0.3 * k, color=colour, lw=1.8)
+        ax.text(0.1, 0.3 * k, "text in grey " * 3, color="0.3", fontsize="x-small")  # greys to spend colours on
+    ax.set_title("a title " * 8)
+    path = tmp_path / "figure.png"
+    fig.savefig(path, dpi=110)
+    before = np.asarray(Image.open(path).convert("RGB")).astype(float)
+    module.shrink_png(path)
+    after = np.asarray(Image.open(path).convert("RGB")).astype(float)
+    for colour in colours:
+        target = np.array(to_rgb(colour)) * 255
+        drawn = np.all(np.abs(before - target) < 2.0, axis=2)
+        assert drawn.sum() > 100, colour
+        moved = np.abs(after[drawn] - target).max(axis=1)
+        assert np.median(moved) <= 3.0, (colour, float(np.median(moved)))
