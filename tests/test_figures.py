@@ -693,3 +693,26 @@ def test_every_sweep_figure_labels_its_axes_with_the_units_the_file_gives(files)
     for fig in (plot.map_figure(plane, "R"), plot.status_figure(plane), plot.motion_figure(plane)):
         ax = fig.axes[0]
         assert ax.get_xlabel().endswith("[m s-2]") and ax.get_ylabel().endswith("[rad s-1]"), fig
+
+
+def test_a_remade_legend_keeps_its_marks_size_and_a_long_one_goes_below(files, tmp_path):
+    """A legend made again (--legend outside, or in more columns) took its own markerscale on
+    handles that carried it already: a bifurcation diagram's dots 9 times their size below, and
+    each column count tried 3 times larger again, until drawing ran out of memory (five curves
+    over Omega). Its marks keep the size they have inside; a long legend goes below the panel,
+    where 'best' laid it over the samples."""
+    ds = load_results(files["plane"])
+    one = ds.isel(Omega=0)
+    inside = plot.bifurcation_figure(one, legend="best").axes[0].get_legend()
+    below = plot.bifurcation_figure(one, legend="outside").legends[0]
+
+    def sizes(legend):
+        return {text.get_text(): handle.get_markersize() for text, handle in zip(legend.get_texts(),
+                                                                                  legend.legend_handles)
+                if handle.get_marker() in (".", "o")}  # the samples' marks (lines have none to draw)
+
+    assert sizes(below) == sizes(inside) and max(sizes(inside).values()) == 3 * 2.5
+    five = plot.bifurcation_figure(ds.isel(Omega=slice(0, 5)), x_axis="g")
+    assert five.legends and five.axes[0].get_legend() is None
+    five.savefig(tmp_path / "five.png", dpi=60)  # drawn, in bounded memory
+    assert max(sizes(five.legends[0]).values()) == 3 * 2.5

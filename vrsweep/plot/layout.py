@@ -141,7 +141,15 @@ def _legends(fig):
 
 
 def _entries(legend):
+    """(handles, labels) to make ``legend`` again: its own handles, whose markers are already scaled
+    by its markerscale, so that a legend made of them takes markerscale 1 (REMADE_SCALE)."""
     return list(legend.legend_handles), [text.get_text() for text in legend.get_texts()]
+
+
+# The markerscale of a legend made of another's handles (_entries): they carry its scale already.
+# Its own scale again made a bifurcation diagram's dots 9 times their size under --legend outside,
+# and each column count _widen tried 3 times larger again, until drawing them ran out of memory.
+REMADE_SCALE = 1.0
 
 
 def _style_of(legend):
@@ -180,7 +188,7 @@ def place_legend(fig, where):
     handles, labels = _entries(legend)
     style = _style_of(legend)
     fontsize = legend.get_texts()[0].get_fontsize() if legend.get_texts() else "x-small"
-    markerscale = legend.markerscale
+    markerscale = REMADE_SCALE
     legend.remove()  # a figure legend leaves fig.legends too
     style = {key: value for key, value in style.items() if value is not None}
     if where == "best":
@@ -419,7 +427,7 @@ def _remake(legend, fig, **changes):
     the same spacing (an abbreviated legend stays compact)."""
     handles, labels = _entries(legend)
     texts = legend.get_texts()
-    options = dict(fontsize=texts[0].get_fontsize() if texts else "x-small", markerscale=legend.markerscale,
+    options = dict(fontsize=texts[0].get_fontsize() if texts else "x-small", markerscale=REMADE_SCALE,
                    handlelength=legend.handlelength, handletextpad=legend.handletextpad,
                    columnspacing=legend.columnspacing, labelspacing=legend.labelspacing, borderpad=legend.borderpad,
                    borderaxespad=legend.borderaxespad, frameon=legend.get_frame_on(),

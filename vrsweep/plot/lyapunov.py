@@ -41,7 +41,7 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     if bifurcation:
         fig = _new_figure(8.0, 7.5)
         top, ax = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
-        failure_note = _draw_bifurcation(top, view, x_axis)
+        failure_note = _draw_bifurcation(top, view, x_axis, below_when_long=False)  # below: the exponent's legend
     else:
         fig = _new_figure(8.0, 4.5)
         ax = fig.subplots()

@@ -949,9 +949,10 @@ def bifurcation_figure(ds, x_axis=None) -> Figure:
     return fig
 
 
-def _draw_bifurcation(ax, view, x_axis):
+def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
     """The bifurcation diagram's panel; returns the notes for the caption (failures, samples not
-    at the forcing's period)."""
+    at the forcing's period). Its legend goes inside, or below the panel when longer than
+    LONG_LEGEND and ``below_when_long`` (the figure has no other legend there)."""
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     n_strobe = view.variables["strobe_x"].shape[-1]
     curves = view.curve_coordinates(x_axis)
@@ -999,8 +1000,18 @@ def _draw_bifurcation(ax, view, x_axis):
     period = "$T$ the model's period" if view.config is not None and view.config.written else "$T = 2\\pi/\\omega$"
     ax.set_ylabel(f"stroboscopic position $x(nT)$, {period}")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize="x-small", loc="best", markerscale=3)
+    handles, labels = ax.get_legend_handles_labels()
+    if below_when_long and len(labels) > LONG_LEGEND:
+        # Below the panel: 'best' found no empty corner for ten entries (curves of five Omega, their
+        # hollow marks and resonances) and laid them over the samples.
+        ax.figure.legend(handles, labels, fontsize="x-small", loc="outside lower center", markerscale=3,
+                         ncol=_legend_columns(ax.figure, 2))
+    else:
+        ax.legend(fontsize="x-small", loc="best", markerscale=3)
     return "; ".join(note for note in (failure_note, strobe_note) if note)
+
+
+LONG_LEGEND = 5  # a bifurcation diagram's legend of more entries goes below the panel
 
 
 LONGEST_REPEAT = 1000  # periods T: a forcing that repeats after more is said to repeat never
