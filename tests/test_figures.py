@@ -716,3 +716,13 @@ def test_a_remade_legend_keeps_its_marks_size_and_a_long_one_goes_below(files, t
     assert five.legends and five.axes[0].get_legend() is None
     five.savefig(tmp_path / "five.png", dpi=60)  # drawn, in bounded memory
     assert max(sizes(five.legends[0]).values()) == 3 * 2.5
+
+
+def test_a_map_of_the_period_says_its_unit(files):
+    """The colour bar of --var period read 'period' (its long name too long to show): a period of
+    what? Slow periods 2 pi/omega, on the map and on curves of it."""
+    ds = load_results(files["plane"])
+    bar = plot.map_figure(ds, "period").axes[1]
+    assert bar.get_ylabel() == "period, in units of the slow period $2\\pi/\\omega$"
+    curve = plot.variable_figure(ds.isel(Omega=0), "period")
+    assert curve.axes[0].get_ylabel() == "period, in units of the slow period $2\\pi/\\omega$"

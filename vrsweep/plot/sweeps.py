@@ -413,6 +413,8 @@ def _map_words(name):
         return written_gain(model.response_scale)
     if name == "impacts_per_period":
         return f"mean impacts per {period_words()}"
+    if name == "period":  # its long name is too long for a colour bar, and 'period' alone names no unit
+        return f"period, in units of the {period_words()}"
     return MAP_LABELS.get(name)
 
 
