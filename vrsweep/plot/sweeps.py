@@ -767,7 +767,8 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
                                         f"colour scale {cap_caption}" if cap_caption else "")
                       if note)
     grey = "not computed or failed" if ds[name].dtype.kind == "f" else "not computed"
-    _title(fig, f"{label.splitlines()[0]} over {_symbol(x_axis)} and {_symbol(y_axis)} (light grey: no value: {grey})",
+    what = "period" if name == "period" else label.splitlines()[0]  # its unit is the colour bar's, not the title's
+    _title(fig, f"{what} over {_symbol(x_axis)} and {_symbol(y_axis)} (light grey: no value: {grey})",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
