@@ -619,8 +619,10 @@ def test_as_many_curves_as_a_figure_allows_keep_apart_in_greyscale(files):
         assert _apart_in_grey(colours) >= 8.0, (kind, sorted(_lightness(colour) for colour in colours))
     nine = load_results(files["plane"]).isel(Omega=slice(0, MAX_CURVES + 1))
     for draw in (plot.lyapunov_figure, plot.bifurcation_figure, plot.impacts_figure):
-        with pytest.raises(UsageError, match="^9 curves"):
+        with pytest.raises(UsageError, match="^9 curves") as refused:
             draw(nine, x_axis="g")
+        # A map of the samples x(nT) is no figure vrsweep draws: not suggested for them.
+        assert ("map" in str(refused.value)) == (draw is not plot.bifurcation_figure), str(refused.value)
 
 
 def test_the_resonance_lines_of_several_curves_are_each_curves_own(files):

@@ -119,11 +119,14 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
 
 
 def _refuse_too_many_curves(view, curves, limit, name, x_axis):
-    """UsageError when more than ``limit`` curves would share one plot: fix the other axes."""
+    """UsageError when more than ``limit`` curves would share one plot: fix the other axes (or draw a
+    map, where ``name`` has one value per point: not strobe_x, a bifurcation diagram's samples)."""
     if len(curves) > limit:
         others = [n for n in view.parameter_axes if n != x_axis]
-        raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}, "
-                                "or draw {kind} map", n=len(curves), name=name, axis=x_axis, others=", ".join(others))
+        mappable = name in view.variables and np.ndim(view.variables[name]) == len(view.axes)
+        raise UsageError.naming("{n} curves of {name} against {axis} on one plot: fix {others} with {at}"
+                                + (", or draw {kind} map" if mappable else ""),
+                                n=len(curves), name=name, axis=x_axis, others=", ".join(others))
 
 
 def _curve_colours(fig, ax, ds, view, scale_axis):
@@ -792,8 +795,7 @@ def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
         raise UsageError.naming("{vmin} and {vmax} set the colour scale of a map; this is a curve")
     x_axis = _choose_x_axis(view, x_axis)
     curves = view.curve_coordinates(x_axis)
-    if len(curves) > MAX_CURVES:
-        raise UsageError.naming("{n} curves on one plot: fix the other axes with {at}", n=len(curves))
+    _refuse_too_many_curves(view, curves, MAX_CURVES, "impacts_per_period", x_axis)
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     fig = _new_figure(8.0, 4.5)
     ax = fig.subplots()
