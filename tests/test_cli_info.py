@@ -197,3 +197,16 @@ def test_a_figure_another_program_wrote_has_no_vrsweep_description(tmp_path, inv
     result = invoke("info", str(path))
     assert result.exit_code == 0, result.output
     assert result.output.strip() == f"{path}: a figure without a vrsweep description in its metadata"
+
+
+
+def test_a_solver_error_not_estimated_says_the_sample_held_no_converged_point(finished, info_json):
+    """The rerun takes only a sample of the grid (execution/solver_error.py): with no periodic or
+    quasi-periodic point among it, info must not say the file holds none (it may hold many)."""
+    from vrsweep.commands.info import format_summary
+
+    summary = info_json(finished)
+    summary["solver_error"] = {"relative": None, "points": 0, "rtol": 1e-12}  # as such a file reads
+    text = format_summary(summary)
+    assert ("the sample of points rerun at a tighter tolerance held no periodic or quasi-periodic point"
+            in text), text

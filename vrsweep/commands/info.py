@@ -614,8 +614,11 @@ def format_summary(summary, show_config=False) -> str:
     solver = summary.get("solver_error")
     if solver:
         if solver["relative"] is None:
-            lines.append("solver:      R's solver error not estimated (no periodic or quasi-periodic point to "
-                         "rerun; R_err says how far R is from converged)")
+            # The rerun takes the first points of the grid's shuffled order only (solver_error.py):
+            # the file may well hold periodic points the sample did not.
+            lines.append("solver:      R's solver error not estimated (the sample of points rerun at a tighter "
+                         "tolerance held no periodic or quasi-periodic point; R_err says how far R is from "
+                         "converged)")
         else:
             lines.append(f"solver:      R's error from the integration about {solver['relative']:.1e} relative "
                          f"({solver['points']} converged points rerun at rtol "
