@@ -117,7 +117,10 @@ def test_a_map_of_motion_gives_each_kind_its_own_colour(files):
 
     assert all(colours[k] == to_rgba(MOTION_COLOURS[k]) for k in (1, 2, 3, 4))  # as --kind motion
     assert [t.get_text() for t in fig.axes[1].get_yticklabels()] == [
-        "periodic", "quasi_periodic", "chaotic", "not_settled"]
+        "periodic", "quasi-periodic", "chaotic", "not-settled"]  # named as --kind motion names them
+    ds["motion"].values[0] = 0  # a failed point: 'none' in the file, named as --kind motion names it
+    labels = [t.get_text() for t in plot.map_figure(ds, "motion").axes[1].get_yticklabels()]
+    assert labels[0] == "failed (none)", labels
 
 
 def test_a_motion_figure_sets_failed_points_apart_from_points_not_computed(files):

@@ -535,7 +535,8 @@ def discrete_scale(name, values, attrs=None):
     for value in present:
         if value in flags:
             colours.append(FLAG_COLOURS.get(flags[value]) or ordinary_colours[value])
-            labels.append(flags[value])
+            # --var motion names its values as --kind motion does ('failed (none)', 'quasi-periodic').
+            labels.append(MOTION_NAMES.get(int(value), flags[value]) if name == "motion" else flags[value])
         elif value in special:
             colours.append(NO_VALUE_COLOUR)
             labels.append(f"{value}: {special[value]}")
