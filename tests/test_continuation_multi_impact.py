@@ -642,3 +642,38 @@ def test_a_doubling_and_a_fold_on_one_long_arc_are_both_located_with_critical_mu
     assert located["period_doubling"].parameter < located["fold"].parameter
     assert np.min(np.abs(located["fold"].multipliers - 1.0)) <= 1e-3
     assert np.min(np.abs(located["period_doubling"].multipliers + 1.0)) <= 1e-3
+
+
+def test_a_long_step_over_a_doubling_and_a_graze_locates_the_doubling():
+    """From an 11-impact orbit past the corner (g = 17.793004, multiplier -0.58) one step of 0.05
+    goes up in g over the orbits' period doubling at 17.793014 (the multiplier from -0.58 to -68,
+    then to -145 as their 11th impact slows) and over their graze at 17.797473, onto the free
+    side's 10-impact orbit (multiplier -0.07). det(M + I) has one sign at both ends: the doubling
+    and the graze's jump undo each other, and up to 0.7.3 only the graze was recorded. Each side of
+    the located graze is now tested on its own, up to that side's limit at the graze. SciPy: the
+    located doubling is a fixed point of its map with 11 impacts, and its monodromy (central
+    differences) has a multiplier within 1e-3 of -1."""
+    problem = _problem(1e-12)  # max_step 0.05, initial_step 0.05
+    start, failure = continuation.correct(problem, np.array([-2.64694289, 2.10048646, 17.793004]), PERIODS)
+    assert failure is None and _count(start) == 11 and -1.0 < start.multipliers[0].real < 0.0
+    orbits, found, _ = continuation.follow(problem, start, +1, 17.79, 17.80, 1)
+    assert _count(orbits[0]) == 10 and orbits[0].parameter > 17.7975  # the one step passed both
+    located = {kind: orbit for kind, orbit in found}
+    assert set(located) == {"period_doubling", "grazing"}, found
+    doubling = located["period_doubling"]
+    assert 17.793004 < doubling.parameter < 17.79302 < located["grazing"].parameter
+    assert np.min(np.abs(doubling.multipliers + 1.0)) <= 1e-3
+    fine = _resolving_step(doubling)
+    run = _real(doubling.parameter, doubling.state, 0.0, PERIODS * SLOW_PERIOD, fine)
+    assert _impacts(run) == 11
+    assert np.max(np.abs([run["x_final"], run["v_final"]] - doubling.state)) < 1e-7
+    columns = []
+    for k in range(2):
+        d = np.zeros(2)
+        d[k] = 1e-7
+        ends = [_real(doubling.parameter, doubling.state + sign * d, 0.0, PERIODS * SLOW_PERIOD, fine)
+                for sign in (1.0, -1.0)]
+        columns.append((np.array([ends[0]["x_final"], ends[0]["v_final"]])
+                        - np.array([ends[1]["x_final"], ends[1]["v_final"]])) / 2e-7)
+    mu = np.linalg.eigvals(np.array(columns).T)
+    assert np.min(np.abs(mu + 1.0)) < 1e-3, mu

@@ -441,8 +441,8 @@ def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, i
     return best
 
 
-def _locate(problem, start, tangent, step, kind, value_start, value_end, periods, across_graze=False):
-    """The orbit on the arc from ``start`` (0 < s < step along tangent) where the test function of
+def _locate(problem, start, tangent, step, kind, value_start, value_end, periods, across_graze=False, low=0.0):
+    """The orbit on the arc from ``start`` (low < s < step along tangent) where the test function of
     ``kind`` vanishes, by Illinois regula falsi (grazing: bisection on the impact count), to
     location_tolerance in the parameter and, for a fold, period doubling or Neimark-Sacker point,
     until its critical multiplier is within LOCATED_MULTIPLIER of its critical value (_located;
@@ -454,7 +454,7 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
     extra = [0]
 
     def point_at(s):
-        z_predicted = start.z + s * tangent
+        z_predicted = start.z + (low + s) * tangent
         orbit, failure = correct(problem, z_predicted, periods, tangent, z_predicted, short_difference=True)
         last[0] = orbit
         return orbit, failure
@@ -480,8 +480,8 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
     if kind == "grazing":
         # -1 on the start's side (the same impact count), +1 beyond
         return locate_on_arc(point_at, lambda orbit: -1.0 if orbit.impacts_per_period == value_start else 1.0,
-                             step, -1.0, 1.0, narrow, 60, illinois=False)
-    return locate_on_arc(point_at, TEST_FUNCTIONS[kind], step, value_start, value_end, narrow,
+                             step - low, -1.0, 1.0, narrow, 60, illinois=False)
+    return locate_on_arc(point_at, TEST_FUNCTIONS[kind], step - low, value_start, value_end, narrow,
                          60 + EXTRA_LOCATION_ITERATIONS)
 
 
@@ -504,6 +504,28 @@ def _located(kind, orbit):
     return critical_distance(kind, orbit) <= LOCATED_MULTIPLIER
 
 
+def _graze_limits(problem, previous, current, tangent, step, graze):
+    """The two smooth pieces of an arc that crosses the located grazing.Graze ``graze``: [(low,
+    high, the test functions' orbit at low, at high)], s from 0 to the graze and from the graze
+    to ``step``, each end's monodromy the limit of its own side at the graze (the free map's on
+    the side without the grazing impact, the probe's on the side with it: one multiplier of
+    order 1/u there). None where the graze does not lie inside the arc or its impacting side's
+    limit is not known (the test functions are then compared across the whole arc, as before)."""
+    s_graze = float(tangent @ (graze.z - previous.z))
+    if not 0.0 < s_graze < step:
+        return None
+    free_limit = _graze_orbit(problem, graze)
+    impacting = grazing.impacting_monodromy(problem, graze)
+    if impacting is None:
+        return None
+    impacting_limit = Orbit(**dict(vars(free_limit), monodromy=impacting))
+    if previous.impacts_per_period < current.impacts_per_period:
+        near_previous, near_current = free_limit, impacting_limit
+    else:
+        near_previous, near_current = impacting_limit, free_limit
+    return [(0.0, s_graze, previous, near_previous), (s_graze, step, near_current, current)]
+
+
 def _detect(problem, previous, current, tangent, step, periods, graze=None):
     """Bifurcations on the arc between two consecutive orbits: a list of (kind, Orbit).
     graze: the graze between them that _graze_between located, if any."""
@@ -512,6 +534,26 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
     # an impacting one's -10.9): a sign change there may be the jump, which regula falsi brackets
     # as if it were a root. What it locates is a bifurcation only if a multiplier is critical there.
     crosses_graze = graze is not None or previous.impacts_per_period != current.impacts_per_period
+    # With the graze located, each side of it is smooth, and its test functions are compared on
+    # each side up to the graze: the jump at the graze can undo a sign change (a period doubling
+    # of Fig. 1's 11-impact orbits at g = 17.793014, -0.58 to -68, then their graze at 17.797473,
+    # -145 to a free side's -0.07: the same sign of det(M + I) at both ends of one long step, and
+    # the doubling was not seen, up to 0.7.3).
+    pieces = None
+    if graze is not None and previous.impacts_per_period != current.impacts_per_period:
+        pieces = _graze_limits(problem, previous, current, tangent, step, graze)
+    if pieces is not None:
+        for kind, test in TEST_FUNCTIONS.items():
+            for low, high, first, last in pieces:
+                a, b = test(first), test(last)
+                if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
+                    orbit = _locate(problem, previous, tangent, high, kind, a, b, periods, True, low=low)
+                    if orbit is not None and _located(kind, orbit):
+                        found.append((kind, orbit))
+                    else:
+                        found.append((UNLOCATED_PREFIX + kind, previous))
+        found.append(("grazing", _graze_orbit(problem, graze)))
+        return found
     for kind, test in TEST_FUNCTIONS.items():
         a, b = test(previous), test(current)
         if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:

@@ -243,6 +243,25 @@ def impacting_direction(problem, graze):
     return direction / np.linalg.norm(direction), predictor, np.linalg.norm(direction)
 
 
+def impacting_monodromy(problem, graze):
+    """The monodromy of the map with the grazing impact, next to the graze on its impacting side:
+    the probe orbit's (impacting_direction's, penetration PROBE_PENETRATION), or None where the
+    probe does not gain exactly one impact. Its saltation term grows like 1/u, u ~ 1e-3 the probe
+    impact's speed, so one multiplier is of order 1/u and the other of order u: the signs of
+    det(M - I) and det(M + I) there are the limits of the impacting side's at the graze, which
+    the continuation's test functions need on that side of it (continuation._detect)."""
+    z_g = graze.z
+    gradient = graze.jacobian[2]
+    penetration = PROBE_PENETRATION * max(1.0, abs(barrier(problem, z_g[2])))
+    probe = z_g - (penetration + graze.gap) * gradient / (gradient @ gradient)
+    real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods, problem.method,
+                        model=problem.model)
+    value, free = _free_system(problem, probe, graze.periods, graze.window)
+    if value is None or real.status != Status.OK or real.impacts != free.impacts + 1:
+        return None
+    return real.monodromy.copy()
+
+
 def _grazing_impact_speed(real, window):
     """The speed of the one impact the real map has where the free map has none (NaN if not one)."""
     if window is None:
