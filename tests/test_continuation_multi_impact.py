@@ -677,3 +677,60 @@ def test_a_long_step_over_a_doubling_and_a_graze_locates_the_doubling():
                         - np.array([ends[1]["x_final"], ends[1]["v_final"]])) / 2e-7)
     mu = np.linalg.eigvals(np.array(columns).T)
     assert np.min(np.abs(mu + 1.0)) < 1e-3, mu
+
+
+def test_the_branch_switched_at_the_bubbles_first_doubling_goes_on_up_without_turning_back():
+    """The branch of six slow periods born at the period-3 branch's doubling at g = 17.798688 curls
+    within 1e-4 of it (its multiplier from +1 through -0.38 and back up to 0.29 by 17.798788). Its
+    second step, from an orbit 5e-6 from the doubling, converged onto an orbit 1e-4 on (0.78 steps
+    off the predictor), skipping the curl between, and the tangent there, oriented by the last one,
+    pointed back along the branch: the branch walked back to its doubling and ended newton_failed
+    there (up to 0.7.3). A step that lands more than half a step from its predictor is retried
+    shorter, and the branch goes on up in g through the curl. SciPy: its orbits are fixed points of
+    SciPy's map of six slow periods (20 impacts) and not of three."""
+    from vrsweep.analysis import period_doubling
+
+    problem = _problem(1e-12)
+    doubling, failure = continuation.correct(
+        problem, np.array([-2.6499651153970105, 2.10435423601687, 17.798688018805226]), PERIODS)
+    assert failure is None and np.min(np.abs(doubling.multipliers + 1.0)) < 1e-3
+    branch, detail, _ = period_doubling.doubled_branch(problem, doubling, 17.7986, 17.7991, 10)
+    assert branch is not None, detail
+    values = [orbit.parameter for orbit in branch.orbits]
+    assert values[0] == doubling.parameter and len(values) >= 4, branch.ends
+    assert np.all(np.diff(values) > 0.0), values  # away from the doubling, never back towards it
+    for orbit in (branch.orbits[2], branch.orbits[-1]):
+        run = _real(orbit.parameter, orbit.state, 0.0, 6 * SLOW_PERIOD, 0.05)
+        assert _impacts(run) == 20
+        assert np.max(np.abs([run["x_final"], run["v_final"]] - orbit.state)) < 1e-7
+        half = _real(orbit.parameter, orbit.state, 0.0, 3 * SLOW_PERIOD, 0.05)
+        assert np.max(np.abs([half["x_final"], half["v_final"]] - orbit.state)) > 1e-5
+
+
+def test_the_period12_branch_keeps_to_its_own_orbits_and_scipy_confirms_them():
+    """The branch of twelve slow periods born at the period-6 branch's doubling at g = 17.793026
+    (44 impacts, its larger multiplier growing to -1e3) has, 2e-6 away in state, orbits whose
+    large multiplier has the other sign (at g = 17.79326: -1483 on one, +1480 on the other).
+    Steps of 1e-5 hopped between the two and recorded an unlocated fold and period doubling at each
+    hop (17.793134, 17.793161, ... up to 0.7.3): the null vector of [M - I | F_lam] reverses
+    across such a hop, which no step along one branch does (continuation._flips), and the step is
+    retried shorter. SciPy: orbits of the branch are fixed points of SciPy's map of twelve slow
+    periods with 44 impacts, and not of its map of six."""
+    from vrsweep.analysis import period_doubling
+
+    problem = _problem(1e-12)
+    doubling, failure = continuation.correct(
+        problem, np.array([-2.6469759712271563, 2.100529985398681, 17.793026432790715]), 6)
+    assert failure is None and np.min(np.abs(doubling.multipliers + 1.0)) < 1e-3
+    branch, detail, _ = period_doubling.doubled_branch(problem, doubling, 17.79, 17.80, 16)
+    assert branch is not None and branch.periods == 12, detail
+    assert not [kind for kind, _ in detail if kind.startswith("unlocated_")], detail
+    values = [orbit.parameter for orbit in branch.orbits]
+    assert values[-1] > 17.7931 and np.all(np.diff(values) > 0.0), values
+    assert all(orbit.multipliers[0].real < -1.0 for orbit in branch.orbits[3:])
+    for orbit in (branch.orbits[len(values) // 2], branch.orbits[-1]):
+        run = _real(orbit.parameter, orbit.state, 0.0, 12 * SLOW_PERIOD, 0.01)
+        assert _impacts(run) == 44
+        assert np.max(np.abs([run["x_final"], run["v_final"]] - orbit.state)) < 1e-7
+        half = _real(orbit.parameter, orbit.state, 0.0, 6 * SLOW_PERIOD, 0.01)
+        assert np.max(np.abs([half["x_final"], half["v_final"]] - orbit.state)) > 1e-5

@@ -413,6 +413,7 @@ def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, i
     at the first failure. Shared by branches (_locate) and bifurcation curves (curves.py).
     """
     low, high, side, best = 0.0, step, 0, None
+    true_low, true_high = f_low, f_high  # the values themselves (Illinois halves f_low, f_high)
     for _ in range(iterations):
         s = 0.5 * (low + high)
         if illinois:
@@ -427,16 +428,26 @@ def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, i
         if value == 0.0:
             return point
         if np.sign(value) == np.sign(f_low):
-            low, f_low = s, value
+            low, f_low, true_low = s, value, value
             if side == -1 and illinois:
                 f_high *= 0.5  # Illinois: the end that stays is halved
             side = -1
         else:
-            high, f_high = s, value
+            high, f_high, true_high = s, value, value
             if side == 1 and illinois:
                 f_low *= 0.5
             side = 1
         if narrow(low, high, value):
+            if illinois and true_low != true_high:
+                # One last point at the straight line's root through the bracket's two corrected
+                # ends, kept where it is nearer the root: the bracket is narrow in the parameter,
+                # the value at its last end need not be (the hysteresis example's fold was left at
+                # a multiplier 2.6e-5 from +1, its bracket's other end 2.5e-5 on the other side).
+                root = (low * true_high - high * true_low) / (true_high - true_low)
+                if low < root < high:
+                    point, failure = point_at(root)
+                    if not failure and abs(value_of(point)) < abs(value):
+                        return point
             break
     return best
 
@@ -462,8 +473,12 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
     def narrow(low, high, value):
         if (high - low) <= 1e-14 * step:
             return True
-        # The parameter interval between the bracket's ends: tangent[2] * (high - low) to first order.
-        if not (abs(tangent[2]) * (high - low) <= tolerance or (kind != "grazing" and abs(value) <= 1e-12)):
+        # The parameter interval between the bracket's ends: tangent[2] * (high - low) to first order;
+        # at a fold the parameter turns (its tangent component is near zero there), so the arc itself
+        # is narrowed (the hysteresis example's fold was left with its multiplier 2.6e-5 from +1, at
+        # a bracket of 1e-4 along the arc, when a refused step shifted its bracket).
+        spread = (high - low) if kind == "fold" else abs(tangent[2]) * (high - low)
+        if not (spread <= tolerance or (kind != "grazing" and abs(value) <= 1e-12)):
             return False
         if kind == "grazing":
             return True
@@ -744,6 +759,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
     before = None  # the orbit before ``current``
     memo = {}  # the graze the last jump check located (_graze_between)
     grazing_reason = None
+    strayed = False  # a step from ``current`` was refused as too long for its curvature (_strays, _flips)
     while True:
         if len(orbits) >= max_points:
             return orbits, bifurcations, (ENDED_MAX_POINTS, f"{max_points} points reached")
@@ -796,8 +812,14 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                               f"{grazing_reason or 'no branch beyond the graze was found'}")
                     return orbits, bifurcations, (ENDED_GRAZING, reason)
                 status, reason = failure or (ENDED_NEWTON, "the corrector keeps jumping to another branch")
+                # Where steps from here were refused as too long for the branch's curvature, the
+                # branch is there and curves on a scale below min_step (Fig. 1's bubble of six
+                # periods at g = 17.798772: SciPy's orbits go on, steps of 2e-6 follow it).
+                curl = (f"; the branch curves here on a scale below min_step = {options['min_step']:g} (steps from "
+                        "this orbit were refused as too long for its curvature): a smaller continuation.min_step "
+                        "may follow it" if strayed else "")
                 reason = (f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
-                          f"{_section_note(problem, current)}")
+                          f"{curl}{_section_note(problem, current)}")
                 return orbits, bifurcations, (status, reason)
         else:
             located, verdict = _graze_between(problem, current, orbit, before, memo)
@@ -821,6 +843,12 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, (ENDED_NEWTON, f"{ended[1]} with the smallest step")
         if ended is not None:
             return orbits, bifurcations, ended
+        # After stop: a switched branch that meets its doubling (a corner there) ends, not retried.
+        if not crossed and (_strays(current, orbit, z_predicted, step) or _flips(current, orbit, tangent)) \
+                and step * 0.5 >= options["min_step"]:
+            step *= 0.5
+            strayed = True
+            continue
         if not lo <= orbit.parameter <= hi:
             if crossed:  # the orbits a march in the new impact's speed found inside the range are kept
                 orbits.extend(passed for passed in beyond[:-1] if lo <= passed.parameter <= hi)
@@ -873,7 +901,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, _domain_end(problem, orbit, edge)
         # No secant through a graze's corner for the next step's _bends: the branch is not smooth there.
         before, current, tangent = (None if crossed else current), orbit, new_tangent
-        tried_crossing = False
+        tried_crossing = strayed = False
         failed_crossing = failed_crossing and _near_grazing(problem, orbit)
         if not failed_crossing:
             grazing_reason = None
@@ -1165,6 +1193,49 @@ def switch_at_grazing(problem, graze, tangent):
                 chord = orbit.z - graze.z
                 return orbit, tangent_of(orbit, chord / np.linalg.norm(chord))
     return None
+
+
+# A step is retried shorter where its orbit lies further than this many step lengths from the
+# predictor: the branch curves within the step by about twice that in radians, and the corrector
+# may have converged onto a part of it that curls back past the predictor's plane, not onto the
+# continuation of the arc, where the tangent, oriented by the last one, points back along the
+# branch. A switched branch of Fig. 1's six slow periods at g = 17.79869 went from an orbit
+# 5e-6 from its doubling to one 1e-4 on (0.78 steps off the predictor), skipping the curl between
+# (its multiplier from 0.9 through -0.38 and back to 0.29), turned back there and walked back to
+# its doubling, where it ended newton_failed (up to 0.7.3). Across a graze the branch has a
+# corner (not checked there).
+MAX_DEVIATION = 0.5
+
+
+def _strays(previous, orbit, z_predicted, step):
+    """True when a step between orbits of one impact count lands more than MAX_DEVIATION steps
+    from its predictor: too long for the branch's curvature (follow retries it shorter)."""
+    if previous.impacts_per_period != orbit.impacts_per_period:
+        return False
+    return float(np.linalg.norm(orbit.z - z_predicted)) > MAX_DEVIATION * step
+
+
+def _flips(previous, orbit, tangent):
+    """True when a step between orbits of one impact count reverses the null vector of [M - I | F_lam]
+    relative to the arc's tangent: along one smooth branch that vector (the cross product of the
+    rows, whose parameter component is det(M - I)) turns continuously and keeps its orientation,
+    through folds too; it reverses only at a branch point or where the corrector went onto another
+    branch (next to Fig. 1's period-12 orbits at g = 17.79326 one lies 2e-6 away with its large
+    multiplier of the other sign, -1483 for +1480, and steps of 1e-5 hopped between the two,
+    recording an unlocated fold and period doubling at each hop, up to 0.7.3). Only where the fold's
+    test function changes sign too (a hop's signature: a fold passed without the parameter turning):
+    next to a branch point (a switched branch's birth, the pitchfork) the vector turns fast and its
+    orientation says nothing."""
+    if previous.impacts_per_period != orbit.impacts_per_period or _fold_test(previous) * _fold_test(orbit) >= 0.0:
+        return False
+    return float(tangent @ _raw_tangent(previous)) * float(tangent @ _raw_tangent(orbit)) < 0.0
+
+
+def _raw_tangent(orbit):
+    rows = np.zeros((2, 3))
+    rows[:, :2] = orbit.monodromy - np.eye(2)
+    rows[:, 2] = orbit.parameter_derivative
+    return np.cross(rows[0], rows[1])
 
 
 def _turned_back(previous, orbit, tangent, step):
