@@ -21,7 +21,7 @@ import pytest
 import vrsweep
 
 PACKAGE = Path(vrsweep.__file__).resolve().parent
-BASE = {"errors", "results", "_version"}
+BASE = {"errors", "results", "_version", "numbertext"}
 
 # layer -> the layers it may import (besides itself and BASE).
 ALLOWED = {
@@ -43,6 +43,7 @@ TOP_LEVEL = {
     "__main__": "python -m vrsweep",
     "_version": "the version, read by the build without importing the package",
     "errors": "the exceptions every layer raises",
+    "numbertext": "numbers typed as text (options, YAML, a written model's literals), read by one rule in every layer",
     "results": "the point statuses every layer reads",
     "cli": "the console script's entry point (pyproject.toml), registering the commands",
 }

@@ -12,6 +12,17 @@ _BIDI_CONTROLS = set("\u061c\u200e\u200f") | {chr(c) for c in range(0x202A, 0x20
 _SHORT_ESCAPES = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
+# How much of a value a message quotes: a 400-digit --set value, a long key or expression was
+# quoted whole, a paragraph of digits around the one thing the message says.
+SHOWN_CHARACTERS = 40
+
+
+def clip(text, limit=SHOWN_CHARACTERS) -> str:
+    """``text`` as a message quotes it: whole up to ``limit`` characters, else its start and '...'."""
+    text = str(text)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def one_line(text) -> str:
     """``text`` as one line of a terminal: every character that would break the line or change
     how the rest reads written as its escape, as Python writes it (a newline as \\n, a byte that
@@ -120,11 +131,11 @@ class InvalidArgument(UsageError):
 
     def __init__(self, argument, value, problem):
         self.argument, self.value, self.problem = argument, value, problem
-        super().__init__(f"{argument} {value}: {problem}")
+        super().__init__(f"{argument} {clip(value)}: {problem}")
 
     def as_option(self, option) -> UsageError:
         """The same problem, worded for the command-line ``option`` the value came from."""
-        return UsageError(f"{option} {self.value}: {self.problem}")
+        return UsageError(f"{option} {clip(self.value)}: {self.problem}")
 
 
 class FlagTypeError(UsageError, TypeError):

@@ -7,9 +7,10 @@ import dataclasses
 import click
 
 from vrsweep.commands.options import (
-    OUTPUT_FLAGS, PathText, config_argument, flag_wording, output_option, overwrite_option, set_option,
+    OUTPUT_FLAGS, FiniteFloatRange, PathText, WholeNumberRange, config_argument, flag_wording, output_option, overwrite_option, set_option,
 )
-from vrsweep.errors import one_line
+from vrsweep.errors import clip, one_line
+from vrsweep.numbertext import read_float
 
 
 def _parse_at(values):
@@ -18,14 +19,14 @@ def _parse_at(values):
         name, sep, value = text.partition("=")
         name = name.strip()
         try:
-            number = float(value)
-        except ValueError:
+            number = read_float(value)  # the one rule of numbers as text: not "١٢", nan or 1e400
+        except ValueError:  # NumberTextError is one
             if name.strip() == "direction":  # up or down, as plot --at takes it (store/reading.axis_index)
                 number = value.strip()
             else:
                 sep = ""
         if not sep or not name:
-            raise click.BadParameter(f"expected AXIS=VALUE, e.g. g=23, got {text!r}", param_hint="--at")
+            raise click.BadParameter(f"expected AXIS=VALUE, e.g. g=23, got {clip(text)!r}", param_hint="--at")
         if name in at:  # the later value was taken silently
             raise click.BadParameter(f"{name} is named twice: one value per axis", param_hint="--at")
         at[name] = number
@@ -43,14 +44,14 @@ def _parse_at(values):
 @click.option("--switch", is_flag=True,
               help="Also follow the branch of 2p periods born at each period doubling "
                    "(as continuation.switch: true).")
-@click.option("--point", "point", type=int, multiple=True, metavar="K",
+@click.option("--point", "point", type=WholeNumberRange(), multiple=True, metavar="K",
               help="With a branch file: the bifurcation (its index in the file's table, counted from 0 in the "
                    "order vrsweep info lists them) to follow; repeatable: one curve each, in one file.")
 @click.option("--along", "along", default=None, metavar="NAME",
               help="With a branch file: the second parameter the bifurcation point moves along, e.g. Omega.")
-@click.option("--to", "to", type=float, nargs=2, default=None, metavar="LOW HIGH",
+@click.option("--to", "to", type=FiniteFloatRange(), nargs=2, default=None, metavar="LOW HIGH",
               help="The range of --along (default: the config's sweep axis of that name).")
-@click.option("--within", "within", type=float, nargs=2, default=None, metavar="LOW HIGH",
+@click.option("--within", "within", type=FiniteFloatRange(), nargs=2, default=None, metavar="LOW HIGH",
               help="The range of the branch's parameter (default: the branch's continuation.to).")
 @overwrite_option
 @click.option("--quiet", "-q", is_flag=True, help="No summary.")

@@ -82,34 +82,70 @@ output_option = click.option(
     "-o", "--output", type=PathText(dir_okay=False), default=None, callback=file_name_only,
     help="Output file (overrides the config's 'output').",
 )
-class FiniteFloatRange(click.FloatRange):
-    """click's FloatRange that also refuses nan and inf (1e400 reads as inf): a number option
-    never takes a value that no comparison can place."""
+def _option_name(param):
+    return param.opts[0] if param is not None and param.opts else "the value"
+
+
+class FiniteFloatRange(click.ParamType):
+    """A number option, read by the one rule of numbers as text (vrsweep.numbertext): decimal ASCII
+    digits, finite, one a double holds. click's float() took nan and inf (1e400 read as inf), "١٢"
+    and the fullwidth "１２" as 12, and 1e-400 as 0."""
+
+    name = "number"
+
+    def __init__(self, min=None):
+        self.min = min
 
     def convert(self, value, param, ctx):
-        import math
+        from vrsweep.errors import clip
+        from vrsweep.numbertext import NumberTextError, read_float
 
-        number = super().convert(value, param, ctx)
-        if not math.isfinite(number):
-            self.fail(f"{value!r} is not a finite number.", param, ctx)
+        if isinstance(value, float) or isinstance(value, int) and not isinstance(value, bool):
+            return float(value)  # a default
+        try:
+            number = read_float(value)
+        except NumberTextError as error:
+            raise click.UsageError(f"{_option_name(param)} {clip(value)}: {error}", ctx) from None
+        if self.min is not None and number < self.min:
+            raise click.UsageError(f"{_option_name(param)} {clip(value)}: expected a number >= {self.min}", ctx)
         return number
 
 
-class WholeNumberRange(click.IntRange):
-    """click's IntRange, refusing in words: '1e9' was "not a valid integer range" and 5 "not in
-    the range 20<=x<=1200"; now "--dpi 1e9: expected a whole number from 20 to 1200"."""
+class WholeNumberRange(click.ParamType):
+    """A whole-number option, read by the one rule of numbers as text (vrsweep.numbertext) and
+    refused in words: '1e9' was "not a valid integer range" and 5 "not in the range
+    20<=x<=1200"; now "--dpi 1e9: expected a whole number from 20 to 1200". click's int() took "١٢"
+    and the fullwidth "１２" as 12."""
+
+    name = "integer"
+
+    def __init__(self, min=None, max=None):
+        self.min, self.max = min, max
 
     def _bounds(self):
+        if self.min is None:
+            return ""
         if self.max is None:
-            return f"of at least {self.min}"
-        return f"from {self.min} to {self.max}"
+            return f" of at least {self.min}"
+        return f" from {self.min} to {self.max}"
 
     def convert(self, value, param, ctx):
-        try:
-            return super().convert(value, param, ctx)
-        except click.BadParameter:
-            name = param.opts[0] if param is not None and param.opts else "the value"
-            raise click.UsageError(f"{name} {value}: expected a whole number {self._bounds()}", ctx) from None
+        from vrsweep.errors import clip
+        from vrsweep.numbertext import NumberTextError, read_int
+
+        if isinstance(value, int) and not isinstance(value, bool):
+            number = value  # a default
+        else:
+            try:
+                number = read_int(value)
+            except NumberTextError as error:
+                digits = f" in ASCII digits 0-9 (it holds {error.foreign})" if error.foreign else ""
+                raise click.UsageError(f"{_option_name(param)} {clip(value)}: expected a whole number"
+                                       f"{self._bounds()}{digits}", ctx) from None
+        if (self.min is not None and number < self.min) or (self.max is not None and number > self.max):
+            raise click.UsageError(f"{_option_name(param)} {clip(value)}: expected a whole number{self._bounds()}",
+                                   ctx)
+        return number
 
 
 # More threads than any machine has CPUs: a number past it is a typo, not a request to cap.

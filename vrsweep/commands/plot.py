@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from vrsweep.commands.options import PathText, WholeNumberRange, file_name_only
+from vrsweep.commands.options import FiniteFloatRange, PathText, WholeNumberRange, file_name_only
 from vrsweep.errors import one_line
 
 FORMATS = (".png", ".pdf", ".svg")
@@ -76,8 +76,8 @@ def default_output(path, kind):
 @click.option("--style", default=None, metavar="NAME|FILE",
               help="A matplotlib style sheet (e.g. seaborn-v0_8-paper, ggplot) or a .mplstyle file: fonts, "
                    "colours and line widths follow it.")
-@click.option("--vmin", type=float, default=None, help="Maps: the bottom of the colour scale.")
-@click.option("--vmax", type=float, default=None,
+@click.option("--vmin", type=FiniteFloatRange(), default=None, help="Maps: the bottom of the colour scale.")
+@click.option("--vmax", type=FiniteFloatRange(), default=None,
               help="Maps: the top of the colour scale (default: the 99th percentile, said on the colour "
                    "bar when it caps; lyapunov: symmetric about 0, --vmax alone sets both ends).")
 @click.option("--xlim", default=None, metavar="LOW,HIGH",

@@ -68,7 +68,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
         threads = capped_threads(threads)
 
     from vrsweep.execution.distributed import parse_local
-    from vrsweep.errors import InvalidArgument, RunFailed
+    from vrsweep.errors import InvalidArgument, RunFailed, clip
     from vrsweep.execution.job import GracefulStop, parse_shard, run_job
 
     try:
@@ -77,7 +77,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
         raise error.as_option("--shard") from None
     n_lines = config.n_runs // max(1, _line_length(config))
     if shard_pair[1] > n_lines:  # shards past the grid's lines would hold nothing: not a question to answer
-        raise UsageError(f"--shard {shard}: the grid has {n_lines} line{'s' if n_lines != 1 else ''} of work "
+        raise UsageError(f"--shard {clip(shard)}: the grid has {n_lines} line{'s' if n_lines != 1 else ''} of work "
                          f"(points, or continuation lines), so at most {n_lines} shards")
     executor = None
     workers = 1

@@ -8,6 +8,8 @@ this project's words.
 
 from __future__ import annotations
 
+import math
+
 from ruamel.yaml.comments import CommentedMap, CommentedSeq
 from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.nodes import MappingNode, SequenceNode
@@ -19,8 +21,9 @@ from vrsweep.config.schema import (
     INITIAL_DOMAINS, INTEGRATION_DOMAINS, METHODS, DEVICES, PARAMETER_DOMAINS,
 )
 from vrsweep.config.wording import and_list, did_you_mean, dotted, show
-from vrsweep.config.yaml import key_text, line_and_column, compose
-from vrsweep.errors import ConfigError
+from vrsweep.config.yaml import OutOfDouble, key_text, line_and_column, compose
+from vrsweep.errors import ConfigError, clip
+from vrsweep.numbertext import LARGEST_DOUBLE, beyond_double
 from vrsweep.numerics.model import MODELS
 
 
@@ -55,7 +58,7 @@ class Report:
     def said(self, setting):
         """An override as its user gave it: ``--set g=abc``, or ``keyword argument g='abc'`` in Python,
         whose user never typed --set (execution/api.resolve_config)."""
-        return self.override_words.get(setting, f"--set {setting}")
+        return self.override_words.get(setting, f"--set {clip(setting)}")
 
     def setting_order(self, setting):
         """Problems with --set options come after the file's, in the order the options were given."""
@@ -143,7 +146,13 @@ class Report:
         """Turn one pydantic error into a problem in this project's words."""
         path = prefix + tuple(item["loc"])
         kind, value = item["type"], item.get("input")
-        if kind == "extra_forbidden":
+        too_large = isinstance(value, int) and not isinstance(value, bool) and kind == "float_type" \
+            and abs(value) > LARGEST_DOUBLE  # an integer literal of 400 digits, for a number
+        if isinstance(value, OutOfDouble) or too_large:
+            problem = value.problem if isinstance(value, OutOfDouble) else beyond_double(str(value), math.inf)
+            written = value.text if isinstance(value, OutOfDouble) else value
+            self.report(path, f"{clip(written)} {problem}", allowed=self.describe(path))
+        elif kind == "extra_forbidden":
             key = path[-1]
             parent = path[:-1]
             allowed = self.allowed_keys(parent)

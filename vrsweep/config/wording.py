@@ -3,6 +3,8 @@
 import difflib
 import os
 
+from vrsweep.errors import clip
+
 
 def did_you_mean(word, choices) -> str:
     """`` (did you mean 'Delta'?)`` for a near miss, case-insensitively first; else ''."""
@@ -28,7 +30,7 @@ def show(value) -> str:
         text = "null"
     else:
         text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
+    return clip(text)
 
 
 def show_number(value) -> str:

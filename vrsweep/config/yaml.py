@@ -10,14 +10,48 @@ import warnings
 
 from ruamel.yaml import YAML
 from ruamel.yaml.comments import TaggedScalar
+from ruamel.yaml.constructor import RoundTripConstructor
 from ruamel.yaml.reader import ReaderError
 
 from vrsweep.config.wording import show
+from vrsweep.numbertext import beyond_double
+
+
+class OutOfDouble:
+    """A YAML float that no double holds: ``1e400`` (ruamel reads inf) or ``1e-400`` (read as 0).
+    Kept as written, with why, so that a field says so: ``rtol: 1e-400`` was refused as
+    "got 0.0", and ``gamma: 1e-400`` ran as 0. No field accepts it (it is no number)."""
+
+    def __init__(self, text, problem):
+        self.text, self.problem = text, problem
+
+    def __repr__(self):
+        return f"{self.text} ({self.problem})"
+
+
+class _Constructor(RoundTripConstructor):
+    def construct_yaml_float(self, node):
+        value = super().construct_yaml_float(node)
+        if isinstance(value, float):
+            problem = beyond_double(str(node.value).replace("_", ""), value)
+            if problem:
+                return OutOfDouble(node.value, problem)
+        return value
+
+
+_Constructor.add_constructor("tag:yaml.org,2002:float", _Constructor.construct_yaml_float)
+
+
+def _round_trip_yaml():
+    """ruamel's round-trip reader, its floats checked against the doubles (OutOfDouble)."""
+    yaml = YAML(typ="rt")
+    yaml.Constructor = _Constructor
+    return yaml
 
 
 def load_round_trip(text, allow_duplicate_keys=False):
     """ruamel's round-trip tree of ``text`` (CommentedMap ...), or None for an empty document."""
-    yaml = YAML(typ="rt")
+    yaml = _round_trip_yaml()
     yaml.allow_duplicate_keys = allow_duplicate_keys
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # e.g. ReusedAnchorWarning: not the user's concern here
@@ -108,7 +142,7 @@ def parse_scalar(text):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            value = plain_data(YAML(typ="rt").load(text))
+            value = plain_data(_round_trip_yaml().load(text))
     except Exception as error:  # noqa: BLE001 -- any ruamel failure means "not a YAML scalar"
         problem = getattr(error, "problem", None) or str(error).splitlines()[0]
         raise ValueError(f"VALUE is not a YAML scalar ({problem})") from None

@@ -110,13 +110,14 @@ def resolve_config(config, overrides=None, *, keywords=()):
     ...`` for an override.
     """
     from vrsweep.config import Config, config_from_dict, load_config, parse_config, with_overrides
+    from vrsweep.errors import clip
 
     overrides = overrides or {}
     settings = tuple(setting_text(name, value) for name, value in overrides.items())
     # A problem names the keyword argument as the caller wrote it: this user never typed --set.
     # ``keywords``: the calling function's own (progress, overwrite...): a misspelt one (progres=False)
     # arrives here as a setting, and its near miss is named beside the config's own names.
-    words = {text: f"keyword argument {name}={value!r}{_near_keyword(name, keywords)}"
+    words = {text: f"keyword argument {clip(f'{name}={value!r}')}{_near_keyword(name, keywords)}"
              for text, (name, value) in zip(settings, overrides.items())}
     if isinstance(config, Config):
         # Validated again, settings or none: a Config is a dataclass, and one changed with

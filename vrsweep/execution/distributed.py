@@ -28,6 +28,7 @@ import time
 
 import numpy as np
 
+from vrsweep.numbertext import read_int
 from vrsweep.errors import InvalidArgument, RunFailed, VrsweepError
 from vrsweep.execution.signals import Interrupted
 from vrsweep.execution.chunks import count_statuses, default_chunk_lines, max_chunk_lines, plan_lines
@@ -71,8 +72,8 @@ def parse_local(address):
         return None
     text = address[len(LOCAL_PREFIX):]
     try:
-        n = int(text)
-    except ValueError:
+        n = read_int(text)  # the one rule of numbers as text: local:١٢ is no address
+    except ValueError:  # NumberTextError is one
         n = 0
     if n < 1:
         raise InvalidArgument("Dask address", address, "expected local:N with N >= 1 workers (e.g. local:4)")

@@ -14,7 +14,8 @@ import numpy as np
 
 from vrsweep import __version__
 from vrsweep.store.provenance import cf_attributes, model_attributes
-from vrsweep.errors import InvalidArgument
+from vrsweep.errors import InvalidArgument, clip
+from vrsweep.numbertext import read_int, to_int
 from vrsweep.results import Motion, Status
 from vrsweep.execution.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
 from vrsweep.numerics.model import AXIS_LONG_NAMES, AXIS_UNITS
@@ -117,10 +118,10 @@ def parse_shard(text, environ=None):
         return (0, 1)
     if text == "auto":
         try:
-            task = int(environ["SLURM_ARRAY_TASK_ID"])
-            count = int(environ["SLURM_ARRAY_TASK_COUNT"])
-            first = int(environ.get("SLURM_ARRAY_TASK_MIN", 0))
-            step = int(environ.get("SLURM_ARRAY_TASK_STEP", 1) or 1)
+            task = to_int(environ["SLURM_ARRAY_TASK_ID"])
+            count = to_int(environ["SLURM_ARRAY_TASK_COUNT"])
+            first = to_int(environ.get("SLURM_ARRAY_TASK_MIN", 0))
+            step = to_int(environ.get("SLURM_ARRAY_TASK_STEP", 1) or 1)
         except (KeyError, ValueError):
             raise InvalidArgument("shard", text, "needs SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT "
                                                  "(run it inside a SLURM job array, or give the shard as I/N)") from None
@@ -134,19 +135,19 @@ def parse_shard(text, environ=None):
     else:
         try:
             index_text, count_text = text.split("/")
-            index, count = int(index_text), int(count_text)
-        except ValueError:
+            index, count = read_int(index_text), read_int(count_text)
+        except ValueError:  # NumberTextError is one: "١/٢" was shard 1 of 2
             raise InvalidArgument("shard", text, "expected I/N (e.g. 0/8) or 'auto'") from None
         where = ""
     if count < 1:  # before the index: a range 0..N-1 of N <= 0 ("0..-1") means nothing
-        raise InvalidArgument("shard", text, f"{where}the number of shards N must be >= 1, got {count}")
+        raise InvalidArgument("shard", text, f"{where}the number of shards N must be >= 1, got {clip(count)}")
     if not 0 <= index < count:
         hint = "; submit the array as a range A-B (or A-B:STEP), not a list" if text == "auto" else ""
-        raise InvalidArgument("shard", text, f"{where}shard index {index} is not in 0..{count - 1}{hint}")
+        raise InvalidArgument("shard", text, f"{where}shard index {clip(index)} is not in 0..{clip(count - 1)}{hint}")
     return (index, count)
 
 
-SHARD_SUFFIX = re.compile(r"\.shard(\d+)of(\d+)$")  # OUT.shardIofN.h5's, as merge reads it too
+SHARD_SUFFIX = re.compile(r"\.shard([0-9]+)of([0-9]+)$")  # [0-9]: re's \d is any Unicode digit  # OUT.shardIofN.h5's, as merge reads it too
 
 
 def shard_output_path(path, shard):

@@ -8,11 +8,14 @@ CPU count. numba ignores an unreadable NUMBA_NUM_THREADS with a warning; so does
 import os
 import sys
 
+from vrsweep.errors import clip
+from vrsweep.numbertext import read_int
+
 
 def available_threads() -> int:
     """numba's thread ceiling in this process (``--threads`` can lower it, never raise it)."""
     try:
-        threads = int(os.environ.get("NUMBA_NUM_THREADS", "").strip() or 0)
+        threads = read_int(os.environ.get("NUMBA_NUM_THREADS", "").strip() or 0)
     except ValueError:
         threads = 0
     if threads >= 1:
@@ -31,20 +34,20 @@ def drop_unreadable_setting() -> None:
     if value is None or "numba" in sys.modules:
         return
     try:
-        readable = int(value.strip()) >= 1
+        readable = read_int(value.strip()) >= 1  # "١٢" too is dropped: numba's int() read it as 12
     except ValueError:
         readable = False
     if not readable:
         del os.environ["NUMBA_NUM_THREADS"]
-        sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={value!r} is not a whole number >= 1: ignored, "
+        sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={clip(repr(value))} is not a whole number >= 1: ignored, "
                          f"using the {available_threads()} CPUs this process may run on\n")
         return
     # numba starts every thread at import: NUMBA_NUM_THREADS=100000 segfaults, larger values are
     # killed for memory. More threads than the machine has CPUs is never faster: capped there.
     most = machine_cpus()
-    if int(value.strip()) > most:
+    if read_int(value.strip()) > most:
         os.environ["NUMBA_NUM_THREADS"] = str(most)
-        sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={value.strip()} is more than the {most} CPUs of this "
+        sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={clip(value.strip())} is more than the {most} CPUs of this "
                          f"machine: using {most}\n")
 
 

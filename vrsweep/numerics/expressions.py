@@ -22,6 +22,9 @@ import math
 
 import numpy as np
 
+from vrsweep.errors import clip
+from vrsweep.numbertext import beyond_double
+
 MAX_LENGTH = 2000   # characters: an equation of motion is a line, not a program
 MAX_DEPTH = 60      # nesting of the syntax tree (parentheses, operators, calls)
 MAX_EXPONENT = 64   # a constant power beyond this is a typo (and x**10**9 would never finish)
@@ -63,8 +66,27 @@ def parse(text, names) -> ast.expr:
         raise ExpressionError(f"is not a valid expression{where}: {text.strip()!r}") from None
     except (ValueError, RecursionError, MemoryError):
         raise ExpressionError("is not a valid expression (nested too deeply or holds a NUL character)") from None
+    _check_as_written(tree, text.strip())
     _check(tree.body, frozenset(names), 0)
     return tree.body
+
+
+def _check_as_written(tree, text):
+    """Refuse what Python's parser reads as something else than was written: a name in Unicode's
+    compatibility forms (the fullwidth 'ｚeta' is the parameter zeta to it, NFKC), and a literal no
+    double holds (1e-400 is 0.0 to it, and a model with '1e-400*x' ran as '0.0*x')."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) or isinstance(node, ast.Constant) and isinstance(node.value, float):
+            written = ast.get_source_segment(text, node)
+            if written is None:
+                continue
+            if isinstance(node, ast.Name) and written != node.id:
+                raise ExpressionError(f"writes the name {clip(written)!r}, which Python reads as {node.id!r} "
+                                      f"(Unicode's compatibility form): write it in ASCII letters, {node.id}")
+            if isinstance(node, ast.Constant):
+                problem = beyond_double(written.replace("_", ""), node.value)
+                if problem:
+                    raise ExpressionError(f"holds the number {clip(written)}, which {problem}")
 
 
 def _constant(node, value):
@@ -84,7 +106,7 @@ def _token(node) -> str:
         text = ast.unparse(node)
     except Exception:  # noqa: BLE001 - only for the message
         text = type(node).__name__
-    return text if len(text) <= 40 else text[:37] + "..."
+    return clip(text)
 
 
 def _check(node, names, depth):

@@ -13,7 +13,8 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from vrsweep.errors import UsageError
+from vrsweep.errors import UsageError, clip
+from vrsweep.numbertext import to_float
 from vrsweep.plot import layout
 from vrsweep.plot.palettes import LINE_COLOURS
 
@@ -442,13 +443,13 @@ def parse_size(text):
     else:
         parts = None
     try:
-        width, height = (float(part) for part in parts)
-    except (TypeError, ValueError):
+        width, height = (to_float(part) for part in parts)
+    except (TypeError, ValueError):  # NumberTextError is a ValueError
         raise UsageError.naming("{size} {value}: expected WIDTH,HEIGHT in inches, e.g. 3.4,2.6",
-                                value=text) from None
+                                value=clip(text)) from None
     if not (0.5 <= width <= 100 and 0.5 <= height <= 100):
         raise UsageError.naming("{size} {value}: width and height must be between 0.5 and 100 inches",
-                                value=text)
+                                value=clip(text))
     return width, height
 
 

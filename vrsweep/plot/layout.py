@@ -20,7 +20,8 @@ import math
 import numpy as np
 from matplotlib.transforms import Bbox
 
-from vrsweep.errors import UsageError
+from vrsweep.errors import UsageError, clip
+from vrsweep.numbertext import to_float
 
 LEGEND_PLACES = ("best", "outside", "none")
 # The share of the figure the panels keep at least (the rest: labels, ticks, legend, colour bars).
@@ -38,14 +39,14 @@ def parse_limits(text, option):
         return None
     parts = text.split(",") if isinstance(text, str) else list(text)
     try:
-        low, high = (float(part) for part in parts)
-    except (TypeError, ValueError):
+        low, high = (to_float(part) for part in parts)
+    except (TypeError, ValueError):  # NumberTextError is a ValueError
         raise UsageError.naming("{" + option + "} {value}: expected LOW,HIGH, e.g. 17.82,17.84",
-                                value=text) from None
+                                value=clip(text)) from None
     if not (math.isfinite(low) and math.isfinite(high)):
-        raise UsageError.naming("{" + option + "} {value}: both ends must be finite numbers", value=text)
+        raise UsageError.naming("{" + option + "} {value}: both ends must be finite numbers", value=clip(text))
     if not low < high:
-        raise UsageError.naming("{" + option + "} {value}: LOW must be below HIGH", value=text)
+        raise UsageError.naming("{" + option + "} {value}: LOW must be below HIGH", value=clip(text))
     return low, high
 
 

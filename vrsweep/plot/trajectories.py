@@ -8,7 +8,8 @@ import os
 import numpy as np
 from matplotlib.figure import Figure
 
-from vrsweep.errors import UsageError
+from vrsweep.errors import UsageError, clip
+from vrsweep.numbertext import read_int
 from vrsweep.plot.analytic import barrier_positions
 from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _title, _width, period_words
 from vrsweep.results import Status
@@ -47,12 +48,12 @@ def parse_periods(text):
     """'FIRST:LAST' (slow periods, 1-based, inclusive; either may be empty) -> (first, last)."""
     first, colon, last = str(text).partition(":")
     try:
-        window = (int(first) if first.strip() else 1, int(last) if last.strip() else None)
+        window = (read_int(first) if first.strip() else 1, read_int(last) if last.strip() else None)
     except ValueError:
         window = None
     if not colon or window is None or window[0] < 1 or (window[1] is not None and window[1] < window[0]):
         raise UsageError.naming("{periods} {value}: expected FIRST:LAST slow periods, e.g. 1:20 or 81:100",
-                                value=text)
+                                value=clip(text))
     return window
 
 

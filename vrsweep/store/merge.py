@@ -697,7 +697,7 @@ def _sibling_path(shards, index, count):
     them OUT.shardIofN.h5), or None if the given files are not named that way."""
     for s in shards:
         directory, base = os.path.split(s.path)
-        match = re.fullmatch(r"(.*)\.shard\d+of(\d+)(\.[^.]*)?", base)
+        match = re.fullmatch(r"(.*)\.shard[0-9]+of([0-9]+)(\.[^.]*)?", base)
         if match and int(match.group(2)) == count:
             return os.path.join(directory, f"{match.group(1)}.shard{index}of{count}{match.group(3) or ''}")
     return None

@@ -15,7 +15,7 @@ import os
 import h5py
 import numpy as np
 
-from vrsweep.errors import ResultFileError
+from vrsweep.errors import ResultFileError, clip
 from vrsweep.store.fileio import open_hdf5, refuse_a_special_file
 from vrsweep.store.layout import (
     BOOKKEEPING, FORMAT_VERSION, VariableSpec, clean_attrs, decode, point_label, point_variables_of, scale_names,
@@ -107,7 +107,7 @@ def _whole_number_attr(f, name, path, allowed=None):
 
 def _shown(value):
     text = repr(decode(value) if not isinstance(value, np.ndarray) else value.tolist())
-    return text if len(text) <= 40 else text[:37] + "..."
+    return clip(text)
 
 
 def _text_attr(obj, name, path, where="attribute"):
@@ -141,7 +141,7 @@ def check_structure(f, path):
             _text_attr(f, name, path)
     if "shard" in f.attrs:
         index, _, count = _text_attr(f, "shard", path).partition("/")
-        if not (index.isdigit() and count.isdigit()):
+        if not (index.isascii() and index.isdigit() and count.isascii() and count.isdigit()):
             raise ResultFileError(f"{path} is corrupt: attribute shard must be I/N, got {_shown(f.attrs['shard'])}")
     done = f["done"]
     names = _text_attr(done, "point_variables", path, "attribute done.").split()

@@ -23,7 +23,8 @@ import os
 
 import numpy as np
 
-from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.errors import ResultFileError, UsageError, clip
+from vrsweep.numbertext import NumberTextError, to_float
 
 __all__ = ["open_results", "load_results", "status_names", "file_kind", "grid_axes", "point_variables", "derived_variables", "stored_variables", "open_groups"]
 
@@ -241,8 +242,8 @@ def axis_index(name, values, wanted):
         words = {"up": 1.0, "down": -1.0}
         key = str(wanted).strip().lower()
         try:
-            number = words[key] if key in words else float(key)
-        except ValueError:
+            number = words[key] if key in words else to_float(key)
+        except ValueError:  # NumberTextError is one
             number = None
         # Numbers too, not only their text: continue's --at hands over -1.0, which as the text
         # "-1.0" was refused although the message itself offers -1.
@@ -251,11 +252,13 @@ def axis_index(name, values, wanted):
         wanted = number
     given = wanted
     try:
-        wanted = float(wanted)
-    except ValueError:
-        raise UsageError.naming("{at} {name}={value}: not a number; the axis {name}: {span}",
-                                name=name, value=wanted, span=_axis_span(values)) from None
-    if not np.isfinite(wanted):  # nan, inf, 1e400: argmin would answer with the first value
+        wanted = to_float(wanted)
+    except NumberTextError as error:  # also nan, inf, 1e400 and 1e-400 given as text
+        reason = "not a " + str(error).removeprefix("is not a ") if str(error).startswith("is not a ") \
+            else "not a number a double holds: it " + str(error).removeprefix("is ")
+        raise UsageError.naming("{at} {name}={value}: {reason}; the axis {name}: {span}",
+                                name=name, value=clip(given), reason=reason, span=_axis_span(values)) from None
+    if not np.isfinite(wanted):  # nan or inf given as a number: argmin would answer with the first value
         raise UsageError.naming("{at} {name}={value}: not a finite number; the axis {name}: {span}",
                                 name=name, value=given, span=_axis_span(values))
     index = int(np.argmin(np.abs(values - wanted)))
