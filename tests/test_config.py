@@ -130,9 +130,10 @@ def test_value_errors(text, line, words):
 ])
 def test_a_count_beyond_int64_is_told_its_limit(text, words):
     """`measure_periods: 1e23` said "must be an integer, got 1e+23 (allowed: an integer >= 1)": a
-    whole number, within what was said allowed. The kernel counts in int64, and the message says so."""
+    whole number, within what was said allowed. The kernel reads its counts from doubles, exact to
+    2^53, and the message says so."""
     problem = only_problem(text)
-    assert_words(problem, *words, "<= 9223372036854775807")
+    assert_words(problem, *words, "<= 2^53 = 9007199254740992")
     assert problem.startswith("fig1.yaml:2: "), problem
 
 

@@ -77,12 +77,34 @@ class CrossFieldRules:
                 self.report(("integration", "measure_periods"),
                             f"must be >= integration.strobe_periods = {strobe}{default}, got {measure}")
 
+        self.check_periods_can_finish(integration, measure)
+
         self.check_continuation_start(parameters, _section(data, "continuation"))
 
         with_continuation = [name for name, (_, continuation, _) in axes.items() if continuation]
         for name in with_continuation[1:]:
             self.report(("sweep", name, "continuation"),
                         f"only one axis may have continuation, and sweep.{with_continuation[0]} has it")
+
+    def check_periods_can_finish(self, integration, measure):
+        """Slow periods no point can integrate: each period takes at least one step (its last one
+        lands on the period's end), or one scan of the force on a stuck mass, and a point stops
+        after max_steps of either (kernel._integrate), so past 2 * max_steps periods every point ends
+        max_steps. transient_periods: 2^63 - 1 was valid, estimated at 1.4e10 days, and ran (with
+        --allow-large) to max_steps at every point."""
+        transient = _valid(integration, "transient_periods", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
+        max_steps = _valid(integration, "max_steps", INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
+        if transient is None or measure is None or max_steps is None or transient + measure <= 2 * max_steps:
+            return
+        key = "transient_periods" if transient >= measure else "measure_periods"
+        if self.blame(("integration", "max_steps"), ("integration", key),
+                      "max_steps" in integration and key not in integration, key in integration):
+            key = "max_steps"
+        self.report(("integration", key),
+                    f"{transient} transient + {measure} measured slow periods cannot be integrated within "
+                    f"max_steps = {max_steps}: each period takes at least one step (or one scan of a stuck "
+                    f"mass), and a point stops after max_steps of either, so every point would end max_steps; "
+                    f"lower the periods, or raise integration.max_steps to at least {-(-(transient + measure) // 2)}")
 
     def check_written_rules(self, parameters, initial, sweep, axes, x, v):
         """A written model's rules at the grid's points (config/models.check_written_model), once

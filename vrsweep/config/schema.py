@@ -31,7 +31,11 @@ from vrsweep.numerics.model import (
 # Allowed values, as data: the pydantic schema, the error messages and the docs all read these.
 # --------------------------------------------------------------------------------------------
 
-_INT64_MAX = 2**63 - 1  # the kernel counts in int64; a larger count would overflow silently
+# The largest count a config may give (periods, steps, impacts, points...). The kernel reads its
+# counts from a vector of doubles (numerics/settings.py), which hold whole numbers exactly up to
+# 2^53: above it transient_periods: 2^63 - 1 reached the kernel as 2^63, whose conversion to int64
+# overflows, and 2^53 + 1 as 2^53. No count anywhere near it can be computed anyway.
+COUNT_MAX = 2**53
 
 
 @dataclass(frozen=True)
@@ -48,8 +52,8 @@ class Domain:
         """The interval in words, e.g. ``(0, 1]``, ``> 0``, ``an integer >= 1``; a count says int64's limit too."""
         low, high = show_number(self.low), show_number(self.high)
         has_low, has_high = self.low > -math.inf, self.high < math.inf
-        if has_low and self.high == _INT64_MAX:  # said as a limit, not as an interval [1, 9223372036854775807]
-            text = f"{'>' if self.low_open else '>='} {low} and <= {_INT64_MAX}"
+        if has_low and self.high == COUNT_MAX:  # said as a limit, not as an interval [1, 9007199254740992]
+            text = f"{'>' if self.low_open else '>='} {low} and <= 2^53 = {COUNT_MAX} (the whole numbers a double holds)"
         elif has_low and has_high:
             text = f"in {'(' if self.low_open else '['}{low}, {high}{')' if self.high_open else ']'}"
         elif has_low:
@@ -69,7 +73,7 @@ class Domain:
     def range_message(self, value) -> str:
         """``must be in (0, 1], got 1.5`` -- the message for a value of the right type outside."""
         domain = self
-        if self.high == _INT64_MAX and value <= _INT64_MAX:  # a count below its least: int64's limit is noise
+        if self.high == COUNT_MAX and value <= COUNT_MAX:  # a count below its least: the ceiling is noise
             domain = replace(self, high=math.inf)
         allowed = domain.describe().replace("an integer ", "").replace("a number ", "")
         if self.integer:
@@ -79,7 +83,7 @@ class Domain:
 
 ANY = Domain()
 _POSITIVE = Domain(low=0.0)
-_COUNT = Domain(low=1, low_open=False, high=_INT64_MAX, high_open=False, integer=True)
+_COUNT = Domain(low=1, low_open=False, high=COUNT_MAX, high_open=False, integer=True)
 
 PARAMETER_DOMAINS = {
     "gamma": ANY, "alpha": ANY, "omega0": ANY,
@@ -122,7 +126,7 @@ INTEGRATION_DOMAINS = {
     # longer bounds R's error (rtol 0.99 gave R 7e-4 off with an R_err of 3e-14).
     "rtol": Domain(low=1e-14, high=1e-2, low_open=False, high_open=False),
     "atol": Domain(low=0.0, high=1e-2, high_open=False),
-    "transient_periods": Domain(low=0, low_open=False, high=_INT64_MAX, high_open=False, integer=True),
+    "transient_periods": Domain(low=0, low_open=False, high=COUNT_MAX, high_open=False, integer=True),
     "measure_periods": _COUNT,
     "max_steps": _COUNT,
     "max_impacts_per_period": _COUNT,
@@ -369,7 +373,7 @@ def _check_range(domain: Domain):
 
 def integral_float_to_int(value):
     # YAML 1.2 reads 2e7 as a float; a count written that way is still meant as a count.
-    if isinstance(value, float) and value.is_integer() and abs(value) <= _INT64_MAX:
+    if isinstance(value, float) and value.is_integer() and abs(value) <= COUNT_MAX:
         return int(value)
     return value
 
