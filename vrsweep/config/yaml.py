@@ -89,6 +89,11 @@ def plain_data(node, _active=None, _budget=None):
     if isinstance(node, (dict, list)):
         if id(node) in active:
             raise CyclicAlias
+        tag = getattr(getattr(node, "tag", None), "value", None)
+        if tag:  # a mapping or list under a tag of the user's own (!custom {g: 5}): no field reads
+            # tags, and a tagged scalar is refused as the opaque thing it is; the tagged mapping was
+            # read as if untagged
+            return _Opaque(f"{tag} {'{...}' if isinstance(node, dict) else '[...]'}")
         active.add(id(node))
         try:
             if isinstance(node, dict):

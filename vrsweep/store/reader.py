@@ -285,7 +285,9 @@ def open_in_this_process_error(path, error):
 
 
 def corrupt_error(path, error):
-    text = str(error)
+    # A KeyError's str() is its message quoted: "'Unable to open object (component not found)'",
+    # whose reason came out as "component not found)'" (the message ended ")')")
+    text = str(error.args[0]) if isinstance(error, KeyError) and error.args else str(error)
     in_use = open_in_this_process_error(path, error)
     if in_use is not None:
         return in_use

@@ -1,0 +1,43 @@
+"""Round 4 of the hostile inputs, beyond numbers (test_hostile_numbers): YAML tags on a mapping
+or a list, and the reason a damaged file gives."""
+
+import pytest
+
+from vrsweep.config import parse_config
+from vrsweep.errors import ConfigError
+
+
+@pytest.mark.parametrize("text, field", [
+    ("parameters: !custom {g: 5}\n", "parameters"),
+    ("sweep:\n  g: !foo [1, 2]\n", "sweep.g"),
+    ("!doc\nparameters: {g: 5}\n", "the config"),
+    ("integration: !x {rtol: 1e-8}\n", "integration"),
+])
+def test_a_tagged_mapping_or_list_is_refused_as_a_tagged_scalar_is(text, field):
+    """`parameters: !custom {g: 5}` ran with g = 5, its tag dropped, where `g: !custom 5` is refused."""
+    with pytest.raises(ConfigError) as caught:
+        parse_config(text, "c.yaml")
+    problem = caught.value.problems[0]
+    tag = text.split("!")[1].split()[0]
+    assert field in problem and f"got !{tag} " in problem, problem
+
+
+def test_the_standard_tags_are_read():
+    config = parse_config("parameters: !!map {g: !!float 5}\nsweep:\n  Omega: !!seq [3, 4]\n")
+    assert config.parameters["g"] == 5.0 and list(config.axes[0].values) == [3.0, 4.0]
+
+
+def test_a_dangling_link_in_a_results_file_is_worded_without_stray_quotes(tmp_path):
+    """The reason of a KeyError from h5py was taken from its repr: '... (component not found)')'."""
+    import h5py
+
+    from vrsweep.store.reader import corrupt_error
+
+    path = tmp_path / "d.h5"
+    with h5py.File(path, "w") as f:
+        f["R"] = h5py.SoftLink("/nowhere")
+    with h5py.File(path, "r") as f:
+        with pytest.raises(KeyError) as caught:
+            f["R"]
+    message = str(corrupt_error(str(path), caught.value))
+    assert message.endswith("(HDF5: component not found)"), message
