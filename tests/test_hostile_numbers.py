@@ -279,3 +279,30 @@ def test_a_set_that_breaks_the_periods_rule_is_named(tmp_path, invoke, write_con
     config = write_config(tmp_path, CONFIG)
     line = _one_line(invoke("validate", config, "--set", "max_steps=1"))
     assert "--set max_steps=1: integration.max_steps" in line, line
+
+
+# --- the Python API: numbers of other types ------------------------------------------------------
+
+
+@pytest.mark.parametrize("value, words", [
+    ("Decimal('1e-400')", "below the smallest double"), ("Fraction(1, 10**400)", "below the smallest double"),
+    ("Decimal('-2.5e400')", "beyond the largest double"), ("10**400", "beyond the largest double"),
+])
+def test_a_keyword_number_no_double_holds_is_refused(value, words):
+    """vrsweep.sweep(config, rtol=Decimal("1e-400")) read float(value), 0.0: a gamma so given ran as 0."""
+    from decimal import Decimal  # noqa: F401 - for eval
+    from fractions import Fraction  # noqa: F401 - for eval
+    import vrsweep
+
+    with pytest.raises(ConfigError, match=words) as caught:
+        vrsweep.sweep(CONFIG, gamma=eval(value))
+    assert str(caught.value).startswith("keyword argument gamma="), str(caught.value)
+
+
+def test_keyword_numbers_of_other_types_are_their_values():
+    from decimal import Decimal
+    from fractions import Fraction
+    from vrsweep.execution.api import resolve_config
+
+    for value in (Decimal("0.25"), Fraction(1, 4), 0.25):
+        assert resolve_config(CONFIG, {"gamma": value}).parameters["gamma"] == 0.25

@@ -82,11 +82,32 @@ def setting_text(name: str, value) -> str:
         else:
             if math.isnan(number):
                 text = ".nan"
+            elif (number == 0.0 and value != 0 or math.isinf(number)) and _exact_text(value):
+                # a Decimal or Fraction no double holds (Decimal("1e-400") is 0.0 to float()): as
+                # written, so that it is refused as the same number in a config is
+                text = _exact_text(value)
             elif math.isinf(number):
                 text = ".inf" if number > 0 else "-.inf"
             else:
                 text = repr(number)
     return f"{name}={text}"
+
+
+def _exact_text(value) -> str | None:
+    """A Decimal or a Fraction (numbers.Rational) in decimal notation, 17 digits; None for others."""
+    import decimal
+    import numbers
+
+    try:
+        if isinstance(value, decimal.Decimal) and value.is_finite():
+            return f"{value:.16e}"
+        if isinstance(value, numbers.Rational):
+            with decimal.localcontext() as context:
+                context.prec, context.Emin, context.Emax = 17, decimal.MIN_EMIN, decimal.MAX_EMAX
+                return f"{decimal.Decimal(value.numerator) / decimal.Decimal(value.denominator):.16e}"
+    except (ArithmeticError, ValueError):
+        return None
+    return None
 
 
 def _looks_like_path(text: str) -> bool:
