@@ -41,3 +41,20 @@ def test_a_dangling_link_in_a_results_file_is_worded_without_stray_quotes(tmp_pa
             f["R"]
     message = str(corrupt_error(str(path), caught.value))
     assert message.endswith("(HDF5: component not found)"), message
+
+
+@pytest.mark.parametrize("setting", ["NUMBA_DISABLE_JIT=yes", "NUMBA_OPT=bogus", "NUMBA_BOUNDSCHECK=maybe"])
+def test_a_numba_variable_numba_cannot_read_is_one_line(setting):
+    """numba ignores it with a RuntimeWarning holding its parser's traceback (eight lines on every
+    command); vrsweep says it in one line, as it says an unreadable NUMBA_NUM_THREADS."""
+    import os
+    import subprocess
+    import sys
+
+    name, value = setting.split("=")
+    result = subprocess.run([sys.executable, "-c", "import vrsweep, numba"], capture_output=True, text=True,
+                            env={**os.environ, name: value}, timeout=120)
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+    assert lines[0].startswith(f"vrsweep: {name}='{value}' is not a value numba can read"), lines[0]

@@ -30,6 +30,7 @@ from vrsweep.execution import threads as _threads  # noqa: E402
 
 _numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
 _threads.drop_unreadable_setting()
+_threads.word_numba_setting_warnings()
 
 
 def open_results(path, **kwargs):

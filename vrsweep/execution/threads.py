@@ -6,9 +6,10 @@ CPU count. numba ignores an unreadable NUMBA_NUM_THREADS with a warning; so does
 """
 
 import os
+import re
 import sys
 
-from vrsweep.errors import clip
+from vrsweep.errors import clip, one_line
 from vrsweep.numbertext import read_int
 
 
@@ -49,6 +50,36 @@ def drop_unreadable_setting() -> None:
         os.environ["NUMBA_NUM_THREADS"] = str(most)
         sys.stderr.write(f"vrsweep: NUMBA_NUM_THREADS={clip(value.strip())} is more than the {most} CPUs of this "
                          f"machine: using {most}\n")
+
+
+# numba's words for an environment variable it cannot parse (numba/core/config.py, _readenv): a
+# RuntimeWarning holding the parser's whole traceback, eight lines for NUMBA_DISABLE_JIT=yes.
+_NUMBA_UNREADABLE = re.compile(r"Environment variable '(?P<name>[^']*)' is defined but its associated value "
+                               r"'(?P<value>.*)' could not be parsed", re.DOTALL)
+
+
+def word_numba_setting_warnings() -> None:
+    """Have a NUMBA_* variable that numba cannot parse (NUMBA_DISABLE_JIT=yes, NUMBA_OPT=bogus) said
+    in one line when numba reads it, as NUMBA_NUM_THREADS is (drop_unreadable_setting): numba
+    ignores it, using its default, and printed a RuntimeWarning with a traceback. Every other
+    warning is shown as before (the hook chains to the one it replaces)."""
+    import warnings
+
+    shown = warnings.showwarning
+    if getattr(shown, "vrsweep_numba_words", False):
+        return
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        match = _NUMBA_UNREADABLE.match(str(message)) if issubclass(category, RuntimeWarning) else None
+        if match is None:
+            return shown(message, category, filename, lineno, file, line)
+        reason = [text for text in str(message).splitlines() if text.strip()][-1].strip()
+        (file or sys.stderr).write(one_line(f"vrsweep: {match['name']}={clip(repr(match['value']))} is not a value "
+                                            f"numba can read ({clip(reason, 80)}): ignored, numba uses its default")
+                                   + "\n")
+
+    show.vrsweep_numba_words = True
+    warnings.showwarning = show
 
 
 def machine_cpus() -> int:
