@@ -58,3 +58,31 @@ def test_a_numba_variable_numba_cannot_read_is_one_line(setting):
     lines = [line for line in result.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
     assert lines[0].startswith(f"vrsweep: {name}='{value}' is not a value numba can read"), lines[0]
+
+
+@pytest.mark.parametrize("number", [30, 5, 2])  # EROFS, EIO, ENOENT
+def test_a_file_the_system_will_not_open_is_not_called_corrupt(number):
+    """`run --resume` of a sound file on a read-only file system said "is truncated or corrupt (HDF5:
+    unable to open file: ... errno = 30, error message = 'Read-only file system' ...)"."""
+    import os
+
+    from vrsweep.store.reader import corrupt_error
+
+    error = OSError(f"Unable to synchronously open file (unable to open file: name = 'r.h5', errno = {number}, "
+                    f"error message = '{os.strerror(number)}', flags = 1, o_flags = 2)")
+    message = str(corrupt_error("r.h5", error))
+    assert message == f"r.h5: cannot open it: {os.strerror(number)}", message
+
+
+def test_a_truncated_file_is_still_called_truncated(tmp_path):
+    import h5py
+
+    from vrsweep.store.reader import corrupt_error
+
+    path = tmp_path / "t.h5"
+    with h5py.File(path, "w") as f:
+        f["x"] = list(range(1000))
+    path.write_bytes(path.read_bytes()[:1500])
+    with pytest.raises(OSError) as caught:
+        h5py.File(path, "r")
+    assert "truncated or corrupt" in str(corrupt_error(str(path), caught.value))

@@ -16,7 +16,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, clip
-from vrsweep.store.fileio import open_hdf5, refuse_a_special_file
+from vrsweep.store.fileio import _errno_of, open_hdf5, refuse_a_special_file
 from vrsweep.store.layout import (
     BOOKKEEPING, FORMAT_VERSION, VariableSpec, clean_attrs, decode, point_label, point_variables_of, scale_names,
 )
@@ -297,6 +297,10 @@ def corrupt_error(path, error):
             "set HDF5_USE_FILE_LOCKING=FALSE to read it anyway")
     if "Permission denied" in text or getattr(error, "errno", None) == 13:
         return ResultFileError(f"{path}: permission denied")
+    number = _errno_of(error)
+    if number:  # the system refused the open, not the file: --resume on a read-only file system
+        # (errno 30) was "is truncated or corrupt (HDF5: unable to open file: ... Read-only file system)"
+        return ResultFileError(f"{path}: cannot open it: {os.strerror(number)}")
     reason = text.split("(", 1)[-1].rstrip(")") if "(" in text else text
     return ResultFileError(f"{path} is truncated or corrupt (HDF5: {reason.strip()})")
 
