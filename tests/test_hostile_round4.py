@@ -86,3 +86,28 @@ def test_a_truncated_file_is_still_called_truncated(tmp_path):
     with pytest.raises(OSError) as caught:
         h5py.File(path, "r")
     assert "truncated or corrupt" in str(corrupt_error(str(path), caught.value))
+
+
+def test_output_in_the_home_of_a_user_who_does_not_exist_is_refused(tmp_path, invoke, write_config, monkeypatch):
+    """`output: ~nosuchuser/x.h5` stayed as written (os.path.expanduser knows no such user) and the
+    run made a folder named '~nosuchuser' in the current directory, as '~/x.h5' once made '~'."""
+    import pwd
+
+    user = "vrsweep_no_such_user_7"
+    with pytest.raises(KeyError):
+        pwd.getpwnam(user)
+    monkeypatch.chdir(tmp_path)
+    config = write_config(tmp_path, f"model: effective\nintegration: {{transient_periods: 1, measure_periods: 1, "
+                                    f"strobe_periods: 1}}\noutput: ~{user}/x.h5\n")
+    for command in ("validate", "run"):
+        result = invoke(command, config)
+        assert result.exit_code == 2, result.output
+        assert f"sweep.yaml:3: output: '~{user}/x.h5' starts with ~{user}" in result.output, result.output
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["sweep.yaml"]
+
+
+def test_output_in_a_home_that_exists_is_that_folder():
+    import os
+
+    config = parse_config("output: ~/x.h5\n")
+    assert str(config.output_path()) == os.path.join(os.path.expanduser("~"), "x.h5")

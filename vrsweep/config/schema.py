@@ -324,7 +324,16 @@ class Config:
             # directory (where `rm -r ~` is one slip away) and wrote the results there, and
             # "$SCRATCH/x.h5" a folder named "$SCRATCH". Expanded here, where the path is used,
             # not when the config is read: a stored config is read again on other machines.
-            return Path(self._expand_variables(os.path.expanduser(self.output)))
+            expanded = os.path.expanduser(self.output)
+            if expanded.startswith("~"):
+                # "~nosuchuser/x.h5" (a typo, or a user of another machine: the stored config is
+                # read again elsewhere) stays as written, and a folder named "~nosuchuser" was made
+                # in the current directory, as "~" once was
+                user = re.split(r"[/\\]", expanded, maxsplit=1)[0][1:]
+                raise self._output_error(f"starts with ~{user}, the home folder of {user or 'this user'}, "
+                                         f"{'who is not a user of this machine' if user else 'which is not known'}: "
+                                         f"give the folder, or the path with -o")
+            return Path(self._expand_variables(expanded))
         if self.source_name.startswith("<"):
             return Path("vrsweep.h5")
         return Path(Path(self.source_name).stem + ".h5")
@@ -336,15 +345,19 @@ class Config:
         def value(match):
             name = match.group(1) or match.group(2)
             if name not in os.environ:
-                line = next((f":{number}" for number, row in enumerate(self.source_text.splitlines(), 1)
-                             if _OUTPUT_KEY.match(row)), "")
-                from vrsweep.errors import ConfigError
-
-                raise ConfigError([f"{self.source_name}{line}: output: {show(self.output)} uses the environment "
-                                   f"variable {name}, which is not set: set it, or give the path with -o"])
+                raise self._output_error(f"uses the environment variable {name}, which is not set: set it, or "
+                                         f"give the path with -o")
             return os.environ[name]
 
         return _VARIABLE.sub(value, text)
+
+    def _output_error(self, problem):
+        """A ConfigError at the config's output line: ``FILE:LINE: output: 'VALUE' PROBLEM``."""
+        from vrsweep.errors import ConfigError
+
+        line = next((f":{number}" for number, row in enumerate(self.source_text.splitlines(), 1)
+                     if _OUTPUT_KEY.match(row)), "")
+        return ConfigError([f"{self.source_name}{line}: output: {show(self.output)} {problem}"])
 
     def to_yaml(self) -> str:
         """Canonical YAML of this config, fully resolved (defaults filled, overrides applied).
