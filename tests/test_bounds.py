@@ -32,7 +32,10 @@ integration: {{transient_periods: {transient}, measure_periods: {measure}, strob
 
 
 def _config(n=40, transient=0, measure=1):
-    return parse_config(SWEEP.format(n=n, transient=transient, measure=measure))
+    # max_steps to match: each period takes at least one step (config/rules.check_periods_can_finish)
+    max_steps = max(20_000_000, -(-(transient + measure) // 2))
+    return parse_config(SWEEP.format(n=n, transient=transient, measure=measure).replace(
+        "strobe_periods: 1", f"strobe_periods: 1, max_steps: {max_steps}"))
 
 
 def test_record_row_bytes_is_the_kernels_record():
@@ -101,7 +104,9 @@ def test_validate_counts_memory_and_run_refuses_what_cannot_fit(tmp_path, invoke
     assert f"memory:      {expected:.1f} kB of per-period records held at once" in done.output, done.output
     # measure_periods 1e11: 8 TB of records for one point. Refused by validate and by run, even
     # with --allow-large, in one line and before any file exists.
-    huge = write_config(tmp_path, SWEEP.format(n=40, transient=0, measure=10 ** 11), name="huge.yaml")
+    # (with max_steps to match: 1e11 periods need at least as many steps, config/rules.py)
+    huge = write_config(tmp_path, SWEEP.format(n=40, transient=0, measure=10 ** 11).replace(
+        "strobe_periods: 1", f"strobe_periods: 1, max_steps: {10 ** 11}"), name="huge.yaml")
     out = tmp_path / "out" / "huge.h5"
     for args in (("validate", huge), ("run", huge, "-o", out, "--allow-large")):
         done = invoke(*args)

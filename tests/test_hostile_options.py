@@ -87,7 +87,7 @@ def test_a_huge_canvas_is_one_line_at_the_command_line(branch, tmp_path, invoke,
     (("plot", "F.h5", "--dpi", "-1"), "--dpi -1: expected a whole number from 20 to 1200"),
     (("plot", "F.h5", "--dpi", "1e9"), "--dpi 1e9: expected a whole number from 20 to 1200"),
     (("plot", "F.h5", "--kind", "nope"), "'--kind': 'nope' is not one of"),
-    (("plot", "F.h5", "--vmin", "abc"), "'--vmin'"),
+    (("plot", "F.h5", "--vmin", "abc"), "--vmin abc: is not a finite number"),
     (("plot", "F.h5", "--bogus"), "No such option '--bogus'"),
     (("plot",), "Missing argument"),
     (("simulate", "c.yaml", "--samples-per-period", "0"), "--samples-per-period 0: expected a whole number of at least 1"),
@@ -247,7 +247,8 @@ def test_memory_is_counted_against_the_process_limit(monkeypatch):
 
     monkeypatch.setattr(resource, "getrlimit", limited)
     assert estimate.memory_allowance() == (2 ** 30, "this process may use (half its ulimit -v limit)")
-    config = config_from_dict({**POINT, "integration": {"measure_periods": 100_000_000}})
+    # max_steps: 1e8 periods need at least as many steps (config/rules.check_periods_can_finish)
+    config = config_from_dict({**POINT, "integration": {"measure_periods": 100_000_000, "max_steps": 100_000_000}})
     problem = estimate.memory_problem(config)
     assert "more than the 1.1 GB this process may use (half its ulimit -v limit)" in problem, problem
 
@@ -255,7 +256,7 @@ def test_memory_is_counted_against_the_process_limit(monkeypatch):
 def test_measure_periods_beyond_ulimit_is_one_line(tmp_path, write_config):
     """vrsweep validate and run under ulimit -v 3 GiB: 1e8 measured periods need 8 GB of records
     (it was a 7.45 GiB allocation traceback); refused before any file is made."""
-    config = write_config(tmp_path, "parameters: {g: 5}\nintegration: {measure_periods: 100000000}\n")
+    config = write_config(tmp_path, "parameters: {g: 5}\nintegration: {measure_periods: 100000000, max_steps: 100000000}\n")
     out = tmp_path / "out.h5"
 
     def limit():
