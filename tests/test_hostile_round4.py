@@ -111,3 +111,11 @@ def test_output_in_a_home_that_exists_is_that_folder():
 
     config = parse_config("output: ~/x.h5\n")
     assert str(config.output_path()) == os.path.join(os.path.expanduser("~"), "x.h5")
+
+
+def test_validate_shows_a_count_as_given(tmp_path, invoke, write_config):
+    """`--set max_steps=123456789` was shown as max_steps=1.23457e+08: a count that was not given."""
+    config = write_config(tmp_path, "model: effective\n")
+    result = invoke("validate", config, "--set", "max_steps=123456789", "--set", "max_impacts_per_period=1234567")
+    assert result.exit_code == 0, result.output
+    assert "max_steps=123456789 max_impacts_per_period=1234567" in result.output, result.output

@@ -137,6 +137,8 @@ def _other_settings(integration) -> str:
             changed.append(f"{key}={'true' if value else 'false'}")
         elif isinstance(value, str):  # device
             changed.append(f"{key}={value}")
+        elif isinstance(value, int):  # a count as given: max_steps=123456789 was shown as 1.23457e+08
+            changed.append(f"{key}={value}")
         else:
             changed.append(f"{key}={value:g}")
     return f"; {' '.join(changed)}" if changed else ""
