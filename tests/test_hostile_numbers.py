@@ -306,3 +306,14 @@ def test_keyword_numbers_of_other_types_are_their_values():
 
     for value in (Decimal("0.25"), Fraction(1, 4), 0.25):
         assert resolve_config(CONFIG, {"gamma": value}).parameters["gamma"] == 0.25
+
+
+def test_a_huge_whole_number_in_a_library_message_is_quoted_short():
+    """VrsweepError.naming quotes an int at clip's length: simulate(samples_per_period=10**400)
+    printed the 400-digit count and its 400-digit product."""
+    import vrsweep
+
+    with pytest.raises(UsageError) as caught:
+        vrsweep.simulate("model: effective\nparameters: {g: 5}\n", samples_per_period=10 ** 400)
+    message = str(caught.value)
+    assert "0" * 50 not in message and "samples per period" in message, message

@@ -65,7 +65,11 @@ class VrsweepError(Exception):
         Values (paths, numbers) go in ``values``, never into the template, so that their braces
         are never read as placeholders.
         """
-        error = cls(template.format_map(_Wording(argument_words or {}, values)))
+        # A whole number of 400 digits (samples_per_period=10**400) is quoted short, as clip quotes
+        # a value; a path or another text is quoted whole: it names what to look at
+        shown = {name: clip(value) if isinstance(value, int) and not isinstance(value, bool) else value
+                 for name, value in values.items()}
+        error = cls(template.format_map(_Wording(argument_words or {}, shown)))
         error.template, error.argument_words, error.values = template, dict(argument_words or {}), values
         return error
 
