@@ -216,7 +216,7 @@ initial: {{x: 0.0, v: 0.0}}
 
 @pytest.mark.parametrize("acceleration, words", [
     ("-2*zeta*v - x + F*cos(omega*t) + 1e-400*x", "1e-400, which is below the smallest double"),
-    ("-2*zeta*v - x + F*cos(omega*t) + 1e400", "1e400, which is beyond the largest double"),
+    ("-2*zeta*v - x + F*cos(omega*t) + 1e400", "holds a number too large for a double"),
     ("-2*ｚeta*v - x + F*cos(omega*t)", "'ｚeta', which Python reads as 'zeta'"),
     ("-2*zeta*v - ｘ + F*cos(omega*t)", "'ｘ', which Python reads as 'x'"),
 ])

@@ -21,9 +21,10 @@ def _parse_at(values):
         try:
             number = read_float(value)  # the one rule of numbers as text: not "١٢", nan or 1e400
         except ValueError:  # NumberTextError is one
-            if name.strip() == "direction":  # up or down, as plot --at takes it (store/reading.axis_index)
-                number = value.strip()
-            else:
+            # as text: store/reading.axis_index says what is wrong with it (nan: "not a finite
+            # number", "١٢": digits other than 0-9) or reads up/down for the direction
+            number = value.strip()
+            if not number:
                 sep = ""
         if not sep or not name:
             raise click.BadParameter(f"expected AXIS=VALUE, e.g. g=23, got {clip(text)!r}", param_hint="--at")

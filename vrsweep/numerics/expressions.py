@@ -83,7 +83,7 @@ def _check_as_written(tree, text):
             if isinstance(node, ast.Name) and written != node.id:
                 raise ExpressionError(f"writes the name {clip(written)!r}, which Python reads as {node.id!r} "
                                       f"(Unicode's compatibility form): write it in ASCII letters, {node.id}")
-            if isinstance(node, ast.Constant):
+            if isinstance(node, ast.Constant) and node.value == 0.0:  # inf: _check says "too large"
                 problem = beyond_double(written.replace("_", ""), node.value)
                 if problem:
                     raise ExpressionError(f"holds the number {clip(written)}, which {problem}")
