@@ -67,8 +67,8 @@ class VrsweepError(Exception):
         """
         # A whole number of 400 digits (samples_per_period=10**400) is quoted short, as clip quotes
         # a value; a path or another text is quoted whole: it names what to look at
-        shown = {name: clip(value) if isinstance(value, int) and not isinstance(value, bool) else value
-                 for name, value in values.items()}
+        shown = {name: _Clipped(clip(value)) if isinstance(value, int) and not isinstance(value, bool)
+                 and len(str(value)) > SHOWN_CHARACTERS else value for name, value in values.items()}
         error = cls(template.format_map(_Wording(argument_words or {}, shown)))
         error.template, error.argument_words, error.values = template, dict(argument_words or {}), values
         return error
@@ -79,6 +79,13 @@ class VrsweepError(Exception):
         if self.template is None:
             return self
         return type(self).naming(self.template, {**self.argument_words, **flags}, **self.values)
+
+
+class _Clipped(str):
+    """A value cut short for a message, shown as it is whatever format the template asks ({n:g})."""
+
+    def __format__(self, spec):
+        return str(self)
 
 
 class _Wording(dict):
