@@ -1136,3 +1136,27 @@ def test_a_greek_parameter_name_is_told_to_use_latin_letters_and_a_symbol():
     found = problems(MODEL.replace("zeta", "ζ"))
     assert found[0].startswith("m.yaml:3: model.parameters.ζ: must be a name in ASCII letters, digits and _, "
                                "got 'ζ': write it in Latin letters"), found
+
+
+@pytest.mark.parametrize("text, character, advice", [
+    ("-2*zeta*v - x + \uff26*cos(omega*t)", "U+FF26 FULLWIDTH LATIN CAPITAL LETTER F", "silently read it as 'F'"),
+    ("-2*zeta*v - \U0001d465 + F*cos(omega*t)", "U+1D465 MATHEMATICAL ITALIC SMALL X", "silently read it as 'x'"),
+    ("-2*zeta*v - x**\u00b2 + F*cos(omega*t)", "U+00B2 SUPERSCRIPT TWO", "silently read it as '2'"),
+    ("-2*zeta*v \u2212 x + F*cos(omega*t)", "U+2212 MINUS SIGN", "write '-' instead"),
+    ("-2*\u03b6*v - x + F*cos(omega*t)", "U+03B6 GREEK SMALL LETTER ZETA", "under model.symbols"),
+])
+def test_a_look_alike_of_an_ascii_name_is_refused_not_read_as_it(text, character, advice, tmp_path):
+    """Python's parser folds identifiers by NFKC: a fullwidth F and a mathematical italic x (pasted
+    from a typeset paper) ran as the parameter F and the position x, an equation other than the
+    one written, without a word."""
+    with pytest.raises(expressions.NonAsciiError) as caught:
+        expressions.parse(text, ("x", "v", "t", "zeta", "F", "omega"))
+    assert character in str(caught.value) and advice in str(caught.value)
+    (problem,) = problems(MODEL.replace("-2*zeta*v - x + F*cos(omega*t)", text))
+    assert problem.startswith(f"m.yaml:2: model.acceleration: holds "), problem
+    assert character in problem and advice in problem
+    config = tmp_path / "pasted.yaml"
+    config.write_text(MODEL.replace("-2*zeta*v - x + F*cos(omega*t)", text), encoding="utf-8")
+    result = CliRunner().invoke(main, ["validate", str(config)])
+    assert result.exit_code == 2 and character in result.output and "Traceback" not in result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output

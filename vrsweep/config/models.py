@@ -266,7 +266,7 @@ class ModelSection:
         try:
             expressions.parse(text, names)
         except expressions.ExpressionError as error:
-            if parameters is None and "unknown name" in str(error):
+            if parameters is None and ("unknown name" in str(error) or isinstance(error, expressions.NonAsciiError)):
                 return None  # the parameters themselves are broken: that is the problem reported
             self.report(path, str(error))
             return None

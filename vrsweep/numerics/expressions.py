@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import ast
 import math
+import unicodedata
 
 import numpy as np
 
@@ -56,6 +57,7 @@ def parse(text, names) -> ast.expr:
         # ran as -x - 0.1*v, the rest of the model dropped without a word.
         raise ExpressionError(f"holds a '#', which would silently end the expression there: a YAML comment "
                               f"goes after the closing quote: {text.strip()!r}")
+    _refuse_non_ascii(text)
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as error:
@@ -72,21 +74,45 @@ def parse(text, names) -> ast.expr:
 
 
 def _check_as_written(tree, text):
-    """Refuse what Python's parser reads as something else than was written: a name in Unicode's
-    compatibility forms (the fullwidth 'ｚeta' is the parameter zeta to it, NFKC), and a literal no
-    double holds (1e-400 is 0.0 to it, and a model with '1e-400*x' ran as '0.0*x')."""
+    """Refuse a literal no double holds: 1e-400 is 0.0 to Python's parser, and a model with
+    '1e-400*x' ran as '0.0*x'. (Names Python reads as others, Unicode's compatibility forms, are
+    refused before parsing: _refuse_non_ascii.)"""
     for node in ast.walk(tree):
-        if isinstance(node, ast.Name) or isinstance(node, ast.Constant) and isinstance(node.value, float):
-            written = ast.get_source_segment(text, node)
-            if written is None:
-                continue
-            if isinstance(node, ast.Name) and written != node.id:
-                raise ExpressionError(f"writes the name {clip(written)!r}, which Python reads as {node.id!r} "
-                                      f"(Unicode's compatibility form): write it in ASCII letters, {node.id}")
-            if isinstance(node, ast.Constant) and node.value == 0.0:  # inf: _check says "too large"
-                problem = beyond_double(written.replace("_", ""), node.value)
-                if problem:
-                    raise ExpressionError(f"holds the number {clip(written)}, which {problem}")
+        if isinstance(node, ast.Constant) and isinstance(node.value, float) and node.value == 0.0:
+            written = ast.get_source_segment(text, node)  # inf: _check says "too large"
+            problem = written and beyond_double(written.replace("_", ""), node.value)
+            if problem:
+                raise ExpressionError(f"holds the number {clip(written)}, which {problem}")
+
+
+# Typeset operators a pasted equation brings, and what they mean here.
+_TYPESET_OPERATORS = {"\u2212": "-", "\u2013": "-", "\u00d7": "*", "\u22c5": "*", "\u00b7": "*", "\u2215": "/"}
+
+
+class NonAsciiError(ExpressionError):
+    """An expression holding a character outside ASCII."""
+
+
+def _refuse_non_ascii(text):
+    """Refuse any character outside ASCII, naming it. Python's parser folds identifiers by NFKC:
+    'Ｆ' (fullwidth) and '𝑥' (mathematical italic) were silently read as the parameter F and the
+    position x, so a model pasted from a typeset paper ran as another equation than the one
+    shown. The language is ASCII (names, digits, operators), so nothing else can be meant."""
+    for offset, character in enumerate(text.strip(), start=1):
+        if character.isascii():
+            continue
+        name = unicodedata.name(character, "an unnamed character")
+        folded = unicodedata.normalize("NFKC", character)
+        if character in _TYPESET_OPERATORS:
+            advice = f"write {_TYPESET_OPERATORS[character]!r} instead"
+        elif folded != character and folded.isascii():
+            advice = f"Python's parser would silently read it as {folded!r}: write that in ASCII"
+        elif unicodedata.category(character).startswith("L"):
+            advice = "write names in ASCII letters (zeta) and give their typeset look under model.symbols"
+        else:
+            advice = "write expressions in ASCII"
+        raise NonAsciiError(f"holds {character!r} (U+{ord(character):04X} {name}) at character {offset}: "
+                            f"{advice}: {text.strip()!r}")
 
 
 def _constant(node, value):
