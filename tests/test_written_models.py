@@ -1160,3 +1160,41 @@ def test_a_look_alike_of_an_ascii_name_is_refused_not_read_as_it(text, character
     result = CliRunner().invoke(main, ["validate", str(config)])
     assert result.exit_code == 2 and character in result.output and "Traceback" not in result.output
     assert len(result.output.strip().splitlines()) == 1, result.output
+
+
+@pytest.mark.parametrize("change, expected", [
+    # 300 periods of 1e-300 moved nothing in doubles: every point "ok", period 1, R = 2|x0| (the mean)
+    (("period: \"2*pi/omega\"", "period: 1e-300"),
+     "m.yaml:6: model.period: T = 1e-300 is too short to be integrated against the response frequency's cycle "
+     "2*pi/w = 7.85"),
+    (("period: \"2*pi/omega\"", "period: 1e-20"), "m.yaml:6: model.period: T = 1e-20 is too short"),
+    # a cycle of 7.85 against the rounding of t = 2e22: every point ended step_too_small, "loosen rtol"
+    (("period: \"2*pi/omega\"", "period: 1e20"),
+     "m.yaml:7: model.response.frequency: w = 0.8 turns too fast for the time of the run in doubles"),
+    (("period: \"2*pi/omega\"", "period: 1e14"), "m.yaml:7: model.response.frequency: w = 0.8 turns too fast"),
+    # 1e6 steps a period at the cap, 200 periods: 2e8 steps, ten times the budget
+    (("response: {frequency: omega, scale: F}", "response: {frequency: omega, scale: F}\n  max_step: period/1e6"),
+     "m.yaml:8: model.max_step: the step cap 7.853981633974482e-06 makes at least 2e+08 steps over the run (200 periods of "
+     "T = 7.85"),
+])
+def test_a_period_out_of_scale_with_the_models_other_time_scales_is_refused(change, expected):
+    found = problems(MODEL.replace(*change))
+    assert len(found) == 1 and found[0].startswith(expected), found
+
+
+def test_periods_and_step_caps_within_doubles_reach_are_taken(tmp_path):
+    """The bounds are double precision's and the step budget's, not a taste in time scales: a
+    period a millionth or ten billion times the forcing's, and a cap just within the budget, are read."""
+    for period in ("1e-12", "1e9"):
+        parse_config(MODEL.replace('period: "2*pi/omega"', f"period: {period}"), "m.yaml")
+    parse_config(MODEL.replace("scale: F}", "scale: F}\n  max_step: period/1e5"), "m.yaml")
+    # the default cap, period/8, with a small budget is a status on the point, as before
+    parse_config(MODEL, "m.yaml", ["max_steps=100"])
+    config = tmp_path / "short.yaml"
+    config.write_text(MODEL.replace('period: "2*pi/omega"', "period: 1e-300") + "sweep: {omega: [0.5, 0.8]}\n")
+    result = CliRunner().invoke(main, ["validate", str(config)])
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert result.output.strip().splitlines() == [
+        f"Error: {config}:6: model.period: T = 1e-300 is too short to be integrated against the response "
+        f"frequency's cycle 2*pi/w = 12.566370614359172: the whole run (200 periods) is below that cycle's "
+        f"rounding in doubles, so nothing moves and R is no Fourier component at omega = 0.5"]

@@ -30,7 +30,7 @@ from vrsweep.config.schema import ANY, INITIAL_STATE_AXES, INTEGRATION_DEFAULTS,
 from vrsweep.config.wording import did_you_mean, show
 import vrsweep.numerics.expressions as expressions
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, PARAMETER_NAMES
-from vrsweep.numerics.written import SIDES, Barrier, WrittenModel
+from vrsweep.numerics.written import SCAN_STEPS_PER_MAX_STEP, SIDES, Barrier, WrittenModel
 
 MODEL_KEYS = ("name", "acceleration", "parameters", "ranges", "symbols", "barriers", "period", "response",
               "max_step")
@@ -369,12 +369,14 @@ def _undefined_everywhere(report, model: WrittenModel, values, period) -> bool:
 
 
 def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, initial: dict, swept_initial: dict,
-                        initial_given=True, velocity_given=True):
+                        initial_given=True, velocity_given=True, run=None):
     """The rules a written model's values must keep at every grid point (or along each axis through
     the fixed values, for a grid beyond FULL_CHECK_POINTS): each reported once, at the model's field.
 
     fixed: name -> the parameter's fixed value; axes: name -> values of the swept parameters;
-    initial: {"x", "v"} (None where invalid); swept_initial: x0 / v0 -> values.
+    initial: {"x", "v"} (None where invalid); swept_initial: x0 / v0 -> values; run: the sweep's
+    (periods, max_steps) for the time-scale rules (time_scale_problem), None where there is no
+    sweep to run (a branch's domain).
     """
     from vrsweep.numerics.written import header_values
 
@@ -426,6 +428,19 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
                 period_failed = period_failed or key_path == ("period",)
         if failed:
             return
+        if run is not None:
+            scales = [header[key] for key in ("period", "max_step", "response.frequency")]
+            swept_shape = np.broadcast_shapes(*(np.shape(a) for a in scales))
+            # The default cap, period/8, is 8 steps a period: a run beyond max_steps then is a small
+            # budget, which a point's status reports, not a step cap out of scale with the period.
+            problem = time_scale_problem(*scales, run[0], run[1] if model.max_step is not None else math.inf)
+            if problem is not None:
+                field, message, index = problem
+                where = _point_at(values, names, index) if math.prod(swept_shape) > 1 else ""
+                path = {"period": ("model", "period"), "frequency": ("model", "response", "frequency"),
+                        "max_step": ("model", "max_step")}[field]
+                report(path, f"{message}{where}")
+                return
         if _undefined_everywhere(report, model, values, header["period"]):
             return
         if len(model.barriers) == 2:
@@ -478,3 +493,64 @@ def check_written_model(report, model: WrittenModel, fixed: dict, axes: dict, in
                        f"{show(side * found[0])}{found[1]}): a velocity into the barrier is the instant before an "
                        f"impact, not a state; give the velocity after it, got {field} = {show(side * into)}")
                 return
+
+
+# The kernel's shortest step at time t is 4 ulps of max(t, T) (kernel._smallest_step): a time scale
+# shorter than that at the run's end cannot be stepped through, and a run shorter than that
+# against a time scale moves nothing in doubles.
+_ROUNDING_STEPS = 4.0 * float(np.finfo(np.float64).eps)
+# The steps a cycle of the response must hold at least: a stuck mass's release scan steps 1/64 of
+# the shortest forcing period, and R's quadrature needs a cycle resolved (at T = 1e14 a cycle of
+# 7.85 was 3.4 of those shortest steps, and every point ended step_too_small).
+CYCLE_STEPS = 64
+
+
+def time_scale_problem(period, max_step, frequency, periods, max_steps):
+    """Whether the period T can be integrated against the model's other time scales, the response
+    frequency's cycle 2 pi / w and the step cap, over ``periods`` periods within ``max_steps``
+    steps: None, or (field, message, flat index of the first bad point) where it cannot.
+
+    ``period: 1e-300`` ran every point "ok": its 32 periods moved nothing in doubles (x stayed
+    x0, R = 2 |x0| the mean, no Fourier component); ``period: 1e20`` ended each point
+    step_too_small with advice to loosen the tolerance, since a cycle of 7.85 is below the
+    rounding of t = 1e21; a step cap of T/1e12 would take 1e12 steps a period before max_steps."""
+    with np.errstate(all="ignore"):
+        period, max_step, frequency = (np.ravel(array) for array in np.broadcast_arrays(
+            *(np.asarray(a, dtype=np.float64) for a in (period, max_step, frequency))))
+        span = periods * period  # the whole run's time, where t's rounding is coarsest
+        cycle = 2.0 * np.pi / frequency
+        rounding = _ROUNDING_STEPS * span
+        rules = (
+            ("period", span <= _ROUNDING_STEPS * cycle,
+             lambda i: f"T = {show(float(period[i]))} is too short to be integrated against the response frequency's "
+                       f"cycle 2*pi/w = {show(float(cycle[i]))}: the whole run ({periods} periods) is below that cycle's "
+                       f"rounding in doubles, so nothing moves and R is no Fourier component"),
+            ("frequency", cycle <= CYCLE_STEPS * rounding,
+             lambda i: f"w = {show(float(frequency[i]))} turns too fast for the time of the run in doubles: its cycle "
+                       f"{show(float(cycle[i]))} is less than {CYCLE_STEPS} of the shortest steps at t = {show(float(span[i]))} "
+                       f"({periods} periods of T = {show(float(period[i]))}); the period is too long against it"),
+            ("max_step", max_step <= rounding,
+             lambda i: f"the step cap {show(float(max_step[i]))} is below the rounding of t = {show(float(span[i]))} ({periods} "
+                       f"periods of T = {show(float(period[i]))}): steps would not advance time"),
+            # Flight takes a step per cap at least, a mass stuck on a stop a scan per cap/8, each
+            # with a budget of max_steps: beyond 1 + 1/8 budgets at the cap no point can finish.
+            ("max_step", span / max_step > (1.0 + 1.0 / SCAN_STEPS_PER_MAX_STEP) * max_steps,
+             lambda i: f"the step cap {show(float(max_step[i]))} makes at least {span[i] / max_step[i]:.3g} steps "
+                       f"over the run ({periods} periods of T = {show(float(period[i]))}), more than integration.max_steps "
+                       f"= {max_steps}: every point would end max_steps"),
+        )
+        for field, bad, message in rules:
+            if bad.any():
+                index = int(np.argmax(bad))
+                return field, message(index), index
+    return None
+
+
+def _point_at(values, names, index) -> str:
+    """' at name = value, ...' for the swept names of flat point ``index`` ('' if nothing is swept)."""
+    shape = np.broadcast_shapes(*(np.shape(values[name]) for name in names))
+    swept = [name for name in names if np.ndim(values[name]) > 0]
+    if not swept or index >= math.prod(shape):
+        return ""
+    return " at " + ", ".join(f"{name} = {show(float(np.broadcast_to(values[name], shape).reshape(-1)[index]))}"
+                              for name in swept)

@@ -36,7 +36,7 @@ class CrossFieldRules:
         x = _valid(initial, "x", INITIAL_DEFAULTS, INITIAL_DOMAINS)
         v = _valid(initial, "v", INITIAL_DEFAULTS, INITIAL_DOMAINS)
         if isinstance(self.model, WrittenModel):
-            self.check_written_rules(parameters, initial, sweep, axes, x, v)
+            self.check_written_rules(parameters, initial, sweep, axes, x, v, _run_length(integration))
         elif "x0" in sweep:
             if "x0" in axes:
                 self.check_x0_axis(axes["x0"][0], axes["Delta"][0] if "Delta" in axes else None,
@@ -106,7 +106,7 @@ class CrossFieldRules:
                     f"mass), and a point stops after max_steps of either, so every point would end max_steps; "
                     f"lower the periods, or raise integration.max_steps to at least {-(-(transient + measure) // 2)}")
 
-    def check_written_rules(self, parameters, initial, sweep, axes, x, v):
+    def check_written_rules(self, parameters, initial, sweep, axes, x, v, run=None):
         """A written model's rules at the grid's points (config/models.check_written_model), once
         every value they read is valid on its own."""
         fixed = {}
@@ -120,7 +120,7 @@ class CrossFieldRules:
         swept = {name: values for name, (values, _, _) in axes.items() if name in self.parameter_names}
         swept_initial = {name: axes[name][0] for name in ("x0", "v0") if name in axes}
         check_written_model(self.report, self.model, fixed, swept, {"x": x, "v": v}, swept_initial,
-                            initial_given="x" in initial, velocity_given="v" in initial)
+                            initial_given="x" in initial, velocity_given="v" in initial, run=run)
 
     def check_continuation_start(self, parameters, section):
         """continuation.from inside the model's domain (config/domains.py, the rule every point of
@@ -205,6 +205,15 @@ class CrossFieldRules:
 def _section(data, name) -> dict:
     value = data.get(name)
     return value if isinstance(value, dict) else {}
+
+
+def _run_length(integration):
+    """(periods integrated, max_steps) where both are valid on their own, else None."""
+    counts = [_valid(integration, key, INTEGRATION_DEFAULTS, INTEGRATION_DOMAINS)
+              for key in ("transient_periods", "measure_periods", "max_steps")]
+    if None in counts:
+        return None
+    return counts[0] + counts[1], counts[2]
 
 
 def _valid(section, key, defaults, domains):
