@@ -62,7 +62,8 @@ def _integrate(integrate, functions, method, tangents, coefficients, initial_sta
     impacts = np.full((4096, 3), np.nan)
     sticks = np.full((1024, 2), np.nan)
     status = integrate(
-        model_rhs, model_rhs, tangent, barrier_force, rhs.no_preparation, rhs.no_preparation, rules, step, error,
+        model_rhs, model_rhs, tangent, barrier_force, rhs.no_switches, rhs.no_preparations, rules,
+        step, error,
         dense_output, accepted, growth, rejected, tangents, np.empty((k_rows, n_state)),
         np.empty((n_state, dense_order)), np.empty((kernel.N_VECTORS, n_state)), np.empty(N_BRACKET), np.empty(1),
         coefficients, initial_state, settings, records, summary, sample_times, samples, impacts, sticks,

@@ -104,7 +104,7 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
     dense = cuda.local.array(({n_state}, {dense_order}), float64)
     vectors = cuda.local.array(({n_vectors}, {n_state}), float64)
     bracket = cuda.local.array({n_bracket}, float64)
-    scratch = cuda.local.array(1, float64)  # no_preparation reads none
+    scratch = cuda.local.array(1, float64)  # no_preparations reads none
     state = cuda.local.array(2, float64)
 {local_coefficients}    # The observers a sweep does not use, as empty views (nothing is allocated for them).
     no_samples = scratch[:0]
@@ -122,7 +122,7 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
             summary = summaries[line, slot]
             fill_nan(period_records[line, slot], summary)
 {point}            status = _integrate(
-                model_rhs, model_rhs, tangent, barrier_force, no_preparation, no_preparation, RULES, step,
+                model_rhs, model_rhs, tangent, barrier_force, no_switches, no_preparations, RULES, step,
                 step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents}, K, dense, vectors,
                 bracket, scratch, point, state, settings, period_records[line, slot],
                 summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy, gather_lanes)
@@ -273,7 +273,7 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, queue, max
         point=_LOCAL_POINT if local_coefficients else _POINT)
     functions = {
         "_integrate": simulated_integrate if numba.config.ENABLE_CUDASIM else kernel._integrate,
-        "next_start": next_start, "no_preparation": rhs.no_preparation,
+        "next_start": next_start, "no_preparations": rhs.no_preparations, "no_switches": rhs.no_switches,
         "step": step, "step_error": step_error, "dense_output": dense_output, "accepted_factor": accepted_factor,
         "growth": growth, "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
         "barrier_force": barrier_force,

@@ -52,6 +52,29 @@ IMPACT = 1
 UNRESOLVED = 2  # left the barrier and came back between scan points: retry with a shorter step
 
 
+# Bisections of a step fraction for a switching function's sign change: 2**-60 of a step.
+SWITCH_BISECTIONS = 60
+
+
+@kernel_jit(inline="always")
+def locate_switch(switch_signs, signs, dense, y, t, h, coefficients):
+    """The first step fraction theta in (0, 1] past which the signs of the model's switching
+    functions (switch_signs(t, x, v, coefficients), a bit each) differ from ``signs`` on the dense
+    output: bisection on the bits, which needs no derivative and, being a comparison of bit
+    patterns, holds for any number of surfaces. Returns the upper end of the final bracket, so the
+    located state is on the far side, as locate_root's."""
+    theta_low = 0.0
+    theta_high = 1.0
+    for _ in range(SWITCH_BISECTIONS):
+        theta = 0.5 * (theta_low + theta_high)
+        if switch_signs(t + theta * h, dense_value(dense, y, h, theta, X), dense_value(dense, y, h, theta, V),
+                        coefficients) != signs:
+            theta_high = theta
+        else:
+            theta_low = theta
+    return theta_high
+
+
 @kernel_jit
 def locate_root(dense, y, h, component, level, theta_low, theta_high):
     """theta in [theta_low, theta_high] where the interpolant's component crosses ``level``.

@@ -35,7 +35,8 @@ from vrsweep.numerics.dop853 import (
     dop853_step,
 )
 from vrsweep.numerics.impact import (
-    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, hermite_reach, locate_root, release_time,
+    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, hermite_reach, locate_root, locate_switch,
+    release_time,
 )
 from vrsweep.numerics.coefficients import (
     BARRIER, BARRIER_VALUES, MAX_STEP, N_BARRIERS, PERIOD, POSITION, RESPONSE_FREQUENCY,
@@ -61,6 +62,7 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
     N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
     ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
+    no_preparations, no_switches, prepare_rotations_for,
     dop853_rotation_scratch, force_at_barrier, no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent,
     oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations,
     rotation_scratch,
@@ -138,6 +140,10 @@ def lanes_apart(waiting):
     return APART
 
 
+# A switching surface crossed within this fraction of a step's start is stepped over (kernel loop).
+SWITCH_SLIVER = 1e-9
+
+
 @kernel_jit
 def _smallest_step(t, slow_period):
     """A step this short no longer moves t by more than a few units of its last place."""
@@ -167,7 +173,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     cosines at every evaluation. Since version 0.2 steps are no longer capped at 1/8 of the
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_preparation, no_preparation,
+    return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_switches, no_preparations,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
                       rejected_step_factor, False, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET), no_scratch(0.0),
@@ -184,8 +190,8 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
     library (oscillator_rhs).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
-                      prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
+    return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, prepare_rotations_for,
+                      DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, False,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET),
@@ -202,8 +208,8 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_preparation,
-                      no_preparation, RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_preparations,
+                      RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET), no_scratch(0.0),
@@ -215,8 +221,8 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
-                      prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, prepare_rotations_for,
+                      DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET),
@@ -235,8 +241,8 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     interval makes it zero. No renormalisation: one period's map stays far inside double range
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_preparation,
-                      no_preparation, RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_preparations,
+                      RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
                       np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET), no_scratch(0.0),
@@ -248,8 +254,8 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, prepare_step_rotations,
-                      prepare_rotations, DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, prepare_rotations_for,
+                      DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET),
@@ -277,7 +283,7 @@ def integrator(method, lyapunov=False):
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
-def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_dense, rules, step, step_error,
+def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, rules, step, step_error,
                dense_output, accepted_factor, certain_growth, rejected_factor, tangents, K, dense, vectors, bracket,
                scratch, coefficients, initial_state, settings, period_records, summary,
                sample_times, samples, impact_log, stick_log, monodromy_log, gather_lanes):
@@ -285,10 +291,14 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
 
     rhs(t, h, node, c, y, coefficients, dydt, scratch) is the oscillator at t + c h; tangent(t, y,
     coefficients, dydt) its tangent product J u (tangent.apply_jacobian) and barrier_force(t,
-    coefficients, b) the acceleration of a mass at rest on barrier b, positive into it: the paper's
+    coefficients, b) the acceleration of a mass at rest on barrier b, positive into it;
+    switch_signs(t, x, v, coefficients) the signs of the acceleration's switching functions, one
+    bit each (codegen.switching_functions: the argument of abs or sign, the difference of max's
+    arguments), 0 for a smooth one (rhs.no_switches), so that a step that crosses a kink is cut
+    to end on it (locate_switch) and the method's order holds on each side: the paper's
     family passes rhs.py's, a written model its generated ones (codegen.py); stage_rhs the
-    same at a step's stages, after prepare_step(t, h, coefficients, scratch) (before a dense output:
-    prepare_dense, which also prepares the dense output's extra stages), with scratch =
+    same at a step's stages, after prepare(t, h, coefficients, scratch, dense) (dense: True before a
+    dense output, which also prepares the dense output's extra stages), with scratch =
     the method's own (dop853_rotation_scratch(h_max), or no_scratch). rules = (grid_steps,
     hold_after_reject, initial_order, n_stages), the method's constants (RK45_RULES ...): grid_steps
     rounds each step size down to grid_step's grid.
@@ -384,6 +394,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
     n_sticks = 0
     n_scans = 0
     retrying = False
+    cut_at_switch = False  # the step being attempted was cut to end on a switching surface
     # A located impact being reached: its Newton steps are passes of the loop (reaching), the trial
     # step's size and clipping, the barrier and what else the trial pass decided kept for them.
     reaching = False
@@ -463,7 +474,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                         status = Status.STEP_TOO_SMALL if finite else Status.NON_FINITE
                         break
                     h_try = min(h, h_max)
-                    if grid_steps:
+                    if grid_steps and not cut_at_switch:  # a step cut to a switch ends on it exactly
                         h_try = grid_step(h_try, scratch)  # a step size whose rotations are tabulated
                     if has_window:
                         # A step ends on each edge of the transparent window, so that each step is wholly
@@ -474,13 +485,15 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                             h_try = transparent_to - t
                         transparent = transparent_from <= t + 0.5 * h_try < transparent_to
                     clipped = False
-                    if t + 1.01 * h_try >= t_boundary:  # land on the boundary, no sliver step after it
+                    # land on the boundary, no sliver step after it (a step cut to a switch before it
+                    # ends on the switch)
+                    if t + 1.01 * h_try >= t_boundary and not (cut_at_switch and t + h_try < t_boundary):
                         h_try = t_boundary - t
                         clipped = True
                     h_step = h_try
                 # One call of the step for both: on a GPU the lanes of a warp that reach an impact
                 # take their Newton steps with the others' ordinary steps, not while those wait.
-                prepare_step(t, h_step, coefficients, scratch)
+                prepare(t, h_step, coefficients, scratch, False)
                 step(stage_rhs, t, y, f, h_step, coefficients, K, y_new, stage, scratch, n_dynamic)
                 n_rhs += n_stages
                 if reaching:
@@ -502,11 +515,31 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                     if not (err <= 1.0):  # also catches NaN from an overflowing trial step
                         n_rejected += 1
                         retrying = True
+                        cut_at_switch = False
                         h = h_try * (rejected_factor(err) if err == err else 0.2)
                         if h <= _smallest_step(t, slow_period):
                             status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
                             break
                         continue
+                    # A kink of the acceleration (abs, max, a jump of sign) inside the step: the step
+                    # is taken again to end on it, as an impact is reached, so that each step sees one
+                    # smooth side and the method keeps its order (across a kink the error estimate
+                    # only shrinks the step, and lambda_1 of a bilinear spring missed by more than its
+                    # error bar). A step already cut to a switch ends where it ends, and a crossing
+                    # within a sliver of the step's start (the cut step landed a rounding short) is
+                    # stepped over: its error is of the sliver's order.
+                    if not cut_at_switch:
+                        signs = switch_signs(t, y[X], y[V], coefficients)
+                        if switch_signs(t + h_try, y_new[X], y_new[V], coefficients) != signs:
+                            prepare(t, h_try, coefficients, scratch, True)
+                            n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage,
+                                                  scratch, n_dynamic)
+                            theta = locate_switch(switch_signs, signs, dense, y, t, h_try, coefficients)
+                            if SWITCH_SLIVER < theta < 1.0 and theta * h_try > _smallest_step(t, slow_period):
+                                h = theta * h_try
+                                cut_at_switch = True
+                                continue
+                    cut_at_switch = False
                     # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
                     # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
                     if clipped and h >= h_max:
@@ -541,7 +574,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
             kept = held
             held = 0
             if kept == REACHED:
-                prepare_dense(t, h_taken, coefficients, scratch)
+                prepare(t, h_taken, coefficients, scratch, True)
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
                 dense_ready = True
@@ -565,7 +598,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
                     # Every step that the ends alone cannot place far from the barrier gets its dense
                     # output and the exact test on it (find_crossing: Bernstein form).
                     if not dense_ready:
-                        prepare_dense(t, h_try, coefficients, scratch)
+                        prepare(t, h_try, coefficients, scratch, True)
                         n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
                                               n_dynamic)
                         dense_ready = True
@@ -613,13 +646,13 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, prepare_step, prepare_den
             t_new = t_boundary if (clipped and not impact) else t + h_taken
             if next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_new:
                 if not dense_ready:
-                    prepare_dense(t, h_taken, coefficients, scratch)
+                    prepare(t, h_taken, coefficients, scratch, True)
                     n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                           n_dynamic)
                     dense_ready = True
                 next_sample = emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
             if y[V] * y_new[V] < 0.0 and not dense_ready:
-                prepare_dense(t, h_taken, coefficients, scratch)
+                prepare(t, h_taken, coefficients, scratch, True)
                 n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
             update_extremes(record, dense, y, y_new, h_taken, theta_turn)

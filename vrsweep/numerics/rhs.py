@@ -98,6 +98,20 @@ def no_preparation(t, h, coefficients, scratch):
     return
 
 
+@kernel_jit
+def no_preparations(t, h, coefficients, scratch, dense):
+    """kernel._integrate's prepare for a method whose stages call the library: nothing."""
+    return
+
+
+@kernel_jit
+def no_switches(t, x, v, coefficients):
+    """The signs of a model's switching functions (kernel._integrate's switch_signs) for a model
+    whose acceleration is smooth, as the paper's: none, a constant that LLVM inlines and folds
+    away, so the kink location costs their kernels nothing."""
+    return 0
+
+
 # --- the forcing's phases rotated to the stage times (the dop853 kernel) ------------------------
 # At a stage time t + c h, cos(a + d) = cos a cos d - sin a sin d and sin(a + d) = sin a cos d
 # + cos a sin d, with a = omega t (Omega t) at the step's start and d = omega c h (Omega c h).
@@ -214,6 +228,18 @@ def prepare_step_rotations(t, h, coefficients, scratch):
     prepare_rotations. A step to an impact (Newton) or to a period's end is off the grid, and most
     of them need no dense output: 3 of 16 nodes' library calls saved."""
     _prepare(t, h, coefficients, scratch, int(scratch[STEP_NODES]))
+
+
+@kernel_jit
+def prepare_rotations_for(t, h, coefficients, scratch, dense):
+    """kernel._integrate's prepare with the rotated phases: prepare_rotations for a step and its
+    dense output (dense), prepare_step_rotations for the step alone. One function, so that the loop
+    takes one argument for both (CPython passes a call of more than 30 arguments as *args, which
+    numba cannot inline)."""
+    if dense:
+        _prepare(t, h, coefficients, scratch, MAX_NODES)
+    else:
+        _prepare(t, h, coefficients, scratch, int(scratch[STEP_NODES]))
 
 
 @kernel_jit(inline="always")
