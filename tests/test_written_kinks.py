@@ -5,7 +5,8 @@ on each smooth side and R and the Lyapunov exponent converge with the tolerance.
 The reference is SciPy's solve_ivp (DOP853, rtol 1e-13) restarted at each crossing of the kink by
 a terminal event, with its own right-hand side of each side (no max() in it), written here.
 
-Not yet located: kinks on the GPU (cuda.py passes rhs.no_switches). And the tangent vectors still
+Not yet located: kinks on the GPU (cuda.py passes rhs.no_switches), and the jumps of sign (see
+codegen.switching_functions: located so, friction's R got worse). And the tangent vectors still
 see the kink's side at a step's first and last stages by rounding (the Jacobian jumps there even
 where the acceleration is continuous): lambda_1 of the spring below scatters by ~1e-6 at any rtol
 (it did before too), within its lyapunov_err at rtol 1e-10, not always at 1e-9.
@@ -86,8 +87,8 @@ def test_the_switching_functions_are_the_arguments_of_each_kink():
         return [str(s) for s in codegen.switching_functions(acceleration, state)]
 
     assert switches("-x - k*max(x - d, 0)") in (["-d + x"], ["d - x"], ["p_d - x"], ["-p_d + x"])
-    # abs and sign: their arguments; a surface twice (abs(x) and sign(x), sign(-x)) is one
-    assert sorted(switches("-x - k*abs(x)*x - zeta*sign(v) + F*sign(-x)")) == ["v", "x"]
+    # abs: its argument; a surface twice (abs(x), abs(-x)) is one; sign's jump is not located
+    assert switches("-x - k*abs(x)*x - zeta*sign(v) + F*abs(-x)") == ["x"]
     # min and max of the state: the difference of their arguments, one surface
     assert len(switches("-x + min(x, v) - max(v, x) + zeta")) == 1
     # a kink in the parameters alone is none in time; a smooth model has none
