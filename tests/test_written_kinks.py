@@ -5,8 +5,8 @@ on each smooth side and R and the Lyapunov exponent converge with the tolerance.
 The reference is SciPy's solve_ivp (DOP853, rtol 1e-13) restarted at each crossing of the kink by
 a terminal event, with its own right-hand side of each side (no max() in it), written here.
 
-Not yet located: kinks on the GPU (cuda.py passes rhs.no_switches), and the jumps of sign (see
-codegen.switching_functions: located so, friction's R got worse). And the tangent vectors still
+Located on the GPU too (the same loop, given the model's switch_signs: test_gpu.py). Not yet
+located: the jumps of sign (see codegen.switching_functions: located so, friction's R got worse). And the tangent vectors still
 see the kink's side at a step's first and last stages by rounding (the Jacobian jumps there even
 where the acceleration is continuous): lambda_1 of the spring below scatters by ~1e-6 at any rtol
 (it did before too), within its lyapunov_err at rtol 1e-10, not always at 1e-9.

@@ -585,9 +585,11 @@ _MODULES = {}
 
 
 def written_functions(module, tangents):
-    """A generated module's (rhs, tangent, barrier_force), as kernel._integrate takes them (the
-    GPU's line kernel, cuda.line_kernel; tests that drive the loop)."""
-    return (module.tangent_rhs if tangents else module.rhs), module.tangent, module.barrier_force
+    """A generated module's (rhs, tangent, barrier_force, switch_signs), as kernel._integrate takes
+    them (the GPU's line kernel, cuda.line_kernel; tests that drive the loop): the kinks the CPU's
+    kernel locates, the GPU's locates too."""
+    return ((module.tangent_rhs if tangents else module.rhs), module.tangent, module.barrier_force,
+            module.switch_signs)
 
 
 def compiled(model):

@@ -69,10 +69,11 @@ def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
 
 
 def paper_functions(tangents):
-    """The paper's family's (rhs, tangent, barrier_force), as kernel._integrate takes them with the
-    library's cosines (the GPU's line kernel, cuda.line_kernel; tests that drive the loop)."""
+    """The paper's family's (rhs, tangent, barrier_force, switch_signs), as kernel._integrate takes
+    them with the library's cosines (the GPU's line kernel, cuda.line_kernel; tests that drive the
+    loop). Its acceleration is smooth: no switching functions."""
     model_rhs = oscillator_tangent_rhs if tangents else oscillator_rhs
-    return model_rhs, oscillator_tangent, force_at_barrier
+    return model_rhs, oscillator_tangent, force_at_barrier, no_switches
 
 
 @kernel_jit
