@@ -121,6 +121,7 @@ RESULT_EPOCHS = (
               "is released on a scan of its fastest force"),
     ("0.7.3", "a rebound whose flight rises less than 16 ulps of the stop's position sticks, and a written model's "
               "force counts the frequencies of its products and powers"),
+    ("0.7.4", "a written model's kinks (abs, min, max of the state) are located as events"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -138,7 +139,10 @@ fastest force's period (max_step/8 stepped over short pulls); 0.7.3 sticks a reb
 v^2/2a rises less than 16 ulps of max(1, |position|) (kernel.STICK_HEIGHT: a stiff chatter's tail
 was decided by rounding, 178 against 181-186 impacts a period for one orbit), in every model, and
 finds a written force's frequencies in its products and powers (cos(omega t)**9 holds 9 omega: the
-release scan and the forcing's period q follow). Versions of one epoch
+release scan and the forcing's period q follow); 0.7.4 ends a step on each kink of a written
+acceleration (abs, min, max of x, v or t: codegen.switching_functions), where it stepped over them
+(a bilinear spring's R 1.5e-6 off at rtol 1e-6; the paper's models have none and are unchanged
+bit for bit). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
