@@ -213,15 +213,11 @@ def impacting_direction(problem, graze):
     """The normal form at the graze: (unit direction (3,) of the impacting branch as u grows,
     predictor(u) -> z (3,), |dz/du| at u = 0), or None when the probe orbit does not gain exactly
     one impact over the free map's, in the window, as the normal form assumes."""
-    z_g = graze.z
-    gradient = graze.jacobian[2]
-    penetration = PROBE_PENETRATION * max(1.0, abs(barrier(problem, z_g[2])))
-    probe = z_g - (penetration + graze.gap) * gradient / (gradient @ gradient)
-    real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods, problem.method,
-                        model=problem.model)
-    value, free = _free_system(problem, probe, graze.periods, graze.window)
-    if value is None or real.status != Status.OK or real.impacts != free.impacts + 1:
+    probed = _probe(problem, graze)
+    if probed is None:
         return None
+    z_g = graze.z
+    value, real, free = probed
     speed = _grazing_impact_speed(real, graze.window)
     if not speed > 0.0:
         return None
@@ -250,6 +246,14 @@ def impacting_monodromy(problem, graze):
     impact's speed, so one multiplier is of order 1/u and the other of order u: the signs of
     det(M - I) and det(M + I) there are the limits of the impacting side's at the graze, which
     the continuation's test functions need on that side of it (continuation._detect)."""
+    probed = _probe(problem, graze)
+    return None if probed is None else probed[1].monodromy.copy()
+
+
+def _probe(problem, graze):
+    """(the free system's value, the real map, the free map) at the probe: the graze's point moved
+    PROBE_PENETRATION into the impacting side, or None where the real map does not gain exactly
+    one impact over the free map's there (the normal form's assumption)."""
     z_g = graze.z
     gradient = graze.jacobian[2]
     penetration = PROBE_PENETRATION * max(1.0, abs(barrier(problem, z_g[2])))
@@ -259,7 +263,7 @@ def impacting_monodromy(problem, graze):
     value, free = _free_system(problem, probe, graze.periods, graze.window)
     if value is None or real.status != Status.OK or real.impacts != free.impacts + 1:
         return None
-    return real.monodromy.copy()
+    return value, real, free
 
 
 def _grazing_impact_speed(real, window):
