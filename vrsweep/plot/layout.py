@@ -38,11 +38,19 @@ def parse_limits(text, option):
     if text is None:
         return None
     parts = text.split(",") if isinstance(text, str) else list(text)
-    try:
-        low, high = (to_float(part) for part in parts)
-    except (TypeError, ValueError):  # NumberTextError is a ValueError
-        raise UsageError.naming("{" + option + "} {value}: expected LOW,HIGH, e.g. 17.82,17.84",
-                                value=clip(text)) from None
+    if len(parts) != 2:
+        raise UsageError.naming("{" + option + "} {value}: expected LOW,HIGH, e.g. 17.82,17.84", value=clip(text))
+    ends = []
+    for part in parts:
+        try:
+            ends.append(to_float(part))
+        except (TypeError, ValueError) as error:  # NumberTextError is a ValueError, its text the reason
+            # Text is read by numbertext's rule, which refuses nan and inf as words: such an end
+            # is told as a non-finite number given as a number is (below), with its reason.
+            raise UsageError.naming("{" + option + "} {value}: both ends must be finite numbers ({end} {reason})",
+                                    value=clip(text), end=clip(str(part)),
+                                    reason=str(error) or "is not a number") from None
+    low, high = ends
     if not (math.isfinite(low) and math.isfinite(high)):
         raise UsageError.naming("{" + option + "} {value}: both ends must be finite numbers", value=clip(text))
     if not low < high:
