@@ -91,17 +91,6 @@ def write_file(path, axes, *, points=None, finish=True, **kwargs):
     return path
 
 
-@pytest.fixture(scope="session")
-def assert_identical(describe):
-    """The helper below, with the shared helpers it calls (tests/conftest.py)."""
-    def assert_identical(a, b):
-        da, db = describe(a), describe(b)
-        assert list(da) == list(db)
-        for key in da:
-            assert da[key] == db[key], key
-    return assert_identical
-
-
 # ---------------------------------------------------------------------------------------------
 # Layout
 # ---------------------------------------------------------------------------------------------
@@ -281,7 +270,7 @@ def test_create_in_a_missing_directory_creates_it(tmp_path, capsys):
     assert not load_results(tmp_path / "no" / "r.h5").done.any()
 
 
-def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path, assert_identical):
+def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path, assert_same_result):
     full = write_file(tmp_path / "full.h5", AXES_2D)
     partial = write_file(tmp_path / "part.h5", AXES_2D, points=[1, 2, 3, 9], finish=False)
     writer = ResultWriter.open_for_resume(partial, CONFIG)
@@ -291,7 +280,7 @@ def test_resume_continues_to_a_file_identical_to_an_uninterrupted_run(tmp_path, 
     writer.write_points(todo, values_for(todo))
     writer.finish({"g_res": (np.array([1.0, 2.0, 3.0]), ("Omega",),
                              {"units": "1", "long_name": "theory column"})})
-    assert_identical(full, partial)
+    assert_same_result(full, partial)
 
 
 @settings(max_examples=40, deadline=None)
@@ -487,7 +476,7 @@ def check_resumed(path, reported):
     return done
 
 
-def test_kill_9_between_chunks_then_resume(tmp_path, assert_identical):
+def test_kill_9_between_chunks_then_resume(tmp_path, assert_same_result):
     path = tmp_path / "ckpt.h5"
     ResultWriter.create(path, GRID, specs(), ATTRS).close()
     child = subprocess.Popen([sys.executable, "-c", CHILD, str(path), "pause"],
@@ -514,7 +503,7 @@ def test_kill_9_between_chunks_then_resume(tmp_path, assert_identical):
     reference = ResultWriter.create(tmp_path / "ref.h5", GRID, specs(), ATTRS)
     reference.write_points(np.arange(3000), values_for(np.arange(3000)))
     reference.finish()
-    assert_identical(path, tmp_path / "ref.h5")
+    assert_same_result(path, tmp_path / "ref.h5")
 
 
 @pytest.mark.parametrize("delay", [0.0, 0.01, 0.03, 0.07])
@@ -562,7 +551,7 @@ def write_shards(tmp_path, n_shards=3, axes=AXES_2D, skip=()):
     return paths
 
 
-def test_merge_of_three_shards_equals_a_single_run(tmp_path, assert_identical):
+def test_merge_of_three_shards_equals_a_single_run(tmp_path, assert_same_result):
     import vrsweep.store.merge
 
     assert vrsweep.store.merge.merge_results is merge_results  # the package re-exports it
@@ -571,18 +560,18 @@ def test_merge_of_three_shards_equals_a_single_run(tmp_path, assert_identical):
     report = merge_results(shards, tmp_path / "merged.h5")
     assert report.complete and report.n_done == 15 and report.n_duplicated == 0
     assert "15 of 15" in str(report)
-    assert_identical(single, tmp_path / "merged.h5")
+    assert_same_result(single, tmp_path / "merged.h5")
     with xr.open_dataset(tmp_path / "merged.h5", engine="h5netcdf") as ds:
         assert "shard" not in ds.attrs and "owned" not in ds and ds.attrs["vrsweep_complete"] == 1
 
 
-def test_merge_of_single_point_shards(tmp_path, assert_identical):
+def test_merge_of_single_point_shards(tmp_path, assert_same_result):
     single = tmp_path / "single.h5"
     w = ResultWriter.create(single, [], specs(), ATTRS)
     w.write_points([0], values_for([0]))
     w.finish()
     merge_results([single], tmp_path / "merged.h5")
-    assert_identical(single, tmp_path / "merged.h5")
+    assert_same_result(single, tmp_path / "merged.h5")
 
 
 def test_merge_refuses_missing_points(tmp_path):
@@ -596,7 +585,7 @@ def test_merge_refuses_missing_points(tmp_path):
     assert not (tmp_path / "merged.h5").exists()
 
 
-def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(tmp_path, assert_identical):
+def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(tmp_path, assert_same_result):
     shards = write_shards(tmp_path, skip=(4, 7))  # shard 2/3 was killed before two of its points
     with pytest.raises(ResultFileError) as info:
         merge_results(shards, tmp_path / "merged.h5")
@@ -615,7 +604,7 @@ def test_merge_names_an_unfinished_shard_and_can_write_a_resumable_partial_file(
     writer.write_points([4, 7], values_for([4, 7]))
     writer.finish({"g_res": (np.array([1.0, 2.0, 3.0]), ("Omega",),
                              {"units": "1", "long_name": "theory column"})})
-    assert_identical(write_file(tmp_path / "single.h5", AXES_2D), tmp_path / "merged.h5")
+    assert_same_result(write_file(tmp_path / "single.h5", AXES_2D), tmp_path / "merged.h5")
 
 
 def test_merge_of_unfinished_whole_runs_says_no_file_has_the_missing_points(tmp_path):
@@ -640,12 +629,12 @@ def test_merge_names_a_foreign_shard(tmp_path):
     assert str(shards[0]) in message.split("than", 1)[1]  # the reference is a good shard
 
 
-def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path, assert_identical):
+def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path, assert_same_result):
     shards = write_shards(tmp_path)
     single = write_file(tmp_path / "single.h5", AXES_2D)  # every point, identical values
     report = merge_results(shards + [single], tmp_path / "merged.h5")
     assert report.n_duplicated == 15 and report.complete
-    assert_identical(single, tmp_path / "merged.h5")
+    assert_same_result(single, tmp_path / "merged.h5")
 
     with h5py.File(shards[2], "r+") as f:
         f["R"][0, 2] = 99.0  # flat index 2 belongs to shard 3/3
@@ -747,17 +736,17 @@ def small_blocks(monkeypatch):
     monkeypatch.setattr(vrsweep.store.merge, "BLOCK_BYTES", 160)
 
 
-def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks, assert_identical):
+def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks, assert_same_result):
     single = write_file(tmp_path / "single.h5", AXES_3D)
     with h5py.File(single, "r") as f:
         assert f["R"].chunks == (1, 2, 4) and f["roots"].chunks == (1, 1, 4, 2)
     shards = write_shards(tmp_path, n_shards=4, axes=AXES_3D)
     merge_results(shards, tmp_path / "merged.h5")
-    assert_identical(single, tmp_path / "merged.h5")
+    assert_same_result(single, tmp_path / "merged.h5")
     # The single run given again after them: every point twice, compared block by block.
     report = merge_results(shards + [single], tmp_path / "twice.h5")
     assert report.n_duplicated == 84
-    assert_identical(single, tmp_path / "twice.h5")
+    assert_same_result(single, tmp_path / "twice.h5")
     # A value changed in the last block: found, and counted over all blocks.
     with h5py.File(single, "r+") as f:
         f["roots"][6, 2, 3, 1] = 0.0
@@ -770,14 +759,14 @@ def test_merge_in_many_blocks_equals_a_single_run(tmp_path, small_blocks, assert
     assert not (tmp_path / "conflict.h5").exists()
 
 
-def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks, assert_identical):
+def test_merge_in_many_blocks_with_points_missing(tmp_path, small_blocks, assert_same_result):
     lost = (5, 40, 41, 83)
     partial = write_file(tmp_path / "partial.h5", AXES_3D,
                          points=[p for p in range(84) if p not in lost], finish=False)
     shards = write_shards(tmp_path, n_shards=4, axes=AXES_3D, skip=lost)
     report = merge_results(shards, tmp_path / "merged.h5", allow_missing=True)
     assert report.n_missing == 4 and not report.complete
-    assert_identical(partial, tmp_path / "merged.h5")  # unwritten points hold the fill values
+    assert_same_result(partial, tmp_path / "merged.h5")  # unwritten points hold the fill values
 
 
 @settings(max_examples=200, deadline=None)

@@ -25,16 +25,6 @@ FIRST = np.arange(0, N, 7)          # done before the cut
 SECOND = np.array([1, 2, 3, 2995])  # the write that the kill cuts: in the first chunk of each variable
 
 
-@pytest.fixture
-def assert_identical(describe):
-    def assert_identical(a, b):
-        da, db = describe(a), describe(b)
-        assert list(da) == list(db)
-        for key in da:
-            assert da[key] == db[key], key
-    return assert_identical
-
-
 def _chunk_of(ds, flat):
     where = np.unravel_index(int(flat), ds.shape[:2])
     return tuple(int(i) // c * c for i, c in zip(where, ds.chunks)) + (0,) * (ds.ndim - 2)
@@ -80,7 +70,7 @@ def cut_write(tmp_path, path, name, where, second):
     return path
 
 
-def finish_and_compare(path, tmp_path, assert_identical):
+def finish_and_compare(path, tmp_path, assert_same_result):
     writer = ResultWriter.open_for_resume(path, CONFIG)
     todo = np.flatnonzero(~writer.done_mask())
     writer.write_points(todo, values_for(todo))
@@ -88,7 +78,7 @@ def finish_and_compare(path, tmp_path, assert_identical):
     reference = ResultWriter.create(tmp_path / "ref.h5", GRID, specs(), ATTRS)
     reference.write_points(np.arange(N), values_for(np.arange(N)))
     reference.finish()
-    assert_identical(path, tmp_path / "ref.h5")
+    assert_same_result(path, tmp_path / "ref.h5")
 
 
 def stored_values_are(path, points):
@@ -101,7 +91,7 @@ def stored_values_are(path, points):
 
 @pytest.mark.parametrize("name", ["R", "roots", "n_steps", "status", "done"])
 @pytest.mark.parametrize("where", ["first byte", "half", "all but checksum"])
-def test_a_cut_chunk_loses_no_point_done_before(tmp_path, capfd, assert_identical, name, where):
+def test_a_cut_chunk_loses_no_point_done_before(tmp_path, capfd, assert_same_result, name, where):
     """--resume recovers every point of the cut chunk done before, bit for bit, checked against
     the chunk's own checksum (the old one: the write had not reached the chunk's end), and says so
     in one line; the run then finishes to the file an uninterrupted run writes."""
@@ -121,10 +111,10 @@ def test_a_cut_chunk_loses_no_point_done_before(tmp_path, capfd, assert_identica
         assert np.array_equal(np.flatnonzero(done), np.sort(FIRST))
     result = stored_values_are(path, np.flatnonzero(done))
     assert np.isnan(result["R"].values.reshape(-1)[~done]).all()
-    finish_and_compare(path, tmp_path, assert_identical)
+    finish_and_compare(path, tmp_path, assert_same_result)
 
 
-def test_a_second_kill_after_a_first_loses_nothing_either(tmp_path, capfd, assert_identical):
+def test_a_second_kill_after_a_first_loses_nothing_either(tmp_path, capfd, assert_same_result):
     """A kill between a write's values and its flags leaves values of points not done; a later cut
     of their chunk could then not be told from damage (the chunk as it was held those values, not
     fill), and its points done were computed again. --resume puts such values back to their fill
@@ -149,7 +139,7 @@ def test_a_second_kill_after_a_first_loses_nothing_either(tmp_path, capfd, asser
     assert np.array_equal(np.flatnonzero(writer.done_mask()), np.sort(FIRST))
     writer.close()
     assert "every point done before is recovered" in capfd.readouterr().err
-    finish_and_compare(path, tmp_path, assert_identical)
+    finish_and_compare(path, tmp_path, assert_same_result)
 
 
 def test_a_cut_chunk_reads_as_recovered_before_the_resume(tmp_path, capfd):
@@ -178,7 +168,7 @@ def spoil(path, name, flat, value=None, at_byte=100):
     return footprint.reshape(-1)
 
 
-def test_a_chunk_that_cannot_be_told_is_computed_again(tmp_path, capfd, assert_identical):
+def test_a_chunk_that_cannot_be_told_is_computed_again(tmp_path, capfd, assert_same_result):
     """A chunk whose bytes are not those of a write (its checksum fails however the points in
     flight are reset): its points done before cannot be trusted; only they are computed again, with
     one line saying how many, and the run still ends bit for bit as an uninterrupted one."""
@@ -209,10 +199,10 @@ def test_a_chunk_that_cannot_be_told_is_computed_again(tmp_path, capfd, assert_i
     assert err.count("\n") == 1 and (f"{lost.sum()} point(s) that may have been done cannot be read back "
                                      "(g=0, Omega=3; g=0, Omega=3.42857; g=0, Omega=3.85714, ...), "
                                      "they are computed again") in err
-    finish_and_compare(path, tmp_path, assert_identical)
+    finish_and_compare(path, tmp_path, assert_same_result)
 
 
-def test_done_flags_that_are_not_flags_are_all_computed_again(tmp_path, capfd, assert_identical):
+def test_done_flags_that_are_not_flags_are_all_computed_again(tmp_path, capfd, assert_same_result):
     path = tmp_path / "ckpt.h5"
     writer = ResultWriter.create(path, GRID, specs(), ATTRS)
     writer.write_points(FIRST, values_for(FIRST))
@@ -222,7 +212,7 @@ def test_done_flags_that_are_not_flags_are_all_computed_again(tmp_path, capfd, a
     assert not writer.done_mask().any()
     writer.close()
     assert f"{N} point(s) that may have been done cannot be read back" in capfd.readouterr().err
-    finish_and_compare(path, tmp_path, assert_identical)
+    finish_and_compare(path, tmp_path, assert_same_result)
 
 
 def test_a_point_marked_done_that_holds_only_fill_values_is_not_done(tmp_path, capfd):
