@@ -104,9 +104,9 @@ def test_a_cut_chunk_loses_no_point_done_before(tmp_path, capfd, assert_same_res
     assert "every point done before is recovered, checked against the chunks' checksums" in err
     assert done[FIRST].all()
     if name == "done":
-        # Every value was on disk before the flags: the new flags the cut wrote are true, and kept.
-        assert set(np.flatnonzero(done)) <= set(FIRST) | set(SECOND)
-        assert done[SECOND[:3]].any()  # the first of them at least: its byte was written
+        # Every value was on disk before the flags: the flags, made again from status, are all true,
+        # the ones the cut did not reach too.
+        assert np.array_equal(np.flatnonzero(done), np.sort(np.concatenate([FIRST, SECOND])))
     else:
         assert np.array_equal(np.flatnonzero(done), np.sort(FIRST))
     result = stored_values_are(path, np.flatnonzero(done))
@@ -202,30 +202,63 @@ def test_a_chunk_that_cannot_be_told_is_computed_again(tmp_path, capfd, assert_s
     finish_and_compare(path, tmp_path, assert_same_result)
 
 
-def test_done_flags_that_are_not_flags_are_all_computed_again(tmp_path, capfd, assert_same_result):
+def test_done_flags_that_are_not_flags_are_made_again_from_status(tmp_path, capfd, assert_same_result):
+    """A chunk of done whose bytes are no flags at all: its flags are made again from status (the
+    record written last of a point's values), so no point done before is computed again."""
     path = tmp_path / "ckpt.h5"
     writer = ResultWriter.create(path, GRID, specs(), ATTRS)
     writer.write_points(FIRST, values_for(FIRST))
     writer.close()
     spoil(path, "done", 0, value=7)  # int8 done: one chunk over the whole grid
     writer = ResultWriter.open_for_resume(path, CONFIG)
-    assert not writer.done_mask().any()
+    assert np.array_equal(np.flatnonzero(writer.done_mask()), np.sort(FIRST))
     writer.close()
-    assert f"{N} point(s) that may have been done cannot be read back" in capfd.readouterr().err
+    assert "every point done before is recovered" in capfd.readouterr().err
     finish_and_compare(path, tmp_path, assert_same_result)
 
 
-def test_a_point_marked_done_that_holds_only_fill_values_is_not_done(tmp_path, capfd):
-    """A cut chunk of done is read from its bytes (0 or 1 each, old or new, both true), but a flag
-    that says done over values never written (a flipped bit, not a cut) is not taken."""
+def test_a_flag_flipped_over_half_written_values_is_not_taken(tmp_path, capfd, assert_same_result):
+    """A kill in the middle of a write's values leaves some variables of its points written and
+    the rest not (status, written last, not yet); a bit of done flipped to 1 over such a point, in
+    a chunk that then fails its checksum, was taken as a flag (its bytes are all 0 or 1, and the
+    point's values are not all fill): the point was done with status -1 and n_steps -1, and the
+    finished file held it so. Torn flags are made from status now, which says not written."""
+    from vrsweep.store.writer import _write_selection
+
+    path = tmp_path / "ckpt.h5"
+    writer = ResultWriter.create(path, GRID, specs(), ATTRS)
+    writer.write_points(FIRST, values_for(FIRST))
+    half = np.arange(100, 108)  # none of them in FIRST but 105
+    values = values_for(half)
+    for name in ("R", "Qs"):  # the kill: R and Qs written, the rest not
+        _write_selection(writer._file[name], writer.grid_shape, half, values[name])
+    writer._file.flush()
+    writer.close()
+    spoil(path, "done", 100, value=1, at_byte=100)  # done's bytes 100..107 flipped to 1
+    writer = ResultWriter.open_for_resume(path, CONFIG)
+    done = writer.done_mask().reshape(-1)
+    writer.close()
+    assert np.array_equal(np.flatnonzero(done), np.sort(FIRST))
+    capfd.readouterr()
+    finish_and_compare(path, tmp_path, assert_same_result)
+
+
+def test_a_chunk_of_done_and_one_of_status_cut_at_once_are_computed_again(tmp_path, capfd, assert_same_result):
+    """Both records of a point failing (damage: a kill cuts one write at a time, and done's after
+    an fsync of every value) leave nothing to rebuild the flags from: those points are computed
+    again, and the run still ends as an uninterrupted one."""
     path = tmp_path / "ckpt.h5"
     writer = ResultWriter.create(path, GRID, specs(), ATTRS)
     writer.write_points(FIRST, values_for(FIRST))
     writer.close()
-    spoil(path, "done", 0, value=1)  # points 100..107 marked done, never computed
+    spoil(path, "done", 0, value=7)
+    footprint = spoil(path, "status", 0, value=9, at_byte=0)
     writer = ResultWriter.open_for_resume(path, CONFIG)
-    assert np.array_equal(np.flatnonzero(writer.done_mask()), np.sort(FIRST))
+    done = writer.done_mask().reshape(-1)
     writer.close()
+    assert np.array_equal(done, np.isin(np.arange(N), FIRST) & ~footprint)
+    assert "cannot be read back" in capfd.readouterr().err
+    finish_and_compare(path, tmp_path, assert_same_result)
 
 
 def test_a_file_read_while_it_is_written_shows_no_value_before_its_done_flag(tmp_path):

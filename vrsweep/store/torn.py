@@ -22,10 +22,18 @@ chunk's, the recovery is exact and verified, and nothing is lost. When it is not
 done held values of an earlier write cut by a kill, or the damage is something else), the points
 of the chunk are not trusted: their ``done`` flags are cleared and they are computed again.
 
-A torn chunk of ``done`` holds 0 or 1 per point, old or new: a 1 is only ever written after the
-point's values were on disk, so either is true. Its bytes are accepted when every one is 0 or 1,
-and a point marked done whose every variable holds its fill value (never computed: a flipped bit)
-is not done; otherwise the chunk's flags are all cleared.
+A torn chunk of ``done`` is not read from its bytes: they cannot be checked (the points whose
+flags were in flight are unknown, so the chunk as it was cannot be rebuilt to test its checksum),
+and a flipped bit would be taken as a flag (a point marked done over values half written, with
+status -1, finished so). Its flags are made again from another record: ``status``, which the writer
+writes last of a point's values, after the others were flushed (``writer.write_points``), and
+whose fill value -1 no computed point has. A point of a torn ``done`` chunk is done where its
+``status`` reads back through its checksum and is not -1: then every value of it was written
+before, whether its flag was (a kill between a point's values and its flag leaves such points,
+computed whole). Where ``status`` cannot be read either (its chunk fails too: two records cut at
+once are damage, not a kill), the points are computed again. A file without ``status`` (a writer's
+own variables, no sweep's) has no such record, and the points of a torn ``done`` chunk are
+computed again.
 
 Only an unfinished file is read this way: a finished file must read back whole through every
 checksum (reader.check_structure), and a failing chunk there is damage.
@@ -42,6 +50,10 @@ import numpy as np
 from vrsweep.store.layout import point_label, point_variables_of, scale_names
 
 CHECKSUM_BYTES = 4  # fletcher32, after the chunk's data
+# The variable written last of a point's values, after the others were flushed: a value other than
+# its fill says the point's values are all on disk (writer.write_points); it vouches for the
+# points of a torn chunk of done.
+COMPLETION = "status"
 # Bytes read at a time while looking for failing chunks (reader.CHECK_BLOCK_BYTES's reason).
 SCAN_BLOCK_BYTES = 4 * 2 ** 20
 
@@ -125,7 +137,7 @@ class Recovery:
     """What an unfinished file holds where a kill cut a chunk's write.
 
     torn: {variable: [chunk offsets]} of the chunks that fail their checksum; done: the ``done``
-    flags to trust (a torn chunk of ``done`` read from its bytes, the points of a chunk that could
+    flags to trust (a torn chunk of ``done`` made again from ``status``, the points of a chunk that could
     not be recovered cleared); chunks: {variable: {offset: the whole chunk to store}}; lost: the
     points that were marked done but whose values (or flag) cannot be trusted: computed again.
     """
@@ -195,24 +207,28 @@ def find(f, keep=False):
 
     for name in names[1:]:
         ds = f[name]
-        torn[name], values[name] = failing_chunks(ds, keep, seen=None if keep else seen)
+        # status is kept whole (1 byte a point, as done): it rebuilds a torn chunk of done
+        torn[name], values[name] = failing_chunks(ds, keep or name == COMPLETION, seen=None if keep else seen)
     if not any(torn.values()):
         return (Recovery(torn=torn, done=written, stale=stale) if stale.any() else None), values
     done = np.asarray(values["done"], dtype=np.int8)
     lost = np.zeros(done.shape, dtype=bool)
     chunks = {name: {} for name in names}
-    suspect = np.zeros(done.shape, dtype=bool)  # points whose done flag came from a torn chunk
-    for offset in torn["done"]:
-        where = _chunk_slices(done_ds, offset)
-        stored, _ = _raw_chunk(done_ds, offset)
-        inside = tuple(slice(0, s.stop - s.start) for s in where)
-        if stored is not None and np.isin(stored, (0, 1)).all():
-            done[where] = stored[inside]
-            suspect[where] = True
-        else:  # not flags: which points were done is unknown, and all are computed again
-            lost[where] = True
-            done[where] = 0
-        chunks["done"][offset] = None  # written from the final flags below
+    if torn["done"]:
+        if COMPLETION in names:
+            status_ds = f[COMPLETION]
+            # status as read (a failing chunk holds its fill value), and which points it could not tell
+            complete = ~_is_fill(np.asarray(values[COMPLETION]), status_ds.fillvalue)
+            unknown = _in_chunks(status_ds, torn[COMPLETION])
+        for offset in torn["done"]:
+            where = _chunk_slices(done_ds, offset)
+            if COMPLETION in names:
+                done[where] = complete[where] & ~unknown[where]
+                lost[where] = unknown[where]
+            else:
+                lost[where] = True
+                done[where] = 0
+            chunks["done"][offset] = None  # written from the final flags below
     kept = np.zeros(done.shape, dtype=bool)  # done points of chunks recovered exactly
     for name in names[1:]:
         ds = f[name]
@@ -239,16 +255,6 @@ def find(f, keep=False):
             chunks[name][offset] = np.full(ds.chunks, ds.fillvalue, dtype=ds.dtype)
             if keep:
                 values[name][where] = ds.fillvalue
-    if suspect.any():
-        # A point marked done whose every variable still holds its fill value was never computed.
-        box = tuple(slice(int(w.min()), int(w.max()) + 1) for w in np.nonzero(suspect)) if suspect.ndim else ()
-        never = suspect[box] & (done[box] == 1)
-        for name in names[1:]:
-            ds = f[name]
-            data = values[name][box] if keep else _region(ds, box, chunks[name])
-            blank = _is_fill(np.asarray(data), ds.fillvalue)
-            never &= blank.reshape(never.shape + (-1,)).all(axis=-1) if blank.ndim > grid_ndim else blank
-        done[box] = np.where(never, 0, done[box])
     recovered = int(np.count_nonzero(kept & (done == 1)))
     for offset in chunks["done"]:
         array = np.zeros(done_ds.chunks, dtype=np.int8)
@@ -271,21 +277,6 @@ def _readable(ds, failing):
     for piece in ds.iter_chunks():
         if _offset(piece, ds.chunks) not in failing:
             values[piece] = ds[piece]
-    return values
-
-
-def _region(ds, box, recovered):
-    """``ds`` over the grid slices ``box`` (extra dimensions whole), with the recovered chunks in place
-    of the failing ones: for checking a few points without reading the variable whole."""
-    box = box + tuple(slice(0, n) for n in ds.shape[len(box):])
-    values = np.empty(tuple(s.stop - s.start for s in box), dtype=ds.dtype)
-    for piece in ds.iter_chunks(box):
-        offset = _offset(piece, ds.chunks)
-        target = tuple(slice(p.start - b.start, p.stop - b.start) for p, b in zip(piece, box))
-        if offset in recovered:
-            values[target] = recovered[offset][tuple(slice(p.start - o, p.stop - o) for p, o in zip(piece, offset))]
-        else:
-            values[target] = ds[piece]
     return values
 
 

@@ -5,9 +5,10 @@ Why crash-safe
 Datasets are chunked (about 4 KiB per chunk, trailing axes whole, so a C-order run of points
 touches few chunks), uncompressed and allocated at creation time (``H5D_ALLOC_TIME_EARLY``). After
 ``create`` the file's metadata therefore never changes while points are written: a write only
-overwrites raw bytes at fixed places. ``write_points`` writes the values, flushes and fsyncs, and
-only then sets ``done`` and flushes again, so a point is never marked done before its values are
-on disk. A chunk is rewritten in place, with the points already in it unchanged: a kill in the
+overwrites raw bytes at fixed places. ``write_points`` writes the values (``status`` last, after
+the others are flushed: the record a cut chunk of ``done`` is made again from), flushes and fsyncs,
+and only then sets ``done`` and flushes again, so a point is never marked done before its values
+are on disk. A chunk is rewritten in place, with the points already in it unchanged: a kill in the
 middle of that write leaves it part new, part old, failing its checksum, and ``open_for_resume``
 recovers it (store/torn.py). ``finish`` works on a copy and renames it into place, so a crash
 while finishing leaves the checkpoint as it was. Compression is deliberately off: compressed
@@ -31,6 +32,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.store import torn
 from vrsweep.store.fileio import (
     LIBVER, check_still_at_path, close_without_writing, fsync_path, identity, notice,
     lock_for_writing, output_target, refuse_if_being_written, replacing, reserve_space, trim_to_contents, write_failure,
@@ -245,8 +247,6 @@ class ResultWriter:
         one line says which. Values of points not done (a write a kill stopped before its flags)
         go back to their fill value, so that a later cut chunk is always one that can be told.
         Every chunk is read once."""
-        from vrsweep.store import torn
-
         recovery, _ = torn.find(h5file)  # an error: open_for_resume's "corrupt", the file closed
         if recovery is None:
             return
@@ -308,8 +308,17 @@ class ResultWriter:
 
         self._check_still_mine()
         try:
+            # status last, after the others are flushed: a status other than -1 then says that the
+            # point's values are all written, the record a torn chunk of done is rebuilt from
+            # (store/torn.py). One fsync before done suffices: a chunk of done is only ever cut
+            # after every value of its points reached the disk.
+            later = [torn.COMPLETION] if torn.COMPLETION in arrays else []
             for name, array in arrays.items():
-                _write_selection(self._file[name], self.grid_shape, idx, array)
+                if name not in later:
+                    _write_selection(self._file[name], self.grid_shape, idx, array)
+            for name in later:
+                self._file.flush()
+                _write_selection(self._file[name], self.grid_shape, idx, arrays[name])
             self._file.flush()
             _fsync(self._file)
             _write_selection(self._file["done"], self.grid_shape, idx, np.ones(n, dtype=np.int8))
