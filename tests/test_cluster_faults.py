@@ -499,6 +499,46 @@ def test_a_temporary_file_of_another_host_is_named_not_removed(tmp_path, invoke,
     assert foreign.exists() and older.exists() and unrelated.exists()
 
 
+def test_a_file_of_the_users_named_like_a_temporary_one_is_never_removed(tmp_path, capfd):
+    """clean_stale_temporaries judged a name by its pattern alone: a file of the user's named
+    .out.h5.HOST.PID.8HEX.tmp (PID a process gone) was removed, by any write of out.h5 (a run, a
+    figure). Only a name vrsweep signed is removed now; the file of the user's is named once, kept."""
+    from vrsweep.store.fileio import _HOST, clean_stale_temporaries, temporary_path, write_bytes
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    out = tmp_path / "out.h5"
+    users = tmp_path / f".out.h5.{_HOST}.{gone.pid}.0123abcd.tmp"
+    users.write_bytes(b"the user's notes")
+    real = tmp_path / os.path.basename(temporary_path(out))  # this process: a live writer's, kept silently
+    real.write_bytes(b"partial")
+    capfd.readouterr()
+    clean_stale_temporaries(out)
+    err = capfd.readouterr().err
+    assert users.read_bytes() == b"the user's notes" and real.exists()
+    assert f"Note: {users} looks like a temporary file left by vrsweep (process {gone.pid} on {_HOST})" in err
+    write_bytes(tmp_path / "out.h5", b"x")  # any write of the output: the note is not repeated
+    assert users.exists() and str(users) not in capfd.readouterr().err
+
+
+def test_a_temporary_file_vrsweep_signed_is_removed_when_its_writer_is_gone(tmp_path, capfd):
+    from vrsweep.store import fileio
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    out = tmp_path / "out.h5"
+    tag = "89abcdef"  # the name a process now gone gave its temporary file, as temporary_path makes it
+    signature = fileio._signature("out.h5", fileio._HOST, gone.pid, tag)
+    left = str(tmp_path / f".out.h5.{fileio._HOST}.{gone.pid}.{tag}{signature}.tmp")
+    assert len(os.path.basename(left)) == len(os.path.basename(fileio.temporary_path(out))) - len(str(os.getpid())) \
+        + len(str(gone.pid))
+    with open(left, "wb") as handle:
+        handle.write(b"partial")
+    fileio.clean_stale_temporaries(out)
+    assert not os.path.exists(left)
+    assert f"Removed {left}, left by an interrupted vrsweep (process {gone.pid})" in capfd.readouterr().err
+
+
 def test_a_reader_never_blocks_an_overwrite(slow_config, tmp_path, invoke):
     """Only a writer's lock refuses --overwrite: a file held open for reading is replaced."""
     out = tmp_path / "read.h5"

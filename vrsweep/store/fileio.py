@@ -559,15 +559,26 @@ def _probe_directory(directory, path) -> None:
 
 
 _HOST = re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname().split(".")[0]) or "host"
-# After ".NAME.": HOST.PID.TAG.tmp, or PID.TAG.tmp from vrsweep before hosts were recorded.
-_TEMPORARY_TAIL = re.compile(r"(?:(?P<host>[A-Za-z0-9_-]+)\.)?(?P<pid>\d+)\.[0-9a-f]{8}\.tmp")
+# After ".NAME.": HOST.PID.TAG.tmp; TAG is 8 random hex digits and 8 more that sign the name
+# (_signature), or 8 alone from vrsweep before names were signed (and PID.TAG.tmp before hosts).
+_TEMPORARY_TAIL = re.compile(
+    r"(?:(?P<host>[A-Za-z0-9_-]+)\.)?(?P<pid>\d+)\.(?P<tag>[0-9a-f]{8})(?P<signature>[0-9a-f]{8})?\.tmp")
+
+
+def _signature(base, host, pid, tag) -> str:
+    """What makes a temporary name vrsweep's own: a file of the user's named like one by chance (or
+    by a tool of theirs) carries it with a chance of 2^-32, and is never removed."""
+    import hashlib
+
+    return hashlib.sha256(f"vrsweep temporary of {base} by {host} {pid} {tag}".encode()).hexdigest()[:8]
 
 
 def temporary_path(path) -> str:
     """A new temporary name beside ``path`` (same folder, so the final rename stays on one file
-    system) that says which host and process wrote it."""
+    system) that says which host and process wrote it, signed as vrsweep's."""
     directory, base = os.path.split(os.path.abspath(path))
-    return os.path.join(directory, f".{base}.{_HOST}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    pid, tag = os.getpid(), uuid.uuid4().hex[:8]
+    return os.path.join(directory, f".{base}.{_HOST}.{pid}.{tag}{_signature(base, _HOST, pid, tag)}.tmp")
 
 
 def _process_alive(pid) -> bool:
@@ -588,7 +599,9 @@ def clean_stale_temporaries(path) -> None:
 
     A temporary file is stale when no process holds it locked and the process that wrote it (its
     name says which, on which host) is gone. One written on another host, or by a process of
-    unknown host, cannot be judged from here: it is named on stderr, and left alone.
+    unknown host, cannot be judged from here: it is named on stderr, and left alone. So is a name
+    without vrsweep's signature (_signature): a file of the user's named like a temporary one (or
+    one of a vrsweep before names were signed) was removed by the pattern alone.
     """
     directory, base = os.path.split(os.path.abspath(path))
     try:
@@ -604,7 +617,8 @@ def clean_stale_temporaries(path) -> None:
         if being_written(temporary):
             continue  # another process is writing it right now
         pid, host = int(match.group("pid")), match.group("host")
-        if host == _HOST and not _process_alive(pid):
+        signed = match.group("signature") == _signature(base, host, match.group("pid"), match.group("tag"))
+        if host == _HOST and signed and not _process_alive(pid):
             try:
                 os.remove(temporary)
             except OSError:
