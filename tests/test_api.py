@@ -554,3 +554,45 @@ def test_a_folder_named_like_a_scratch_folder_is_removed_only_if_vrsweep_made_it
     assert not os.path.exists(made)
     err = capfd.readouterr().err
     assert err.count("Removed") == 1 and f"Removed {ours}, left by an interrupted vrsweep" in err
+
+
+def test_a_scratch_folder_of_a_vrsweep_before_the_marker_is_named_once(tmp_path, monkeypatch, capfd):
+    """Scratch folders of a killed vrsweep from before the marker (vrsweep-8CHARS of 0.1.0 to
+    0.6.8, vrsweep-HOST.PID.tag of 0.6.9 to 0.7.2), each maybe as large as a grid, were left in
+    TMPDIR with nothing ever saying so. They cannot be told from a user's folder, so they are kept;
+    one line each, once a process, says where they are and how large. A folder holding anything
+    vrsweep never writes there, or nothing, is not named."""
+    import tempfile
+
+    from vrsweep.store import fileio
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(fileio, "_named_scratch", set())
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+
+    def folder(name, files):
+        path = tmp_path / name
+        path.mkdir()
+        for file in files:
+            (path / file).write_bytes(b"x" * 1500)
+        return path
+
+    oldest = folder("vrsweep-k2j_9xq1", ["sweep.h5"])
+    unmarked = folder(f"vrsweep-{fileio._HOST}.{gone.pid}.abc123_x", ["trajectory.h5"])
+    users = folder("vrsweep-myresult", ["sweep.h5", "notes.txt"])
+    empty = folder("vrsweep-a1b2c3d4", [])
+    with fileio.scratch_folder():
+        pass
+    err = capfd.readouterr().err.splitlines()
+    assert sorted(err) == sorted([
+        f"Note: {oldest} looks like the scratch folder of a vrsweep interrupted before scratch folders were "
+        "marked (process unknown; 1.5 kB): it is kept, as vrsweep cannot tell it made it; delete it if no "
+        "vrsweep is using it",
+        f"Note: {unmarked} looks like the scratch folder of a vrsweep interrupted before scratch folders were "
+        f"marked (process {gone.pid}, gone; 1.5 kB): it is kept, as vrsweep cannot tell it made it; delete it "
+        "if no vrsweep is using it"])
+    assert all(path.is_dir() for path in (oldest, unmarked, users, empty))
+    with fileio.scratch_folder():
+        pass
+    assert capfd.readouterr().err == ""

@@ -639,8 +639,40 @@ SCRATCH_MARKER = ".vrsweep-scratch"
 _SCRATCH_FILES = re.compile(r"\.vrsweep-scratch|(?:\.)?(?:sweep|trajectory)\.h5(?:\..+\.tmp)?")
 
 
+# A scratch folder of vrsweep before the marker: tempfile's 8 characters (0.1.0 to 0.6.8), or
+# HOST.PID.tag (0.6.9 to 0.7.2). Never removed (vrsweep cannot tell it made it), but named, once.
+_UNMARKED_SCRATCH_TAIL = re.compile(r"[a-z0-9_]{8}")
+_named_scratch = set()
+
+
 def _scratch_marker_text(host, pid) -> str:
     return f"vrsweep scratch folder of process {pid} on {host}: removed when that process is gone\n"
+
+
+def _name_unmarked_scratch(folder, pid=None) -> None:
+    """One line, once a process, for a folder of this user's in TMPDIR that looks like the scratch
+    folder of a killed vrsweep of a version that made no marker: it may hold a file as large as a
+    grid, and nothing else will ever say it is there. Only a folder holding nothing but what vrsweep
+    writes there (and something) is named; it is not removed: a folder of the user's may look so."""
+    if folder in _named_scratch:
+        return
+    try:
+        if not os.path.isdir(folder) or os.path.islink(folder) or os.stat(folder).st_uid != os.getuid():
+            return
+        items = os.listdir(folder)
+        paths = [os.path.join(folder, item) for item in items]
+        if not items or SCRATCH_MARKER in items or not all(
+                _SCRATCH_FILES.fullmatch(item) and os.path.isfile(path) and not os.path.islink(path)
+                for item, path in zip(items, paths)):
+            return
+        size = sum(os.path.getsize(path) for path in paths)
+    except (OSError, AttributeError):  # AttributeError: no os.getuid (Windows)
+        return
+    _named_scratch.add(folder)
+    process = f"process {pid}, gone" if pid is not None else "process unknown"
+    notice(f"Note: {folder} looks like the scratch folder of a vrsweep interrupted before scratch folders "
+           f"were marked ({process}; {format_bytes(size)}): it is kept, as vrsweep cannot tell it made it; "
+           "delete it if no vrsweep is using it")
 
 
 def _own_stale_scratch(folder, host, pid) -> bool:
@@ -683,11 +715,18 @@ def scratch_folder():
     except OSError:
         names = []
     for name in sorted(names):
-        match = _SCRATCH_TAIL.fullmatch(name[len("vrsweep-"):]) if name.startswith("vrsweep-") else None
-        if not match or match.group("host") != _HOST or _process_alive(int(match.group("pid"))):
+        if not name.startswith("vrsweep-"):
             continue
         folder = os.path.join(root, name)
+        match = _SCRATCH_TAIL.fullmatch(name[len("vrsweep-"):])
+        if not match:
+            if _UNMARKED_SCRATCH_TAIL.fullmatch(name[len("vrsweep-"):]):
+                _name_unmarked_scratch(folder)
+            continue
+        if match.group("host") != _HOST or _process_alive(int(match.group("pid"))):
+            continue
         if not _own_stale_scratch(folder, match.group("host"), match.group("pid")):
+            _name_unmarked_scratch(folder, match.group("pid"))  # says nothing of a folder with a marker
             continue  # not vrsweep's, or its process id was reused, or a file is shared: leave it
         for item in os.listdir(folder):
             if not _SCRATCH_FILES.fullmatch(item):
