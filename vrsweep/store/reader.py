@@ -56,7 +56,7 @@ def open_checked(path, mode="r"):
     try:
         f = open_store_file(path, mode)
     except OSError as error:
-        raise corrupt_error(path, error) from None
+        raise corrupt_error(path, error, writing=mode != "r") from None
     try:
         if "vrsweep_format_version" not in f.attrs:
             raise ResultFileError(f"{path} is an HDF5 file but not a vrsweep results file "
@@ -284,13 +284,20 @@ def open_in_this_process_error(path, error):
     return None
 
 
-def corrupt_error(path, error):
+def corrupt_error(path, error, writing=False):
     # A KeyError's str() is its message quoted: "'Unable to open object (component not found)'",
     # whose reason came out as "component not found)'" (the message ended ")')")
     text = str(error.args[0]) if isinstance(error, KeyError) and error.args else str(error)
     in_use = open_in_this_process_error(path, error)
     if in_use is not None:
         return in_use
+    if "unable to lock file" in text and writing:
+        # A writer is refused by its own lock first (fileio.refuse_if_being_written): what holds the
+        # file here is a reader, and a lazy Dataset holds its file until it is closed. It was told
+        # "has it open for writing; set HDF5_USE_FILE_LOCKING=FALSE to read it anyway".
+        return ResultFileError(
+            f"{path} is open in another process (a Dataset of vrsweep.open_results or xarray, a viewer): "
+            "HDF5 cannot lock it for writing; close it there (ds.close()) and try again")
     if "unable to lock file" in text:  # not just "lock": "sblock" appears in truncation messages
         return ResultFileError(
             f"{path} is locked: another process (a run in progress?) has it open for writing; "
