@@ -46,6 +46,12 @@ class GracefulStop:
         if threading.current_thread() is threading.main_thread():
             for signum in self.SIGNALS:
                 self._previous[signum] = signal.signal(signum, self._handle)
+            # A signal whose Interrupted an import swallowed before this stop was set up: the run
+            # went on as if never asked to stop (see _raise_interrupted). Stop now, nothing written.
+            swallowed = _take_swallowed()
+            if swallowed is not None:
+                self.__exit__()
+                raise Interrupted(swallowed)
         return self
 
     def __exit__(self, *exc):
@@ -71,6 +77,18 @@ class GracefulStop:
             raise Interrupted(self.signum)
 
 
+# Signals whose Interrupted _raise_interrupted raised: C code that clears whatever error it meets
+# may swallow one (numpy.random's Cython module, imported with numba at `run`'s start, registers
+# its classes with abc, and an exception raised there vanished: a SIGTERM 0.3 s into `vrsweep run`
+# was lost, and the run went on to its end, exit 0). GracefulStop looks here when it starts.
+_raised = []
+
+
+def _take_swallowed():
+    """The signal of an Interrupted raised and never handled, or None; forgotten once taken."""
+    return _raised.pop() if _raised else None
+
+
 def _exit_interrupted(signum, frame):
     # Nothing is written yet and nothing is held: say so in the one line every command uses, and
     # leave with the shell's code for the signal, without unwinding an import half done.
@@ -81,10 +99,13 @@ def _exit_interrupted(signum, frame):
 
 def exit_at_once_on_sigint() -> None:
     """Ctrl-C while the command line starts (imports take ~0.3 s; a traceback from inside one is
-    what Python would print): exit 130 with one line. The command line calls
+    what Python would print): exit 130 with one line; SIGTERM likewise, 143 (without a handler it
+    ended the process with no word, as at no other moment). The command line calls
     :func:`raise_on_sigint` once a command runs, where KeyboardInterrupt is handled (cli.py)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, _exit_interrupted)
+        if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, _exit_interrupted)
 
 
 def _compiling() -> bool:
@@ -112,6 +133,7 @@ def _raise_interrupted(signum, frame):
     # `python -m vrsweep` then ends killed by SIGINT after the command line has printed its one
     # line and chosen exit 130. Only the exact class is noted; the command line catches the
     # subclass as any KeyboardInterrupt (cli.py), with the same line and code.
+    _raised[:] = [signum]  # taken by GracefulStop if the Interrupted is swallowed on its way
     raise Interrupted(signum)
 
 
@@ -125,5 +147,5 @@ def raise_on_sigint() -> None:
         return
     if signal.getsignal(signal.SIGINT) is _exit_interrupted:
         signal.signal(signal.SIGINT, _raise_interrupted)
-    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+    if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, _exit_interrupted):
         signal.signal(signal.SIGTERM, _raise_interrupted)
