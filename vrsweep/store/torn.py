@@ -293,7 +293,10 @@ def repair(f, recovery, fsync):
         done_ds[...] = np.where(cleared, 0, done_ds[()]).astype(np.int8)
     f.flush()
     fsync(f)
-    for name, chunks in recovery.chunks.items():
+    # status first: a point's status other than -1 must always mean its values are all there,
+    # also after a kill in the middle of clearing the values of points not done
+    for name in sorted(recovery.chunks, key=lambda name: name != COMPLETION):
+        chunks = recovery.chunks[name]
         if name == "done":
             continue
         ds = f[name]
