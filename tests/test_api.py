@@ -567,7 +567,7 @@ def test_a_scratch_folder_of_a_vrsweep_before_the_marker_is_named_once(tmp_path,
     from vrsweep.store import fileio
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    monkeypatch.setattr(fileio, "_named_scratch", set())
+    monkeypatch.setattr(fileio, "_named_scratch", set(), raising=False)
     gone = subprocess.Popen([sys.executable, "-c", "pass"])
     gone.wait()
 
