@@ -312,6 +312,27 @@ def test_samples_not_at_the_forcings_period_are_marked_apart_and_explained(tmp_p
     assert not [line for line in fig.axes[0].get_lines() if line.get_gid() == "strobe off the forcing's period"]
 
 
+def test_the_forcings_repeats_are_counted_curve_by_curve(tmp_path):
+    """Curves of several Omega repeat after their own q: the caption counted the points of all
+    curves as one and gave every one the q of the last curve drawn ("at 3 of 3 points ... q = 2"
+    where Omega = 4.1 has q = 5). Omega/omega = 8, 41/5, 17/2: q = 1, 5, 2, in lowest terms."""
+    from fractions import Fraction
+
+    path = _run(tmp_path, "curves", "model: original\nsweep:\n  g: [5.0, 10.0, 15.0]\n  Omega: [4.0, 4.1, 4.25]\n"
+                "integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 2}\n", "run")
+    omega = DEFAULT_PARAMETERS["omega"]
+    q = {Omega: Fraction(Omega / omega).limit_denominator(100).denominator for Omega in (4.0, 4.1, 4.25)}
+    assert q == {4.0: 1, 4.1: 5, 4.25: 2}
+    fig = plot.plot(path, kind="bifurcation", x_axis="g")
+    words = plot.description(fig)
+    for Omega in (4.1, 4.25):
+        assert f"Ω = {Omega:g}: at 3 of 3 points the forcing repeats only after q = {q[Omega]} periods T" in words, words
+    assert "Ω = 4: at" not in words and "of 9 points" not in words, words
+    # A curve with no sample at the forcing's period has no legend entry for filled dots it does not draw.
+    texts = [text.replace("$\\Omega$", "Ω") for text in legend_texts(fig)]
+    assert "Ω = 4" in texts and "Ω = 4.1" not in texts and any(t.startswith("Ω = 4.1: hollow") for t in texts), texts
+
+
 def test_bifurcation_draws_the_barrier_where_each_point_had_it(files, tmp_path):
     """A sweep in Delta moves the barrier: it is drawn at Delta at each value (the line x = Delta),
     not as one horizontal line at the config's default Delta; elsewhere, one line at Delta."""

@@ -965,17 +965,19 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
     # No more curves than colours apart in grey (an x axis asked for on a map drew a curve per row,
     # their colours in turn).
     _refuse_too_many_curves(view, curves, MAX_CURVES, "strobe_x", x_axis)
-    unlocked = np.zeros(len(x), dtype=bool)  # over every curve: where the forcing does not repeat every T
-    repeats = {}
+    repeats = []  # (label, q at each x) of each curve: the caption counts them curve by curve
     for k, (where, label) in enumerate(curves):
         colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
         strobe = view.along("strobe_x", x_axis, **where)  # (n_x, n_strobe)
         q = _forcing_repeats(view, x_axis, x, where)
         at_period = q == 1
-        unlocked |= ~at_period
-        repeats.update({float(value): int(n) for value, n in zip(x[~at_period], q[~at_period])})
+        repeats.append((label, q))
+        # A curve with no sample at the forcing's period gets no legend entry for filled dots it
+        # does not draw: its hollow entry names it.
+        named = at_period.any() or at_period.size == 0
         ax.plot(np.repeat(x[at_period], n_strobe), strobe[at_period].reshape(-1), ".", ms=2.5, color=colour,
-                label=label or f"x(nT), last {n_strobe} {period_words(symbol=False)}s of each point", gid="strobe")
+                label=(label or f"x(nT), last {n_strobe} {period_words(symbol=False)}s of each point") if named
+                else None, gid="strobe")
         if not at_period.all():
             # Samples at t = nT where the forcing repeats only after q periods T (Omega/omega = 1/10:
             # q = 10) or never: a motion locked to the forcing shows q dots, or a curve, where its
@@ -991,7 +993,7 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
     if failure_note:
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ms=2.0, ls="none",
                 label="integration failed: no samples")  # ms x markerscale 3 = the drawn marks
-    strobe_note = _unlocked_note(unlocked, repeats, len(x), x_axis)
+    strobe_note = _unlocked_note(repeats, x, x_axis)
     _draw_resonance_lines(ax, view, x_axis, x)
     if view.config is not None:
         levels = _barrier_levels(view, x_axis, x)
@@ -1037,23 +1039,43 @@ def _forcing_repeats(view, x_axis, x, where):
     return sampling_of_forcing(view.config.model, sets, LONGEST_REPEAT)[0]
 
 
-def _unlocked_note(unlocked, repeats, n_points, x_axis):
-    """The caption's words for the points whose samples at t = nT are not at the forcing's period."""
+def _unlocked_note(repeats, x, x_axis):
+    """The caption's words for the points whose samples at t = nT are not at the forcing's period.
+
+    repeats: (label, q at each value of ``x``) of each curve (q: ``_forcing_repeats``). Curves of
+    several Omega repeat after different q: each is counted on its own and named by its label (the
+    caption counted the points of all curves as one, with the q of the last curve drawn: "at 6 of
+    6 points ... q = 2" of three curves, one of them q = 5)."""
+    said = [(label, _repeat_words(q, x, x_axis)) for label, q in repeats]
+    said = [(label, words) for label, words in said if words]
+    if not said:
+        return ""
+    tail = ("(hollow dots): sampled at t = nT, not once per the forcing's period, a motion locked to it "
+            "shows q dots, or a closed curve, not chaos")
+    if len(repeats) == 1:
+        return f"{said[0][1]} {tail}"
+    return f"the forcing repeats only after q > 1 periods T {tail}; {'; '.join(f'{label}: {words}' for label, words in said)}"
+
+
+def _repeat_words(q, x, x_axis):
+    """'at 2 of 3 points the forcing repeats only after q periods T (q = 10 at g = 5, ...)' for one
+    curve's q at each value of ``x``; '' where it repeats every T throughout."""
+    q = np.asarray(q)
+    unlocked = q != 1
     if not unlocked.any():
         return ""
-    finite = sorted({q for q in repeats.values() if q > 1})
-    never = sum(1 for q in repeats.values() if q == 0)
-    examples = ", ".join(f"q = {q} at {_symbol(x_axis)} = {_number(value)}"
-                         for value, q in sorted(repeats.items()) if q > 1)
+    finite = sorted({int(n) for n in q[unlocked] if n > 1})
+    never = int(np.sum(q == 0))
     parts = []
     if finite:
-        parts.append(f"after q periods T ({examples})" if len(repeats) <= 3 else
+        examples = ", ".join(f"q = {int(n)} at {_symbol(x_axis)} = {_number(float(value))}"
+                             for value, n in zip(x, q) if n > 1)
+        # Each point's own q where a few differ; else the range (one q along a curve of one Omega).
+        parts.append(f"after q periods T ({examples})" if int(unlocked.sum()) <= 3 and len(finite) > 1 else
                      f"after q = {finite[0]}{'' if len(finite) == 1 else f' to {finite[-1]}'} periods T")
     if never:
         parts.append(f"not within {LONGEST_REPEAT} periods at {never} of them")
-    return (f"at {int(unlocked.sum())} of {n_points} points the forcing repeats only {' and '.join(parts)} "
-            "(hollow dots): sampled at t = nT, not once per the forcing's period, a motion locked to it "
-            "shows q dots, or a closed curve, not chaos")
+    return f"at {int(unlocked.sum())} of {len(q)} points the forcing repeats only {' and '.join(parts)}"
 
 
 def _barrier_levels(view, x_axis, x):
