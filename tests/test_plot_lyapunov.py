@@ -55,15 +55,26 @@ def test_the_panel_draws_the_files_exponent_and_calls_chaos_by_its_band(line):
     assert "not chaotic" not in hollow.get_label() and "undecided" in hollow.get_label()
 
 
-def test_minus_infinity_is_drawn_at_the_bottom_and_counted(line):
+@pytest.mark.parametrize("bifurcation", [False, True])
+def test_minus_infinity_is_drawn_apart_from_the_data_and_counted(line, bifurcation):
+    """-inf (stuck) was a triangle inside the exponent's panel, at some height near its bottom, where
+    it read as that value of lambda_1. It is in a strip of its own under the panel, on the same
+    parameter axis, named -inf, and the exponent's panel holds no mark of it."""
     ds = load_results(line)
     ds["lyapunov"].values[1] = -math.inf  # as a point that stuck on the barrier stores it
-    fig = plot.lyapunov_figure(ds)
+    fig = plot.lyapunov_figure(ds, bifurcation=bifurcation)
     (stuck,) = _lines(fig, "stuck")
     np.testing.assert_array_equal(stuck.get_xdata(), [5.0])
     assert "1 point stuck on the barrier" in fig._suptitle.get_text()
     (curve,) = _lines(fig, "lyapunov")
     assert np.isnan(curve.get_ydata()[1])  # not drawn as a number
+    strip, panel = stuck.axes, curve.axes
+    assert strip is not panel and strip.get_shared_x_axes().joined(strip, panel)
+    assert strip.get_position().y1 <= panel.get_position().y0  # below the panel, not over its data
+    assert [t.get_text() for t in strip.get_yticklabels()] == ["$\\lambda_1$ = $-\\infty$"]
+    assert strip.get_xlabel() and not panel.get_xlabel()  # the parameter's label under the lowest panel
+    # Without -inf, no strip.
+    assert len(plot.lyapunov_figure(load_results(line), bifurcation=bifurcation).axes) == (2 if bifurcation else 1)
 
 
 def test_under_the_bifurcation_diagram_on_one_axis(line):

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import ResultFileError
 from vrsweep.plot.labels import (
     parameter_symbol,
-    FAILED_COLOUR, FAILED_ROW_HEIGHT, LYAPUNOV_SYMBOL, MAX_CURVES, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options,
+    FAILED_COLOUR, LYAPUNOV_SYMBOL, MAX_CURVES, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _point_classes, _progress_note, _span_grid, _Sweep,
@@ -38,17 +38,23 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     if bifurcation:
         view.require("strobe_x")
     x_axis = _choose_x_axis(view, x_axis, need_axes=1)
+    # -inf has no place on the exponent's axis: a mark inside the panel sat at some height and was
+    # read as that exponent (a triangle at "-1.03" beside a point at -1.05). Such points get a strip
+    # of their own under the panel, ticked "-inf", which no finite value can reach.
+    heights = [3, 2] if bifurcation else [1]
+    stuck = bool(np.isneginf(np.asarray(view.variables["lyapunov"], dtype=np.float64)).any())
+    if stuck:
+        heights.append(STUCK_STRIP * heights[-1])
+    fig = _new_figure(8.0, 7.5 if bifurcation else 4.5)
+    panels = np.atleast_1d(fig.subplots(len(heights), 1, sharex=True, squeeze=False,
+                                        gridspec_kw={"height_ratios": heights})[:, 0])
     if bifurcation:
-        fig = _new_figure(8.0, 7.5)
-        top, ax = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
-        failure_note = _draw_bifurcation(top, view, x_axis, below_when_long=False)  # below: the exponent's legend
-    else:
-        fig = _new_figure(8.0, 4.5)
-        ax = fig.subplots()
-    note = _draw_lyapunov(ax, view, x_axis)
+        failure_note = _draw_bifurcation(panels[0], view, x_axis, below_when_long=False)  # below: the exponent's legend
+    ax = panels[1 if bifurcation else 0]
+    note = _draw_lyapunov(ax, view, x_axis, strip=panels[-1] if stuck else None)
     if not bifurcation:
         failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
-    ax.set_xlabel(view.axis_label(x_axis))
+    panels[-1].set_xlabel(view.axis_label(x_axis))
     notes = "; ".join(n for n in (_progress_note(view), failure_note, note) if n)
     what = (f"Bifurcation diagram (top) and largest Lyapunov exponent {LYAPUNOV_SYMBOL} (bottom)" if bifurcation
             else f"Largest Lyapunov exponent {LYAPUNOV_SYMBOL}")
@@ -58,8 +64,13 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     return fig
 
 
-def _draw_lyapunov(ax, view, x_axis):
-    """lambda_1 with its band, the zero line, -inf and failed points; returns the -inf note."""
+STUCK_STRIP = 0.12  # the -inf strip's height, of the exponent's panel's
+
+
+def _draw_lyapunov(ax, view, x_axis, strip=None):
+    """lambda_1 with its band, the zero line, failed points, and -inf (stuck on the barrier) as
+    triangles in ``strip``, a panel of their own under ``ax`` (one row per curve); returns the
+    -inf note."""
     x = np.asarray(view.axes[x_axis], dtype=np.float64)
     curves = view.curve_coordinates(x_axis)
     _refuse_too_many_curves(view, curves, MAX_CURVES, "lyapunov", x_axis)  # no more than colours apart in grey
@@ -88,10 +99,12 @@ def _draw_lyapunov(ax, view, x_axis):
         stuck = np.isneginf(exponent)
         n_stuck += int(np.sum(stuck))
         if np.any(stuck):
-            ax.plot(x[stuck], np.full(int(np.sum(stuck)), FAILED_ROW_HEIGHT * (len(curves) + k + 0.7)), "v",
-                    color=STUCK_COLOUR if len(curves) == 1 else colour, ms=6, zorder=6, clip_on=False,
-                    transform=ax.get_xaxis_transform(), gid="stuck", ls="none",
-                    label=None if k else f"{LYAPUNOV_SYMBOL} = $-\\infty$: stuck on the barrier")
+            strip.plot(x[stuck], np.full(int(np.sum(stuck)), float(k)), "v",
+                       color=STUCK_COLOUR if len(curves) == 1 else colour, ms=6, zorder=6, clip_on=False,
+                       gid="stuck", ls="none")
+            if not n_stuck - int(np.sum(stuck)):  # the legend's entry, once (the strip is no panel of its own)
+                ax.plot([], [], "v", color=STUCK_COLOUR if len(curves) == 1 else "k", ms=6, ls="none",
+                        label=f"in the strip below: {LYAPUNOV_SYMBOL} = $-\\infty$, stuck on the barrier")
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
@@ -100,6 +113,12 @@ def _draw_lyapunov(ax, view, x_axis):
     _span_grid(ax, x)
     ax.set_ylabel(f"{LYAPUNOV_SYMBOL}, per unit time")
     ax.grid(alpha=0.3)
+    if strip is not None:
+        # Rows 0 .. n-1 (a curve each), one tick between them naming what the strip holds.
+        strip.set_ylim(-0.7, len(curves) - 0.3)
+        strip.set_yticks([(len(curves) - 1) / 2.0], [f"{LYAPUNOV_SYMBOL} = $-\\infty$"], fontsize="small")
+        strip.tick_params(axis="y", length=0)
+        strip.grid(alpha=0.3, axis="x")
     # Below the axes: a legend inside would cover points (the exponent fills its whole range).
     handles, labels = ax.get_legend_handles_labels()
     ax.figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",
@@ -107,4 +126,4 @@ def _draw_lyapunov(ax, view, x_axis):
     if not n_stuck:
         return ""
     points = "1 point" if n_stuck == 1 else f"{n_stuck} points"
-    return f"{points} stuck on the barrier in the window ({LYAPUNOV_SYMBOL} = -inf): ▼ along the bottom edge"
+    return f"{points} stuck on the barrier in the window ({LYAPUNOV_SYMBOL} = -inf): ▼ in the strip under the panel"
