@@ -343,15 +343,39 @@ def test_dimensionless_axes_show_no_unit(files):
 
 
 def test_many_curves_get_a_colour_scale_not_a_legend_entry_each(files):
-    fig = plot.plot(files["plane"], kind="response", log=False)
+    ds = load_results(files["plane"]).isel(Omega=slice(0, 9))
+    fig = plot.response_figure(ds, x_axis="g", log=False)
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert not any("Ω =" in text or "\\Omega$ =" in text for text in legend), legend
     assert len(legend) <= 8
     (bar,) = [ax for ax in fig.axes if ax is not fig.axes[0]]
     assert "$\\Omega$" in bar.get_ylabel()
-    # Each curve's colour is the scale's colour of its Omega: ten values, ten colours.
+    # Each curve's colour is the scale's colour of its Omega: nine values, nine colours.
     joins = [line for line in fig.axes[0].get_lines() if line.get_linestyle() == ":"]
-    assert len({to_rgba(line.get_color()) for line in joins}) == 10
+    assert len({to_rgba(line.get_color()) for line in joins}) == 9
+
+
+def test_curves_on_a_colour_scale_keep_their_neighbours_apart_in_greyscale(files):
+    """Sixteen curves on viridis were 4 to 5 apart in L* from their neighbours (in value): one grey
+    on a greyscale page. Curves are coloured by rank, every two neighbours at least 8 apart, the
+    colour bar names each value in its own block; a tenth curve is refused (--at, or a map), and
+    two close values (Omega = 3 and 3.01 beside 6) get colours as far apart as any neighbours."""
+    from vrsweep.plot.palettes import MAX_SCALE_CURVES, most_scale_curves
+
+    assert MAX_SCALE_CURVES == most_scale_curves() == 9
+    plane = load_results(files["plane"])
+    for ds in (plane.isel(Omega=slice(0, 9)), plane.isel(Omega=slice(0, 4)).assign_coords(Omega=[3.0, 3.01, 5.9, 6.0])):
+        fig = plot.response_figure(ds, x_axis="g", log=False)
+        joins = {float(Omega): line for Omega, line in
+                 zip(ds["Omega"].values, [line for line in fig.axes[0].get_lines() if line.get_linestyle() == ":"])}
+        grey = [_lightness(joins[Omega].get_color()) for Omega in sorted(joins)]
+        assert np.all(np.diff(grey) >= 8.0), grey  # dark to light with the value, neighbours apart
+        bar = fig.axes[-1]
+        texts = [t.get_text() for t in bar.get_yticklabels()]
+        np.testing.assert_allclose([float(t) for t in texts], sorted(joins),  # each in its block, to 2 % of a step
+                                   atol=0.02 * min(np.diff(sorted(joins))))
+    with pytest.raises(UsageError, match="^10 curves of R against g"):
+        plot.response_figure(plane, x_axis="g", log=False)
 
 
 def test_the_barrier_line_is_not_drawn_like_the_joins_of_a_sweep(files):

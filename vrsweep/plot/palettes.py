@@ -43,6 +43,15 @@ LINE_COLOURS = ("tab:blue", "tab:orange", "tab:green", "#993388", "#66CCEE", "#6
 
 SEQUENTIAL = "viridis"  # more categories than QUALITATIVE and EXTRA hold: in order, lighter and lighter
 
+# Curves over one parameter coloured by its value (a response figure of many Omega), from dark to
+# light. viridis' top is pale yellow, unreadable as a thin line on white: the scale stops at 90 %
+# (L* 15 to 84). The curves are coloured by rank, at equal steps of the scale, so that neighbours
+# are as far apart in grey as the scale allows; at most MAX_SCALE_CURVES of them keep every two
+# neighbours LIGHTNESS_STEP apart. Sixteen at equal steps were 4 to 5 apart in L*: neighbouring
+# curves printed in one grey (and colouring by value put two close values in one colour).
+CURVE_SCALE = "viridis"
+CURVE_SCALE_TOP = 0.9
+
 
 def lightness(colour) -> float:
     """CIE L* of a matplotlib colour: what a greyscale page keeps of it (sRGB, D65)."""
@@ -90,3 +99,23 @@ def cased(colour, width):
     from matplotlib.patheffects import Normal, Stroke
 
     return [Stroke(linewidth=width + CASING, foreground=contrasting(colour)), Normal()]
+
+
+def scale_colours(count) -> list:
+    """``count`` colours of CURVE_SCALE at equal steps from its bottom to CURVE_SCALE_TOP, dark to light."""
+    from matplotlib import colormaps
+
+    steps = np.linspace(0.0, CURVE_SCALE_TOP, count) if count > 1 else np.zeros(1)
+    return [tuple(colour) for colour in colormaps[CURVE_SCALE](steps)]
+
+
+def most_scale_curves() -> int:
+    """The most curves ``scale_colours`` keeps with every two neighbours LIGHTNESS_STEP apart in L*
+    (MAX_SCALE_CURVES; tests/test_figures.py checks the two agree)."""
+    count = 2
+    while min(np.diff([lightness(colour) for colour in scale_colours(count + 1)])) >= LIGHTNESS_STEP:
+        count += 1
+    return count
+
+
+MAX_SCALE_CURVES = 9  # most_scale_curves() of viridis up to 0.9 (not computed here: no matplotlib on import)

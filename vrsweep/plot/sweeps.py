@@ -14,7 +14,9 @@ from vrsweep.plot.analytic import (
     barrier_positions,
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
 )
-from vrsweep.plot.palettes import NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, cased, categorical
+from vrsweep.plot.palettes import (
+    MAX_SCALE_CURVES, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, cased, categorical, scale_colours,
+)
 from vrsweep.plot.labels import (
     parameter_symbol,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
@@ -38,8 +40,7 @@ LEGEND_CURVES = 3        # more curves over one other parameter than this: a col
 # every two apart in grey): the marks mean nothing else there, and tell the curves apart where the
 # colours alone do not (a legend's small samples).
 CURVE_MARKERS = "os^Dv<>p"
-MAX_SCALED_CURVES = 16   # with a colour scale, curves stay apart up to this many
-CURVE_SCALE = "viridis"
+MAX_SCALED_CURVES = MAX_SCALE_CURVES  # with a colour scale, neighbours stay apart in grey up to this many (9)
 BARRIER_COLOUR = "0.35"
 BARRIER_DASHES = (0, (7, 2, 1.5, 2, 1.5, 2))  # dash-dot-dot: unlike the dotted joins, dashed unstable branches
 
@@ -131,22 +132,28 @@ def _refuse_too_many_curves(view, curves, limit, name, x_axis):
 
 def _curve_colours(fig, ax, ds, view, scale_axis):
     """colour(k, where) of curve k: the legend's colours in turn, or with ``scale_axis`` a colour
-    from a scale of that axis' value, named by a colour bar."""
+    from a scale of that axis' value, named by a colour bar.
+
+    On the scale the curves are coloured by rank, at equal steps from dark to light
+    (``palettes.scale_colours``), and the colour bar has a block per value, labelled with it: by
+    value, two close values (Omega = 3 and 3.1 beside 6) took one colour."""
     if scale_axis is None:
         return lambda k, where: RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
-    from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
+
+    from vrsweep.plot.selection import _cell_texts
 
     scale_values = np.asarray(view.axes[scale_axis], dtype=np.float64)
-    scale_norm = Normalize(vmin=float(scale_values.min()), vmax=float(scale_values.max()))
-    scale_cmap = colormaps[CURVE_SCALE]
-    # The top of viridis is pale yellow, unreadable as a thin line on white: stop at 90 %.
-    colours = [scale_cmap(0.9 * float(scale_norm(value))) for value in scale_values]
-    bar_cmap = ListedColormap(scale_cmap(np.linspace(0.0, 0.9, 256)))
-    fig.colorbar(ScalarMappable(norm=scale_norm, cmap=bar_cmap), ax=ax,
-                 label=parameter_label(scale_axis, ds[scale_axis].attrs.get("units")),
-                 ticks=scale_values if len(scale_values) <= 12 else None)
+    order = np.argsort(scale_values)
+    ranked = scale_colours(len(scale_values))
+    colours = [None] * len(scale_values)
+    for rank, index in enumerate(order):
+        colours[index] = ranked[rank]
+    blocks = np.arange(len(scale_values) + 1) - 0.5
+    bar = fig.colorbar(ScalarMappable(norm=BoundaryNorm(blocks, len(ranked)), cmap=ListedColormap(ranked)), ax=ax,
+                       label=parameter_label(scale_axis, ds[scale_axis].attrs.get("units")))
+    bar.set_ticks(np.arange(len(scale_values)), labels=_cell_texts(scale_values[order]))
+    bar.minorticks_off()
     return lambda k, where: colours[where[scale_axis]]
 
 
