@@ -755,3 +755,23 @@ def test_a_map_of_the_period_says_its_unit(files):
     assert bar.get_ylabel() == "period, in units of the slow period $2\\pi/\\omega$"
     curve = plot.variable_figure(ds.isel(Omega=0), "period")
     assert curve.axes[0].get_ylabel() == "period, in units of the slow period $2\\pi/\\omega$"
+
+
+def test_every_variable_is_named_in_words_on_its_colour_bar_and_axis(files):
+    """--var R_err's colour bar read "R_err" alone (its long name did not fit), as did motion,
+    stuck_fraction, lyapunov_err, the impact speeds... Every variable a map can show says what it is
+    in words, with its units, on the colour bar, and the same on a curve figure of it."""
+    from vrsweep.plot.sweeps import mappable_variables
+    from vrsweep.store.variables import IMPACT_VARIABLES, LYAPUNOV_VARIABLES
+
+    ds = load_results(files["plane"])
+    names = mappable_variables(ds)
+    assert {name for name, *_ in IMPACT_VARIABLES + LYAPUNOV_VARIABLES} | {"R_err", "motion"} <= set(names)
+    for name in names:
+        bar = plot.map_figure(ds, name).axes[-1].get_ylabel().replace("\n", " ")
+        curve = plot.variable_figure(ds.isel(Omega=0), name).axes[0].get_ylabel().replace("\n", " ")
+        assert bar.startswith(curve), (bar, curve)  # a cap's note may follow on the colour bar
+        words = curve.split(" [")[0].removeprefix(f"{name}: ")
+        assert words != name and len(words.split()) >= 2, (name, curve)
+        if ds[name].attrs.get("units") == "rad":
+            assert curve.endswith(" [rad]"), curve

@@ -3,6 +3,8 @@ an xarray Dataset (``vrsweep.open_results``, ``plot.load``), its axes fixed with
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
@@ -429,12 +431,8 @@ def _map_words(name):
 
 
 def _line_label(ds, name):
-    """A variable's axis label: its name and the long name up to its first parenthesis, units."""
-    words = _map_words(name)
-    if words is None:
-        long_name = str(ds[name].attrs.get("long_name", "")).split(" (")[0]
-        words = f"{name}: {long_name}" if long_name else name
-    return f"{words}{units_suffix(ds[name].attrs.get('units'))}"
+    """A variable's axis label on a curve figure: the same words as on a map's colour bar."""
+    return variable_label(ds, name)
 
 
 def _nonpositive_note(ax, values, symbol):
@@ -463,7 +461,6 @@ def _decades(arrays):
 MAP_LABELS = {"R": "gain $R = |Q|/c$", "Q_amplitude": "amplitude $|Q|$",
               "impacts_per_period": "mean impacts per slow period $2\\pi/\\omega$",
               "lyapunov": f"{LYAPUNOV_SYMBOL}, per unit time"}
-LONG_NAME_IN_LABEL = 45  # characters of a variable's long_name that fit beside a colour bar
 CAP_PERCENTILE = 99      # a linear map's default top: one wild point must not wash out the map ...
 CAP_MARGIN = 0.1         # ... if the largest value is more than 10 % of the scale above it (else no cap)
 NO_VALUE_COLOUR = NO_VALUE_GREY  # an integer map's 'no period' / 'failed' value: dark grey, set apart
@@ -495,13 +492,47 @@ def mappable_variables(ds) -> list:
 
 
 def _variable_label(ds, name):
-    """The colour bar's label: what the variable is and its units, from the file's attributes
-    (dimensionless units are not shown)."""
+    """A map's colour-bar label (``variable_label``)."""
+    return variable_label(ds, name)
+
+
+# What a variable is, in words short enough for a colour bar, where its long name's first words are
+# too long or say too little (every stored per-point variable has words: store/variables.py; a
+# colour bar read "R_err", "motion", "stuck_fraction" alone where the long name did not fit).
+VARIABLE_WORDS = {
+    "Qs": "sine component of x at $\\omega$ (eq3.1)",
+    "Qc": "cosine component of x at $\\omega$ (eq3.2)",
+    "R_err": "95 % half-width of R",
+    "lyapunov_err": f"95 % half-width of {LYAPUNOV_SYMBOL}, per unit time",
+    "status": "how the integration ended",
+    "motion": "kind of motion",
+    "impacts_per_cycle": "impacts in one cycle of the period",
+    "impact_speed_min": "slowest impact speed |v-|",
+    "impact_speed_max": "fastest impact speed |v-|",
+    "impact_speed_mean": "mean impact speed |v-|",
+    "impact_phase": "mean impact phase $\\omega t$ mod $2\\pi$",
+    "impact_phase_spread": "circular spread of the impact phase",
+    "stuck_fraction": "fraction of the time stuck on a barrier",
+    "A_theory_max_stable": "largest stable analytic amplitude $A$",
+}
+# A written model's: its response frequency is no omega (None: its long name's words, which name it).
+WRITTEN_VARIABLE_WORDS = {"Qs": None, "Qc": None, "impact_phase": "mean impact phase at the response frequency"}
+
+
+def variable_label(ds, name):
+    """A variable's label, on a map's colour bar and a curve figure's axis alike: 'name: words'
+    (the name is what --var takes) and its units from the file (dimensionless ones not shown).
+    The words: MAP_LABELS' for the usual maps, else VARIABLE_WORDS', else the file's long name up
+    to its first parenthesis, colon, semicolon or comma; the bare name only for a variable the file
+    says nothing about."""
     attrs = ds[name].attrs
     words = _map_words(name)
     if words is None:
-        long_name = str(attrs.get("long_name", ""))
-        words = name if not long_name or len(long_name) > LONG_NAME_IN_LABEL else f"{name}: {long_name}"
+        table = dict(VARIABLE_WORDS, **WRITTEN_VARIABLE_WORDS) if written_model() is not None else VARIABLE_WORDS
+        short = table.get(name)
+        if short is None:
+            short = re.split(r" \(|: |; |, ", str(attrs.get("long_name", "")).strip(), maxsplit=1)[0].strip()
+        words = f"{name}: {short}" if short else name
     return f"{words}{units_suffix(attrs.get('units'))}"
 
 
