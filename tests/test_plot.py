@@ -620,6 +620,11 @@ def test_what_the_view_leaves_out_is_said_of_the_view_asked_for(tmp_path):
     assert "2 measured points outside the limits asked for (1 below, 1 above)" in said, said
     said = " ".join(plot.description(plot.plot([ds], ylim=(0.5, 2.0), title=False)).split())
     assert "2 measured points outside" in said  # in the file's metadata, with no title drawn
+    # The response figure sets the view itself, as an argument (its caption is written once, of that
+    # view), not through a callable left on the Figure for figure_options to find and call again.
+    fig = plot.response_figure(ds, ylim=(0.5, 2.0))
+    assert "2 measured points outside the limits asked for" in " ".join(plot.description(fig).split())
+    assert not [name for name in vars(fig) if "after_limits" in name]
 
 
 def test_log_on_a_map_is_a_logarithmic_colour_scale(files):

@@ -469,9 +469,14 @@ def figure_options(function):
     legend: 'best' (inside the main panel), 'outside' (below the panels) or 'none'; None: each
         figure's own place, moved inside when below it would leave the panels under half the
         figure (``layout.arrange``).
+
+    A function that takes ``xlim`` or ``ylim`` itself is given it and sets it (a branch figure zooms
+    on its own unless told where; a response figure's caption says what the view asked for leaves
+    out); the others' are set here, on the figure they return.
     """
     takes_limits = "vmin" in inspect.signature(function).parameters
     takes_xlim = "xlim" in inspect.signature(function).parameters
+    takes_ylim = "ylim" in inspect.signature(function).parameters
 
     @functools.wraps(function)
     def wrapper(*args, title=True, size=None, style=None, vmin=None, vmax=None, xlim=None, ylim=None,
@@ -486,6 +491,8 @@ def figure_options(function):
                                     places=", ".join(layout.LEGEND_PLACES))
         if takes_xlim:
             kwargs["xlim"] = xlim
+        if takes_ylim:
+            kwargs["ylim"] = ylim
         if takes_limits:
             for key, value in (("vmin", vmin), ("vmax", vmax)):
                 # matplotlib's colour bar does arithmetic on its ends (tick steps, bin middles): near
@@ -510,9 +517,7 @@ def figure_options(function):
                 fig._vrsweep_style = style
                 fig._vrsweep_title = bool(title)
                 fig._vrsweep_ylim_given = ylim is not None  # the layout may not raise a panel's top then
-                layout.apply_limits(fig, None if takes_xlim else xlim, ylim)
-                if (xlim is not None or ylim is not None) and hasattr(fig, "_vrsweep_after_limits"):
-                    fig._vrsweep_after_limits()  # notes on what the view leaves out, of the view asked for
+                layout.apply_limits(fig, None if takes_xlim else xlim, None if takes_ylim else ylim)
                 if not title:
                     _drop_titles(fig)
                 layout.place_legend(fig, legend)

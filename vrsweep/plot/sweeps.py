@@ -12,6 +12,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
+from vrsweep.plot import layout
 from vrsweep.plot.analytic import (
     barrier_positions,
     _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
@@ -48,7 +49,7 @@ BARRIER_DASHES = (0, (7, 2, 1.5, 2, 1.5, 2))  # dash-dot-dot: unlike the dotted 
 
 
 @figure_options
-def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
+def response_figure(ds, amplitude=False, x_axis=None, log=None, xlim=None, ylim=None) -> Figure:
     """R (or |Q|) against one axis with the analytic branches and the resonance (Fig. 1, Fig. 2).
 
     Markers follow docs/trust.md, "Can R be trusted?": filled where R_err <= 10% of R (R can be
@@ -62,6 +63,10 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     measured values span LOG_SPAN or more. The theory counts for the limits only near the
     measured values, and is clipped beyond, said in the caption (``_response_axes``): at small
     Omega its A/c fell to 1e-6 and forced a log axis of 7 decades on R of 0.2 to 44.
+
+    xlim, ylim: the view asked for (--xlim, --ylim), set here rather than after the figure is made
+    (``figure_options`` hands them to a figure function that takes them), so that the caption says
+    what that view leaves out, not what the automatic one would have.
 
     In pieces: ``_curve_colours`` (a legend's colours, or a colour scale), ``_draw_measured``
     (each curve's points by trust and kind), ``_draw_analytic`` (the theory's branches, the
@@ -107,17 +112,14 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None) -> Figure:
     quantity = "amplitude |Q|" if amplitude else "gain R"
     theory_note = ("" if written else "; analytic: first-order theory of the effective system "
                    f"(ERRATA 1-3{'' if amplitude else ', divided by c: ERRATA 6'})")
-
-    def entitle(asked=False):
-        """The title, with what the view leaves out as it is now: after --xlim/--ylim (``asked``),
-        again (``figure_options``), since the note made for the automatic limits would be wrong."""
-        beyond = _beyond_view(ax, drawn, theory, analytic.barrier_levels, amplitude, None if asked else reach)
-        notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note, beyond) if note)
-        _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
-               _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
-
-    entitle()
-    fig._vrsweep_after_limits = lambda: entitle(asked=True)
+    asked = xlim is not None or ylim is not None
+    layout.apply_limits(fig, xlim, ylim)
+    # What the view leaves out, as it is now: with --xlim/--ylim the automatic limits' reason for
+    # leaving the theory out ('more than 10 times from the measured values') no longer holds.
+    beyond = _beyond_view(ax, drawn, theory, analytic.barrier_levels, amplitude, None if asked else reach)
+    notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note, beyond) if note)
+    _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
+           _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
 
 
