@@ -775,3 +775,76 @@ def test_every_variable_is_named_in_words_on_its_colour_bar_and_axis(files):
         assert words != name and len(words.split()) >= 2, (name, curve)
         if ds[name].attrs.get("units") == "rad":
             assert curve.endswith(" [rad]"), curve
+
+
+# --- maps over Omega at any scale -----------------------------------------------------------------
+
+
+def _tick_texts(fig, axis):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    ticks = [tick for tick in axis.get_major_ticks() if tick.label1.get_visible() and tick.label1.get_text()]
+    return ticks, [tick.label1.get_text() for tick in ticks]
+
+
+def test_a_maps_cell_ticks_write_round_values_out(files):
+    """g = 0, 10, 20, 30 was labelled 0, 1e+01, 2e+01, 3e+01 (one significant digit in '{:.1g}')."""
+    ds = load_results(files["plane"]).isel(g=slice(0, 4))
+    ds = ds.assign_coords(g=[0.0, 10.0, 20.0, 30.0])
+    fig = plot.map_figure(ds, "R")
+    _, texts = _tick_texts(fig, fig.axes[0].xaxis)
+    assert texts == ["0", "10", "20", "30"], texts
+
+
+@pytest.mark.parametrize("size", [None, (3.4, 2.6)])
+def test_a_map_over_a_geometric_grid_has_a_logarithmic_axis(files, size):
+    """Omega = 0.25, 0.5, ... 128 on a linear axis: the rows below 8 were slivers a few pixels high,
+    their cells' edges at linear midpoints, and their tick labels printed on top of each other. The
+    axis is logarithmic, every cell as tall as the others, its edges at geometric midpoints, each
+    tick on a grid value with its value, no two labels overlapping."""
+    Omega = 0.25 * 2.0 ** np.arange(10)
+    ds = load_results(files["plane"]).assign_coords(Omega=Omega)
+    for fig in (plot.map_figure(ds, "R", size=size), plot.status_figure(ds, size=size)):
+        ax = fig.axes[0]
+        assert ax.get_yscale() == "log" and ax.get_xscale() == "linear"  # g = 0 ... 55: linear
+        rows = np.unique(_mesh(ax).get_coordinates()[:, 0, 1])
+        np.testing.assert_allclose(np.diff(np.log(rows)), np.log(2.0))
+        np.testing.assert_allclose(np.sqrt(rows[:-1] * rows[1:]), Omega)  # each value in the middle of its cell
+        ticks, texts = _tick_texts(fig, ax.yaxis)
+        assert len(ticks) >= 3 and ticks[0].get_loc() == Omega[0]
+        for tick, text in zip(ticks, texts):
+            assert tick.get_loc() in Omega and float(text) == pytest.approx(tick.get_loc(), rel=0.02)
+        boxes = [tick.label1.get_window_extent() for tick in ticks]
+        assert not any(a.overlaps(b) for a, b in zip(boxes, boxes[1:])), texts
+    linear = plot.map_figure(load_results(files["plane"]), "R")  # Omega = 3 ... 6: stays linear
+    assert linear.axes[0].get_yscale() == "linear"
+
+
+def test_a_map_of_the_period_says_where_the_forcing_repeats_only_after_q_periods(files):
+    """Omega/omega = 20/3 repeats after q = 3 slow periods: a locked motion has period 3 there, a map
+    of the period showed its rows as period 3 with no word that it is the forcing's own period, and no
+    period tripling. The caption counts those cells (g = 0 has no fast force: it repeats every T)."""
+    from fractions import Fraction
+
+    ds = load_results(files["plane"])
+    omega = 0.5
+    q = np.array([Fraction(float(Omega) / omega).limit_denominator(1000).denominator for Omega in ds["Omega"].values])
+    assert set(q) == {1, 3}
+    expected = int(np.sum(ds["g"].values > 0)) * int(np.sum(q > 1))
+    for name in ("period", "impacts_per_cycle"):
+        said = " ".join(plot.description(plot.map_figure(ds, name)).split())
+        assert f"in {expected} of {ds['g'].size * ds['Omega'].size} cells the forcing repeats only after q = 3 " \
+               "slow periods" in said, said
+        assert "no period doubling" in said
+    assert "repeats only" not in plot.description(plot.map_figure(ds, "R"))
+
+
+def test_a_map_of_a_phase_has_a_cyclic_scale_over_the_whole_circle(files):
+    """impact_phase lies in [0, 2 pi): on viridis, capped at its 99th percentile, 0.1 and 6.2 rad
+    (neighbours on the circle) were its darkest and lightest colours."""
+    ds = load_results(files["plane"])
+    mesh = _mesh(plot.map_figure(ds, "impact_phase").axes[0])
+    assert (mesh.norm.vmin, mesh.norm.vmax) == (0.0, 2.0 * np.pi)
+    np.testing.assert_allclose(mesh.cmap(0.0), mesh.cmap(1.0), atol=0.02)  # one colour at 0 and 2 pi
+    assert abs(_lightness(mesh.cmap(0.0)) - _lightness(mesh.cmap(0.5))) >= 40.0  # half a turn away: far apart

@@ -298,6 +298,52 @@ def _limits(values):
 
 
 # --------------------------------------------------------------------------------------------
+# A map's cells: where each grid value's cell begins and ends, on a linear or logarithmic axis
+# --------------------------------------------------------------------------------------------
+
+
+def geometric(values) -> bool:
+    """Whether a map axis of ``values`` is drawn logarithmic: positive, at least three values over at
+    least a decade, more evenly spaced in log than linearly (Omega = 0.25, 0.5, ... 32, or 0.1, 0.2,
+    0.5, 1, 2, 5). On a linear axis such a grid's small values were squeezed into slivers at the
+    bottom, their cells a pixel high and their tick labels printed on top of each other."""
+    values = np.sort(np.asarray(values, dtype=np.float64))
+    if values.size < 3 or not np.all(np.isfinite(values)) or values[0] <= 0.0 or values[-1] < 10.0 * values[0]:
+        return False
+
+    def unevenness(steps):
+        return float(steps.max() / steps.min())
+
+    return unevenness(np.diff(np.log(values))) < unevenness(np.diff(values))
+
+
+def cell_edges(centres, log=False):
+    """Edges of the cells around ``centres`` (n -> n + 1): half-way between neighbours, the ends half
+    a step beyond; on a logarithmic axis half-way in log (the geometric mean), so that every cell of a
+    geometric grid is as tall as the others there."""
+    centres = np.asarray(centres, dtype=np.float64)
+    if log:
+        return np.exp(cell_edges(np.log(centres)))
+    if centres.size == 1:
+        return np.array([centres[0] - 0.5, centres[0] + 0.5])
+    middles = (centres[:-1] + centres[1:]) / 2.0
+    return np.concatenate([[2 * centres[0] - middles[0]], middles, [2 * centres[-1] - middles[-1]]])
+
+
+def map_mesh(ax, xs, ys, z, **style):
+    """The cells of a map, z[j, i] at (xs[i], ys[j]), each axis logarithmic where its grid is
+    ``geometric``, each cell from ``cell_edges``: pcolormesh's own 'nearest' cells are linear
+    midpoints, which on a log axis gave a geometric grid's cells of unequal heights."""
+    logs = []
+    for values, set_scale in ((xs, ax.set_xscale), (ys, ax.set_yscale)):
+        log = geometric(values)
+        if log:
+            set_scale("log")
+        logs.append(log)
+    return ax.pcolormesh(cell_edges(xs, logs[0]), cell_edges(ys, logs[1]), z, shading="flat", **style)
+
+
+# --------------------------------------------------------------------------------------------
 # A map's ticks: at its cells when there are few
 # --------------------------------------------------------------------------------------------
 
@@ -330,19 +376,30 @@ def _cell_texts(values):
     within 2 % of a cell of its value and tell every two apart."""
     step = float(np.min(np.diff(np.sort(values)))) if len(values) > 1 else max(abs(float(values[0])), 1.0)
     for digits in range(1, 7):
-        texts = [f"{value:.{digits}g}" for value in values]
+        texts = [_significant(value, digits) for value in values]
         if len(set(texts)) == len(texts) and all(abs(float(text) - value) <= 0.02 * step
                                                  for text, value in zip(texts, values)):
             break
     return [text.replace("-", "\u2212") for text in texts]  # matplotlib's minus sign
 
 
+def _significant(value, digits):
+    """``value`` to ``digits`` significant digits, written out where it is of a size a reader takes in
+    at a glance (10, 0.25, 60000: '{:.1g}' wrote 10 as '1e+01'), in exponent form beyond."""
+    value = float(value)
+    if value == 0.0 or not 1e-4 <= abs(value) < 1e6:
+        return f"{value:.{digits}g}"
+    return np.format_float_positional(value, precision=digits, unique=False, fractional=False, trim="-")
+
+
 from matplotlib.ticker import Locator  # noqa: E402
 
 
 class _CellLocator(Locator):
-    """Ticks at every k-th cell centre, k the smallest that leaves room between the labels (from
-    the axis' length when drawn and the longest label; a vertical axis needs a line a label)."""
+    """Ticks at cell centres, as many as leave room between their labels (from the axis' length when
+    drawn and the longest label; a vertical axis needs a line a label): every k-th cell where they
+    are evenly spaced on the axis, else the first and then each next one far enough from the last
+    (every k-th of an uneven grid printed the labels of its close cells on top of each other)."""
 
     def __init__(self, values, texts):
         self.values = np.asarray(values, dtype=np.float64)
@@ -354,12 +411,19 @@ class _CellLocator(Locator):
 
         horizontal = self.axis.axis_name == "x"
         size = FontProperties(size=matplotlib.rcParams[f"{self.axis.axis_name}tick.labelsize"]).get_size_in_points()
-        box = self.axis.axes.get_window_extent()
-        length = (box.width if horizontal else box.height) * 72.0 / self.axis.axes.figure.dpi
         room = (0.6 * self.longest + 1.5) * size if horizontal else 1.8 * size
-        fits = max(1, int(length // room))
-        step = int(np.ceil(len(self.values) / fits))
-        return self.values[::step]
+        # Where each cell's centre is drawn, in points along the axis (linear or logarithmic).
+        axes = self.axis.axes
+        along = axes.transData.transform(np.column_stack([self.values, self.values]))[:, 0 if horizontal else 1]
+        along = along * 72.0 / axes.figure.dpi
+        steps = np.abs(np.diff(along))
+        if steps.size and steps.max() <= 1.01 * steps.min():
+            return self.values[::max(1, int(np.ceil(room / steps.min())))]
+        chosen = [0]
+        for index in range(1, len(self.values)):
+            if abs(along[index] - along[chosen[-1]]) >= room:
+                chosen.append(index)
+        return self.values[chosen]
 
     def tick_values(self, vmin, vmax):
         return self.values

@@ -28,7 +28,7 @@ from vrsweep.plot.labels import (
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
-    _progress_note, _span_grid, _Sweep, _sweep_default, cell_ticks,
+    _progress_note, _span_grid, _Sweep, _sweep_default, cell_edges, cell_ticks, map_mesh,
 )
 from vrsweep.results import Motion, Status
 
@@ -594,6 +594,9 @@ def discrete_scale(name, values, attrs=None):
     return cmap, norm, list((edges[:-1] + edges[1:]) / 2.0), labels
 
 
+CYCLIC_VARIABLES = {"impact_phase": (0.0, 2.0 * np.pi)}  # a circle's values: (start, end) of one turn
+
+
 def continuous_scale(name, values, log=False, vmin=None, vmax=None):
     """The colour scale of a float variable: (norm, cmap, extend, (short_note, long_note)).
 
@@ -611,7 +614,17 @@ def continuous_scale(name, values, log=False, vmin=None, vmax=None):
     finite = values[np.isfinite(values)]
     cmap = "viridis"
     note_top = ""
-    if name == "lyapunov" and not log:
+    if name in CYCLIC_VARIABLES and not log:
+        # A phase: 0.1 and 6.2 rad are neighbours, which viridis drew darkest and lightest, and a cap
+        # at the 99th percentile cut the circle. A cyclic scale over the whole circle, the same
+        # colour at both ends.
+        cmap = "twilight"
+        low, high = CYCLIC_VARIABLES[name]
+        low, high = (low if vmin is None else vmin), (high if vmax is None else vmax)
+        if high <= low:
+            raise UsageError.naming("{vmin} {low} and {vmax} {high}: the bottom of the colour scale must be below "
+                                    "its top", low=_number(low), high=_number(high))
+    elif name == "lyapunov" and not log:
         cmap = "RdBu_r"  # the sign is the message: chaos above zero (red), periodic below (blue)
         if vmin is None and vmax is None:
             span = float(np.abs(finite).max()) if finite.size else 1.0
@@ -664,21 +677,13 @@ def continuous_scale(name, values, log=False, vmin=None, vmax=None):
     return norm, cmap, extend, ("\n".join(short_notes), "; ".join(long_notes))
 
 
-def _cell_edges(centres):
-    """Edges of the cells pcolormesh(shading='nearest') draws around ``centres`` (n -> n + 1)."""
-    centres = np.asarray(centres, dtype=np.float64)
-    if centres.size == 1:
-        return np.array([centres[0] - 0.5, centres[0] + 0.5])
-    middles = (centres[:-1] + centres[1:]) / 2.0
-    return np.concatenate([[2 * centres[0] - middles[0]], middles, [2 * centres[-1] - middles[-1]]])
-
-
 def _hatch_cells(ax, xs, ys, mask, hatch="////"):
     """Hatch the cells of ``mask`` (indexed [x, y]) of a nearest-shaded map; returns the collection."""
     from matplotlib.collections import PatchCollection
     from matplotlib.patches import Rectangle
 
-    x_edges, y_edges = _cell_edges(xs), _cell_edges(ys)
+    x_edges = cell_edges(xs, ax.get_xscale() == "log")
+    y_edges = cell_edges(ys, ax.get_yscale() == "log")
     cells = [Rectangle((x_edges[i], y_edges[j]), x_edges[i + 1] - x_edges[i], y_edges[j + 1] - y_edges[j])
              for i, j in zip(*np.nonzero(mask))]
     collection = PatchCollection(cells, facecolor="none", edgecolor="0.15", linewidth=0.0, hatch=hatch,
@@ -741,8 +746,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             # the bottom colour. Below the scale's bottom, they are drawn there (under).
             with np.errstate(invalid="ignore"):
                 z = np.where(np.isfinite(z) & (z <= 0.0), norm.vmin / 2.0, z)
-        mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap,
-                             norm=norm)
+        mesh = map_mesh(ax, view.axes[x_axis], view.axes[y_axis], z.T, cmap=cmap, norm=norm)
         if name == "lyapunov" and "lyapunov_err" in view.variables:
             error = _as_x_y(view, "lyapunov_err", x_axis, y_axis, where)
             with np.errstate(invalid="ignore"):
@@ -808,13 +812,58 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             text.set_color("white")
     notes = "; ".join(note for note in (_progress_note(view), _failure_note(view, "on its cell")
                                         if name in ("R", "Q_amplitude") and "status" in view.variables else "",
-                                        f"colour scale {cap_caption}" if cap_caption else "")
+                                        f"colour scale {cap_caption}" if cap_caption else "",
+                                        _map_repeats_note(view, name, x_axis, y_axis))
                       if note)
     grey = "not computed or failed" if ds[name].dtype.kind == "f" else "not computed"
     what = "period" if name == "period" else label.splitlines()[0]  # its unit is the colour bar's, not the title's
     _title(fig, f"{what} over {_symbol(x_axis)} and {_symbol(y_axis)} (light grey: no value: {grey})",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
+
+
+# Counted in periods T of the stroboscopic samples: where the forcing repeats only after q > 1 of
+# them, a motion locked to it has period q (or a multiple), whatever it does within a cycle.
+STROBE_PERIOD_VARIABLES = ("period", "impacts_per_cycle")
+
+
+def _map_repeats_note(view, name, x_axis, y_axis):
+    """The caption's words for a map of a period counted in periods T (``STROBE_PERIOD_VARIABLES``)
+    where the forcing repeats only after q > 1 of them: a row of Omega/omega = 1/2 showed period 2
+    throughout, read as a period doubling, with no word that it is the forcing's own period there
+    (the bifurcation diagram says so of its samples: ``_unlocked_note``)."""
+    if name not in STROBE_PERIOD_VARIABLES or view.config is None:
+        return ""
+    from vrsweep.analysis.diagnostics import sampling_of_forcing
+
+    xs, ys = (np.asarray(view.axes[axis], dtype=np.float64) for axis in (x_axis, y_axis))
+
+    def at(axis, value):
+        return {axis: float(value)} if axis in view.config.parameters else {}
+
+    sets = [view.parameters(**at(x_axis, x), **at(y_axis, y)) for x in xs for y in ys]
+    q = sampling_of_forcing(view.config.model, sets, LONGEST_REPEAT)[0].reshape(len(xs), len(ys))
+    unlocked = q != 1
+    if not unlocked.any():
+        return ""
+    finite = sorted({int(n) for n in q[unlocked] if n > 1})
+    what = [f"q = {finite[0]}{'' if len(finite) == 1 else f' to {finite[-1]}'}"] if finite else []
+    if np.any(q == 0):
+        what.append(f"not within {LONGEST_REPEAT}")
+    # Where: the rows (or columns) that hold them, when they are few, as on a map over Omega (whose
+    # column g = 0, no fast force, repeats every T).
+    where = ""
+    for axis, values, lines in ((y_axis, ys, q.T), (x_axis, xs, q)):
+        held = [(value, sorted({int(n) for n in line[line != 1]})) for value, line in zip(values, lines)
+                if np.any(line != 1)]
+        if len(held) <= 4:
+            where = " (" + ", ".join(f"{_symbol(axis)} = {_number(float(value))}: q = "
+                                     + " or ".join(str(n) if n else "none" for n in found)
+                                     for value, found in held) + ")"
+            break
+    return (f"in {int(unlocked.sum())} of {q.size} cells the forcing repeats only after {' or '.join(what)} "
+            f"{period_words(symbol=False)}s{where}: there a motion locked to it has period q, which is no "
+            "period doubling")
 
 
 def _as_x_y(view, name, x_axis, y_axis, where):
@@ -930,7 +979,7 @@ def _flag_figure(view, name, codes, names, colours, x_axis, y_label, title):
         axes = fig.subplots(1, len(panels), squeeze=False)[0]
         for ax, (where, panel_title) in zip(axes, panels):
             z = _as_x_y(view, name, x_axis, y_axis, where)
-            mesh = ax.pcolormesh(view.axes[x_axis], view.axes[y_axis], z.T, shading="nearest", cmap=cmap, norm=norm)
+            mesh = map_mesh(ax, view.axes[x_axis], view.axes[y_axis], z.T, cmap=cmap, norm=norm)
             bar = fig.colorbar(mesh, ax=ax, ticks=codes)
             bar.ax.set_yticklabels(names, fontsize="x-small")
             ax.set_xlabel(view.axis_label(x_axis))
