@@ -688,6 +688,10 @@ def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
     assert any(label.startswith("gain $R = |Q|$ / |F|") for label in labels), labels
     assert any(label.startswith("mean impacts per period $T$") for label in labels), labels
     assert not any("c$" in label or "slow" in label for label in labels), labels
+    # Qs and Qc at its response frequency by its symbol; no paper's omega or eq3.1 (the words of --var).
+    with vrsweep.open_results(output) as ds:
+        sine = plot.map_figure(ds, "Qs").axes[-1].get_ylabel().replace("\n", " ")
+    assert sine == "Qs: sine component of x at $\\omega$", sine
 
 
 def test_a_written_models_response_curve_and_basins_say_its_gain_is_over_the_scales_magnitude(tmp_path):

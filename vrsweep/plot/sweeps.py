@@ -517,8 +517,8 @@ VARIABLE_WORDS = {
     "stuck_fraction": "fraction of the time stuck on a barrier",
     "A_theory_max_stable": "largest stable analytic amplitude $A$",
 }
-# A written model's: its response frequency is no omega (None: its long name's words, which name it).
-WRITTEN_VARIABLE_WORDS = {"Qs": None, "Qc": None, "impact_phase": "mean impact phase at the response frequency"}
+# A written model's: its response frequency is no omega (Qs and Qc name it: ``variable_label``).
+WRITTEN_VARIABLE_WORDS = {"impact_phase": "mean impact phase at the response frequency"}
 
 
 def variable_label(ds, name):
@@ -530,8 +530,12 @@ def variable_label(ds, name):
     attrs = ds[name].attrs
     words = _map_words(name)
     if words is None:
-        table = dict(VARIABLE_WORDS, **WRITTEN_VARIABLE_WORDS) if written_model() is not None else VARIABLE_WORDS
+        model = written_model()
+        table = dict(VARIABLE_WORDS, **WRITTEN_VARIABLE_WORDS) if model is not None else VARIABLE_WORDS
         short = table.get(name)
+        if model is not None and name in ("Qs", "Qc"):  # at its response frequency, by its symbol
+            short = (f"{'sine' if name == 'Qs' else 'cosine'} component of x at "
+                     f"{written_expression(model.response_frequency)}")
         if short is None:
             short = re.split(r" \(|: |; |, ", str(attrs.get("long_name", "")).strip(), maxsplit=1)[0].strip()
         words = f"{name}: {short}" if short else name
