@@ -31,6 +31,34 @@ def test_list_names_every_example_with_its_first_sentence(invoke):
     assert fig3.split()[1] == "simulate"  # a trajectory example says which command runs it
 
 
+def test_list_with_an_example_describes_that_one_in_full(invoke, tmp_path, monkeypatch):
+    # --example was ignored with --list: the whole list came back, as if it had not been given
+    monkeypatch.chdir(tmp_path)
+    result = invoke("init", "--list", "--example", "fig1")
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[0] == "fig1 (run):" and lines[-1] == "Write it with: vrsweep init --example fig1 [PATH]"
+    comment = [line.lstrip("# ").strip() for line in (CONFIGS / "fig1.yaml").read_text().splitlines()
+               if line.startswith("#")]
+    shown = " ".join(result.stdout.split())
+    assert comment[1] and comment[1] in shown  # beyond the first sentence
+    assert "vrsweep run fig1.yaml" in shown and "configs/" not in shown  # the file init writes
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+@pytest.mark.parametrize("extra, named", [(["mine.yaml"], "PATH mine.yaml"), (["--overwrite"], "--overwrite")])
+def test_list_refuses_what_it_would_ignore(extra, named, invoke, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = invoke("init", "--list", *extra)
+    assert result.exit_code == 2 and f"--list writes nothing, so {named} would be ignored" in result.output
+    assert "Traceback" not in result.output and not list(tmp_path.iterdir())
+
+
+def test_list_with_an_unknown_example_is_refused(invoke):
+    result = invoke("init", "--list", "--example", "nope")
+    assert result.exit_code == 2 and "--example nope: no such example" in result.output
+
+
 def test_description_is_the_first_sentence_cut_at_a_word():
     text = "# Paper Fig. 7: one thing. Then another.\n#\n# More.\nmodel: original\n"
     assert description(text) == "Paper Fig. 7: one thing"

@@ -11,6 +11,7 @@ from importlib import resources
 from pathlib import Path
 
 import click
+from click.core import ParameterSource
 
 from vrsweep.commands.options import PathText
 from vrsweep.errors import one_line
@@ -22,7 +23,8 @@ DEFAULT_EXAMPLE = "quickstart"
 @click.argument("path", required=False, type=PathText(), metavar="[PATH]")
 @click.option("--example", "-e", "name", default=DEFAULT_EXAMPLE, show_default=True, metavar="NAME",
               help="The shipped example to start from (--list names them).")
-@click.option("--list", "list_only", is_flag=True, help="List the shipped examples and exit.")
+@click.option("--list", "list_only", is_flag=True,
+              help="List the shipped examples and exit; with --example, describe that one in full.")
 @click.option("--overwrite", is_flag=True, help="Replace PATH if it exists.")
 def command(path, name, list_only, overwrite):
     """Write a commented starter config to PATH (default: NAME.yaml here).
@@ -35,13 +37,22 @@ def command(path, name, list_only, overwrite):
     from vrsweep.errors import UsageError
 
     examples = shipped_examples()
-    if list_only:
-        _print_list(examples)
-        return
     name = name.removesuffix(".yaml")
     if name not in examples:
         raise UsageError(f"--example {name}: no such example; shipped: {', '.join(examples)} "
                          "(vrsweep init --list describes them)")
+    if list_only:
+        # --list writes nothing: a PATH or --overwrite given with it would be dropped silently
+        # (the user meant to write a file), so they are refused; --example NAME asks about one.
+        if path is not None or overwrite:
+            given = "PATH " + one_line(path) if path is not None else "--overwrite"
+            raise UsageError(f"--list writes nothing, so {given} would be ignored: "
+                             "leave out --list to write a config")
+        if click.get_current_context().get_parameter_source("name") is ParameterSource.DEFAULT:
+            _print_list(examples)
+        else:
+            _print_one(name, examples[name])
+        return
     target = Path(path) if path else Path(f"{name}.yaml")
     from vrsweep.config.wording import folder_ending
     from vrsweep.store.fileio import output_target, write_bytes
@@ -140,6 +151,23 @@ def _print_list(examples):
         text = resource.read_text(encoding="utf-8")
         start = f"  {example:<{width}}  {_command_of(text, example):<8}  "
         click.echo(start + description(text, max(40, columns - 1 - len(start))))
+
+
+def _print_one(name, resource):
+    """One example's leading comment in full (--list --example NAME), and how to write it."""
+    text = resource.read_text(encoding="utf-8")
+    comment = []
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        # the commands name the file init writes (NAME.yaml here), not the clone's configs/
+        comment.append(line[1:].removeprefix(" ").replace(f"configs/{name}.yaml", f"{name}.yaml"))
+    while comment and not comment[-1].strip():
+        comment.pop()
+    click.echo(f"{name} ({_command_of(text, name)}):")
+    for line in comment:
+        click.echo(f"  {line}".rstrip())
+    click.echo(f"Write it with: vrsweep init --example {name} [PATH]")
 
 
 def _make_output_folder(target):
