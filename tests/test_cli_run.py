@@ -301,6 +301,48 @@ def test_dry_run_times_a_sample_and_writes_nothing(tmp_path, invoke, write_confi
     assert not (tmp_path / "out.h5").exists() and not list(tmp_path.glob("*.h5"))
 
 
+def test_dry_run_with_resume_says_how_much_the_file_leaves(tmp_path, monkeypatch, invoke, write_config):
+    """--dry-run --resume: --resume was ignored, and the estimate was the whole grid's."""
+    import h5py
+
+    monkeypatch.chdir(tmp_path)  # output: out.h5 is relative to the current directory
+    from vrsweep.config import load_config
+    from vrsweep.execution.job import run_job
+
+    config = write_config(tmp_path, """
+        model: effective
+        sweep:
+          g: {start: 5.0, stop: 30.0, num: 40}
+        integration: {transient_periods: 4, measure_periods: 16}
+        output: out.h5
+        """)
+    out = tmp_path / "out.h5"
+    result = invoke("run", config, "--dry-run", "--resume", "--threads", 1)
+    assert result.exit_code == 0, result.output
+    assert "resume:      out.h5 does not exist: --resume would compute all 40 points" in result.output
+    assert not out.exists()
+
+    def stop_after_a_chunk(total, done):
+        def advance(n):
+            raise KeyboardInterrupt  # the first chunk is written before progress advances
+        return advance
+
+    with pytest.raises(KeyboardInterrupt):
+        run_job(load_config(config), out, threads=1, progress_factory=stop_after_a_chunk)
+    with h5py.File(out, "r") as f:
+        n_done = int(f["done"][()].sum())
+    assert 0 < n_done < 40
+    before = out.read_bytes()
+    result = invoke("run", config, "--dry-run", "--resume", "--threads", 1)
+    assert result.exit_code == 0, result.output
+    assert f"resume:      {40 - n_done} of 40 points are not done in out.h5: about" in result.output
+    assert out.read_bytes() == before  # read, not written
+
+    other = invoke("run", config, "--dry-run", "--resume", "--set", "g=7")
+    assert other.exit_code == 2 and "cannot resume: " in other.output and "different config" in other.output
+    assert "estimate:" not in other.output and out.read_bytes() == before
+
+
 def test_a_run_says_how_long_it_took_beside_the_estimate(tmp_path, invoke, write_config):
     config = write_config(tmp_path, """
         model: effective

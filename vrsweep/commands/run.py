@@ -95,7 +95,8 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
     guess = check_size(config, (threads or available_threads()) * shard_pair[1] * workers, allow_large or dry_run,
                        allow="--allow-large")
     if dry_run:
-        _dry_run(config, threads or available_threads(), shard_pair, guess, dask_address)
+        _dry_run(config, threads or available_threads(), shard_pair, guess, dask_address,
+                 (output,) if resume else None)
         return
     bars = []
 
@@ -165,19 +166,30 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
                    f"{item.status.name.lower()}: {item.remedy}{example}, and run again with --overwrite", err=True)
 
 
-def _dry_run(config, threads, shard, guess, dask_address):
-    """--dry-run: time a sample of the grid's lines here and say how long the run would take."""
+def _dry_run(config, threads, shard, guess, dask_address, resume):
+    """--dry-run: time a sample of the grid's lines here and say how long the run would take;
+    with --resume (``resume``: (output,)), how much of it the file leaves, read without writing."""
     from vrsweep.errors import UsageError
     from vrsweep.execution.estimate import format_duration
+    from vrsweep.execution.job import points_left
     from vrsweep.execution.timing import describe, measure, rough_and_measured_agree
 
     if dask_address:
         raise UsageError("--dry-run times this machine, not a Dask cluster's workers: leave out --dask")
+    # The file first: a resume it would refuse needs no timing.
+    left = points_left(config, resume[0], shard) if resume is not None else None
     _say_if_compiling(config.integration, config.model)
     timing = measure(config, threads, shard)
     click.echo(f"estimate:    {describe(timing, threads, config.integration.device)}")
     agreement = "" if rough_and_measured_agree(guess.seconds, timing) else " (more than 2x off: the measurement counts)"
     click.echo(f"cost model:  {format_duration(guess.seconds)}{agreement}; nothing was written")
+    if left is not None:
+        path, n_left, n_owned = left
+        if n_left is None:
+            click.echo(f"resume:      {one_line(path)} does not exist: --resume would compute all {n_owned} points")
+        else:
+            click.echo(f"resume:      {n_left} of {n_owned} points are not done in {one_line(path)}: about "
+                       f"{format_duration(timing.seconds * n_left / max(1, n_owned))} at the pace above")
 
 
 def _line_length(config):

@@ -392,6 +392,24 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
     return JobReport(path, n_owned, sum(counts.values()), counts, config.integration, motions)
 
 
+def points_left(config, output=None, shard=(0, 1)):
+    """(path, points not done, points of the shard) for ``run --resume``, read without writing:
+    None for the points not done where ``path`` does not exist (resume starts afresh).
+    ResultFileError where --resume would refuse the file (another config, shard or version)."""
+    from vrsweep.store.writer import ResultWriter
+
+    grid = Grid.from_config(config)
+    path = shard_output_path(config.output_path(output), shard)
+    owned = owned_mask(grid, shard).reshape(-1) if shard[1] > 1 else np.ones(grid.n_points, dtype=bool)
+    n_owned = int(owned.sum())
+    if not path.exists():
+        return path, None, n_owned
+    _refuse_results_of_older_steps(path)
+    done = ResultWriter.done_for_resume(path, _expected_config_text(path, config),
+                                        expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None)
+    return path, n_owned - int(done.reshape(-1)[owned].sum()), n_owned
+
+
 def _refuse_results_of_older_steps(path):
     """ResultFileError if the file at ``path`` was written by a version whose points differ from
     this version's (or by an unknown one); files this function cannot read are left to the writer."""

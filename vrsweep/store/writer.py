@@ -220,25 +220,31 @@ class ResultWriter:
         path = output_target(path, overwrite=True, inputs=inputs, inputs_are="the config being run")
         f = open_checked(path, "r+")
         try:
-            stored = decode(f.attrs.get("config", ""))
-            if stored != expected_config_text:
-                raise ResultFileError.naming(
-                    "cannot resume: {path} was written from a different config ({difference}); "
-                    "pass {overwrite} to replace it", ARGUMENT_WORDS, path=path,
-                    difference=first_difference(stored, expected_config_text))
-            shard = decode(f.attrs.get("shard")) if "shard" in f.attrs else None
-            if expected_shard is not None or shard is not None:
-                if shard != expected_shard:
-                    raise ResultFileError.naming(
-                        "cannot resume: {path} holds shard {found}, not {expected}; pass {overwrite} to replace it",
-                        ARGUMENT_WORDS, path=path, found=shard or "none (a whole run)",
-                        expected=expected_shard or "a whole run")
+            _check_same_run(f, path, expected_config_text, expected_shard)
             return cls(path, f, action="resume")
         except (ResultFileError, UsageError):
             f.close()
             raise
         except (OSError, KeyError, ValueError) as error:
             f.close()
+            raise corrupt_error(path, error) from None
+
+    @staticmethod
+    def done_for_resume(path, expected_config_text: str, expected_shard=None) -> np.ndarray:
+        """The ``done`` flags ``open_for_resume`` would find in ``path`` (after the same checks and
+        the same recovery of chunks a kill cut), read without writing anything: for ``run
+        --dry-run --resume``, which says how much is left. ResultFileError as open_for_resume."""
+        path = os.fspath(path)
+        refuse_if_being_written(path, "resume")
+        try:
+            with open_checked(path, "r") as f:
+                _check_same_run(f, path, expected_config_text, expected_shard)
+                recovery, values = torn.find(f)
+                done = recovery.done if recovery is not None else values["done"]
+                return np.asarray(done) == 1
+        except (ResultFileError, UsageError):
+            raise
+        except (OSError, KeyError, ValueError) as error:
             raise corrupt_error(path, error) from None
 
     def _repair_torn_chunks(self, h5file):
@@ -395,3 +401,21 @@ class ResultWriter:
 
     def __del__(self):
         self.abandon()
+
+
+def _check_same_run(f, path, expected_config_text, expected_shard):
+    """ResultFileError unless the open file ``f`` was written from this config, for this shard:
+    the checks before a resume, shared by open_for_resume and done_for_resume."""
+    stored = decode(f.attrs.get("config", ""))
+    if stored != expected_config_text:
+        raise ResultFileError.naming(
+            "cannot resume: {path} was written from a different config ({difference}); "
+            "pass {overwrite} to replace it", ARGUMENT_WORDS, path=path,
+            difference=first_difference(stored, expected_config_text))
+    shard = decode(f.attrs.get("shard")) if "shard" in f.attrs else None
+    if expected_shard is not None or shard is not None:
+        if shard != expected_shard:
+            raise ResultFileError.naming(
+                "cannot resume: {path} holds shard {found}, not {expected}; pass {overwrite} to replace it",
+                ARGUMENT_WORDS, path=path, found=shard or "none (a whole run)",
+                expected=expected_shard or "a whole run")
