@@ -2,6 +2,7 @@
 
 import errno
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -358,9 +359,17 @@ def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, si
     if existing is not None:
         out.write_bytes(existing)
         options = ["--overwrite"]
-    # Each shard given 50 times: every block is read and compared 100 times, so the merge would take
-    # seconds; it is stopped as soon as its temporary file appears, long before the end.
-    child = vrsweep_process("merge", *(big_shards * 50), "-o", out, *options)
+    # Each shard in 25 copies: every block is read and compared 50 times, so the merge would take
+    # seconds; it is stopped as soon as its temporary file appears, long before the end. (Copies,
+    # not the same file given 25 times: that is one shard, read once.)
+    copies = tmp_path / "copies"
+    copies.mkdir()
+    shards = []
+    for n in range(25):
+        for path in big_shards:
+            shards.append(copies / f"{n}.{path.name}")
+            shutil.copyfile(path, shards[-1])
+    child = vrsweep_process("merge", *shards, "-o", out, *options)
     try:
         deadline = time.monotonic() + 120
         while not list(tmp_path.glob(".merged.h5.*.tmp")):
@@ -377,7 +386,7 @@ def test_a_signal_during_merge_leaves_no_partial_output(big_shards, tmp_path, si
     state = "left as it was" if existing else "not written"
     name = signal.Signals(signum).name
     assert stderr.strip().splitlines() == [f"Interrupted ({name}): merge stopped, {out} {state} (no partial file)"]
-    assert [p.name for p in tmp_path.iterdir()] == (["merged.h5"] if existing else [])
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["copies", "merged.h5"] if existing else ["copies"])
     assert existing is None or out.read_bytes() == existing
 
 

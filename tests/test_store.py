@@ -629,6 +629,22 @@ def test_merge_names_a_foreign_shard(tmp_path):
     assert str(shards[0]) in message.split("than", 1)[1]  # the reference is a good shard
 
 
+def test_one_file_given_twice_is_one_shard_read_once(tmp_path, assert_same_result):
+    # As `merge a.h5 ./a.h5 b.h5 c.h5`, a glob and a name, or a link: it was counted as two shards
+    # ("merged 4 shard(s)") and its points as "computed by more than one shard".
+    single = write_file(tmp_path / "single.h5", AXES_2D)
+    shards = write_shards(tmp_path)
+    link = tmp_path / "link.h5"
+    link.symlink_to(shards[0])
+    again = [shards[0], tmp_path / "." / shards[0].name, link, shards[1], shards[2], shards[1]]
+    report = merge_results(again, tmp_path / "merged.h5")
+    assert report.complete and report.n_done == 15 and report.n_duplicated == 0
+    assert [path for path, _, _ in report.shards] == [os.fspath(p) for p in shards]
+    assert report.warnings[:2] == [f"{shards[0]} given 3 times (read once)", f"{shards[1]} given 2 times (read once)"]
+    assert "merged 3 shard(s)" in str(report)
+    assert_same_result(single, tmp_path / "merged.h5")
+
+
 def test_merge_accepts_identical_duplicates_and_rejects_conflicts(tmp_path, assert_same_result):
     shards = write_shards(tmp_path)
     single = write_file(tmp_path / "single.h5", AXES_2D)  # every point, identical values

@@ -262,11 +262,31 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
         "output {path} already exists: pass {overwrite} to replace it", ARGUMENT_WORDS, path=given))
 
     stop = stop or (lambda: None)
-    return _merge([_Shard(path, stop) for path in paths], out_path, allow_missing)
+    paths, repeated = _each_file_once(paths)
+    return _merge([_Shard(path, stop) for path in paths], out_path, allow_missing,
+                  [f"{first} given {n} times (read once)" for first, n in repeated])
 
 
-def _merge(shards, out_path, allow_missing):
-    ref, warnings = _check_one_run(shards)
+def _each_file_once(paths):
+    """(the paths with each file once, in the order given; [(first path, times given)] of files given
+    more than once). One file given twice (a shell glob and its name, ``./a.h5`` and ``a.h5``, a link)
+    is one shard: read twice, it was counted as two ("merged 3 shard(s)") and its points as
+    "computed by more than one shard"."""
+    first, times = {}, {}
+    for path in paths:
+        try:
+            stat = os.stat(path)
+            key = (stat.st_dev, stat.st_ino)
+        except OSError:  # missing or unreadable: _Shard says so, naming this path
+            key = os.path.realpath(path)
+        first.setdefault(key, path)
+        times[key] = times.get(key, 0) + 1
+    return list(first.values()), [(first[key], n) for key, n in times.items() if n > 1]
+
+
+def _merge(shards, out_path, allow_missing, warnings=()):
+    ref, found = _check_one_run(shards)
+    warnings = [*warnings, *found]
     # Only now that the inputs are known to be one run's: a folder made for a merge that is then
     # refused would be left behind empty.
     prepare_output_directory(out_path)
@@ -392,10 +412,6 @@ def _check_one_run(shards):
             raise ResultFileError(f"{s.path} does not have the layout of {ref.path}: {problem}")
 
     warnings = []
-    given = {}
-    for s in shards:
-        given.setdefault(os.path.realpath(s.path), []).append(s.path)
-    warnings.extend(f"{paths[0]} given {len(paths)} times" for paths in given.values() if len(paths) > 1)
     labels = [s.shard for s in shards if s.shard]
     counts = {str(label).split("/")[-1] for label in labels}
     if len(counts) > 1:
