@@ -210,3 +210,22 @@ def test_a_solver_error_not_estimated_says_the_sample_held_no_converged_point(fi
     text = format_summary(summary)
     assert ("the sample of points rerun at a tighter tolerance held no periodic or quasi-periodic point"
             in text), text
+
+
+@pytest.mark.parametrize("description, shown", [
+    ("x" * 1_000_000, ["x" * 1000 + "... (999000 more characters; --json prints them)"]),
+    ("line\n" * 100_000, ["line"] * 40 + ["... (99961 more lines; --json prints them all)"]),
+])
+def test_a_figures_description_of_any_size_is_printed_in_a_screenful(tmp_path, invoke, info_json, description, shown):
+    # A figure's metadata is anyone's to write: `info big.png` printed a 1 MB description whole.
+    from PIL import Image, PngImagePlugin
+
+    metadata = PngImagePlugin.PngInfo()
+    metadata.add_text("Software", "vrsweep 0.7.4")
+    metadata.add_text("Description", description)
+    path = tmp_path / "big.png"
+    Image.new("RGB", (4, 4)).save(path, pnginfo=metadata)
+    result = invoke("info", str(path))
+    assert result.exit_code == 0, result.output
+    assert result.output.splitlines() == [f"{path}: figure"] + shown
+    assert info_json(path)["Description"] == description  # the data whole, for a script

@@ -73,7 +73,21 @@ def _describe_figure(path, as_json):
         click.echo(f"{one_line(path)}: a figure without a vrsweep description in its metadata")
     else:
         description = (found["Description"] or found["Title"]).split("\n")
-        click.echo("\n".join([f"{one_line(path)}: figure"] + [one_line(line) for line in description]))
+        shown = [one_line(_cut(line, DESCRIPTION_LINE_CHARACTERS)) for line in description[:DESCRIPTION_LINES]]
+        if len(description) > DESCRIPTION_LINES:
+            shown.append(f"... ({len(description) - DESCRIPTION_LINES} more lines; --json prints them all)")
+        click.echo("\n".join([f"{one_line(path)}: figure"] + shown))
+
+
+# A figure's metadata is any file's to write: a description of a megabyte (a PNG made elsewhere,
+# or on purpose) was printed whole. vrsweep's own captions are a few lines of at most a few
+# hundred characters, well inside these.
+DESCRIPTION_LINES = 40
+DESCRIPTION_LINE_CHARACTERS = 1000
+
+
+def _cut(line, limit):
+    return line if len(line) <= limit else f"{line[:limit]}... ({len(line) - limit} more characters; --json prints them)"
 
 
 # --------------------------------------------------------------------------------------------
