@@ -193,6 +193,47 @@ def test_a_yaml_literal_no_double_holds_is_refused_saying_why(text, field, words
     assert "got 0.0" not in problem
 
 
+@pytest.mark.parametrize("text, field, words", [
+    ("parameters: {Omega: 0x10}\n", "parameters.Omega", "0x10 written in hexadecimal"),
+    ("parameters: {Omega: 0o10}\n", "parameters.Omega", "0o10 written in octal"),
+    ("parameters: {Omega: 0b11}\n", "parameters.Omega", "0b11 written in binary"),
+    ("integration: {max_steps: 1_000_000}\n", "integration.max_steps", "write it without them (1000000)"),
+    ("parameters: {gamma: 1__0.5}\n", "parameters.gamma", "written with underscores"),
+    ("sweep:\n  g: [1, 0x2]\n", "sweep.g", "0x2 written in hexadecimal"),
+])
+def test_a_yaml_number_not_in_decimal_is_refused_as_an_option_is(text, field, words):
+    """YAML read 0x10 as 16 and 1_000 (or 1__0) as 1000 where --threads 0x10 or 1_000 was refused:
+    one value, two meanings by where it was typed."""
+    problem = _problem(text)
+    assert field in problem and words in problem, problem
+    for option_text in ("0x10", "1_000"):
+        with pytest.raises(NumberTextError):
+            read_int(option_text)
+
+
+@pytest.mark.parametrize("text, value", [("010", 10.0), ("+4", 4.0), (".5", 0.5), ("5.", 5.0), ("1.5e-3", 1.5e-3)])
+def test_decimal_yaml_numbers_are_read_as_written(text, value):
+    config = parse_config(f"model: effective\nparameters: {{c: {text}}}\n", "c.yaml")
+    assert config.parameters["c"] == value
+
+
+def test_a_quoted_yaml_number_is_a_string_as_before():
+    assert "must be a number" in _problem("parameters: {Omega: '0x10'}\n")
+
+
+@pytest.mark.parametrize("directive", ["%YAML 1.1", "%YAML 1.0"])
+def test_a_yaml_version_other_than_1_2_is_refused(directive):
+    # Under %YAML 1.1 ruamel read lyapunov: yes as true (refused without it), 010 as 8, 1:30 as 90.
+    text = f"# a comment\n{directive}\n---\nmodel: effective\nintegration: {{lyapunov: yes}}\n"
+    with pytest.raises(ConfigError) as caught:
+        parse_config(text, "c.yaml")
+    assert str(caught.value).splitlines() == [
+        f"c.yaml:2: {directive}: vrsweep reads configs as YAML 1.2 (YAML 1.1 reads yes and on as true, 010 as 8, "
+        "1:30 as 90): remove the directive, or write %YAML 1.2"]
+    with pytest.raises(ConfigError, match="lyapunov: must be true or false, got 'yes'"):
+        parse_config(text.replace(directive, "%YAML 1.2"), "c.yaml")
+
+
 def test_a_set_value_no_double_holds_is_refused_saying_why():
     with pytest.raises(ConfigError, match="1e-400 is below the smallest double"):
         parse_config("model: effective\n", "c.yaml", ["gamma=1e-400"])

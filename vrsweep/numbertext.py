@@ -42,6 +42,30 @@ def beyond_double(text: str, value: float) -> str | None:
     return None
 
 
+def yaml_number_problem(text: str) -> str | None:
+    """Why a YAML number, as written (``text``), is not one by this module's rule, or None.
+
+    YAML reads more than decimal notation as numbers: ``0x10`` (16), ``0o10`` (8), ``0b11`` (3),
+    ``1_000`` and ``1__0`` (ruamel's underscores, anywhere), and under ``%YAML 1.1`` ``010`` (8) and
+    ``1:30`` (90). A config is read by the rule an option is (``--threads 0x10`` is refused), so
+    that one value means one thing wherever it is typed. ``.inf`` and ``.nan`` are left to the field,
+    which refuses them as any non-finite number."""
+    stripped = text.strip()
+    if stripped.lower().lstrip("+-") in (".inf", ".nan"):
+        return None
+    if _DECIMAL.fullmatch(stripped):
+        return None
+    body = stripped.lstrip("+-").lower()
+    for prefix, base in (("0x", "hexadecimal"), ("0o", "octal"), ("0b", "binary")):
+        if body.startswith(prefix):
+            return f"written in {base}: write it in decimal"
+    if "_" in body:
+        return f"written with underscores: write it without them ({stripped.replace('_', '')})"
+    if ":" in body:
+        return "written in base 60 (YAML 1.1's hours:minutes): write it in decimal"
+    return "not a number in decimal notation"
+
+
 def _not_a_number(text: str, what: str) -> NumberTextError:
     foreign = sorted({char for char in text if char.isdigit() and not char.isascii()})
     if foreign:

@@ -16,6 +16,7 @@ wording and location of problems in ``report.py``.
 from __future__ import annotations
 
 import dataclasses
+import re
 from pathlib import Path
 
 from pydantic import ValidationError
@@ -35,7 +36,7 @@ from vrsweep.config.yaml import (
     MAX_EXPANDED_VALUES, CyclicAlias, TooManyValues, Unrepresentable, error_line, load_round_trip, parse_scalar,
     plain_data, yaml_text,
 )
-from vrsweep.errors import ConfigError
+from vrsweep.errors import ConfigError, one_line
 from vrsweep.numerics.model import INITIAL_STATE_AXES, INITIAL_STATE_KEYS, PARAMETER_NAMES
 from vrsweep.numerics.written import WrittenModel
 
@@ -208,6 +209,16 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
 
     def read_yaml(self):
         """The document as plain dicts/lists/scalars ({} if empty), or None after a syntax error."""
+        # %YAML 1.1 makes ruamel read by YAML 1.1's rules: yes, no, on and off as true and false,
+        # 010 as 8, 1:30 as 90; the config meant something else than it says to a reader of
+        # vrsweep's docs (YAML 1.2), and lyapunov: yes was refused without it, accepted with it.
+        directive = re.search(r"^%YAML[ \t]+(\S*)", self.text, flags=re.MULTILINE)
+        if directive and directive.group(1) != "1.2":
+            line = self.text.count("\n", 0, directive.start()) + 1
+            self.report_raw((0, line, ""), f"{self.source}:{line}: %YAML {one_line(directive.group(1))}: vrsweep "
+                            "reads configs as YAML 1.2 (YAML 1.1 reads yes and on as true, 010 as 8, 1:30 as "
+                            "90): remove the directive, or write %YAML 1.2")
+            return None
         try:
             try:
                 self.root = load_round_trip(self.text, allow_duplicate_keys=False)

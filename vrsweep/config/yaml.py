@@ -14,13 +14,14 @@ from ruamel.yaml.constructor import RoundTripConstructor
 from ruamel.yaml.reader import ReaderError
 
 from vrsweep.config.wording import show
-from vrsweep.numbertext import beyond_double
+from vrsweep.numbertext import beyond_double, yaml_number_problem
 
 
 class OutOfDouble:
-    """A YAML float that no double holds: ``1e400`` (ruamel reads inf) or ``1e-400`` (read as 0).
-    Kept as written, with why, so that a field says so: ``rtol: 1e-400`` was refused as
-    "got 0.0", and ``gamma: 1e-400`` ran as 0. No field accepts it (it is no number)."""
+    """A YAML number that is not the number written, by vrsweep's rule (numbertext): one no double
+    holds, ``1e400`` (ruamel reads inf) or ``1e-400`` (read as 0), or one not in decimal notation
+    (``0x10``, ``1_000``). Kept as written, with why, so that a field says so: ``rtol: 1e-400`` was
+    refused as "got 0.0", and ``gamma: 1e-400`` ran as 0. No field accepts it (it is no number)."""
 
     def __init__(self, text, problem):
         self.text, self.problem = text, problem
@@ -32,14 +33,30 @@ class OutOfDouble:
 class _Constructor(RoundTripConstructor):
     def construct_yaml_float(self, node):
         value = super().construct_yaml_float(node)
+        problem = _as_written(node)
+        if problem:
+            return OutOfDouble(node.value, problem)
         if isinstance(value, float):
-            problem = beyond_double(str(node.value).replace("_", ""), value)
+            problem = beyond_double(str(node.value), value)
             if problem:
                 return OutOfDouble(node.value, problem)
         return value
 
+    def construct_yaml_int(self, node):
+        value = super().construct_yaml_int(node)
+        problem = _as_written(node)
+        return OutOfDouble(node.value, problem) if problem else value
+
+
+def _as_written(node):
+    """Why a number YAML resolved, as written, is not a number by vrsweep's rule (numbertext): 0x10,
+    1_000, YAML 1.1's 010 or 1:30; None for decimal notation. A quoted or tagged value is not
+    resolved, so it is not checked here."""
+    return yaml_number_problem(str(node.value)) if node.style is None else None
+
 
 _Constructor.add_constructor("tag:yaml.org,2002:float", _Constructor.construct_yaml_float)
+_Constructor.add_constructor("tag:yaml.org,2002:int", _Constructor.construct_yaml_int)
 
 
 def _round_trip_yaml():
