@@ -46,3 +46,31 @@ def test_a_config_missing_a_parameter_is_one_config_error():
 def test_a_valid_config_runs_as_before():
     config = parse_config(TINY)
     assert vrsweep.theory(config) == vrsweep.theory(TINY)
+
+
+@pytest.mark.parametrize("value", [[5.0, 6.0], (5.0,), range(3), "array"])
+def test_several_values_for_a_parameter_say_how_to_sweep_it(value):
+    # vrsweep.sweep(config, g=[5, 6]) reads as a sweep over g; it was refused in --set's words,
+    # "VALUE must be a single number or word", which this caller never typed.
+    import numpy as np
+
+    from vrsweep.execution.api import resolve_config
+
+    value = np.array([5.0, 6.0]) if value == "array" else value
+    with pytest.raises(ConfigError) as caught:
+        resolve_config("model: effective\n", {"g": value})
+    assert str(caught.value).startswith("keyword argument g=")
+    assert "a keyword sets one value (g=5 fixes g); to sweep g over values, give its axis in the config" in str(caught.value)
+    assert "VALUE" not in str(caught.value)
+
+
+def test_one_value_and_a_continuation_range_are_still_keywords():
+    import numpy as np
+
+    from vrsweep.execution.api import resolve_config
+
+    assert resolve_config("model: effective\n", {"g": np.float64(5.0)}).parameters["g"] == 5.0
+    assert resolve_config("model: effective\n", {"g": np.array(5.0)}).parameters["g"] == 5.0
+    text = "model: effective\ncontinuation: {parameter: g, from: 20, to: [10, 30]}\n"
+    config = resolve_config(text, {"continuation.to": [15, 25]})
+    assert (config.continuation.low, config.continuation.high) == (15.0, 25.0)

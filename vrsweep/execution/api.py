@@ -134,6 +134,14 @@ def resolve_config(config, overrides=None, *, keywords=()):
     from vrsweep.errors import clip
 
     overrides = overrides or {}
+    for name, value in overrides.items():
+        # g=[5, 6] reads as "sweep g over 5 and 6" to a caller, and was refused as a --set VALUE
+        # ("VALUE must be a single number or word"), words this caller never typed.
+        if _several(value) and str(name).rpartition(".")[2] != "to":
+            raise ConfigError([f"keyword argument {clip(f'{name}={value!r}')}: a keyword sets one value ({name}=5 "
+                               f"fixes {name}); to sweep {name} over values, give its axis in the config, e.g. "
+                               f'{{"sweep": {{"{name}": [5.0, 6.0]}}}} (a dict config) or sweep: {{{name}: [5.0, 6.0]}}'],
+                              source="keyword arguments")
     settings = tuple(setting_text(name, value) for name, value in overrides.items())
     # A problem names the keyword argument as the caller wrote it: this user never typed --set.
     # ``keywords``: the calling function's own (progress, overwrite...): a misspelt one (progres=False)
@@ -162,6 +170,18 @@ def resolve_config(config, overrides=None, *, keywords=()):
         return config_from_dict(config, "<dict>", settings, override_words=words)
     raise UsageError.naming("{config} must be a path, YAML text, a dict or a vrsweep Config, got {kind}",
                             kind=type(config).__name__)
+
+
+def _several(value) -> bool:
+    """Whether a keyword's value holds several values (a list, a tuple, an array of any size but a
+    0-d one, a range): not one number or word."""
+    import numpy as np
+
+    if isinstance(value, (str, bytes)):
+        return False
+    if isinstance(value, np.ndarray):
+        return value.ndim > 0
+    return isinstance(value, (list, tuple, range, set, frozenset, dict))
 
 
 def _near_keyword(name, keywords) -> str:
