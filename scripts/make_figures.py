@@ -123,11 +123,17 @@ COMMANDS = {
         ["plot", "results/hysteresis_effective.h5", "-o", "docs/figures/hysteresis.png"],
     ],
     # Not in the paper: the same example followed by continuation, stable and unstable (issue 20).
+    # Two branches: the one from rest (the small orbit, its fold, the unstable orbits beyond the
+    # graze) and the stable impacting orbit the down-sweep follows, started from the down-sweep's
+    # state at g = 23. Without the second the down-sweep's triangles sat by the dashed unstable
+    # orbits (R within 2 % of theirs), as if the sweep had found unstable orbits.
     "continuation_hysteresis": [
         ["run", "configs/hysteresis_effective.yaml", "-o", "results/hysteresis_effective.h5", "--overwrite"],
         ["continue", "configs/continuation_hysteresis.yaml", "--overwrite"],
-        ["plot", "results/continuation_hysteresis.h5", "results/hysteresis_effective.h5",
-         "-o", "docs/figures/continuation_hysteresis.png"],
+        ["continue", "configs/continuation_hysteresis.yaml", "--start", "results/hysteresis_effective.h5",
+         "--at", "g=23", "--at", "direction=-1", "-o", "results/continuation_hysteresis_impacting.h5", "--overwrite"],
+        ["plot", "results/continuation_hysteresis.h5", "results/continuation_hysteresis_impacting.h5",
+         "results/hysteresis_effective.h5", "-o", "docs/figures/continuation_hysteresis.png"],
     ],
     # Not in the paper: the original model's periodic orbits along g over Fig. 1 (issue 20): three
     # starts of one config (the orbits of 2, 1 and 3 slow periods), over the Fig. 1 sweep.

@@ -362,6 +362,57 @@ def test_make_figures_follows_the_free_orbits_graze(invoke, tmp_path, monkeypatc
     assert kinds == ["grazing"] and abs(np.interp(37.98, np.sort(g), delta[np.argsort(g)]) - 2.5) < 0.01
 
 
+def test_make_figures_hysteresis_draws_the_stable_orbit_each_down_sweep_point_lies_on(invoke, tmp_path,
+                                                                                      monkeypatch):
+    """docs/figures/continuation_hysteresis.png drew the down-sweep's triangles by the dashed
+    unstable impacting orbits (R within 0.05-4 % of theirs) and not the stable impacting orbit
+    they are on: a reader concluded the sweep found unstable orbits. Every period-1 point of the
+    recipe's down-sweep must lie on a stable orbit of a branch the recipe draws: R within 1e-3 at
+    its g, interpolated between the branch's points (spaced 0.3 in g or less; the impacting orbit's
+    R is nearly straight in g, the small orbit's curves too much by its fold for a straight line)."""
+    import vrsweep
+
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "scripts" / "make_figures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    (tmp_path / "configs").symlink_to(ROOT / "configs")
+    (tmp_path / "results").mkdir()
+    (tmp_path / "docs" / "figures").mkdir(parents=True)
+    commands = module.COMMANDS["continuation_hysteresis"]
+    for words in commands:
+        words = module.resolve(words)
+        result = invoke(*words, *([] if words[0] == "plot" else ["--quiet"]))
+        assert result.exit_code == 0, f"vrsweep {shlex.join(words)}\n{result.output}"
+    plot = commands[-1]
+    drawn = [vrsweep.open_results(name) for name in plot[1:plot.index("-o")]]
+    branches = [data for data in drawn if data.attrs["vrsweep_file"] == "branch"]
+    sweeps = [data for data in drawn if data.attrs["vrsweep_file"] != "branch"]
+    assert len(sweeps) == 1 and branches
+    stretches = []  # (g, R) of each run of consecutive stable orbits, sorted by g
+    for data in branches:
+        stable, branch = data["stable"].values.astype(bool), data["branch"].values
+        g, R = data["parameter"].values, data["R"].values
+        edges = np.flatnonzero(np.diff(stable.astype(int)) | np.diff(branch)) + 1
+        for piece in np.split(np.arange(g.size), edges):
+            if stable[piece[0]] and piece.size > 1:
+                order = np.argsort(g[piece])
+                stretches.append((g[piece][order], R[piece][order]))
+    sweep = sweeps[0]
+    misplaced, checked = [], 0
+    down = sweep.sel(direction=-1)
+    for g, R, period in zip(down["g"].values, down["R"].values, down["period"].values):
+        if period != 1:
+            continue
+        checked += 1
+        near = [abs(np.interp(g, gs, Rs) - R) for gs, Rs in stretches if gs[0] <= g <= gs[-1]]
+        if not near or min(near) > 1e-3 * R:
+            misplaced.append((float(g), float(R), min(near, default=None)))
+    assert checked == 25, checked  # the down-sweep's points, g = 21 to 27: all period 1
+    assert not misplaced, f"sweep points on no stable orbit the figure draws: {misplaced}"
+
+
 def test_make_figures_names_each_followed_bifurcation_by_its_kind_and_place(tmp_path, monkeypatch):
     """The recipes gave --point as the bifurcation's index in its branch file (--point 2): a change
     in the branch (a graze located first, one bifurcation more) followed another point with no word
