@@ -61,7 +61,7 @@ def main():
     graze = next(b.orbit for b in bifurcations if b.kind == "grazing")
     near = min((o for o in branch.orbits if o.impacts_per_period == 0 and not o.stable),
                key=lambda o: abs(o.parameter - graze.parameter))
-    crossing, (_, beyond, _, _) = best_of(lambda: continuation.cross_grazing(problem, near, continuation.tangent_of(near)))
+    crossing, (_, beyond, _, _, _) = best_of(lambda: continuation.cross_grazing(problem, near, continuation.tangent_of(near)))
     assert beyond is not None
     print(f"method {method}, rtol 1e-10")
     print(f"sweep point (100 + 100 periods)          {1e3 * sweep_point:8.2f} ms   1.00x")

@@ -310,6 +310,47 @@ def test_past_a_graze_the_branch_goes_back_over_its_parameter_on_its_own_orbits(
 
 
 @pytest.mark.slow
+def test_the_way_through_a_crossed_graze_is_searched_for_bifurcations():
+    """cross_grazing carries Fig. 1's period-1 branch over its graze at g* = 39.844991 onto a
+    6-impact orbit at g = 39.845246 whose multiplier is +2.18: between them, along the branch, the
+    new impact's multiplier comes from -infinity (order -1/u at the graze) through -1 (a period
+    doubling) and +1 (a fold, where g turns back). A crossing skipped the bifurcation test (_detect)
+    and neither was recorded, up to 0.7.4. Now both pieces of the corner are tested: the fold is
+    located, and SciPy's map has it as a fixed point with six impacts and a multiplier at +1; the
+    doubling, next to the graze where the map is steep, is recorded as not located, bracketed by
+    the orbits before and after the crossing."""
+    problem = continuation.ContinuationProblem(dict(FIG1, g=39.8), "original", "g",
+                                               settings_vector(rtol=1e-10, atol=1e-12), "rk45",
+                                               dict(continuation.DEFAULTS, max_step=0.5))
+    start = continuation.find_start(problem, [-3.2054, 2.8920], 39.8, 20, 8)  # on the branch from g = 30
+    orbits, found, _ = continuation.follow(problem, start, +1, 39.7, 39.86, 40)
+    graze = next(orbit.parameter for kind, orbit in found if kind == "grazing")
+    assert abs(graze - 39.844991) < 1e-5, found
+    folds = [orbit for kind, orbit in found if kind == "fold" and abs(orbit.parameter - graze) < 1e-3]
+    assert len(folds) == 1, [(kind, orbit.parameter) for kind, orbit in found]
+    fold = folds[0]
+    assert fold.parameter > graze and fold.impacts_per_period == 6
+    doubling = [orbit for kind, orbit in found if kind.endswith("period_doubling") and abs(orbit.parameter - graze) < 2e-3]
+    assert len(doubling) == 1, [(kind, orbit.parameter) for kind, orbit in found]
+    # SciPy: the fold is a fixed point of one slow period with six impacts, its monodromy (central
+    # differences of SciPy's map) has a multiplier at +1 (det(M - I) = 0)
+    step = _resolving_step(fold)
+
+    def scipy_map(state):
+        run = reference_trajectory(_coefficients(fold.parameter), state[0], state[1], SLOW_PERIOD,
+                                   rtol=1e-12, atol=1e-14, max_step=step)
+        return np.array([run["x_final"], run["v_final"]]), _impacts(run)
+
+    end, impacts = scipy_map(fold.state)
+    assert impacts == 6
+    assert np.max(np.abs(end - fold.state)) < 1e-6 * max(1.0, np.max(np.abs(fold.state)))
+    h = 1e-6
+    monodromy = np.array([(scipy_map(fold.state + d)[0] - scipy_map(fold.state - d)[0]) / (2 * h)
+                          for d in (np.array([h, 0.0]), np.array([0.0, h]))]).T
+    mu = np.linalg.eigvals(monodromy)
+    assert np.min(np.abs(mu - 1.0)) < 1e-2, mu
+
+
 def test_a_long_step_towards_the_corner_locates_the_graze_rather_than_passing_it():
     """From g = 17.7 at the default max_step of 0.5 the steps grow as they near the corner at the
     end of the period-3 window; one of them (from g = 17.7866, its smooth maximum 0.008 below Delta)

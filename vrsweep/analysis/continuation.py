@@ -452,14 +452,19 @@ def locate_on_arc(point_at, value_of, step, f_low, f_high, narrow, iterations, i
     return best
 
 
-def _locate(problem, start, tangent, step, kind, value_start, value_end, periods, across_graze=False, low=0.0):
+def _locate(problem, start, tangent, step, kind, value_start, value_end, periods, across_graze=False, low=0.0,
+            impacts=None):
     """The orbit on the arc from ``start`` (low < s < step along tangent) where the test function of
     ``kind`` vanishes, by Illinois regula falsi (grazing: bisection on the impact count), to
     location_tolerance in the parameter and, for a fold, period doubling or Neimark-Sacker point,
     until its critical multiplier is within LOCATED_MULTIPLIER of its critical value (_located;
     at most EXTRA_LOCATION_ITERATIONS more; ``across_graze``: the arc crosses a graze, and a
     multiplier CRITICAL_DISTANCE or more from critical once the parameter is narrow is the
-    monodromy's jump, not looked at further). Returns the Orbit nearest the root, or None."""
+    monodromy's jump, not looked at further; ``impacts``: the arc lies on one side of a graze with
+    these impacts per period, and an orbit with others, or farther from its predictor than the
+    arc is long, is another branch's, a failure of the corrector here: from Fig. 1's graze at g =
+    39.844991 the arc's plane met orbits of 4 impacts at g = 38.5). Returns the Orbit nearest the
+    root, or None."""
     tolerance = problem.options["location_tolerance"] * max(1.0, abs(start.parameter))
     last = [None]  # the last orbit corrected on the arc
     extra = [0]
@@ -467,6 +472,9 @@ def _locate(problem, start, tangent, step, kind, value_start, value_end, periods
     def point_at(s):
         z_predicted = start.z + (low + s) * tangent
         orbit, failure = correct(problem, z_predicted, periods, tangent, z_predicted, short_difference=True)
+        if failure is None and impacts is not None and (
+                orbit.impacts_per_period != impacts or np.linalg.norm(orbit.z - z_predicted) > step - low):
+            return None, (ENDED_NEWTON, "the corrector went to another branch")
         last[0] = orbit
         return orbit, failure
 
@@ -519,26 +527,80 @@ def _located(kind, orbit):
     return critical_distance(kind, orbit) <= LOCATED_MULTIPLIER
 
 
-def _graze_limits(problem, previous, current, tangent, step, graze):
-    """The two smooth pieces of an arc that crosses the located grazing.Graze ``graze``: [(low,
-    high, the test functions' orbit at low, at high)], s from 0 to the graze and from the graze
-    to ``step``, each end's monodromy the limit of its own side at the graze (the free map's on
-    the side without the grazing impact, the probe's on the side with it: one multiplier of
-    order 1/u there). None where the graze does not lie inside the arc or its impacting side's
-    limit is not known (the test functions are then compared across the whole arc, as before)."""
-    s_graze = float(tangent @ (graze.z - previous.z))
-    if not 0.0 < s_graze < step:
-        return None
+def _graze_limits(problem, previous, current, graze):
+    """The limits at the located grazing.Graze ``graze`` of the two sides of a step across it from
+    ``previous`` to ``current``: (the grazing Orbit with the monodromy of previous's side, with
+    that of current's side), the free map's on the side without the grazing impact, the probe's
+    on the side with it (one multiplier of order 1/u there). None where the impacting side's
+    limit is not known."""
     free_limit = _graze_orbit(problem, graze)
     impacting = grazing.impacting_monodromy(problem, graze)
     if impacting is None:
         return None
     impacting_limit = Orbit(**dict(vars(free_limit), monodromy=impacting))
     if previous.impacts_per_period < current.impacts_per_period:
-        near_previous, near_current = free_limit, impacting_limit
+        return free_limit, impacting_limit
+    return impacting_limit, free_limit
+
+
+def _detect_on_pieces(problem, pieces, periods, before):
+    """Folds, period doublings and Neimark-Sacker points on smooth pieces of a branch that meet
+    at a graze: each piece (start Orbit, unit direction, low, high, the test functions' orbit at
+    low, at high, the branch's orbit on its side) is the arc start.z + s * direction, low < s < high, on one side of the graze,
+    its end at the graze carrying that side's limit (_graze_limits). On one side the test
+    functions are continuous, so a sign change is a bifurcation: located, or recorded as not
+    located with ``before`` (the branch's orbit before the step) as its orbit."""
+    found = []
+    for kind, test in TEST_FUNCTIONS.items():
+        for start, direction, low, high, first, last, side in pieces:
+            a, b = test(first), test(last)
+            if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
+                orbit = _locate(problem, start, direction, high, kind, a, b, periods, True, low=low,
+                                impacts=side.impacts_per_period)
+                if orbit is not None and _located(kind, orbit):
+                    found.append((kind, orbit))
+                else:
+                    found.append((UNLOCATED_PREFIX + kind, before))
+    return found
+
+
+def _detect_crossing(problem, previous, graze, passed, periods):
+    """Bifurcations on the way cross_grazing took from ``previous`` through the located
+    grazing.Graze ``graze`` onto the orbits ``passed`` beyond it (in order; several after a march
+    in the new impact's speed): on the chord from previous to the graze, with previous's side's
+    limit there, on the chord from the graze to the first orbit beyond, with that side's limit,
+    and between consecutive orbits beyond (_detect). The branch turns at the graze (a corner), so
+    each piece has its own direction. Up to 0.7.4 nothing was looked for: Fig. 1's period-1 branch
+    crossed its graze at g = 39.844991 onto an orbit past a period doubling and a fold 3e-4 away
+    and recorded neither. Returns [(kind, Orbit)], the graze itself not included."""
+    found = []
+    first = passed[0]
+    graze_orbit = _graze_orbit(problem, graze)
+    limits = _graze_limits(problem, previous, first, graze)
+    pieces = []
+    for start, end, first_limit, last_limit in ((previous, graze_orbit, previous, None if limits is None else limits[0]),
+                                                (graze_orbit, first, None if limits is None else limits[1], first)):
+        chord = end.z - start.z
+        length = float(np.linalg.norm(chord))
+        if length > 0.0:
+            pieces.append((start, chord / length, 0.0, length, first_limit, last_limit,
+                           previous if start is previous else first))
+    if limits is not None:
+        found += _detect_on_pieces(problem, pieces, periods, previous)
     else:
-        near_previous, near_current = impacting_limit, free_limit
-    return [(0.0, s_graze, previous, near_previous), (s_graze, step, near_current, current)]
+        # The impacting side's limit is not known (the probe does not gain one impact): the test
+        # functions are compared across the corner, and a sign change is kept only where a
+        # multiplier comes near critical (the monodromy's jump at the graze is no bifurcation).
+        for kind, test in TEST_FUNCTIONS.items():
+            a, b = test(previous), test(first)
+            if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
+                found.append((UNLOCATED_PREFIX + kind, previous))
+    for before, after in zip(passed, passed[1:]):
+        chord = after.z - before.z
+        length = float(np.linalg.norm(chord))
+        if length > 0.0:
+            found += _detect(problem, before, after, chord / length, length, periods)
+    return found
 
 
 def _detect(problem, previous, current, tangent, step, periods, graze=None):
@@ -554,19 +616,15 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
     # of Fig. 1's 11-impact orbits at g = 17.793014, -0.58 to -68, then their graze at 17.797473,
     # -145 to a free side's -0.07: the same sign of det(M + I) at both ends of one long step, and
     # the doubling was not seen, up to 0.7.3).
-    pieces = None
+    limits = None
     if graze is not None and previous.impacts_per_period != current.impacts_per_period:
-        pieces = _graze_limits(problem, previous, current, tangent, step, graze)
-    if pieces is not None:
-        for kind, test in TEST_FUNCTIONS.items():
-            for low, high, first, last in pieces:
-                a, b = test(first), test(last)
-                if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
-                    orbit = _locate(problem, previous, tangent, high, kind, a, b, periods, True, low=low)
-                    if orbit is not None and _located(kind, orbit):
-                        found.append((kind, orbit))
-                    else:
-                        found.append((UNLOCATED_PREFIX + kind, previous))
+        s_graze = float(tangent @ (graze.z - previous.z))
+        if 0.0 < s_graze < step:
+            limits = _graze_limits(problem, previous, current, graze)
+    if limits is not None:
+        pieces = [(previous, tangent, 0.0, s_graze, previous, limits[0], previous),
+                  (previous, tangent, s_graze, step, limits[1], current, current)]
+        found += _detect_on_pieces(problem, pieces, periods, previous)
         found.append(("grazing", _graze_orbit(problem, graze)))
         return found
     for kind, test in TEST_FUNCTIONS.items():
@@ -792,7 +850,7 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 # The square-root singularity of grazing: Newton from this side cannot reach the
                 # other (module doc); the graze is located and crossed from its normal form.
                 tried_crossing = True
-                graze, beyond, new_tangent, grazing_reason = cross_grazing(problem, current, tangent)
+                graze, beyond, new_tangent, grazing_reason, located_graze = cross_grazing(problem, current, tangent)
                 if graze is not None:
                     _record_graze(problem, bifurcations, graze)
                 crossed = bool(beyond)
@@ -851,7 +909,11 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             continue
         if not lo <= orbit.parameter <= hi:
             if crossed:  # the orbits a march in the new impact's speed found inside the range are kept
-                orbits.extend(passed for passed in beyond[:-1] if lo <= passed.parameter <= hi)
+                kept = [passed for passed in beyond[:-1] if lo <= passed.parameter <= hi]
+                if kept and located_graze is not None:
+                    _record_found(problem, bifurcations, _detect_crossing(problem, current, located_graze, kept,
+                                                                          start.periods))
+                orbits.extend(kept)
                 return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}] beyond a "
                                                            f"graze, where no orbit at its end is looked for")
             end, reason = _range_end(problem, current, orbit, tangent, lo, hi, before, memo)
@@ -862,11 +924,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                     return orbits, bifurcations, (ENDED_RANGE, f"{problem.parameter} left [{lo:g}, {hi:g}]; {ended[1]}")
                 if ended is not None:
                     return orbits, bifurcations, ended
-                for kind, found_orbit in _detect(problem, current, end_orbit, tangent, s_end, start.periods, located):
-                    if kind == "grazing":
-                        _record_graze(problem, bifurcations, found_orbit)
-                    else:
-                        bifurcations.append((kind, found_orbit))
+                _record_found(problem, bifurcations,
+                              _detect(problem, current, end_orbit, tangent, s_end, start.periods, located))
                 orbits.append(end_orbit)
                 if progress is not None:
                     try:
@@ -880,12 +939,11 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if crossed:
             step = options["initial_step"]
             memo.clear()  # the graze just crossed is no test of the next step's
+            if located_graze is not None:  # the way through the graze, as a step's (_detect)
+                _record_found(problem, bifurcations, _detect_crossing(problem, current, located_graze, beyond,
+                                                                      start.periods))
         else:
-            for kind, found in _detect(problem, current, orbit, tangent, step, start.periods, located):
-                if kind == "grazing":
-                    _record_graze(problem, bifurcations, found)
-                else:
-                    bifurcations.append((kind, found))
+            _record_found(problem, bifurcations, _detect(problem, current, orbit, tangent, step, start.periods, located))
             if orbit.newton_iterations <= EASY_NEWTON:
                 step = min(step * STEP_GROWTH, options["max_step"])
         if crossed:  # the orbits a march in the new impact's speed found on the way (march_in_speed)
@@ -946,6 +1004,15 @@ def _domain_end(problem, last, reason):
                           f"beyond it {reason}")
 
 
+def _record_found(problem, bifurcations, found):
+    """Append _detect's [(kind, Orbit)], each graze once (_record_graze)."""
+    for kind, orbit in found:
+        if kind == "grazing":
+            _record_graze(problem, bifurcations, orbit)
+        else:
+            bifurcations.append((kind, orbit))
+
+
 def _record_graze(problem, bifurcations, graze):
     """Append a grazing orbit unless the same graze (its parameter within location_tolerance) is
     already there: the corrector can meet one graze several times as it closes in on it."""
@@ -959,7 +1026,8 @@ def cross_grazing(problem, near, tangent):
     """Locate the graze next to ``near`` (an Orbit on either side of it) and step across.
 
     Returns (the grazing Orbit or None, the Orbits beyond in order along the branch (empty when
-    none), the last one's tangent, a one-line reason when there are none). Where the ordinary
+    none), the last one's tangent, a one-line reason when there are none, the located
+    grazing.Graze or None: follow looks for bifurcations on the way through it, _detect_crossing). Where the ordinary
     corrector fails from the normal form's predictor (the map beyond is steep: Fig. 1's period-2
     branch at g = 17.8973) the branch beyond is followed in the new impact's speed (march_in_speed),
     several orbits at once. The map without the grazing impact is the barrier-free map, or
@@ -972,20 +1040,20 @@ def cross_grazing(problem, near, tangent):
     if site is None:
         switched = switch_at_grazing(problem, near, tangent)
         if switched is None:
-            return near, [], None, "no branch beyond the graze was found"
-        return near, [switched[0]], switched[1], None
+            return near, [], None, "no branch beyond the graze was found", None
+        return near, [switched[0]], switched[1], None, None
     side, window = site
     located = grazing.locate_graze(problem, near.z, periods, _tolerance(problem, near.state), window)
     if located is None:
         free = "barrier-free" if window is None else "windowed"
-        return None, [], None, f"the grazing orbit could not be located (Newton on the {free} map failed)"
+        return None, [], None, f"the grazing orbit could not be located (Newton on the {free} map failed)", None
     graze = _graze_orbit(problem, located)
     lengths = [problem.options["initial_step"] * factor for factor in CROSSING_DISTANCES]
     impacts_near = round(near.impacts_per_period * periods)
     if side == "free":
         normal_form = grazing.impacting_direction(problem, located)
         if normal_form is None:
-            return graze, [], None, "the orbit beyond the graze does not gain one impact, as its normal form needs"
+            return graze, [], None, "the orbit beyond the graze does not gain one impact, as its normal form needs", None
         direction, predictor, speed_scale = normal_form
         candidates = [predictor(length / speed_scale) for length in lengths]
         beyond, impacts_beyond = "impacting", impacts_near + 1
@@ -996,12 +1064,12 @@ def cross_grazing(problem, near, tangent):
     for z_predicted in candidates:
         orbit = _corrected_forward(problem, z_predicted, periods, direction, located.z, impacts_beyond)
         if orbit is not None:
-            return graze, [orbit], tangent_of(orbit, direction), None
+            return graze, [orbit], tangent_of(orbit, direction), None, located
     if side == "free":
         marched = march_in_speed(problem, located, predictor, impacts_beyond)
         if marched:
-            return graze, marched[0], marched[1], None
-    return graze, [], None, f"no {beyond} orbit converged beyond the graze"
+            return graze, marched[0], marched[1], None, located
+    return graze, [], None, f"no {beyond} orbit converged beyond the graze", None
 
 
 # The march in the new impact's speed u beyond a steep graze (march_in_speed): from u =
@@ -1025,8 +1093,9 @@ def march_in_speed(problem, graze, predictor, impacts_beyond):
     Each orbit is grazing.correct_at_speed's, from the normal form's predictor at the first u and
     from the quadratic (then linear) extrapolation in u of the orbits before (the branch is smooth
     in u, grazing.py), each moved first to where the free map overshoots the barrier as that u
-    needs (grazing.onto_speed). Bifurcations between these orbits are not looked for (the arc's
-    corrector, which locates them, is what fails here). The march hands over to follow once the
+    needs (grazing.onto_speed). Bifurcations between these orbits are looked for by follow
+    (_detect_crossing), and recorded as not located where the arc's corrector, which locates
+    them, fails, as it does here. The march hands over to follow once the
     ordinary corrector converges from its last orbit onto the same branch, forward. Where it never
     does (multipliers of 10^3 and more all along: the original model at Omega = 5 beyond g =
     45.122) the march goes on while it converges, and follow ends the branch after its last orbit.
