@@ -122,6 +122,26 @@ def test_tags_sit_next_to_their_points_clear_of_each_other_and_of_the_markers(tm
         assert gap <= 3.0 * box.height, (text, gap, box.height)
 
 
+def test_a_crowd_of_bifurcations_gets_one_tag_saying_how_many_and_where(tmp_path):
+    """Fig. 1's continuation figure drew some thirty tags at g = 17.6-17.9 of a 40-wide axis,
+    joined ('PD?6, PD10') and led out by lines over each other: unreadable. More than eight within
+    1 % of the axis in view of each other get one tag, their count and range; the others keep
+    theirs. Zoomed in (--xlim), each has its own again."""
+    from handmade import write_cascade_branch_file
+
+    crowd = tuple(("period_doubling", 45.70 + 0.005 * k, 4.0 + 0.3 * k) for k in range(30))
+    path = write_cascade_branch_file(tmp_path / "crowd.h5", crowd + (("fold", 32.0), ("fold", 53.0)))
+    fig = plot.plot(path, zoom="none", title=False)
+    tags = _tag_boxes(fig)
+    assert set(tags) == {"F1", "F2", "30 bifurcations,\n$g$ 45.7\u201345.845"}, list(tags)
+    boxes = [box for box, _ in tags.values()]
+    for number, box in enumerate(boxes):
+        for other in boxes[number + 1:]:
+            assert min(min(box.x1, other.x1) - max(box.x0, other.x0), min(box.y1, other.y1) - max(box.y0, other.y0)) <= 0.5
+    near = plot.plot(path, xlim=(45.69, 45.86), title=False)
+    assert len([tag for text in _tag_boxes(near) for tag in text.split(", ")]) == 30
+
+
 def _data_lines(ax):
     return [line for line in ax.get_lines() if line.get_transform() is ax.transData and np.size(line.get_xdata()) > 1
             and not getattr(line, "_vrsweep_context", False)]

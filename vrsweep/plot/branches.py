@@ -153,7 +153,7 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
         top.set_xlim(*window)
         for ax in (top, bottom):
             fit_y_to_view(ax)
-    _mark_bifurcations(top, bottom, kinds, places, heights, tags)
+    _mark_bifurcations(top, bottom, kinds, places, heights, tags, name)
     written = config is not None and config.written
     top.set_ylabel(written_gain(config.model.response_scale) if written
                    else "gain $R = |Q|/c$")
@@ -290,9 +290,31 @@ def _draw_branch_lines(top, bottom, datasets, values, config, name):
 MARKER_SIZE = 6.0
 
 
-def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
+# More than CLUSTER_TAGS bifurcations within CLUSTER_WIDTH of the parameter axis in view of each
+# other (chained) get one tag together, their count and range: Fig. 1's period-3 window ends with
+# some thirty within 0.3 of a 40-wide g axis, and their tags, joined and led out by lines, were
+# unreadable. --zoom, --xlim and --table show each (docs/continuation.md).
+CLUSTER_TAGS = 8
+CLUSTER_WIDTH = 0.01
+
+
+def _clusters(places, low, high):
+    """Index groups of the bifurcations in view [low, high], by parameter, each a chain of
+    neighbours within CLUSTER_WIDTH of the range in view."""
+    order = [index for index in np.argsort(places, kind="stable") if low <= places[index] <= high]
+    groups = []
+    for index in order:
+        if groups and places[index] - places[groups[-1][-1]] <= CLUSTER_WIDTH * (high - low):
+            groups[-1].append(index)
+        else:
+            groups.append([index])
+    return groups
+
+
+def _mark_bifurcations(top, bottom, kinds, places, heights, tags, name="parameter"):
     """Each bifurcation marked and tagged (placed beside its point once the layout is done,
-    clear of the other tags and markers: layout._separate_tags); one legend entry per kind."""
+    clear of the other tags and markers: layout._separate_tags), a crowd of them (_clusters) with
+    one tag saying how many and where; one legend entry per kind."""
     low, high = top.get_xlim()
     bottom_y, top_y = top.get_ylim()
     for index in np.argsort(places):
@@ -301,13 +323,17 @@ def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
         top.plot([at], [R], marker=marker, color="k", mfc="w", mew=1.2, ms=MARKER_SIZE, zorder=5, ls="none",
                  gid=f"bifurcation {tag}")
         bottom.axvline(at, color=BIFURCATION_LINE, lw=0.8, zorder=0, gid=f"bifurcation line {tag}")
-        if not low <= at <= high:
-            continue  # outside the zoom: no tag
-        note = top.annotate(tag, (at, R), xytext=(0, -MARKER_SIZE), textcoords="offset points", ha="center",
-                            va="top", fontsize="xx-small", annotation_clip=True, gid=f"tag {tag}", zorder=6,
-                            arrowprops=dict(arrowstyle="-", lw=0.5, color="0.4", shrinkA=0, shrinkB=MARKER_SIZE / 2 + 1))
-        note._vrsweep_tag = True
-        note._vrsweep_marker_points = MARKER_SIZE / 2 + 0.6  # the marker's half width and half its edge
+    for group in _clusters(places, low, high):
+        if len(group) > CLUSTER_TAGS:
+            top_index = max(group, key=lambda index: heights[index])
+            first, last = min(places[index] for index in group), max(places[index] for index in group)
+            text = f"{len(group)} bifurcations,\n{parameter_symbol(name)} {first:.5g}\u2013{last:.5g}"
+            at, R, gid = places[top_index], heights[top_index], f"tag cluster {tags[group[0]]}"
+        else:
+            for index in group:
+                _tag(top, tags[index], places[index], heights[index], f"tag {tags[index]}")
+            continue
+        _tag(top, text, at, R, gid)
     for kind in dict.fromkeys(kinds):
         marker, words = BIFURCATION_MARKERS.get(kind, (UNKNOWN_BIFURCATION_MARKER, kind))
         prefix = TAG_PREFIXES.get(kind, kind)
@@ -321,6 +347,15 @@ def _mark_bifurcations(top, bottom, kinds, places, heights, tags):
             top.set_ylim(bottom_y / 1.3, top_y * 1.3)
         else:
             top.set_ylim(bottom_y - 0.12 * span, top_y + 0.12 * span)
+
+
+def _tag(top, text, at, R, gid):
+    """A tag at (at, R), placed later (layout._separate_tags)."""
+    note = top.annotate(text, (at, R), xytext=(0, -MARKER_SIZE), textcoords="offset points", ha="center",
+                        va="top", fontsize="xx-small", annotation_clip=True, gid=gid, zorder=6,
+                        arrowprops=dict(arrowstyle="-", lw=0.5, color="0.4", shrinkA=0, shrinkB=MARKER_SIZE / 2 + 1))
+    note._vrsweep_tag = True
+    note._vrsweep_marker_points = MARKER_SIZE / 2 + 0.6  # the marker's half width and half its edge
 
 
 def _table_ratio(figure, rows):
