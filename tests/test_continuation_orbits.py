@@ -508,3 +508,23 @@ def test_a_sticking_orbit_ends_a_branch_saying_it_is_not_followed_not_that_it_is
     assert "sticks to the barrier" in reason and "follows only orbits that do not stick" in reason
     assert "singular" not in reason
     assert continuation._failure(SimpleNamespace(status=Status.OK, stuck_time=0.0)) is None
+
+
+def test_a_hop_onto_another_family_at_the_smallest_step_ends_the_branch_saying_so(monkeypatch):
+    """A step whose orbit reverses the null vector of [M - I | F_lam] with its fold test changing
+    sign (continuation._flips) hopped onto another family; retried shorter down to min_step, it
+    was then taken, recorded as an unlocated fold and period doubling, and the branch went on along
+    both families in turn (Fig. 1's period-12 branch beyond g = 17.793242, six such pairs, where
+    the other family lies 2e-6 away). Now the branch ends there with a reason that says so. The
+    hop is staged here at the hysteresis example's fold (g = 25.2675): every step over it is
+    taken for a hop."""
+    flips = continuation._flips
+    monkeypatch.setattr(continuation, "_flips", lambda previous, orbit, tangent: flips(previous, orbit, tangent) or (
+        continuation._fold_test(previous) * continuation._fold_test(orbit) < 0.0))
+    problem = _problem()
+    start = continuation.find_start(problem, [0.0, 0.0], 23.0, 200, 16)
+    orbits, found, (status, reason) = continuation.follow(problem, start, +1, 20.0, 27.0, 200)
+    assert status == continuation.ENDED_NEWTON and "hopping onto another family" in reason, (status, reason)
+    assert "min_step = 1e-05" in reason and "smaller continuation.min_step" in reason
+    assert not [kind for kind, _ in found if "fold" in kind], found  # no hop recorded as a fold
+    assert abs(orbits[-1].parameter - 25.2675) < 1e-3, orbits[-1].parameter

@@ -902,11 +902,22 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         if ended is not None:
             return orbits, bifurcations, ended
         # After stop: a switched branch that meets its doubling (a corner there) ends, not retried.
-        if not crossed and (_strays(current, orbit, z_predicted, step) or _flips(current, orbit, tangent)) \
-                and step * 0.5 >= options["min_step"]:
+        hop = not crossed and _flips(current, orbit, tangent)
+        if not crossed and (_strays(current, orbit, z_predicted, step) or hop) and step * 0.5 >= options["min_step"]:
             step *= 0.5
             strayed = True
             continue
+        if hop:
+            # Still a hop at the smallest step: another family lies closer than min_step tells apart.
+            # Taken, the step recorded the hop as an unlocated fold and period doubling (six such
+            # pairs on Fig. 1's period-12 branch beyond g = 17.793242, up to 0.7.4) and went on
+            # along orbits of both families in turn; the branch ends here instead, saying why.
+            return orbits, bifurcations, (
+                ENDED_NEWTON, f"the corrector keeps hopping onto another family of orbits at {problem.parameter} = "
+                              f"{current.parameter:.8g}: the step's orbit reverses the null vector of [M - I | F_lam] "
+                              f"and its fold test changes sign, which no step along one branch does, down to "
+                              f"min_step = {options['min_step']:g}; a smaller continuation.min_step may tell the two "
+                              f"apart")
         if not lo <= orbit.parameter <= hi:
             if crossed:  # the orbits a march in the new impact's speed found inside the range are kept
                 kept = [passed for passed in beyond[:-1] if lo <= passed.parameter <= hi]
