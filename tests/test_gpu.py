@@ -58,11 +58,12 @@ def _simulated(tmp_path, text_or_path, method, lyapunov, line_length, transient_
             {key: np.array(value, dtype=float) for key, value in result["gpu"].items()})
 
 
-# A bilinear spring with a barrier: its switching function x - d changes sign every period.
+# A bilinear spring with friction and a barrier: its switching functions x - d (a kink) and v (a
+# jump) change sign every period, and the frozen mode holds their sides for the steps around them.
 KINKED = """
 model:
-  acceleration: "-2*zeta*v - x - k*max(x - d, 0) + F*cos(omega*t)"
-  parameters: {zeta: 0.05, k: 3.0, d: 0.5, F: 1.0, omega: 0.8, Delta: 1.2, r: 0.8}
+  acceleration: "-2*zeta*v - x - k*max(x - d, 0) - mu*sign(v) + F*cos(omega*t)"
+  parameters: {zeta: 0.05, k: 3.0, d: 0.5, mu: 0.02, F: 1.0, omega: 0.8, Delta: 1.2, r: 0.8}
   barriers: [{position: Delta, side: above, restitution: r}]
   period: "2*pi/omega"
   response: {frequency: omega, scale: F}
@@ -78,8 +79,9 @@ sweep:
     ("written, two barriers", EXAMPLES / "impact_two_sided.yaml", "rk45", "false", 1, False),
     # cuda.LOCAL_COEFFICIENTS: the loop reads a thread's copy of its point's coefficients
     ("written, two barriers, coefficients copied", EXAMPLES / "impact_two_sided.yaml", "rk45", "false", 1, True),
-    # A kink (max) the CPU's kernel locates as an event: the GPU's locates it the same way.
-    ("written, a kink", KINKED, "rk45", "false", 1, False),
+    # A kink (max) and a jump (sign) the CPU's kernel locates as events, with the tangent vectors
+    # (the frozen mode's Jacobian): the GPU's locates them the same way.
+    ("written, a kink and a jump, tangent vectors", KINKED, "rk45", "true", 1, False),
 ])
 def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config, method, lyapunov, line_length,
                                                           local_coefficients):

@@ -1,15 +1,14 @@
-"""Kinks of a written acceleration (abs, max, min, sign) located as events: a step that crosses one
-is cut to end on it (kernel._integrate, codegen.switching_functions), so the method keeps its order
-on each smooth side and R and the Lyapunov exponent converge with the tolerance.
+"""Kinks (abs, max, min) and jumps (sign) of a written acceleration located as events: a step that
+crosses one is cut to end on it (kernel._integrate, codegen.switching_functions), and the steps on
+either side of the surface hold each switch on one side for all their stages (the frozen mode,
+codegen.frozen_acceleration), so the method keeps its order on each smooth side, and R and the
+Lyapunov exponent converge with the tolerance.
 
-The reference is SciPy's solve_ivp (DOP853, rtol 1e-13) restarted at each crossing of the kink by
-a terminal event, with its own right-hand side of each side (no max() in it), written here.
+The references are SciPy's solve_ivp (DOP853, rtol 1e-13) restarted at each crossing of a
+switching surface by a terminal event, with its own right-hand side of each side (no max() or
+sign() in it), written here.
 
-Located on the GPU too (the same loop, given the model's switch_signs: test_gpu.py). Not yet
-located: the jumps of sign (see codegen.switching_functions: located so, friction's R got worse). And the tangent vectors still
-see the kink's side at a step's first and last stages by rounding (the Jacobian jumps there even
-where the acceleration is continuous): lambda_1 of the spring below scatters by ~1e-6 at any rtol
-(it did before too), within its lyapunov_err at rtol 1e-10, not always at 1e-9.
+Located on the GPU too (the same loop, given the model's switch_signs: test_gpu.py).
 """
 
 import math
@@ -87,8 +86,8 @@ def test_the_switching_functions_are_the_arguments_of_each_kink():
         return [str(s) for s in codegen.switching_functions(acceleration, state)]
 
     assert switches("-x - k*max(x - d, 0)") in (["-d + x"], ["d - x"], ["p_d - x"], ["-p_d + x"])
-    # abs: its argument; a surface twice (abs(x), abs(-x)) is one; sign's jump is not located
-    assert switches("-x - k*abs(x)*x - zeta*sign(v) + F*abs(-x)") == ["x"]
+    # abs and sign: their arguments; a surface twice (abs(x), abs(-x), sign(-x)) is one
+    assert sorted(switches("-x - k*abs(x)*x - zeta*sign(v) + F*abs(-x) + sign(-x)")) == ["v", "x"]
     # min and max of the state: the difference of their arguments, one surface
     assert len(switches("-x + min(x, v) - max(v, x) + zeta")) == 1
     # a kink in the parameters alone is none in time; a smooth model has none
@@ -109,3 +108,103 @@ def test_a_bilinear_springs_response_converges_with_the_tolerance():
         result = vrsweep.sweep(BILINEAR, rtol=rtol, atol=rtol * 1e-2, progress=False)
         assert int(result.period) == 1
         assert abs(float(result.R) - R_reference) < bound, (rtol, float(result.R) - R_reference)
+
+
+def test_a_bilinear_springs_lyapunov_exponent_converges_with_the_tolerance():
+    """The tangent vectors see each step's side of the kink (the frozen mode's Jacobian), not the
+    side rounding puts a step's first and last stages at: the Jacobian jumps by k there, and one
+    stage on the wrong side is an error of k times the step. lambda_1 scattered by about 1e-6 at
+    any rtol (4.9e-6 at 1e-8, 1.1e-6 at 1e-10, rk45); now 1.6e-9 and 6.2e-12. The reference is
+    the period-1 orbit's largest Floquet multiplier, log|mu_1| / T, from SciPy's monodromy."""
+    _, monodromy = _bilinear_reference()
+    period = 2 * math.pi / OMEGA
+    exponent = math.log(max(abs(np.linalg.eigvals(monodromy)))) / period
+    for rtol, bound in ((1e-8, 2e-8), (1e-10, 3e-11)):
+        result = vrsweep.sweep(BILINEAR, rtol=rtol, atol=rtol * 1e-2, lyapunov=True, progress=False)
+        assert abs(float(result.lyapunov) - exponent) < bound, (rtol, float(result.lyapunov) - exponent)
+
+
+# Coulomb friction on the forced linear oscillator: a jump of the force at v = 0. At mu = 0.1 the
+# force -x + F cos(omega t) at every turning point exceeds mu: the mass never sticks, and each
+# crossing of v = 0 is transversal.
+MU = 0.1
+FRICTION = f"""
+model:
+  acceleration: "-2*zeta*v - x - mu*sign(v) + F*cos(omega*t)"
+  parameters: {{zeta: {ZETA}, mu: {MU}, F: {F}, omega: {OMEGA}}}
+  period: "2*pi/omega"
+  response: {{frequency: omega, scale: F}}
+initial: {{x: 0.0, v: 0.3}}
+integration: {{transient_periods: 50, measure_periods: 20}}
+"""
+
+
+def _friction_reference():
+    """R over the 20 measured periods: SciPy with a terminal event at v = 0, restarted there with
+    the other side's force (the side the force at v = 0 pushes the mass to)."""
+    period = 2 * math.pi / OMEGA
+
+    def rhs(t, y, side):
+        x, v = y[0], y[1]
+        return [v, -2 * ZETA * v - x - MU * side + F * math.cos(OMEGA * t), x * math.sin(OMEGA * t),
+                x * math.cos(OMEGA * t)]
+
+    def run(t, t_end, y):
+        while t < t_end:
+            side = 1.0 if y[1] > 0 else -1.0
+            if y[1] == 0.0:  # on the surface: the side the force at rest pushes to (no sliding here)
+                pull = -y[0] + F * math.cos(OMEGA * t)
+                assert abs(pull) > MU, "the reference does not slide"
+                side = math.copysign(1.0, pull)
+            event = lambda t, y, side: y[1]  # noqa: E731
+            event.terminal = True
+            event.direction = -side
+            solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-15, events=event,
+                                 args=(side,))
+            if solution.status == 1:
+                t, y = solution.t_events[0][0], solution.y_events[0][0].copy()
+                y[1] = 0.0
+            else:
+                t, y = solution.t[-1], solution.y[:, -1].copy()
+        return y
+
+    y = run(0.0, 50 * period, np.array([0.0, 0.3, 0.0, 0.0]))
+    y[2:] = 0.0
+    end = run(50 * period, 70 * period, y)
+    window = 20 * period
+    return math.hypot(2 * end[2] / window, 2 * end[3] / window) / F
+
+
+def test_friction_is_integrated_as_a_smooth_oscillator_is():
+    """Stepped over (0.7.4), each jump of -mu*sign(v) cost the controller a cascade of rejected
+    steps creeping up to it: 8995 steps at rtol 1e-6 where the same oscillator without friction
+    takes 3038. Located, the step that ends on v = 0 and the one that leaves it each evaluate one
+    side's force (the frozen mode): 3225 steps, and R converges with rtol as a smooth model's
+    does, against SciPy restarted at each v = 0 (rk45: 4.8e-7 at rtol 1e-6, 3.4e-11 at 1e-10; the
+    oscillator without friction is itself 3.3e-7 and 1.6e-11 off)."""
+    smooth = vrsweep.sweep(FRICTION, mu=0.0, rtol=1e-6, atol=1e-8, progress=False)
+    result = vrsweep.sweep(FRICTION, rtol=1e-6, atol=1e-8, progress=False)
+    assert int(result.status) == 0 and int(result.period) == 1
+    assert int(result.n_steps) < 1.2 * int(smooth.n_steps), (int(result.n_steps), int(smooth.n_steps))
+    R_reference = _friction_reference()
+    errors = []
+    for rtol in (1e-6, 1e-10):
+        result = vrsweep.sweep(FRICTION, rtol=rtol, atol=rtol * 1e-2, progress=False)
+        errors.append(abs(float(result.R) - R_reference))
+    assert errors[0] < 1e-6 and errors[1] < 1e-10, errors
+    assert errors[1] < 1e-3 * errors[0], errors  # converging with rtol
+
+
+def test_a_sliding_motion_on_a_jump_is_a_status():
+    """Where the force at v = 0 is weaker than mu, friction's field points into v = 0 from both
+    sides: the mass sticks (a Filippov sliding motion), which the kernel does not follow. It ran
+    to max_steps (20 million steps at the default budget), or through millions of steps chattering
+    across v = 0; now the point ends `sliding` at its first sticking, in a few dozen steps."""
+    from vrsweep.results import Status
+
+    for mu in (0.5, 2.0):
+        with pytest.warns(RuntimeWarning, match="sliding"):
+            result = vrsweep.sweep(FRICTION, mu=mu, max_steps=200000, progress=False)
+        assert int(result.status) == Status.SLIDING, (mu, int(result.status))
+        assert int(result.n_steps) < 1000
+

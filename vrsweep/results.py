@@ -14,6 +14,7 @@ class Status(enum.IntEnum):
     CHATTER_LIMIT = 3
     STEP_TOO_SMALL = 4
     NON_FINITE = 5
+    SLIDING = 6
 
 
 MESSAGES = {
@@ -24,6 +25,8 @@ MESSAGES = {
     Status.CHATTER_LIMIT: "more impacts in one slow period than integration.max_impacts_per_period",
     Status.STEP_TOO_SMALL: "the step size fell below the floating-point resolution of t",
     Status.NON_FINITE: "a non-finite value (NaN or inf) appeared in the state or its derivative",
+    Status.SLIDING: "the force points into a jump of a written acceleration (sign) from both sides: "
+                    "a sliding motion, which vrsweep does not follow",
 }
 
 FLAG_VALUES = [int(s) for s in Status]

@@ -48,6 +48,9 @@ def _remedy(status, run):
         # meet, or a scale no tolerance meets (c = 1e300 makes every step too small).
         return (f"loosen integration.rtol/atol (now {run.rtol:g}/{run.atol:g}), unless the parameters there are "
                 "extreme (a force of 1e300 moves beyond what doubles integrate, at any tolerance)", None)
+    if status == Status.SLIDING:
+        return ("the written force has a jump (sign) that holds the motion on it there (stick-slip): write a "
+                "smooth law instead, such as -mu*tanh(v/v0) with v0 small against the motion's speeds", None)
     return "check the parameters of those points (vrsweep info FILE lists them)", None
 
 

@@ -104,7 +104,7 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
     dense = cuda.local.array(({n_state}, {dense_order}), float64)
     vectors = cuda.local.array(({n_vectors}, {n_state}), float64)
     bracket = cuda.local.array({n_bracket}, float64)
-    scratch = cuda.local.array(1, float64)  # no_preparations reads none
+    scratch = cuda.local.array(1, float64)  # the frozen mode (kernel._hold_mode); no_preparations reads none
     state = cuda.local.array(2, float64)
 {local_coefficients}    # The observers a sweep does not use, as empty views (nothing is allocated for them).
     no_samples = scratch[:0]

@@ -62,7 +62,7 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
     N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
     ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
-    no_preparations, no_switches, prepare_rotations_for,
+    no_preparations, no_switches, prepare_rotations_for, UNFROZEN,
     dop853_rotation_scratch, force_at_barrier, no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent,
     oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations,
     rotation_scratch,
@@ -140,8 +140,19 @@ def lanes_apart(waiting):
     return APART
 
 
-# A switching surface crossed within this fraction of a step's start is stepped over (kernel loop).
+# A switching surface crossed within this fraction of a step's start is crossed at the step's start:
+# the step starts on it (a rounding from it).
 SWITCH_SLIVER = 1e-9
+# The acceleration jumps at a surface (sign) where the two sides' values at the located crossing
+# differ by more than this share of the larger; at a kink (abs, min, max) they differ by rounding.
+JUMP_TOLERANCE = 1e-9
+
+
+@kernel_jit(inline="always")
+def _hold_mode(scratch, mode):
+    """The frozen mode the right-hand sides read (the scratch's last value; codegen._modes): the
+    side of each switching function, a bit each, held for a whole step; UNFROZEN: none held."""
+    scratch[scratch.shape[0] - 1] = mode
 
 
 @kernel_jit
@@ -383,6 +394,9 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
     if tangents:
         seed_tangents(y)
     t = 0.0
+    # The frozen mode (switching functions, below): none held at the start.
+    mode = UNFROZEN
+    _hold_mode(scratch, mode)
     rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
     n_rhs = 1
     h = initial_step(rhs, t, y, f, coefficients, rtol, atol, h_max, initial_order, scratch, y_new, stage)
@@ -395,6 +409,11 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
     n_scans = 0
     retrying = False
     cut_at_switch = False  # the step being attempted was cut to end on a switching surface
+    crossing = 0  # the bits of the switching functions that the cut step crosses at its end
+    next_mode = UNFROZEN  # the mode from the accepted step's end on
+    landed = False  # the step being attempted leaves a switching surface, frozen on the side it heads to
+    jumped = False  # the acceleration jumps at that surface (sign), not only its slope (abs, min, max)
+    unchecked = False  # the step being attempted is not tested for switches (a kink touched, below)
     # A located impact being reached: its Newton steps are passes of the loop (reaching), the trial
     # step's size and clipping, the barrier and what else the trial pass decided kept for them.
     reaching = False
@@ -511,34 +530,82 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
                     held = REACHED
                 else:
                     n_steps += 1
+                    if mode < 0.0 and not unchecked:
+                        signs = switch_signs(t, y[X], y[V], coefficients)
+                        if switch_signs(t + h_try, y_new[X], y_new[V], coefficients) != signs:
+                            # The step crosses a switching surface: taken again frozen on the side it
+                            # starts on, so that its error estimate is that of one smooth field (see below)
+                            mode = float(signs)
+                            _hold_mode(scratch, mode)
+                            rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+                            n_rhs += 1
+                            h = h_try
+                            continue
                     err = step_error(K, h_try, y, y_new, rtol, atol)
                     if not (err <= 1.0):  # also catches NaN from an overflowing trial step
                         n_rejected += 1
                         retrying = True
                         cut_at_switch = False
+                        unchecked = False
                         h = h_try * (rejected_factor(err) if err == err else 0.2)
                         if h <= _smallest_step(t, slow_period):
                             status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
                             break
                         continue
-                    # A kink of the acceleration (abs, min, max) inside the step: the step is taken
-                    # again to end on it, as an impact is reached, so that each step sees one smooth
-                    # side and the method keeps its order (across a kink the error estimate only
-                    # shrinks the step: R of a bilinear spring was 1.5e-6 off at rtol 1e-6). A step already cut to a switch ends where it ends, and a crossing
-                    # within a sliver of the step's start (the cut step landed a rounding short) is
-                    # stepped over: its error is of the sliver's order.
-                    if not cut_at_switch:
-                        signs = switch_signs(t, y[X], y[V], coefficients)
+                    # A switching surface of the acceleration inside the step (a kink of abs, min,
+                    # max; a jump of sign): the step is taken again to end on it, as an impact is
+                    # reached, so that each step sees one smooth side and the method keeps its order
+                    # (across a kink the error estimate only shrinks the step: R of a bilinear spring
+                    # was 1.5e-6 off at rtol 1e-6). The step that ends there, and the next, which
+                    # leaves it, each hold every switch on one side for all their stages, the frozen
+                    # mode (codegen.frozen_acceleration): their first and last stages lie a rounding
+                    # from the surface, on either side, and across a jump (friction's sign(v)) or a
+                    # jump of the Jacobian (the tangent vectors at a kink) one such stage is an error
+                    # of the jump times the step, at any rtol. The step that leaves the surface holds
+                    # the side the trajectory crossed to; where its field at once turns back to the
+                    # surface, and the acceleration jumps there, the field points into the surface
+                    # from both sides: a sliding motion (Filippov), which the kernel does not follow.
+                    next_mode = mode
+                    if cut_at_switch:
+                        next_mode = float(int(mode) ^ crossing)  # on the surface: the side it heads to
+                    elif mode >= 0.0:
+                        signs = int(mode)
                         if switch_signs(t + h_try, y_new[X], y_new[V], coefficients) != signs:
                             prepare(t, h_try, coefficients, scratch, True)
                             n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage,
                                                   scratch, n_dynamic)
                             theta = locate_switch(switch_signs, signs, dense, y, t, h_try, coefficients)
+                            crossed = signs ^ switch_signs(t + theta * h_try, dense_value(dense, y, h_try, theta, X),
+                                                           dense_value(dense, y, h_try, theta, V), coefficients)
                             if SWITCH_SLIVER < theta < 1.0 and theta * h_try > _smallest_step(t, slow_period):
                                 h = theta * h_try
                                 cut_at_switch = True
+                                crossing = crossed
                                 continue
+                            if theta < 1.0:
+                                # crossed at the step's start: the step starts on the surface
+                                if landed:
+                                    # and the side it crossed to turns back at once
+                                    if jumped:
+                                        status = Status.SLIDING
+                                        break
+                                    mode = UNFROZEN  # a kink touched, not crossed: taken unfrozen, as it is
+                                    unchecked = True
+                                else:
+                                    # a start on the surface (at rest on sign(v)'s): frozen on the side it heads to
+                                    mode = float(signs ^ crossed)
+                                    landed = True
+                                _hold_mode(scratch, mode)
+                                before = f[V]
+                                rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+                                n_rhs += 1
+                                jumped = abs(f[V] - before) > JUMP_TOLERANCE * max(abs(f[V]), abs(before))
+                                h = h_try
+                                continue
+                        next_mode = UNFROZEN  # off the surface, on the held side
                     cut_at_switch = False
+                    unchecked = False
+                    landed = False
                     # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
                     # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
                     if clipped and h >= h_max:
@@ -669,6 +736,19 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
             for j in range(n_state):
                 y[j] = y_new[j]
                 f[j] = K[n_stages, j]
+            if impact:
+                next_mode = UNFROZEN  # the state jumps: every switch on the side it is on
+            if next_mode != mode:
+                landing = mode >= 0.0 and next_mode >= 0.0
+                mode = next_mode
+                _hold_mode(scratch, mode)
+                if landing:
+                    # On the surface, the next step frozen on the side it heads to: f is that side's
+                    before = f[V]
+                    rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+                    n_rhs += 1
+                    jumped = abs(f[V] - before) > JUMP_TOLERANCE * max(abs(f[V]), abs(before))
+                    landed = True
 
             # --- the impact: restitution (eq2.2), or the start of sticking ---
             if impact:

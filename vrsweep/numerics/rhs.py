@@ -89,9 +89,15 @@ def force_at_barrier(t, coefficients, barrier):
             - coefficients[STIFFNESS] * delta - coefficients[ALPHA] * delta ** 3)
 
 
+# The last value of every rhs scratch is the frozen mode of a model's switching functions
+# (kernel._integrate holds it; codegen.frozen_acceleration reads it): -1, none held.
+UNFROZEN = -1.0
+
+
 @kernel_jit
 def no_scratch(h_max):
-    return np.empty(0)
+    """The scratch of a method whose stages call the library: the frozen mode's value alone."""
+    return np.full(1, UNFROZEN)
 
 
 @kernel_jit
@@ -138,7 +144,7 @@ NODES = ROTATION + ROTATION_VALUES                   # the method's nodes c
 STEP_GRID = NODES + MAX_NODES                        # the grid of step sizes
 LEVEL_READY = STEP_GRID + N_STEP_LEVELS              # 1 once a grid step's rotations are tabulated
 LEVEL_ROTATIONS = LEVEL_READY + N_STEP_LEVELS        # N_STEP_LEVELS x ROTATION_VALUES
-N_ROTATION_SCRATCH = LEVEL_ROTATIONS + N_STEP_LEVELS * ROTATION_VALUES
+N_ROTATION_SCRATCH = LEVEL_ROTATIONS + N_STEP_LEVELS * ROTATION_VALUES + 1  # + the frozen mode, last
 
 
 @kernel_jit
@@ -160,6 +166,7 @@ def rotation_scratch(h_max, nodes):
             scratch[STEP_NODES] = node + 1
     for k in range(N_STEP_LEVELS):
         scratch[STEP_GRID + k] = h_max * 2.0 ** (-k / STEP_LEVELS_PER_OCTAVE)
+    scratch[N_ROTATION_SCRATCH - 1] = UNFROZEN
     return scratch
 
 

@@ -31,7 +31,7 @@ NOT_COMPUTED_GREY = "0.85"   # L* 87: a point not computed (a map's background)
 # green 58 and orange 67 were pairs of one grey).
 STATUS_COLOURS = {"not_computed": NOT_COMPUTED_GREY, "ok": "#009988", "max_steps": "#EE8866",
                   "diverged": "#CC3311", "chatter_limit": "#66CCEE", "step_too_small": "#004488",
-                  "non_finite": "#000000"}
+                  "non_finite": "#000000", "sliding": "#551133"}  # sliding: L* 18, between black and 29
 
 # The curves of one figure (a response, --var, impacts, lambda_1 or bifurcation figure with a legend,
 # up to labels.MAX_CURVES of them), in turn: each two at least LIGHTNESS_STEP apart in L* (48, 67, 58,
