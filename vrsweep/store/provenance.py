@@ -122,6 +122,8 @@ RESULT_EPOCHS = (
     ("0.7.3", "a rebound whose flight rises less than 16 ulps of the stop's position sticks, and a written model's "
               "force counts the frequencies of its products and powers"),
     ("0.7.4", "a written model's kinks (abs, min, max of the state) are located as events"),
+    ("0.7.5", "a written model's jumps (sign) are located as events too, and the steps around a kink or jump hold "
+              "its side (a frozen mode)"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -142,7 +144,11 @@ finds a written force's frequencies in its products and powers (cos(omega t)**9 
 release scan and the forcing's period q follow); 0.7.4 ends a step on each kink of a written
 acceleration (abs, min, max of x, v or t: codegen.switching_functions), where it stepped over them
 (a bilinear spring's R 1.5e-6 off at rtol 1e-6; the paper's models have none and are unchanged
-bit for bit). Versions of one epoch
+bit for bit); 0.7.5 locates the jumps of sign too, holds each switch's side for all the stages of
+the steps that end on a surface and leave it (the frozen mode: a stage a rounding across it was an
+error of the jump times the step, in friction's force and in the tangents' Jacobian at a kink, so
+lambda_1 of a bilinear spring scattered by 1e-6), and ends a sliding motion with the status
+sliding; the paper's models have no switches and are unchanged bit for bit. Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
