@@ -208,3 +208,79 @@ def test_a_sliding_motion_on_a_jump_is_a_status():
         assert int(result.status) == Status.SLIDING, (mu, int(result.status))
         assert int(result.n_steps) < 1000
 
+
+
+# A spring with a clearance, stiffened beyond |x| = d on both sides (two kinks: max and min), in a
+# gap between two stops at -Delta and Delta: period 1 at F = 1.5, an impact on each stop a period.
+CLEARANCE = dict(zeta=0.05, k=3.0, d=0.5, F=1.5, omega=0.8, Delta=1.0, r=0.8)
+TWO_SIDED = """
+model:
+  acceleration: "-2*zeta*v - x - k*max(x - d, 0) - k*min(x + d, 0) + F*cos(omega*t)"
+  parameters: {zeta: 0.05, k: 3.0, d: 0.5, F: 1.5, omega: 0.8, Delta: 1.0, r: 0.8}
+  barriers: [{position: Delta, side: above, restitution: r}, {position: -Delta, side: below, restitution: r}]
+  period: "2*pi/omega"
+  response: {frequency: omega, scale: F}
+initial: {x: 0.0, v: 0.0}
+integration: {transient_periods: 150, measure_periods: 20}
+"""
+
+
+def _two_sided_reference():
+    """(R over the 20 measured periods, impacts per period): SciPy with terminal events at the
+    kinks x = d and x = -d (restarted with the other region's spring) and at the stops (v -> -r v)."""
+    zeta, k, d, F_, omega, delta, r = (CLEARANCE[name] for name in ("zeta", "k", "d", "F", "omega", "Delta", "r"))
+    period = 2 * math.pi / omega
+
+    def rhs(t, y, region):
+        x, v = y[0], y[1]
+        spring = -x - (k * (x - d) if region > 0 else (k * (x + d) if region < 0 else 0.0))
+        return [v, -2 * zeta * v + spring + F_ * math.cos(omega * t), x * math.sin(omega * t),
+                x * math.cos(omega * t)]
+
+    # the surfaces that bound each region (beyond d, beyond -d, between) and the way out of it
+    bounds = {1: ((d, -1), (delta, 1)), -1: ((-d, 1), (-delta, -1)), 0: ((d, 1), (-d, -1))}
+    counted = [0]
+
+    def run(t, t_end, y):
+        while t < t_end:
+            x, v = y[0], y[1]
+            region = 1 if (x > d or (x == d and v > 0)) else (-1 if (x < -d or (x == -d and v < 0)) else 0)
+            events = []
+            for level, direction in bounds[region]:
+                event = (lambda level: lambda t, y, region: y[0] - level)(level)
+                event.terminal = True
+                event.direction = direction
+                events.append(event)
+            solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-15, events=events,
+                                 args=(region,))
+            if solution.status == 1:
+                which = min((times[0], i) for i, times in enumerate(solution.t_events) if len(times))[1]
+                t, y = solution.t_events[which][0], solution.y_events[which][0].copy()
+                y[0] = bounds[region][which][0]
+                if abs(y[0]) == delta:
+                    y[1] = -r * y[1]
+                    counted[0] += 1
+            else:
+                t, y = solution.t[-1], solution.y[:, -1].copy()
+        return y
+
+    y = run(0.0, 150 * period, np.zeros(4))
+    y[2:] = 0.0
+    counted[0] = 0
+    end = run(150 * period, 170 * period, y)
+    window = 20 * period
+    return math.hypot(2 * end[2] / window, 2 * end[3] / window) / F_, counted[0] / 20
+
+
+def test_two_stops_and_two_kinks_agree_with_scipy():
+    """Kinks and impacts on both sides in one orbit: R, the impacts per period and both stops
+    reached, against SciPy with events at the kinks and the stops (rk45: 2.6e-8 at rtol 1e-6,
+    1.0e-11 at 1e-10)."""
+    R_reference, impacts = _two_sided_reference()
+    assert impacts == 2.0
+    for rtol, bound in ((1e-6, 2e-7), (1e-10, 5e-11)):
+        result = vrsweep.sweep(TWO_SIDED, rtol=rtol, atol=rtol * 1e-2, progress=False)
+        assert int(result.status) == 0 and int(result.period) == 1
+        assert float(result.impacts_per_period) == impacts
+        assert float(result.x_max) == CLEARANCE["Delta"] and float(result.x_min) == -CLEARANCE["Delta"]
+        assert abs(float(result.R) - R_reference) < bound, (rtol, float(result.R) - R_reference)
