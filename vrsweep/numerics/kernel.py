@@ -304,13 +304,15 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
     coefficients, dydt) its tangent product J u (tangent.apply_jacobian) and barrier_force(t,
     coefficients, b) the acceleration of a mass at rest on barrier b, positive into it;
     switch_signs(t, x, v, coefficients) the signs of the acceleration's switching functions, one
-    bit each (codegen.switching_functions: the argument of abs, the difference of min's and max's
-    arguments; not sign's jumps), 0 for a smooth one (rhs.no_switches), so that a step that crosses a kink is cut
-    to end on it (locate_switch) and the method's order holds on each side: the paper's
-    family passes rhs.py's, a written model its generated ones (codegen.py); stage_rhs the
+    bit each (codegen.switching_functions: the argument of abs and sign, the difference of min's
+    and max's arguments), 0 for a smooth one (rhs.no_switches), so that a step that crosses a kink
+    or jump is cut to end on it (locate_switch) and the method's order holds on each side: the
+    paper's family passes rhs.py's, a written model its generated ones (codegen.py); stage_rhs the
     same at a step's stages, after prepare(t, h, coefficients, scratch, dense) (dense: True before a
     dense output, which also prepares the dense output's extra stages), with scratch =
-    the method's own (dop853_rotation_scratch(h_max), or no_scratch). rules = (grid_steps,
+    the method's own (dop853_rotation_scratch(h_max), or no_scratch), whose last value is the
+    frozen mode the right-hand sides read (_hold_mode: the side of each switching function held
+    for the steps that end on a surface and leave it; rhs.UNFROZEN elsewhere). rules = (grid_steps,
     hold_after_reject, initial_order, n_stages), the method's constants (RK45_RULES ...): grid_steps
     rounds each step size down to grid_step's grid.
     step(stage_rhs, t, y, f, h, coefficients, K, y_new, stage, scratch, n_dynamic) fills K
