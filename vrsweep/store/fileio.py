@@ -570,7 +570,10 @@ def _signature(base, host, pid, tag) -> str:
     by a tool of theirs) carries it with a chance of 2^-32, and is never removed."""
     import hashlib
 
-    return hashlib.sha256(f"vrsweep temporary of {base} by {host} {pid} {tag}".encode()).hexdigest()[:8]
+    # surrogateescape: a name that is not UTF-8 (café.h5 in Latin-1 under LC_ALL=C) reaches Python
+    # as lone surrogates, and its bytes are what the name is
+    text = f"vrsweep temporary of {base} by {host} {pid} {tag}"
+    return hashlib.sha256(text.encode("utf-8", "surrogateescape")).hexdigest()[:8]
 
 
 def temporary_path(path) -> str:
