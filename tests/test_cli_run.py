@@ -284,15 +284,18 @@ def test_resume_refuses_a_file_of_an_older_version_and_names_it(tmp_path, invoke
     assert invoke("run", config, "-o", out, "--resume", "-q").exit_code == 0  # its own version resumes
 
 
+DRY_RUN_CONFIG = """
+    model: effective
+    sweep:
+      g: {start: 5.0, stop: 30.0, num: 40}
+    integration: {transient_periods: 4, measure_periods: 16}
+    output: out.h5
+    """
+
+
 def test_dry_run_times_a_sample_and_writes_nothing(tmp_path, invoke, write_config):
     """--dry-run: an estimate measured on the grid's own points, its range, and no file."""
-    config = write_config(tmp_path, """
-        model: effective
-        sweep:
-          g: {start: 5.0, stop: 30.0, num: 40}
-        integration: {transient_periods: 4, measure_periods: 16}
-        output: out.h5
-        """)
+    config = write_config(tmp_path, DRY_RUN_CONFIG)
     result = invoke("run", config, "--dry-run", "--threads", 1)
     assert result.exit_code == 0, result.output
     estimate = next(line for line in result.output.splitlines() if line.startswith("estimate:"))
@@ -309,13 +312,7 @@ def test_dry_run_with_resume_says_how_much_the_file_leaves(tmp_path, monkeypatch
     from vrsweep.config import load_config
     from vrsweep.execution.job import run_job
 
-    config = write_config(tmp_path, """
-        model: effective
-        sweep:
-          g: {start: 5.0, stop: 30.0, num: 40}
-        integration: {transient_periods: 4, measure_periods: 16}
-        output: out.h5
-        """)
+    config = write_config(tmp_path, DRY_RUN_CONFIG)
     out = tmp_path / "out.h5"
     result = invoke("run", config, "--dry-run", "--resume", "--threads", 1)
     assert result.exit_code == 0, result.output
