@@ -516,7 +516,7 @@ def _switch_signs_body(acceleration, state, printer):
     return f"{body}\n    return {bits}"
 
 
-# The slot of the rhs's scratch that holds the frozen mode (kernel.MODE_SLOT): its last.
+# The slot of the rhs's scratch that holds the frozen mode (kernel._hold_mode writes it): its last.
 _MODE = "scratch[scratch.shape[0] - 1]"
 
 
@@ -618,7 +618,7 @@ def source(model) -> str:
     # The tangent vectors at a step's stages: with the frozen mode, each side's Jacobian
     if sides:
         frozen_jacobian = [("dv_dx", sympy.diff(frozen, x)), ("dv_dv", sympy.diff(frozen, v))]
-        tangent_stage = ("    if scratch[scratch.shape[0] - 1] < 0.0:\n"
+        tangent_stage = (f"    if {_MODE} < 0.0:\n"
                          "        tangent(t + c * h, y, coefficients, dydt)\n"
                          "    else:\n"
                          "        x = y[" + str(X) + "]\n        v = y[" + str(V) + "]\n        t = t + c * h\n"

@@ -176,7 +176,7 @@ def _as_done(path, ds):
             if recovery is not None and recovery.n_torn:
                 return _as_done_whole(path, ds, *torn.find(f, keep=True), fills=_fills(f, values))
             done = np.asarray(values["done"]) == 1
-            fills = {name: f[name].fillvalue for name in point_variables_of(f)}
+            fills = _fills(f, point_variables_of(f))
         ds["done"] = ds["done"].copy(data=done.astype(np.int8))
         for name, fill in fills.items():
             masked = _not_done_as_fill()(ds[name].variable, done, fill)
