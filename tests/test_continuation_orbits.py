@@ -528,3 +528,24 @@ def test_a_hop_onto_another_family_at_the_smallest_step_ends_the_branch_saying_s
     assert "min_step = 1e-05" in reason and "smaller continuation.min_step" in reason
     assert not [kind for kind, _ in found if "fold" in kind], found  # no hop recorded as a fold
     assert abs(orbits[-1].parameter - 25.2675) < 1e-3, orbits[-1].parameter
+
+
+def test_a_branch_whose_corrector_fails_down_to_min_step_names_the_lever(monkeypatch):
+    """A branch that ends newton_failed with the smallest step said only where: Fig. 1's bubble of
+    six periods ends so 1e-5 short of its other doubling, which continuation.min_step = 1e-6
+    reaches. The reason now names min_step and its value, so a reader knows what to try."""
+    correct = continuation.correct
+
+    def failing_beyond(problem, z_guess, *args, **kwargs):
+        if z_guess[2] > 23.2:  # an orbit the corrector cannot reach, as at a steep curl
+            return None, (continuation.ENDED_NEWTON, "Newton did not converge in 8 iterations (residual 0.1)")
+        return correct(problem, z_guess, *args, **kwargs)
+
+    monkeypatch.setattr(continuation, "correct", failing_beyond)
+    problem = _problem(min_step=1e-4)
+    start = continuation.find_start(problem, [0.0, 0.0], 23.0, 200, 16)
+    branch, _ = continuation.continue_branch(problem, start, 22.9, 23.5, 50)
+    status, reason = branch.ends["up"]
+    assert status == "newton_failed", branch.ends
+    assert "with the smallest step" in reason and "a smaller continuation.min_step (now 0.0001)" in reason, reason
+    assert branch.orbits[-1].parameter <= 23.2 < branch.orbits[-1].parameter + 1e-3, branch.orbits[-1].parameter

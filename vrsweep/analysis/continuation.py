@@ -876,6 +876,12 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 curl = (f"; the branch curves here on a scale below min_step = {options['min_step']:g} (steps from "
                         "this orbit were refused as too long for its curvature): a smaller continuation.min_step "
                         "may follow it" if strayed else "")
+                # A corrector that fails at every step down to min_step may converge at a smaller one:
+                # Fig. 1's bubble of six periods ends so 1e-5 short of its other doubling, which
+                # min_step = 1e-6 reaches (docs/continuation.md). Say where the lever is.
+                if status == ENDED_NEWTON and not curl:
+                    curl = (f"; a smaller continuation.min_step (now {options['min_step']:g}) may carry the branch "
+                            "further")
                 reason = (f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
                           f"{curl}{_section_note(problem, current)}")
                 return orbits, bifurcations, (status, reason)
