@@ -87,3 +87,16 @@ def test_threads_may_be_a_numpy_integer(tmp_path):
     for value in (np.bool_(True), np.int64(0), np.float64(1.0)):
         with pytest.raises(UsageError, match=r"^threads must be a whole number of at least 1, got "):
             vrsweep.sweep(config, threads=value, progress=False)
+
+
+def test_a_sweep_on_fewer_threads_leaves_the_callers_numba_count_as_it_was():
+    """numba keeps its thread count per Python thread: vrsweep.sweep(cfg, threads=1) left the
+    notebook's own parallel numba code on one thread for the rest of the session."""
+    code = ("import warnings; warnings.simplefilter('ignore'); import numba, vrsweep; "
+            "config = {'model': 'effective', 'integration': {'transient_periods': 1, 'measure_periods': 1, "
+            "'strobe_periods': 1}, 'sweep': {'g': {'start': 5, 'stop': 6, 'num': 4}}}; "
+            "vrsweep.sweep(config, threads=1, progress=False); print(numba.get_num_threads())")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=dict(os.environ, NUMBA_NUM_THREADS="2"), timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["2"], done.stdout

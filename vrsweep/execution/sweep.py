@@ -46,6 +46,19 @@ def integration_settings(integration):
 _LAUNCH_LOCK = threading.Lock()
 
 
+@contextlib.contextmanager
+def numba_threads(threads):
+    """numba runs the kernel on ``threads`` threads (at most its pool's), and the calling thread's
+    count is put back after: numba keeps the count per Python thread, and ``vrsweep.sweep(cfg,
+    threads=1)`` left a notebook's own parallel numba code on one thread for the session."""
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
+
+
 def kernel_launch_lock():
     """Held around a parallel kernel's launch where numba's threading layer is not threadsafe.
 
@@ -91,7 +104,6 @@ class LineRunner:
         """Start the lines' kernel: on the CPU it runs here, to the end; on a GPU it is launched and
         left running (finish waits for it), so that the host can meanwhile finish the chunk before."""
         threads = threads or numba.config.NUMBA_NUM_THREADS
-        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
         n_lines, line_length = lines.shape
         flat = np.ascontiguousarray(lines, dtype=np.int64).reshape(-1)
         coefficients = np.ascontiguousarray(
@@ -113,8 +125,8 @@ class LineRunner:
         if self.device == "cuda":
             chunk.launch = self.run_lines.launch(*arrays)
         else:
-            with kernel_launch_lock(), numba.parallel_chunksize(1):  # dynamic scheduling: point costs differ tenfold
-                self.run_lines(*arrays)
+            with kernel_launch_lock(), numba.parallel_chunksize(1), numba_threads(threads):
+                self.run_lines(*arrays)  # chunk size 1: dynamic scheduling, point costs differ tenfold
         return chunk
 
     def finish(self, chunk):
