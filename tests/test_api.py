@@ -392,7 +392,8 @@ def test_the_figures_take_what_the_functions_return(tmp_path, invoke, sweep_yaml
     for kind in ("trajectory", "slowflow", "impacts"):
         assert _drawn(plot.plot(groups, kind=kind)) == _drawn(plot.plot(out, kind=kind)), kind
     alone = vrsweep.simulate(config, samples_per_period=10)  # the original run only: no file behind it
-    assert _drawn(plot.plot(alone)) == _drawn(plot.plot([vrsweep.open_results(out)]))
+    with vrsweep.open_results(out) as opened:
+        assert _drawn(plot.plot(alone)) == _drawn(plot.plot([opened]))
     assert _drawn(plot.plot(api_dataset)) == _drawn(plot.plot(cli_file))
     assert _drawn(plot.plot(api_dataset, kind="map")) == _drawn(plot.plot([cli_file], kind="map"))
 

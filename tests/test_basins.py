@@ -113,13 +113,13 @@ def small_sweep(tmp_path_factory, run_ok, write_config):
 
 def test_initial_state_axes_reproduce_single_runs_bit_for_bit(small_sweep, tmp_path, run_ok):
     path, out = small_sweep
-    data = xr.open_dataset(out, engine="h5netcdf")
+    data = xr.load_dataset(out, engine="h5netcdf")
     for g, x0, v0 in [(22.5, -2.0, 0.0), (23.0, 0.5, -1.5), (23.0, -2.0, -1.5)]:
         single = tmp_path / f"single_{g}_{x0}_{v0}.h5"
         # initial.x / initial.v fix the state the way `initial:` does (and drop the x0 / v0 axes).
         run_ok("run", path, "-o", single, "--quiet", "--set", f"g={g!r}", "--set", f"initial.x={x0!r}",
                "--set", f"initial.v={v0!r}")
-        one = xr.open_dataset(single, engine="h5netcdf")
+        one = xr.load_dataset(single, engine="h5netcdf")
         assert one.R.dims == ()
         point = data.sel(g=g, x0=x0, v0=v0)
         for name in ("R", "R_err", "strobe_x", "strobe_v", "x_final", "v_final", "n_steps", "status"):
@@ -127,7 +127,7 @@ def test_initial_state_axes_reproduce_single_runs_bit_for_bit(small_sweep, tmp_p
 
 
 def test_initial_state_coordinates_have_units_and_long_names(small_sweep):
-    data = xr.open_dataset(small_sweep[1], engine="h5netcdf")
+    data = xr.load_dataset(small_sweep[1], engine="h5netcdf")
     assert data.x0.attrs["units"] == "1" and data.x0.attrs["long_name"] == "initial position x(0)"
     assert data.v0.attrs["units"] == "1" and data.v0.attrs["long_name"] == "initial velocity x'(0)"
     assert data.attractor.dims == ("g", "x0", "v0")
@@ -277,7 +277,7 @@ def bistable(tmp_path_factory, run_ok, write_config):
 
 
 def test_the_bistable_example_has_exactly_its_two_attractors(bistable):
-    data = xr.open_dataset(bistable, engine="h5netcdf")
+    data = xr.load_dataset(bistable, engine="h5netcdf")
     assert int(data.attractor_count) == 2
     rest = int(data.attractor.sel(x0=0.0, v0=0.0))
     impacting = {int(data.attractor.sel(x0=x0, v0=v0)) for x0, v0 in [(0.9, 1.0), (-2.0, 0.0), (0.5, -1.5)]}
@@ -304,7 +304,7 @@ def test_the_tolerance_picks_one_of_four_coexisting_orbits_of_the_original_model
     small = tmp_path / "small.yaml"
     small.write_text(path.read_text().replace("num: 31", "num: 6"))
     run_ok("run", small, "-o", out, "--quiet", "--overwrite")
-    data = xr.open_dataset(out, engine="h5netcdf")
+    data = xr.load_dataset(out, engine="h5netcdf")
     assert int(data.attractor_count) == 4
     assert data.attractor_period.values.tolist() == [1] * 4
     assert data.attractor_impacts_per_cycle.values.tolist() == [4] * 4
@@ -314,7 +314,7 @@ def test_the_tolerance_picks_one_of_four_coexisting_orbits_of_the_original_model
     for rtol in ("1e-8", "1e-10", "1e-12"):
         single = tmp_path / f"single_{rtol}.h5"
         run_ok("run", path, "-o", single, "--quiet", "--set", "x0=0.99", "--set", "v0=0.5", "--set", f"rtol={rtol}")
-        one = xr.open_dataset(single, engine="h5netcdf")
+        one = xr.load_dataset(single, engine="h5netcdf")
         assert int(one.period) == 1 and int(one.impacts_per_cycle) == 4
         nearest = int(np.argmin(np.abs(R - float(one.R))))
         assert abs(R[nearest] - float(one.R)) < 1e-6, (rtol, float(one.R), R)

@@ -37,7 +37,7 @@ def grid_of(text):
 
 
 def open_result(path):
-    return xr.open_dataset(path, engine="h5netcdf")
+    return xr.load_dataset(path, engine="h5netcdf")  # read whole and closed: no file left open
 
 
 # --- config and run order -------------------------------------------------------------------------

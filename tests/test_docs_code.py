@@ -386,7 +386,9 @@ def test_make_figures_hysteresis_draws_the_stable_orbit_each_down_sweep_point_li
         result = invoke(*words, *([] if words[0] == "plot" else ["--quiet"]))
         assert result.exit_code == 0, f"vrsweep {shlex.join(words)}\n{result.output}"
     plot = commands[-1]
-    drawn = [vrsweep.open_results(name) for name in plot[1:plot.index("-o")]]
+    drawn = [vrsweep.open_results(name).load() for name in plot[1:plot.index("-o")]]
+    for data in drawn:
+        data.close()  # left open, xarray's cache kept the files open for the worker's later tests
     branches = [data for data in drawn if data.attrs["vrsweep_file"] == "branch"]
     sweeps = [data for data in drawn if data.attrs["vrsweep_file"] != "branch"]
     assert len(sweeps) == 1 and branches
