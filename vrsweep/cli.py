@@ -13,6 +13,7 @@ import click
 
 from vrsweep import __version__
 from vrsweep.errors import VrsweepError, one_line
+from vrsweep.execution.signals import forget_raised
 from vrsweep.store.provenance import record_command_line
 
 
@@ -35,7 +36,7 @@ class _Group(click.Group):
 
     def invoke(self, ctx):
         try:
-            from vrsweep.execution.signals import raise_on_sigint
+            from vrsweep.execution.signals import raise_if_swallowed, raise_on_sigint
 
             raise_on_sigint()  # from here on, KeyboardInterrupt: handled below (and by run)
             # numpy's overflow warnings from vrsweep's own arithmetic (omega = 1e-320 in the theory)
@@ -43,7 +44,14 @@ class _Group(click.Group):
             # it (NaN, a status, "-" in a table).
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"vrsweep\.")
-                return super().invoke(ctx)
+                result = super().invoke(ctx)
+            # A signal whose Interrupted C code swallowed while the command ran (an import:
+            # numpy.random registering its classes with abc) ended simulate, plot, info ... with
+            # exit 0, as if never sent (run, merge and continue ask their stop). The command has
+            # finished, and what it wrote is complete (written under a temporary name, renamed):
+            # the line and code of a signal that arrives at its last moment.
+            raise_if_swallowed()
+            return result
         except click.UsageError as error:
             # click's own refusal of an option (--dpi 5, --kind nope, a missing argument) is four
             # lines: usage, a hint, a blank line, the error. One line, as every other bad input.
@@ -81,6 +89,10 @@ class _Group(click.Group):
             newline = "\n" if sys.stderr.isatty() else ""  # off the terminal's "^C"
             click.echo(f"{newline}Interrupted ({str(interrupt) or 'SIGINT'})", err=True)
             ctx.exit(getattr(interrupt, "exit_code", 130))
+        finally:
+            # Whatever Interrupted was raised has been handled (here, or by run, merge, continue):
+            # left noted, it would stop the next command run in this process (the API, tests).
+            forget_raised()
 
 
 def _one_line(error):

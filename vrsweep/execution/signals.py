@@ -48,10 +48,11 @@ class GracefulStop:
                 self._previous[signum] = signal.signal(signum, self._handle)
             # A signal whose Interrupted an import swallowed before this stop was set up: the run
             # went on as if never asked to stop (see _raise_interrupted). Stop now, nothing written.
-            swallowed = _take_swallowed()
-            if swallowed is not None:
+            try:
+                raise_if_swallowed()
+            except Interrupted:
                 self.__exit__()
-                raise Interrupted(swallowed)
+                raise
         return self
 
     def __exit__(self, *exc):
@@ -87,6 +88,22 @@ _raised = []
 def _take_swallowed():
     """The signal of an Interrupted raised and never handled, or None; forgotten once taken."""
     return _raised.pop() if _raised else None
+
+
+def raise_if_swallowed() -> None:
+    """Raise the :class:`Interrupted` of a signal that C code swallowed (see ``_raised``), once;
+    nothing if there is none. The command line asks after every command (cli.py): simulate, plot,
+    info ... have no stop of their own, and one swallowed during their imports ended them with
+    exit 0, the scancel lost (0.7.5 fixed run only)."""
+    swallowed = _take_swallowed()
+    if swallowed is not None:
+        raise Interrupted(swallowed)
+
+
+def forget_raised() -> None:
+    """The Interrupted of _raise_interrupted reached its handler (cli.py): nothing was swallowed.
+    Left noted, it stopped the next command run in the same process (the Python API, tests)."""
+    _raised.clear()
 
 
 def _exit_interrupted(signum, frame):
