@@ -35,7 +35,8 @@ ALLOWED = {
     "execution": {"numerics", "analysis", "config", "store"},
     # model: parameter symbols for labels; written: where a written model's barriers are drawn
     "plot": {"analysis", "config", "store", "numerics.model", "numerics.written"},
-    "commands": {"numerics", "analysis", "config", "store", "execution", "plot", "cli"},
+    # mpl_folder: plot says where matplotlib's folder went when it is not its usual one
+    "commands": {"numerics", "analysis", "config", "store", "execution", "plot", "cli", "mpl_folder"},
 }
 # Top-level modules, each with the reason it is not in a layer.
 TOP_LEVEL = {
@@ -46,6 +47,7 @@ TOP_LEVEL = {
     "numbertext": "numbers typed as text (options, YAML, a written model's literals), read by one rule in every layer",
     "results": "the point statuses every layer reads",
     "cli": "the console script's entry point (pyproject.toml), registering the commands",
+    "mpl_folder": "matplotlib's folder, chosen when the package is imported: config and plot import matplotlib",
 }
 
 

@@ -27,8 +27,10 @@ if _os.path.basename(_sys.argv[0]) in ("vrsweep", "-m"):  # the command line (`v
 from vrsweep._version import __version__  # noqa: E402
 from vrsweep.numerics import numba_cache as _numba_cache  # noqa: E402
 from vrsweep.execution import threads as _threads  # noqa: E402
+from vrsweep import mpl_folder as _mpl_folder  # noqa: E402
 
 _numba_cache.configure()  # before anything imports numba: kernels never go into site-packages
+_mpl_folder.configure()  # before anything imports matplotlib: a writable folder, not its warnings
 _threads.drop_unreadable_setting()
 _threads.word_numba_setting_warnings()
 

@@ -160,6 +160,10 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
         # Only what was not already done: --no-title given is never advised again.
         advice = ("--no-title, " if title else "") + "a larger --size" + (", --legend none" if legend != "none" else "")
         click.echo(f"Note: {one_line(path)}: {layout_note(figure)} ({advice})", err=True)
+    from vrsweep import mpl_folder
+
+    if mpl_folder.notice():  # matplotlib's own two warnings are not printed (mpl_folder.py)
+        click.echo(f"Note: {one_line(mpl_folder.notice())}", err=True)
     click.echo(f"-> {one_line(path)}", err=True)
 
 
