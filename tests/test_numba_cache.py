@@ -238,3 +238,24 @@ def test_a_kernel_the_cache_has_no_room_for_still_runs_with_one_note(tmp_path, l
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("Note: the compiled kernel could not be saved in the numba "
                                                    "cache") and "File too large" in lines[0], done.stderr
+
+
+@pytest.mark.parametrize("value, expected", [
+    ("~/numba", "{home}/numba"),     # quoted in a job script: the shell left the ~
+    ("relative/numba", "{cwd}/relative/numba"),
+    (" ", "{xdg}/vrsweep"),           # blank: the default, not a folder named " "
+])
+def test_numba_cache_dir_is_read_as_a_shell_would(value, expected, tmp_path):
+    """NUMBA_CACHE_DIR='~/numba' made a folder named '~' in the current folder, a relative path
+    one folder per folder a command started in (a worker inherits it as given), and a blank value
+    a folder named ' '. Now ~ is the home folder, the path absolute, a blank value the default."""
+    (tmp_path / "home").mkdir()
+    (tmp_path / "cwd").mkdir()
+    code = "import os, vrsweep, numba.core.config as c; print(os.environ['NUMBA_CACHE_DIR']); print(c.CACHE_DIR)"
+    done = _run(code, {"NUMBA_CACHE_DIR": value, "HOME": str(tmp_path / "home"),
+                       "XDG_CACHE_HOME": str(tmp_path / "xdg"), "PYTHONPATH": str(PACKAGE.parent)},
+                tmp_path / "cwd")
+    assert done.returncode == 0, done.stderr
+    folder = expected.format(home=tmp_path / "home", cwd=tmp_path / "cwd", xdg=tmp_path / "xdg")
+    assert done.stdout.split() == [f"{folder}/{folder_name()}"] * 2
+    assert list((tmp_path / "cwd").iterdir()) == ([tmp_path / "cwd" / "relative"] if value.startswith("rel") else [])

@@ -67,9 +67,12 @@ def preferred_dir() -> Path:
     """The folder the user asked for: ``NUMBA_CACHE_DIR`` or the per-user cache, plus
     :func:`folder_name` (unless the path already ends in it, as in a worker that inherited it)."""
     explicit = os.environ.get("NUMBA_CACHE_DIR")
-    if explicit:
-        base = Path(explicit)
-    else:
+    if explicit and explicit.strip():
+        # As a shell would have read it unquoted: NUMBA_CACHE_DIR="~/.cache/numba" in a job script
+        # made a folder named "~" in the current folder, and a relative path another folder in
+        # each folder a command (or a worker, which inherits the variable) starts in.
+        base = Path(os.path.abspath(os.path.expanduser(explicit)))
+    else:  # unset, empty or blank (a blank value made a folder named " " in the current folder)
         import platformdirs
 
         base = Path(platformdirs.user_cache_dir("vrsweep", appauthor=False))
