@@ -72,7 +72,11 @@ def test_every_task_of_an_array_gets_its_own_shard():
     ("auto", slurm(9, 8, first=1), "index 8 is not in 0..7"),       # outside the array
     ("auto", slurm(4, 3, first=1, step=2), "not on the range"),     # task 4 of --array=1-5:2?
     ("auto", slurm(7, 3, first=1), "not a list"),                   # --array=1,4,7
-    ("auto", {"SLURM_ARRAY_TASK_ID": "x", "SLURM_ARRAY_TASK_COUNT": "2"}, "SLURM_ARRAY_TASK_ID"),
+    ("auto", {"SLURM_ARRAY_TASK_ID": "x", "SLURM_ARRAY_TASK_COUNT": "2"}, "SLURM_ARRAY_TASK_ID='x' is not a whole number"),
+    # the variable that is wrong, not the two that are set (all four were "needs SLURM_ARRAY_TASK_ID and ...")
+    ("auto", {"SLURM_ARRAY_TASK_ID": "1", "SLURM_ARRAY_TASK_COUNT": ""}, "SLURM_ARRAY_TASK_COUNT='' is not a whole"),
+    ("auto", {**slurm(1, 2), "SLURM_ARRAY_TASK_STEP": "abc"}, "SLURM_ARRAY_TASK_STEP='abc' is not a whole number"),
+    ("auto", {**slurm(1, 2), "SLURM_ARRAY_TASK_MIN": "1.5"}, "SLURM_ARRAY_TASK_MIN='1.5' is not a whole number"),
     ("2/2", {}, "not in 0..1"),
     ("-1/2", {}, "not in 0..1"),
     ("1/0", {}, "number of shards N must be >= 1, got 0"),

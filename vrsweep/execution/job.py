@@ -120,14 +120,12 @@ def parse_shard(text, environ=None):
     if text is None:
         return (0, 1)
     if text == "auto":
-        try:
-            task = to_int(environ["SLURM_ARRAY_TASK_ID"])
-            count = to_int(environ["SLURM_ARRAY_TASK_COUNT"])
-            first = to_int(environ.get("SLURM_ARRAY_TASK_MIN", 0))
-            step = to_int(environ.get("SLURM_ARRAY_TASK_STEP", 1) or 1)
-        except (KeyError, ValueError):
+        if "SLURM_ARRAY_TASK_ID" not in environ or "SLURM_ARRAY_TASK_COUNT" not in environ:
             raise InvalidArgument("shard", text, "needs SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT "
-                                                 "(run it inside a SLURM job array, or give the shard as I/N)") from None
+                                                 "(run it inside a SLURM job array, or give the shard as I/N)")
+        task, count, first, step = (_slurm_int(environ, text, name, default) for name, default in (
+            ("SLURM_ARRAY_TASK_ID", None), ("SLURM_ARRAY_TASK_COUNT", None), ("SLURM_ARRAY_TASK_MIN", 0),
+            ("SLURM_ARRAY_TASK_STEP", 1)))
         offset = task - first
         if step < 1 or offset % step:
             raise InvalidArgument(
@@ -148,6 +146,20 @@ def parse_shard(text, environ=None):
         hint = "; submit the array as a range A-B (or A-B:STEP), not a list" if text == "auto" else ""
         raise InvalidArgument("shard", text, f"{where}shard index {clip(index)} is not in 0..{clip(count - 1)}{hint}")
     return (index, count)
+
+
+def _slurm_int(environ, text, name, default):
+    """The whole number SLURM set in ``name`` (``default`` where it is unset or empty, if any).
+    One that is not a whole number is named with its value: SLURM_ARRAY_TASK_STEP=abc was refused
+    as "needs SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT", both of which were set."""
+    value = environ.get(name, "")
+    if value == "" and default is not None:
+        return default
+    try:
+        return to_int(value)
+    except ValueError:
+        raise InvalidArgument("shard", text, f"{name}={clip(repr(value))} is not a whole number (SLURM sets it in a "
+                                             "job array; run it inside one, or give the shard as I/N)") from None
 
 
 SHARD_SUFFIX = re.compile(r"\.shard([0-9]+)of([0-9]+)$")  # [0-9]: re's \d is any Unicode digit  # OUT.shardIofN.h5's, as merge reads it too
