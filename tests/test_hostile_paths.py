@@ -124,3 +124,25 @@ def test_a_config_output_ending_in_slash_dot_names_a_folder(tmp_path, write_conf
     assert result.exit_code == 2, result.output
     assert "sweep.yaml:6: output: must name a file, got 'out.h5/.', which ends in '/.' (a folder): give the " \
            "file's name, e.g. out.h5/results.h5" in result.output, result.output
+
+
+@pytest.mark.parametrize("output, variable", [("$VRS_OUT/x.h5", "VRS_OUT"), ("${VRS_OUT}/x.h5", "VRS_OUT"),
+                                              ("~/x.h5", "HOME")])
+def test_an_empty_variable_in_the_config_output_is_refused(output, variable, tmp_path, monkeypatch,
+                                                           write_config, invoke):
+    """A variable set but empty left the path's start empty, as an unset one would have: "/x.h5",
+    and `run` wrote its results at the file system's root (an export in a job script that found
+    nothing, SCRATCH=""; HOME="" for ~, which expanduser reads as the home folder "")."""
+    monkeypatch.chdir(tmp_path)
+    config = write_config(tmp_path, TINY + f"output: {output}\n")
+    monkeypatch.setenv(variable, "")
+    if variable == "VRS_OUT":
+        words = f"uses the environment variable {variable}, which is empty"
+    else:
+        words = "starts with ~, the home folder, but HOME is empty"
+    for command in ("validate", "run"):
+        result = invoke(command, config, "-q") if command == "run" else invoke(command, config)
+        assert result.exit_code == 2, result.output
+        assert f"sweep.yaml:6: output: '{output}' {words}" in result.output, result.output
+        assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert sorted(os.listdir(tmp_path)) == ["sweep.yaml"] and not os.path.exists("/x.h5")

@@ -324,6 +324,11 @@ class Config:
             # directory (where `rm -r ~` is one slip away) and wrote the results there, and
             # "$SCRATCH/x.h5" a folder named "$SCRATCH". Expanded here, where the path is used,
             # not when the config is read: a stored config is read again on other machines.
+            if re.match(r"~(?:[/\\]|$)", self.output) and os.environ.get("HOME") == "":
+                # expanduser reads an empty HOME as the home folder "": "~/x.h5" was "/x.h5", the
+                # results written at the file system's root
+                raise self._output_error("starts with ~, the home folder, but HOME is empty: set HOME, "
+                                         "or give the path with -o")
             expanded = os.path.expanduser(self.output)
             if expanded.startswith("~"):
                 # "~nosuchuser/x.h5" (a typo, or a user of another machine: the stored config is
@@ -346,6 +351,11 @@ class Config:
             name = match.group(1) or match.group(2)
             if name not in os.environ:
                 raise self._output_error(f"uses the environment variable {name}, which is not set: set it, or "
+                                         f"give the path with -o")
+            if not os.environ[name].strip():
+                # "$SCRATCH/x.h5" with SCRATCH set but empty (an export in a job script that found
+                # nothing) was "/x.h5": the results written at the file system's root
+                raise self._output_error(f"uses the environment variable {name}, which is empty: set it, or "
                                          f"give the path with -o")
             return os.environ[name]
 
