@@ -62,7 +62,7 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
     N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
     ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
-    no_preparations, no_switches, prepare_rotations_for, UNFROZEN,
+    no_preparations, no_saltation, no_switches, prepare_rotations_for, UNFROZEN,
     dop853_rotation_scratch, force_at_barrier, no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent,
     oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations,
     rotation_scratch,
@@ -184,10 +184,10 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     cosines at every evaluation. Since version 0.2 steps are no longer capped at 1/8 of the
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_switches, no_preparations,
+    return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_preparations,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
-                      rejected_step_factor, False, np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET), no_scratch(0.0),
+                      rejected_step_factor, False, (np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
@@ -201,11 +201,11 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
     library (oscillator_rhs).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, prepare_rotations_for,
+    return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, prepare_rotations_for,
                       DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, False,
-                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET),
+                      (np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET)),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
@@ -219,11 +219,11 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_preparations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_preparations,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
-                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET), no_scratch(0.0),
+                      (np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
 
@@ -232,11 +232,11 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, prepare_rotations_for,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, prepare_rotations_for,
                       DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET),
+                      (np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET)),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
@@ -252,11 +252,11 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     interval makes it zero. No renormalisation: one period's map stays far inside double range
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_preparations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_preparations,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
-                      np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET), no_scratch(0.0),
+                      (np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET)), no_scratch(0.0),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart)
 
@@ -265,11 +265,11 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, prepare_rotations_for,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, prepare_rotations_for,
                       DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET),
+                      (np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
+                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET)),
                       dop853_rotation_scratch(coefficients[MAX_STEP]),
                       coefficients, initial_state, settings, period_records, summary,
                       sample_times, samples, impact_log, stick_log, monodromy_log, lanes_apart)
@@ -294,9 +294,8 @@ def integrator(method, lyapunov=False):
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
-def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, rules, step, step_error,
-               dense_output, accepted_factor, certain_growth, rejected_factor, tangents, K, dense, vectors, bracket,
-               scratch, coefficients, initial_state, settings, period_records, summary,
+def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_saltation, prepare, rules, step, step_error,
+               dense_output, accepted_factor, certain_growth, rejected_factor, tangents, work, scratch, coefficients, initial_state, settings, period_records, summary,
                sample_times, samples, impact_log, stick_log, monodromy_log, gather_lanes):
     """The integration loop of every method; see integrate_rk45 for the arguments.
 
@@ -307,7 +306,11 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
     bit each (codegen.switching_functions: the argument of abs and sign, the difference of min's
     and max's arguments), 0 for a smooth one (rhs.no_switches), so that a step that crosses a kink
     or jump is cut to end on it (locate_switch) and the method's order holds on each side: the
-    paper's family passes rhs.py's, a written model its generated ones (codegen.py); stage_rhs the
+    paper's family passes rhs.py's, a written model its generated ones (codegen.py);
+    switch_saltation(t, y, coefficients, mode, crossing, a_before, a_after) jumps the tangent
+    vectors in y by the saltation matrix of the crossed surfaces (bits ``crossing``) where the
+    force jumps there (codegen._switch_saltation_body; tangent.apply_switch_saltation) and answers
+    whether it changed them (rhs.no_saltation: never); stage_rhs the
     same at a step's stages, after prepare(t, h, coefficients, scratch, dense) (dense: True before a
     dense output, which also prepares the dense output's extra stages), with scratch =
     the method's own (dop853_rotation_scratch(h_max), or no_scratch), whose last value is the
@@ -322,7 +325,9 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
     n_dynamic) fills dense and returns its extra RHS count. tangents: the state carries the
     tangent vectors (state.py) and the right-hand sides integrate them; n_dynamic is the number of
     state components the right-hand sides read. The work arrays are the caller's, so that the loop
-    allocates nothing and compiles for a GPU thread as it does for a CPU one (cuda.py): K (rows,
+    allocates nothing and compiles for a GPU thread as it does for a CPU one (cuda.py); work is the
+    tuple (K, dense, vectors, bracket) (one argument: a call of more than 30 arguments is compiled by
+    CPython as a call with *args, which numba cannot inline), K (rows,
     n_state) and dense (n_state, order), the method's; vectors (N_VECTORS, n_state), the state, the
     trial state, a stage's state and the derivative (rows Y_ROW ...); bracket (bracket_size(order)
     at least: N_BRACKET holds any method's), find_crossing's, which each barrier's test reuses.
@@ -383,6 +388,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
     stick_scan_step = coefficients[SCAN_STEP]
 
     grid_steps, hold_after_reject, initial_order, n_stages = rules
+    K, dense, vectors, bracket = work
     n_state = K.shape[1]
     y = vectors[Y_ROW]
     y_new = vectors[Y_NEW_ROW]
@@ -751,6 +757,13 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, prepare, ru
                     n_rhs += 1
                     jumped = abs(f[V] - before) > JUMP_TOLERANCE * max(abs(f[V]), abs(before))
                     landed = True
+                    # Where the force jumps there (sign(v)), so do the tangent vectors: a neighbour
+                    # crosses a little earlier or later and spends the difference in the other
+                    # side's field (the saltation matrix; without it lambda_1 of Coulomb friction
+                    # was 1.5e-2 off, tests/test_written_saltation.py)
+                    if tangents and switch_saltation(t, y, coefficients, mode, crossing, before, f[V]):
+                        rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)  # f of the jumped tangent vectors
+                        n_rhs += 1
 
             # --- the impact: restitution (eq2.2), or the start of sticking ---
             if impact:

@@ -69,11 +69,11 @@ def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
 
 
 def paper_functions(tangents):
-    """The paper's family's (rhs, tangent, barrier_force, switch_signs), as kernel._integrate takes
-    them with the library's cosines (the GPU's line kernel, cuda.line_kernel; tests that drive the
+    """The paper's family's (rhs, tangent, barrier_force, switch_signs, switch_saltation), as
+    kernel._integrate takes them with the library's cosines (the GPU's line kernel, cuda.line_kernel; tests that drive the
     loop). Its acceleration is smooth: no switching functions."""
     model_rhs = oscillator_tangent_rhs if tangents else oscillator_rhs
-    return model_rhs, oscillator_tangent, force_at_barrier, no_switches
+    return model_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation
 
 
 @kernel_jit
@@ -117,6 +117,14 @@ def no_switches(t, x, v, coefficients):
     whose acceleration is smooth, as the paper's: none, a constant that LLVM inlines and folds
     away, so the kink location costs their kernels nothing."""
     return 0
+
+
+@kernel_jit
+def no_saltation(t, y, coefficients, mode, crossing, acceleration_before, acceleration_after):
+    """kernel._integrate's switch_saltation for a model with no jump of its force (the paper's, or
+    a written one with kinks only): the tangent vectors are continuous across every surface, S = I.
+    False: nothing changed (a constant, folded away with the branch it guards)."""
+    return False
 
 
 # --- the forcing's phases rotated to the stage times (the dop853 kernel) ------------------------

@@ -12,6 +12,9 @@ carried along the trajectory (docs/design.md, "Lyapunov exponents", derives ever
   u jumps by the saltation matrix
       S = [[-e, 0], [(a+ + e a-) / v-, -e]],   det S = e^2,
   a- and a+ the accelerations just before and after the impact;
+- where a written model's acceleration jumps across a switching surface h = 0 (sign(v)), u jumps
+  by that crossing's saltation matrix, S = I + (f+ - f-) grad h^T / (grad h . f- + dh/dt)
+  (apply_switch_saltation); at a kink (abs, min, max: the force is continuous) S = I;
 - while stuck on the barrier the state is (Delta, 0) whatever it was before: the tangent map
   of the flow over a sticking interval is zero, and u collapses to zero (the exponent of a
   point that sticks in the measurement window is -inf, exactly);
@@ -69,6 +72,23 @@ def apply_saltation(y, v_before, acceleration_before, acceleration_after, restit
         dv = y[TANGENT + 2 * i + 1]
         y[TANGENT + 2 * i] = -restitution * dx
         y[TANGENT + 2 * i + 1] = coupling * dx - restitution * dv
+
+
+@kernel_jit(inline="always")
+def apply_switch_saltation(y, dh_dx, dh_dv, rate, jump):
+    """u -> S u where the flow crosses a switching surface h(t, x, v) = 0 on which the acceleration
+    jumps by ``jump`` = a+ - a- (a written model's sign(v); codegen._switch_saltation_body):
+        S = I + (f+ - f-) grad h^T / (grad h . f- + dh/dt),   f+- = (v, a+-),
+    the saltation matrix of a transversal crossing (Aizerman-Gantmacher; Filippov). rate is
+    grad h . f- + dh/dt = dh_dx v + dh_dv a- + dh_dt, the rate at which the trajectory from the
+    side it left crosses the surface. A neighbour displaced by u meets the surface
+    tau = -(grad h . u) / rate later, and over tau it moves with the other side's field: its
+    velocity gains (a- - a+) tau. Only v's component jumps (f+ - f- = (0, a+ - a-))."""
+    factor = jump / rate
+    for i in range(N_TANGENT_VECTORS):
+        dx = y[TANGENT + 2 * i]
+        dv = y[TANGENT + 2 * i + 1]
+        y[TANGENT + 2 * i + 1] = dv + factor * (dh_dx * dx + dh_dv * dv)
 
 
 @kernel_jit(inline="always")
