@@ -124,6 +124,8 @@ RESULT_EPOCHS = (
     ("0.7.4", "a written model's kinks (abs, min, max of the state) are located as events"),
     ("0.7.5", "a written model's jumps (sign) are located as events too, and the steps around a kink or jump hold "
               "its side (a frozen mode)"),
+    ("0.7.6", "a written model's tangent vectors jump by the saltation matrix where its force jumps (sign): the "
+              "lyapunov of such models changes"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -148,7 +150,9 @@ bit for bit); 0.7.5 locates the jumps of sign too, holds each switch's side for 
 the steps that end on a surface and leave it (the frozen mode: a stage a rounding across it was an
 error of the jump times the step, in friction's force and in the tangents' Jacobian at a kink, so
 lambda_1 of a bilinear spring scattered by 1e-6), and ends a sliding motion with the status
-sliding; the paper's models have no switches and are unchanged bit for bit. Versions of one epoch
+sliding; the paper's models have no switches and are unchanged bit for bit; 0.7.6 jumps the
+tangent vectors by the saltation matrix where a written force jumps (friction's lambda_1 was the
+damping's -zeta alone, 1.5e-2 off; kinks and the paper's models unchanged bit for bit). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
