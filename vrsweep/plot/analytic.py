@@ -85,24 +85,42 @@ def _draw_branches(ax, branches, colour):
 
 
 def resonance_positions(parameters, axis, values):
-    """Where along ``axis`` the effective frequency meets the slow one, wt2 = omega^2 (eq3.4).
+    """Where along ``axis`` the effective frequency meets the slow one, wt2 = omega^2 (eq3.4), and
+    the fast force is fast (Omega > omega: ``theory.fast_force``; below, eq3.4 means nothing).
 
     For the g axis these are +-g_res; for other axes the root is found on the fine grid ``values``
     (linear interpolation between sign changes). Empty where the axis leaves wt2 - omega^2 one-signed.
     """
+    return resonance_roots(parameters, axis, values)[0]
+
+
+def resonance_roots(parameters, axis, values):
+    """(positions, cut): ``resonance_positions``, and whether a root of wt2 = omega^2 on the range
+    was left out because Omega <= omega there (for the caption: the curve stops, and says why)."""
     from vrsweep.analysis import theory
 
     if axis == "g":
         g_res = float(theory.g_res(parameters["alpha"], parameters["omega0"], parameters["omega"],
                                    parameters["Omega"]))
-        return [g for g in (-g_res, g_res) if values.min() <= g <= values.max()]
+        roots = [g for g in (-g_res, g_res) if values.min() <= g <= values.max()]
+        if roots and not bool(theory.fast_force(parameters)):
+            return [], True
+        return roots, False
     fine = _fine_parameters(parameters, axis, values)
     detuning = theory.effective_frequency_squared(fine) - np.square(fine["omega"])
-    positions = []
+    fast = theory.fast_force(fine)
+    positions, cut = [], False
     for i in np.flatnonzero(np.sign(detuning[:-1]) * np.sign(detuning[1:]) < 0):
         fraction = detuning[i] / (detuning[i] - detuning[i + 1])
-        positions.append(float(values[i] + fraction * (values[i + 1] - values[i])))
-    return positions
+        position = float(values[i] + fraction * (values[i + 1] - values[i]))
+        if fast[i] and fast[i + 1]:
+            positions.append(position)
+        else:
+            cut = True
+    return positions, cut
+
+
+RESONANCE_CUT = "no resonance (eq3.4) drawn where Ω ≤ ω: the effective system averages over a fast force"
 
 
 def _resonance_label(axis, position):
@@ -127,7 +145,13 @@ def _draw_resonance_curve(ax, view, x_axis, y_axis):
     mesh = {name: np.full(X.shape, float(value)) for name, value in view.parameters().items()}
     mesh[x_axis], mesh[y_axis] = X, Y
     detuning = theory.effective_frequency_squared(mesh) - np.square(mesh["omega"])
-    if not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
+    # Only where the fast force is fast (Omega > omega, theory.fast_force): below, g_res(Omega) was
+    # drawn on through Omega = 0.25 ... 0.5 of a geometric grid, where eq3.4 means nothing.
+    fast = np.broadcast_to(theory.fast_force(mesh), detuning.shape)
+    slow = ~fast & np.isfinite(detuning)
+    cut = bool(slow.any()) and float(detuning[slow].min()) < 0.0 < float(detuning[slow].max())
+    detuning = np.where(fast, detuning, np.nan)
+    if not np.any(np.isfinite(detuning)) or not (np.nanmin(detuning) < 0.0 < np.nanmax(detuning)):
         return None
     from vrsweep.plot.palettes import cased
 
@@ -140,7 +164,7 @@ def _draw_resonance_curve(ax, view, x_axis, y_axis):
     # g_res(Omega) names the curve only in the (g, Omega) plane; over (Delta, alpha) it is Delta_res(alpha)
     name = "$g_{res}(\\Omega)$: " if {x_axis, y_axis} == {"g", "Omega"} else "resonance: "
     return Line2D([], [], color="white", ls="--", lw=1.6, path_effects=edge,
-                  label=name + "$\\tilde\\omega^2 = \\omega^2$ (eq3.4)")
+                  label=name + "$\\tilde\\omega^2 = \\omega^2$ (eq3.4)" + (", drawn where Ω > ω only" if cut else ""))
 
 
 def barrier_positions(config, parameters) -> list[float]:

@@ -55,7 +55,9 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     if not bifurcation:
         failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
     panels[-1].set_xlabel(view.axis_label(x_axis))
-    notes = "; ".join(n for n in (_progress_note(view), failure_note, note) if n)
+    # Both panels may say one thing (the resonance left out where Omega <= omega): once.
+    notes = "; ".join(dict.fromkeys(n for part in (_progress_note(view), failure_note, note)
+                                    for n in part.split("; ") if n))
     what = (f"Bifurcation diagram (top) and largest Lyapunov exponent {LYAPUNOV_SYMBOL} (bottom)" if bifurcation
             else f"Largest Lyapunov exponent {LYAPUNOV_SYMBOL}")
     _title(fig, f"{what} against {parameter_symbol(x_axis)}: "
@@ -109,7 +111,7 @@ def _draw_lyapunov(ax, view, x_axis, strip=None):
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
     ax.axhline(0.0, color="k", lw=0.9, label=f"{LYAPUNOV_SYMBOL} = 0")
-    _draw_resonance_lines(ax, view, x_axis, x)
+    resonance_note = _draw_resonance_lines(ax, view, x_axis, x)
     _span_grid(ax, x)
     ax.set_ylabel(f"{LYAPUNOV_SYMBOL}, per unit time")
     ax.grid(alpha=0.3)
@@ -124,6 +126,7 @@ def _draw_lyapunov(ax, view, x_axis, strip=None):
     ax.figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",
                       ncol=_legend_columns(ax.figure, 3))
     if not n_stuck:
-        return ""
+        return resonance_note
     points = "1 point" if n_stuck == 1 else f"{n_stuck} points"
-    return f"{points} stuck on the barrier in the window ({LYAPUNOV_SYMBOL} = -inf): ▼ in the strip under the panel"
+    stuck_note = f"{points} stuck on the barrier in the window ({LYAPUNOV_SYMBOL} = -inf): ▼ in the strip under the panel"
+    return "; ".join(note for note in (stuck_note, resonance_note) if note)

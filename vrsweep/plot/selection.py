@@ -247,11 +247,30 @@ def _draw_failed_rug(ax, x, failed, row=0, colour=FAILED_COLOUR):
     return line
 
 
+SPAN_MARGIN = 0.03  # of the grid's span (in log on a logarithmic axis), beyond either end
+
+
 def _span_grid(ax, values):
-    """The x limits of the whole grid (plus a margin), whatever could be drawn."""
+    """The x limits of the whole grid (plus a margin), whatever could be drawn, on a logarithmic
+    axis where the grid is ``geometric``, as a map's axis is (``map_mesh``): a line plot over
+    Omega = 0.25 ... 16 in doublings put five of its seven points in the left tenth of a linear
+    axis. Every line plot over a swept axis sets its limits here, so its scale is chosen here too."""
     low, high = _limits(values)
-    margin = 0.03 * (high - low) if high > low else 0.5 * max(1.0, abs(low))
+    if geometric(values):
+        ax.set_xscale("log")
+        factor = (high / low) ** SPAN_MARGIN
+        ax.set_xlim(low / factor, high * factor)
+        return
+    margin = SPAN_MARGIN * (high - low) if high > low else 0.5 * max(1.0, abs(low))
     ax.set_xlim(low - margin, high + margin)
+
+
+def fine_grid(values, count):
+    """``count`` values from the grid's smallest to its largest, to draw the theory on: evenly in log
+    on a logarithmic axis (``_span_grid``), where evenly spaced ones left its lowest decade one or
+    two points, else evenly."""
+    low, high = _limits(values)
+    return (np.geomspace if geometric(values) else np.linspace)(low, high, count)
 
 
 def _progress_note(view):

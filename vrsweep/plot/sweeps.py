@@ -15,7 +15,8 @@ from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.plot import layout
 from vrsweep.plot.analytic import (
     barrier_positions,
-    _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches, resonance_positions,
+    RESONANCE_CUT, _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches,
+    resonance_roots,
 )
 from vrsweep.plot.palettes import (
     MAX_SCALE_CURVES, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, cased, categorical, scale_colours,
@@ -28,7 +29,7 @@ from vrsweep.plot.labels import (
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
-    _progress_note, _span_grid, _Sweep, _sweep_default, cell_edges, cell_ticks, map_mesh,
+    _progress_note, _span_grid, _Sweep, _sweep_default, cell_edges, cell_ticks, fine_grid, map_mesh,
 )
 from vrsweep.results import Motion, Status
 
@@ -117,7 +118,8 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None, xlim=None, ylim=
     # What the view leaves out, as it is now: with --xlim/--ylim the automatic limits' reason for
     # leaving the theory out ('more than 10 times from the measured values') no longer holds.
     beyond = _beyond_view(ax, drawn, theory, analytic.barrier_levels, amplitude, None if asked else reach)
-    notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note, beyond) if note)
+    notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note, beyond,
+                                        RESONANCE_CUT if analytic.resonance_cut else "") if note)
     _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
     return fig
@@ -192,6 +194,7 @@ class _Analytic:
         self.done = set()  # the parameter values whose branches are drawn
         self.resonance_handles = []
         self.barrier_levels = []  # (x, A/c = Delta/c or A = Delta) of each curve: said when out of view
+        self.resonance_cut = False  # a resonance left out where Omega <= omega: said in the caption
 
 
 def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic):
@@ -205,7 +208,7 @@ def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, an
         return []
     analytic.done.add(key)
     parameters = view.parameters(**{axis: float(view.axes[axis][i]) for axis, i in parameter_where.items()})
-    fine = np.linspace(x.min(), x.max(), FINE_POINTS)
+    fine = fine_grid(x, FINE_POINTS)
     branches = analytic_branches(parameters, x_axis, fine, gain=not amplitude)
     _draw_branches(ax, branches, colour)
     barrier = _fine_parameters(parameters, x_axis, fine)
@@ -216,7 +219,9 @@ def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, an
         ax.plot(fine, barrier_level, color=BARRIER_COLOUR if analytic.barrier_shared else colour, lw=1.0,
                 ls=BARRIER_DASHES, zorder=1, gid="barrier")
         analytic.barrier_drawn = True
-    for position in resonance_positions(parameters, x_axis, fine):
+    positions, cut = resonance_roots(parameters, x_axis, fine)
+    analytic.resonance_cut |= cut
+    for position in positions:
         ax.axvline(position, color=colour, ls="-.", lw=0.9, zorder=1)
         if scale_axis is None:
             analytic.resonance_handles.append(Line2D([], [], color=colour, ls="-.", lw=0.9,
@@ -1087,7 +1092,7 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ms=2.0, ls="none",
                 label="integration failed: no samples")  # ms x markerscale 3 = the drawn marks
     strobe_note = _unlocked_note(repeats, x, x_axis)
-    _draw_resonance_lines(ax, view, x_axis, x)
+    resonance_note = _draw_resonance_lines(ax, view, x_axis, x)
     if view.config is not None:
         levels = _barrier_levels(view, x_axis, x)
         for index in range(levels.shape[1]):
@@ -1109,7 +1114,7 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
                          ncol=_legend_columns(ax.figure, 2))
     else:
         ax.legend(fontsize="x-small", loc="best", markerscale=3)
-    return "; ".join(note for note in (failure_note, strobe_note) if note)
+    return "; ".join(note for note in (failure_note, strobe_note, resonance_note) if note)
 
 
 LONG_LEGEND = 5  # a bifurcation diagram's legend of more entries goes below the panel
@@ -1189,18 +1194,22 @@ def _draw_resonance_lines(ax, view, x_axis, x):
     """g_res (eq3.4) as vertical lines, where it falls on the drawn range (the paper's theory:
     none for a written model, whose parameters are its own): at each curve's parameters, in its
     colour and named by its label where the curves' resonances differ. At the config's parameters
-    alone, the curves of Omega = 3 ... 6 got one line, g_res at the config's Omega = 4."""
+    alone, the curves of Omega = 3 ... 6 got one line, g_res at the config's Omega = 4. Returns the
+    caption's note where a resonance was left out because Omega <= omega there (RESONANCE_CUT), else ''."""
     if view.config is None or view.config.written:
-        return
-    fine = np.linspace(x.min(), x.max(), FINE_POINTS)
+        return ""
+    fine = fine_grid(x, FINE_POINTS)
     lines = {}  # {positions: [(curve number, label)]}: one line for curves that share their resonance
+    any_cut = False
     for k, (where, label) in enumerate(view.curve_coordinates(x_axis)):
         fixed = {axis: float(view.axes[axis][index]) for axis, index in where.items() if axis != "direction"}
-        positions = tuple(resonance_positions(view.parameters(**fixed), x_axis, fine))
-        lines.setdefault(positions, []).append((k, label))
+        positions, cut = resonance_roots(view.parameters(**fixed), x_axis, fine)
+        any_cut |= cut
+        lines.setdefault(tuple(positions), []).append((k, label))
     for positions, owners in lines.items():
         k, label = owners[0]
         several = len(lines) > 1
         for position in positions:
             ax.axvline(position, color=RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)] if several else "0.4", ls="-.",
                        lw=0.9, label=(f"{label}: " if several and label else "") + _resonance_label(x_axis, position))
+    return RESONANCE_CUT if any_cut else ""

@@ -40,7 +40,7 @@ motion would hit the barrier and the analytic amplitude is indicative only.
 
 from vrsweep.analysis.theory.slowflow import (  # noqa: F401
     AMPLITUDE_NOTE, BARRIER_NOTE, DEFAULT_SLOW_STEP, SlowFlowCoefficients, THEORY_NOTE,
-    damping_level, effective_frequency_squared, g_res, initial_slow_state,
+    damping_level, effective_frequency_squared, fast_force, g_res, initial_slow_state,
     integrate_slow_flow, reconstruct, slow_flow, slow_flow_cartesian, slow_flow_coefficients,
     slow_flow_jacobian,
 )
@@ -57,7 +57,7 @@ from vrsweep.analysis.theory.curves import (  # noqa: F401
 
 __all__ = [
     "AMPLITUDE_NOTE", "BARRIER_NOTE", "DEFAULT_SLOW_STEP", "SlowFlowCoefficients", "THEORY_NOTE",
-    "damping_level", "effective_frequency_squared", "g_res", "initial_slow_state", "integrate_slow_flow",
+    "damping_level", "effective_frequency_squared", "fast_force", "g_res", "initial_slow_state", "integrate_slow_flow",
     "reconstruct", "slow_flow", "slow_flow_cartesian", "slow_flow_coefficients", "slow_flow_jacobian",
     "AnalyticPeak", "DEFAULT_G_POINTS", "FixedPoints", "ResponseBranches", "THEORY_PARAMETERS",
     "analytic_columns", "analytic_peak", "fixed_point_cubic", "fixed_point_phase", "fixed_points",

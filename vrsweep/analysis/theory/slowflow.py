@@ -49,6 +49,15 @@ def damping_level(params: Mapping) -> np.ndarray:
     return effective_damping_level(_get(params, "g"), _get(params, "Omega"))
 
 
+def fast_force(params: Mapping) -> np.ndarray:
+    """Where the effective system (eq2.10-eq2.12), and with it the resonance wt2 = omega^2 (eq3.4),
+    means anything: Omega > omega. It is the original system averaged over the fast force's period
+    2 pi/Omega at a fixed slow time; where that force is no faster than the slow one (Omega <=
+    omega) there is nothing fast to average over, and g_res is a root of a formula, not a
+    resonance of the motion."""
+    return _get(params, "Omega") > _get(params, "omega")
+
+
 def g_res(alpha, omega0, omega, Omega):
     """g_res = Omega^2 sqrt(2 (omega^2 + omega0^2) / (3 alpha)).   # eq3.4
 
@@ -56,7 +65,8 @@ def g_res(alpha, omega0, omega, Omega):
     it is 21.065 at Omega = 4 and 32.914 at Omega = 5 (ERRATA 7): proportional to Omega^2 and to
     alpha^(-1/2), not to Omega and 1/alpha as the paper's text says.
 
-    alpha <= 0 has no resonance (wt2 never reaches omega^2): inf for alpha = 0, NaN below.
+    alpha <= 0 has no resonance (wt2 never reaches omega^2): inf for alpha = 0, NaN below. The
+    formula holds for any Omega; the resonance exists only where Omega > omega (``fast_force``).
     """
     alpha, omega0, omega, Omega = (np.asarray(v, dtype=np.float64) for v in (alpha, omega0, omega, Omega))
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -1,0 +1,120 @@
+"""A referee's reading of the figures: a geometric grid on a logarithmic axis in line plots as in
+maps, the resonance (eq3.4) only where the fast force is fast (Omega > omega), every curve of a
+figure named even where its legend must shrink, integer maps with many values on a scale of
+categories. Checked through matplotlib's objects, not pixels."""
+
+import numpy as np
+import pytest
+
+from vrsweep import plot
+from vrsweep.analysis import theory
+from vrsweep.plot.labels import FINE_POINTS
+from vrsweep.store.reading import load_results
+
+SHORT = "integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 2, max_steps: 20000}\n"
+# Omega in doublings from 0.25 (below omega = 0.5) to 16: a geometric grid.
+GEOMETRIC = "parameters: {g: 5.0}\nsweep:\n  Omega: [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0]\n" + SHORT
+# g_res at Omega = 0.4 is 0.21 (eq3.4), on this range; but 0.4 < omega = 0.5: no fast force.
+SLOW_FAST_FORCE = "parameters: {Omega: 0.4}\nsweep:\n  g: [0.0, 0.1, 0.2, 0.3]\n" + SHORT
+PLANE = "sweep:\n  g: {start: 0.0, stop: 2.0, num: 3}\n  Omega: [0.25, 0.5, 1.0, 2.0]\n" + SHORT
+CURVES = "sweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n  Omega: [4.0, 4.5, 5.0]\n" + SHORT
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, invoke, write_config):
+    folder = tmp_path_factory.mktemp("referee")
+    made = {}
+    for name, text in (("geometric", GEOMETRIC), ("slow", SLOW_FAST_FORCE), ("plane", PLANE), ("curves", CURVES)):
+        out = folder / f"{name}.h5"
+        result = invoke("run", write_config(folder, text, name=f"{name}.yaml"), "-o", out, "--quiet")
+        assert result.exit_code == 0, result.output
+        made[name] = out
+    return made
+
+
+def _dash_dot_positions(ax):
+    return [float(line.get_xdata()[0]) for line in ax.get_lines() if line.get_linestyle() == "-."]
+
+
+# --- a geometric grid: a logarithmic axis on line plots, as on maps ----------------------------
+
+
+@pytest.mark.parametrize("kind", ["response", "impacts", "variable", "bifurcation"])
+def test_a_line_plot_over_a_geometric_grid_has_a_logarithmic_axis(files, kind):
+    ds = load_results(files["geometric"])
+    fig = {"response": lambda: plot.response_figure(ds), "impacts": lambda: plot.impacts_figure(ds),
+           "variable": lambda: plot.variable_figure(ds, "x_max"),
+           "bifurcation": lambda: plot.bifurcation_figure(ds)}[kind]()
+    ax = fig.axes[0]
+    assert ax.get_xscale() == "log"
+    low, high = ax.get_xlim()
+    assert low < 0.25 and high > 16.0 and low > 0.0
+    # The margin is the same share of the axis at either end (in log).
+    assert np.isclose(np.log(0.25 / low), np.log(high / 16.0))
+
+
+def test_the_theory_over_a_geometric_grid_is_drawn_as_finely_in_every_decade(files):
+    fig = plot.response_figure(load_results(files["geometric"]))
+    theory_lines = [line for line in fig.axes[0].get_lines() if getattr(line, "_vrsweep_context", False)]
+    long_lines = [np.asarray(line.get_xdata(), dtype=float) for line in theory_lines if len(line.get_xdata()) >= 3]
+    assert long_lines
+    # Equal steps in log along every branch (a linear fine grid left the lowest doubling, a
+    # hundredth of the range, its ~1 % of the points: steps in log 60 times those at the top).
+    for x in long_lines:
+        steps = np.diff(np.log(x))
+        assert np.allclose(steps, steps[0], rtol=1e-6)
+    assert np.isclose(np.diff(np.log(long_lines[0]))[0], np.log(16.0 / 0.25) / (FINE_POINTS - 1))
+
+
+def test_a_linear_grid_keeps_a_linear_axis(files):
+    fig = plot.response_figure(load_results(files["slow"]))
+    assert fig.axes[0].get_xscale() == "linear"
+
+
+# --- the resonance (eq3.4) only where Omega > omega ---------------------------------------------
+
+
+def test_fast_force_says_where_the_averaging_has_a_fast_force():
+    assert theory.fast_force({"Omega": 4.0, "omega": 0.5})
+    assert not theory.fast_force({"Omega": 0.5, "omega": 0.5})
+    assert not theory.fast_force({"Omega": 0.4, "omega": 0.5})
+
+
+@pytest.mark.parametrize("kind", ["response", "bifurcation"])
+def test_no_g_res_is_drawn_where_the_fast_force_is_slow_and_the_caption_says_so(files, kind):
+    ds = load_results(files["slow"])
+    g_res = float(theory.g_res(0.1, 0.1, 0.5, 0.4))
+    assert 0.0 < g_res < 0.3  # the formula's root lies on the axis ...
+    fig = plot.response_figure(ds) if kind == "response" else plot.bifurcation_figure(ds)
+    assert not [x for x in _dash_dot_positions(fig.axes[0]) if np.isclose(x, g_res)]  # ... and is not drawn
+    caption = fig._vrsweep_description[1].replace("\n", " ")
+    assert "no resonance (eq3.4) drawn where Ω ≤ ω" in caption
+
+
+def test_g_res_is_still_drawn_where_the_fast_force_is_fast(files):
+    fig = plot.response_figure(plot.select(load_results(files["curves"]), {"Omega": 4.0}), x_axis="g")
+    assert np.any(np.isclose(_dash_dot_positions(fig.axes[0]), float(theory.g_res(0.1, 0.1, 0.5, 4.0))))
+    assert "Ω ≤ ω" not in fig._vrsweep_description[1]
+
+
+def test_along_omega_the_resonance_is_kept_above_omega_only():
+    parameters = {"alpha": 0.1, "omega0": 0.1, "omega": 0.5, "g": 0.2, "gamma": 0.22, "c": 0.04,
+                  "Delta": 1.0, "e": 0.95, "Omega": 4.0}
+    fine = np.geomspace(0.25, 16.0, 2000)
+    # wt2 = omega^2 at Omega = (g / sqrt(2 (omega^2 + omega0^2) / (3 alpha)))^(1/2): 0.39 < omega.
+    root = np.sqrt(0.2 / np.sqrt(2.0 * (0.25 + 0.01) / 0.3))
+    assert root < 0.5
+    assert plot.resonance_positions(parameters, "Omega", fine) == []
+    above = dict(parameters, g=5.0)
+    (position,) = plot.resonance_positions(above, "Omega", fine)
+    assert np.isclose(position, np.sqrt(5.0 / np.sqrt(2.0 * 0.26 / 0.3)), rtol=1e-4)
+
+
+def test_the_maps_resonance_curve_stops_at_omega_and_its_legend_says_so(files):
+    fig = plot.map_figure(load_results(files["plane"]), "R")
+    ax = fig.axes[0]
+    (contour,) = [c for c in ax.collections if c.get_gid() == "resonance"]
+    omegas = np.concatenate([path.vertices[:, 1] for path in contour.get_paths()])
+    assert omegas.size and omegas.min() > 0.5
+    texts = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+    assert any("drawn where Ω > ω only" in text for text in texts)
