@@ -17,7 +17,8 @@ GEOMETRIC = "parameters: {g: 5.0}\nsweep:\n  Omega: [0.25, 0.5, 1.0, 2.0, 4.0, 8
 # g_res at Omega = 0.4 is 0.21 (eq3.4), on this range; but 0.4 < omega = 0.5: no fast force.
 SLOW_FAST_FORCE = "parameters: {Omega: 0.4}\nsweep:\n  g: [0.0, 0.1, 0.2, 0.3]\n" + SHORT
 PLANE = "sweep:\n  g: {start: 0.0, stop: 2.0, num: 3}\n  Omega: [0.25, 0.5, 1.0, 2.0]\n" + SHORT
-CURVES = "sweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n  Omega: [4.0, 4.5, 5.0]\n" + SHORT
+CURVES = ("sweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n  Omega: [4.0, 4.5, 5.0]\n"
+          "integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 2, lyapunov: true}\n")
 
 
 @pytest.fixture(scope="module")
@@ -118,3 +119,28 @@ def test_the_maps_resonance_curve_stops_at_omega_and_its_legend_says_so(files):
     assert omegas.size and omegas.min() > 0.5
     texts = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
     assert any("drawn where Ω > ω only" in text for text in texts)
+
+
+# --- every curve named, even at one journal column ---------------------------------------------
+
+
+def _legend_texts(fig):
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    return [text.get_text() for legend in legends for text in legend.get_texts()]
+
+
+COLUMN = (3.4, 2.6)  # inches: one journal column
+
+
+@pytest.mark.parametrize("kind", ["bifurcation", "response", "lyapunov"])
+def test_a_figure_of_three_curves_names_each_at_one_journal_column(files, kind):
+    ds = load_results(files["curves"])
+    from vrsweep.plot.lyapunov import lyapunov_figure
+
+    make = {"bifurcation": plot.bifurcation_figure, "response": plot.response_figure, "lyapunov": lyapunov_figure}[kind]
+    fig = make(ds, x_axis="g", size=COLUMN)
+    texts = _legend_texts(fig)
+    for Omega in ("4", "4.5", "5"):
+        assert sum(f"$\\Omega$ = {Omega}" in text for text in texts) >= 1, texts
+    # The full legend is wider than the column would allow: only the curves' names are kept.
+    assert not any("barrier" in text for text in texts) or len(texts) <= 4

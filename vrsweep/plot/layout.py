@@ -345,9 +345,11 @@ def _arrange(fig, legend=None):
                 if _fits_inside(main):
                     note = "the legend went inside the axes, where it leaves them half the figure"
                 else:
-                    place_legend(fig, "none")
-                    note = (f"the legend ({count} entries) is left off: below the axes it would leave them under "
-                            "half the figure, inside it would cover them")
+                    note = _keep_curve_names(fig, main, count, may_raise=not getattr(fig, "_vrsweep_ylim_given", False))
+                    if not note:
+                        place_legend(fig, "none")
+                        note = (f"the legend ({count} entries) is left off: below the axes it would leave them "
+                                "under half the figure, inside it would cover them")
             for label, (text, size) in labels.items():  # wrapped for the old layout: fitted again to the new
                 label.set_text(text)
                 label.set_fontsize(size)
@@ -380,6 +382,27 @@ def _shrink_cell_labels(fig):
 COMPACT_LEGEND = dict(fontsize="xx-small", handlelength=1.5, handletextpad=0.4, columnspacing=0.9,
                       labelspacing=0.25, borderpad=0.2, borderaxespad=0.2, frameon=False)
 STRIP_GAP = 0.02  # of the panel's height, between a legend strip and the data below it
+
+
+def _keep_curve_names(fig, main, count, may_raise=True):
+    """Where the whole legend fits neither below nor inside: a legend of the entries that name the
+    figure's curves alone (``fig._vrsweep_curve_labels``, {label: short label}, set by a figure of
+    several curves), abbreviated (``_abbreviate``): at one journal column a bifurcation diagram of
+    three Omega lost its legend, and nothing told its curves apart. Returns the note, '' where the
+    figure names no two curves (then the legend is left off, as before)."""
+    names = getattr(fig, "_vrsweep_curve_labels", None) or {}
+    legend = main.get_legend()
+    if legend is None or len(names) < 2:
+        return ""
+    handles, labels = _entries(legend)
+    kept = [(handle, label) for handle, label in zip(handles, labels) if label in names]
+    if len(kept) < 2:
+        return ""
+    legend.remove()
+    fig.legend([handle for handle, _ in kept], [label for _, label in kept], loc="outside lower center")
+    _abbreviate(fig, names, may_raise=may_raise)
+    return (f"the legend keeps the curves' names only ({count - len(kept)} of its {count} entries left off: the "
+            "whole legend would leave the axes under half the figure)")
 
 
 def _abbreviate(fig, short, may_raise=True):

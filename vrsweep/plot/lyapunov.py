@@ -93,6 +93,8 @@ def _draw_lyapunov(ax, view, x_axis, strip=None):
                         label=None if k else "95 % band (lyapunov_err)")
         ax.plot(x, np.where(finite, exponent, np.nan), ls=style, color=colour, lw=0.8 if style == "-" else 1.0,
                 label=label or None, gid="lyapunov")
+        if label and len(curves) > 1:  # kept where a small figure has no room for the whole legend
+            ax.figure._vrsweep_curve_labels = {**getattr(ax.figure, "_vrsweep_curve_labels", {}), label: label}
         ax.plot(x[chaotic], exponent[chaotic], "o", ms=3.5, color=colour, ls="none", gid="chaotic",
                 label=None if k else f"{LYAPUNOV_SYMBOL} > 0 beyond its band: chaotic")
         calm = finite & ~chaotic

@@ -109,6 +109,9 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None, xlim=None, ylim=
     handles = _response_legend(curve_handles, kinds_seen, failure_note, len(curves), amplitude,
                                analytic if view.config is not None and not written else None)
     fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
+    if scale_axis is None and len(curves) > 1:  # kept, by their labels alone, where the whole legend has no room
+        fig._vrsweep_curve_labels = {handle.get_label(): label for handle, (_, label) in zip(curve_handles, curves)
+                                     if label}
     scale_note, reach = _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, analytic.barrier_levels)
     quantity = "amplitude |Q|" if amplitude else "gain R"
     theory_note = ("" if written else "; analytic: first-order theory of the effective system "
@@ -1064,6 +1067,9 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
     # their colours in turn).
     _refuse_too_many_curves(view, curves, MAX_CURVES, "strobe_x", x_axis)
     repeats = []  # (label, q at each x) of each curve: the caption counts them curve by curve
+    # The entries that tell the curves apart, kept (shortened) where a small figure has no room for
+    # the whole legend (layout._keep_curve_names).
+    names = {} if len(curves) > 1 else None
     for k, (where, label) in enumerate(curves):
         colour = RELIABLE_COLOURS[k % len(RELIABLE_COLOURS)]
         strobe = view.along("strobe_x", x_axis, **where)  # (n_x, n_strobe)
@@ -1076,14 +1082,18 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
         ax.plot(np.repeat(x[at_period], n_strobe), strobe[at_period].reshape(-1), ".", ms=2.5, color=colour,
                 label=(label or f"x(nT), last {n_strobe} {period_words(symbol=False)}s of each point") if named
                 else None, gid="strobe")
+        if names is not None and label:
+            names[label] = label
         if not at_period.all():
             # Samples at t = nT where the forcing repeats only after q periods T (Omega/omega = 1/10:
             # q = 10) or never: a motion locked to the forcing shows q dots, or a curve, where its
             # own stroboscopic map would show one. Another mark, so that they are not read as chaos.
+            hollow = (f"{label}: " if label else "") + "hollow: x(nT) where the forcing repeats only after " \
+                "q > 1 periods T, or never (caption)"
             ax.plot(np.repeat(x[~at_period], n_strobe), strobe[~at_period].reshape(-1), "o", ms=1.6, mew=0.5,
-                    mfc="none", color=colour, gid="strobe off the forcing's period",
-                    label=(f"{label}: " if label else "") + "hollow: x(nT) where the forcing repeats only after "
-                          "q > 1 periods T, or never (caption)")
+                    mfc="none", color=colour, gid="strobe off the forcing's period", label=hollow)
+            if names is not None and label:
+                names[hollow] = f"{label}, hollow"
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
@@ -1102,6 +1112,8 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
             else:
                 order = np.argsort(x)
                 ax.plot(np.asarray(x)[order], levels[order, index], color="k", lw=0.8, ls="--", label=label)
+    if names:
+        ax.figure._vrsweep_curve_labels = {**getattr(ax.figure, "_vrsweep_curve_labels", {}), **names}
     _span_grid(ax, x)  # the whole grid, even where every point failed
     period = "$T$ the model's period" if view.config is not None and view.config.written else "$T = 2\\pi/\\omega$"
     ax.set_ylabel(f"stroboscopic position $x(nT)$, {period}")
