@@ -144,3 +144,57 @@ def test_a_figure_of_three_curves_names_each_at_one_journal_column(files, kind):
         assert sum(f"$\\Omega$ = {Omega}" in text for text in texts) >= 1, texts
     # The full legend is wider than the column would allow: only the curves' names are kept.
     assert not any("barrier" in text for text in texts) or len(texts) <= 4
+
+
+# --- integer maps of many values: binned into categories, never a continuous scale --------------
+
+
+def _palette_rgba():
+    from matplotlib.colors import to_rgba
+
+    from vrsweep.plot.palettes import EXTRA, QUALITATIVE
+
+    return {to_rgba(colour) for colour in QUALITATIVE + EXTRA}
+
+
+def test_many_periods_are_binned_into_runs_each_in_a_palette_colour():
+    from matplotlib.colors import to_rgba
+
+    from vrsweep.plot.palettes import MAX_CATEGORIES
+    from vrsweep.plot.sweeps import NO_VALUE_COLOUR, discrete_scale
+
+    # Period 1 on 500 cells, 2 on 200, 3 on 100, then 4 ... 39 on one cell each; 50 cells with none.
+    values = np.concatenate([np.ones(500), np.full(200, 2), np.full(100, 3), np.arange(4, 40), np.zeros(50)])
+    cmap, norm, ticks, labels, note = discrete_scale("period", values)
+    assert cmap.N == MAX_CATEGORIES + 1 == len(ticks) == len(labels)  # twelve bins and 'no period'
+    assert labels[:4] == ["0: no period", "1", "2", "3"]  # the values of many cells keep a colour each
+    ordinary = [tuple(cmap(k)) for k in range(1, cmap.N)]
+    assert len(set(ordinary)) == MAX_CATEGORIES and set(ordinary) <= _palette_rgba()  # no viridis
+    assert to_rgba(cmap(0)) == to_rgba(NO_VALUE_COLOUR)
+    # Each value is drawn in the colour of the bin whose label names it.
+    for value in range(1, 40):
+        (block,) = [k for k, text in enumerate(labels[1:], 1)
+                    if int(text.split("\u2013")[0]) <= value <= int(text.split("\u2013")[-1])]
+        assert cmap(norm(value)) == cmap(block)
+    assert any("\u2013" in text for text in labels) and "39 values of period binned into 12 colours" in note
+
+
+def test_up_to_twelve_values_keep_a_colour_each():
+    from vrsweep.plot.sweeps import discrete_scale
+
+    cmap, _, _, labels, note = discrete_scale("period", np.arange(0, 13))  # 0 and 1 ... 12
+    assert cmap.N == 13 and labels[1:] == [str(value) for value in range(1, 13)] and note == ""
+
+
+def test_a_map_of_many_periods_draws_bins_named_on_its_colour_bar(files):
+    from matplotlib.collections import QuadMesh
+
+    ds = load_results(files["curves"])
+    ds["period"].values[...] = np.arange(15).reshape(ds["period"].shape)  # 0 and 1 ... 14: fourteen values
+    fig = plot.map_figure(ds, "period")
+    (mesh,) = [c for c in fig.axes[0].collections if isinstance(c, QuadMesh)]
+    drawn = {tuple(mesh.cmap(mesh.norm(value))) for value in range(1, 15)}
+    assert len(drawn) == 12 and drawn <= _palette_rgba()
+    bar_labels = [t.get_text() for t in fig.axes[1].get_yticklabels()]
+    assert len(bar_labels) == 13 and sum("\u2013" in text for text in bar_labels) == 2
+    assert "14 values of period binned into 12 colours" in fig._vrsweep_description[1].replace("\n", " ")

@@ -69,9 +69,13 @@ def lightness(colour) -> float:
 EXTRA = ("#AA4499", "#999933", "#DDCC77", "#117733", "#882255", "#88CCEE")
 
 
+MAX_CATEGORIES = len(QUALITATIVE) + len(EXTRA)  # categories a palette keeps apart; an integer map bins beyond
+
+
 def categorical(count) -> list:
     """``count`` colours for categories: QUALITATIVE's first ``count`` (apart in lightness), then
-    EXTRA's (apart in hue), then, for more than both hold, SEQUENTIAL from dark to light. A
+    EXTRA's (apart in hue), then, for more than both hold (MAX_CATEGORIES), SEQUENTIAL from dark to
+    light (an integer map bins its values to MAX_CATEGORIES instead: sweeps.discrete_scale). A
     sequential scale for seven or more (viridis) drew periods 1 and 3 of a map of eight periods
     in two dark purples, and period 3 on the grey of 'no period'."""
     from matplotlib import colormaps

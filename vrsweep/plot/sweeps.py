@@ -19,7 +19,8 @@ from vrsweep.plot.analytic import (
     resonance_roots,
 )
 from vrsweep.plot.palettes import (
-    MAX_SCALE_CURVES, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, cased, categorical, scale_colours,
+    MAX_CATEGORIES, MAX_SCALE_CURVES, NO_VALUE_GREY, NOT_COMPUTED_GREY, STATUS_COLOURS, cased, categorical,
+    scale_colours,
 )
 from vrsweep.plot.labels import (
     parameter_symbol,
@@ -562,10 +563,15 @@ def _flag_names(attrs):
 def discrete_scale(name, values, attrs=None):
     """The colour scale of an integer variable: one colour per value present, the values that mean
     'none' (period 0, impacts_per_cycle -1: no period; attractor -1: failed) in grey and named.
+    More ordinary values than the palette has categories apart (``palettes.MAX_CATEGORIES``, 12):
+    binned into as many runs of consecutive values, each of about equal cells, a colour and a
+    label ('13–16') each (``_bins``). Past 12 they took viridis, a colour each: a continuous scale
+    for categories, on which periods 14 and 15 were one colour to the eye.
 
     values: the variable's values (any shape; NaN where not computed). Returns (cmap, norm, ticks,
-    tick_labels): a ListedColormap of exactly len(ticks) colours, a BoundaryNorm putting each
-    value present in its own colour, and where on a uniformly spaced colour bar to name each.
+    tick_labels, note): a ListedColormap of exactly len(ticks) colours, a BoundaryNorm putting each
+    value present (or bin) in its own colour, where on a uniformly spaced colour bar to name each,
+    and the caption's words for a binned scale ('' where every value has its colour).
     """
     finite = np.asarray(values, dtype=np.float64)
     present = np.unique(finite[np.isfinite(finite)]).astype(np.int64)
@@ -576,34 +582,80 @@ def discrete_scale(name, values, attrs=None):
     # A flag with no colour of its own takes one of the palette's, as a number would: one shared
     # grey for all of them drew a map of motion as a single grey block.
     ordinary = [v for v in present if v not in special and (v not in flags or flags[v] not in FLAG_COLOURS)]
-    # Apart in lightness from each other and from the greys of 'no period' and 'not computed' (tab10's
-    # were pairs of one grey on a greyscale page), the six that are: to the values of most cells.
     finite_values = finite[np.isfinite(finite)].astype(np.int64)
-    by_cells = sorted(ordinary, key=lambda value: (-int(np.count_nonzero(finite_values == value)), value))
-    palette = dict(zip(by_cells, categorical(len(ordinary))))
-    palette = [palette[value] for value in ordinary]
-    colours, labels = [], []
-    ordinary_colours = dict(zip(ordinary, palette))
+    cells = {value: int(np.count_nonzero(finite_values == value)) for value in ordinary}
+    # Blocks of the colour bar, in order of value: (first value, last value), one value each but
+    # for the bins of many ordinary values. The values meaning 'none' lie below every ordinary one
+    # (SPECIAL_VALUES), and the flag variables have fewer values than bins: no bin spans them.
+    bins = _bins(ordinary, cells, MAX_CATEGORIES) if len(ordinary) > MAX_CATEGORIES else [(v, v) for v in ordinary]
+    bin_of = {value: (low, high) for low, high in bins for value in ordinary if low <= value <= high}
+    # Apart in lightness from each other and from the greys of 'no period' and 'not computed' (tab10's
+    # were pairs of one grey on a greyscale page), the six that are: to the blocks of most cells.
+    bin_cells = {block: sum(cells[v] for v in ordinary if bin_of[v] == block) for block in bins}
+    by_cells = sorted(bins, key=lambda block: (-bin_cells[block], block))
+    block_colours = dict(zip(by_cells, categorical(len(bins))))
+    blocks, colours, labels = [], [], []
     for value in present:
-        if value in flags:
-            colours.append(FLAG_COLOURS.get(flags[value]) or ordinary_colours[value])
+        if value in bin_of and bin_of[value] in blocks:
+            continue  # a bin's later values: drawn in its block
+        if value in flags and value not in bin_of:
+            blocks.append((value, value))
+            colours.append(FLAG_COLOURS[flags[value]])
             # --var motion names its values as --kind motion does ('failed (none)', 'quasi-periodic').
             labels.append(MOTION_NAMES.get(int(value), flags[value]) if name == "motion" else flags[value])
         elif value in special:
+            blocks.append((value, value))
             colours.append(NO_VALUE_COLOUR)
             labels.append(f"{value}: {special[value]}")
         else:
-            colours.append(ordinary_colours[value])
-            labels.append(str(value))
+            low, high = bin_of[value]
+            blocks.append((low, high))
+            colours.append(block_colours[(low, high)])
+            if value in flags:
+                labels.append(MOTION_NAMES.get(int(value), flags[value]) if name == "motion" else flags[value])
+            else:
+                labels.append(str(low) if low == high else f"{low}\u2013{high}")
+    spans = blocks
     cmap = ListedColormap(colours)
-    edges = np.concatenate([[present[0] - 0.5], (present[:-1] + present[1:]) / 2.0, [present[-1] + 0.5]])
+    edges = np.array([spans[0][0] - 0.5] + [(spans[k][1] + spans[k + 1][0]) / 2.0 for k in range(len(spans) - 1)]
+                     + [spans[-1][1] + 0.5], dtype=np.float64)
     norm = BoundaryNorm(edges, cmap.N)
-    if len(present) > MAX_TICK_LABELS:  # every k-th value named, the special ones always
-        step = int(np.ceil(len(present) / MAX_TICK_LABELS))
-        labels = [text if (k % step == 0 or present[k] in special or present[k] in flags) else ""
+    if len(spans) > MAX_TICK_LABELS:  # every k-th block named, the special ones always
+        step = int(np.ceil(len(spans) / MAX_TICK_LABELS))
+        labels = [text if (k % step == 0 or spans[k][0] in special or spans[k][0] in flags) else ""
                   for k, text in enumerate(labels)]
+    note = ""
+    if len(bins) < len(ordinary):
+        note = (f"{len(ordinary)} values of {name} binned into {len(bins)} colours, runs of consecutive values "
+                "of about equal cells (labels on the colour bar)")
     # Ticks in the middle of each block (equal blocks: the colour bar's spacing="uniform").
-    return cmap, norm, list((edges[:-1] + edges[1:]) / 2.0), labels
+    return cmap, norm, list((edges[:-1] + edges[1:]) / 2.0), labels, note
+
+
+def _bins(ordinary, cells, count):
+    """At most ``count`` runs of the sorted values ``ordinary`` as (first, last), each of about equal
+    cells (``cells``: {value: cells}); each next run takes values while it stays within an equal
+    share of the cells left, so that a value of many cells (period 1 over half the map) is a run
+    of its own and the rare ones share runs."""
+    values = list(ordinary)
+    weights = [cells[value] for value in values]
+    runs, start = [], 0
+    while start < len(values):
+        left = count - len(runs)
+        if len(values) - start <= left:
+            runs += [(value, value) for value in values[start:]]
+            break
+        if left == 1:
+            runs.append((values[start], values[-1]))
+            break
+        target = sum(weights[start:]) / left
+        end, total = start, weights[start]
+        while len(values) - (end + 2) >= left - 1 and (total + weights[end + 1] <= target or total == 0):
+            end += 1
+            total += weights[end]
+        runs.append((values[start], values[end]))
+        start = end + 1
+    return runs
 
 
 CYCLIC_VARIABLES = {"impact_phase": (0.0, 2.0 * np.pi)}  # a circle's values: (start, end) of one turn
@@ -738,11 +790,12 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             raise UsageError.naming("{vmin} and {vmax} set a continuous colour scale; {var} {value} holds "
                                     "integers, drawn one colour per value", value=name)
         values = np.where(np.asarray(ds["done"].values, dtype=bool), values, np.nan)
-        cmap, norm, ticks, tick_labels = discrete_scale(name, values, ds[name].attrs)
+        cmap, norm, ticks, tick_labels, bin_note = discrete_scale(name, values, ds[name].attrs)
         extend, cap_note, cap_caption = "neither", "", ""
     else:
         shown = np.where(np.isneginf(values), np.nan, values)  # -inf (stuck) has its own mark
         norm, cmap, extend, (cap_note, cap_caption) = continuous_scale(name, shown, log=log, vmin=vmin, vmax=vmax)
+        bin_note = ""
     handles = {}
     X, Y = np.meshgrid(view.axes[x_axis], view.axes[y_axis], indexing="ij")
     for ax, (where, panel_title) in zip(axes, panels):
@@ -824,7 +877,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             text.set_color("white")
     notes = "; ".join(note for note in (_progress_note(view), _failure_note(view, "on its cell")
                                         if name in ("R", "Q_amplitude") and "status" in view.variables else "",
-                                        f"colour scale {cap_caption}" if cap_caption else "",
+                                        f"colour scale {cap_caption}" if cap_caption else "", bin_note,
                                         _map_repeats_note(view, name, x_axis, y_axis))
                       if note)
     grey = "not computed or failed" if ds[name].dtype.kind == "f" else "not computed"
