@@ -524,19 +524,32 @@ def failed_marks(ax):
     return [line for line in ax.get_lines() if line.get_gid() == "failed"]
 
 
+def failure_strip(fig, ax):
+    """The strip of failed points under ``ax``: its own axes, sharing ax's horizontal axis only."""
+    (strip,) = [other for other in fig.axes if other.get_label() == "failed points"
+                and other.get_shared_x_axes().joined(other, ax)]
+    return strip
+
+
 @pytest.mark.parametrize("log", [True, False])
-def test_failed_points_sit_on_the_bottom_edge_on_any_axis(files, log):
-    """Failed points have R = NaN: drawn at R = 0 they vanished on a log axis. Now they are x marks
-    in axes coordinates just above the bottom edge, and the title counts them."""
+def test_failed_points_sit_in_a_strip_of_their_own_on_any_axis(files, log):
+    """Failed points have R = NaN: drawn at R = 0 they vanished on a log axis; as marks along the
+    panel's bottom edge they sat where R near 0 is drawn, and read as values. They are x marks in a
+    strip under the panel, which holds no data, and the title counts them."""
     results = load_results(files["failed"])
     failed = results["status"].values > 0
     assert 0 < failed.sum() < 5
     fig = plot.plot(files["failed"], log=log)
     ax = fig.axes[0]
-    (marks,) = failed_marks(ax)
+    assert not failed_marks(ax)  # none in the data panel
+    strip = failure_strip(fig, ax)
+    (marks,) = failed_marks(strip)
     np.testing.assert_array_equal(marks.get_xdata(), results["g"].values[failed])
-    assert marks.get_transform() == ax.get_xaxis_transform()  # y in axes fraction
-    assert all(0.0 < y < 0.1 for y in marks.get_ydata())
+    low, high = strip.get_ylim()
+    assert all(low < y < high for y in marks.get_ydata())
+    assert [t.get_text() for t in strip.get_yticklabels()] == ["failed"]
+    assert strip.get_xlabel() == "fast forcing amplitude $g$" and ax.get_xlabel() == ""  # under the lowest
+    assert strip.get_position().y1 <= ax.get_position().y0  # below the panel, apart from it
     assert ax.get_yscale() == ("log" if log else "linear")
     title = fig._suptitle.get_text()
     assert f"{failed.sum()} of 5 points failed ({failed.sum()} max_steps)" in title
@@ -550,7 +563,8 @@ def test_a_bifurcation_diagram_spans_the_grid_and_marks_failed_points(files):
     low, high = ax.get_xlim()
     assert low < 0.0 and high > 40.0
     results = load_results(files["failed"])
-    (marks,) = failed_marks(ax)
+    assert not failed_marks(ax)
+    (marks,) = failed_marks(failure_strip(fig, ax))
     np.testing.assert_array_equal(marks.get_xdata(), results["g"].values[results["status"].values > 0])
     assert "points failed" in fig._suptitle.get_text()
 

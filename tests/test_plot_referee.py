@@ -17,6 +17,10 @@ GEOMETRIC = "parameters: {g: 5.0}\nsweep:\n  Omega: [0.25, 0.5, 1.0, 2.0, 4.0, 8
 # g_res at Omega = 0.4 is 0.21 (eq3.4), on this range; but 0.4 < omega = 0.5: no fast force.
 SLOW_FAST_FORCE = "parameters: {Omega: 0.4}\nsweep:\n  g: [0.0, 0.1, 0.2, 0.3]\n" + SHORT
 PLANE = "sweep:\n  g: {start: 0.0, stop: 2.0, num: 3}\n  Omega: [0.25, 0.5, 1.0, 2.0]\n" + SHORT
+# max_steps too few for g >= 10: four of five points fail.
+FAILING = ("parameters: {Omega: 4.0}\nsweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n"
+           "integration: {transient_periods: 5, measure_periods: 16, strobe_periods: 8, max_steps: 6000, "
+           "lyapunov: true}\n")
 CURVES = ("sweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n  Omega: [4.0, 4.5, 5.0]\n"
           "integration: {transient_periods: 2, measure_periods: 3, strobe_periods: 2, lyapunov: true}\n")
 
@@ -25,7 +29,8 @@ CURVES = ("sweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n  Omega: [4.0, 4.5, 5.
 def files(tmp_path_factory, invoke, write_config):
     folder = tmp_path_factory.mktemp("referee")
     made = {}
-    for name, text in (("geometric", GEOMETRIC), ("slow", SLOW_FAST_FORCE), ("plane", PLANE), ("curves", CURVES)):
+    for name, text in (("geometric", GEOMETRIC), ("slow", SLOW_FAST_FORCE), ("plane", PLANE), ("curves", CURVES),
+                       ("failing", FAILING)):
         out = folder / f"{name}.h5"
         result = invoke("run", write_config(folder, text, name=f"{name}.yaml"), "-o", out, "--quiet")
         assert result.exit_code == 0, result.output
@@ -198,3 +203,35 @@ def test_a_map_of_many_periods_draws_bins_named_on_its_colour_bar(files):
     bar_labels = [t.get_text() for t in fig.axes[1].get_yticklabels()]
     assert len(bar_labels) == 13 and sum("\u2013" in text for text in bar_labels) == 2
     assert "14 values of period binned into 12 colours" in fig._vrsweep_description[1].replace("\n", " ")
+
+
+# --- failed points in a strip of their own, never on the data panel ------------------------------
+
+
+@pytest.mark.parametrize("kind", ["response", "impacts", "bifurcation", "lyapunov", "bifurcation+lyapunov"])
+def test_failed_points_are_marked_in_a_strip_under_each_panel_never_on_it(files, kind):
+    from vrsweep.plot.lyapunov import lyapunov_figure
+
+    ds = load_results(files["failing"])
+    failed_g = ds["g"].values[ds["status"].values > 0]
+    assert 0 < failed_g.size < 5
+    fig = {"response": plot.response_figure, "impacts": plot.impacts_figure, "bifurcation": plot.bifurcation_figure,
+           "lyapunov": lyapunov_figure,
+           "bifurcation+lyapunov": lambda d: lyapunov_figure(d, bifurcation=True)}[kind](ds)
+    strips = [ax for ax in fig.axes if ax.get_label() == "failed points"]
+    panels = [ax for ax in fig.axes if ax not in strips and ax.get_ylabel()]
+    assert strips
+    for panel in panels:
+        assert not [line for line in panel.get_lines() if line.get_gid() == "failed"]
+    for strip in strips:
+        (marks,) = [line for line in strip.get_lines() if line.get_gid() == "failed"]
+        np.testing.assert_array_equal(marks.get_xdata(), failed_g)
+        assert not [line for line in strip.get_lines() if line.get_gid() != "failed"]  # nothing else there
+        (owner,) = [panel for panel in panels if panel.get_shared_x_axes().joined(panel, strip)
+                    and getattr(panel, "_vrsweep_failure_strip", None) is strip]
+        assert strip.get_position().y1 <= owner.get_position().y0
+    # The axis is labelled once, under the lowest panel or strip.
+    lowest = min(fig.axes, key=lambda ax: ax.get_position().y0 if not hasattr(ax, "_colorbar") else 1.0)
+    assert lowest.get_xlabel() == "fast forcing amplitude $g$"
+    assert sum(bool(ax.get_xlabel()) for ax in fig.axes) == 1
+    assert "in the strip under the panel" in fig._vrsweep_description[1].replace("\n", " ")

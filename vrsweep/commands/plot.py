@@ -132,7 +132,7 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
 
     On response plots a filled marker is an R to trust (R_err <= 10% of R), a hollow one is not
     (R depends on the window: chaos or a transient); a circle is a motion with a period, a
-    square one without (period 0). Failed points are x marks along the bottom edge. The response
+    square one without (period 0). Failed points are x marks in a strip under the panel. The response
     axis turns logarithmic by itself when the measured values span two decades (--log/--linear to choose).
     """
     from vrsweep.errors import VrsweepError

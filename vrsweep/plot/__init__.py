@@ -36,8 +36,8 @@ a point is drawn filled where R_err <= RELATIVE_ERROR_LIMIT of R and hollow wher
 kind of motion by ``period``: a circle where a period was found, a square where none was (chaos,
 quasi-periodic, a period above max_period, or a motion still settling; with a tiny R_err the last
 two are common and harmless). Points keep their curve's colour. Failed points (status not ok)
-have no value: they are x marks along the bottom edge, in axes coordinates, so that a log axis
-shows them too, and the title counts them (issue 15).
+have no value: they are x marks in a strip of their own under the panel (selection.failure_strip),
+where no value is drawn, and the title counts them (issue 15).
 
 One module per concern: ``labels`` (constants, axis labels, captions), ``selection`` (loading a
 file, ``select``: fixing axes through xarray, which points to trust), ``analytic`` (the theory's

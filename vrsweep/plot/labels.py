@@ -43,7 +43,6 @@ DIRECTION_NAMES = {1: "up", -1: "down"}
 # MAX_CURVES, so that no figure with a legend repeats a colour or a grey.
 RELIABLE_COLOURS = LINE_COLOURS
 FAILED_COLOUR = "tab:red"
-FAILED_ROW_HEIGHT = 0.035  # axes fraction per row of failed-point marks at the bottom edge
 MARKERS = {False: "o", True: "s"}  # period found: circle; none found (period 0): square
 LYAPUNOV_SYMBOL = "$\\lambda_1$"  # the largest Lyapunov exponent, on every figure that shows it
 LOG_SPAN = 100.0  # measured values spanning this ratio (two decades) or more get a log axis
@@ -512,6 +511,9 @@ def figure_options(function):
                     where = "{style} {value}" if style else "matplotlib's settings (matplotlibrc)"
                     raise UsageError.naming(where + ": {problem}", value=style, problem=problem)
                 fig = function(*args, **kwargs)
+                from vrsweep.plot.selection import settle_strips
+
+                settle_strips(fig)
                 if size is not None and not getattr(fig, "_vrsweep_grown", False):
                     fig.set_size_inches(*size)  # a figure not made by _new_figure gets the size too
                 fig._vrsweep_style = style

@@ -53,7 +53,7 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     ax = panels[1 if bifurcation else 0]
     note = _draw_lyapunov(ax, view, x_axis, strip=panels[-1] if stuck else None)
     if not bifurcation:
-        failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
+        failure_note = _failure_note(view, "in the strip under the panel") if "status" in view.variables else ""
     panels[-1].set_xlabel(view.axis_label(x_axis))
     # Both panels may say one thing (the resonance left out where Omega <= omega): once.
     notes = "; ".join(dict.fromkeys(n for part in (_progress_note(view), failure_note, note)

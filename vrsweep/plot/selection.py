@@ -12,7 +12,7 @@ import numpy as np
 from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.plot.labels import (
     parameter_label, parameter_symbol, use_model,
-    CURVES_NOT_MAP, DIRECTION_NAMES, FAILED_COLOUR, FAILED_ROW_HEIGHT, RELATIVE_ERROR_LIMIT, _number, _parse_config,
+    CURVES_NOT_MAP, DIRECTION_NAMES, FAILED_COLOUR, RELATIVE_ERROR_LIMIT, _number, _parse_config,
 )
 from vrsweep.results import Status
 from vrsweep.store.reading import axis_index
@@ -223,7 +223,7 @@ def _failure_counts(view):
 
 
 def _failure_note(view, where_drawn):
-    """'7 of 9 points failed (7 max_steps): red x along the bottom edge', or ''."""
+    """'7 of 9 points failed (7 max_steps): red x in the strip under the panel', or ''."""
     counts = _failure_counts(view)
     if not counts:
         return ""
@@ -233,18 +233,63 @@ def _failure_note(view, where_drawn):
             f"× {where_drawn}; see vrsweep info")
 
 
-def _draw_failed_rug(ax, x, failed, row=0, colour=FAILED_COLOUR):
-    """Failed points as x marks in a row just above the bottom edge of the axes.
+FAILED_STRIP = 0.1   # the failed points' strip, of its panel's height
+FAILED_STRIP_GAP = 0.08  # between the panel and its strip, of the panel's height
 
-    Their value is NaN, so no data coordinate can show them; axes coordinates can, on a linear
-    or a log axis alike, and they do not move the data limits.
+
+def _draw_failed_rug(ax, x, failed, row=0, colour=FAILED_COLOUR):
+    """Failed points as x marks in a strip of their own under the panel ``ax``, one row per curve
+    (``failure_strip``), as lambda_1 = -inf has (lyapunov.py).
+
+    Their value is NaN, so no place on the panel's axis can show them: marks in a row along its
+    bottom edge sat where data sit (R near 0 on a linear axis, a bifurcation diagram's lowest
+    samples) and were read as values. The strip shares the panel's horizontal axis (and scale) and
+    nothing else.
     """
     if not np.any(failed):
         return None
-    (line,) = ax.plot(np.asarray(x)[failed], np.full(int(np.sum(failed)), FAILED_ROW_HEIGHT * (row + 0.7)),
-                      "x", color=colour, ms=6, mew=1.5, zorder=6, clip_on=False,
-                      transform=ax.get_xaxis_transform(), gid="failed")
+    strip = failure_strip(ax)
+    (line,) = strip.plot(np.asarray(x)[failed], np.full(int(np.sum(failed)), float(row)),
+                         "x", color=colour, ms=6, mew=1.5, zorder=6, clip_on=False, ls="none", gid="failed")
+    line._vrsweep_context = True  # no data: a zoom does not fit the strip to it (layout.fit_y_to_view)
+    strip._vrsweep_rows = max(getattr(strip, "_vrsweep_rows", 1), row + 1)
+    strip.set_ylim(-0.7, strip._vrsweep_rows - 0.3)
+    strip.set_yticks([(strip._vrsweep_rows - 1) / 2.0], ["failed"], fontsize="small")
     return line
+
+
+def failure_strip(ax):
+    """The strip under panel ``ax`` for its failed points, made on first use: the panel's place in
+    its grid split into the panel and the strip (FAILED_STRIP of its height), the horizontal axis
+    shared. The panel's horizontal axis label goes to the strip at the end (``settle_strips``),
+    where it is the lowest of the two."""
+    strip = getattr(ax, "_vrsweep_failure_strip", None)
+    if strip is not None:
+        return strip
+    fig = ax.figure
+    cells = ax.get_subplotspec().subgridspec(2, 1, height_ratios=[1.0, FAILED_STRIP], hspace=FAILED_STRIP_GAP)
+    ax.set_subplotspec(cells[0])
+    strip = fig.add_subplot(cells[1], sharex=ax)
+    strip.set_label("failed points")
+    # Tick labels where the panel had them: under a panel with more panels below (a bifurcation
+    # diagram above lambda_1) neither shows them.
+    labelled = ax.xaxis._major_tick_kw.get("label1On", True)
+    ax.tick_params(axis="x", labelbottom=False)
+    strip.tick_params(axis="x", labelbottom=labelled)
+    strip.tick_params(axis="y", length=0)
+    strip.grid(alpha=0.3, axis="x")
+    ax._vrsweep_failure_strip = strip
+    return strip
+
+
+def settle_strips(fig):
+    """Each failure strip takes its panel's horizontal axis label (set by the figure after the
+    marks): the label belongs under the lowest of the two."""
+    for ax in fig.axes:
+        strip = getattr(ax, "_vrsweep_failure_strip", None)
+        if strip is not None and ax.get_xlabel():
+            strip.set_xlabel(ax.get_xlabel())
+            ax.set_xlabel("")
 
 
 SPAN_MARGIN = 0.03  # of the grid's span (in log on a logarithmic axis), beyond either end

@@ -58,7 +58,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None, xlim=None, ylim=
     trusted), hollow where not; a circle where a period was found, a square where none was
     (period 0); always in the curve's colour. More than LEGEND_CURVES curves over one other
     parameter take their colours from a scale of its value, with a colour bar, not a legend.
-    Failed points (status not ok, R = NaN) are x marks along the bottom edge, one row per curve,
+    Failed points (status not ok, R = NaN) are x marks in a strip under the panel, one row per curve,
     and counted in the title.
 
     log: True/False for a logarithmic/linear response axis; None chooses: logarithmic when the
@@ -106,7 +106,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None, xlim=None, ylim=
                                         label=f"{what}; colour: {_symbol(scale_axis)} (colour bar)"))
         if view.config is not None and not written:
             theory += _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic)
-    failure_note = _failure_note(view, "along the bottom edge")
+    failure_note = _failure_note(view, "in the strip under the panel")
     handles = _response_legend(curve_handles, kinds_seen, failure_note, len(curves), amplitude,
                                analytic if view.config is not None and not written else None)
     fig.legend(handles=handles, fontsize="x-small", loc="outside lower center", ncol=_legend_columns(fig, 2))
@@ -169,7 +169,7 @@ def _curve_colours(fig, ax, ds, view, scale_axis):
 
 def _draw_measured(ax, view, name, x_axis, x, where, colour, k, n_curves, kinds_seen):
     """One curve's points: joined by a dotted line, marked by trust (filled or hollow) and kind
-    (circle: a period; square: none), failed points along the bottom edge. Returns (x, values)
+    (circle: a period; square: none), failed points in the strip under the panel. Returns (x, values)
     drawn; records in ``kinds_seen`` which kinds of mark appeared (for the legend)."""
     y = view.along(name, x_axis, **where)
     trusted, aperiodic, failed = _point_classes(view, x_axis, where)
@@ -253,7 +253,7 @@ def _response_legend(curve_handles, kinds_seen, failure_note, n_curves, amplitud
                               label="square: no period found (period 0)"))
     if failure_note:
         handles.append(Line2D([], [], ls="none", marker="x", mew=1.5, color=FAILED_COLOUR if n_curves == 1 else "k",
-                              label="× at the bottom edge: integration failed"))
+                              label="× in the strip under the panel: integration failed"))
     if analytic is None:
         return handles
     name = "A" if amplitude else "A/c"
@@ -964,7 +964,7 @@ def impacts_figure(ds, x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
-    failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
+    failure_note = _failure_note(view, "in the strip under the panel") if "status" in view.variables else ""
     if failure_note:
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ls="none",
                 label="integration failed (no count)")
@@ -1150,7 +1150,7 @@ def _draw_bifurcation(ax, view, x_axis, below_when_long=True):
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
-    failure_note = _failure_note(view, "along the bottom edge") if "status" in view.variables else ""
+    failure_note = _failure_note(view, "in the strip under the panel") if "status" in view.variables else ""
     if failure_note:
         ax.plot([], [], "x", color=FAILED_COLOUR if len(curves) == 1 else "k", mew=1.5, ms=2.0, ls="none",
                 label="integration failed: no samples")  # ms x markerscale 3 = the drawn marks
