@@ -113,7 +113,7 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
       bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
       lyapunov     largest Lyapunov exponent against the axis, with its 95% band and the
                    zero line (sweeps run with integration.lyapunov: true); -inf (stuck on
-                   the barrier) as triangles along the bottom edge
+                   the barrier) as triangles in a strip under the panel
       bifurcation+lyapunov
                    both, the exponent aligned under the bifurcation diagram
       basin        the x0-v0 plane coloured by the attractor each start reached

@@ -29,8 +29,8 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
     Each point is drawn with its 95 % band (lyapunov_err), filled where lambda_1 exceeds its band
     above zero (chaos), hollow where not (periodic, or quasi-periodic when it stays within its band
     of zero). -inf (the mass stuck on the barrier in the window: tangent.py) cannot sit on a data
-    axis: such points are triangles along the bottom edge, counted in the title, as failed points
-    are x marks. ``bifurcation``: the bifurcation diagram above, on the same parameter axis.
+    axis: such points are triangles in a strip under the panel, counted in the title, as failed
+    points are x marks in a strip of their own. ``bifurcation``: the bifurcation diagram above, on the same parameter axis.
     """
     view = _Sweep(ds)
     if "lyapunov" not in view.variables:
