@@ -511,9 +511,7 @@ def figure_options(function):
                     where = "{style} {value}" if style else "matplotlib's settings (matplotlibrc)"
                     raise UsageError.naming(where + ": {problem}", value=style, problem=problem)
                 fig = function(*args, **kwargs)
-                from vrsweep.plot.selection import settle_strips
-
-                settle_strips(fig)
+                layout.settle_strips(fig)
                 if size is not None and not getattr(fig, "_vrsweep_grown", False):
                     fig.set_size_inches(*size)  # a figure not made by _new_figure gets the size too
                 fig._vrsweep_style = style

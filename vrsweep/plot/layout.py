@@ -98,6 +98,16 @@ def apply_limits(fig, xlim=None, ylim=None):
                 fit_y_to_view(ax)
 
 
+def settle_strips(fig):
+    """Each failure strip (``selection.failure_strip``) takes its panel's horizontal axis label
+    (set by the figure after the marks): the label belongs under the lowest of the two."""
+    for ax in fig.axes:
+        strip = getattr(ax, "_vrsweep_failure_strip", None)
+        if strip is not None and ax.get_xlabel():
+            strip.set_xlabel(ax.get_xlabel())
+            ax.set_xlabel("")
+
+
 def fit_y_to_view(ax):
     """Vertical limits around the lines' points inside the horizontal limits (lines in data
     coordinates only: marks along an edge or across the axes are placed in axes coordinates; the

@@ -261,7 +261,7 @@ def _draw_failed_rug(ax, x, failed, row=0, colour=FAILED_COLOUR):
 def failure_strip(ax):
     """The strip under panel ``ax`` for its failed points, made on first use: the panel's place in
     its grid split into the panel and the strip (FAILED_STRIP of its height), the horizontal axis
-    shared. The panel's horizontal axis label goes to the strip at the end (``settle_strips``),
+    shared. The panel's horizontal axis label goes to the strip at the end (``layout.settle_strips``),
     where it is the lowest of the two."""
     strip = getattr(ax, "_vrsweep_failure_strip", None)
     if strip is not None:
@@ -280,16 +280,6 @@ def failure_strip(ax):
     strip.grid(alpha=0.3, axis="x")
     ax._vrsweep_failure_strip = strip
     return strip
-
-
-def settle_strips(fig):
-    """Each failure strip takes its panel's horizontal axis label (set by the figure after the
-    marks): the label belongs under the lowest of the two."""
-    for ax in fig.axes:
-        strip = getattr(ax, "_vrsweep_failure_strip", None)
-        if strip is not None and ax.get_xlabel():
-            strip.set_xlabel(ax.get_xlabel())
-            ax.set_xlabel("")
 
 
 SPAN_MARGIN = 0.03  # of the grid's span (in log on a logarithmic axis), beyond either end
