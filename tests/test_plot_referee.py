@@ -72,6 +72,25 @@ def test_the_theory_over_a_geometric_grid_is_drawn_as_finely_in_every_decade(fil
     assert np.isclose(np.diff(np.log(long_lines[0]))[0], np.log(16.0 / 0.25) / (FINE_POINTS - 1))
 
 
+def test_the_theorys_branches_stop_where_the_fast_force_is_no_longer_fast(files):
+    fig = plot.response_figure(load_results(files["geometric"]))
+    theory_lines = [line for line in fig.axes[0].get_lines() if getattr(line, "_vrsweep_context", False)]
+    x = np.concatenate([line.get_xdata() for line in theory_lines])
+    assert x.size and x.min() > 0.5 and x.max() == pytest.approx(16.0)  # omega = 0.5
+    assert "no analytic curve or resonance drawn where Ω ≤ ω" in fig._vrsweep_description[1].replace("\n", " ")
+
+
+def test_the_analytic_fold_and_hopf_fields_are_none_where_omega_is_at_most_omega():
+    from vrsweep.numerics.model import DEFAULT_PARAMETERS
+    from vrsweep.plot.curves import analytic_fields
+
+    Omegas = np.geomspace(0.25, 4.0, 40)
+    fields = analytic_fields(dict(DEFAULT_PARAMETERS), "g", "Omega", np.linspace(0.0, 30.0, 50), Omegas)
+    for field in fields.values():
+        assert np.all(np.isnan(field[Omegas <= 0.5]))
+    assert np.any(np.isfinite(fields["fold"][Omegas > 0.5]))
+
+
 def test_a_linear_grid_keeps_a_linear_axis(files):
     fig = plot.response_figure(load_results(files["slow"]))
     assert fig.axes[0].get_xscale() == "linear"
@@ -94,7 +113,11 @@ def test_no_g_res_is_drawn_where_the_fast_force_is_slow_and_the_caption_says_so(
     fig = plot.response_figure(ds) if kind == "response" else plot.bifurcation_figure(ds)
     assert not [x for x in _dash_dot_positions(fig.axes[0]) if np.isclose(x, g_res)]  # ... and is not drawn
     caption = fig._vrsweep_description[1].replace("\n", " ")
-    assert "no resonance (eq3.4) drawn where Ω ≤ ω" in caption
+    if kind == "response":  # nor the branches of the effective system's theory
+        assert not [line for line in fig.axes[0].get_lines() if getattr(line, "_vrsweep_context", False)]
+        assert "no analytic curve or resonance drawn where Ω ≤ ω" in caption
+    else:
+        assert "no resonance (eq3.4) drawn where Ω ≤ ω" in caption
 
 
 def test_g_res_is_still_drawn_where_the_fast_force_is_fast(files):

@@ -34,7 +34,9 @@ def analytic_branches(parameters, axis, values, gain=True):
 
     fine = _fine_parameters(parameters, axis, values)
     columns = theory.analytic_columns(fine)
-    roots = columns["A_theory"][0]
+    # None where the fast force is no faster than the slow one (Omega <= omega): the effective
+    # system is an average over it (theory.fast_force).
+    roots = np.where(theory.fast_force(fine)[:, None], columns["A_theory"][0], np.nan)
     stable = columns["A_theory_stable"][0].astype(bool)
     if gain:
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -121,6 +123,8 @@ def resonance_roots(parameters, axis, values):
 
 
 RESONANCE_CUT = "no resonance (eq3.4) drawn where Ω ≤ ω: the effective system averages over a fast force"
+THEORY_CUT = ("no analytic curve or resonance drawn where Ω ≤ ω: the effective system (eq2.10) averages over a "
+              "fast force")
 
 
 def _resonance_label(axis, position):

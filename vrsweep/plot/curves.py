@@ -25,7 +25,7 @@ from matplotlib.lines import Line2D
 from vrsweep.errors import UsageError
 from vrsweep.plot.palettes import cased
 from vrsweep.plot.labels import Wrapped, _legend_columns, _parse_config, _title, _width, caption_lines, figure_options
-from vrsweep.plot.selection import _limits, _map_axes, _Sweep
+from vrsweep.plot.selection import _limits, _map_axes, _Sweep, fine_grid
 
 FILE_KIND = "curves"
 
@@ -225,7 +225,10 @@ def analytic_fields(parameters, x_axis, y_axis, x_values, y_values):
         J = theory.slow_flow_jacobian(R, theory.fixed_point_phase(R, mesh), mesh)
         determinant = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
     hopf = np.where(np.isfinite(R) & (determinant > 0.0), hopf, np.nan)
-    return {"fold": fold, "hopf": hopf}
+    # The effective system averages over the fast force: where Omega <= omega it has none, and
+    # neither curve means anything (theory.fast_force).
+    fast = np.broadcast_to(theory.fast_force(mesh), X.shape)
+    return {"fold": np.where(fast, fold, np.nan), "hopf": np.where(fast, hopf, np.nan)}
 
 
 def _draw_analytic(ax, view, x_axis, y_axis):
@@ -235,8 +238,9 @@ def _draw_analytic(ax, view, x_axis, y_axis):
 
     if x_axis not in THEORY_PLANE_PARAMETERS or y_axis not in THEORY_PLANE_PARAMETERS:
         return {}
-    x_values = np.linspace(*_limits(view.axes[x_axis]), ANALYTIC_MESH)
-    y_values = np.linspace(*_limits(view.axes[y_axis]), ANALYTIC_MESH)
+    # Evenly in log on a logarithmic axis (a geometric grid's: selection.fine_grid), as the map's cells are.
+    x_values = fine_grid(view.axes[x_axis], ANALYTIC_MESH)
+    y_values = fine_grid(view.axes[y_axis], ANALYTIC_MESH)
     parameters = {name: value for name, value in view.parameters().items()}
     handles = {}
     for kind, field in analytic_fields(parameters, x_axis, y_axis, x_values, y_values).items():

@@ -15,7 +15,7 @@ from vrsweep.errors import ResultFileError, UsageError
 from vrsweep.plot import layout
 from vrsweep.plot.analytic import (
     barrier_positions,
-    RESONANCE_CUT, _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches,
+    RESONANCE_CUT, THEORY_CUT, _draw_branches, _draw_resonance_curve, _fine_parameters, _resonance_label, analytic_branches,
     resonance_roots,
 )
 from vrsweep.plot.palettes import (
@@ -123,6 +123,7 @@ def response_figure(ds, amplitude=False, x_axis=None, log=None, xlim=None, ylim=
     # leaving the theory out ('more than 10 times from the measured values') no longer holds.
     beyond = _beyond_view(ax, drawn, theory, analytic.barrier_levels, amplitude, None if asked else reach)
     notes = "; ".join(note for note in (_progress_note(view), failure_note, scale_note, beyond,
+                                        THEORY_CUT if analytic.theory_cut else
                                         RESONANCE_CUT if analytic.resonance_cut else "") if note)
     _title(fig, f"Response {quantity} against {parameter_symbol(x_axis)}{theory_note}",
            _caption(view.path, view.config, view.model, view.selected, notes, _width(fig)))
@@ -199,6 +200,7 @@ class _Analytic:
         self.resonance_handles = []
         self.barrier_levels = []  # (x, A/c = Delta/c or A = Delta) of each curve: said when out of view
         self.resonance_cut = False  # a resonance left out where Omega <= omega: said in the caption
+        self.theory_cut = False  # the branches left out where Omega <= omega: said in the caption
 
 
 def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, analytic):
@@ -225,6 +227,9 @@ def _draw_analytic(ax, view, x_axis, x, where, colour, amplitude, scale_axis, an
         analytic.barrier_drawn = True
     positions, cut = resonance_roots(parameters, x_axis, fine)
     analytic.resonance_cut |= cut
+    from vrsweep.analysis import theory
+
+    analytic.theory_cut |= not bool(np.all(theory.fast_force(barrier)))  # the branches stop there (analytic_branches)
     for position in positions:
         ax.axvline(position, color=colour, ls="-.", lw=0.9, zorder=1)
         if scale_axis is None:
