@@ -57,6 +57,12 @@ def test_a_line_plot_over_a_geometric_grid_has_a_logarithmic_axis(files, kind):
     assert low < 0.25 and high > 16.0 and low > 0.0
     # The margin is the same share of the axis at either end (in log).
     assert np.isclose(np.log(0.25 / low), np.log(high / 16.0))
+    # Ticked at the seven grid values, written out (the log axis' own ticks read 10^0 and 10^1).
+    fig.draw_without_rendering()
+    ticks = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+    ticks += [t.get_text() for strip in fig.axes if strip.get_label() == "failed points"
+              for t in strip.get_xticklabels() if t.get_text()]
+    assert set(ticks) <= {"0.25", "0.5", "1", "2", "4", "8", "16"} and len(ticks) >= 4
 
 
 def test_the_theory_over_a_geometric_grid_is_drawn_as_finely_in_every_decade(files):

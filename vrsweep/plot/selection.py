@@ -295,6 +295,9 @@ def _span_grid(ax, values):
         ax.set_xscale("log")
         factor = (high / low) ** SPAN_MARGIN
         ax.set_xlim(low / factor, high * factor)
+        # Ticked at the grid values where they are few, as a map's axis is: the log axis' own
+        # ticks named 10^0 and 10^1 alone under seven points from 0.25 to 16.
+        cell_ticks(ax, values)
         return
     margin = SPAN_MARGIN * (high - low) if high > low else 0.5 * max(1.0, abs(low))
     ax.set_xlim(low - margin, high + margin)
