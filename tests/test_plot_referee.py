@@ -26,16 +26,11 @@ CURVES = ("sweep:\n  g: {start: 0.0, stop: 40.0, num: 5}\n  Omega: [4.0, 4.5, 5.
 
 
 @pytest.fixture(scope="module")
-def files(tmp_path_factory, invoke, write_config):
+def files(tmp_path_factory, sweep_file):
     folder = tmp_path_factory.mktemp("referee")
-    made = {}
-    for name, text in (("geometric", GEOMETRIC), ("slow", SLOW_FAST_FORCE), ("plane", PLANE), ("curves", CURVES),
-                       ("failing", FAILING)):
-        out = folder / f"{name}.h5"
-        result = invoke("run", write_config(folder, text, name=f"{name}.yaml"), "-o", out, "--quiet")
-        assert result.exit_code == 0, result.output
-        made[name] = out
-    return made
+    return {name: sweep_file(folder, text, name)[1]
+            for name, text in (("geometric", GEOMETRIC), ("slow", SLOW_FAST_FORCE), ("plane", PLANE),
+                               ("curves", CURVES), ("failing", FAILING))}
 
 
 def _dash_dot_positions(ax):

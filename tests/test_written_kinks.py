@@ -131,15 +131,22 @@ def test_a_bilinear_springs_lyapunov_exponent_converges_with_the_tolerance():
 # force -x + F cos(omega t) at every turning point exceeds mu: the mass never sticks, and each
 # crossing of v = 0 is transversal.
 MU = 0.1
-FRICTION = f"""
+
+
+def friction_config(zeta=ZETA, mu=MU, F=F, omega=OMEGA, transient_periods=50):
+    """The friction oscillator's config (test_written_saltation's too)."""
+    return f"""
 model:
   acceleration: "-2*zeta*v - x - mu*sign(v) + F*cos(omega*t)"
-  parameters: {{zeta: {ZETA}, mu: {MU}, F: {F}, omega: {OMEGA}}}
+  parameters: {{zeta: {zeta}, mu: {mu}, F: {F}, omega: {omega}}}
   period: "2*pi/omega"
   response: {{frequency: omega, scale: F}}
 initial: {{x: 0.0, v: 0.3}}
-integration: {{transient_periods: 50, measure_periods: 20}}
+integration: {{transient_periods: {transient_periods}, measure_periods: 20}}
 """
+
+
+FRICTION = friction_config()
 
 
 def _friction_reference():

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 import sympy
 from scipy.integrate import solve_ivp
+from test_written_kinks import friction_config
 
 import vrsweep
 from vrsweep.config import parse_config
@@ -41,15 +42,7 @@ ZETA, MU, F, OMEGA = 0.05, 0.1, 1.0, 0.8
 B, D = 0.2, 0.3
 PERIOD = 2 * math.pi / OMEGA
 TRANSIENT = 200
-FRICTION = f"""
-model:
-  acceleration: "-2*zeta*v - x - mu*sign(v) + F*cos(omega*t)"
-  parameters: {{zeta: {ZETA}, mu: {MU}, F: {F}, omega: {OMEGA}}}
-  period: "2*pi/omega"
-  response: {{frequency: omega, scale: F}}
-initial: {{x: 0.0, v: 0.3}}
-integration: {{transient_periods: {TRANSIENT}, measure_periods: 20}}
-"""
+FRICTION = friction_config(ZETA, MU, F, OMEGA, TRANSIENT)
 RELAY = (FRICTION.replace("mu*sign(v)", "b*sign(x - d)")
          .replace(f"mu: {MU}", f"b: {B}, d: {D}"))
 # Each model's surface h(x, v), its gradient (dh/dx, dh/dv; dh/dt = 0) and its force's side's constant:
