@@ -13,6 +13,7 @@ from vrsweep.plot.labels import (
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _point_classes, _progress_note, _span_grid, _Sweep,
+    label_strip,
 )
 from vrsweep.plot.sweeps import _draw_bifurcation, _draw_resonance_lines, _refuse_too_many_curves
 
@@ -118,11 +119,7 @@ def _draw_lyapunov(ax, view, x_axis, strip=None):
     ax.set_ylabel(f"{LYAPUNOV_SYMBOL}, per unit time")
     ax.grid(alpha=0.3)
     if strip is not None:
-        # Rows 0 .. n-1 (a curve each), one tick between them naming what the strip holds.
-        strip.set_ylim(-0.7, len(curves) - 0.3)
-        strip.set_yticks([(len(curves) - 1) / 2.0], [f"{LYAPUNOV_SYMBOL} = $-\\infty$"], fontsize="small")
-        strip.tick_params(axis="y", length=0)
-        strip.grid(alpha=0.3, axis="x")
+        label_strip(strip, len(curves), f"{LYAPUNOV_SYMBOL} = $-\\infty$")
     # Below the axes: a legend inside would cover points (the exponent fills its whole range).
     handles, labels = ax.get_legend_handles_labels()
     ax.figure.legend(handles, labels, fontsize="x-small", loc="outside lower center",

@@ -253,9 +253,17 @@ def _draw_failed_rug(ax, x, failed, row=0, colour=FAILED_COLOUR):
                          "x", color=colour, ms=6, mew=1.5, zorder=6, clip_on=False, ls="none", gid="failed")
     line._vrsweep_context = True  # no data: a zoom does not fit the strip to it (layout.fit_y_to_view)
     strip._vrsweep_rows = max(getattr(strip, "_vrsweep_rows", 1), row + 1)
-    strip.set_ylim(-0.7, strip._vrsweep_rows - 0.3)
-    strip.set_yticks([(strip._vrsweep_rows - 1) / 2.0], ["failed"], fontsize="small")
+    label_strip(strip, strip._vrsweep_rows, "failed")
     return line
+
+
+def label_strip(strip, rows, name):
+    """A strip of marks under a panel (failed points here, lambda_1 = -inf in lyapunov.py): rows
+    0 .. rows-1 (a curve each), one tick between them naming what the strip holds."""
+    strip.set_ylim(-0.7, rows - 0.3)
+    strip.set_yticks([(rows - 1) / 2.0], [name], fontsize="small")
+    strip.tick_params(axis="y", length=0)
+    strip.grid(alpha=0.3, axis="x")
 
 
 def failure_strip(ax):
@@ -276,8 +284,6 @@ def failure_strip(ax):
     labelled = ax.xaxis._major_tick_kw.get("label1On", True)
     ax.tick_params(axis="x", labelbottom=False)
     strip.tick_params(axis="x", labelbottom=labelled)
-    strip.tick_params(axis="y", length=0)
-    strip.grid(alpha=0.3, axis="x")
     ax._vrsweep_failure_strip = strip
     return strip
 
