@@ -1,0 +1,169 @@
+"""Filippov sliding (stick-slip) on a jump of a written force, h = v - c with c a constant (the
+belt's speed; c = 0: Coulomb friction on a fixed floor).
+
+x'' = -2 zeta v - x - mu sign(v - c) + F cos(omega t): where the force without the jump,
+p = -2 zeta c - x + F cos(omega t), is weaker than mu at v = c, the field points into v = c from
+both sides and the mass rides the belt: v = c, x' = c, until |p| = mu, when it leaves on the side p
+pushes it to.
+
+The reference is SciPy's solve_ivp (DOP853, rtol 1e-13) written here: an event at v = c, restarted
+with the other side's force where |p| > mu there; where |p| < mu a sliding phase written by hand,
+x = x0 + c (t - t0), its exit the first root of |p| = mu (scanned in T/256, brentq), its
+quadratures of eq3.1-eq3.2 by scipy's quad. The kernel's result is compared at a converged point:
+x and v at the end of each measured period, each stick's start and end, the number of sticks,
+and R.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad, solve_ivp
+from scipy.optimize import brentq
+
+from vrsweep.config import parse_config
+from vrsweep.numerics import kernel
+from vrsweep.numerics.models import kernels_for
+from vrsweep.numerics.trajectory import settings_vector, simulate
+from vrsweep.results import Status
+
+ZETA, F = 0.05, 1.0
+TRANSIENT, MEASURE = 20, 6
+# (omega, mu, belt): two sticks a period on the fixed floor and on the belt, each inside a period;
+# one stick a period on a belt, 0.46 of a period long, across the period's boundary.
+CASES = [(0.5, 0.6, 0.0), (0.5, 0.6, 0.2), (0.3, 0.6, 0.2)]
+
+
+def _config(omega, mu, belt):
+    jump = "sign(v)" if belt == 0.0 else "sign(v - belt)"
+    return f"""
+model:
+  acceleration: "-2*zeta*v - x - mu*{jump} + F*cos(omega*t)"
+  parameters: {{zeta: {ZETA}, mu: {mu}, F: {F}, omega: {omega}, belt: {belt}}}
+  period: "2*pi/omega"
+  response: {{frequency: omega, scale: F}}
+initial: {{x: 0.0, v: 0.3}}
+"""
+
+
+def reference(omega, mu, belt, x0=0.0, v0=0.3, n_transient=TRANSIENT, n_measure=MEASURE):
+    """(R over the window, (x, v) at the end of every period, every stick [start, end])."""
+    T = 2 * math.pi / omega
+
+    def pull(t, x, v):  # the force without the jump term
+        return -2 * ZETA * v - x + F * math.cos(omega * t)
+
+    def rhs(t, y, side):
+        return [y[1], pull(t, y[0], y[1]) - mu * side, y[0] * math.sin(omega * t), y[0] * math.cos(omega * t)]
+
+    sticks = []
+
+    def run(t, t_end, y, sliding):
+        while t < t_end:
+            if y[1] == belt:
+                p = pull(t, y[0], belt)
+                if abs(p) < mu:  # pointing into v = belt from both sides: it slides
+                    if not sliding:
+                        sticks.append([t, math.nan])
+                        sliding = True
+                    t0, x0 = t, y[0]
+
+                    def position(s):
+                        return x0 + belt * (s - t0)
+
+                    def excess(s):
+                        return abs(pull(s, position(s), belt)) - mu
+
+                    a, leaves = t, None
+                    while a < t_end:
+                        b = min(a + T / 256, t_end)
+                        if excess(b) >= 0.0:
+                            leaves = brentq(excess, a, b, xtol=1e-15, rtol=1e-15, maxiter=200)
+                            break
+                        a = b
+                    s_end = t_end if leaves is None else leaves
+                    y = y.copy()
+                    for j, harmonic in ((2, math.sin), (3, math.cos)):
+                        y[j] += quad(lambda s: position(s) * harmonic(omega * s), t, s_end,
+                                     epsabs=1e-14, epsrel=1e-13, limit=200)[0]
+                    y[0] = position(s_end)
+                    t = s_end
+                    if leaves is None:
+                        break
+                    sticks[-1][1] = t
+                    sliding = False
+                    side = math.copysign(1.0, pull(t, y[0], belt))
+                else:
+                    side = math.copysign(1.0, p)
+            else:
+                side = math.copysign(1.0, y[1] - belt)
+            event = lambda t, y, side: y[1] - belt  # noqa: E731
+            event.terminal = True
+            event.direction = -side
+            solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-15, events=event,
+                                 args=(side,))
+            if solution.status == 1:
+                t, y = solution.t_events[0][0], solution.y_events[0][0].copy()
+                y[1] = belt
+            else:
+                t, y = solution.t[-1], solution.y[:, -1].copy()
+        return y, sliding
+
+    y = np.array([x0, v0, 0.0, 0.0])
+    sliding = False
+    states = []
+    for k in range(n_transient + n_measure):
+        if k == n_transient:
+            y[2:] = 0.0
+        y, sliding = run(k * T, (k + 1) * T, y, sliding)
+        states.append(y[:2].copy())
+    window = n_measure * T
+    return math.hypot(2 * y[2] / window, 2 * y[3] / window) / F, np.array(states), np.array(sticks)
+
+
+@pytest.fixture(scope="module", params=CASES, ids=lambda case: "omega={} mu={} belt={}".format(*case))
+def case(request):
+    omega, mu, belt = request.param
+    return request.param, reference(omega, mu, belt)
+
+
+def _simulate(omega, mu, belt, rtol, method="rk45", lyapunov=False):
+    config = parse_config(_config(omega, mu, belt), "m.yaml")
+    coefficients = kernels_for(config.model).coefficients(config.parameters)
+    settings = settings_vector(rtol=rtol, atol=rtol * 1e-2, transient_periods=TRANSIENT, measure_periods=MEASURE)
+    return simulate(coefficients, [config.initial["x"], config.initial["v"]], settings, method=method,
+                    lyapunov=lyapunov, model=config.model)
+
+
+def _errors(run, reference_, omega):
+    """The largest differences: (x and v at the measured periods' ends, the sticks' times in the
+    window, R)."""
+    R, states, sticks = reference_
+    T = 2 * math.pi / omega
+    measured = run.period_records[TRANSIENT:]
+    state_error = np.max(np.abs(measured[:, [kernel.REC_X, kernel.REC_V]] - states[TRANSIENT:]))
+    in_window = sticks[sticks[:, 0] >= TRANSIENT * T - 1e-9]
+    found = run.sticks[run.sticks[:, 0] >= TRANSIENT * T - 1e-9]
+    assert len(found) == len(in_window), (run.sticks / T, sticks / T)
+    open_ = np.isnan(in_window[:, 1])  # the last stick may last to the run's end
+    stick_error = max(np.max(np.abs(found[:, 0] - in_window[:, 0])),
+                      np.max(np.abs(found[~open_, 1] - in_window[~open_, 1])))
+    return state_error, stick_error, abs(float(run.summary[kernel.SUM_R]) - R)
+
+
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+def test_stick_slip_follows_the_sliding_motion_and_agrees_with_scipy(case, method):
+    """Before 0.7.7 every one of these points ended `sliding` at its first stick."""
+    (omega, mu, belt), reference_ = case
+    R, states, sticks = reference_
+    T = 2 * math.pi / omega
+    assert len(sticks[sticks[:, 0] >= TRANSIENT * T]) >= MEASURE  # stick-slip in every measured period
+    errors = []
+    for rtol in (1e-8, 1e-10):
+        run = _simulate(omega, mu, belt, rtol, method)
+        assert run.status == Status.OK, run.status
+        assert int(run.summary[kernel.SUM_STICKS]) == len(sticks)
+        errors.append(_errors(run, reference_, omega))
+    errors = np.array(errors)
+    assert np.all(errors[0] < 1e3 * 1e-8) and np.all(errors[1] < 1e3 * 1e-10), errors
+    assert np.all(errors[1] < 0.1 * errors[0]), errors  # converging with rtol
