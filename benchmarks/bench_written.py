@@ -101,7 +101,8 @@ def kinked(repeats):
         summary = np.full(kernel.N_SUMMARY, np.nan)
         switches = module.switch_signs if located else rhs.no_switches
         status = integrate(module.rhs, module.rhs, module.tangent, module.barrier_force, switches,
-                           module.switch_saltation if located else rhs.no_saltation, rhs.no_preparations, rules,
+                           module.switch_saltation if located else rhs.no_saltation,
+                           module.sliding_surface if located else rhs.no_sliding, rhs.no_preparations, rules,
                            step, error, dense_output, accepted, growth, rejected, False,
                            (np.empty((k_rows, N_STATE)), np.empty((N_STATE, dense_order)),
                             np.empty((kernel.N_VECTORS, N_STATE)), np.empty(N_BRACKET)), np.empty(1), coefficients,

@@ -89,7 +89,7 @@ def integrate(method, coefficients, settings, gather_lanes, parts=None):
     summary = np.full(kernel.N_SUMMARY, np.nan)
     return kernel._integrate(
         rhs.oscillator_rhs, rhs.oscillator_rhs, rhs.oscillator_tangent, rhs.force_at_barrier, rhs.no_switches,
-        rhs.no_saltation,
+        rhs.no_saltation, rhs.no_sliding,
         rhs.no_preparations, rules, step, error, dense_output, accepted, growth, rejected, False,
         (np.empty((k_rows, N_STATE)), np.empty((N_STATE, dense_order)), np.empty((kernel.N_VECTORS, N_STATE)),
          np.empty(bracket_size(dense_order))), np.empty(1), coefficients, np.array([X0, V0]), settings,

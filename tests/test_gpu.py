@@ -71,6 +71,18 @@ sweep:
   F: {values: [0.8, 1.0, 1.2]}
 """
 
+# Stick-slip on a belt (v = belt, on the fixed floor at belt = 0): the kernel follows the sliding
+# motion (tests/test_written_sliding.py), two sticks a period, with the tangent vectors.
+STICK_SLIP = """
+model:
+  acceleration: "-2*zeta*v - x - mu*sign(v - belt) + F*cos(omega*t)"
+  parameters: {zeta: 0.05, mu: 0.6, F: 1.0, omega: 0.5, belt: 0.2}
+  period: "2*pi/omega"
+  response: {frequency: omega, scale: F}
+sweep:
+  belt: {values: [0.0, 0.1, 0.2]}
+"""
+
 
 @pytest.mark.parametrize("case, config, method, lyapunov, line_length, local_coefficients", [
     ("original, with an initial-state axis", BASIN_MAP, "rk45", "false", 1, False),
@@ -82,6 +94,7 @@ sweep:
     # A kink (max) and a jump (sign) the CPU's kernel locates as events, with the tangent vectors
     # (the frozen mode's Jacobian): the GPU's locates them the same way.
     ("written, a kink and a jump, tangent vectors", KINKED, "rk45", "true", 1, False),
+    ("written, stick-slip, tangent vectors", STICK_SLIP, "rk45", "true", 1, False),
 ])
 def test_the_gpu_kernel_gives_the_cpu_results_bit_for_bit(tmp_path, case, config, method, lyapunov, line_length,
                                                           local_coefficients):

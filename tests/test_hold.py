@@ -43,14 +43,14 @@ def seed_votes(seed):
 
 
 def _functions(model, tangents):
-    """(rhs, tangent, barrier_force, switch_signs, switch_saltation) as the GPU's kernel takes them."""
+    """(rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface) as the GPU's kernel takes them."""
     if isinstance(model, WrittenModel):
         return codegen.written_functions(codegen.compiled(model), tangents)
     return rhs.paper_functions(tangents)
 
 
 def _integrate(integrate, functions, method, tangents, coefficients, initial_state, settings, gather):
-    model_rhs, tangent, barrier_force, switch_signs, switch_saltation = functions
+    model_rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface = functions
     rules, step, error, dense_output, accepted, growth, rejected, k_rows, dense_order = kernel.METHOD_PARTS[method]
     n_state = N_STATE_WITH_TANGENTS if tangents else N_STATE
     n_periods = int(settings[kernel.TRANSIENT_PERIODS] + settings[kernel.MEASURE_PERIODS])
@@ -62,7 +62,8 @@ def _integrate(integrate, functions, method, tangents, coefficients, initial_sta
     impacts = np.full((4096, 3), np.nan)
     sticks = np.full((1024, 2), np.nan)
     status = integrate(
-        model_rhs, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, rhs.no_preparations, rules,
+        model_rhs, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface,
+        rhs.no_preparations, rules,
         step, error,
         dense_output, accepted, growth, rejected, tangents, (np.empty((k_rows, n_state)),
         np.empty((n_state, dense_order)), np.empty((kernel.N_VECTORS, n_state)), np.empty(N_BRACKET)), np.empty(1),

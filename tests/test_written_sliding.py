@@ -18,11 +18,12 @@ import math
 
 import numpy as np
 import pytest
+import sympy
 from scipy.integrate import quad, solve_ivp
 from scipy.optimize import brentq
 
 from vrsweep.config import parse_config
-from vrsweep.numerics import kernel
+from vrsweep.numerics import codegen, kernel
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.trajectory import settings_vector, simulate
 from vrsweep.results import Status
@@ -35,10 +36,10 @@ CASES = [(0.5, 0.6, 0.0), (0.5, 0.6, 0.2), (0.3, 0.6, 0.2)]
 
 
 def _config(omega, mu, belt):
-    jump = "sign(v)" if belt == 0.0 else "sign(v - belt)"
+    # one model for every case (belt = 0 is the fixed floor's sign(v)): one compile per method
     return f"""
 model:
-  acceleration: "-2*zeta*v - x - mu*{jump} + F*cos(omega*t)"
+  acceleration: "-2*zeta*v - x - mu*sign(v - belt) + F*cos(omega*t)"
   parameters: {{zeta: {ZETA}, mu: {mu}, F: {F}, omega: {omega}, belt: {belt}}}
   period: "2*pi/omega"
   response: {{frequency: omega, scale: F}}
@@ -153,17 +154,81 @@ def _errors(run, reference_, omega):
 
 @pytest.mark.parametrize("method", ["rk45", "dop853"])
 def test_stick_slip_follows_the_sliding_motion_and_agrees_with_scipy(case, method):
-    """Before 0.7.7 every one of these points ended `sliding` at its first stick."""
+    """Before 0.7.7 every one of these points ended `sliding` at its first stick. Now (rk45 at rtol
+    1e-6 and 1e-10, the largest of the three cases): x, v at the periods' ends 6.2e-7 and 5.6e-11
+    off, the sticks' times 1.9e-6 and 1.7e-10, R 3.9e-7 and 3.5e-11; dop853 8.1e-9 and 2.1e-12,
+    2.1e-7 and 1.7e-11, 4.5e-9 and 6.9e-13; the same number of sticks as SciPy's."""
     (omega, mu, belt), reference_ = case
     R, states, sticks = reference_
     T = 2 * math.pi / omega
     assert len(sticks[sticks[:, 0] >= TRANSIENT * T]) >= MEASURE  # stick-slip in every measured period
     errors = []
-    for rtol in (1e-8, 1e-10):
+    for rtol in (1e-6, 1e-10):
         run = _simulate(omega, mu, belt, rtol, method)
         assert run.status == Status.OK, run.status
         assert int(run.summary[kernel.SUM_STICKS]) == len(sticks)
         errors.append(_errors(run, reference_, omega))
     errors = np.array(errors)
-    assert np.all(errors[0] < 1e3 * 1e-8) and np.all(errors[1] < 1e3 * 1e-10), errors
-    assert np.all(errors[1] < 0.1 * errors[0]), errors  # converging with rtol
+    assert np.all(errors[0] < 10 * 1e-6) and np.all(errors[1] < 10 * 1e-10), errors
+    assert np.all(errors[1] < 1e-2 * errors[0]), errors  # converging with rtol
+
+
+def test_the_arrival_at_a_stick_does_not_creep():
+    """Approaching the belt's speed from below, an unfrozen step's stages beyond v = c saw the
+    other side's force, which turns them back: the error estimate failed at every step size and the
+    steps crept up to the surface, 1e-9 long, never crossing it (dop853 at rtol 1e-10: 20 million
+    steps, max_steps, at the third stick; rtol 1e-8: 613629 steps). A rejected step is retried frozen
+    on its start's side: 1423 and 903 steps."""
+    omega, mu, belt = CASES[2]
+    for rtol in (1e-8, 1e-10):
+        run = _simulate(omega, mu, belt, rtol, "dop853")
+        assert run.status == Status.OK
+        assert run.summary[kernel.SUM_STEPS] < 3000, run.summary[kernel.SUM_STEPS]
+
+
+def _period_map(omega, mu, belt, start):
+    return reference(omega, mu, belt, start[0], start[1], 0, 1)[1][-1]
+
+
+@pytest.mark.parametrize("index", [1, 2])
+def test_the_lyapunov_exponent_through_sliding_agrees_with_the_maps_derivative(index):
+    """lambda_1 = log|mu_1| / T of the stick-slip orbit, the reference's one-period map
+    differentiated by central differences 1e-5 apart (no saltation formula: it moves with the
+    reference's sliding phase; 1e-4 and 1e-6 apart give lambda_1 within 4e-9 of it). The map has
+    rank one (sliding forgets v: the entry's saltation matrix is diag(1, 0)), so the sum of the
+    exponents is -inf. The kernel at rtol 1e-8 and 1e-10: 4.4e-9 and 3.5e-9 off (belt 0.2, two
+    sticks a period), 2.4e-11 and 2.0e-11 (one stick, across the period's end)."""
+    omega, mu, belt = CASES[index]
+    T = 2 * math.pi / omega
+    start = reference(omega, mu, belt)[1][-1]
+    columns = []
+    for j in range(2):
+        up, down = start.copy(), start.copy()
+        up[j] += 1e-5
+        down[j] -= 1e-5
+        columns.append((_period_map(omega, mu, belt, up) - _period_map(omega, mu, belt, down)) / 2e-5)
+    exponent = math.log(max(abs(np.linalg.eigvals(np.array(columns).T)))) / T
+    for rtol in (1e-8, 1e-10):
+        run = _simulate(omega, mu, belt, rtol, lyapunov=True)
+        assert run.status == Status.OK
+        assert abs(run.summary[kernel.SUM_LYAPUNOV] - exponent) < 2e-8, (run.summary[kernel.SUM_LYAPUNOV], exponent)
+        assert run.summary[kernel.SUM_LYAPUNOV_SUM] == -math.inf
+
+
+def test_the_surfaces_slid_on_are_v_equal_a_constant():
+    """codegen.sliding_surfaces: {switch: (speed, gain)} for the jumps s = gain (v - speed), speed
+    and gain free of x, v, t; any other surface is left to the status `sliding`."""
+    x, v, t = sympy.symbols("x v t", real=True)
+    mu, c, w, d = sympy.symbols("p_mu p_c p_w p_d", real=True)
+
+    def surfaces(acceleration):
+        return {str(speed): gain for speed, gain in codegen.sliding_surfaces(acceleration, (x, v, t)).values()}
+
+    assert surfaces(-x - mu * sympy.sign(v)) == {"0": 1}
+    assert surfaces(-x - mu * sympy.sign(v - c)) == {"p_c": 1}
+    assert set(surfaces(mu * sympy.sign(c - v))) == {"p_c"}  # either orientation: gain -1 or 1
+    assert surfaces(-x - mu * sympy.Abs(2 * v - c) / (2 * v - c)) == {"p_c/2": 2}
+    assert surfaces(-x - mu * sympy.sign(x + v)) == {}  # sliding-mode control: x + v = 0
+    assert surfaces(-x - mu * sympy.sign(v - c * sympy.cos(w * t))) == {}  # a belt's speed varying in time
+    assert surfaces(-x - mu * sympy.sign(sympy.Abs(v) - c)) == {}  # a surface inside another switch
+    assert surfaces(-x - mu * sympy.Max(v - d, 0)) == {}  # a kink: the force is continuous, nothing slides

@@ -25,8 +25,8 @@ MESSAGES = {
     Status.CHATTER_LIMIT: "more impacts in one slow period than integration.max_impacts_per_period",
     Status.STEP_TOO_SMALL: "the step size fell below the floating-point resolution of t",
     Status.NON_FINITE: "a non-finite value (NaN or inf) appeared in the state or its derivative",
-    Status.SLIDING: "the force points into a jump of a written acceleration (sign) from both sides: "
-                    "a sliding motion, which vrsweep does not follow",
+    Status.SLIDING: "the force points into a jump of a written acceleration (sign) from both sides on a "
+                    "surface other than v = constant: a sliding motion, which vrsweep does not follow",
 }
 
 FLAG_VALUES = [int(s) for s in Status]

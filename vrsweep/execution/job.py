@@ -49,7 +49,8 @@ def _remedy(status, run):
         return (f"loosen integration.rtol/atol (now {run.rtol:g}/{run.atol:g}), unless the parameters there are "
                 "extreme (a force of 1e300 moves beyond what doubles integrate, at any tolerance)", None)
     if status == Status.SLIDING:
-        return ("the written force has a jump (sign) that holds the motion on it there (stick-slip): write a "
+        return ("the written force has a jump (sign) that holds the motion on it there (stick-slip), on a surface "
+                "other than v = constant, the one vrsweep slides on: write a "
                 "smooth law instead, such as -mu*tanh(v/v0) with v0 small against the motion's speeds", None)
     return "check the parameters of those points (vrsweep info FILE lists them)", None
 

@@ -122,7 +122,8 @@ def run_lines(coefficients, initial_states, settings, lines, period_records, sum
             summary = summaries[line, slot]
             fill_nan(period_records[line, slot], summary)
 {point}            status = _integrate(
-                model_rhs, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, no_preparations, RULES,
+                model_rhs, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface,
+                no_preparations, RULES,
                 step, step_error, dense_output, accepted_factor, growth, rejected_factor, {tangents},
                 (K, dense, vectors, bracket), scratch, point, state, settings, period_records[line, slot],
                 summary, no_samples, no_sample_values, no_impacts, no_sticks, no_monodromy, gather_lanes)
@@ -235,10 +236,11 @@ def fill_nan(records, summary):
         summary[j] = math.nan
 
 
-def line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, queue=None,
+def line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface,
+                queue=None,
                 max_registers=None, gather=None, local_coefficients=None, hold=None):
     """The CUDA kernel that runs lines with ``method`` for a model's functions (kernel._integrate's
-    rhs, tangent, barrier_force, switch_signs and switch_saltation; model_rhs with the tangent vectors when
+    rhs, tangent, barrier_force, switch_signs, switch_saltation and sliding_surface; model_rhs with the tangent vectors when
     ``tangents``).
 
     kernel[blocks, THREADS_PER_BLOCK](coefficients, initial_states, settings, lines,
@@ -248,7 +250,7 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_sign
     hold: HOLD_LANES, with gather only). Compiled on its first launch, once per process.
     """
     return _line_kernel(method, bool(tangents), model_rhs, tangent, barrier_force, switch_signs, switch_saltation,
-                        bool(QUEUE if queue is None else queue),
+                        sliding_surface, bool(QUEUE if queue is None else queue),
                         MAX_REGISTERS if max_registers is None else max_registers,
                         bool(GATHER_LANES if gather is None else gather),
                         bool(LOCAL_COEFFICIENTS if local_coefficients is None else local_coefficients),
@@ -256,7 +258,8 @@ def line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_sign
 
 
 @functools.lru_cache(maxsize=None)  # (line_kernel's defaults resolved first: one compile per kernel)
-def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, queue,
+def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface,
+                 queue,
                  max_registers, gather, local_coefficients, hold):
     (rules, step, step_error, dense_output, accepted_factor, growth, rejected_factor, k_rows,
      dense_order) = kernel.METHOD_PARTS[method]  # (the library's cosines, no rotation table)
@@ -275,7 +278,7 @@ def _line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_sig
     functions = {
         "_integrate": simulated_integrate if numba.config.ENABLE_CUDASIM else kernel._integrate,
         "next_start": next_start, "no_preparations": rhs.no_preparations, "switch_signs": switch_signs,
-        "switch_saltation": switch_saltation,
+        "switch_saltation": switch_saltation, "sliding_surface": sliding_surface,
         "step": step, "step_error": step_error, "dense_output": dense_output, "accepted_factor": accepted_factor,
         "growth": growth, "rejected_factor": rejected_factor, "model_rhs": model_rhs, "tangent": tangent,
         "barrier_force": barrier_force,
@@ -491,7 +494,7 @@ class Launch:
 
 
 def compile_for(method, tangents, model_rhs, tangent, barrier_force, switch_signs, switch_saltation,
-                compute_capability=(9, 0), **options):
+                sliding_surface, compute_capability=(9, 0), **options):
     """The line kernel's PTX for a GPU of ``compute_capability``, compiled on a machine that may have
     none (tests, and a look at the code before a GPU is at hand).
 
@@ -507,7 +510,7 @@ def compile_for(method, tangents, model_rhs, tangent, barrier_force, switch_sign
     from numba.cuda import dispatcher as cuda_dispatcher
 
     kernel_ = line_kernel(method, tangents, model_rhs, tangent, barrier_force, switch_signs, switch_saltation,
-                          **options)
+                          sliding_surface, **options)
     stand_in = types.SimpleNamespace(compute_capability=tuple(compute_capability))
     with mock.patch.object(cuda_dispatcher, "get_current_device", lambda: stand_in):
         ptx, _ = compile_ptx(kernel_.py_func, kernel_signature(), cc=tuple(compute_capability))

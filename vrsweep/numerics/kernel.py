@@ -5,7 +5,9 @@ Dormand-Prince 5(4) pair of rk45.py, or dop853, Hairer's 8(5,3) of dop853.py), s
 every step at the slow-period boundaries t = nT (T = 2 pi / omega) so that every period is
 measured exactly, locates
 impacts on the dense output (impact.py), applies the restitution law (eq2.2), and holds the
-mass on the barrier while chatter has died out and the force presses it there (sticking).
+mass on the barrier while chatter has died out and the force presses it there (sticking); a
+written model's mass rides a surface v = c of its force's jump while the force points into it
+from both sides (Filippov sliding, stick-slip).
 
 Observers are plain arrays the caller passes in, so one kernel serves a sweep (which only
 needs the per-period records) and a trajectory (samples, impact and sticking logs): an
@@ -35,7 +37,7 @@ from vrsweep.numerics.dop853 import (
     dop853_step,
 )
 from vrsweep.numerics.impact import (
-    IMPACT, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, hermite_reach, locate_root, locate_switch,
+    IMPACT, MAX_ROOT_ITERATIONS, N_BRACKET, TURNING_POINT, UNRESOLVED, find_crossing, hermite_reach, locate_root, locate_switch,
     release_time,
 )
 from vrsweep.numerics.coefficients import (
@@ -62,7 +64,7 @@ from vrsweep.numerics.rhs import (  # noqa: F401 - the rotation layout, read as 
     COS_FAST, COS_SLOW, FULL_STEP_NODE, LEVEL_READY, LEVEL_ROTATIONS, MAX_NODES, NODES,
     N_ROTATION_SCRATCH, N_STEP_LEVELS, PHASE_STEP, PHASE_TIME, RESYNC_STEPS, ROTATED_STEPS, ROTATION,
     ROTATION_VALUES, SIN_FAST, SIN_SLOW, STEP_GRID, STEP_LEVELS_PER_OCTAVE, grid_step, no_preparation,
-    no_preparations, no_saltation, no_switches, prepare_rotations_for, UNFROZEN,
+    no_preparations, no_saltation, no_sliding, no_switches, prepare_rotations_for, UNFROZEN,
     dop853_rotation_scratch, force_at_barrier, no_scratch, oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent,
     oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, prepare_rotations, prepare_step_rotations,
     rotation_scratch,
@@ -73,7 +75,7 @@ from vrsweep.numerics.settings import (  # noqa: F401 - the settings layout, rea
 )
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS, QC_INTEGRAL, QS_INTEGRAL, V, X
 from vrsweep.numerics.tangent import (
-    apply_saltation, collapse_tangents, record_monodromy, seed_tangents, tangents_out_of_range,
+    apply_saltation, collapse_tangents, record_monodromy, seed_tangents, slide_tangents, tangents_out_of_range,
 )
 
 # Impacts are decided on each step's dense output in Bernstein form (impact.find_crossing), which
@@ -184,7 +186,7 @@ def integrate_rk45(coefficients, initial_state, settings, period_records, summar
     cosines at every evaluation. Since version 0.2 steps are no longer capped at 1/8 of the
     shortest forcing period, so results differ from those of 0.1 (no longer bit for bit).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_preparations,
+    return _integrate(oscillator_rhs, oscillator_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, no_preparations,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor, certain_growth,
                       rejected_step_factor, False, (np.empty((N_STAGES + 1, N_STATE)), np.empty((N_STATE, DENSE_ORDER)),
                       np.empty((N_VECTORS, N_STATE)), np.empty(N_BRACKET)), no_scratch(0.0),
@@ -201,7 +203,7 @@ def integrate_dop853(coefficients, initial_state, settings, period_records, summ
     oscillator_rhs_rotated), on step sizes rounded down to their grid; other evaluations call the
     library (oscillator_rhs).
     """
-    return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, prepare_rotations_for,
+    return _integrate(oscillator_rhs, oscillator_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, prepare_rotations_for,
                       DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, False,
                       (np.empty((dop853.N_STAGES_EXTENDED, N_STATE)), np.empty((N_STATE, dop853.DENSE_ORDER)),
@@ -219,7 +221,7 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_preparations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, no_preparations,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
                       (np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -232,7 +234,7 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
     """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, prepare_rotations_for,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, prepare_rotations_for,
                       DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       (np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
@@ -252,7 +254,7 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
     interval makes it zero. No renormalisation: one period's map stays far inside double range
     for the model's damping (tangent.py's TANGENT_RANGE is for runs of many periods).
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_preparations,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, no_preparations,
                       RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
                       certain_growth, rejected_step_factor, True,
                       (np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
@@ -265,7 +267,7 @@ def integrate_rk45_monodromy(coefficients, initial_state, settings, period_recor
 def integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
                                sample_times, samples, impact_log, stick_log, monodromy_log):
     """integrate_rk45_monodromy with DOP853 steps."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, prepare_rotations_for,
+    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, prepare_rotations_for,
                       DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
                       dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
                       (np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
@@ -294,7 +296,7 @@ def integrator(method, lyapunov=False):
 # Inlined into each method's kernel above, so that the method's functions become direct calls
 # (a function passed as a runtime value would be a "dynamic global" and could not be cached).
 @kernel_jit(inline="always")
-def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_saltation, prepare, rules, step, step_error,
+def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface, prepare, rules, step, step_error,
                dense_output, accepted_factor, certain_growth, rejected_factor, tangents, work, scratch, coefficients, initial_state, settings, period_records, summary,
                sample_times, samples, impact_log, stick_log, monodromy_log, gather_lanes):
     """The integration loop of every method; see integrate_rk45 for the arguments.
@@ -310,7 +312,10 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
     switch_saltation(t, y, coefficients, mode, crossing, a_before, a_after) jumps the tangent
     vectors in y by the saltation matrix of the crossed surfaces (bits ``crossing``) where the
     force jumps there (codegen._switch_saltation_body; tangent.apply_switch_saltation) and answers
-    whether it changed them (rhs.no_saltation: never); stage_rhs the
+    whether it changed them (rhs.no_saltation: never); sliding_surface(coefficients, crossing, what)
+    says whether the surface of the switch bits ``crossing`` is one the loop slides on, s = gain (v -
+    speed) with speed and gain constants: what = 0 gives the speed, 1 the gain, NaN for any other
+    surface (codegen._sliding_surface_body; rhs.no_sliding: none); stage_rhs the
     same at a step's stages, after prepare(t, h, coefficients, scratch, dense) (dense: True before a
     dense output, which also prepares the dense output's extra stages), with scratch =
     the method's own (dop853_rotation_scratch(h_max), or no_scratch), whose last value is the
@@ -333,7 +338,9 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
     at least: N_BRACKET holds any method's), find_crossing's, which each barrier's test reuses.
 
     Each pass of the loop is one of: hold the mass on the barrier up to its release or the period's
-    end; or attempt a step, and if it is accepted and meets a barrier, locate the impact on its
+    end; or carry it along a sliding surface v = c (a written model's friction: Filippov's sliding
+    motion, x = x0 + c (t - t0)) up to its exit or the period's end, the same idea as a stick with
+    the surface moving; or attempt a step, and if it is accepted and meets a barrier, locate the impact on its
     dense output; or take one Newton step of the exact step to a located impact (from the same t,
     at most IMPACT_NEWTON_ITERATIONS passes); or, on a GPU that holds branches back, wait with a
     kept step, or take its branches (below). A step accepted without an impact, or the impact's
@@ -433,6 +440,12 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
     theta_turn = math.nan
     stuck = False
     stuck_at = 0  # the barrier that holds the mass while stuck
+    # A Filippov sliding motion on a switching surface s = slide_gain (v - slide_speed) (the bit
+    # slide_bit): from (slide_t0, slide_x0) the state is (slide_x0 + slide_speed (t - slide_t0),
+    # slide_speed) while the field points into the surface from both sides.
+    sliding = False
+    slide_bit = 0
+    slide_speed = slide_gain = slide_x0 = slide_t0 = 0.0
     # A step whose branches wait for the warp (on a GPU, gather_lanes): ACCEPTED, an accepted step
     # with `near` (bit b: barrier b's quick test could not clear it); REACHED, an impact's last
     # Newton step. On the CPU a step is never held: its branches follow it in the same pass.
@@ -480,6 +493,54 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                     stick_log[n_sticks - 1, 1] = t
                 rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
                 n_rhs += 1
+                err_previous = 1.0
+        elif sliding:
+            # --- riding the surface v = slide_speed until the field on one side lets go (Filippov) ---
+            t_exit, scans, leaves = _sliding_exit(rhs, switch_signs, t, t_boundary, slide_t0, slide_x0, slide_speed,
+                                                  slide_gain, slide_bit, coefficients, y, f, scratch,
+                                                  stick_scan_step, max_steps - n_scans)
+            n_scans += scans
+            n_rhs += 2 * scans
+            if t_exit != t_exit:
+                status = Status.MAX_STEPS  # the exit scan has a budget of max_steps intervals, as a stick's
+                break
+            t_end = min(t_exit, t_boundary)
+            x_end = slide_x0 + slide_speed * (t_end - slide_t0)
+            onto_barrier = False
+            for barrier in range(n_barriers):
+                slot = BARRIER + BARRIER_VALUES * barrier
+                if coefficients[slot + SIDE] * (x_end - coefficients[slot + POSITION]) > 0.0:
+                    onto_barrier = True
+            if onto_barrier:
+                status = Status.SLIDING  # carried onto a stop by the belt: not followed
+                break
+            _add_sliding_quadratures(y, slide_t0, slide_x0, slide_speed, response_frequency, t, t_end)
+            while next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_end:
+                samples[next_sample, 0] = slide_x0 + slide_speed * (sample_times[next_sample] - slide_t0)
+                samples[next_sample, 1] = slide_speed
+                next_sample += 1
+            record[REC_STUCK_TIME] += t_end - t
+            record[REC_X_MIN] = min(record[REC_X_MIN], x_end)
+            record[REC_X_MAX] = max(record[REC_X_MAX], x_end)
+            t = t_end
+            y[X] = x_end
+            y[V] = slide_speed
+            if leaves != 0 and t_exit <= t_boundary:
+                # Off the surface on the side whose field no longer points into it, frozen there for
+                # the step that leaves, as after a crossing. The tangent vectors go on unchanged:
+                # that side's field equals the sliding one where it lets go, S = I.
+                sliding = False
+                if n_sticks - 1 < stick_log.shape[0]:
+                    stick_log[n_sticks - 1, 1] = t
+                others = switch_signs(t, x_end, slide_speed, coefficients) & ~slide_bit
+                mode = float(others | slide_bit) if leaves > 0 else float(others)
+                _hold_mode(scratch, mode)
+                rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+                n_rhs += 1
+                landed = True
+                jumped = True
+                cut_at_switch = False
+                unchecked = False
                 err_previous = 1.0
         elif held and vote == HOLD:
             continue  # the kept step's branches wait for the warp's release
@@ -555,6 +616,15 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                         retrying = True
                         cut_at_switch = False
                         unchecked = False
+                        if mode < 0.0:
+                            # Retried frozen on the side it starts on: stages beyond a surface that the
+                            # step's end does not cross (a field pointing into it from both sides, at
+                            # the mass's arrival at a stick) were each side's field in turn, an error no
+                            # step size cured: the steps crept up to the surface, 1e-9 long, never
+                            # crossing it (millions of steps). Frozen, the step crosses and is cut there.
+                            # (A smooth model's rhs reads no mode: its steps are the same, bit for bit.)
+                            mode = float(switch_signs(t, y[X], y[V], coefficients))
+                            _hold_mode(scratch, mode)
                         h = h_try * (rejected_factor(err) if err == err else 0.2)
                         if h <= _smallest_step(t, slow_period):
                             status = Status.STEP_TOO_SMALL if err == err else Status.NON_FINITE
@@ -572,7 +642,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                     # of the jump times the step, at any rtol. The step that leaves the surface holds
                     # the side the trajectory crossed to; where its field at once turns back to the
                     # surface, and the acceleration jumps there, the field points into the surface
-                    # from both sides: a sliding motion (Filippov), which the kernel does not follow.
+                    # from both sides: a sliding motion (Filippov), followed on v = constant (the
+                    # sliding pass above), the status SLIDING elsewhere.
                     next_mode = mode
                     if cut_at_switch:
                         next_mode = float(int(mode) ^ crossing)  # on the surface: the side it heads to
@@ -595,6 +666,27 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                                 if landed:
                                     # and the side it crossed to turns back at once
                                     if jumped:
+                                        # the field points into the surface from both sides: slide on
+                                        # it where it is v = speed (Filippov), else end `sliding`
+                                        speed = sliding_surface(coefficients, crossed, 0)
+                                        gain = sliding_surface(coefficients, crossed, 1)
+                                        if speed == speed:
+                                            below, above = _sliding_rates(rhs, switch_signs, t, y[X], speed, gain,
+                                                                          crossed, coefficients, y, f, scratch)
+                                            n_rhs += 2
+                                            if below > 0.0 and above < 0.0:
+                                                sliding = True
+                                                slide_bit = crossed
+                                                slide_speed = speed
+                                                slide_gain = gain
+                                                slide_x0 = y[X]
+                                                slide_t0 = t
+                                                n_sticks = log_stick_start(stick_log, n_sticks, t)
+                                                if tangents:
+                                                    slide_tangents(y, monodromy_log.shape[0] > 0)
+                                                landed = False
+                                                mode = UNFROZEN
+                                                continue
                                         status = Status.SLIDING
                                         break
                                     mode = UNFROZEN  # a kink touched, not crossed: taken unfrozen, as it is
@@ -819,6 +911,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
             if raw and not stuck:
                 seed_tangents(y)  # the next period's map starts from the identity, not from Q
                 tangent(t, y, coefficients, f)
+            if tangents and sliding:
+                slide_tangents(y, monodromy_log.shape[0] > 0)  # renormalised or seeded afresh, still on the surface
             period += 1
             if period == n_periods:
                 break
@@ -892,3 +986,74 @@ def _mirror(y, y_new, dense):
     for q in range(dense.shape[1]):
         dense[X, q] = -dense[X, q]
         dense[V, q] = -dense[V, q]
+
+
+@kernel_jit(inline="always")
+def _sliding_rates(rhs, switch_signs, t, x, speed, gain, bit, coefficients, y, f, scratch):
+    """ds/dt on each side of a sliding surface s = gain (v - speed) at (t, x, speed): (the field where
+    s < 0, the field where s > 0), every other switch on the side the state is on. With speed and
+    gain constants ds/dt = gain a. The motion slides while the first is positive and the second
+    negative: each side's field points into the surface. Leaves y at (x, speed), f the second field."""
+    others = switch_signs(t, x, speed, coefficients) & ~bit
+    y[X] = x
+    y[V] = speed
+    _hold_mode(scratch, float(others))
+    rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+    below = gain * f[V]
+    _hold_mode(scratch, float(others | bit))
+    rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+    return below, gain * f[V]
+
+
+@kernel_jit(inline="always")
+def _sliding_exit(rhs, switch_signs, t_start, t_limit, t0, x0, speed, gain, bit, coefficients, y, f, scratch,
+                  scan_step, max_scans):
+    """The end of a sliding motion x = x0 + speed (t - t0), v = speed, from t_start: the first t in
+    (t_start, t_limit] where the field on one side no longer points into the surface
+    (_sliding_rates), scanned in steps of scan_step and bisected to rounding, as a stuck mass's
+    release (impact.release_time): the t returned is the first found past the root, where that
+    side's field leads away. Returns (t, scans, side): side -1 or +1, the side of s it leaves to; 0
+    and t_limit + 1 if it still slides at t_limit; t NaN if max_scans intervals reached neither."""
+    t_a = t_start
+    scans = 0
+    while t_a < t_limit:
+        if scans >= max_scans:
+            return np.nan, scans, 0
+        scans += 1
+        t_b = min(t_a + scan_step, t_limit)
+        below, above = _sliding_rates(rhs, switch_signs, t_b, x0 + speed * (t_b - t0), speed, gain, bit,
+                                      coefficients, y, f, scratch)
+        if not (below > 0.0 and above < 0.0):
+            for _ in range(MAX_ROOT_ITERATIONS):
+                t_mid = 0.5 * (t_a + t_b)
+                if t_mid <= t_a or t_mid >= t_b:
+                    break
+                middle_below, middle_above = _sliding_rates(rhs, switch_signs, t_mid, x0 + speed * (t_mid - t0), speed,
+                                                            gain, bit, coefficients, y, f, scratch)
+                scans += 1
+                if middle_below > 0.0 and middle_above < 0.0:
+                    t_a = t_mid
+                else:
+                    t_b = t_mid
+                    below = middle_below
+                    above = middle_above
+            # the side whose field leads away; where both do (a corner), the faster
+            return t_b, scans, (1 if above >= 0.0 and above >= -below else -1)
+        t_a = t_b
+    return t_limit + 1.0, scans, 0
+
+
+@kernel_jit(inline="always")
+def _add_sliding_quadratures(y, t0, x0, speed, frequency, t_start, t_end):
+    """eq3.1, eq3.2 integrands over [t_start, t_end] along x = x0 + speed (t - t0): in closed form
+    (integrated by parts; speed = 0 is _add_stuck_quadratures')."""
+    x_start = x0 + speed * (t_start - t0)
+    x_end = x0 + speed * (t_end - t0)
+    cos_start = math.cos(frequency * t_start)
+    cos_end = math.cos(frequency * t_end)
+    sin_start = math.sin(frequency * t_start)
+    sin_end = math.sin(frequency * t_end)
+    y[QS_INTEGRAL] += ((x_start * cos_start - x_end * cos_end) / frequency
+                       + speed * (sin_end - sin_start) / (frequency * frequency))
+    y[QC_INTEGRAL] += ((x_end * sin_end - x_start * sin_start) / frequency
+                       + speed * (cos_end - cos_start) / (frequency * frequency))

@@ -69,11 +69,11 @@ def oscillator_tangent_rhs(t, h, node, c, y, coefficients, dydt, scratch):
 
 
 def paper_functions(tangents):
-    """The paper's family's (rhs, tangent, barrier_force, switch_signs, switch_saltation), as
+    """The paper's family's (rhs, tangent, barrier_force, switch_signs, switch_saltation, sliding_surface), as
     kernel._integrate takes them with the library's cosines (the GPU's line kernel, cuda.line_kernel; tests that drive the
     loop). Its acceleration is smooth: no switching functions."""
     model_rhs = oscillator_tangent_rhs if tangents else oscillator_rhs
-    return model_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation
+    return model_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding
 
 
 @kernel_jit
@@ -117,6 +117,13 @@ def no_switches(t, x, v, coefficients):
     whose acceleration is smooth, as the paper's: none, a constant that LLVM inlines and folds
     away, so the kink location costs their kernels nothing."""
     return 0
+
+
+@kernel_jit
+def no_sliding(coefficients, crossing, what):
+    """kernel._integrate's sliding_surface for a model with no surface it slides on (the paper's):
+    NaN, no speed (a constant, folded away with the branch it guards)."""
+    return math.nan
 
 
 @kernel_jit

@@ -59,6 +59,29 @@ def collapse_tangents(y):
 
 
 @kernel_jit(inline="always")
+def slide_tangents(y, both):
+    """Sliding on a surface v = c, c a constant (a written model's Filippov sliding, kernel.py): the
+    entry's saltation matrix S = I + (f_s - f-) grad h^T / (grad h . f-), f_s = (c, 0) the sliding
+    field, is diag(1, 0): a neighbour displaced by dv reaches the surface a little earlier or later
+    and slides from there, at the same speed. Along the surface x' = c whatever x, so u = (dx, 0)
+    stays; the exit's S is I (the side it leaves to has the sliding field where it lets go).
+
+    both: each vector is mapped (a period's raw map, continuation's monodromy). Otherwise the map
+    has rank one: the first vector keeps the image (the second's where the first has none) and the
+    second is 0, so that the area's log, the sum of the exponents, is -inf exactly, as after sticking,
+    not the log of a rounding."""
+    if both:
+        for i in range(N_TANGENT_VECTORS):
+            y[TANGENT + 2 * i + 1] = 0.0
+        return
+    if y[TANGENT] == 0.0:
+        y[TANGENT] = y[TANGENT + 2]
+    y[TANGENT + 1] = 0.0
+    y[TANGENT + 2] = 0.0
+    y[TANGENT + 3] = 0.0
+
+
+@kernel_jit(inline="always")
 def apply_saltation(y, v_before, acceleration_before, acceleration_after, restitution):
     """u -> S u at an impact with x'(-) = v_before > 0 (module doc; eq2.2).
 
