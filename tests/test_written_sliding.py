@@ -222,11 +222,12 @@ def test_the_surfaces_slid_on_are_v_equal_a_constant():
     mu, c, w, d = sympy.symbols("p_mu p_c p_w p_d", real=True)
 
     def surfaces(acceleration):
-        return {str(speed): gain for speed, gain in codegen.sliding_surfaces(acceleration, (x, v, t)).values()}
+        # (the switch's orientation is sympy's: v - c or c - v, gain 1 or -1)
+        return {str(speed): abs(gain) for speed, gain in codegen.sliding_surfaces(acceleration, (x, v, t)).values()}
 
     assert surfaces(-x - mu * sympy.sign(v)) == {"0": 1}
     assert surfaces(-x - mu * sympy.sign(v - c)) == {"p_c": 1}
-    assert set(surfaces(mu * sympy.sign(c - v))) == {"p_c"}  # either orientation: gain -1 or 1
+    assert surfaces(mu * sympy.sign(c - v)) == {"p_c": 1}
     assert surfaces(-x - mu * sympy.Abs(2 * v - c) / (2 * v - c)) == {"p_c/2": 2}
     assert surfaces(-x - mu * sympy.sign(x + v)) == {}  # sliding-mode control: x + v = 0
     assert surfaces(-x - mu * sympy.sign(v - c * sympy.cos(w * t))) == {}  # a belt's speed varying in time
