@@ -128,12 +128,13 @@ def case(request):
     return request.param, reference(omega, mu, belt)
 
 
-def _simulate(omega, mu, belt, rtol, method="rk45", lyapunov=False):
+def _simulate(omega, mu, belt, rtol, method="rk45", lyapunov=False, initial=None, sample_times=()):
     config = parse_config(_config(omega, mu, belt), "m.yaml")
     coefficients = kernels_for(config.model).coefficients(config.parameters)
     settings = settings_vector(rtol=rtol, atol=rtol * 1e-2, transient_periods=TRANSIENT, measure_periods=MEASURE)
-    return simulate(coefficients, [config.initial["x"], config.initial["v"]], settings, method=method,
-                    lyapunov=lyapunov, model=config.model)
+    initial = [config.initial["x"], config.initial["v"]] if initial is None else initial
+    return simulate(coefficients, initial, settings, sample_times, method=method, lyapunov=lyapunov,
+                    model=config.model)
 
 
 def _errors(run, reference_, omega):
@@ -184,6 +185,26 @@ def test_the_arrival_at_a_stick_does_not_creep():
         run = _simulate(omega, mu, belt, rtol, "dop853")
         assert run.status == Status.OK
         assert run.summary[kernel.SUM_STEPS] < 3000, run.summary[kernel.SUM_STEPS]
+
+
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+def test_a_start_on_the_surface_slides_from_t0_and_leaves_where_the_force_reaches_mu(method):
+    """mu = 2 > F: laid on the floor the mass never moves, and its one stick lasts to the run's end
+    (its end was left unwritten); laid on the belt it rides it from t = 0 until the spring and the
+    force reach -mu, -2 zeta c - (x0 + c t) + F cos(omega t) = -mu, to rounding (the exit is bisected
+    as a release is)."""
+    omega, mu = 0.5, 2.0
+    end = (TRANSIENT + MEASURE) * 2 * math.pi / omega
+    run = _simulate(omega, mu, 0.0, 1e-10, method, initial=[0.5, 0.0], sample_times=np.linspace(0.0, end, 7))
+    assert run.status == Status.OK
+    assert run.sticks.tolist() == [[0.0, end]]
+    assert np.all(run.samples == [0.5, 0.0])
+    belt = 0.2
+    run = _simulate(omega, mu, belt, 1e-10, method, initial=[0.5, belt])
+    release = brentq(lambda t: -2 * ZETA * belt - (0.5 + belt * t) + F * math.cos(omega * t) + mu, 0.0, 6.0,
+                     xtol=1e-15)
+    assert run.sticks[0, 0] == 0.0
+    assert abs(run.sticks[0, 1] - release) < 1e-13 * release, (run.sticks[0, 1], release)
 
 
 def _period_map(omega, mu, belt, start):

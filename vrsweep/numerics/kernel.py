@@ -919,7 +919,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
             t_boundary = (period + 1) * slow_period
             start_period(period_records[max(period - first_row, 0)], y[X], tangents)
 
-    if stuck and n_sticks - 1 < stick_log.shape[0]:
+    if (stuck or sliding) and n_sticks - 1 < stick_log.shape[0]:
         stick_log[n_sticks - 1, 1] = t
     status = summarize(period_records, n_transient - first_row, n_periods - first_row, slow_period,
                        coefficients[RESPONSE_SCALE], status, summary)
