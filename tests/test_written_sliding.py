@@ -208,6 +208,23 @@ def test_a_start_on_the_surface_slides_from_t0_and_leaves_where_the_force_reache
     assert abs(run.sticks[0, 1] - release) < 1e-13 * release, (run.sticks[0, 1], release)
 
 
+def test_a_belt_that_carries_the_sliding_mass_onto_a_stop_ends_sliding():
+    """Riding the belt from x = 0.5 at 0.2, the mass reaches a stop at x = 1 at t = 2.5, before the
+    force lets go (t = 4.42, above): an impact of a sliding mass is not followed, the point ends
+    `sliding`, its final state on the belt's line short of the stop (the exit scan's trial states
+    were left in it: x = 1.38, the release's)."""
+    text = _config(0.5, 2.0, 0.2).replace(
+        "belt: 0.2}", "belt: 0.2, Delta: 1.0}\n  barriers: [{position: Delta, side: above, restitution: 0.5}]")
+    config = parse_config(text, "m.yaml")
+    coefficients = kernels_for(config.model).coefficients(config.parameters)
+    settings = settings_vector(rtol=1e-10, atol=1e-12, transient_periods=2, measure_periods=2)
+    run = simulate(coefficients, [0.5, 0.2], settings, model=config.model)
+    assert run.status == Status.SLIDING
+    assert run.sticks[0, 0] == 0.0 and run.summary[kernel.SUM_T_FINAL] < 2.5
+    x, v, t = run.summary[[kernel.SUM_X_FINAL, kernel.SUM_V_FINAL, kernel.SUM_T_FINAL]]
+    assert x == 0.5 + 0.2 * t and v == 0.2 and x <= 1.0
+
+
 def _period_map(omega, mu, belt, start):
     return reference(omega, mu, belt, start[0], start[1], 0, 1)[1][-1]
 

@@ -501,6 +501,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                                                   stick_scan_step, max_steps - n_scans)
             n_scans += scans
             n_rhs += 2 * scans
+            y[X] = slide_x0 + slide_speed * (t - slide_t0)  # the scan left its trial states in y
+            y[V] = slide_speed
             if t_exit != t_exit:
                 status = Status.MAX_STEPS  # the exit scan has a budget of max_steps intervals, as a stick's
                 break
