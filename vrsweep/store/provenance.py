@@ -126,6 +126,8 @@ RESULT_EPOCHS = (
               "its side (a frozen mode)"),
     ("0.7.6", "a written model's tangent vectors jump by the saltation matrix where its force jumps (sign): the "
               "lyapunov of such models changes"),
+    ("0.7.7", "a written model's mass slides on a jump of its force at v = c (stick-slip, Filippov) where it ended "
+              "`sliding`, and a step rejected beside a surface is retried on its side"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -152,7 +154,11 @@ error of the jump times the step, in friction's force and in the tangents' Jacob
 lambda_1 of a bilinear spring scattered by 1e-6), and ends a sliding motion with the status
 sliding; the paper's models have no switches and are unchanged bit for bit; 0.7.6 jumps the
 tangent vectors by the saltation matrix where a written force jumps (friction's lambda_1 was the
-damping's -zeta alone, 1.5e-2 off; kinks and the paper's models unchanged bit for bit). Versions of one epoch
+damping's -zeta alone, 1.5e-2 off; kinks and the paper's models unchanged bit for bit); 0.7.7 follows a written model's sliding
+motion on a jump at v = c (friction on a floor or a belt: the point ended `sliding` at its first
+stick) and retries a step rejected beside a surface frozen on its side (the steps crept up to a
+stick for millions of steps; models that never reach one are unchanged bit for bit, the paper's
+too). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
