@@ -426,6 +426,9 @@ def test_continue_locates_the_linear_oscillators_graze_and_follows_it_in_omega(t
                                                         "frequency omega"), path
             assert f["periods"].attrs["long_name"] == "orbit period in periods T = 2 * pi / omega", path
             assert "Roy" not in f.attrs["references"], path
+    with h5py.File(curve, "r") as f:  # its own parameters, not the paper's slow forcing frequency
+        assert f["omega"].attrs["long_name"] == "model parameter omega"
+        assert f["special_omega"].attrs["long_name"] == "model parameter omega at the codimension-two point"
     np.testing.assert_allclose(delta, _free_amplitude(p["zeta"], p["F"], omega), rtol=0, atol=1e-6)
     for path in (branch, curve):
         assert runner.invoke(main, ["info", str(path)]).exit_code == 0
@@ -692,6 +695,20 @@ def test_a_map_of_a_written_model_draws_no_resonance_curve(tmp_path):
     with vrsweep.open_results(output) as ds:
         sine = plot.map_figure(ds, "Qs").axes[-1].get_ylabel().replace("\n", " ")
     assert sine == "Qs: sine component of x at $\\omega$", sine
+
+
+def test_a_written_models_axes_are_its_own_parameters_not_the_papers_namesakes(tmp_path):
+    """A written model's parameter named as one of the paper's (omega, Delta, c...) was stored and
+    shown by `info` with the paper's words: its forcing frequency omega as 'slow forcing frequency
+    omega', a damping written `c` would be 'slow forcing amplitude c'."""
+    import h5py
+
+    output = _short_linear_sweep(tmp_path, "axes", "omega: [0.6, 0.8]\n  F: [0.5, 1.0]")
+    with h5py.File(output, "r") as f:
+        assert f["omega"].attrs["long_name"] == "model parameter omega"
+        assert f["F"].attrs["long_name"] == "model parameter F"
+    shown = CliRunner().invoke(main, ["info", str(output)]).output
+    assert "slow forcing" not in shown, shown
 
 
 def test_a_written_models_response_curve_and_basins_say_its_gain_is_over_the_scales_magnitude(tmp_path):

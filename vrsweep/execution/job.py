@@ -18,7 +18,7 @@ from vrsweep.errors import InvalidArgument, clip
 from vrsweep.numbertext import read_int, to_int
 from vrsweep.results import Motion, Status
 from vrsweep.execution.signals import GracefulStop, Interrupted  # noqa: F401 - the run's, re-exported
-from vrsweep.numerics.model import AXIS_LONG_NAMES, AXIS_UNITS
+from vrsweep.numerics.model import AXIS_UNITS, axis_long_name
 from vrsweep.store import ResultWriter, VariableSpec
 from vrsweep.config.grid import Grid
 from vrsweep.execution.sweep import run_sweep
@@ -196,7 +196,7 @@ def _variable_specs(config):
     return [VariableSpec(name=name, dtype=dtype, extra_dims=extra, attrs=attrs) for name, dtype, extra, attrs in variables]
 
 
-def _axes(grid):
+def _axes(grid, written=False):
     axes = []
     for name, values in zip(grid.axis_names, grid.axis_values):
         if name == "direction":
@@ -204,7 +204,7 @@ def _axes(grid):
         else:
             # a written model's parameter: dimensionless as the model is written (its own units)
             attrs = {"units": AXIS_UNITS.get(name, "1"),
-                     "long_name": AXIS_LONG_NAMES.get(name, f"model parameter {name}")}
+                     "long_name": axis_long_name(name, written)}
         axes.append((name, values, attrs))
     return axes
 
@@ -369,7 +369,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
                                               expected_shard=f"{shard[0]}/{shard[1]}" if shard[1] > 1 else None,
                                               inputs=inputs)
     else:
-        writer = ResultWriter.create(path, _axes(grid), _variable_specs(config),
+        writer = ResultWriter.create(path, _axes(grid, config.written), _variable_specs(config),
                                      root_attributes(config, shard), overwrite=overwrite or resume,
                                      owned_mask=owned, inputs=inputs)
     try:

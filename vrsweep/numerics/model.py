@@ -55,6 +55,15 @@ INITIAL_STATE_SYMBOLS = {"x0": r"$x(0)$", "v0": r"$\dot{x}(0)$"}
 AXIS_UNITS = {**PARAMETER_UNITS, **INITIAL_STATE_UNITS}
 AXIS_LONG_NAMES = {**PARAMETER_LONG_NAMES, **INITIAL_STATE_LONG_NAMES}
 
+
+def axis_long_name(name: str, written: bool = False) -> str:
+    """A file's words for an axis or parameter. A written model's parameter is its own, whatever
+    its name: its `omega` or `c` is not the paper's slow forcing (a written damping `c` was stored
+    as 'slow forcing amplitude c')."""
+    if written and name not in INITIAL_STATE_LONG_NAMES:
+        return f"model parameter {name}"
+    return AXIS_LONG_NAMES.get(name, f"model parameter {name}")
+
 MODELS = ("original", "effective")
 
 # Layout of the kernel's coefficient vector: the header every model fills (coefficients.py),

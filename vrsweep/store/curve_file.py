@@ -48,7 +48,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError
-from vrsweep.numerics.model import PARAMETER_LONG_NAMES, PARAMETER_UNITS
+from vrsweep.numerics.model import PARAMETER_UNITS, axis_long_name
 from vrsweep.store.branch_file import _POINT_VARIABLES as BRANCH_POINT_VARIABLES
 from vrsweep.store.branch_file import (
     ATTRIBUTES_CHECKSUM, _dimension, _ends, _multipliers, _attr_text, _text, _variable, check_layout, check_model_attribute, check_values, file_attributes,
@@ -104,7 +104,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False, complete=
                                 "Floquet multiplier number, larger modulus first")
         _variable(f, "curve", arrays["curve"], (point,), "curve number", "1")
         for name in names:
-            _variable(f, name, arrays[name], (point,), PARAMETER_LONG_NAMES.get(name, f"model parameter {name}"),
+            _variable(f, name, arrays[name], (point,), axis_long_name(name, config.written),
                       PARAMETER_UNITS.get(name, "1"))
         words = point_long_names(config)
         for name, (_, units) in _POINT_VARIABLES.items():
@@ -125,7 +125,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False, complete=
                   "curve of the codimension-two point", "1")
         for index, name in enumerate(names):
             _variable(f, f"special_{name}", np.asarray([s[2 + index] for s in specials], dtype=np.float64),
-                      (special,), f"{PARAMETER_LONG_NAMES.get(name, name)} at the codimension-two point",
+                      (special,), f"{axis_long_name(name, config.written)} at the codimension-two point",
                       PARAMETER_UNITS.get(name, "1"))
         seal_attributes(f)
     write_bytes(path, image.getvalue())
