@@ -1127,6 +1127,17 @@ def test_a_periodic_orbit_with_complex_multipliers_has_its_exact_exponent():
                          progress=False)
     assert int(shaw.period) == 1 and int(shaw.impacts_per_cycle) == 1
     assert float(shaw.lyapunov) == pytest.approx(math.log(0.8) * omega / (2 * math.pi) - 0.05, abs=1e-8)
+    # Its band is the stored estimate's: the batches of one tangent vector's stretch, which swings
+    # with the pair's rotation, gave half-widths up to 0.026 about an exact -0.03 (a bilinear
+    # spring's orbits: its kink keeps the trace -2 zeta, so a complex pair's exponent is -zeta).
+    assert (free.lyapunov_err.values < 1e-8).all() and float(shaw.lyapunov_err) < 1e-8
+    bilinear = vrsweep.sweep(text.replace("- x + F", "- x - 4*max(x - 0.5, 0) + F").replace(
+        "measure_periods: 100", "measure_periods: 50").replace(
+        "initial:", "sweep: {omega: [0.638, 1.146, 1.315]}\ninitial:"), Delta=100.0, F=0.5, zeta=0.03,
+        progress=False)
+    assert (bilinear.period.values == 1).all() and (bilinear.x_max.values > 0.5).all()
+    np.testing.assert_allclose(bilinear.lyapunov.values, -0.03, atol=1e-8)
+    assert (bilinear.lyapunov_err.values < 1e-8).all(), bilinear.lyapunov_err.values
 
 
 def test_a_long_flat_sum_is_refused_with_the_way_out_and_grouped_it_is_read():

@@ -67,7 +67,9 @@ Stroboscopic (Poincare) samples
     as its R is; vrsweep 0.6.9 and earlier stored the window's mean and added the distance between
     the two to lyapunov_err. On an orbit whose two Floquet multipliers are a complex pair the per-period stretch oscillates with the pair's rotation and
     the window's mean carries an O(1/m) bias: there lyapunov is half the exponents' sum, from the
-    exact log areas (complex_pair_exponent, since 0.7.1), and lyapunov_err the batches'. A point that stuck
+    exact log areas (complex_pair_exponent, since 0.7.1), and lyapunov_err the batches' of half the
+    log area, the estimate stored (up to 0.7.6 the batches' of the one vector's stretch, which swing
+    with the pair's rotation: 0.026 about a bilinear spring's exact -0.03). A point that stuck
     in the window has lyapunov = -inf exactly (tangent.py) and lyapunov_err = 0.
     Measured as for R_err (24 runs per point: rtol 1e-8 ... 1e-11 times six x(0) moved by up to
     5e-9, paper parameters, Omega = 4, 100 + 100 periods): the fraction of runs within
@@ -373,9 +375,13 @@ def lyapunov_values(records, summaries, statuses, coefficients, integration, per
         if period[i] > 0 and m % period[i] and np.isfinite(lyapunov[i]):
             lyapunov[i] = whole_cycle_exponent(log_stretch, slow_period[i], int(period[i]))
         if period[i] > 0 and np.isfinite(lyapunov[i]):
-            pair = complex_pair_exponent(log_stretch, measured[i, :, kernel.REC_LOG_AREA], slow_period[i],
-                                         int(period[i]))
-            lyapunov[i] = lyapunov[i] if pair is None else pair
+            log_area = measured[i, :, kernel.REC_LOG_AREA]
+            pair = complex_pair_exponent(log_stretch, log_area, slow_period[i], int(period[i]))
+            if pair is not None:
+                # its band is the batches' of the estimate it stores, half the log area: the one
+                # vector's stretch swings with the pair's rotation (0.026 about an exact -0.03)
+                lyapunov[i] = pair
+                lyapunov_err[i] = lyapunov_error(log_area / 2, slow_period[i], period[i])
     lyapunov[~ok] = np.nan
     return {"lyapunov": lyapunov, "lyapunov_err": lyapunov_err}
 
