@@ -117,3 +117,36 @@ def test_a_periodic_point_whose_tight_run_does_not_settle_is_left_out(tmp_path):
     run_job(tight, tmp_path / "tight.h5", threads=1)
     with h5py.File(tmp_path / "tight.h5", "r") as f:
         assert int(f["period"][()]) == 0  # the premise: the tight run has not settled
+
+
+WRITTEN_2W = """
+model:
+  acceleration: "-2*zeta*v - x - beta*x**3 + F*cos(w*t)"
+  parameters: {zeta: 0.05, beta: 0.5, F: 0.6, w: 1.2, r: 0.8}
+  barriers: [{position: "w", side: above, restitution: r}]
+  period: "2*pi/w"
+  response: {frequency: "2*w", scale: F}
+initial: {x: 0.0, v: 0.0}
+sweep: {w: [1.2, 1.3, 1.5, 1.6]}
+"""
+
+
+def test_a_response_held_only_to_rounding_does_not_set_the_bound(tmp_path):
+    """R at 2w of a Duffing oscillator (x -> -x symmetric) is 0 on its symmetric orbits, free of the
+    stop (w = 1.5, 1.6: about 1e-12 in both runs, two roundings) and not on its impacting ones
+    (w = 1.2, 1.3). The roundings' relative difference, about 1, was taken for the solver's error:
+    R_solver_err 0.6, every point of the file beyond trust. Those points are left out; the bound
+    from the others covers their R's real error against a run at rtol 1e-12."""
+    integration = "integration: {transient_periods: 100, measure_periods: 50}\n"
+    run_job(parse_config(WRITTEN_2W + integration, "w.yaml"), tmp_path / "run.h5", threads=1)
+    tight = integration.replace("{", "{rtol: 1.0e-12, atol: 1.0e-14, ")
+    run_job(parse_config(WRITTEN_2W + tight, "t.yaml"), tmp_path / "tight.h5", threads=1)
+    with h5py.File(tmp_path / "run.h5", "r") as f, h5py.File(tmp_path / "tight.h5", "r") as g:
+        r, r_err, x_max = f["R"][()], f["R_err"][()], f["x_max"][()]
+        points, relative = int(f.attrs["R_solver_err_points"]), float(f.attrs["R_solver_err"])
+        converged = g["R"][()]
+    free = x_max < np.array([1.2, 1.3, 1.5, 1.6])
+    assert list(free) == [False, False, True, True]  # the premise
+    assert (r[free] < 1e-9).all() and (converged[free] < 1e-9).all()
+    assert points == 2 and relative < 1e-5
+    assert (np.abs(r - converged)[~free] <= relative * r[~free] + r_err[~free]).all()

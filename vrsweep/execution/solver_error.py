@@ -17,8 +17,14 @@ the same). Where the sample holds no periodic point, its quasi-periodic points (
 count instead, as on a map of the original model at an Omega/omega that is no small ratio: their
 R converges too, and the difference then also holds the two runs' averaging errors (each within
 its R_err), so the bound can only be wider. A periodic point whose tight run settles on no period
-is left out (estimate: a transient, not the solver). With none left there is no R_solver_err,
-and R_solver_err_points is 0: nothing was estimated.
+is left out (estimate: a transient, not the solver). So is a point whose |Q| (the tight run's)
+lies below the run's rtol times the motion's size max(|x_min|, |x_max|): a component the run's
+tolerance does not resolve, zero within its accuracy (a response frequency the orbit holds only
+through the solver's errors, as 2w of a symmetric orbit: 1e-12 to 6e-11 of F at rtol 1e-9); its
+two runs' R are two such errors, and their relative difference, about 1, is no relative error of
+any R the run resolves (a Duffing oscillator's R at 2w, 1e-12 at its
+symmetric orbits, put R_solver_err at 0.60 and every point of the file beyond trust). With none
+left there is no R_solver_err, and R_solver_err_points is 0: nothing was estimated.
 
 On a GPU the tight run starts as soon as the sample's points are done (start, execution/job.py's
 SolverErrorSample), beside the rest of the grid; its points, and so the estimate, are the same.
@@ -43,6 +49,7 @@ SAMPLE_FRACTION = 0.02
 SAMPLE_POINTS = 32
 SAMPLE_MIN = 4
 SAFETY = 2.0
+NOISE_FLOOR = 1.0            # |Q| below this times rtol times max|x|: zero within the run's accuracy
 
 
 def tight_integration(integration):
@@ -83,6 +90,7 @@ class Sample:
     """The tight run of the sample, started (start): its settings' rtol, and where it has lines,
     the runner, its chunk in flight or done, and the points the run counted as converged."""
     rtol: float
+    run_rtol: float = None
     runner: object = None
     chunk: object = None
     converged: np.ndarray = None
@@ -111,9 +119,9 @@ def start(config, grid, done, stored):
         converged = ok & (stored["motion"] == Motion.QUASI_PERIODIC)
         lines = sample_lines(grid, done, converged)
     if not len(lines):
-        return Sample(tight.rtol)
+        return Sample(tight.rtol, config.integration.rtol)
     runner = LineRunner(dataclasses.replace(config, integration=tight))
-    return Sample(tight.rtol, runner, runner.start(lines), converged)
+    return Sample(tight.rtol, config.integration.rtol, runner, runner.start(lines), converged)
 
 
 def finish(sample, stored):
@@ -139,8 +147,11 @@ def finish(sample, stored):
     # (docs/trust.md, "What R_err cannot see"), not the solver's; counted, one such point would
     # put every point of a map beyond trust.
     unsettled = (stored["period"][flat] > 0) & (values["period"] == 0)
+    # A component at the solver's rounding (module doc): its relative difference is noise's.
+    size = np.maximum(np.abs(values["x_min"]), np.abs(values["x_max"]))
+    resolved = values["Q_amplitude"] > NOISE_FLOOR * sample.run_rtol * size
     same = ((stored["status"][flat] == Status.OK) & (values["status"] == Status.OK) & converged[flat]
-            & ~unsettled & np.isfinite(r) & (r != 0) & np.isfinite(r_tight))
+            & ~unsettled & resolved & np.isfinite(r) & (r != 0) & np.isfinite(r_tight))
     if same.any():
         attributes["R_solver_err"] = float(SAFETY * np.max(np.abs(r[same] - r_tight[same]) / np.abs(r[same])))
         attributes["R_solver_err_points"] = np.int64(same.sum())
