@@ -54,7 +54,11 @@ def test_info_summarises_the_branch(branch_file, invoke):
     result = invoke("info", path)
     assert result.exit_code == 0
     assert "vrsweep branch" in result.output and "branch 0:" in result.output
-    assert "g=24 " in result.output  # the continued parameter's start value, not the config's default
+    # The continued parameter moves: neither its config default (0) nor its start (24) is fixed, as
+    # validate says of the section (the branch line gives its range).
+    fixed = next(line for line in result.output.splitlines() if line.startswith("fixed:"))
+    assert "g=" not in fixed and "Omega=4" in fixed, fixed
+    assert re.search(r"branch 0: +period 1, \d+ points \(\d+ stable\), g from ", result.output), result.output
     assert "bifurcation: fold at g = " in result.output
 
 

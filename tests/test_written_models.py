@@ -432,6 +432,11 @@ def test_continue_locates_the_linear_oscillators_graze_and_follows_it_in_omega(t
     np.testing.assert_allclose(delta, _free_amplitude(p["zeta"], p["F"], omega), rtol=0, atol=1e-6)
     for path in (branch, curve):
         assert runner.invoke(main, ["info", str(path)]).exit_code == 0
+    # The continued parameters are not fixed (the branch's Delta was 'fixed: ... Delta=1.2').
+    from vrsweep.commands.info import describe
+
+    assert set(describe(branch)["fixed_parameters"]) == {"zeta", "F", "omega", "phi", "r"}
+    assert set(describe(curve)["fixed_parameters"]) == {"zeta", "F", "phi", "r"}
     figure = runner.invoke(main, ["plot", str(branch), "-o", str(tmp_path / "branch.png")])
     assert figure.exit_code == 0, figure.output
 

@@ -126,6 +126,11 @@ def _describe(path) -> dict:
         if described is None:
             raise ResultFileError(f"{path} is a vrsweep {kind} file this vrsweep cannot describe")
         described["branches" if kind == "branch" else "curves"] = describe(*checked)
+        # The continued parameters move along the file: their config value is only the start
+        # (a branch in F from 0.3 was shown as 'fixed: ... F=0.3').
+        moving = {checked[0]} if kind == "branch" else set(checked[0])
+        described["fixed_parameters"] = {name: value for name, value in described["fixed_parameters"].items()
+                                         if name not in moving}
         return described
     if kind == "trajectory":
         from vrsweep.store.trajectory_file import check_trajectory, read_trajectory
