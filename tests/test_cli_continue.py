@@ -161,6 +161,24 @@ def test_validate_describes_the_continuation(invoke, tmp_path, write_config):
     assert "Omega=4" in fixed and "g=" not in fixed  # g moves: its config value (0) is not used
 
 
+def test_a_max_step_alone_below_the_default_first_step_is_the_first_step(invoke, tmp_path, write_config):
+    """`max_step: 0.02` alone was refused: 'continuation.initial_step = 0.05 must lie between ...
+    and continuation.max_step = 0.02', an initial_step the config never wrote (its default). An
+    unwritten first step is the default brought within [min_step, max_step], as a curve's
+    --set continuation.max_step alone already did; a written one outside is refused as before."""
+    from vrsweep.config import load_config
+
+    small = write_config(tmp_path, HYSTERESIS.replace("max_step: 0.3", "max_step: 0.02"), "small.yaml")
+    result = invoke("validate", small)
+    assert result.exit_code == 0, result.output
+    assert "steps 0.02 (1e-05 to 0.02)" in result.output
+    assert load_config(small).continuation.initial_step == 0.02
+    coarse = write_config(tmp_path, HYSTERESIS.replace("max_step: 0.3", "max_step: 0.3\n  min_step: 0.1"),
+                          "coarse.yaml")
+    assert load_config(coarse).continuation.initial_step == 0.1
+    assert load_config(write_config(tmp_path, HYSTERESIS, "plain.yaml")).continuation.initial_step == 0.05
+
+
 class Started(Exception):
     """continue got past its announcements to the work itself."""
 

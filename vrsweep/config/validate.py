@@ -353,9 +353,14 @@ def _same_value(a, b) -> bool:
 def _continuation(section):
     if section is None:
         return None
+    settings = {key: getattr(section, key) for key in CONTINUATION_DEFAULTS}
+    if "initial_step" not in section.model_fields_set:
+        # Not written: the default first step, brought within the steps the section allows (as a
+        # curve's --set continuation.max_step alone does). `max_step: 0.02` alone was refused for
+        # an initial_step = 0.05 the user never wrote.
+        settings["initial_step"] = min(max(settings["initial_step"], settings["min_step"]), settings["max_step"])
     return Continuation(parameter=section.parameter, start=float(section.start), low=float(section.to[0]),
-                        high=float(section.to[1]), switch=section.switch,
-                        **{key: getattr(section, key) for key in CONTINUATION_DEFAULTS})
+                        high=float(section.to[1]), switch=section.switch, **settings)
 
 
 def _override_targets(names=PARAMETER_NAMES):
