@@ -775,6 +775,8 @@ def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names
     assert figure.axes[1].get_xlabel() == "parameter D"
     title = " ".join(text.get_text() for text in figure.texts)
     assert "c = 0.1" in title and "$c$" not in title
+    # The frequency Q is read at, as on a sweep's response axis (it said 'gain R = |Q| / |F|' alone).
+    assert figure.axes[0].get_ylabel() == "gain $R = |Q|$ / |F|, $Q$ at frequency w"
 
 
 def test_a_start_where_the_acceleration_is_infinite_is_non_finite_not_a_step_too_small(tmp_path):

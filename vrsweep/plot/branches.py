@@ -17,7 +17,8 @@ from vrsweep.plot.layout import fit_y_to_view
 from vrsweep.plot.palettes import LINE_COLOURS, QUALITATIVE, categorical
 from vrsweep.plot.labels import (
     parameter_symbol,
-    _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label, written_gain,
+    _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
+    written_response_label,
 )
 from vrsweep.store.branch_file import TAG_PREFIXES, UNLOCATED, bifurcation_tags
 
@@ -155,8 +156,7 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
             fit_y_to_view(ax)
     _mark_bifurcations(top, bottom, kinds, places, heights, tags, name)
     written = config is not None and config.written
-    top.set_ylabel(written_gain(config.model.response_scale) if written
-                   else "gain $R = |Q|/c$")
+    top.set_ylabel(written_response_label(config.model) if written else "gain $R = |Q|/c$")
     model_words = config.model.title if written else f"{ds.attrs.get('model', '')} model"
     what = f"Periodic orbits continued in {parameter_symbol(name)} ({model_words})"
     path = str(ds.encoding.get("source", "") or ds.attrs.get("path", "") or "branch")

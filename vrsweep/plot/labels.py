@@ -100,6 +100,17 @@ def written_expression(text) -> str:
     return _written_symbol(str(text).strip()) or str(text)
 
 
+def written_response_label(model, amplitude=False) -> str:
+    """A written model's response axis: its gain and the frequency Q is read at ('gain $R = |Q|$ /
+    |F|, $Q$ at frequency $\\omega$'), or |Q| itself with ``amplitude``. One label for sweeps and
+    branches: a branch's said 'gain R = |Q| / |F|' alone, and R = 0 of a period-1 orbit read at
+    w/2 looked like a failure."""
+    frequency = written_expression(model.response_frequency)
+    if amplitude:
+        return f"amplitude $|Q|$ of x at {frequency}"
+    return f"{written_gain(model.response_scale)}, $Q$ at frequency {frequency}"
+
+
 def written_gain(scale, mathtext=True) -> str:
     """'gain R = |Q| / |s|' of a written model with response scale ``scale``; 'gain R = |Q|' where
     the scale is 1 (the label read "|Q| / |1.0|")."""

@@ -26,7 +26,7 @@ from vrsweep.plot.labels import (
     parameter_symbol,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
     _caption, _legend_columns, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
-    period_words, written_expression, written_gain, written_model,
+    period_words, written_expression, written_gain, written_model, written_response_label,
 )
 from vrsweep.plot.selection import (
     _choose_x_axis, _draw_failed_rug, _failure_note, _grid_axes, _map_axes, _map_panels, _point_classes,
@@ -285,10 +285,7 @@ def _response_axes(ax, view, x_axis, x, drawn, theory, amplitude, log, barrier_l
     says nothing) neither makes the axis logarithmic nor stretches it; it is clipped, and said."""
     ax.set_xlabel(view.axis_label(x_axis))
     if view.config is not None and view.config.written:
-        response = view.config.model.as_data()["response"]
-        frequency = written_expression(response["frequency"])
-        ax.set_ylabel(f"amplitude $|Q|$ of x at {frequency}" if amplitude
-                      else f"{written_gain(response['scale'])}, $Q$ at frequency {frequency}")
+        ax.set_ylabel(written_response_label(view.config.model, amplitude))
     elif amplitude:
         ax.set_ylabel("amplitude $|Q|$ of x at $\\omega$, analytic $A$")
     else:
