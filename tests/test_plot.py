@@ -702,6 +702,24 @@ def test_impacts_of_several_trajectories_clip_nothing(files):
     assert fig.axes[0].get_shared_y_axes().get_siblings(fig.axes[0]) == [fig.axes[0]]
 
 
+def test_the_nearest_grid_values_offered_are_ones_at_takes():
+    """On linspace(0.6, 2, 12) the message offered 'the nearest are 0.981818 and 1.10909', and
+    --at omega=1.10909 was refused again (1e-9 relative is the match): each is now offered with
+    the digits that name it, and taken."""
+    import re
+
+    from vrsweep.store.reading import axis_index
+
+    values = np.linspace(0.6, 2.0, 12)
+    with pytest.raises(UsageError) as refused:
+        axis_index("omega", values, "1.109")
+    offered = re.search(r"the nearest are (\S+) and (\S+) \(", str(refused.value)).groups()
+    assert offered == ("0.981818182", "1.10909091"), offered
+    assert [axis_index("omega", values, text) for text in offered] == [3, 4]
+    with pytest.raises(UsageError, match="the nearest are 10 and 20"):  # short values stay short
+        axis_index("g", np.array([0.0, 10.0, 20.0]), "12")
+
+
 def test_at_names_the_nearest_grid_values_and_the_directions(files):
     with pytest.raises(UsageError, match=r"g=22: not a value of the axis g; the nearest are 20 and 25"):
         plot.plot(files["g"], at={"g": "22"})

@@ -325,17 +325,33 @@ def axis_index(name, values, wanted):
         raise UsageError.naming("{at} {name}={value}: not a finite number; the axis {name}: {span}",
                                 name=name, value=given, span=_axis_span(values))
     index = int(np.argmin(np.abs(values - wanted)))
-    if not abs(values[index] - wanted) <= 1e-9 * max(1.0, abs(wanted)):
+    if not _matches(values[index], wanted):
         raise UsageError.naming("{at} {name}={value}: not a value of the axis {name}; {nearest} (axis: {span})",
                                 name=name, value=_short(wanted), nearest=_nearest_text(values, wanted),
                                 span=_axis_span(values))
     return index
 
 
+def _matches(value, wanted):
+    """Whether ``wanted`` (typed) names the grid value ``value``: to 1e-9, relative."""
+    return abs(value - wanted) <= 1e-9 * max(1.0, abs(wanted))
+
+
+def _typeable(value):
+    """The shortest decimal of a grid value that names it (_matches): '1.109090909' for
+    linspace(0.6, 2, 12)[4]. Its 6 digits, '1.10909', were offered and then refused."""
+    for digits in range(6, 18):
+        text = f"{value:.{digits}g}"
+        if _matches(value, float(text)):
+            return text
+    return repr(float(value))
+
+
 def _nearest_text(values, wanted):
-    """'the nearest are 19.5 and 21' -- the grid values on either side of ``wanted``."""
+    """'the nearest are 19.5 and 21' -- the grid values on either side of ``wanted``, each as it
+    may be typed back."""
     below, above = values[values < wanted], values[values > wanted]
-    sides = ([_short(below.max())] if below.size else []) + ([_short(above.min())] if above.size else [])
+    sides = ([_typeable(below.max())] if below.size else []) + ([_typeable(above.min())] if above.size else [])
     if len(sides) == 2:
         return f"the nearest are {sides[0]} and {sides[1]}"
     return f"the nearest is {sides[0]}"
