@@ -283,7 +283,10 @@ def test_a_misspelt_keyword_of_the_function_is_named(tmp_path):
     cases = [(vrsweep.sweep, {"progres": False}, "keyword argument progres=False (did you mean the keyword progress?)"),
              (vrsweep.sweep, {"overwite": True}, "keyword argument overwite=True (did you mean the keyword overwrite?)"),
              (vrsweep.sweep, {"alow_large": True}, "(did you mean the keyword allow_large?)"),
-             (vrsweep.simulate, {"samples_per_perod": 3}, "(did you mean the keyword samples_per_period?)")]
+             (vrsweep.simulate, {"samples_per_perod": 3}, "(did you mean the keyword samples_per_period?)"),
+             # another function's keyword: it said only "unknown name 'progress'" among the config's names
+             (vrsweep.simulate, {"progress": False}, "keyword argument progress=False (a keyword of vrsweep.sweep, "
+              "not of this function: its own are output, samples_per_period, compare, overwrite)")]
     for function, overrides, words in cases:
         with pytest.raises(ConfigError) as error:
             function(path, output=str(tmp_path / "o.h5"), **overrides)

@@ -185,11 +185,21 @@ def _several(value) -> bool:
 
 
 def _near_keyword(name, keywords) -> str:
-    """`` (did you mean the keyword progress?)`` where ``name`` is a near miss of one of ``keywords``."""
+    """`` (did you mean the keyword progress?)`` where ``name`` is a near miss of one of ``keywords``;
+    `` (a keyword of vrsweep.sweep, not of this function: its own are ...)`` where it is another API
+    function's (simulate(progress=False), as sweep takes it, was refused among the config's names
+    alone)."""
     import difflib
 
     close = difflib.get_close_matches(name, [word for word in keywords if word != name], n=1, cutoff=0.75)
-    return f" (did you mean the keyword {close[0]}?)" if close else ""
+    if close:
+        return f" (did you mean the keyword {close[0]}?)"
+    others = [function.__name__ for function in (sweep, simulate, theory)
+              if name in _keywords(function) and name not in keywords]
+    if others:
+        own = ", ".join(keywords) if keywords else "none"
+        return f" (a keyword of vrsweep.{others[0]}, not of this function: its own are {own})"
+    return ""
 
 
 def _keywords(function):
