@@ -366,6 +366,25 @@ def test_two_sided_impacts_match_the_closed_form(method):
     np.testing.assert_allclose(run.impacts[:, 2], -r * signs * np.array(speeds[:n]), rtol=0, atol=1e-8)
 
 
+def test_the_slowest_impact_of_an_orbit_is_a_speed_on_a_barrier_below_too():
+    """Continuation's slowest impact (numerics.shooting.periodic_map) was the signed minimum of
+    x'(-): with a barrier below, the fastest impact there, negative, which read as an impact past
+    stopping at every orbit (a branch of a Duffing oscillator between two stops crawled 180
+    points at min_step). The closed form of the two-sided flights (above): the last speed."""
+    from vrsweep.numerics.shooting import periodic_map
+
+    delta, r, v0 = 1.0, 0.9, 2.5
+    config = example("impact_two_sided", Delta=delta, r=r, omega=1.0, **{"initial.v": v0})
+    coefficients = kernels_for(config.model).coefficients(dict(config.parameters, zeta=0.0, F=0.0))
+    settings = settings_vector(rtol=1e-11, atol=1e-13)
+    orbit_map = periodic_map(coefficients, np.array([0.0, v0]), settings, 1, model=config.model)
+    speeds = [math.sqrt(v0 * v0 - delta * delta)]
+    while len(speeds) < orbit_map.impacts:
+        speeds.append(r * speeds[-1])
+    assert orbit_map.impacts >= 3 and (orbit_map.impact_speeds < 0).any()  # both barriers met
+    assert orbit_map.slowest_impact == pytest.approx(speeds[-1], abs=1e-8)
+
+
 def test_duffing_energy_is_conserved_through_elastic_impacts():
     """zeta = F1 = F2 = 0, r = 1: H = v^2/2 + x^2/2 + beta x^4/4 is a constant of the motion, and an
     elastic impact only flips v. Checked at every stroboscopic point and every impact."""

@@ -190,7 +190,7 @@ class CurvePoint:
     impacts_per_period: float
     x_max: float
     barrier_distance: float
-    slowest_impact: float      # smallest impact velocity (inf without impacts)
+    slowest_impact: float      # smallest impact speed |x'(-)| (inf without impacts)
     residual: float
     newton_iterations: int
     jacobian: np.ndarray       # (3, 4) derivative of the three equations at the point

@@ -30,7 +30,7 @@ class OrbitMap:
     R, Q_amplitude  eq3.3 and |Q| over the p periods
     impacts         impacts in the p periods
     x_max           largest x over the p periods (Delta when it impacts)
-    slowest_impact  smallest impact velocity x'(-) over the p periods (inf without impacts)
+    slowest_impact  smallest impact speed |x'(-)| over the p periods (inf without impacts)
     stuck_time      time held on the barrier in the p periods (sticking)
     impact_times    (impacts,) when each impact happened, t in [0, pT]
     impact_speeds   (impacts,) each impact's velocity x'(-)
@@ -88,7 +88,9 @@ def periodic_map(coefficients, state, settings, periods, method="rk45", impact_c
     monodromy = np.eye(2)
     for k in range(periods):
         monodromy = period_maps[k] @ monodromy
-    slowest = float(np.min(impacts[:n_impacts, 1])) if n_impacts else np.inf
+    # Speeds: an impact on a barrier below has x'(-) < 0, and the signed minimum was the fastest of
+    # those, negative, which continuation read as an impact past stopping (a graze) at every step.
+    slowest = float(np.min(np.abs(impacts[:n_impacts, 1]))) if n_impacts else np.inf
     return OrbitMap(
         status=Status(int(status)),
         end_state=np.array([summary[kernel.SUM_X_FINAL], summary[kernel.SUM_V_FINAL]]),

@@ -14,7 +14,7 @@ root attributes: ``vrsweep_file = "branch"``, ``vrsweep_format_version``, ``vrsw
     R, Q_amplitude (point)        eq3.3 and |Q| (eq3.1, eq3.2) over the orbit's p periods
     impacts_per_period (point)
     x_max (point)                 largest x over the orbit; barrier_distance = Delta - x_max
-    slowest_impact (point)        smallest impact velocity x'(-) (NaN without impacts)
+    slowest_impact (point)        smallest impact speed |x'(-)| (NaN without impacts)
     multiplier (dim, 2)           the Floquet multipliers, larger modulus first
     multiplier_real, multiplier_imag, multiplier_modulus (point, multiplier)
     stable (point)                1 when both |mu| < 1
@@ -66,7 +66,7 @@ _POINT_VARIABLES = {
     "impacts_per_period": ("impacts per slow period", "1"),
     "x_max": ("largest x over the orbit", "1"),
     "barrier_distance": ("distance Delta - x_max of the orbit from the barrier", "1"),
-    "slowest_impact": ("smallest impact velocity x'(-) of the orbit", "1"),
+    "slowest_impact": ("smallest impact speed |x'(-)| of the orbit", "1"),
     "stable": ("1 if both Floquet multipliers lie inside the unit circle", "1"),
     "residual": ("Newton residual max |P^p(y) - y|", "1"),
 }
