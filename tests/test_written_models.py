@@ -798,6 +798,27 @@ def test_a_written_models_branch_figure_labels_its_parameters_by_their_own_names
     assert figure.axes[0].get_ylabel() == "gain $R = |Q|$ / |F|, $Q$ at frequency w"
 
 
+def test_a_rotating_pendulum_counts_its_turns_as_docs_models_says():
+    """docs/models.md, "What a written model does not have" (angles): x is never taken modulo 2 pi,
+    so a pendulum running three turns a period the other way from its stop has x(nT) falling by
+    6 pi a period, no period, a motion called quasi-periodic, and its orbit's lambda_1 (-0.033)
+    all the same."""
+    import vrsweep
+
+    pendulum = {"model": {"acceleration": "-2*zeta*v - sin(x) + F*cos(omega*t)",
+                          "parameters": {"zeta": 0.1, "F": 1.78, "omega": 0.6, "theta_s": 0.5, "r": 0.7},
+                          "barriers": [{"position": "theta_s", "side": "above", "restitution": "r"}],
+                          "period": "2*pi/omega", "response": {"frequency": "omega", "scale": "F"}},
+                "initial": {"x": 0.0, "v": 0.0},
+                "integration": {"transient_periods": 100, "measure_periods": 60, "lyapunov": True}}
+    point = vrsweep.sweep(pendulum, progress=False)
+    np.testing.assert_allclose(np.diff(point.strobe_x.values), -6 * math.pi, rtol=0, atol=1e-6)
+    assert int(point.period) == 0 and int(point.motion) == Motion.QUASI_PERIODIC
+    assert float(point.impacts_per_period) == 0.0 and float(point.x_max) < 0.5
+    assert float(point.lyapunov) == pytest.approx(-0.033, abs=5e-4)
+    assert float(point.lyapunov_err) < 1e-6
+
+
 def test_a_start_where_the_acceleration_is_infinite_is_non_finite_not_a_step_too_small(tmp_path):
     """beta x**3 at x = -1e110 is inf: the first step's estimate is 0, which the kernel called
     step_too_small (advice: loosen rtol/atol). The derivative is not finite: non_finite, as a
