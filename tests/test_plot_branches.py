@@ -216,6 +216,10 @@ def test_a_sweep_over_a_second_axis_is_drawn_where_the_branch_is(tmp_path, invok
     with pytest.raises(UsageError, match="^without.h5 is swept over Omega too, and none of its values is the "
                                          "branch's Omega = 4"):
         plot.plot([branch, tmp_path / "without.h5"])
+    # The sweep given first: it said several files go together only for trajectories' impacts.
+    with pytest.raises(UsageError, match=r"^branch files \(vrsweep continue\) go first, the sweep files drawn "
+                                         r"with them after"):
+        plot.plot([sweep, branch])
 
 
 def test_a_parameter_the_config_sweeps_is_stated_at_the_value_the_branch_held(tmp_path):

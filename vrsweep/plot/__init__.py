@@ -133,6 +133,11 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     if zoom is not None or table:  # never ignored quietly
         raise UsageError.naming("{zoom} and {table} are for branch files (vrsweep continue), whose bifurcations "
                                 "they show")
+    if any(is_branch(d) for d in data):
+        # A sweep first and a branch after ran into the line below, which said several files go
+        # together only for trajectories' impacts: branches go first, and the sweeps after them.
+        raise UsageError.naming("branch files (vrsweep continue) go first, the sweep files drawn with them after: "
+                                "vrsweep plot BRANCH.h5 [BRANCH2.h5 ...] SWEEP.h5 [SWEEP2.h5 ...]")
     trajectories = [isinstance(d, TrajectoryData) for d in data]
     if any(trajectories) and not all(trajectories):
         raise UsageError.naming("plot sweep results and trajectory files separately")
