@@ -113,3 +113,9 @@ def test_a_map_of_the_exponent_is_centred_on_zero_and_shows_minus_infinity(tmp_p
     assert (marks.get_xdata()[0], marks.get_ydata()[0]) == (5.0, 5.0)
     finite = np.delete(ds["lyapunov"].values.T.ravel(), 3)
     np.testing.assert_array_equal(np.delete(cells.ravel(), 3), finite)
+    # --kind lyapunov of such a file: the line figure needs one axis, and the refusal names the map
+    # that draws both (it said only 'this plot needs 1 axis(es); fix the others with --at').
+    refused = invoke("plot", out, "--kind", "lyapunov", "-o", tmp_path / "l.png")
+    assert refused.exit_code == 2
+    assert ("this plot is drawn against one axis; fix the others with --at, e.g. --at Omega=4; both at once: "
+            "--kind map --var lyapunov") in refused.output, refused.output

@@ -38,7 +38,7 @@ def lyapunov_figure(ds, x_axis=None, bifurcation=False) -> Figure:
         raise ResultFileError(f"{view.path} has no lyapunov: run the sweep with integration.lyapunov: true")
     if bifurcation:
         view.require("strobe_x")
-    x_axis = _choose_x_axis(view, x_axis, need_axes=1)
+    x_axis = _choose_x_axis(view, x_axis, need_axes=1, over_two="{kind} map {var} lyapunov")
     # -inf has no place on the exponent's axis: a mark inside the panel sat at some height and was
     # read as that exponent (a triangle at "-1.03" beside a point at -1.05). Such points get a strip
     # of their own under the panel, ticked "-inf", which no finite value can reach.

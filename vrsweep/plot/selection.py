@@ -163,7 +163,9 @@ def _coordinate_text(name, value):
     return f"{parameter_symbol(name)} = {_number(value)}"
 
 
-def _choose_x_axis(view, x_axis, need_axes=None):
+def _choose_x_axis(view, x_axis, need_axes=None, over_two=None):
+    """The swept parameter a curve is drawn against. ``over_two``: the figure that shows two axes
+    instead, named where a file sweeps two (the lyapunov figure's map), in UsageError's words."""
     axes = view.parameter_axes
     if not axes:
         raise UsageError.naming("{path} is a single point" + (" after {at}" if view.selected else "")
@@ -175,9 +177,11 @@ def _choose_x_axis(view, x_axis, need_axes=None):
                                     value=x_axis, path=view.path, axes=", ".join(axes))
         return x_axis
     if need_axes is not None and len(axes) != need_axes:
+        # over_two is a template's words ({kind} map ...), reworded as the caller's flags or keywords
+        hint = f"; both at once: {over_two}" if over_two and len(axes) == 2 else ""
         raise UsageError.naming(
-            "{path} sweeps {axes}: this plot needs {need} axis(es); fix the others with {at}, e.g. {at} {example}",
-            path=view.path, axes=", ".join(axes), need=need_axes,
+            "{path} sweeps {axes}: this plot is drawn against one axis; fix the others with {at}, e.g. {at} "
+            "{example}" + hint, path=view.path, axes=", ".join(axes),
             example=f"{axes[-1]}={_number(view.axes[axes[-1]][0])}")
     return "g" if "g" in axes else axes[0]
 
