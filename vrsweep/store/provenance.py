@@ -127,7 +127,8 @@ RESULT_EPOCHS = (
     ("0.7.6", "a written model's tangent vectors jump by the saltation matrix where its force jumps (sign): the "
               "lyapunov of such models changes"),
     ("0.7.7", "a written model's mass slides on a jump of its force at v = c (stick-slip, Filippov) where it ended "
-              "`sliding`, and a step rejected beside a surface is retried on its side"),
+              "`sliding`, a step rejected beside a surface is retried on its side, and a complex-pair orbit's "
+              "lyapunov_err is its stored exponent's band"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -158,7 +159,9 @@ damping's -zeta alone, 1.5e-2 off; kinks and the paper's models unchanged bit fo
 motion on a jump at v = c (friction on a floor or a belt: the point ended `sliding` at its first
 stick) and retries a step rejected beside a surface frozen on its side (the steps crept up to a
 stick for millions of steps; models that never reach one are unchanged bit for bit, the paper's
-too). Versions of one epoch
+too), and takes a periodic orbit's lyapunov_err, where its multipliers are a complex pair, from
+the batches of the exponent it stores (half the log area), not of one vector's stretch (0.026
+about an exact -0.03 on a bilinear spring; the paper's models too). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
