@@ -229,6 +229,19 @@ def _period_map(omega, mu, belt, start):
     return reference(omega, mu, belt, start[0], start[1], 0, 1)[1][-1]
 
 
+def _map_derivative(omega, mu, belt):
+    """(the reference orbit's state at a period's end, the reference's one-period map differentiated
+    there by central differences 1e-5 apart)."""
+    start = reference(omega, mu, belt)[1][-1]
+    columns = []
+    for j in range(2):
+        up, down = start.copy(), start.copy()
+        up[j] += 1e-5
+        down[j] -= 1e-5
+        columns.append((_period_map(omega, mu, belt, up) - _period_map(omega, mu, belt, down)) / 2e-5)
+    return start, np.array(columns).T
+
+
 @pytest.mark.parametrize("index", [1, 2])
 def test_the_lyapunov_exponent_through_sliding_agrees_with_the_maps_derivative(index):
     """lambda_1 = log|mu_1| / T of the stick-slip orbit, the reference's one-period map
@@ -239,14 +252,8 @@ def test_the_lyapunov_exponent_through_sliding_agrees_with_the_maps_derivative(i
     sticks a period), 2.4e-11 and 2.0e-11 (one stick, across the period's end)."""
     omega, mu, belt = CASES[index]
     T = 2 * math.pi / omega
-    start = reference(omega, mu, belt)[1][-1]
-    columns = []
-    for j in range(2):
-        up, down = start.copy(), start.copy()
-        up[j] += 1e-5
-        down[j] -= 1e-5
-        columns.append((_period_map(omega, mu, belt, up) - _period_map(omega, mu, belt, down)) / 2e-5)
-    exponent = math.log(max(abs(np.linalg.eigvals(np.array(columns).T)))) / T
+    _, derivative = _map_derivative(omega, mu, belt)
+    exponent = math.log(max(abs(np.linalg.eigvals(derivative)))) / T
     for rtol in (1e-8, 1e-10):
         run = _simulate(omega, mu, belt, rtol, lyapunov=True)
         assert run.status == Status.OK
@@ -263,14 +270,7 @@ def test_the_monodromy_matrix_through_sliding_is_the_maps_derivative(index):
     period's end falls inside a stick, as CASES[2]'s, the map is not differentiable in v there:
     both one-sided derivatives are 0, the kernel's, and central differences give O(1e-5).)"""
     omega, mu, belt = CASES[index]
-    start = reference(omega, mu, belt)[1][-1]
-    columns = []
-    for j in range(2):
-        up, down = start.copy(), start.copy()
-        up[j] += 1e-5
-        down[j] -= 1e-5
-        columns.append((_period_map(omega, mu, belt, up) - _period_map(omega, mu, belt, down)) / 2e-5)
-    derivative = np.array(columns).T
+    start, derivative = _map_derivative(omega, mu, belt)
     config = parse_config(_config(omega, mu, belt), "m.yaml")
     coefficients = kernels_for(config.model).coefficients(config.parameters)
     for rtol in (1e-8, 1e-10):
