@@ -306,7 +306,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
     coefficients, b) the acceleration of a mass at rest on barrier b, positive into it;
     switch_signs(t, x, v, coefficients) the signs of the acceleration's switching functions, one
     bit each (codegen.switching_functions: the argument of abs and sign, the difference of min's
-    and max's arguments), 0 for a smooth one (rhs.no_switches), so that a step that crosses a kink
+    and max's arguments), -1 (UNFROZEN) for a smooth one (rhs.no_switches), so that a step that crosses a kink
     or jump is cut to end on it (locate_switch) and the method's order holds on each side: the
     paper's family passes rhs.py's, a written model its generated ones (codegen.py);
     switch_saltation(t, y, coefficients, mode, crossing, a_before, a_after) jumps the tangent
@@ -624,7 +624,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                             # the mass's arrival at a stick) were each side's field in turn, an error no
                             # step size cured: the steps crept up to the surface, 1e-9 long, never
                             # crossing it (millions of steps). Frozen, the step crosses and is cut there.
-                            # (A smooth model's rhs reads no mode: its steps are the same, bit for bit.)
+                            # (A smooth model's switch_signs is UNFROZEN, a constant: its mode stays
+                            # unfrozen, and the frozen branches fold away as before; its steps are the same.)
                             mode = float(switch_signs(t, y[X], y[V], coefficients))
                             _hold_mode(scratch, mode)
                         h = h_try * (rejected_factor(err) if err == err else 0.2)
