@@ -313,3 +313,29 @@ def test_the_numba_free_cache_lookup_finds_what_numba_cached(tmp_path):
     assert module.twice(2.0) == 4.0
     assert numba_cache.is_cached_function(source, "twice") and numba_cache.is_compiled(module.twice)
     assert not numba_cache.is_cached_function(source, "thrice") and not numba_cache.is_compiled(module.thrice)
+
+
+def test_a_continuation_without_a_sweep_is_described_as_continue_runs_it(tmp_path):
+    """A config with a continuation and no sweep was shown as a one-point sweep: 'grid: 1 point',
+    its 87 kB and '< 0.1 s' estimate and its records' memory, a run `continue` never does. It is
+    described as a continuation now: no sweep (what `run` would do instead), no sweep estimate.
+    The same config with a sweep keeps its sweep's lines."""
+    alone = """\
+        model: effective
+        parameters: {gamma: 0.05, alpha: 0.05, g: 5.0, Omega: 4.0}
+        initial: {x: 0.0, v: 0.0}
+        continuation: {parameter: g, from: 23.0, to: [20.0, 27.0]}
+        """
+    result, output = invoke("validate", str(write(tmp_path, alone, "alone.yaml")))
+    assert result.exit_code == 0, output
+    lines = output.splitlines()
+    assert not any(line.startswith(("grid:", "memory:", "axes:")) for line in lines), output
+    (sweep,) = [line for line in lines if line.startswith("sweep:")]
+    assert "vrsweep continue" in sweep and "g=5" in sweep, sweep  # run would hold g at parameters.g
+    (guess,) = [line for line in lines if line.startswith("estimate:")]
+    assert "continuation" in guess and " s on " not in guess and "B," not in guess, guess
+    swept = textwrap.dedent(alone) + "sweep:\n  Omega: [4.0, 5.0]\n"
+    result, output = invoke("validate", str(write(tmp_path, swept, "swept.yaml")))
+    assert result.exit_code == 0, output
+    assert "grid:        2 points (2)" in output and "memory:" in output and " s on " in output, output
+    assert not any(line.startswith("sweep:") for line in output.splitlines()), output

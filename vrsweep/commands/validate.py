@@ -2,7 +2,8 @@
 
 Prints the model, the axes, the grid size, the continuation (a config's continuation section,
 checked as ``vrsweep continue`` checks it), the output path and an estimate of the output size and
-run time, without compiling or running anything (numba is imported only to check a continuation
+run time (for a config with a continuation and no sweep, what ``continue`` will do: no sweep
+estimate), without compiling or running anything (numba is imported only to check a continuation
 section's model rule, and compiles nothing). Exit 0 for a valid
 config, 2 with every problem listed for an invalid one.
 """
@@ -59,15 +60,24 @@ def command(config_path, overrides, threads):
     initial = [f"{key}=swept ({axis})" if axis in config.axis_names else f"{key}={config.initial[key]:g}"
                for axis, key in (("x0", "x"), ("v0", "v"))]
     click.echo(f"initial:     {' '.join(initial)}")
+    # A config with a continuation and no sweep is one for `continue`: a one-point sweep's grid,
+    # estimate and memory described a run nobody asked for (`run` would integrate the continued
+    # parameter at its `parameters` value, not along the branch).
+    continues_only = config.continuation is not None and not config.axes
     if config.axes:
         for index, axis in enumerate(config.axes):
             label = "axes:" if index == 0 else ""
             click.echo(f"{label:<12} {axis.name}: {_describe_axis(axis)}")
+    elif continues_only:
+        name = config.continuation.parameter
+        click.echo(f"sweep:       none: this config is for `vrsweep continue` (`vrsweep run` would integrate one "
+                   f"point, at {name}={config.parameters[name]:g} from parameters)")
     else:
         click.echo("axes:        none (a single point)")
-    shape = f" ({' x '.join(str(n) for n in config.shape)})" if config.axes else ""
-    both = " x 2 directions (continuation: both)" if config.n_runs != config.n_points else ""
-    click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''}{shape}{both}")
+    if not continues_only:
+        shape = f" ({' x '.join(str(n) for n in config.shape)})" if config.axes else ""
+        both = " x 2 directions (continuation: both)" if config.n_runs != config.n_points else ""
+        click.echo(f"grid:        {config.n_points} point{'s' if config.n_points != 1 else ''}{shape}{both}")
     integration = config.integration
     click.echo(f"integration: {integration.method}, rtol={integration.rtol:g} atol={integration.atol:g}, "
                f"{integration.transient_periods} transient + {integration.measure_periods} measured "
@@ -75,6 +85,9 @@ def command(config_path, overrides, threads):
     if config.continuation is not None:
         click.echo(f"continuation: {_describe_continuation(config.continuation)}")
     click.echo(f"output:      {one_line(config.output_path())}")
+    if continues_only:
+        click.echo(f"estimate:    {_continuation_cost()}")
+        return
     duration = format_duration(guess.seconds)
     click.echo(f"estimate:    {format_bytes(guess.output_bytes)}, {'' if duration.startswith('<') else 'about '}{duration} "
                f"on {threads} thread{'s' if threads != 1 else ''} (rough: from per-period cost constants)"
@@ -119,6 +132,16 @@ def _describe_continuation(section) -> str:
             f"steps {section.initial_step:g} ({section.min_step:g} to {section.max_step:g}), at most "
             f"{section.max_points} points, periods up to {section.max_period}")
     return text + ("; the branches of 2p periods too (switch)" if section.switch else "")
+
+
+def _continuation_cost() -> str:
+    """What is known of a continuation's cost before it runs: its size is bounded by max_points
+    (the continuation line), its time is the branch's (how many Newton corrections, at which
+    periods), which no per-period constant predicts."""
+    from vrsweep.commands.continue_ import COMPILE_DURATION
+
+    return ("none for a continuation: its time depends on the branch (a Newton solve on the period map per "
+            f"orbit); the first continue on a machine compiles its kernels first ({COMPILE_DURATION}, once)")
 
 
 # Always on the integration line, whatever their values; every other setting is named when it
