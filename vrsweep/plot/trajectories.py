@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import UsageError, clip
 from vrsweep.numbertext import read_int
 from vrsweep.plot.analytic import barrier_positions
-from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _title, _width, period_words
+from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _symbol, _title, _width, period_words
 from vrsweep.results import Status
 
 
@@ -86,12 +86,22 @@ def _in_window(t, window, *arrays):
     return (t[keep],) + tuple(a[keep] for a in arrays)
 
 
-def _point_text(config):
+def _headline(config) -> tuple:
+    """The parameters a trajectory's title names: the paper's g and Ω (what its figures vary);
+    every parameter of a written model, whose parameters vrsweep cannot rank (its first four were
+    named, and a model's fifth to eighth were in no title)."""
+    if config is None:
+        return ()
+    return tuple(config.parameter_names) if config.written else ("g", "Omega")
+
+
+def _point_text(config, names) -> str:
+    """'g = 5, Ω = 4' (the paper's two as they always read), a written model's in its symbols, as
+    the caption writes them."""
     if config is None:
         return ""
-    if config.written:
-        return ", ".join(f"{name} = {_number(config.parameters[name])}" for name in config.parameter_names[:4])
-    return f"g = {_number(config.parameters['g'])}, Ω = {_number(config.parameters['Omega'])}"
+    plain = {} if config.written else {"g": "g", "Omega": "Ω"}
+    return ", ".join(f"{plain.get(name) or _symbol(name)} = {_number(config.parameters[name])}" for name in names)
 
 
 def _barriers(config):
@@ -153,9 +163,12 @@ def trajectory_figure(data, periods=None) -> Figure:
         ax_phase.legend(fontsize="x-small", loc="best")
         status = "" if run.status == Status.OK else f" (stopped: {run.status.name.lower()})"
         for ax, what in ((ax_x, "position"), (ax_v, "velocity"), (ax_phase, "phase portrait")):
-            row_title = config.model.title if config is not None and config.written else ROW_TITLES.get(run.model,
-                                                                                                         run.model)
-            ax.set_title(f"({next(letters)}) {row_title}: {what}{status}", fontsize="small")
+            # A written model's one row is named by the caption: its name in each panel's title ran
+            # off the canvas ("single-well Duffing impact oscillator with two forces: phase portr").
+            row_title = ("" if config is not None and config.written and len(runs) == 1
+                         else f"{config.model.title}: " if config is not None and config.written
+                         else f"{ROW_TITLES.get(run.model, run.model)}: ")
+            ax.set_title(f"({next(letters)}) {row_title}{what}{status}", fontsize="small")
             ax.grid(alpha=0.3)
         for ax in (ax_x, ax_v):
             ax.set_xlabel(f"time $t$")
@@ -165,11 +178,14 @@ def trajectory_figure(data, periods=None) -> Figure:
         ax_phase.set_xlabel(f"position $x$")
         ax_phase.set_ylabel(f"velocity $\\dot{{x}}$")
     samples = data.attrs.get("samples_per_period", "?")
-    _title(fig, f"Trajectory at {_point_text(config)}, {_window_text(window, data)}: position, velocity, "
+    # A written model's parameters are all in the title (wrapped): the caption leaves them out
+    # rather than print them twice. The paper's caption keeps g and Ω among the others, as before.
+    named = _headline(config)
+    _title(fig, f"Trajectory at {_point_text(config, named)}, {_window_text(window, data)}: position, velocity, "
                 f"phase portrait ({samples} dense-output samples per {period_words(symbol=False)}, impacts exact; dashed: barrier)"
                 + _aliasing_note(config, samples, runs),
            _caption(data.path or "", config, " and ".join(ROW_TITLES.get(m, m) for m in data.runs),
-                    width=_width(fig)))
+                    width=_width(fig), omit=named if config is not None and config.written else ()))
     return fig
 
 
@@ -208,6 +224,17 @@ def impacts_per_period_figure(datasets) -> Figure:
                                 "its parameters; {paths} are of {n} models: plot them one at a time",
                                 paths=", ".join(os.path.basename(data.path or "") for data in datasets),
                                 n=len(models))
+    first = configs[0]
+    varying = {}
+    if first is not None and len(datasets) > 1:
+        varying = {name: first.parameters[name] for name in first.parameter_names
+                   if any(c is not None and c.parameters[name] != first.parameters[name] for c in configs)}
+    # Each panel names what tells it from the others: the parameters that differ (the caption
+    # leaves them out), then the paper's g and Ω. Panels that differed in a written model's fifth
+    # parameter, or the paper's e, were titled alike, their values on no part of the figure.
+    # A single written model's panel names none: its caption holds them all.
+    headline = () if first is None or (first.written and not varying) else (
+        tuple(varying) + tuple(name for name in _headline(first) if name not in varying and not first.written))
     fig = _new_figure(8.0, 2.7 * len(datasets) + 1.0)
     axes = fig.subplots(len(datasets), 1, squeeze=False, sharex=len(datasets) > 1)[:, 0]
     for k, (ax, data, config) in enumerate(zip(axes, datasets, configs)):
@@ -228,7 +255,8 @@ def impacts_per_period_figure(datasets) -> Figure:
                 ax.hlines(mean, n_transient + 0.5, len(counts) + 0.5, color=MEAN_COLOUR, lw=1.4,
                           label=f"mean over the measured periods: {mean:.2f}")
         letter = f"({'abcdefgh'[k]}) " if len(datasets) > 1 else ""
-        ax.set_title(f"{letter}{_point_text(config)}  ·  {os.path.basename(data.path or '')}  ·  "
+        point = _point_text(config, headline)
+        ax.set_title(f"{letter}{point + '  ·  ' if point else ''}{os.path.basename(data.path or '')}  ·  "
                      f"{int(counts.sum())} impacts in {len(counts)} {period_words(symbol=False)}s", fontsize="small")
         ax.set_ylabel(f"impacts per {period_words(symbol=False)}")
         top = max(1.0, float(counts.max(initial=0)))
@@ -242,10 +270,6 @@ def impacts_per_period_figure(datasets) -> Figure:
     period = (f"period number $n$ (period $T$ = {config.model.as_data()['period']})"
               if config is not None and config.written else "slow period number $n$ (period $T = 2\\pi/\\omega$)")
     axes[-1].set_xlabel(period)
-    varying = {}
-    if config is not None and len(datasets) > 1:
-        varying = {name: config.parameters[name] for name in config.parameter_names
-                   if any(c is not None and c.parameters[name] != config.parameters[name] for c in configs)}
     names = ", ".join(os.path.basename(data.path or "") for data in datasets)
     _title(fig, f"Impacts in each {period_words()}, transient included"
                 + (f" (the panels differ in {', '.join(varying)})" if varying else ""),
@@ -358,6 +382,6 @@ def slow_flow_figure(data, periods=None, starts=("state", "paper", "paper_litera
                    for line in handles]
     fig.legend(handles, labels, loc="outside lower center", ncol=_legend_columns(fig, 2), fontsize="x-small")
     _title(fig, f"Effective system against the slow-flow reconstruction X = R cos(ωt + θ) (eq2.21) at "
-                f"{_point_text(config)}, {_window_text(window, data)}; the first-order theory ignores the barrier",
+                f"{_point_text(config, _headline(config))}, {_window_text(window, data)}; the first-order theory ignores the barrier",
            _caption(data.path or "", config, "effective system eq2.10 and its slow flow", width=_width(fig)))
     return fig
