@@ -474,3 +474,25 @@ def test_make_figures_shrinks_a_figure_without_moving_its_lines_colours(tmp_path
         assert drawn.sum() > 100, colour
         moved = np.abs(after[drawn] - target).max(axis=1)
         assert np.median(moved) <= 3.0, (colour, float(np.median(moved)))
+
+
+# Words that belong to the paper's model alone: its slow period 2 pi/omega, its g_res and Omega,
+# its equations and figures, its two systems and its gain |Q|/c.
+PAPER_ONLY = ("slow period", "g_res", "Omega", "eq2.", "eq3.", "Fig.", "effective", "original", "A/c", "|Q|/c")
+
+
+@pytest.mark.parametrize("name", [None, *sorted(main.commands)])
+def test_help_names_the_papers_model_where_it_speaks_of_it(name, invoke):
+    """`plot --help` said 'impacts per slow period', 'g_res(Omega) drawn on it', 'original above
+    effective' and 'R = |Q|/c' as if every model were the paper's; for a written model none of
+    it holds. Each such word now sits within a clause that names the paper's model (general
+    wording elsewhere): 'paper' within 150 characters of it."""
+    result = invoke(*([name] if name else []), "--help")
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    unnamed = []
+    for word in PAPER_ONLY:
+        for match in re.finditer(re.escape(word), text):
+            if "paper" not in text[max(0, match.start() - 150):match.end() + 150]:
+                unnamed.append(text[max(0, match.start() - 60):match.end() + 60])
+    assert not unnamed, unnamed

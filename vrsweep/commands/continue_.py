@@ -49,7 +49,8 @@ def _parse_at(values):
               help="With a branch file: the bifurcation (its index in the file's table, counted from 0 in the "
                    "order vrsweep info lists them) to follow; repeatable: one curve each, in one file.")
 @click.option("--along", "along", default=None, metavar="NAME",
-              help="With a branch file: the second parameter the bifurcation point moves along, e.g. Omega.")
+              help="With a branch file: the second parameter the bifurcation point moves along, e.g. Omega in "
+                   "the paper's model.")
 @click.option("--to", "to", type=FiniteFloatRange(), nargs=2, default=None, metavar="LOW HIGH",
               help="The range of --along (default: the config's sweep axis of that name).")
 @click.option("--within", "within", type=FiniteFloatRange(), nargs=2, default=None, metavar="LOW HIGH",
@@ -72,7 +73,8 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     to the ends of --to and --within, into a curves file (docs/commands.md); --set
     continuation.max_step=... (or max_points, or another numeric key of the section) sets the
     curve's step and points. Branches and curves stop at the edge of the model's domain
-    (domain_edge: e in (0, 1], c, omega, Omega > 0).
+    (domain_edge: the paper's model's e in (0, 1], c, omega, Omega > 0; a written model's own
+    rules).
     """
     from vrsweep.store.branch_file import check_branch, is_branch_file
     from vrsweep.store.fileio import is_hdf5

@@ -59,7 +59,8 @@ class PathText(click.Path):
 set_option = click.option(
     "--set", "overrides", multiple=True, metavar="NAME=VALUE",
     help="Override a parameter (fixing it if it is swept), an integration setting, "
-         "initial.x/initial.v, model or continuation.KEY; repeatable. E.g. --set g=5 --set rtol=1e-10 "
+         "initial.x/initial.v, model or continuation.KEY; repeatable. E.g. --set g=5 (a parameter of "
+         "the paper's model; a written model's by their names) --set rtol=1e-10 "
          "--set continuation.max_step=0.05.",
 )
 device_option = click.option(

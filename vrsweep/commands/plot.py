@@ -49,9 +49,10 @@ def default_output(path, kind):
               default=None,
               help="What to draw (default: chosen from the file, see above).")
 @click.option("--amplitude", is_flag=True,
-              help="Plot the amplitude |Q| and the analytic A instead of the gain R = |Q|/c and A/c.")
+              help="Plot the amplitude |Q| instead of the gain R, |Q| over the model's response scale (the "
+                   "paper's model: A instead of A/c too, eq3.3).")
 @click.option("--at", "at_items", multiple=True, metavar="NAME=VALUE",
-              help="Fix a swept axis at one of its values, e.g. --at Omega=4 (repeatable; "
+              help="Fix a swept axis at one of its values, e.g. --at Omega=4 in the paper's model (repeatable; "
                    "direction=up|down for a two-way continuation).")
 @click.option("--x", "x_axis", default=None, metavar="NAME", help="The swept parameter on the horizontal axis.")
 @click.option("--var", default=None, metavar="NAME",
@@ -62,7 +63,8 @@ def default_output(path, kind):
               help="Logarithmic (or linear) response axis; on maps, colour scale. Default: response "
                    "plots choose log when the measured values span two decades or more, maps are linear.")
 @click.option("--periods", default=None, metavar="FIRST:LAST",
-              help="Trajectory files: show slow periods FIRST to LAST only (1-based), e.g. 1:20.")
+              help="Trajectory files: show periods FIRST to LAST only (1-based; the paper's slow periods "
+                   "2 pi/omega, a written model's period T), e.g. 1:20.")
 @click.option("--dpi", type=WholeNumberRange(min=20, max=1200), default=150, show_default=True,
               help="Resolution of a .png (pixels = --size x --dpi).")
 @click.option("--title/--no-title", "title", default=True, show_default=True,
@@ -101,19 +103,21 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
 
     \b
     Sweep results (vrsweep run), --kind:
-      response     R (or |Q| with --amplitude) against the axis, with the analytic
-                   branches (stable solid, unstable dashed) and g_res -- default for
-                   one axis, or two axes when one has at most 5 values (one curve each);
-                   --var NAME draws any stored variable (impact_speed_min, x_max...)
-      map          heat map over two axes with g_res(Omega) drawn on it -- default for two axes;
-                   --var NAME maps any stored variable (R_err, period, x_min...)
-      impacts      mean impacts per slow period
+      response     R (or |Q| with --amplitude) against the axis -- default for one
+                   axis, or two axes when one has at most 5 values (one curve each);
+                   --var NAME draws any stored variable (impact_speed_min, x_max...);
+                   the paper's model: with the analytic branches (stable solid,
+                   unstable dashed) and g_res
+      map          heat map over two axes -- default for two axes; --var NAME maps
+                   any stored variable (R_err, period, x_min...); the paper's model
+                   over g and Omega: with g_res(Omega) drawn on it
+      impacts      mean impacts per period (the paper's slow period, a written model's T)
       status       how each point's integration ended
       motion       the kind of motion: periodic, quasi-periodic, chaotic, not settled
       bifurcation  stroboscopic x(nT) against the axis (2 axes: pick one with --at)
       lyapunov     largest Lyapunov exponent against the axis, with its 95% band and the
                    zero line (sweeps run with integration.lyapunov: true); -inf (stuck on
-                   the barrier) as triangles in a strip under the panel
+                   a barrier) as triangles in a strip under the panel
       bifurcation+lyapunov
                    both, the exponent aligned under the bifurcation diagram
       basin        the x0-v0 plane coloured by the attractor each start reached
@@ -122,13 +126,15 @@ def command(paths, output, kind, amplitude, at_items, x_axis, log, periods, var,
     Bifurcation curves over a map: vrsweep plot MAP.h5 CURVES.h5 [CURVES2.h5 ...]
       the map of --var (default R) with the curves of each curves file (vrsweep
       continue BRANCH.h5 --point K --along NAME) over it: fold, period doubling and
-      grazing each in its own style, codimension-two points marked; for the effective
-      model the corrected theory's fold and Hopf curves too. The map's two axes must
-      be the curves' two parameters.
+      grazing each in its own style, codimension-two points marked; for the paper's
+      effective model the corrected theory's fold and Hopf curves too. The map's two
+      axes must be the curves' two parameters.
     Trajectory files (vrsweep simulate), --kind:
-      trajectory   position, velocity, phase portrait; original above effective (default)
-      impacts      impacts per slow period, period by period (several files: one panel each)
-      slowflow     effective system against the slow-flow reconstruction (needs --compare effective)
+      trajectory   position, velocity, phase portrait (default); the paper's model
+                   with --compare effective: original above effective
+      impacts      impacts per period, period by period (several files: one panel each)
+      slowflow     the paper's effective system against the slow-flow reconstruction
+                   (needs simulate --compare effective)
 
     On response plots a filled marker is an R to trust (R_err <= 10% of R), a hollow one is not
     (R depends on the window: chaos or a transient); a circle is a motion with a period, a

@@ -38,7 +38,9 @@ PROGRESS_INTERVAL = 60.0  # seconds between two progress lines in a batch log
                    "(points done, percent, points/s, ETA) instead of a progress bar.")
 def command(config_path, output, threads, device, overrides, quiet, resume, overwrite, shard, dask_address, allow_large,
             dry_run, progress_interval):
-    """Sweep R (eq3.3) over the config's grid and write it to HDF5.
+    """Sweep the gain R over the config's grid and write it to HDF5.
+
+    R is |Q| over the model's response scale: the paper's model's |Q|/c (eq3.3).
 
     The file is written chunk by chunk: after Ctrl-C, a crash or a kill, --resume computes only
     what is missing. Ctrl-C (or SIGTERM) stops once the chunk in progress is saved; exit 130 (143).

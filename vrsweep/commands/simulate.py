@@ -16,21 +16,25 @@ from vrsweep.execution.simulate import DEFAULT_SAMPLES_PER_PERIOD, SAMPLES_PER_C
 @set_option
 @output_option
 @click.option("--samples-per-period", type=WholeNumberRange(min=1), default=None,
-              help="Samples of x and v per slow period 2 pi/omega (a written model's period T), taken from "
+              help="Samples of x and v per period (the paper's slow period 2 pi/omega, a written model's period "
+                   "T), taken from "
                    f"the solver's dense output. Default: {DEFAULT_SAMPLES_PER_PERIOD}, or {SAMPLES_PER_CYCLE} per "
-                   "cycle of the fastest force when that is more (Omega = 50, omega = 0.5: 2000).")
+                   "cycle of the fastest force when that is more (the paper's model at Omega = 50, omega = 0.5: "
+                   "2000).")
 @click.option("--compare", type=click.Choice(["effective"]), default=None,
-              help="Also integrate the effective system (eq2.10) from the same initial state, and "
-                   "reconstruct it from the slow flow (eq2.21, eq2.24) -- Fig. 3-6 of the paper.")
+              help="The paper's original model only: also integrate its effective system (eq2.10) from the "
+                   "same initial state, and reconstruct it from the slow flow (eq2.21, eq2.24) -- Fig. 3-6 "
+                   "of the paper.")
 @overwrite_option
 @click.option("--quiet", "-q", is_flag=True, help="No summary.")
 def command(config_path, overrides, output, samples_per_period, compare, overwrite, quiet):
     """Integrate one point of CONFIG.yaml and store its trajectory.
 
-    The config must describe a single point: fix swept parameters with --set (e.g. --set g=5).
-    The run lasts the config's transient_periods + measure_periods slow periods. Stored: x and v
+    The config must describe a single point: fix swept parameters with --set (e.g. --set g=5 in
+    the paper's model). The run lasts the config's transient_periods + measure_periods periods (the
+    paper's slow periods 2 pi/omega, a written model's period T). Stored: x and v
     at evenly spaced times, every impact (time, velocity before and after), every sticking
-    interval, and impacts per slow period, transient included. Plot it with `vrsweep plot`.
+    interval, and impacts per period, transient included. Plot it with `vrsweep plot`.
     """
     from vrsweep.config import load_config
     from vrsweep.execution.simulate import check_single_point, simulate_point

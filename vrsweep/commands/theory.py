@@ -89,8 +89,9 @@ def _finite_or_null(value):
 @set_option
 @click.option("--json", "as_json", is_flag=True, help="Print the same data as JSON (a list of per-Omega objects).")
 def command(config_path, overrides, as_json):
-    """Analytic predictions for CONFIG.yaml: g_res (eq3.4), wt2 and K (eq2.11, eq2.12), and the
-    analytic peak per Omega (corrected derivation, ERRATA 1-3; amplitudes are of X, ERRATA 6)."""
+    """Analytic predictions of the paper's model for CONFIG.yaml: g_res (eq3.4), wt2 and K (eq2.11,
+    eq2.12), and the analytic peak per Omega (corrected derivation, ERRATA 1-3; amplitudes are of X,
+    ERRATA 6). A written model has no theory here."""
     from vrsweep.config import load_config  # ConfigError propagates: the CLI group exits 2
 
     rows = theory_rows(load_config(config_path, overrides))
