@@ -396,7 +396,9 @@ def impact_observables(measured, ok, slow_period):
                                    (omega: the response frequency)
     impact_phase_spread            circular standard deviation sqrt(-2 ln |mean of exp(i omega t)|):
                                    0 when every impact falls at one phase
-    stuck_fraction                 fraction of the window's time the mass was stuck on a barrier
+    stuck_fraction                 fraction of the window's time the mass was stuck: at rest on a
+                                   barrier, or sliding on a written model's surface v = c (the
+                                   kernel's REC_STUCK_TIME counts both); NaN only where not ok
 
     measured: (n_points, measure_periods, N_RECORD); ok: (n_points,) bool; slow_period (n_points,).
     """

@@ -529,7 +529,10 @@ VARIABLE_WORDS = {
     "A_theory_max_stable": "largest stable analytic amplitude $A$",
 }
 # A written model's: its response frequency is no omega (Qs and Qc name it: ``variable_label``).
-WRITTEN_VARIABLE_WORDS = {"impact_phase": "mean impact phase at the response frequency"}
+# Its time stuck counts sliding on v = c too (friction on a belt: stick-slip), where "on a barrier"
+# named something the model may not even have.
+WRITTEN_VARIABLE_WORDS = {"impact_phase": "mean impact phase at the response frequency",
+                          "stuck_fraction": "fraction of the time stuck (on a barrier, or sliding at v = c)"}
 
 
 def variable_label(ds, name):

@@ -182,7 +182,8 @@ def trajectory_figure(data, periods=None) -> Figure:
     # rather than print them twice. The paper's caption keeps g and Ω among the others, as before.
     named = _headline(config)
     _title(fig, f"Trajectory at {_point_text(config, named)}, {_window_text(window, data)}: position, velocity, "
-                f"phase portrait ({samples} dense-output samples per {period_words(symbol=False)}, impacts exact; dashed: barrier)"
+                f"phase portrait ({samples} dense-output samples per {period_words(symbol=False)}"
+                f"{', impacts exact; dashed: barrier' if barriers else ''})"
                 + _aliasing_note(config, samples, runs),
            _caption(data.path or "", config, " and ".join(ROW_TITLES.get(m, m) for m in data.runs),
                     width=_width(fig), omit=named if config is not None and config.written else ()))

@@ -93,7 +93,8 @@ IMPACT_VARIABLES = [
         "units": "rad", "long_name": ("circular standard deviation of the impacts' phase omega t "
                                       "(0: every impact at one phase)")}),
     ("stuck_fraction", np.float64, (), {
-        "units": "1", "long_name": "fraction of the measurement window's time the mass stuck on a barrier"}),
+        "units": "1", "long_name": ("fraction of the measurement window's time the mass stuck: at rest on a barrier, or "
+                                    "(a written model's friction) sliding on a surface v = c")}),
 ]
 
 
