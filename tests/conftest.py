@@ -27,11 +27,14 @@ settings.load_profile(os.environ.get("VRSWEEP_HYPOTHESIS", "repeatable"))
 
 @pytest.fixture(autouse=True)
 def _signal_handlers_as_found():
-    """Each test leaves this process's SIGINT and SIGTERM handling as it found it. A test in the
+    """Each test leaves this process's SIGINT and SIGTERM handling (and that of every signal that
+    stops a run) as it found it. A test in the
     same worker that changed it (dask_jobqueue's runner installs its own SIGINT handler when it is
     imported; a SIG_IGN is inherited by every child process) made a later test's children start
     with SIGINT ignored: test_process_edges' 'importing vrsweep leaves SIGINT alone' failed so."""
-    found = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    from vrsweep.execution.signals import STOP_SIGNALS
+
+    found = {signum: signal.getsignal(signum) for signum in STOP_SIGNALS}
     yield
     for signum, handler in found.items():
         if signal.getsignal(signum) is not handler and handler is not None:

@@ -164,7 +164,9 @@ def _numba_loaded(pid):
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads /proc to know when to signal")
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+# SIGHUP (a closed terminal) and SIGUSR1 (sbatch --signal=USR1@60) killed it at once (exit -1,
+# -10), the orbits followed lost; SIGUSR2 takes the same way.
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGUSR1])
 def test_a_real_signal_to_a_long_continuation(tmp_path, write_config, signum):
     config = write_config(tmp_path, LONG)
     out = tmp_path / "long.h5"
@@ -182,6 +184,7 @@ def test_a_real_signal_to_a_long_continuation(tmp_path, write_config, signum):
             process.kill()
     assert process.returncode == 128 + signum, stderr
     assert "Traceback" not in stderr
+    assert stderr.strip().splitlines()[-1].startswith(f"Interrupted ({signal.Signals(signum).name}): "), stderr
     assert "marked incomplete" in stderr.strip().splitlines()[-1], stderr
     with vrsweep.open_results(out) as ds:
         assert ds.sizes["point"] >= 2 and ds.attrs["vrsweep_complete"] == 0
@@ -212,3 +215,30 @@ def test_an_interrupted_branch_file_must_say_so_both_ways(tmp_path):
         check_branch(_handmade_branch(tmp_path / "a.h5", whole, complete=False))
     with pytest.raises(ResultFileError, match="it ends interrupted in a file marked complete"):
         check_branch(_handmade_branch(tmp_path / "b.h5", stopped, complete=True))
+
+
+def test_a_stop_leaves_an_ignored_or_claimed_signal_as_it_was():
+    """`nohup vrsweep run ...` ignores SIGHUP on purpose, and a program that runs vrsweep's API may
+    handle SIGUSR1 itself: a run's stop takes neither; a signal left to its default it takes, and
+    gives back."""
+    from vrsweep.execution.signals import GracefulStop
+
+    def mine(signum, frame):
+        pass
+
+    before = {signum: signal.getsignal(signum) for signum in (signal.SIGHUP, signal.SIGUSR1, signal.SIGUSR2)}
+    try:
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+        signal.signal(signal.SIGUSR1, mine)
+        signal.signal(signal.SIGUSR2, signal.SIG_DFL)
+        with GracefulStop(announce=False) as stop:
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+            assert signal.getsignal(signal.SIGUSR1) is mine
+            assert signal.getsignal(signal.SIGUSR2) == stop._handle
+            os.kill(os.getpid(), signal.SIGUSR2)
+            with pytest.raises(KeyboardInterrupt, match="SIGUSR2"):
+                stop.check()
+        assert signal.getsignal(signal.SIGUSR2) is signal.SIG_DFL
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)

@@ -50,6 +50,11 @@ def test_importing_vrsweep_as_a_library_leaves_sigint_alone():
     done = _python("import signal; before = signal.getsignal(signal.SIGINT); import vrsweep; "
                    "print(signal.getsignal(signal.SIGINT) is before, before)")
     assert done.stdout.split()[0] == "True", (done.stdout, done.stderr)
+    # Nor any other signal a command stops on (SIGHUP, SIGUSR1, SIGUSR2: a program's own to handle).
+    done = _python("import signal; names = ('SIGTERM', 'SIGHUP', 'SIGUSR1', 'SIGUSR2'); "
+                   "before = [signal.getsignal(getattr(signal, n)) for n in names]; import vrsweep; "
+                   "print([signal.getsignal(getattr(signal, n)) for n in names] == before)")
+    assert done.stdout.split()[0] == "True", (done.stdout, done.stderr)
 
 
 @pytest.fixture

@@ -79,7 +79,12 @@ def test_kill_9_mid_run_then_resume_is_identical_to_an_uninterrupted_run(tmp_pat
     assert_same_result(out, expected)
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+# SIGHUP (a closed terminal, a dropped ssh session) and SIGUSR1/SIGUSR2 (sbatch --signal=USR1@60)
+# killed the run at once (exit -1, -10, -12): the chunk in flight lost, not a word in the log.
+STOP_SIGNALS = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGUSR1, signal.SIGUSR2]
+
+
+@pytest.mark.parametrize("signum", STOP_SIGNALS, ids=[signal.Signals(s).name for s in STOP_SIGNALS])
 def test_a_signal_stops_cleanly_and_prints_the_resume_command(tmp_path, reference, signum, assert_same_result, done_count, invoke, start_and_wait_for_progress):
     config, expected = reference
     out = tmp_path / "stopped.h5"
@@ -92,7 +97,9 @@ def test_a_signal_stops_cleanly_and_prints_the_resume_command(tmp_path, referenc
     _, stderr = child.communicate(timeout=60)
     assert child.returncode == 128 + signum, stderr
     assert "Traceback" not in stderr, stderr
-    assert "stopping once the chunk in progress is saved" in stderr
+    name = signal.Signals(signum).name
+    assert f"{name}: stopping once the chunk in progress is saved" in stderr, stderr
+    assert f"Interrupted ({name}): finished chunks are saved" in stderr, stderr
     saved = done_count(out)
     assert seen < saved < N_POINTS  # the chunk in flight was finished and kept
     assert saved % CHUNK == 0
@@ -103,6 +110,57 @@ def test_a_signal_stops_cleanly_and_prints_the_resume_command(tmp_path, referenc
                                   "--threads", "1"])
     result = invoke(*shlex.split(command)[1:])
     assert result.exit_code == 0, result.output
+    assert n_computed(result) == N_POINTS - saved
+    assert_same_result(out, expected)
+
+
+def test_a_terminal_that_closes_stops_the_run_as_sighup_does(tmp_path, reference, assert_same_result, done_count, resume):
+    """The real thing: a run whose terminal is a pseudo-terminal it controls; the terminal's
+    master end closes (the window, or ssh, goes), the kernel sends SIGHUP and every later write to
+    the terminal fails with EIO. The run finishes its chunk, keeps it and exits 129; the progress
+    line and the message it can no longer write do not turn it into an error."""
+    import fcntl
+    import os
+    import subprocess
+    import sys
+    import termios
+
+    config, expected = reference
+    out = tmp_path / "hung_up.h5"
+    master, terminal = os.openpty()
+
+    def control_the_terminal():  # a session of its own, with the pty as its controlling terminal
+        os.setsid()
+        fcntl.ioctl(terminal, termios.TIOCSCTTY, 0)
+
+    child = subprocess.Popen([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(out), "--threads", "1"],
+                             stdin=terminal, stdout=terminal, stderr=terminal, preexec_fn=control_the_terminal,
+                             env=dict(os.environ))
+    os.close(terminal)
+    os.set_blocking(master, False)  # read what the run writes without waiting for it
+    try:
+        deadline = time.monotonic() + 120
+        seen = None
+        while time.monotonic() < deadline and child.poll() is None:
+            try:
+                os.read(master, 65536)  # keep the terminal's buffer from filling
+            except OSError:
+                pass
+            seen = done_count(out)
+            if seen is not None and seen >= CHUNK:
+                break
+            time.sleep(0.02)
+        assert seen is not None and seen >= CHUNK, "no chunk written in time"
+        time.sleep(0.1)
+        os.close(master)  # the terminal hangs up
+        child.wait(timeout=60)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    assert child.returncode == 128 + signal.SIGHUP
+    saved = done_count(out)
+    assert seen < saved < N_POINTS and saved % CHUNK == 0  # the chunk in flight was finished and kept
+    result = resume(config, out)
     assert n_computed(result) == N_POINTS - saved
     assert_same_result(out, expected)
 

@@ -43,7 +43,9 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
     R is |Q| over the model's response scale: the paper's model's |Q|/c (eq3.3).
 
     The file is written chunk by chunk: after Ctrl-C, a crash or a kill, --resume computes only
-    what is missing. Ctrl-C (or SIGTERM) stops once the chunk in progress is saved; exit 130 (143).
+    what is missing. Ctrl-C, SIGTERM, SIGHUP (the terminal closed) or SIGUSR1/SIGUSR2 (sbatch
+    --signal=USR1@60) stop once the chunk in progress is saved; exit 128 + the signal (130, 143,
+    129, 138, 140).
 
     Progress goes to stderr: a bar in a terminal, else (a batch log) one line every
     --progress-interval seconds. On a first run (an empty numba cache) it first says that the

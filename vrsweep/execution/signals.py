@@ -1,5 +1,6 @@
-"""Signals as "stop at the next safe point": SIGINT (Ctrl-C) and SIGTERM (scancel, a SLURM
-time limit) for long commands (run, merge).
+"""Signals as "stop at the next safe point": SIGINT (Ctrl-C), SIGTERM (scancel, a SLURM time
+limit), SIGHUP (the terminal closed, an ssh session dropped) and SIGUSR1/SIGUSR2 (SLURM's
+``--signal=USR1@60``, sent before the time limit) for long commands (run, merge, continue).
 
 No numerics and no I/O libraries here, so that any command can use it without importing numba.
 """
@@ -10,8 +11,19 @@ import sys
 import threading
 
 
+# The signals that ask a command to stop. Left to their default action, SIGHUP, SIGUSR1 and
+# SIGUSR2 killed a run at once: the chunk in flight lost, no word in the log, exit 129/138/140 as
+# a shell reports a killed process. (Not on every platform: Windows has neither.)
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGUSR1", "SIGUSR2")
+                     if hasattr(signal, name))
+# Of these, the ones vrsweep takes over only where nobody else handles them: `nohup` ignores SIGHUP
+# on purpose, and a program that runs vrsweep's API may use SIGUSR1 for its own ends.
+_ONLY_IF_DEFAULT = tuple(signum for signum in STOP_SIGNALS if signum not in (signal.SIGINT, signal.SIGTERM))
+
+
 class Interrupted(KeyboardInterrupt):
-    """The run was stopped by a signal (SIGINT: Ctrl-C; SIGTERM: scancel, a time limit)."""
+    """The run was stopped by a signal (SIGINT: Ctrl-C; SIGTERM: scancel, a time limit; SIGHUP:
+    the terminal closed; SIGUSR1/SIGUSR2: SLURM's warning before a time limit)."""
 
     def __init__(self, signum):
         super().__init__(signal.Signals(signum).name)
@@ -23,19 +35,24 @@ class Interrupted(KeyboardInterrupt):
 
 
 class GracefulStop:
-    """Turn SIGINT and SIGTERM into "stop after the chunk in flight is written".
+    """Turn SIGINT, SIGTERM, SIGHUP, SIGUSR1 and SIGUSR2 into "stop after the chunk in flight is
+    written".
 
     The numba kernel cannot be interrupted, and a chunk computed but not written would be lost,
     so the first signal only sets a flag (and says so on stderr); ``check()``, called by run_job
     after each chunk is written, then raises :class:`Interrupted`. A second signal raises at once
     (the file is crash-safe either way, only the chunk in flight is lost). SIGTERM is included
-    because SLURM sends it at the time limit and on scancel, some 30 s (KillWait) before SIGKILL.
+    because SLURM sends it at the time limit and on scancel, some 30 s (KillWait) before SIGKILL;
+    SIGUSR1/SIGUSR2 because ``sbatch --signal=USR1@60`` sends one a chosen time before; SIGHUP
+    because a closed terminal sends it (its stdout and stderr then go to /dev/null: writing to a
+    hung-up terminal fails). SIGHUP, SIGUSR1 and SIGUSR2 are taken only where their handler is
+    the default (or the command line's own): a ``nohup`` run ignores SIGHUP as asked.
 
     A context manager; outside the main thread (where Python cannot handle signals) it does
     nothing.
     """
 
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+    SIGNALS = STOP_SIGNALS
 
     def __init__(self, announce=True):
         self.signum = None
@@ -45,6 +62,8 @@ class GracefulStop:
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
             for signum in self.SIGNALS:
+                if signum in _ONLY_IF_DEFAULT and not _unclaimed(signum):
+                    continue
                 self._previous[signum] = signal.signal(signum, self._handle)
             # A signal whose Interrupted an import swallowed before this stop was set up: the run
             # went on as if never asked to stop (see _raise_interrupted). Stop now, nothing written.
@@ -65,17 +84,44 @@ class GracefulStop:
         self.announce = what
 
     def _handle(self, signum, frame):
+        _leave_a_lost_terminal()
         if self.signum is not None:
             raise Interrupted(signum)
         self.signum = signum
         if self.announce:
             what = self.announce if isinstance(self.announce, str) else "stopping once the chunk in progress is saved"
-            sys.stderr.write(f"\n{signal.Signals(signum).name}: {what} (send it again to stop at once)\n")
-            sys.stderr.flush()
+            try:
+                sys.stderr.write(f"\n{signal.Signals(signum).name}: {what} (send it again to stop at once)\n")
+                sys.stderr.flush()
+            except (OSError, ValueError):  # nowhere to say it (stderr closed): the stop goes on all the same
+                pass
 
     def check(self):
         if self.signum is not None:
             raise Interrupted(self.signum)
+
+
+def _unclaimed(signum) -> bool:
+    """Whether ``signum`` is left to its default action, or to the command line's own handlers."""
+    return signal.getsignal(signum) in (signal.SIG_DFL, _exit_interrupted, _raise_interrupted)
+
+
+def _leave_a_lost_terminal() -> None:
+    """Send stdout and stderr to /dev/null where writing to them fails: a terminal that hung up
+    (SIGHUP: the window closed, ssh dropped) answers every write with EIO, and the progress bar's
+    next update, or the line that says where the run stopped, raised it out of the command, which
+    then ended with exit 1 instead of the signal's code. A write of nothing tests it (0 on a file
+    or a pipe, EIO on a hung-up terminal)."""
+    for fd in (1, 2):
+        try:
+            os.write(fd, b"")
+        except OSError:
+            try:
+                devnull = os.open(os.devnull, os.O_WRONLY)
+                os.dup2(devnull, fd)
+                os.close(devnull)
+            except OSError:
+                pass
 
 
 # Signals whose Interrupted _raise_interrupted raised: C code that clears whatever error it meets
@@ -109,8 +155,12 @@ def forget_raised() -> None:
 def _exit_interrupted(signum, frame):
     # Nothing is written yet and nothing is held: say so in the one line every command uses, and
     # leave with the shell's code for the signal, without unwinding an import half done.
+    _leave_a_lost_terminal()
     newline = "\n" if sys.stderr.isatty() and signum == signal.SIGINT else ""
-    os.write(2, f"{newline}Interrupted ({signal.Signals(signum).name})\n".encode())
+    try:
+        os.write(2, f"{newline}Interrupted ({signal.Signals(signum).name})\n".encode())
+    except OSError:
+        pass
     os._exit(128 + signum)
 
 
@@ -121,8 +171,9 @@ def exit_at_once_on_sigint() -> None:
     :func:`raise_on_sigint` once a command runs, where KeyboardInterrupt is handled (cli.py)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, _exit_interrupted)
-        if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
-            signal.signal(signal.SIGTERM, _exit_interrupted)
+        for signum in (signal.SIGTERM, *_ONLY_IF_DEFAULT):  # SIGHUP, SIGUSR1, SIGUSR2 likewise: 129, 138, 140
+            if signal.getsignal(signum) is signal.SIG_DFL:
+                signal.signal(signum, _exit_interrupted)
 
 
 def _compiling() -> bool:
@@ -156,7 +207,7 @@ def _raise_interrupted(signum, frame):
 
 def raise_on_sigint() -> None:
     """KeyboardInterrupt on SIGINT again (as :class:`Interrupted`), if exit_at_once_on_sigint set
-    it aside; and on SIGTERM, where nothing else handles it. Without a handler SIGTERM (scancel, a
+    it aside; and on SIGTERM, SIGHUP, SIGUSR1 and SIGUSR2, where nothing else handles them. Without a handler SIGTERM (scancel, a
     SLURM time limit, `timeout`) ended simulate, plot or info with exit 143 and not a word in the
     job's log; now it is the one line and code of any interrupted command (cli.py). Commands that
     stop at a safe point (run, merge, continue) install their own for as long as they run."""
@@ -164,5 +215,6 @@ def raise_on_sigint() -> None:
         return
     if signal.getsignal(signal.SIGINT) is _exit_interrupted:
         signal.signal(signal.SIGINT, _raise_interrupted)
-    if signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, _exit_interrupted):
-        signal.signal(signal.SIGTERM, _raise_interrupted)
+    for signum in (signal.SIGTERM, *_ONLY_IF_DEFAULT):
+        if signal.getsignal(signum) in (signal.SIG_DFL, _exit_interrupted):
+            signal.signal(signum, _raise_interrupted)
