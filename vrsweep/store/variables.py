@@ -94,7 +94,7 @@ IMPACT_VARIABLES = [
                                       "(0: every impact at one phase)")}),
     ("stuck_fraction", np.float64, (), {
         "units": "1", "long_name": ("fraction of the measurement window's time the mass stuck: at rest on a barrier, or "
-                                    "(a written model's friction) sliding on a surface v = c")}),
+                                    "sliding on a surface v = c (a written model's friction)")}),
 ]
 
 
