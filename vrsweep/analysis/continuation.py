@@ -744,7 +744,9 @@ def _graze_between(problem, previous, current, before=None, memo=None):
         # may cross that parameter value on its own branch, with the same impacts.
         return None, JUMP if passed and _passes_near(located.z, previous.z, current.z) else None
     free_side, impacting_side = sorted((previous, current), key=lambda orbit: orbit.impacts_per_period)
-    if round((impacting_side.impacts_per_period - free_side.impacts_per_period) * free_side.periods) > 1:
+    gained = round((impacting_side.impacts_per_period - free_side.impacts_per_period) * free_side.periods)
+    # Two at once only from a free orbit onto both stops (a double graze, checked below).
+    if gained > 2 or (gained == 2 and free_side.impacts_per_period != 0):
         return None, JUMP
     window = _new_impact_window(problem, free_side, impacting_side)
     if window is False:
@@ -757,7 +759,19 @@ def _graze_between(problem, previous, current, before=None, memo=None):
         return None, UNLOCATED
     if not (min(previous.parameter, current.parameter) <= located.z[2] <= max(previous.parameter, current.parameter)):
         return None, JUMP
+    if gained != max(1, len(located.touches)):
+        return None, JUMP  # two impacts gained where the graze touches one stop, or one at a double graze
+    if _same_graze(problem, located, (memo or {}).get("crossed")):
+        return None, JUMP  # back over the graze the branch has just crossed (follow)
     return located, None
+
+
+def _same_graze(problem, located, other):
+    """Whether two located grazing.Graze (either may be None) are one, to location_tolerance."""
+    if located is None or other is None:
+        return False
+    return bool(np.max(np.abs(located.z - other.z))
+                <= problem.options["location_tolerance"] * max(1.0, float(np.max(np.abs(other.z)))))
 
 
 def _passes_near(point, start, end):
@@ -853,6 +867,12 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 graze, beyond, new_tangent, grazing_reason, located_graze = cross_grazing(problem, current, tangent)
                 if graze is not None:
                     _record_graze(problem, bifurcations, graze)
+                if _same_graze(problem, located_graze, memo.get("crossed")):
+                    # Back over the graze just crossed, to the side the branch came from: the
+                    # corrector failed on the steep side beyond it, which shorter steps follow
+                    # (beyond the symmetric Duffing oscillator's double graze at F = 0.2459, from
+                    # u = 0.0145 this went back onto the free orbits the branch had come up).
+                    beyond, grazing_reason = [], "the branch beyond the graze it crossed could not be followed"
                 crossed = bool(beyond)
                 orbit = beyond[-1] if crossed else None
                 # The same graze, located again from a closer orbit, is crossed no better: the
@@ -955,8 +975,9 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, _domain_end(problem, current, outside(problem, orbit.parameter))
         if crossed:
             step = options["initial_step"]
-            memo.clear()  # the graze just crossed is no test of the next step's
-            if located_graze is not None:  # the way through the graze, as a step's (_detect)
+            memo.clear()  # the graze just crossed is no test of the next step's ...
+            if located_graze is not None:  # ... except that no step goes back over it (_graze_between)
+                memo["crossed"] = located_graze
                 _record_found(problem, bifurcations, _detect_crossing(problem, current, located_graze, beyond,
                                                                       start.periods))
         else:
@@ -978,6 +999,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
         before, current, tangent = (None if crossed else current), orbit, new_tangent
         tried_crossing = strayed = False
         failed_crossing = failed_crossing and _near_grazing(problem, orbit)
+        if not crossed and not _near_grazing(problem, orbit, JUMP_PROXIMITY):
+            memo.pop("crossed", None)  # away from the graze crossed: a loop may come back to it
         if not failed_crossing:
             grazing_reason = None
 
@@ -1067,26 +1090,63 @@ def cross_grazing(problem, near, tangent):
     graze = _graze_orbit(problem, located)
     lengths = [problem.options["initial_step"] * factor for factor in CROSSING_DISTANCES]
     impacts_near = round(near.impacts_per_period * periods)
+    touched = max(1, len(located.touches))  # a double graze gains or loses an impact on each stop
+    double = _double_graze_words(problem, located)
     if side == "free":
         normal_form = grazing.impacting_direction(problem, located)
         if normal_form is None:
+            if double:
+                return graze, [], None, f"{double}: the orbits beyond, with an impact on each, were not found", None
             return graze, [], None, "the orbit beyond the graze does not gain one impact, as its normal form needs", None
         direction, predictor, speed_scale = normal_form
         candidates = [predictor(length / speed_scale) for length in lengths]
-        beyond, impacts_beyond = "impacting", impacts_near + 1
+        beyond, impacts_beyond = "impacting", impacts_near + touched
     else:
         direction = grazing.free_direction(located)
         candidates = [located.z + length * direction for length in lengths]
-        beyond, impacts_beyond = "free", impacts_near - 1
+        beyond, impacts_beyond = "free", impacts_near - touched
     for z_predicted in candidates:
-        orbit = _corrected_forward(problem, z_predicted, periods, direction, located.z, impacts_beyond)
+        if double and side == "free":
+            orbit = _with_more_iterations(problem, DOUBLE_GRAZE_ITERATIONS, _corrected_forward, problem, z_predicted,
+                                          periods, direction, located.z, impacts_beyond)
+        else:
+            orbit = _corrected_forward(problem, z_predicted, periods, direction, located.z, impacts_beyond)
         if orbit is not None:
             return graze, [orbit], tangent_of(orbit, direction), None, located
-    if side == "free":
+    if side == "free" and not double:  # the march follows one new impact's speed
         marched = march_in_speed(problem, located, predictor, impacts_beyond)
         if marched:
             return graze, marched[0], marched[1], None, located
+    if double:
+        return graze, [], None, f"{double}: no {beyond} orbit converged beyond it", None
     return graze, [], None, f"no {beyond} orbit converged beyond the graze", None
+
+
+# Beyond a double graze the map has two square roots, one per stop, and the damped corrector
+# halves its steps many times before it closes in: from the normal form's predictor at u = 0.015
+# (the symmetric Duffing oscillator between stops at +-1, F = 0.2297) it converges in 40
+# iterations and not in 12. The crossing's corrector gets this many times the configured number.
+DOUBLE_GRAZE_ITERATIONS = 4
+
+
+def _with_more_iterations(problem, factor, function, *args):
+    """``function(*args)`` with the corrector allowed ``factor`` times max_newton_iterations."""
+    configured = problem.options["max_newton_iterations"]
+    problem.options["max_newton_iterations"] = factor * configured
+    try:
+        return function(*args)
+    finally:
+        problem.options["max_newton_iterations"] = configured
+
+
+def _double_graze_words(problem, located):
+    """'the orbit touches both stops at once (x = 1 and x = -1), a double graze' for a graze of
+    several stops (grazing.Graze.touches), else ''."""
+    if not located.touches:
+        return ""
+    coefficients = problem.coefficients(located.z[2])
+    where = " and ".join(f"x = {barrier_position(coefficients, b):.8g}" for b in located.touches)
+    return f"the orbit touches both stops at once ({where}), a double graze"
 
 
 # The march in the new impact's speed u beyond a steep graze (march_in_speed): from u =

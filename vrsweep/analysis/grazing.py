@@ -44,11 +44,13 @@ stroboscopic section t = 0 mod pT for a window has no such map; there the caller
 search around the grazing point (continuation.switch_at_grazing).
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from vrsweep.numerics.coefficients import PERIOD, free_of_barriers, grazing_barrier, shortest_period
+from vrsweep.numerics.coefficients import (BARRIER, BARRIER_VALUES, N_BARRIERS, PERIOD, POSITION, SIDE,
+                                           free_of_barriers, grazing_barrier, only_barrier, shortest_period)
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.results import Status
 
@@ -70,6 +72,16 @@ MAX_GRAZE_HALVINGS = 6
 WINDOW_FORCING_SHARE = 0.25
 # ... and under this share of the time to the orbit's nearest other impact.
 WINDOW_IMPACT_SHARE = 0.45
+# A graze of two stops at once (a double graze): an orbit symmetric under x -> -x, t -> t + T/2
+# between stops at d and -d (a Duffing oscillator in a symmetric gap) touches both in the same
+# orbit, and beyond it gains (or, from the other side, loses) both impacts at once. Another stop
+# counts as touched by the located grazing orbit when its own gap is within this many Newton
+# tolerances of 0 (the symmetric orbit's two gaps agree to about one: the orbit is converged to
+# it) ...
+TOUCH_TOLERANCES = 100.0
+# ... and an impacting orbit's impacts slow down together when the fastest of them is within this
+# factor of the slowest (the two impacts of a symmetric orbit have one speed, to its convergence).
+SIMULTANEOUS_SPEEDS = 1.5
 
 
 @dataclass
@@ -85,6 +97,8 @@ class Graze:
     gap         Delta - x_max_free at z (within the Newton tolerance of 0)
     residual    max |P_free^p(y) - y| at z
     iterations  Newton iterations taken
+    touches     the barriers (indices) the barrier-free grazing orbit touches when it touches
+                more than one at once (a double graze: both stops of a symmetric orbit), else ()
     """
     z: np.ndarray
     periods: int
@@ -94,6 +108,7 @@ class Graze:
     gap: float
     residual: float
     iterations: int
+    touches: tuple = ()
 
 
 def free_coefficients(coefficients):
@@ -114,6 +129,27 @@ def free_map(problem, state, value, periods, window=None):
 
 def barrier(problem, value):
     return grazing_barrier(problem.coefficients(value))
+
+
+def barrier_gaps(coefficients, orbit_map):
+    """Per barrier of the coefficient vector, how far inside it the orbit of ``orbit_map`` stays:
+    position - x_max for a barrier above, x_min - position for one below (0: it touches)."""
+    gaps = []
+    for b in range(int(coefficients[N_BARRIERS])):
+        position = coefficients[BARRIER + BARRIER_VALUES * b + POSITION]
+        above = coefficients[BARRIER + BARRIER_VALUES * b + SIDE] > 0.0
+        gaps.append(position - orbit_map.x_max if above else orbit_map.x_min - position)
+    return np.array(gaps)
+
+
+def _touches(problem, z, orbit_map, tolerance):
+    """The barriers the barrier-free orbit at z touches, when it touches more than one (else ())."""
+    coefficients = problem.coefficients(z[2])
+    scale = max(1.0, float(np.max(np.abs(coefficients[BARRIER + POSITION::BARRIER_VALUES][
+        :int(coefficients[N_BARRIERS])]), initial=0.0)))
+    touched = tuple(int(b) for b in np.flatnonzero(np.abs(barrier_gaps(coefficients, orbit_map))
+                                                    <= TOUCH_TOLERANCES * tolerance * scale))
+    return touched if len(touched) > 1 else ()
 
 
 def free_top(orbit_map, window):
@@ -189,7 +225,8 @@ def locate_graze(problem, z_guess, periods, tolerance, window=None):
         if np.max(np.abs(value)) <= tolerance:
             return Graze(z=z, periods=periods, window=window, orbit_map=orbit_map, jacobian=jacobian,
                          gap=float(value[2]),
-                         residual=float(np.max(np.abs(value[:2]))), iterations=iteration)
+                         residual=float(np.max(np.abs(value[:2]))), iterations=iteration,
+                         touches=() if window is not None else _touches(problem, z, orbit_map, tolerance))
         step = _newton_step(jacobian, -value)
         if step is None:
             return None
@@ -212,7 +249,10 @@ def locate_graze(problem, z_guess, periods, tolerance, window=None):
 def impacting_direction(problem, graze):
     """The normal form at the graze: (unit direction (3,) of the impacting branch as u grows,
     predictor(u) -> z (3,), |dz/du| at u = 0), or None when the probe orbit does not gain exactly
-    one impact over the free map's, in the window, as the normal form assumes."""
+    one impact over the free map's, in the window, as the normal form assumes (one impact on each
+    touched stop at a double graze: _double_normal_form)."""
+    if graze.touches:
+        return _double_normal_form(problem, graze)
     probed = _probe(problem, graze)
     if probed is None:
         return None
@@ -245,7 +285,19 @@ def impacting_monodromy(problem, graze):
     probe does not gain exactly one impact. Its saltation term grows like 1/u, u ~ 1e-3 the probe
     impact's speed, so one multiplier is of order 1/u and the other of order u: the signs of
     det(M - I) and det(M + I) there are the limits of the impacting side's at the graze, which
-    the continuation's test functions need on that side of it (continuation._detect)."""
+    the continuation's test functions need on that side of it (continuation._detect). At a
+    double graze, the real map's at the normal form's predictor a little beyond (both impacts)."""
+    if graze.touches:
+        normal_form = _double_normal_form(problem, graze)
+        if normal_form is None:
+            return None
+        speed = math.sqrt(normal_form[1].kappa * PROBE_PENETRATION * max(1.0, abs(barrier(problem, graze.z[2]))))
+        probe = normal_form[1](speed)
+        real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods,
+                            problem.method, model=problem.model)
+        if real.status != Status.OK or real.impacts != graze.orbit_map.impacts + len(graze.touches):
+            return None
+        return real.monodromy.copy()
     probed = _probe(problem, graze)
     return None if probed is None else probed[1].monodromy.copy()
 
@@ -264,6 +316,121 @@ def _probe(problem, graze):
     if value is None or real.status != Status.OK or real.impacts != free.impacts + 1:
         return None
     return value, real, free
+
+
+def _double_normal_form(problem, graze):
+    """impacting_direction at a graze of two stops at once (graze.touches: both gaps 0 at z_g).
+
+    Beyond it the map gains one impact on each stop, F = F_free + C1 u1 + C2 u2 (each stop's
+    square-root term, its own C_b and kappa_b measured by a probe with that stop alone in effect,
+    only_barrier), with the two gaps -u_b^2 / kappa_b. Each impact also moves the rest of the
+    orbit by O(u), and so the other stop's gap by D_ab u_b (measured on the same probe): without
+    that term the first-order system had no solution with both speeds positive (r = -2.6 for the
+    symmetric Duffing oscillator, whose branch beyond has u2 = u1). Parameterised by the first
+    stop's speed u1 = u, with u2 = r u + s u^2: to first order
+        [[M - I, F_lam, C2], [grad gap1, D_12], [grad gap2, 0]] [dz1; r] = [-C1; 0; -D_21]
+    (a branch with both impacts needs r > 0), to second order the same matrix times [dz2; s] is
+    [0; 0; -1 / kappa1; -r^2 / kappa2] (the cross terms' own second order left to the corrector),
+    and the gaps' residue at z_g (within the tolerance) is taken up by a constant dz0. The single
+    graze's formula is the same with one gap row and no C2.
+    Returns (unit dz1, predictor(u) -> z, |dz1|) or None (a probe that does not gain its one impact,
+    r <= 0: no branch beyond touches both stops, or a singular matrix)."""
+    z_g, periods = graze.z, graze.periods
+    coefficients = problem.coefficients(z_g[2])
+    first_above = [b for b in graze.touches
+                   if coefficients[BARRIER + BARRIER_VALUES * b + SIDE] > 0.0][:1]
+    order = first_above + [b for b in graze.touches if b not in first_above]
+    if len(order) != 2:
+        return None
+
+    def gaps_at(z):
+        orbit_map = free_map(problem, z[:2], z[2], periods)
+        if orbit_map.status != Status.OK:
+            return None, orbit_map
+        return barrier_gaps(problem.coefficients(z[2]), orbit_map)[order], orbit_map
+
+    gaps, _ = gaps_at(z_g)
+    if gaps is None:
+        return None
+    gradients = np.zeros((2, 3))
+    for column in range(3):
+        step = GAP_DIFFERENCE * max(1.0, abs(z_g[column]))
+        moved = z_g.copy()
+        moved[column] += step
+        there, _ = gaps_at(moved)
+        if there is None:
+            return None
+        gradients[:, column] = (there - gaps) / step
+    jumps, kappas, crossed = [], [], []
+    for k, b in enumerate(order):
+        gradient = gradients[k]
+        penetration = PROBE_PENETRATION * max(1.0, abs(coefficients[BARRIER + BARRIER_VALUES * b + POSITION]))
+        probe = z_g - (penetration + gaps[k]) * gradient / (gradient @ gradient)
+        real = periodic_map(only_barrier(problem.coefficients(probe[2]), b), probe[:2], problem.settings, periods,
+                            problem.method, model=problem.model)
+        probe_gaps, free = gaps_at(probe)
+        if probe_gaps is None or real.status != Status.OK or real.impacts != free.impacts + 1:
+            return None
+        speed, sigma = real.slowest_impact, -probe_gaps[k]
+        if not (speed > 0.0 and sigma > 0.0):
+            return None
+        jumps.append((real.end_state - free.end_state) / speed)
+        kappas.append(speed * speed / sigma)
+        # The impact on this stop moves the rest of the orbit by O(u), and with it the other
+        # stop's gap: a first-order term of that gap (which is itself O(u^2) on the branch).
+        other = 1 - k
+        crossed.append((barrier_gaps(problem.coefficients(probe[2]), real)[order[other]] - probe_gaps[other]) / speed)
+    matrix = np.zeros((4, 4))
+    matrix[:2, :3] = graze.jacobian[:2]
+    matrix[:2, 3] = jumps[1]
+    matrix[2:, :3] = gradients
+    matrix[2, 3] = crossed[1]   # the second stop's impact on the first stop's gap, per unit of u2
+    try:
+        first = np.linalg.solve(matrix, np.array([-jumps[0][0], -jumps[0][1], 0.0, -crossed[0]]))
+        ratio = first[3]
+        second = np.linalg.solve(matrix, np.array([0.0, 0.0, -1.0 / kappas[0], -ratio * ratio / kappas[1]]))
+        constant = np.linalg.solve(matrix, np.array([0.0, 0.0, -gaps[0], -gaps[1]]))
+    except np.linalg.LinAlgError:
+        return None
+    if not ratio > 0.0:
+        return None
+    direction = first[:3]
+
+    def gaps_without(z, k):
+        """Stop order[k]'s gap on the map with the other stop in effect: what the real orbit's
+        speed on that stop follows (u_k^2 = -kappa_k gap), its other impact's effect included."""
+        only = periodic_map(only_barrier(problem.coefficients(z[2]), order[1 - k]), z[:2], problem.settings,
+                            periods, problem.method, model=problem.model)
+        if only.status != Status.OK:
+            return None
+        return barrier_gaps(problem.coefficients(z[2]), only)[order[k]]
+
+    def predictor(u):
+        """The normal form's point at u1 = u, moved (Newton-chord, minimum-norm steps) to where
+        each stop's gap on the map without it is -u_b^2 / kappa_b: the expansion's O(u^2) error
+        in z is an O(u) error in the speeds (the square root; and the other impact's effect on a
+        gap is O(u^2) beyond its linear term), and Newton on the real map then started with one
+        impact missing (u = 0.02 at the symmetric Duffing oscillator's graze). The chord's rows are
+        the gaps' gradients plus the other impact's term through its speed (D kappa grad / 2u)."""
+        z = z_g + constant[:3] + u * direction + u * u * second[:3]
+        speeds = np.array([u, ratio * u])
+        target = -speeds ** 2 / np.array(kappas)
+        chord = np.array([gradients[k] - crossed[1 - k] * kappas[1 - k] * gradients[1 - k] / (2.0 * speeds[1 - k])
+                          for k in range(2)])
+        pseudo_inverse = np.linalg.pinv(chord)
+        for _ in range(6):
+            there = [gaps_without(z, k) for k in range(2)]
+            if any(gap is None for gap in there):
+                break
+            miss = np.array(there) - target
+            if np.max(np.abs(miss)) <= 1e-3 * np.min(np.abs(target)):
+                break
+            z = z - pseudo_inverse @ miss
+        return z
+
+    predictor.kappa = kappas[0]
+    predictor.ratio = ratio  # u2 / u1 to first order (1 on a symmetric orbit)
+    return direction / np.linalg.norm(direction), predictor, np.linalg.norm(direction)
 
 
 def _grazing_impact_speed(real, window):
@@ -302,11 +469,22 @@ def graze_site(problem, orbit_map, value, periods, proximity):
             return "free", None
         window = graze_window(problem, orbit_map, value, periods, orbit_map.free_x_max_time)
         return None if window is None else ("free", window)
-    if orbit_map.impacts == 1:
+    if orbit_map.impacts == 1 or _slowing_together(orbit_map):
         return "impacting", None
     time = float(orbit_map.impact_times[np.argmin(orbit_map.impact_speeds)])
     window = graze_window(problem, orbit_map, value, periods, time)
     return None if window is None else ("impacting", window)
+
+
+def _slowing_together(orbit_map):
+    """An orbit whose impacts all slow down at once, one on each stop (a double graze ahead, from
+    its impacting side): the map without them is the barrier-free map. Up to 0.7.7 the slowest was
+    windowed alone and the other kept, and the 'graze' located was that of another orbit (the
+    symmetric Duffing oscillator between stops at +-1: F = 0.24384 for 0.24591)."""
+    speeds = np.abs(orbit_map.impact_speeds)
+    return (orbit_map.impacts == 2 and np.min(speeds) > 0.0
+            and np.max(speeds) <= SIMULTANEOUS_SPEEDS * np.min(speeds)
+            and orbit_map.impact_speeds[0] * orbit_map.impact_speeds[1] < 0.0)
 
 
 # --- the branch beyond a steep graze, parameterised by the new impact's speed --------------------

@@ -73,3 +73,12 @@ def free_of_barriers(coefficients):
         side = free[..., barrier_slot(barrier, SIDE)]
         free[..., barrier_slot(barrier, POSITION)] = np.where(side < 0.0, -np.inf, np.inf)
     return free
+
+
+def only_barrier(coefficients, kept):
+    """A copy with barrier ``kept`` alone in effect (the others moved to infinity on their side):
+    the map with one stop's impacts only, at a graze of two stops at once (analysis/grazing.py)."""
+    only = free_of_barriers(coefficients)
+    slot = barrier_slot(kept, POSITION)
+    only[..., slot] = np.asarray(coefficients, dtype=np.float64)[..., slot]
+    return only

@@ -30,6 +30,7 @@ class OrbitMap:
     R, Q_amplitude  eq3.3 and |Q| over the p periods
     impacts         impacts in the p periods
     x_max           largest x over the p periods (Delta when it impacts)
+    x_min           smallest x over the p periods (a barrier below's position when it impacts there)
     slowest_impact  smallest impact speed |x'(-)| over the p periods (inf without impacts)
     stuck_time      time held on the barrier in the p periods (sticking)
     impact_times    (impacts,) when each impact happened, t in [0, pT]
@@ -46,6 +47,7 @@ class OrbitMap:
     Q_amplitude: float
     impacts: int
     x_max: float
+    x_min: float
     slowest_impact: float
     stuck_time: float
     impact_times: np.ndarray
@@ -100,6 +102,7 @@ def periodic_map(coefficients, state, settings, periods, method="rk45", impact_c
         Q_amplitude=float(summary[kernel.SUM_Q_AMPLITUDE]),
         impacts=n_impacts,
         x_max=float(np.max(records[:, kernel.REC_X_MAX])),
+        x_min=float(np.min(records[:, kernel.REC_X_MIN])),
         slowest_impact=slowest,
         stuck_time=float(np.sum(records[:, kernel.REC_STUCK_TIME])),
         impact_times=impacts[:n_impacts, 0].copy(),
