@@ -299,3 +299,30 @@ def test_the_surfaces_slid_on_are_v_equal_a_constant():
     assert surfaces(-x - mu * sympy.sign(v - c * sympy.cos(w * t))) == {}  # a belt's speed varying in time
     assert surfaces(-x - mu * sympy.sign(sympy.Abs(v) - c)) == {}  # a surface inside another switch
     assert surfaces(-x - mu * sympy.Max(v - d, 0)) == {}  # a kink: the force is continuous, nothing slides
+
+
+def test_continuations_tops_count_a_stick_at_the_top_of_the_swing():
+    """shooting.periodic_map's free_x_max (continuation's distance to a graze) and window_x_max on
+    the floor's stick-slip orbit (CASES[0]): the mass sticks at the top of its swing, x = x_s, and
+    leaves down where the spring's pull passes friction, -x_s + F cos(omega t_e) = -mu (by hand:
+    x_s = F cos(omega t_e) + mu, t_e the reference's stick end). Up to 0.7.7 the sliding pass left
+    both tops alone and the steps around the stick end and start at v = 0, so neither saw x turn:
+    free_x_max was -inf, and a window inside the stick had no top at all."""
+    omega, mu, belt = CASES[0]
+    T = 2 * math.pi / omega
+    _, states, sticks = reference(omega, mu, belt)
+    first = TRANSIENT + MEASURE - 1  # the reference's last period, from its state at first * T
+    sticks = sticks[(sticks[:, 0] >= first * T) & (sticks[:, 1] <= (first + 1) * T)] - first * T
+    config = parse_config(_config(omega, mu, belt), "m.yaml")
+    coefficients = kernels_for(config.model).coefficients(config.parameters)
+    settings = settings_vector(rtol=1e-10, atol=1e-12, transient_periods=0, measure_periods=1)
+    orbit = periodic_map(coefficients, states[first - 1], settings, 1, model=config.model)
+    assert orbit.status == Status.OK
+    top = sticks[np.argmin(np.abs(sticks[:, 0] - orbit.free_x_max_time))]
+    assert abs(top[0] - orbit.free_x_max_time) < 1e-8, (sticks, orbit.free_x_max_time)
+    x_s = F * math.cos(omega * top[1]) + mu
+    assert abs(orbit.free_x_max - x_s) < 1e-8, (orbit.free_x_max, x_s)
+    assert orbit.free_x_max == orbit.x_max  # no impacts: the top of the period is a free one
+    inside = (top[0] + 0.1 * (top[1] - top[0]), top[1] - 0.1 * (top[1] - top[0]))
+    windowed = periodic_map(coefficients, states[first - 1], settings, 1, model=config.model, transparent=inside)
+    assert abs(windowed.window_x_max - x_s) < 1e-8, (windowed.window_x_max, x_s)

@@ -524,6 +524,28 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
             record[REC_STUCK_TIME] += t_end - t
             record[REC_X_MIN] = min(record[REC_X_MIN], x_end)
             record[REC_X_MAX] = max(record[REC_X_MAX], x_end)
+            # Continuation's tops (grazing.py): on the surface x = x0 + c (t - t0) is monotone, so
+            # its largest x is at an end, the entry for c <= 0 and the exit for c > 0. On a floor
+            # (c = 0) a mass that sticks at the top of its swing has its maximum there, and the
+            # steps on either side, ending and starting at v = 0, never showed v turning from + to
+            # - (free_x_max was -inf on such an orbit, up to 0.7.7). The window's share is where
+            # the segment overlaps it.
+            if slide_speed > 0.0:
+                t_top = t_end
+                x_top = x_end
+            else:
+                t_top = t
+                x_top = y[X]
+            if has_window:
+                t_low = max(t, transparent_from)
+                t_high = min(t_end, transparent_to)
+                if t_low <= t_high:
+                    t_in = t_high if slide_speed > 0.0 else t_low
+                    window_x_max = max(window_x_max, slide_x0 + slide_speed * (t_in - slide_t0))
+            if track_free_maxima and x_top > free_x_max and not (
+                    has_window and transparent_from <= t_top < transparent_to):
+                free_x_max = x_top
+                free_x_max_time = t_top
             t = t_end
             y[X] = x_end
             y[V] = slide_speed

@@ -36,7 +36,8 @@ class OrbitMap:
     impact_times    (impacts,) when each impact happened, t in [0, pT]
     impact_speeds   (impacts,) each impact's velocity x'(-)
     window_x_max    largest x inside the transparent window (-inf without one)
-    free_x_max      largest smooth maximum of x (no impact there; -inf if none) and its time
+    free_x_max      largest smooth maximum of x (no impact there; -inf if none) and its time; a
+                    sliding segment (x linear in t) counts with its higher end
     free_x_max_time
     """
     status: Status
