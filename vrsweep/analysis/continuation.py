@@ -730,8 +730,10 @@ def _graze_between(problem, previous, current, before=None, memo=None):
                 and _same_touch(known.window, site[1])):
             located = known
         else:
-            located = grazing.locate_graze(problem, previous.z, previous.periods,
-                                           _tolerance(problem, previous.state), site[1])
+            located = grazing.locate_at_site(problem, previous.z, previous.periods, _tolerance(problem, previous.state),
+                                             site, round(previous.impacts_per_period * previous.periods),
+                                             lambda: evaluate(problem, previous.state, previous.parameter,
+                                                              previous.periods))
             memo.update(graze=located, impacts=previous.impacts_per_period)
         if located is None:
             # Not located is not "not there": a step that the gaps' trend says passes a graze is
@@ -1083,7 +1085,10 @@ def cross_grazing(problem, near, tangent):
             return near, [], None, "no branch beyond the graze was found", None
         return near, [switched[0]], switched[1], None, None
     side, window = site
-    located = grazing.locate_graze(problem, near.z, periods, _tolerance(problem, near.state), window)
+    located = grazing.locate_at_site(problem, near.z, periods, _tolerance(problem, near.state), site,
+                                     round(near.impacts_per_period * periods),
+                                     lambda: evaluate(problem, near.state, near.parameter, periods))
+    window = window if located is None else located.window
     if located is None:
         free = "barrier-free" if window is None else "windowed"
         return None, [], None, f"the grazing orbit could not be located (Newton on the {free} map failed)", None

@@ -476,6 +476,25 @@ def graze_site(problem, orbit_map, value, periods, proximity):
     return None if window is None else ("impacting", window)
 
 
+def locate_at_site(problem, z, periods, tolerance, site, impacts, orbit_map_of):
+    """locate_graze at a graze_site (side, window) of the orbit at z with ``impacts`` impacts in its
+    periods (``orbit_map_of()`` its OrbitMap, asked for only where needed).
+    Impacts that slow down together (_slowing_together) are taken out at once, on the barrier-free
+    map; where the orbit located there touches only one stop after all (not a double graze), the
+    slowest impact is taken out alone in its window and the graze located again, as for any orbit
+    with other impacts."""
+    side, window = site
+    located = locate_graze(problem, z, periods, tolerance, window)
+    if side != "impacting" or window is not None or impacts < 2 or (located is not None and located.touches):
+        return located
+    orbit_map = orbit_map_of()
+    if orbit_map.impacts > 1:
+        time = float(orbit_map.impact_times[np.argmin(np.abs(orbit_map.impact_speeds))])
+        window = graze_window(problem, orbit_map, z[2], periods, time)
+        located = None if window is None else locate_graze(problem, z, periods, tolerance, window)
+    return located
+
+
 def _slowing_together(orbit_map):
     """An orbit whose impacts all slow down at once, one on each stop (a double graze ahead, from
     its impacting side): the map without them is the barrier-free map. Up to 0.7.7 the slowest was
