@@ -670,6 +670,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                     # from both sides: a sliding motion (Filippov), followed on v = constant (the
                     # sliding pass above), the status SLIDING elsewhere.
                     next_mode = mode
+                    departing = False  # the step leaves a sliding surface, its end on it to rounding
                     if cut_at_switch:
                         next_mode = float(int(mode) ^ crossing)  # on the surface: the side it heads to
                     elif mode >= 0.0:
@@ -696,6 +697,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                                         speed = sliding_surface(coefficients, crossed, 0)
                                         gain = sliding_surface(coefficients, crossed, 1)
                                         if speed == speed:
+                                            v_start = y[V]
                                             below, above = _sliding_rates(rhs, switch_signs, t, y[X], speed, gain,
                                                                           crossed, coefficients, y, f, scratch)
                                             n_rhs += 2
@@ -712,25 +714,54 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                                                 landed = False
                                                 mode = UNFROZEN
                                                 continue
-                                        status = Status.SLIDING
-                                        break
-                                    mode = UNFROZEN  # a kink touched, not crossed: taken unfrozen, as it is
-                                    unchecked = True
+                                            # The surface's own fields say the motion does not slide:
+                                            # the step's end came back a rounding or a truncation
+                                            # across, not the field. Leaving a slide the field on the
+                                            # side left to is tangent to v = speed (it lets go where
+                                            # its ds/dt reaches 0), so the step that leaves moves off
+                                            # as h^2: a step of 3e-10 (the one that cut to the
+                                            # surface before the slide) ended on v = speed exactly,
+                                            # and the point ended `sliding` (belt, rk45 at rtol 1e-9,
+                                            # t = 28.87; tests/test_written_sliding.py). The mass
+                                            # goes to the side whose field leads away, as at a
+                                            # slide's exit (_sliding_exit); frozen on it already,
+                                            # the step is taken as it is, still frozen there.
+                                            y[V] = v_start  # _sliding_rates left (x, speed) in y
+                                            others = int(mode) & ~crossed
+                                            heads = float(others | crossed) if (above >= 0.0 and above >= -below) \
+                                                else float(others)
+                                            departing = heads == mode
+                                            mode = heads
+                                            _hold_mode(scratch, mode)
+                                            rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+                                            n_rhs += 1
+                                            if not departing:
+                                                h = h_try
+                                                continue
+                                        else:
+                                            status = Status.SLIDING
+                                            break
+                                    else:
+                                        mode = UNFROZEN  # a kink touched, not crossed: taken unfrozen, as it is
+                                        unchecked = True
                                 else:
                                     # a start on the surface (at rest on sign(v)'s): frozen on the side it heads to
                                     mode = float(signs ^ crossed)
                                     landed = True
-                                _hold_mode(scratch, mode)
-                                before = f[V]
-                                rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
-                                n_rhs += 1
-                                jumped = abs(f[V] - before) > JUMP_TOLERANCE * max(abs(f[V]), abs(before))
-                                h = h_try
-                                continue
-                        next_mode = UNFROZEN  # off the surface, on the held side
+                                if not departing:
+                                    _hold_mode(scratch, mode)
+                                    before = f[V]
+                                    rhs(t, 0.0, -1, 0.0, y, coefficients, f, scratch)
+                                    n_rhs += 1
+                                    jumped = abs(f[V] - before) > JUMP_TOLERANCE * max(abs(f[V]), abs(before))
+                                    h = h_try
+                                    continue
+                        # off the surface, on the held side; or still leaving it (departing, above): on
+                        # the surface to rounding, frozen on the side it leaves to for the next step too
+                        next_mode = mode if departing else UNFROZEN
                     cut_at_switch = False
                     unchecked = False
-                    landed = False
+                    landed = departing
                     # The next step is at the cap whenever h >= h_max, whatever h's value: so the factor
                     # (two pow calls) is computed only where it can matter, with bit for bit the same steps.
                     if clipped and h >= h_max:
