@@ -164,8 +164,8 @@ def _set_attr(path, name, value, sealed=True):
         reseal(path)
 
 
-OLD_VERSIONS = st.sampled_from(["0.1.0", "0.1.9", "0.0.1", "0.2.0", "0.5.0", "0.6.0", "0.6.9", "0.7.0", "0.7.1", "0.7.2", "0.7.3", "0.7.4", "0.7.5", "0.7.6", "dev", None])
-NEW_VERSIONS = st.sampled_from(["0.7.7", "0.7.8", "0.8.0", "1.0"])
+OLD_VERSIONS = st.sampled_from(["0.1.0", "0.1.9", "0.0.1", "0.2.0", "0.5.0", "0.6.0", "0.6.9", "0.7.0", "0.7.1", "0.7.2", "0.7.3", "0.7.4", "0.7.5", "0.7.6", "0.7.7", "dev", None])
+NEW_VERSIONS = st.sampled_from(["0.7.8", "0.7.9", "0.8.0", "1.0"])
 
 
 @SETTINGS
