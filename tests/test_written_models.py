@@ -755,6 +755,21 @@ def test_a_written_models_response_curve_and_basins_say_its_gain_is_over_the_sca
     with vrsweep.open_results(basins) as ds:
         description = plot.description(plot.basin_figure(ds))
     assert "4 transient + 16 measured periods T" in description and "slow" not in description, description
+    # The attractor table's stored words and `info`'s: its period T and gain, not the paper's slow
+    # period and |Q|/c (eq3.3).
+    with vrsweep.open_results(basins) as ds:
+        words = {name: ds[name].attrs["long_name"] for name in ds.data_vars if name.startswith("attractor_")}
+    assert "per period T = 2 * pi / omega" in words["attractor_impacts_per_period"], words
+    assert "|Q|/|F|" in words["attractor_R"] and "periods T" in words["attractor_period"], words
+    assert not any("slow" in text or "/c" in text for text in words.values()), words
+    from vrsweep.commands.info import _format_attractors
+
+    quasi = {"label": 0, "period": 0, "R": 1.0, "R_err": 0.1, "impacts_per_cycle": -1,
+             "impacts_per_period": 1.5, "fraction": 1.0, "points": 4}
+    assert "1.5 impacts per period T" in "\n".join(_format_attractors([{"slice": "", "per": "period T",
+                                                                         "attractors": [quasi]}]))
+    info = CliRunner().invoke(main, ["info", "--json", str(basins)])
+    assert info.exit_code == 0 and '"per": "period T"' in info.output, info.output
 
 
 def test_a_response_scale_of_one_is_no_division_in_the_labels():

@@ -222,11 +222,27 @@ _TABLE_ATTRS = {
 }
 
 
-def attractor_extras(axes, variables, period_tolerance):
+def _table_attrs(model):
+    """_TABLE_ATTRS in a written model's own terms (its period T, its gain), where ``model`` is
+    one (numerics.written); the paper's words otherwise."""
+    if model is None:
+        return _TABLE_ATTRS
+    words = {
+        "period": (f"period of the attractor in periods T = {model.period} (0: non-periodic; -1: no such "
+                   "attractor)"),
+        "R": f"gain |Q|/|{model.response_scale}| at {model.response_frequency}, mean over the attractor's basin",
+        "impacts_per_period": f"mean impacts per period T = {model.period} over the attractor's basin",
+    }
+    return {key: (name, dict(attrs, long_name=words[key]) if key in words else attrs)
+            for key, (name, attrs) in _TABLE_ATTRS.items()}
+
+
+def attractor_extras(axes, variables, period_tolerance, model=None):
     """The derived variables of a basin sweep, as ``ResultWriter.finish`` and a merge take them.
 
     axes: ordered name -> values of the grid's axes; variables: name -> full-grid array of the
-    point variables (those in NEEDED at least). Returns (extra, coords): extra is
+    point variables (those in NEEDED at least); model: a written model (its words for the table's
+    long names), None for the paper's. Returns (extra, coords): extra is
     ``{name: (array, dims, attrs)}``, coords ``{attractor_label: (values, attrs)}``; both empty
     when the grid has no x0 / v0 axis.
     """
@@ -251,8 +267,9 @@ def attractor_extras(axes, variables, period_tolerance):
         "attractor_count": (counts, slice_dims, {
             "units": "1", "long_name": "number of attractors found in the slice"}),
     }
+    table_attrs = _table_attrs(model)
     for key, array in table.items():
-        name, attrs = _TABLE_ATTRS[key]
+        name, attrs = table_attrs[key]
         extra[name] = (array, slice_dims + (LABEL_DIMENSION,), attrs)
     n_attractors = next(iter(table.values())).shape[-1]
     coords = {LABEL_DIMENSION: (np.arange(n_attractors, dtype=np.int32), {
@@ -260,7 +277,7 @@ def attractor_extras(axes, variables, period_tolerance):
     return extra, coords
 
 
-def attractor_extras_from_file(f, period_tolerance):
+def attractor_extras_from_file(f, period_tolerance, model=None):
     """attractor_extras for an open h5py File whose point variables are all written (a merge's
     output before its derived variables are added): the grid's axes are the dimension scales of
     ``done``. Reads only the variables in NEEDED. A merge then adds the result with
@@ -269,7 +286,7 @@ def attractor_extras_from_file(f, period_tolerance):
     if not has_initial_state_axes(names):
         return {}, {}
     axes = {name: f[name][()] for name in names}
-    return attractor_extras(axes, {name: f[name][()] for name in NEEDED}, period_tolerance)
+    return attractor_extras(axes, {name: f[name][()] for name in NEEDED}, period_tolerance, model)
 
 
 def attractor_rows(results, at=None):

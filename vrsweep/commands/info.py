@@ -339,7 +339,7 @@ def _describe_sweep(path, ds) -> dict:
         "status_counts": _status_counts(ds, owned),
         "motion_counts": _motion_counts(ds, owned),
         "solver_error": _solver_error(attrs),
-        "attractors": _attractors(ds),
+        "attractors": _attractors(ds, config),
         "variables": variables,
         "created": attrs.get("created"),
         "versions": _versions(attrs),
@@ -402,11 +402,15 @@ def _motion_counts(ds, owned) -> dict:
             for code, n in zip(*np.unique(motion, return_counts=True))}
 
 
-def _attractors(ds) -> list[dict]:
-    """The attractor table of a basin sweep (x0 / v0 axes), one entry per slice; [] otherwise."""
+def _attractors(ds, config) -> list[dict]:
+    """The attractor table of a basin sweep (x0 / v0 axes), one entry per slice; [] otherwise.
+    ``per``: the period its periods and impact counts are in (a written model's own T, the
+    paper's slow period 2 pi/omega; the paper's too where the config cannot be read)."""
     from vrsweep.analysis.attractors import attractor_rows
 
-    return [{"slice": where, "attractors": [{key: _plain(value) for key, value in row.items()} for row in rows]}
+    per = "period T" if config is not None and config.written else "slow period"
+    return [{"slice": where, "per": per,
+             "attractors": [{key: _plain(value) for key, value in row.items()} for row in rows]}
             for where, rows in attractor_rows(ds)]
 
 
@@ -687,11 +691,12 @@ def _format_attractors(slices) -> list[str]:
         found = len(entry["attractors"])
         lines.append(f"attractors:  {found} found{where}")
         for row in entry["attractors"]:
+            per = entry.get("per", "slow period")
             period = f"period {row['period']}" if row["period"] > 0 else "no period"
             if row["impacts_per_cycle"] >= 0:
                 impacts = f"{row['impacts_per_cycle']} impact{'' if row['impacts_per_cycle'] == 1 else 's'} per cycle"
             else:
-                impacts = f"{_short(row['impacts_per_period'])} impacts per slow period"
+                impacts = f"{_short(row['impacts_per_period'])} impacts per {per}"
             R = "R = nan" if row["R"] is None else f"R = {row['R']:.6g} +- {row['R_err']:.2g}"
             start = ""
             if row.get("x0") is not None or row.get("v0") is not None:

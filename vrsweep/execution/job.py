@@ -329,7 +329,8 @@ def basin_extras(config, writer):
     grid = Grid.from_config(config)
     axes = dict(zip(grid.axis_names, grid.axis_values))
     stored = writer.read_variables(attractors.NEEDED)
-    return attractors.attractor_extras(axes, stored, config.integration.period_tolerance)
+    return attractors.attractor_extras(axes, stored, config.integration.period_tolerance,
+                                       config.model if config.written else None)
 
 
 def _reduce_constant_axes(array, axis_names):

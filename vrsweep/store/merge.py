@@ -568,8 +568,9 @@ def _add_attractor_labels(out, ref):
 
     if not attractors.has_initial_state_axes(tuple(ref.axes)):
         return
-    tolerance = parse_config(str(ref.attrs["config"])).integration.period_tolerance
-    add_extras(out, *attractors.attractor_extras_from_file(out, tolerance))
+    config = parse_config(str(ref.attrs["config"]))
+    add_extras(out, *attractors.attractor_extras_from_file(out, config.integration.period_tolerance,
+                                                            config.model if config.written else None))
 
 
 def _copy_derived_variables(out, shards, ref, warnings):
