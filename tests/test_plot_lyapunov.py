@@ -119,3 +119,26 @@ def test_a_map_of_the_exponent_is_centred_on_zero_and_shows_minus_infinity(tmp_p
     assert refused.exit_code == 2
     assert ("this plot is drawn against one axis; fix the others with --at, e.g. --at Omega=4; both at once: "
             "--kind map --var lyapunov") in refused.output, refused.output
+
+
+def test_minus_infinity_of_a_written_model_is_stuck_on_one_of_its_barriers(line):
+    """A written model may have two barriers (or none): its -inf points were 'stuck on the barrier'.
+    The file's numbers with a stored written config of two barriers, drawn as its figure."""
+    ds = load_results(line)
+    ds["lyapunov"].values[1] = -math.inf
+    ds.attrs["config"] = """\
+model:
+  acceleration: "-0.1*v - g*x + cos(t)"
+  parameters: {g: 1.0}
+  barriers: [{position: 1.0, side: above, restitution: 0.8}, {position: -1.0, side: below, restitution: 0.8}]
+  period: "2*pi"
+  response: {frequency: 1, scale: 1}
+initial: {x: 0.0, v: 0.0}
+sweep:
+  g: [3.0, 5.0, 10.0, 25.0, 40.0]
+"""
+    fig = plot.lyapunov_figure(ds)
+    assert "1 point stuck on a barrier" in fig._suptitle.get_text(), fig._suptitle.get_text()
+    labels = [text.get_text() for legend in fig.legends for text in legend.get_texts()]
+    assert any(label.endswith("stuck on a barrier") for label in labels), labels
+    assert not any("the barrier" in label for label in labels), labels

@@ -85,6 +85,11 @@ def period_words(symbol=True) -> str:
     return "slow period $2\\pi/\\omega$" if symbol else "slow period"
 
 
+def stuck_words() -> str:
+    """Where a mass with lambda_1 = -inf sat: the paper's one barrier, or one of a written model's."""
+    return "stuck on a barrier" if _WRITTEN_MODEL.get() is not None else "stuck on the barrier"
+
+
 def gain_words() -> str:
     """What R is: the paper's |Q|/c (eq3.3), or a written model's |Q| over its response scale."""
     model = _WRITTEN_MODEL.get()

@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 
 from vrsweep.errors import ResultFileError
 from vrsweep.plot.labels import (
-    parameter_symbol,
+    parameter_symbol, stuck_words,
     FAILED_COLOUR, LYAPUNOV_SYMBOL, MAX_CURVES, RELIABLE_COLOURS, _caption, _legend_columns, _new_figure, _title, _width, figure_options,
 )
 from vrsweep.plot.selection import (
@@ -109,7 +109,7 @@ def _draw_lyapunov(ax, view, x_axis, strip=None):
                        gid="stuck", ls="none")
             if not n_stuck - int(np.sum(stuck)):  # the legend's entry, once (the strip is no panel of its own)
                 ax.plot([], [], "v", color=STUCK_COLOUR if len(curves) == 1 else "k", ms=6, ls="none",
-                        label=f"in the strip below: {LYAPUNOV_SYMBOL} = $-\\infty$, stuck on the barrier")
+                        label=f"in the strip below: {LYAPUNOV_SYMBOL} = $-\\infty$, {stuck_words()}")
         if "status" in view.variables:
             failed = _point_classes(view, x_axis, where)[2]
             _draw_failed_rug(ax, x, failed, row=k, colour=FAILED_COLOUR if len(curves) == 1 else colour)
@@ -127,5 +127,5 @@ def _draw_lyapunov(ax, view, x_axis, strip=None):
     if not n_stuck:
         return resonance_note
     points = "1 point" if n_stuck == 1 else f"{n_stuck} points"
-    stuck_note = f"{points} stuck on the barrier in the window ({LYAPUNOV_SYMBOL} = -inf): ▼ in the strip under the panel"
+    stuck_note = f"{points} {stuck_words()} in the window ({LYAPUNOV_SYMBOL} = -inf): ▼ in the strip under the panel"
     return "; ".join(note for note in (stuck_note, resonance_note) if note)

@@ -23,7 +23,7 @@ from vrsweep.plot.palettes import (
     scale_colours,
 )
 from vrsweep.plot.labels import (
-    parameter_symbol,
+    parameter_symbol, stuck_words,
     FAILED_COLOUR, FINE_POINTS, LOG_SPAN, LYAPUNOV_SYMBOL, MARKERS, MAX_CURVES, RELATIVE_ERROR_LIMIT, RELIABLE_COLOURS,
     _caption, _legend_columns, _new_figure, _number, _symbol, _title, _width, figure_options, parameter_label, units_suffix,
     period_words, written_expression, written_gain, written_model, written_response_label,
@@ -830,7 +830,7 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
             ax.plot(X[minus_infinity], Y[minus_infinity], "v", color="k", mec="w", mew=0.5, ms=4.5, ls="none",
                     gid="minus_infinity")
             handles["minus_infinity"] = Line2D([], [], ls="none", marker="v", color="k", mec="w", mew=0.5,
-                                               label=f"{LYAPUNOV_SYMBOL} = −∞: stuck on the barrier")
+                                               label=f"{LYAPUNOV_SYMBOL} = −∞: {stuck_words()}")
         bar_label = label + (" (log scale)" if log else "") + (f"\n{cap_note}" if cap_note else "")
         # spacing="uniform" (the default, said here because discrete_scale's ticks rely on it): an
         # integer map's values get equal blocks on the colour bar, however far apart they are.
