@@ -712,12 +712,32 @@ def test_the_nearest_grid_values_offered_are_ones_at_takes():
 
     values = np.linspace(0.6, 2.0, 12)
     with pytest.raises(UsageError) as refused:
-        axis_index("omega", values, "1.109")
+        axis_index("omega", values, "1.108")
     offered = re.search(r"the nearest are (\S+) and (\S+) \(", str(refused.value)).groups()
     assert offered == ("0.981818182", "1.10909091"), offered
     assert [axis_index("omega", values, text) for text in offered] == [3, 4]
     with pytest.raises(UsageError, match="the nearest are 10 and 20"):  # short values stay short
         axis_index("g", np.array([0.0, 10.0, 20.0]), "12")
+
+
+def test_at_takes_a_grid_value_rounded_to_the_digits_typed():
+    """--at omega=1.109 on linspace(0.6, 2, 12) was refused: only 1.10909091 (the value to 1e-9)
+    was taken. A value typed to fewer digits names the grid value it rounds to, when those digits
+    tell the grid's values apart; never a nearest value the digits do not name."""
+    from vrsweep.store.reading import axis_index
+
+    values = np.linspace(0.6, 2.0, 12)  # spacing 0.127
+    assert axis_index("omega", values, "1.109") == 4  # 1.1090909...
+    assert axis_index("omega", values, "1.11") == 4
+    assert axis_index("omega", values, "0.98") == 3 == axis_index("omega", values, "9.8e-1")
+    assert axis_index("omega", values, "2") == 11  # the value itself, whatever the digits
+    for text in ("1.108", "1.1", "1.10", "1"):  # not the grid value's rounding, or too coarse to tell
+        with pytest.raises(UsageError, match="not a value of the axis omega"):
+            axis_index("omega", values, text)
+    with pytest.raises(UsageError, match="the nearest are 3.9 and 4.1"):  # '4' names neither
+        axis_index("Omega", np.array([3.9, 4.1]), "4")
+    with pytest.raises(UsageError, match="not a value"):  # a number, not text: the value to 1e-9
+        axis_index("omega", values, 1.109)
 
 
 def test_at_names_the_nearest_grid_values_and_the_directions(files):

@@ -19,7 +19,9 @@ names, and CF-aware tools (cf_xarray's ``ds.status.cf == "ok"``) decode them as 
 
 from __future__ import annotations
 
+import decimal
 import functools
+import math
 import os
 import time
 
@@ -325,7 +327,7 @@ def axis_index(name, values, wanted):
         raise UsageError.naming("{at} {name}={value}: not a finite number; the axis {name}: {span}",
                                 name=name, value=given, span=_axis_span(values))
     index = int(np.argmin(np.abs(values - wanted)))
-    if not _matches(values[index], wanted):
+    if not _matches(values[index], wanted) and not _rounds_to(values, index, given, wanted):
         raise UsageError.naming("{at} {name}={value}: not a value of the axis {name}; {nearest} (axis: {span})",
                                 name=name, value=_short(wanted), nearest=_nearest_text(values, wanted),
                                 span=_axis_span(values))
@@ -335,6 +337,22 @@ def axis_index(name, values, wanted):
 def _matches(value, wanted):
     """Whether ``wanted`` (typed) names the grid value ``value``: to 1e-9, relative."""
     return abs(value - wanted) <= 1e-9 * max(1.0, abs(wanted))
+
+
+def _rounds_to(values, index, given, wanted):
+    """Whether ``given``, typed as text, is grid value ``values[index]`` rounded to the digits typed
+    ('1.109' for linspace(0.6, 2, 12)[4] = 1.1090909...), to a last place at least ten times finer
+    than the axis's smallest spacing (so '1.1' there is no grid value: the digits barely tell the
+    values apart). No quiet nearest value: '12' on an axis of 10 and 20 is neither."""
+    if not isinstance(given, str):
+        return False
+    try:
+        place = 10.0 ** decimal.Decimal(given.strip()).as_tuple().exponent
+    except (decimal.InvalidOperation, ValueError, TypeError, OverflowError):
+        return False
+    gaps = np.diff(np.unique(values))
+    spacing = float(np.min(gaps)) if gaps.size else math.inf
+    return 10.0 * place <= spacing and abs(values[index] - wanted) <= 0.5 * place * (1.0 + 1e-12)
 
 
 def _typeable(value):
