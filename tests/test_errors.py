@@ -190,6 +190,29 @@ def test_output_that_exists_is_not_replaced(finished, tmp_path, invoke):
     assert out.read_bytes() == before
 
 
+def test_an_output_holding_another_kind_of_results_is_named_with_its_command(finished, tmp_path, invoke):
+    """`vrsweep continue CONFIG` after `vrsweep run CONFIG` writes to the same default path: the
+    refusal said 'already exists: pass --overwrite to replace it', as if the file were an older
+    branch, and run's offered --resume on a trajectory. It names what the file holds and -o."""
+    from vrsweep.errors import UsageError
+    from vrsweep.store.fileio import output_target
+
+    sweep = tmp_path / "sweep.h5"
+    shutil.copy(finished, sweep)
+    before = sweep.read_bytes()
+    line = one_message(invoke("simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", sweep), 2)
+    assert "already exists and holds a sweep (vrsweep run): give this trajectory its own file with -o" in line, line
+    assert "--overwrite" in line and sweep.read_bytes() == before
+    with pytest.raises(UsageError, match=r"holds a sweep \(vrsweep run\): give this branch its own file"):
+        output_target(sweep, kind="branch")
+    assert output_target(sweep, kind="branch", overwrite=True) == str(sweep)  # asked for: replaced
+    trajectory = tmp_path / "trajectory.h5"
+    assert invoke("simulate", QUICKSTART, "--set", "g=5", *SHORT, "-o", trajectory).exit_code == 0
+    line = one_message(invoke("run", QUICKSTART, "-o", trajectory, *SHORT), 2)
+    assert "holds a trajectory (vrsweep simulate): give this sweep its own file with -o" in line, line
+    assert "--resume" not in line  # no run wrote it: there is nothing to resume
+
+
 @pytest.mark.parametrize("command", ["merge", "simulate"])
 def test_other_commands_refuse_an_existing_output(command, finished, tmp_path, invoke):
     if command not in main.commands:

@@ -116,7 +116,7 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     path = config.output_path(output)
     inputs = (config_path, start_path) if start_path else (config_path,)
     with flag_wording(flags):
-        target = _prepare_output(path, overwrite, quiet, config, inputs, "an input of this continuation")
+        target = _prepare_output(path, overwrite, quiet, config, inputs, "an input of this continuation", "branch")
     from vrsweep.analysis.continuation import interrupted
     from vrsweep.execution.signals import GracefulStop
 
@@ -187,7 +187,7 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
     path = Path(output) if output else Path(path).with_name(Path(path).stem + f"_curve_{name}_{along}.h5")
     with flag_wording(flags):
         target = _prepare_output(path, overwrite, quiet, requests[0].config, (branch_path,),
-                                 "the branch file being followed")
+                                 "the branch file being followed", "curves")
     from vrsweep.analysis.curves import ENDED_INTERRUPTED
     from vrsweep.execution.signals import GracefulStop
 
@@ -245,7 +245,7 @@ def _say_interrupted(signum, path, count, stopped, what, whole):
     sys.exit(128 + signum)
 
 
-def _prepare_output(path, overwrite, quiet, config, inputs, inputs_are):
+def _prepare_output(path, overwrite, quiet, config, inputs, inputs_are, kind):
     """The path to write (fileio's one rule, as run, merge and plot: a link followed to its target;
     a folder, a device or a pipe refused; an existing file only with --overwrite; an input never),
     its folder made, and (unless quiet) the notice that the first run compiles the kernels: before
@@ -254,7 +254,7 @@ def _prepare_output(path, overwrite, quiet, config, inputs, inputs_are):
 
     from vrsweep.store.fileio import output_target, prepare_output_directory
 
-    target = Path(output_target(path, overwrite=overwrite, inputs=inputs, inputs_are=inputs_are))
+    target = Path(output_target(path, overwrite=overwrite, inputs=inputs, inputs_are=inputs_are, kind=kind))
     prepare_output_directory(target)
     if not quiet:
         from vrsweep.commands.options import say_if_compiling

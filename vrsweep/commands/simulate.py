@@ -49,7 +49,7 @@ def command(config_path, overrides, output, samples_per_period, compare, overwri
 
     with flag_wording(flags):  # say so before integrating, not after
         path = Path(output_target(config.output_path(output), overwrite=overwrite, inputs=(config_path,),
-                                  inputs_are="the config being run"))
+                                  inputs_are="the config being run", kind="trajectory"))
 
     prepare_output_directory(path)  # before integrating: a folder that cannot be written is known now
     if not quiet:

@@ -434,7 +434,8 @@ def simulate(config, *, output=None, samples_per_period=None, compare=None,
         check_single_point(resolved)  # before compiling anything
         if output is not None:  # fileio's one rule, as vrsweep simulate: say so before integrating, not after
             inputs = (resolved.source_name,) if os.path.isfile(resolved.source_name) else ()  # never written over
-            path = Path(output_target(output, overwrite=overwrite, inputs=inputs, inputs_are="the config being run"))
+            path = Path(output_target(output, overwrite=overwrite, inputs=inputs, inputs_are="the config being run",
+                                      kind="trajectory"))
             prepare_output_directory(path)
         data = simulate_point(resolved, samples_per_period, compare_effective=compare == "effective")
         if output is not None:

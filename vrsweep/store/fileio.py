@@ -437,8 +437,26 @@ def refuse_a_folder_name(path, argument="output") -> None:
                                 "file's name (without " + ending.replace("a slash", "the slash") + ")", path=path)
 
 
+# What each kind of result file is, and the command that writes it: a refusal to replace one says
+# which it is, where a command that writes another kind was given its path (`vrsweep continue` of a
+# config whose sweep `vrsweep run` already wrote at the same default path).
+KIND_WORDS = {"sweep": "a sweep (vrsweep run)", "shard": "a shard of a sweep (vrsweep run --shard)",
+              "branch": "a branch (vrsweep continue)", "curves": "bifurcation curves (vrsweep continue --along)",
+              "trajectory": "a trajectory (vrsweep simulate)"}
+
+
+def _kind_of(path):
+    """The kind of result file at ``path`` (store.reading.file_kind), None if it is none vrsweep reads."""
+    from vrsweep.store.reading import file_kind
+
+    try:
+        return file_kind(path)
+    except Exception:  # a damaged or foreign file: the plain refusal says enough
+        return None
+
+
 def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None,
-                  writes=None) -> str:
+                  writes=None, kind=None) -> str:
     """The one rule of what vrsweep may write at an output ``path`` (run, simulate, merge, plot,
     init). Returns the path to write; raises UsageError (one line) otherwise.
 
@@ -450,6 +468,9 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
     - An existing regular file is replaced only with ``overwrite`` (else ``exists_error()`` is
       raised, or a generic message), and never when it is one of ``inputs`` (the config being
       run, the files being merged or plotted), whatever the flags.
+    - ``kind``: the kind of result file the caller writes (KIND_WORDS). An existing result file of
+      another kind is refused without ``overwrite`` by what it holds and which command wrote it,
+      before ``exists_error`` (whose --resume would not apply to it).
     - ``writes`` names what a command writes when it is not results ("a figure", "a config"): an
       HDF5 file at the path is then refused whatever the flags. Results took hours to compute and
       a figure or a config is rewritten in a second: no flag should trade one for the other.
@@ -497,6 +518,12 @@ def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of t
         raise UsageError(f"output {shown} is an HDF5 file (results?): {writes} never replaces one; "
                          "choose another output")
     if not overwrite:
+        existing = _kind_of(target) if kind is not None else None
+        if existing is not None and existing not in (kind, "shard" if kind == "sweep" else kind):
+            raise UsageError.naming(
+                "output {path} already exists and holds {holds}: give this {kind} its own file with {output}, or "
+                "pass {overwrite} to replace it", {"overwrite": "overwrite=True", "output": "another output path"},
+                path=shown, holds=KIND_WORDS[existing], kind=KIND_WORDS[kind].split(" (")[0].removeprefix("a "))
         if exists_error is not None:
             raise exists_error()
         raise UsageError.naming("output {path} already exists: pass {overwrite} to replace it",

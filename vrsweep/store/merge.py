@@ -258,7 +258,7 @@ def merge_results(shard_paths: Iterable, out_path, overwrite=False, allow_missin
         raise UsageError("merge needs at least one shard file")
     given = out_path
     out_path = output_target(out_path, overwrite=overwrite, inputs=paths, inputs_are="one of the shards being merged",
-                             exists_error=lambda: UsageError.naming(
+                             kind="sweep", exists_error=lambda: UsageError.naming(
         "output {path} already exists: pass {overwrite} to replace it", ARGUMENT_WORDS, path=given))
 
     stop = stop or (lambda: None)

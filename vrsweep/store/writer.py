@@ -167,7 +167,7 @@ class ResultWriter:
         """
         given = os.fspath(path)
         path = output_target(given, overwrite=overwrite, inputs=inputs, inputs_are="the config being run",
-                             exists_error=lambda: UsageError.naming(
+                             kind="sweep", exists_error=lambda: UsageError.naming(
             "output {path} already exists: pass {overwrite} to replace it, or {resume} to continue the run that "
             "wrote it", ARGUMENT_WORDS, path=given))
         specs = [v if isinstance(v, VariableSpec) else VariableSpec(**v) for v in variables]
