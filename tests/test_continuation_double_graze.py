@@ -151,3 +151,27 @@ def test_the_branch_crosses_the_double_graze_onto_orbits_that_hit_both_stops(sid
     assert impacts == 2
     # Measured 1.4e-9 (from the free side, u = 0.0145, |mu| = 885) and 2.9e-9 (u = 0.0193).
     np.testing.assert_allclose(end, nearest.state, rtol=0, atol=1e-8)
+
+
+def test_a_written_models_start_without_a_periodic_orbit_is_said_in_its_periods(tmp_path):
+    """The refusal of a start with no periodic orbit counted the paper's 'slow periods' for a
+    written model, which has none: its period is T. Undamped and far from the stops, the motion from
+    rest is quasi-periodic (the free oscillation at about 1 beside the forcing at omega = 1.2)."""
+    from vrsweep.errors import UsageError
+
+    path = tmp_path / "config.yaml"
+    path.write_text(CONFIG.replace("zeta: 0.05", "zeta: 0.0").replace("START", "0.12"))
+    with pytest.raises(UsageError, match=r"no periodic orbit of at most 16 periods T at the start \(F = 0.12\)"):
+        run_continuation(load_config(path))
+
+
+def test_a_written_models_trajectory_too_long_is_said_in_its_periods(tmp_path):
+    """simulate's refusal of a run too long for one trajectory counted 'slow periods' likewise."""
+    from vrsweep.errors import UsageError
+    from vrsweep.execution.simulate import MAX_PERIODS, sample_times
+
+    path = tmp_path / "config.yaml"
+    path.write_text(CONFIG.replace("START", "0.3").replace("transient_periods: 300",
+                                                            f"transient_periods: {MAX_PERIODS}"))
+    with pytest.raises(UsageError, match=r"periods T \(transient \+ measured\) is more than"):
+        sample_times(load_config(path))

@@ -606,6 +606,25 @@ def test_a_written_models_caption_prints_its_equation_in_its_symbols(example):
     assert f"x'' = {config.model.acceleration}" in " ".join(said.split())
 
 
+def test_a_function_after_a_factor_is_not_read_as_arccos():
+    """'a*cos(w*t)' was drawn 'acos(tw)' (mathtext sets no space between a factor and a function's
+    name, where TeX does): read as arccos(tw). A thin space separates them; 2 zeta x' stays as is."""
+    from matplotlib.mathtext import MathTextParser
+
+    from vrsweep.config.validate import config_from_dict
+    from vrsweep.plot.labels import written_equation
+
+    config = config_from_dict({
+        "model": {"name": "pendulum", "acceleration": "-2*zeta*v - sin(x) + a*cos(w*t) - mu*sign(v) + b*exp(-x)",
+                  "parameters": {"zeta": 0.05, "a": 0.5, "w": 0.8, "mu": 0.1, "b": 0.0},
+                  "period": "2*pi/w", "response": {"frequency": "w", "scale": "a"}},
+        "initial": {"x": 0.0, "v": 0.0}})
+    equation = written_equation(config.model).split("$")[1]
+    MathTextParser("path").parse(f"${equation}$")
+    assert "a\\,\\cos" in equation and "\\mu\\,\\operatorname{sign}" in equation, equation
+    assert "- \\sin" in equation and "2 \\zeta" in equation and "\\,\\zeta" not in equation, equation
+
+
 def test_the_curves_of_a_variable_stay_apart_in_greyscale(files):
     """Five curves of --var x_max took tab10's blue, orange, green, red and purple, all drawn 'o':
     red, blue and purple (L* 47, 48, 52) were one grey. Any two curves differ in their marker or

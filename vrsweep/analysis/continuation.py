@@ -1418,11 +1418,12 @@ def find_start(problem, initial_state, value, transient_periods, max_period):
         period = period if period <= max_period else 0
     if period == 0:
         raise UsageError.naming(
-            "no periodic orbit of at most {limit} slow periods at the start ({name} = {value}): the motion "
+            "no periodic orbit of at most {limit} {periods} at the start ({name} = {value}): the motion "
             "is chaotic, quasi-periodic, of a longer period or not yet settled; try another start value "
             "({from_key}), a longer transient (integration.transient_periods) or a larger {max_period}",
             {"max_period": "continuation.max_period", "from_key": "continuation.from"},
-            limit=max_period, name=problem.parameter, value=f"{value:g}")
+            limit=max_period, name=problem.parameter, value=f"{value:g}",
+            periods="slow periods" if isinstance(problem.model, str) else "periods T")
     state = strobe[-1, [kernel.REC_X, kernel.REC_V]]
     orbit, failure = correct(problem, np.array([state[0], state[1], value]), period)
     if failure:

@@ -606,7 +606,10 @@ def format_summary(summary, show_config=False) -> str:
         what = "a vrsweep file of a kind this vrsweep does not know" if kind == UNKNOWN_KIND else f"vrsweep {kind}"
         lines.append(f"{summary['path']}: {what}, format {summary['format_version']}, {state}")
     if summary["model"]:
-        lines.append(f"model:       {summary['model']}")
+        # A written model by its name (its definition follows among the attributes): "written"
+        # alone named no model.
+        name = (summary.get("attributes") or {}).get("model_name") if summary["model"] == "written" else None
+        lines.append(f"model:       {name} (written in its config)" if name else f"model:       {summary['model']}")
     if summary["points_total"] is not None:
         if summary["axes"]:
             for index, axis in enumerate(summary["axes"]):

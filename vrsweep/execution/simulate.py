@@ -39,16 +39,18 @@ def sample_times(config, samples_per_period=DEFAULT_SAMPLES_PER_PERIOD):
     if samples_per_period < 1:
         raise UsageError.naming("{samples_per_period} must be at least 1, got {value}", value=samples_per_period)
     n_periods = config.integration.transient_periods + config.integration.measure_periods
+    periods = "periods T" if config.written else "slow periods"  # a written model's own period
     if n_periods > MAX_PERIODS:
         raise UsageError.naming(
-            "{n_periods} slow periods (transient + measured) is more than {most} for one trajectory, which "
-            "keeps a record of every period: lower the run length", n_periods=n_periods, most=MAX_PERIODS)
+            "{n_periods} {periods} (transient + measured) is more than {most} for one trajectory, which "
+            "keeps a record of every period: lower the run length", n_periods=n_periods, most=MAX_PERIODS,
+            periods=periods)
     n_samples = n_periods * samples_per_period + 1
     if n_samples > MAX_SAMPLES:
         raise UsageError.naming(
-            "{n_periods} slow periods x {samples} samples per period = {n_samples} samples (more than {most}): "
+            "{n_periods} {periods} x {samples} samples per period = {n_samples} samples (more than {most}): "
             "lower {samples_per_period} or the run length", n_periods=n_periods, samples=samples_per_period,
-            n_samples=n_samples, most=MAX_SAMPLES)
+            n_samples=n_samples, most=MAX_SAMPLES, periods=periods)
     return np.linspace(0.0, n_periods * stroboscopic_period(config), n_samples)
 
 

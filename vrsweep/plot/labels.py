@@ -188,6 +188,17 @@ def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
 _PLAIN_EQUATIONS = {}  # a written model's equation as mathtext -> as its config wrote it (``description``)
 
 
+# A function's name after a factor: mathtext sets "a \cos" as "acos", read as arccos, where TeX puts
+# a thin space between a factor and an operator's name.
+_FUNCTION_AFTER_FACTOR = re.compile(r"(?<=[\w}]) (\\(?:operatorname|(?:arc)?(?:sin|cos|tan|cot|sec|csc)h?|log|ln|exp"
+                                    r"|max|min)(?![a-zA-Z]))")
+
+
+def _spaced_functions(latex) -> str:
+    """``latex`` with a thin space between a factor and the function it multiplies ('a \\,\\cos')."""
+    return _FUNCTION_AFTER_FACTOR.sub(lambda match: "\\," + match.group(1), latex)
+
+
 def written_equation(model) -> str:
     """'name: $\\ddot{x} = ...$' of a written model, in its symbols (``written.acceleration_latex``),
     for a caption; as the config wrote it ("x'' = -2*zeta*v - x + ...") where matplotlib's mathtext
@@ -198,7 +209,7 @@ def written_equation(model) -> str:
 
     written = f"{model.title}: x'' = {model.acceleration}"
     try:
-        latex = f"${acceleration_latex(model)}$"
+        latex = f"${_spaced_functions(acceleration_latex(model))}$"
         MathTextParser("path").parse(latex)
     except Exception:  # noqa: BLE001 -- anything sympy prints that mathtext does not draw
         return written

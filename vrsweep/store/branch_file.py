@@ -186,7 +186,7 @@ def write_branch(path, arrays, config, method, overwrite=False, complete=True):
         ends = arrays["ends"]
         branch_id = _dimension(f, "branch_id", np.arange(len(ends), dtype=np.int64), "branch number")
         _variable(f, "branch_periods", np.asarray([e[0] for e in ends], dtype=np.int64), (branch_id,),
-                  "orbit period of the branch in slow periods", "1")
+                  f"orbit period of the branch in {'periods T' if config.written else 'slow periods'}", "1")
         _ends(f, "branch", branch_id, [e[1] for e in ends], [e[2] for e in ends])
         seal_attributes(f)
     write_bytes(path, image.getvalue())

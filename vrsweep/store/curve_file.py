@@ -115,7 +115,7 @@ def write_curves(path, arrays, names, config, method, overwrite=False, complete=
         _variable(f, "curve_kind", np.asarray([c[0] for c in curves], dtype=object), (curve_id,),
                   "kind: fold, period_doubling or grazing", None)
         _variable(f, "curve_periods", np.asarray([c[1] for c in curves], dtype=np.int64), (curve_id,),
-                  "orbit period of the curve in slow periods", "1")
+                  f"orbit period of the curve in {'periods T' if config.written else 'slow periods'}", "1")
         _ends(f, "curve", curve_id, [c[2] for c in curves], [c[3] for c in curves])
         specials = arrays["specials"]
         special = _dimension(f, "special", np.arange(len(specials), dtype=np.int64), "codimension-two point")
