@@ -831,3 +831,20 @@ def test_the_kinds_of_motion_stay_apart_in_greyscale(files):
         colours = [mesh.cmap(k) for k in range(mesh.cmap.N)]
         light = sorted(_lightness(colour) for colour in colours)
         assert len(light) >= 2 and min(np.diff(light)) >= 8.0, light
+
+
+def test_a_marks_size_on_a_map_grows_with_its_cells():
+    """The white dot of R_err > 10 % was 2.5 points on every map: on an 8 x 6 map, in cells of about
+    70 points, all but invisible. It grows with the cells, within its bounds."""
+    import matplotlib.pyplot as plt
+
+    from vrsweep.plot.sweeps import MAP_MARK_LARGEST, MAP_MARK_SHARE, _cell_marker_size
+
+    fig, ax = plt.subplots(figsize=(8, 6))
+    box = ax.get_position()
+    cell = 72.0 * min(box.width * 8 / 8, box.height * 6 / 6)  # an 8 x 6 map's cell, in points
+    assert _cell_marker_size(ax, (8, 6), 2.5) == pytest.approx(min(MAP_MARK_SHARE * cell, MAP_MARK_LARGEST))
+    assert _cell_marker_size(ax, (8, 6), 2.5) > 2 * 2.5
+    assert _cell_marker_size(ax, (400, 400), 2.5) == 2.5  # a fine map: the smallest size, no larger
+    assert _cell_marker_size(ax, (1, 1), 2.5) == MAP_MARK_LARGEST
+    plt.close(fig)

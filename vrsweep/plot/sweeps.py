@@ -761,6 +761,21 @@ def _hatch_cells(ax, xs, ys, mask, hatch="////"):
     return collection
 
 
+# A mark on a map's cell (a white dot, an x) is at least its small size and grows with the cells up
+# to this share of a cell's shorter side, and no more than MAP_MARK_LARGEST points: on an 8 x 6 map
+# a 2.5-point dot in a cell of 70 points was all but invisible.
+MAP_MARK_SHARE = 0.15
+MAP_MARK_LARGEST = 9.0
+
+
+def _cell_marker_size(ax, shape, smallest):
+    """Marker size in points for a mark on each cell of a map of ``shape`` (nx, ny) cells."""
+    box = ax.get_position()  # in figure fractions: the axes as laid out so far
+    width, height = ax.figure.get_size_inches()
+    cell = 72.0 * min(box.width * width / max(shape[0], 1), box.height * height / max(shape[1], 1))
+    return float(np.clip(MAP_MARK_SHARE * cell, smallest, MAP_MARK_LARGEST))
+
+
 @figure_options
 def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Figure:
     """A heat map of ``name`` over two axes with the resonance curve; untrusted R dotted, failed x.
@@ -860,12 +875,13 @@ def map_figure(ds, name="R", x_axis=None, log=False, vmin=None, vmax=None) -> Fi
                 untrusted[:, j], failed[:, j] = computed & ~trusted, f
             if untrusted.any():
                 # Edged black as in the legend: a white dot alone vanished on yellow cells.
-                ax.plot(X[untrusted], Y[untrusted], ".", color="white", mec="k", mew=0.3, ms=2.5, gid="untrusted")
+                ax.plot(X[untrusted], Y[untrusted], ".", color="white", mec="k", mew=0.3, gid="untrusted",
+                        ms=_cell_marker_size(ax, z.shape, 2.5))
                 handles["untrusted"] = Line2D(
                     [], [], ls="none", marker=".", color="white", mec="k", mew=0.3,
                     label=f"white dot: $R_{{err}}$ > {RELATIVE_ERROR_LIMIT:.0%} of R (R depends on the window)")
             if failed.any():
-                ax.plot(X[failed], Y[failed], "x", color=FAILED_COLOUR, ms=4, gid="failed",
+                ax.plot(X[failed], Y[failed], "x", color=FAILED_COLOUR, ms=_cell_marker_size(ax, z.shape, 4.0), gid="failed",
                         path_effects=cased(FAILED_COLOUR, 1.0))
                 handles["failed"] = Line2D([], [], ls="none", marker="x", color=FAILED_COLOUR,
                                            path_effects=cased(FAILED_COLOUR, 1.0),
