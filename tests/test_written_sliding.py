@@ -252,6 +252,39 @@ def test_a_short_stick_at_the_sliding_regions_edge_is_not_stepped_over(method):
         assert max(errors) < 100 * rtol, (rtol, errors)
 
 
+@pytest.mark.parametrize("method", ["rk45", "dop853"])
+def test_a_fast_belt_lets_go_where_the_spring_first_pulls_harder_than_mu(method):
+    """A double-well spring x - x^3 on a belt at 2.5, mu 0.38: riding the belt from x = 0 the spring's
+    pull x - x^3 (+ a weak F cos t) passes mu for 0.04 of a time unit near x = 1/sqrt(3), and the
+    mass lets go there (the hand value: the first root of |p| = mu along x = 2.5 t). The exit scan
+    stepped 1/64 of the forcing's period, 0.098 (0.245 in x), over that bump: up to 0.7.8 the mass
+    rode on to t = 0.4613, where the pull fell below -mu, status ok."""
+    belt, mu, force = 2.5, 0.38, 0.001
+    config = parse_config(f"""
+model:
+  acceleration: "x - x**3 - mu*sign(v - belt) + F*cos(omega*t)"
+  parameters: {{mu: {mu}, F: {force}, omega: 1.0, belt: {belt}}}
+  period: "2*pi/omega"
+  response: {{frequency: omega, scale: F}}
+initial: {{x: 0.0, v: {belt}}}
+""", "m.yaml")
+
+    def excess(t):  # |pull| - mu along the slide x = belt t
+        x = belt * t
+        return abs(x - x ** 3 + force * math.cos(t)) - mu
+
+    grid = np.linspace(0.0, 1.0, 100001)
+    first = int(np.argmax([excess(t) >= 0.0 for t in grid]))
+    release = brentq(excess, grid[first - 1], grid[first], xtol=1e-15)
+    assert 0.2 < release < 0.21 and excess(release + 0.05) < 0.0  # a short bump: back under mu after it
+    coefficients = kernels_for(config.model).coefficients(config.parameters)
+    settings = settings_vector(rtol=1e-10, atol=1e-12, transient_periods=1, measure_periods=1)
+    run = simulate(coefficients, [0.0, belt], settings, (), method=method, model=config.model)
+    assert run.status == Status.OK
+    assert run.sticks[0, 0] < 1e-12
+    assert abs(run.sticks[0, 1] - release) < 1e-12, (run.sticks[:2], release)
+
+
 def test_a_belt_that_carries_the_sliding_mass_onto_a_stop_ends_sliding():
     """Riding the belt from x = 0.5 at 0.2, the mass reaches a stop at x = 1 at t = 2.5, before the
     force lets go (t = 4.42, above): an impact of a sliding mass is not followed, the point ends
