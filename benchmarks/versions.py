@@ -22,6 +22,8 @@ NEW = HERE.parent
 CHILD = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
+sys.path.insert(0, sys.argv[3])  # the checkout first: before '' (the working folder), which python -c puts first
+import vrsweep
 from bench_speed import POINTS, V0
 from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.numerics.trajectory import settings_vector, simulate
@@ -38,15 +40,23 @@ for method in ("rk45", "dop853"):
             simulate(c, [x0, V0], settings, method=method)
             best = min(best, time.thread_time() - began)
         out[f"{method}|{label}"] = best
-print(json.dumps(out))
+print(json.dumps({"vrsweep": vrsweep.__file__, "times": out}))
 """
 
 
 def timings(checkout, repeats):
-    env = dict(os.environ, PYTHONPATH=str(checkout))
-    done = subprocess.run([sys.executable, "-c", CHILD, str(HERE), str(repeats)], env=env, capture_output=True,
-                          text=True, check=True)
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    """The child's times, from the checkout's own vrsweep. Up to 0.7.8 the child found vrsweep on
+    PYTHONPATH, after '' (the working folder): run from a checkout's root, as the usage shows, both
+    children imported that checkout's vrsweep, and every ratio compared it with itself."""
+    checkout = os.path.realpath(checkout)
+    env = dict(os.environ, PYTHONPATH=checkout)
+    done = subprocess.run([sys.executable, "-c", CHILD, str(HERE), str(repeats), checkout], env=env,
+                          capture_output=True, text=True, check=True)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    imported = os.path.realpath(result["vrsweep"])
+    if not imported.startswith(checkout + os.sep):
+        raise SystemExit(f"the child imported {imported}, not the checkout {checkout}")
+    return result["times"]
 
 
 def main():
