@@ -440,19 +440,27 @@ def refuse_a_folder_name(path, argument="output") -> None:
 # What each kind of result file is, and the command that writes it: a refusal to replace one says
 # which it is, where a command that writes another kind was given its path (`vrsweep continue` of a
 # config whose sweep `vrsweep run` already wrote at the same default path).
-KIND_WORDS = {"sweep": "a sweep (vrsweep run)", "shard": "a shard of a sweep (vrsweep run --shard)",
-              "branch": "a branch (vrsweep continue)", "curves": "bifurcation curves (vrsweep continue --along)",
+KIND_WORDS = {"sweep": "a sweep (vrsweep run)", "shard": "a shard of a sweep (vrsweep run)",
+              "branch": "a branch (vrsweep continue)", "curves": "bifurcation curves (vrsweep continue of a branch)",
               "trajectory": "a trajectory (vrsweep simulate)"}
 
 
 def _kind_of(path):
-    """The kind of result file at ``path`` (store.reading.file_kind), None if it is none vrsweep reads."""
-    from vrsweep.store.reading import file_kind
-
+    """The kind of result file at ``path`` (a KIND_WORDS key) as its root attributes say it, None
+    for a file vrsweep did not write or cannot read (the plain refusal then says enough)."""
     try:
-        return file_kind(path)
-    except Exception:  # a damaged or foreign file: the plain refusal says enough
+        if not is_hdf5(path):
+            return None
+        with open_hdf5(path, "r") as f:
+            found = f.attrs.get("vrsweep_file", "")
+            found = found.decode() if isinstance(found, bytes) else found
+            if isinstance(found, str) and found in ("branch", "curves", "trajectory"):
+                return found
+            if "vrsweep_format_version" in f.attrs:  # a sweep: no vrsweep_file attribute
+                return "shard" if "shard" in f.attrs else "sweep"
+    except Exception:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type
         return None
+    return None
 
 
 def output_target(path, *, overwrite=False, inputs=(), inputs_are="an input of this command", exists_error=None,
