@@ -603,10 +603,13 @@ def _detect_crossing(problem, previous, graze, passed, periods):
     return found
 
 
-def _detect(problem, previous, current, tangent, step, periods, graze=None):
+def _detect(problem, previous, current, tangent, step, periods, graze=None, branch_point=None):
     """Bifurcations on the arc between two consecutive orbits: a list of (kind, Orbit).
-    graze: the graze between them that _graze_between located, if any."""
+    graze: the graze between them that _graze_between located, if any; branch_point: the branch
+    point follow located between them (_branch_point), which is the fold test's sign change."""
     found = []
+    if branch_point is not None:
+        found.append((BRANCH_POINT, branch_point))
     # Across a graze the test functions jump with the multipliers (a free orbit's 0.57 +- 0.64i to
     # an impacting one's -10.9): a sign change there may be the jump, which regula falsi brackets
     # as if it were a root. What it locates is a bifurcation only if a multiplier is critical there.
@@ -628,6 +631,14 @@ def _detect(problem, previous, current, tangent, step, periods, graze=None):
         found.append(("grazing", _graze_orbit(problem, graze)))
         return found
     for kind, test in TEST_FUNCTIONS.items():
+        if kind == "fold" and branch_point is None and not crosses_graze and _flips(previous, current, tangent):
+            # The parameter does not turn: a branch point, not a fold (follow refuses a hop; a
+            # step to the range's end is not looked at there).
+            branch_point = _branch_point(problem, previous, current, tangent, step, periods)
+            if branch_point is not None:
+                found.append((BRANCH_POINT, branch_point))
+        if kind == "fold" and branch_point is not None:
+            continue
         a, b = test(previous), test(current)
         if np.isfinite(a) and np.isfinite(b) and a * b < 0.0:
             orbit = _locate(problem, previous, tangent, step, kind, a, b, periods, crosses_graze)
@@ -931,6 +942,13 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
             return orbits, bifurcations, ended
         # After stop: a switched branch that meets its doubling (a corner there) ends, not retried.
         hop = not crossed and _flips(current, orbit, tangent)
+        branch_point = None
+        if hop and not _strays(current, orbit, z_predicted, step):
+            # The fold test changed sign and the parameter did not turn: a hop, or a branch point
+            # (a pitchfork of a symmetric branch), where the null space is two-dimensional and
+            # the branch goes on through it. Located, a branch point has [M - I | F_lam] of rank 1.
+            branch_point = _branch_point(problem, current, orbit, tangent, step, start.periods)
+            hop = branch_point is None
         if not crossed and (_strays(current, orbit, z_predicted, step) or hop) and step * 0.5 >= options["min_step"]:
             step *= 0.5
             strayed = True
@@ -983,7 +1001,8 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                 _record_found(problem, bifurcations, _detect_crossing(problem, current, located_graze, beyond,
                                                                       start.periods))
         else:
-            _record_found(problem, bifurcations, _detect(problem, current, orbit, tangent, step, start.periods, located))
+            _record_found(problem, bifurcations, _detect(problem, current, orbit, tangent, step, start.periods, located,
+                                                         branch_point))
             if orbit.newton_iterations <= EASY_NEWTON:
                 step = min(step * STEP_GROWTH, options["max_step"])
         if crossed:  # the orbits a march in the new impact's speed found on the way (march_in_speed)
@@ -1380,6 +1399,37 @@ def _flips(previous, orbit, tangent):
     if previous.impacts_per_period != orbit.impacts_per_period or _fold_test(previous) * _fold_test(orbit) >= 0.0:
         return False
     return float(tangent @ _raw_tangent(previous)) * float(tangent @ _raw_tangent(orbit)) < 0.0
+
+
+# A located sign change of the fold test is a branch point when [M - I | F_lam] has rank 1 there:
+# its smaller singular value below this fraction of the larger (a fold keeps rank 2, F_lam out of
+# the range of M - I). On the symmetric Duffing oscillator's branch in omega (F = 0.4) the
+# located branch point at omega = 1.0689612 has a ratio of 1.5e-5 (multiplier 0.99999998).
+BRANCH_POINT_RANK = 1e-2
+BRANCH_POINT = "branch_point"
+
+
+def _rank_ratio(orbit):
+    rows = np.zeros((2, 3))
+    rows[:, :2] = orbit.monodromy - np.eye(2)
+    rows[:, 2] = orbit.parameter_derivative
+    singular = np.linalg.svd(rows, compute_uv=False)
+    return float(singular[1] / singular[0]) if singular[0] > 0.0 else 0.0
+
+
+def _branch_point(problem, previous, orbit, tangent, step, periods):
+    """The branch point between ``previous`` and ``orbit`` (a step along which the fold test changes
+    sign and the parameter does not turn, _flips): the fold test's root on the arc, located as a
+    fold is (to location_tolerance, its multiplier within LOCATED_MULTIPLIER of +1), where
+    [M - I | F_lam] has rank 1 (BRANCH_POINT_RANK). None where there is no such point: a hop onto
+    another family, whose orbits the arc's corrector meets in turn with no root between them."""
+    if previous.impacts_per_period != orbit.impacts_per_period:
+        return None
+    located = _locate(problem, previous, tangent, step, "fold", _fold_test(previous), _fold_test(orbit), periods,
+                      impacts=previous.impacts_per_period)
+    if located is None or not _located("fold", located) or _rank_ratio(located) > BRANCH_POINT_RANK:
+        return None
+    return located
 
 
 def _raw_tangent(orbit):

@@ -199,7 +199,8 @@ def _unlocated_bracket(values, row):
     else:
         mu = values["multiplier_real"] + 1j * values["multiplier_imag"]
         with np.errstate(invalid="ignore"):
-            test = {"fold": ((1 - mu[:, 0]) * (1 - mu[:, 1])).real, "period_doubling": ((1 + mu[:, 0]) * (1 + mu[:, 1])).real,
+            fold = ((1 - mu[:, 0]) * (1 - mu[:, 1])).real
+            test = {"fold": fold, "branch_point": fold, "period_doubling": ((1 + mu[:, 0]) * (1 + mu[:, 1])).real,
                     "neimark_sacker": np.abs(mu[:, 0] * mu[:, 1]) - 1}.get(kind, np.full(len(mu), np.nan))
         side = np.sign(test)
     for index in mine:

@@ -26,7 +26,8 @@ from vrsweep.store.branch_file import TAG_PREFIXES, UNLOCATED, bifurcation_tags
 # the sweeps' markers are three disjoint sets (a sweep's points were "^", the grazing tag's marker;
 # the second and third periods' "o" and "s" were the fold's and the period doubling's).
 BIFURCATION_MARKERS = {"fold": ("o", "fold"), "period_doubling": ("s", "period doubling"),
-                       "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing")}
+                       "neimark_sacker": ("D", "Neimark-Sacker"), "grazing": ("^", "grazing"),
+                       "branch_point": ("d", "branch point")}
 # Not located: one symbol for it, the tag (G?1, F?1, ...) saying which kind.
 BIFURCATION_MARKERS.update({UNLOCATED + kind: ("p", f"{words}, not located")
                             for kind, (_, words) in list(BIFURCATION_MARKERS.items())})

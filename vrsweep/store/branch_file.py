@@ -20,7 +20,7 @@ root attributes: ``vrsweep_file = "branch"``, ``vrsweep_format_version``, ``vrsw
     stable (point)                1 when both |mu| < 1
     residual (point)              max |P^p(y) - y| at convergence
     bifurcation (dim)             the located bifurcation points
-    bifurcation_kind (bifurcation)  fold, period_doubling, neimark_sacker, grazing; or unlocated_KIND
+    bifurcation_kind (bifurcation)  fold, period_doubling, neimark_sacker, grazing, branch_point; or unlocated_KIND
                                   of any of them: it lies between this point, the branch's orbit
                                   before it, and the branch's next one (for grazing: the impact
                                   count changes there), and could not be located
@@ -171,7 +171,7 @@ def write_branch(path, arrays, config, method, overwrite=False, complete=True):
         bifurcation = _dimension(f, "bifurcation", np.arange(len(table["kind"]), dtype=np.int64),
                                  "located bifurcation point")
         _variable(f, "bifurcation_kind", np.asarray(table["kind"], dtype=object), (bifurcation,),
-                  "kind: fold, period_doubling, neimark_sacker, grazing, or unlocated_ and one of them", None)
+                  "kind: fold, period_doubling, neimark_sacker, grazing, branch_point, or unlocated_ and one of them", None)
         for key, long_name in (("branch", "branch of the bifurcation point"),
                                ("parameter", f"{parameter} at the bifurcation"),
                                ("x", "position x at t = 0 mod T"), ("v", "velocity at t = 0 mod T"),
@@ -241,14 +241,16 @@ def is_branch_file(path) -> bool:
 # "s" text). A file written by this version has all of them.
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
             "interrupted", "domain_edge")
-LOCATED_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing")
+# branch_point: a real multiplier through +1 where the parameter does not turn (a symmetric
+# branch's pitchfork, analysis/continuation._branch_point); the branch goes on through it.
+LOCATED_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "branch_point")
 # A bifurcation the continuation passed but could not locate (analysis/continuation.py): its kind
 # with this prefix, tagged with a "?" (G?1: a graze not located).
 UNLOCATED = "unlocated_"
 KINDS = LOCATED_KINDS + tuple(UNLOCATED + kind for kind in LOCATED_KINDS)
 # The short names of the bifurcations, numbered per kind in the file's order (F1, F2, PD1, G1...):
 # the same on a branch figure as in ``vrsweep info`` (bifurcation_tags).
-TAG_PREFIXES = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G"}
+TAG_PREFIXES = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G", "branch_point": "BP"}
 TAG_PREFIXES.update({UNLOCATED + kind: f"{prefix}?" for kind, prefix in list(TAG_PREFIXES.items())})
 
 

@@ -1,0 +1,157 @@
+"""A symmetry-breaking pitchfork (a branch point) on a symmetric branch.
+
+The Duffing oscillator between two stops of test_continuation_double_graze.py (its orbits
+symmetric under x -> -x, t -> t + T/2), continued in omega at F = 0.4 on its symmetric period-1
+orbits with an impact on each stop. Under the symmetry a real multiplier through +1 without a
+fold is generic: two asymmetric branches (mirror images) are born and the symmetric one goes
+on, unstable. There the fold test det(M - I) changes sign with the parameter not turning, so the
+null vector of [M - I | F_lam] reverses; up to 0.7.8 the branch ended there, "the corrector keeps
+hopping onto another family of orbits" (at omega = 1.0689639).
+
+The test checks the located branch point against SciPy's own symmetric orbits (fsolve on a map
+with impact events on both stops) on both sides of it: their largest real multiplier crosses +1
+at the located omega, and they exist on both sides (the parameter does not turn there).
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import fsolve
+
+from vrsweep.analysis import continuation
+from vrsweep.config import load_config
+from vrsweep.execution.continuation import run_continuation
+
+ZETA, BETA, F, D, R = 0.05, 0.3, 0.4, 1.0, 0.7
+CONFIG = """\
+model:
+  name: Duffing between two stops
+  acceleration: "-2*zeta*v - x - beta*x**3 + F*cos(omega*t)"
+  parameters: {zeta: 0.05, beta: 0.3, F: 0.4, omega: 1.1, d: 1.0, r: 0.7}
+  barriers:
+    - {position: d, side: above, restitution: r}
+    - {position: -d, side: below, restitution: r}
+  period: "2*pi/omega"
+  response: {frequency: omega, scale: F}
+initial: {x: 0.0, v: 0.0}
+integration: {rtol: 1.0e-11, atol: 1.0e-13, transient_periods: 300}
+continuation: {parameter: omega, from: 1.1, to: [1.05, 1.1], max_step: 0.05}
+"""
+
+
+@pytest.fixture(scope="module")
+def branch(tmp_path_factory):
+    path = tmp_path_factory.mktemp("branch_point") / "config.yaml"
+    path.write_text(CONFIG)
+    branches, found = run_continuation(load_config(path))
+    return branches[0], found
+
+
+def _flow(y0, omega, t0, t1):
+    """SciPy's flow from t0 to t1 with both stops (events, x' -> -r x'): (end state, impacts)."""
+    def rhs(t, y):
+        return [y[1], -2 * ZETA * y[1] - y[0] - BETA * y[0] ** 3 + F * math.cos(omega * t)]
+
+    def top(t, y):
+        return y[0] - D
+    top.terminal, top.direction = True, 1.0
+
+    def bottom(t, y):
+        return y[0] + D
+    bottom.terminal, bottom.direction = True, -1.0
+
+    t, y, impacts = t0, np.array(y0, dtype=float), 0
+    while True:
+        solution = solve_ivp(rhs, (t, t1), y, method="DOP853", rtol=1e-12, atol=1e-14, events=(top, bottom))
+        if solution.status != 1:
+            return solution.y[:, -1], impacts
+        hit = 0 if solution.t_events[0].size else 1
+        t = float(solution.t_events[hit][0])
+        y = solution.y_events[hit][0].copy()
+        y[0] = D if hit == 0 else -D
+        y[1] = -R * y[1]
+        impacts += 1
+
+
+def _scipy_orbit(y_guess, omega):
+    """SciPy's period-1 orbit near y_guess: (state, its largest real multiplier, half-period state)."""
+    period = 2.0 * math.pi / omega
+    y = fsolve(lambda y: _flow(y, omega, 0.0, period)[0] - y, y_guess, xtol=1e-13)
+    h = 1e-6
+    columns = [(_flow(y + h * e, omega, 0.0, period)[0] - _flow(y - h * e, omega, 0.0, period)[0]) / (2 * h)
+               for e in np.eye(2)]
+    mu = np.linalg.eigvals(np.array(columns).T)
+    real = mu[np.abs(mu.imag) < 1e-9].real
+    assert real.size, mu
+    return y, float(real.max()), _flow(y, omega, 0.0, 0.5 * period)[0]
+
+
+def test_the_symmetric_branch_goes_through_its_branch_point_where_scipy_puts_it(branch):
+    orbits, found = branch
+    # Up to 0.7.8: ended newton_failed, "the corrector keeps hopping onto another family of orbits".
+    assert all(status == continuation.ENDED_RANGE for status, _ in orbits.ends.values()), orbits.ends
+    points = [b.orbit for b in found if b.kind == continuation.BRANCH_POINT]
+    assert len(points) == 1, [(b.kind, b.orbit.parameter) for b in found]
+    assert not any(b.kind in ("fold", continuation.UNLOCATED_PREFIX + "fold") for b in found)
+    point = points[0]
+    assert abs(max(point.multipliers.real) - 1.0) <= continuation.LOCATED_MULTIPLIER
+    assert continuation._rank_ratio(point) <= continuation.BRANCH_POINT_RANK
+    # The branch goes on through it: orbits on both sides.
+    assert min(o.parameter for o in orbits.orbits) < point.parameter - 0.01
+    assert max(o.parameter for o in orbits.orbits) > point.parameter + 0.01
+    # SciPy's symmetric orbits on both sides: the multiplier crosses +1 at the located omega.
+    delta = 1e-4
+    sides = []
+    for omega in (point.parameter - delta, point.parameter + delta):
+        y, mu, half = _scipy_orbit(point.state, omega)
+        np.testing.assert_allclose(half, -y, rtol=0, atol=1e-9)  # symmetric: x -> -x after T/2
+        assert _flow(y, omega, 0.0, 2.0 * math.pi / omega)[1] == 2
+        sides.append(mu)
+    assert (sides[0] - 1.0) * (sides[1] - 1.0) < 0.0, sides
+    crossing = point.parameter - delta + 2 * delta * (1.0 - sides[0]) / (sides[1] - sides[0])
+    assert abs(crossing - point.parameter) < 1e-6, (crossing, point.parameter, sides)
+    # Measured: located at omega = 1.06896121, SciPy's crossing 3.8e-8 from it (multipliers 1.0036768
+    # and 0.9963261 at -+1e-4), rank ratio 1.5e-5, multiplier 0.99999998.
+    #
+    # The branch's orbits on both sides are SciPy's symmetric orbits: its flow with both stops takes
+    # each to its mirror image in half a period.
+    near = sorted(orbits.orbits, key=lambda o: abs(o.parameter - point.parameter))[:4]
+    assert {o.parameter < point.parameter for o in near} == {True, False}
+    for orbit in near:
+        period = 2.0 * math.pi / orbit.parameter
+        np.testing.assert_allclose(_flow(orbit.state, orbit.parameter, 0.0, 0.5 * period)[0], -orbit.state,
+                                   rtol=0, atol=1e-8)
+    # The located orbit itself is fixed only along the null vectors to about the cube root of the
+    # Newton tolerance (the pitchfork's normal form is cubic there, M - I singular): 2e-4 at 1e-11.
+    period = 2.0 * math.pi / point.parameter
+    np.testing.assert_allclose(_flow(point.state, point.parameter, 0.0, 0.5 * period)[0], -point.state,
+                               rtol=0, atol=2e-4)
+
+
+def test_the_branch_file_holds_the_branch_point_and_info_and_plot_show_it(tmp_path):
+    from click.testing import CliRunner
+
+    import vrsweep
+    from vrsweep.cli import main
+
+    config = tmp_path / "config.yaml"
+    config.write_text(CONFIG)
+    out = tmp_path / "branch.h5"
+    result = CliRunner().invoke(main, ["continue", str(config), "-o", str(out), "-q"])
+    assert result.exit_code == 0, result.output
+    with vrsweep.open_results(out) as ds:
+        assert [str(kind) for kind in ds["bifurcation_kind"].values] == ["branch_point"]
+        mu = ds["bifurcation_multiplier_real"].values[0]
+        assert abs(mu.max() - 1.0) <= continuation.LOCATED_MULTIPLIER
+    info = CliRunner().invoke(main, ["info", str(out)])
+    assert info.exit_code == 0, info.output
+    line = next(line for line in info.output.splitlines() if line.startswith("bifurcation:"))
+    assert "branch_point at omega = 1.06896" in line and "BP1" in line, line
+    figure = CliRunner().invoke(main, ["plot", str(out), "-o", str(tmp_path / "branch.png")])
+    assert figure.exit_code == 0, figure.output
+    # Not a kind curves follow (yet): one line, exit code 2.
+    curve = CliRunner().invoke(main, ["continue", str(out), "--point", "0", "--along", "F", "--to", "0.35", "0.45",
+                                      "-o", str(tmp_path / "curve.h5")])
+    assert curve.exit_code == 2 and len(curve.output.strip().splitlines()) == 1, curve.output
