@@ -126,16 +126,9 @@ def is_hdf5(path) -> bool:
 
 def has_file_kind(path, kind) -> bool:
     """True for an HDF5 file whose root attribute vrsweep_file is ``kind``; False for anything else
-    (branch, curves and trajectory files)."""
-    try:
-        if not is_hdf5(path):
-            return False
-        with open_hdf5(path, "r") as f:
-            found = f.attrs.get("vrsweep_file", "")
-            found = found.decode() if isinstance(found, bytes) else found
-            return isinstance(found, str) and found == kind  # not an array's elementwise answer
-    except Exception:  # noqa: BLE001 - damaged metadata surfaces as any h5py error type; the
-        return False   # file's reader (open_checked, check_branch...) then says what is wrong
+    (branch, curves and trajectory files; unreadable: False, and the file's reader, open_checked,
+    check_branch..., then says what is wrong)."""
+    return kind in _NAMED_KINDS and _kind_of(path) == kind
 
 
 # --------------------------------------------------------------------------------------------
@@ -445,6 +438,10 @@ KIND_WORDS = {"sweep": "a sweep (vrsweep run)", "shard": "a shard of a sweep (vr
               "trajectory": "a trajectory (vrsweep simulate)"}
 
 
+# The kinds a file names in its root attribute vrsweep_file (a sweep or shard names none).
+_NAMED_KINDS = ("branch", "curves", "trajectory")
+
+
 def _kind_of(path):
     """The kind of result file at ``path`` (a KIND_WORDS key) as its root attributes say it, None
     for a file vrsweep did not write or cannot read (the plain refusal then says enough)."""
@@ -454,7 +451,7 @@ def _kind_of(path):
         with open_hdf5(path, "r") as f:
             found = f.attrs.get("vrsweep_file", "")
             found = found.decode() if isinstance(found, bytes) else found
-            if isinstance(found, str) and found in ("branch", "curves", "trajectory"):
+            if isinstance(found, str) and found in _NAMED_KINDS:  # not an array's elementwise answer
                 return found
             if "vrsweep_format_version" in f.attrs:  # a sweep: no vrsweep_file attribute
                 return "shard" if "shard" in f.attrs else "sweep"
