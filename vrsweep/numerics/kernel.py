@@ -500,7 +500,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                                                   slide_gain, slide_bit, coefficients, y, f, scratch,
                                                   stick_scan_step, max_steps - n_scans)
             n_scans += scans
-            n_rhs += 2 * scans
+            n_rhs += 2 * (scans + 1)  # each scan's two fields, and the two at the start
             y[X] = slide_x0 + slide_speed * (t - slide_t0)  # the scan left its trial states in y
             y[V] = slide_speed
             if t_exit != t_exit:
