@@ -23,8 +23,13 @@ kernel.REC_*, kernel.SUM_*); the coefficient vector is model.py's. The right-han
 forcing-phase rotations are rhs.py's.
 
 ``_integrate`` stays one function on purpose: it is the algorithm read top to bottom, and every
-piece it calls is inlined by numba; splitting its loop into functions that return several
-values would cost tuple packing in the hottest path for no gain in clarity.
+piece it calls that takes a model's or a method's function is inlined by numba (so that function
+is a direct call); splitting its loop into functions that return several values would cost tuple
+packing in the hottest path for no gain in clarity. The pieces that take arrays and numbers only
+(records, tangent vectors, the frozen mode) are plain kernels, compiled once for every model:
+numba copies an inlined callee's IR once per block with its whole scope, so each inlined piece
+grew every kernel's compile (0.7.9: 29.5 s cold for the original model's rk45 sweep, 24.4 s
+without them inlined; the same speed, benchmarks/README.md).
 """
 
 import math
@@ -150,7 +155,7 @@ SWITCH_SLIVER = 1e-9
 JUMP_TOLERANCE = 1e-9
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def _hold_mode(scratch, mode):
     """The frozen mode the right-hand sides read (the scratch's last value; codegen._modes): the
     side of each switching function, a bit each, held for a whole step; UNFROZEN: none held."""
@@ -1046,7 +1051,7 @@ def _restitution(y, t, coefficients, barrier_force, barrier, side, restitution, 
     return v_before, v_after, stuck, force
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def _rebound_step(h, v_after, push):
     """The next step size after a rebound: a slow rebound against a force pushing back (push, the
     force at rest on the barrier at the impact) returns after about 2 |v| / a, so the step stays
@@ -1063,7 +1068,7 @@ def _add_stuck_quadratures(y, position, frequency, t_start, t_end):
     y[QC_INTEGRAL] += position * (math.sin(frequency * t_end) - math.sin(frequency * t_start)) / frequency
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def _mirror(y, y_new, dense):
     """x -> -x, v -> -v in a step's ends and dense output (a barrier below seen as one above).
     Negation is exact: calling it twice restores every bit."""
@@ -1160,7 +1165,7 @@ def _sliding_exit(rhs, switch_signs, t_start, t_limit, t0, x0, speed, gain, bit,
     return t_limit + 1.0, scans, 0
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def _add_sliding_quadratures(y, t0, x0, speed, frequency, t_start, t_end):
     """eq3.1, eq3.2 integrands over [t_start, t_end] along x = x0 + speed (t - t0): in closed form
     (integrated by parts; speed = 0 is _add_stuck_quadratures')."""

@@ -29,7 +29,7 @@ def run_line(integrate, coefficients, initial_state, settings, line_points, reco
         next_start(status, summaries[slot], initial_state, state)
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def next_start(status, summary, initial_state, state):
     """Where a line's next point starts (state, (2,)), after a point that ended with status and
     summary: the CPU's lines (run_line) and the GPU's (cuda.py) alike.

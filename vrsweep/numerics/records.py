@@ -158,7 +158,7 @@ def start_period(record, x, tangents):
     record[REC_IMPACT_SIN] = 0.0
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def record_impact(record, speed, phase):
     """An impact of the period: its speed into the barrier (|v-| before eq2.2) and its phase
     (response frequency x t; a grazing line on a map is where the slowest speed falls to zero)."""
@@ -169,7 +169,7 @@ def record_impact(record, speed, phase):
     record[REC_IMPACT_SIN] += math.sin(phase)
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def log_impact(impact_log, n_impacts, t, v_before, v_after):
     """The n_impacts-th impact into the log, while it has room."""
     if n_impacts - 1 < impact_log.shape[0]:
@@ -178,7 +178,7 @@ def log_impact(impact_log, n_impacts, t, v_before, v_after):
         impact_log[n_impacts - 1, 2] = v_after
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def log_stick_start(stick_log, n_sticks, t):
     """A sticking interval starting at t into the log (its end is written at release). Returns the count."""
     if n_sticks < stick_log.shape[0]:
@@ -205,7 +205,7 @@ def close_period(record, t, y, f, tangent, coefficients, tangents, stuck):
             tangent(t, y, coefficients, f)  # f of the renormalised vectors
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def add_tangent_growth(record, y):
     """Renormalise the tangent vectors and add their log growth to the period's record."""
     log_stretch, log_area = renormalise_tangents(y)

@@ -145,7 +145,7 @@ def growth_thresholds(alpha, beta):
 GROWTH_THRESHOLDS = growth_thresholds(PI_ALPHA, PI_BETA)
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def growth_is_certain(err, err_previous, thresholds):
     """True when SAFETY err^-alpha max(err_previous, floor)^beta >= 1 is certain, without pow."""
     previous = max(err_previous, ERR_PREVIOUS_FLOOR)

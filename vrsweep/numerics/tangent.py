@@ -32,7 +32,7 @@ from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.state import N_TANGENT_VECTORS, TANGENT
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def apply_jacobian(y, dv_dx, dv_dv, dydt):
     """dydt[tangent] = J u for both tangent vectors, J = [[0, 1], [dv_dx, dv_dv]]: the model's
     right-hand side computes d(x'')/dx and d(x'')/dv at the state (rhs.py, a written model's)."""
@@ -43,7 +43,7 @@ def apply_jacobian(y, dv_dx, dv_dv, dydt):
         dydt[TANGENT + 2 * i + 1] = dv_dx * dx + dv_dv * dv
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def seed_tangents(y):
     """The tangent vectors as the unit vectors along x and v."""
     for i in range(N_TANGENT_VECTORS):
@@ -51,14 +51,14 @@ def seed_tangents(y):
         y[TANGENT + 2 * i + 1] = 1.0 if i == 1 else 0.0
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def collapse_tangents(y):
     """Sticking: the state is (Delta, 0) whatever it was before, so every tangent vector is 0."""
     for j in range(TANGENT, TANGENT + 2 * N_TANGENT_VECTORS):
         y[j] = 0.0
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def slide_tangents(y, both):
     """Sliding on a surface v = c, c a constant (a written model's Filippov sliding, kernel.py): the
     entry's saltation matrix S = I + (f_s - f-) grad h^T / (grad h . f-), f_s = (c, 0) the sliding
@@ -81,7 +81,7 @@ def slide_tangents(y, both):
     y[TANGENT + 3] = 0.0
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def apply_saltation(y, v_before, acceleration_before, acceleration_after, restitution):
     """u -> S u at an impact with x'(-) = v_before > 0 (module doc; eq2.2).
 
@@ -97,7 +97,7 @@ def apply_saltation(y, v_before, acceleration_before, acceleration_after, restit
         y[TANGENT + 2 * i + 1] = coupling * dx - restitution * dv
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def apply_switch_saltation(y, dh_dx, dh_dv, rate, jump):
     """u -> S u where the flow crosses a switching surface h(t, x, v) = 0 on which the acceleration
     jumps by ``jump`` = a+ - a- (a written model's sign(v); codegen._switch_saltation_body):
@@ -114,7 +114,7 @@ def apply_switch_saltation(y, dh_dx, dh_dv, rate, jump):
         y[TANGENT + 2 * i + 1] = dv + factor * (dh_dx * dx + dh_dv * dv)
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def record_monodromy(row, y):
     """The 2x2 matrix whose columns are the two tangent vectors, row-major into row (4,).
 
@@ -132,7 +132,7 @@ def record_monodromy(row, y):
 TANGENT_RANGE = 1e30
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def tangents_out_of_range(y):
     """Whether a tangent vector has grown beyond TANGENT_RANGE or shrunk below its inverse."""
     for i in range(N_TANGENT_VECTORS):
@@ -142,7 +142,7 @@ def tangents_out_of_range(y):
     return False
 
 
-@kernel_jit(inline="always")
+@kernel_jit
 def renormalise_tangents(y):
     """Gram-Schmidt on the two tangent vectors; returns (log stretch, log area) since the last call.
 
