@@ -48,20 +48,30 @@ def test_numba_imported_first_still_gets_the_folder(tmp_path):
     assert done.stdout.strip() == str(tmp_path / "xdg" / "vrsweep" / folder_name())
 
 
+# The package's smallest kernel that calls a kernel of another module (records.emit_samples calls
+# rk45.dense_value): numba picks a process's cache folder once (numba.core.config.CACHE_DIR), for
+# every kernel alike, so it shows where any kernel goes, in under a second where a sweep's kernel
+# takes 30 s to compile cold. Printed: the samples written, and x, v at theta = 1/2 of a step from
+# y = (1, 2) with every dense coefficient 1: y + h theta (1 + theta + theta^2 + theta^3).
+TINY_KERNEL = ("import numpy as np\n"
+               "from vrsweep.numerics.records import emit_samples\n"
+               "samples = np.zeros((1, 2))\n"
+               "done = emit_samples(np.array([0.5]), samples, 0, 0.0, 1.0, np.array([1.0, 2.0]), np.ones((2, 4)), 1.0)\n"
+               "print(done, *samples[0])\n")
+TINY_KERNEL_SAYS = f"1 {1.0 + 0.5 * 1.875} {2.0 + 0.5 * 1.875}"
+
+
 def test_a_compiled_kernel_lands_in_the_user_folder_not_in_the_package(tmp_path):
     before = {p for p in PACKAGE.rglob("*.nbi")}
     done = _run("import vrsweep.numerics.numba_cache as n; print(n.is_empty())",
                 {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path)
     assert done.stdout.strip() == "True", done.stderr
-    config = tmp_path / "one.yaml"
-    config.write_text("integration: {transient_periods: 1, measure_periods: 1, strobe_periods: 1}\n")
-    done = subprocess.run([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(tmp_path / "one.h5"),
-                           "--quiet"], capture_output=True, text=True, cwd=tmp_path, timeout=600,
-                          env={**{k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"},
-                               "XDG_CACHE_HOME": str(tmp_path / "xdg")})
+    done = _run(TINY_KERNEL, {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path)
     assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == TINY_KERNEL_SAYS
     folder = tmp_path / "xdg" / "vrsweep" / folder_name()
-    assert any(folder.rglob("*.nbi")), "nothing was cached in the per-user folder"
+    assert {p.name.split(".")[0] for p in folder.rglob("*.nbi")} == {"records", "rk45"}, \
+        "the kernel (and the one it calls) were not cached in the per-user folder"
     assert {p for p in PACKAGE.rglob("*.nbi")} == before, "a kernel was cached inside the package"
     done = _run("import vrsweep.numerics.numba_cache as n; print(n.is_empty())",
                 {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path)
@@ -109,6 +119,16 @@ def test_an_unwritable_cache_folder_gives_vrsweeps_own_fallback_and_a_notice(tmp
     assert enabled == "True"
     assert str(_blocked(tmp_path)) in notice and str(expected) in notice and "not writable" in notice
     assert (expected.parent.stat().st_mode & 0o777) == 0o700
+    # A command says it once, before its work (NUMBA_DISABLE_JIT: the point in Python, nothing compiled).
+    config = tmp_path / "one.yaml"
+    config.write_text("model: effective\nparameters: {g: 5}\n"
+                      "integration: {transient_periods: 0, measure_periods: 1, strobe_periods: 1}\n")
+    env = {**{k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}, "NUMBA_DISABLE_JIT": "1",
+           "XDG_CACHE_HOME": str(_blocked(tmp_path)), "TMPDIR": str(tmp_path / "tmp")}
+    done = subprocess.run([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(tmp_path / "one.h5")],
+                          capture_output=True, text=True, cwd=tmp_path, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert [line for line in done.stderr.splitlines() if "numba cache" in line] == [f"Note: {notice}"], done.stderr
 
 
 def test_a_fallback_folder_another_user_could_write_is_refused(tmp_path, monkeypatch):
@@ -145,40 +165,34 @@ def test_no_writable_folder_compiles_without_caching_and_says_so(tmp_path, monke
     assert type(kernel._cache).__name__ == "NullCache"  # numba's "no cache": nothing written anywhere
 
 
-@pytest.mark.slow
 def test_an_edited_kernel_is_never_loaded_stale_with_the_cache_folder_unwritable(tmp_path):
     """The fault as reported: read-only cache folder, run, edit the kernel, run again. The second
-    run must compute with the edited code, and nothing may be cached inside the package."""
+    run must compute with the edited code, and nothing may be cached inside the package. The
+    reported run's sweep loop (lines.py) carried kernel.py's code; here records.emit_samples
+    carries rk45.dense_value's, the same fault (numba keys a cached kernel by its own file only)
+    with a kernel that compiles in a second instead of 30 s."""
     import shutil
-
-    import h5py
 
     site = tmp_path / "site"
     copy = site / "vrsweep"
     shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
     (tmp_path / "tmp").mkdir()
-    env = {**{k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"},
-           "XDG_CACHE_HOME": str(_blocked(tmp_path)), "TMPDIR": str(tmp_path / "tmp"),
-           "PYTHONPATH": str(site)}
-    config = tmp_path / "one.yaml"
-    config.write_text("parameters: {g: 0.5}\n"
-                      "integration: {transient_periods: 5, measure_periods: 5, strobe_periods: 1}\n")
+    changes = {"XDG_CACHE_HOME": str(_blocked(tmp_path)), "TMPDIR": str(tmp_path / "tmp"), "PYTHONPATH": str(site)}
+    code = TINY_KERNEL + "import vrsweep.numerics.numba_cache as n; print(n.notice())\n"
 
-    def response(name):
-        done = subprocess.run([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(tmp_path / name)],
-                              capture_output=True, text=True, cwd=tmp_path, env=env, timeout=600)
+    def response():
+        done = _run(code, changes, tmp_path)
         assert done.returncode == 0, done.stderr
-        assert "not writable" in done.stderr  # the notice, once
-        with h5py.File(tmp_path / name) as file:
-            return float(file["R"][()].ravel()[0])
+        says, notice = done.stdout.splitlines()
+        assert "not writable" in notice
+        return says
 
-    before = response("before.h5")
-    cubic = "coefficients[ALPHA] * x * x * x"
-    source = next(p for p in copy.rglob("*.py") if cubic in p.read_text())
-    source.write_text(source.read_text().replace(cubic, "3.0 * " + cubic))
-    after = response("after.h5")
-    assert np.isfinite(before) and np.isfinite(after)
-    assert abs(after - before) > 1e-6 * abs(before), "the edited kernel was not the one that ran"
+    assert response() == TINY_KERNEL_SAYS
+    horner = "return y[component] + h * theta * acc"
+    source = copy / "numerics" / "rk45.py"
+    assert horner in source.read_text()
+    source.write_text(source.read_text().replace(horner, "return y[component] + 3.0 * h * theta * acc"))
+    assert response() == f"1 {1.0 + 1.5 * 1.875} {2.0 + 1.5 * 1.875}", "the edited kernel was not the one that ran"
     assert not list(copy.rglob("*.nbi")), "numba cached kernels inside the package"
 
 
