@@ -960,15 +960,23 @@ def test_a_branch_ending_where_an_impact_reaches_the_section_says_so(tmp_path):
     assert reasons[0] == "integration_failed" and "phi = 5.957" in reason
 
 
+# MODEL with a kink out of reach (d = 1000, beyond any stop here; k = 0: no force) unless a test moves it
+# there: one kernel (rk45, tangent vectors) for the tests of linear orbits' gains and exponents,
+# which each compiled a model of their own (30 to 40 s each, cold).
+LINEAR_WITH_A_KINK = MODEL.replace("- x + F*cos(omega*t)", "- x - k*max(x - d, 0) + F*cos(omega*t)").replace(
+    "{zeta: 0.05,", "{k: 0.0, d: 1000.0, zeta: 0.05,")
+assert LINEAR_WITH_A_KINK.count("k*max(x - d, 0)") == LINEAR_WITH_A_KINK.count("{k: 0.0, d: 1000.0,") == 1
+
+
 def test_a_negative_response_scale_gives_the_gain_of_its_magnitude():
     # R = |Q| / |scale|: the linear oscillator with its stop out of reach, forced by F cos(omega t)
     # with F swept through -1 and 1 (a force of amplitude 1, phase pi or 0), has the closed-form
     # gain 1 / sqrt((1 - omega^2)^2 + (2 zeta omega)^2) at both, never a negative R.
     import vrsweep
 
-    text = MODEL.replace("Delta: 1.2", "Delta: 5.0") + textwrap.dedent("""\
+    text = LINEAR_WITH_A_KINK.replace("Delta: 1.2", "Delta: 5.0") + textwrap.dedent("""\
         sweep: {F: [-1.0, 1.0]}
-        integration: {transient_periods: 150, measure_periods: 20, method: dop853, rtol: 1.0e-10, atol: 1.0e-12}
+        integration: {transient_periods: 150, measure_periods: 20, lyapunov: true, rtol: 1.0e-11, atol: 1.0e-13}
         """)
     ds = vrsweep.sweep(text, progress=False)
     zeta, omega = 0.05, 0.8
@@ -1177,7 +1185,7 @@ def test_a_periodic_orbit_with_complex_multipliers_has_its_exact_exponent():
     vector gave -0.04995985 with lyapunov_err 6.7e-6 at omega = 2.5 (6 half-widths off)."""
     import vrsweep
 
-    text = MODEL + textwrap.dedent("""\
+    text = LINEAR_WITH_A_KINK + textwrap.dedent("""\
         integration: {transient_periods: 200, measure_periods: 100, lyapunov: true}
         """)
     free = vrsweep.sweep(text.replace("initial:", "sweep: {omega: [0.8, 1.0, 2.5]}\ninitial:"), Delta=100.0,
@@ -1193,7 +1201,7 @@ def test_a_periodic_orbit_with_complex_multipliers_has_its_exact_exponent():
     # with the pair's rotation, gave half-widths up to 0.026 about an exact -0.03 (a bilinear
     # spring's orbits: its kink keeps the trace -2 zeta, so a complex pair's exponent is -zeta).
     assert (free.lyapunov_err.values < 1e-8).all() and float(shaw.lyapunov_err) < 1e-8
-    bilinear = vrsweep.sweep(text.replace("- x + F", "- x - 4*max(x - 0.5, 0) + F").replace(
+    bilinear = vrsweep.sweep(text.replace("{k: 0.0, d: 1000.0,", "{k: 4.0, d: 0.5,").replace(
         "measure_periods: 100", "measure_periods: 50").replace(
         "initial:", "sweep: {omega: [0.638, 1.146, 1.315]}\ninitial:"), Delta=100.0, F=0.5, zeta=0.03,
         progress=False)
