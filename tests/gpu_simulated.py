@@ -42,6 +42,11 @@ from vrsweep.numerics import kernel  # noqa: E402
 from vrsweep.numerics.models import kernels_for  # noqa: E402
 
 
+# The periods of the sweep and slots modes' points, 6 in all: the simulator runs each thread's
+# steps in Python (the paper's model takes ~750 a period), and the chunks, slots and bit-for-bit
+# values these modes test do not depend on how long each point runs.
+SHORT_RUN = ["transient_periods=2", "measure_periods=4", "strobe_periods=4"]
+
 # What the host's output arrays hold before a GPU's launch: not NaN, so that an entry the card
 # left unfilled (cuda.fill_nan) shows (the CPU's are NaN-filled, as execution/sweep.py fills them).
 GARBAGE, GARBAGE_STATUS = 7.0, 99
@@ -56,12 +61,14 @@ def outputs(run_lines, coefficients, initial_states, settings, lines, measure, f
     return {"records": records.tolist(), "summaries": summaries.tolist(), "statuses": statuses.tolist()}
 
 
-def main(config_path, method, lyapunov, line_length, transient_periods=4, local_coefficients="false"):
+def main(config_path, method, lyapunov, line_length, transient_periods=4, local_coefficients="false",
+         measure_periods="16"):
     from vrsweep.numerics import cuda
 
     cuda.LOCAL_COEFFICIENTS = local_coefficients == "true"
     config = load_config(config_path, [f"method={method}", f"lyapunov={lyapunov}", f"transient_periods={transient_periods}",
-                                       "measure_periods=16"])
+                                       f"measure_periods={measure_periods}",
+                                       f"strobe_periods={min(16, int(measure_periods))}"])
     grid = Grid.from_config(config)
     kernels = kernels_for(config.model)
     flat = np.arange(grid.n_points, dtype=np.int64)
@@ -87,7 +94,7 @@ def sweep(config_path):
     chunks.GPU_FIRST_CHUNK_LINES = 2  # several chunks, so that one is in flight while another finishes
     results = {}
     for device in ("cuda", "cpu"):
-        config = load_config(config_path, [f"device={device}", "transient_periods=4", "measure_periods=16"])
+        config = load_config(config_path, [f"device={device}", *SHORT_RUN])
         handed, values = [], {}
 
         def keep(flat, chunk, handed=handed, values=values):
@@ -109,7 +116,7 @@ def slots(config_path):
     allocated arrays."""
     from vrsweep.numerics import cuda
 
-    config = load_config(config_path, ["transient_periods=4", "measure_periods=16"])
+    config = load_config(config_path, SHORT_RUN)
     grid = Grid.from_config(config)
     kernels = kernels_for(config.model)
     flat = np.arange(grid.n_points, dtype=np.int64)
