@@ -15,8 +15,8 @@ import argparse
 import json
 import math
 import os
-import subprocess
-import sys
+
+from _timing import checkout_child  # python benchmarks/NAME.py puts this folder first on sys.path
 
 CASES = [(0.5, 0.6, 0.2), (0.3, 0.6, 0.2), (1.5, 0.72, 0.2), (1.5, 0.75, 0.2)]  # (omega, mu, belt)
 
@@ -28,6 +28,7 @@ from vrsweep.config import parse_config
 from vrsweep.numerics import kernel
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.trajectory import settings_vector, simulate
+
 cases, repeats = json.loads(sys.argv[1]), int(sys.argv[2])
 out = {}
 for omega, mu, belt in cases:
@@ -56,15 +57,8 @@ print(json.dumps({"vrsweep": vrsweep.__file__, "cases": out}))
 
 
 def measure(checkout, repeats):
-    checkout = os.path.realpath(checkout)
-    env = dict(os.environ, PYTHONPATH=checkout)
-    done = subprocess.run([sys.executable, "-c", CHILD, json.dumps(CASES), str(repeats), checkout], env=env,
-                          capture_output=True, text=True, check=True)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
-    imported = os.path.realpath(result["vrsweep"])
-    if not imported.startswith(checkout + os.sep):
-        raise SystemExit(f"the child imported {imported}, not the checkout {checkout}")
-    return result["cases"]
+    """The child's cases, from the checkout's own vrsweep (_timing.checkout_child)."""
+    return checkout_child(checkout, CHILD, [json.dumps(CASES), str(repeats)])["cases"]
 
 
 def main():

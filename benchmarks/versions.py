@@ -9,12 +9,10 @@ Prints new/old speed per point and the geometric mean per method.
 """
 
 import argparse
-import json
 import math
-import os
-import subprocess
-import sys
 from pathlib import Path
+
+from _timing import checkout_child  # python benchmarks/NAME.py puts this folder first on sys.path
 
 HERE = Path(__file__).resolve().parent
 NEW = HERE.parent
@@ -27,6 +25,7 @@ import vrsweep
 from bench_speed import POINTS, V0
 from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.numerics.trajectory import settings_vector, simulate
+
 repeats = int(sys.argv[2])
 settings = settings_vector(rtol=1e-9, atol=1e-11, transient_periods=100, measure_periods=100)
 out = {}
@@ -45,18 +44,8 @@ print(json.dumps({"vrsweep": vrsweep.__file__, "times": out}))
 
 
 def timings(checkout, repeats):
-    """The child's times, from the checkout's own vrsweep. Up to 0.7.8 the child found vrsweep on
-    PYTHONPATH, after '' (the working folder): run from a checkout's root, as the usage shows, both
-    children imported that checkout's vrsweep, and every ratio compared it with itself."""
-    checkout = os.path.realpath(checkout)
-    env = dict(os.environ, PYTHONPATH=checkout)
-    done = subprocess.run([sys.executable, "-c", CHILD, str(HERE), str(repeats), checkout], env=env,
-                          capture_output=True, text=True, check=True)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
-    imported = os.path.realpath(result["vrsweep"])
-    if not imported.startswith(checkout + os.sep):
-        raise SystemExit(f"the child imported {imported}, not the checkout {checkout}")
-    return result["times"]
+    """The child's times, from the checkout's own vrsweep (_timing.checkout_child)."""
+    return checkout_child(checkout, CHILD, [str(HERE), str(repeats)])["times"]
 
 
 def main():

@@ -133,6 +133,7 @@ RESULT_EPOCHS = (
     ("0.7.9", "a written model's mass that arrives where both fields point into a sliding surface slides from its "
               "arrival, and its slide's exit scan shortens where the sliding margin falls: short sticks and short "
               "pulls were stepped over"),
+    ("0.7.10", "a sliding model's n_rhs counts the two fields evaluated at each slide's start"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -174,7 +175,9 @@ to turns within the next step, which ended on the side it started, and the stick
 with status ok (belt friction at omega 1.5, mu 0.72: dop853 logged 27 to 38 sticks of 52, x off by
 2e-3), and shortens the scan for a slide's exit where the margin of the sliding condition falls (on a
 fast belt a double-well spring's short pull past mu was stepped over: the exit at t = 0.46 for
-0.207); every sliding model's step counts change; the paper's models unchanged bit for bit. Versions of one epoch
+0.207); every sliding model's step counts change; the paper's models unchanged bit for bit; 0.7.10 counts in
+n_rhs the two fields a slide's exit scan evaluates at the slide's start (a sliding model's n_rhs
+was 2 short per slide; every other result unchanged bit for bit). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
