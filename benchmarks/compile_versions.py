@@ -35,11 +35,9 @@ CASES = {
 }
 
 CHILD = r"""
+import json, sys
 sys.path.insert(0, sys.argv[3])  # the checkout first: before '' (the working folder), which python -c puts first
 import vrsweep
-
-if not vrsweep.__file__.startswith(sys.argv[3]):
-    raise SystemExit(f"the child imported {vrsweep.__file__}, not the checkout {sys.argv[3]}")
 axis = "F: [0.9, 1.0]" if "F:" in sys.argv[1] else "g: [29.0, 30.0]"
 vrsweep.sweep(sys.argv[1] + "initial: {x: 0.0, v: 0.0}\n" + f"sweep: {{{axis}}}\n"
               + f"integration: {{transient_periods: 1, measure_periods: 1, strobe_periods: 1, {sys.argv[2]}}}\n",
