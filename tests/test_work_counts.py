@@ -15,6 +15,7 @@ import sys
 import textwrap
 
 import pytest
+from test_written_sticking import LINEAR, TWO_SIDED
 
 COUNT = textwrap.dedent("""\
     import json, sys
@@ -70,19 +71,10 @@ model:
   response: {frequency: omega, scale: F}
 initial: {x: 0.0, v: 0.3}
 """ + SHORT
-# plastic impacts: the mass sticks on the stop while the force presses it there, then leaves
-STOP = """\
-model:
-  acceleration: "-2*zeta*v - x + F*cos(omega*t)"
-  parameters: {zeta: 0.1, F: 1.0, omega: 0.8, Delta: 0.5}
-  barriers:
-    - {position: Delta, side: above, restitution: 0.0}
-  period: "2*pi/omega"
-  response: {frequency: omega, scale: F}
-initial: {x: 0.0, v: 0.0}
-""" + SHORT
-TWO_STOPS = STOP.replace("restitution: 0.0}", "restitution: 0.7}\n    - {position: -Delta, side: below, restitution: 0.7}")
-assert TWO_STOPS.count("restitution: 0.7") == 2
+# plastic impacts (r = 0): the mass sticks on the stop while the force presses it there, then leaves;
+# and a mass between two stops
+STOP = LINEAR + SHORT
+TWO_STOPS = TWO_SIDED + SHORT
 ORIGINAL = "model: original\nparameters: {g: 30.0, Omega: 4.0}\n" + SHORT
 
 CASES = [("belt", BELT, "rk45", False, "sticks"), ("belt", BELT, "dop853", True, "sticks"),
