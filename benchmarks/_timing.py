@@ -5,6 +5,10 @@ thread's CPU time less than the clock. Imported by the scripts beside it, which 
 ``python benchmarks/NAME.py`` (this folder first on sys.path) or as modules of the package.
 """
 
+import json
+import os
+import subprocess
+import sys
 import time
 
 
@@ -28,11 +32,6 @@ def checkout_child(checkout, child, arguments, env=None):
     children of versions.py found vrsweep on PYTHONPATH, after '' (the working folder): run from
     a checkout's root, as its usage shows, both children imported that checkout's vrsweep, and
     every ratio compared it with itself."""
-    import json
-    import os
-    import subprocess
-    import sys
-
     checkout = os.path.realpath(checkout)
     env = dict(os.environ if env is None else env, PYTHONPATH=checkout)
     done = subprocess.run([sys.executable, "-c", child, *arguments, checkout], env=env, capture_output=True, text=True,

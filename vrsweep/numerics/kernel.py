@@ -1114,6 +1114,7 @@ def _sliding_exit(rhs, switch_signs, t_start, t_limit, t0, x0, speed, gain, bit,
     (impact.release_time): the t returned is the first found past the root, where that side's
     field leads away. Returns (t, scans, side): side -1 or +1, the side of s it leaves to; 0
     and t_limit + 1 if it still slides at t_limit; t NaN if max_scans intervals reached neither.
+    The fields are evaluated at scans + 1 points (_sliding_rates: two each), the start's included.
 
     The scan step is scan_step (a share of the fastest force's period: the explicit time), cut
     where the margin min(below, -above) falls: the state moves along the slide, and on a fast belt
