@@ -439,7 +439,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
     reaching = False
     newton_steps = 0
     h_try = h_taken = 0.0
-    clipped = impact = dense_ready = False
+    clipped = impact = False
     hit = -1
     position = side = restitution = 1.0
     theta_turn = math.nan
@@ -800,17 +800,23 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
             # --- the step's branches (at once on the CPU; on a GPU when the warp releases them) ---
             kept = held
             held = 0
-            if kept == REACHED:
-                prepare(t, h_taken, coefficients, scratch, True)
-                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
+            # The step's dense output, computed once here for every branch below that reads it: an
+            # impact's last Newton step; a barrier the ends alone cannot clear (near: its exact
+            # test); a sample inside the step; a turn of v (the period's extremes). The same
+            # condition as a GPU's held step above. One call site, not one per branch: dop853's
+            # dense output inlines three more stages of the model, and each site was compiled anew.
+            sampling = next_sample < sample_times.shape[0] and sample_times[next_sample] <= (
+                t_boundary if clipped else t + h_try)  # the step's end if it has no impact
+            if kept == REACHED or near != 0 or sampling or y[V] * y_new[V] < 0.0:
+                h_dense = h_taken if kept == REACHED else h_try
+                prepare(t, h_dense, coefficients, scratch, True)
+                n_rhs += dense_output(stage_rhs, t, y, h_dense, coefficients, K, y_new, dense, stage, scratch,
                                       n_dynamic)
-                dense_ready = True
-            else:
+            if kept != REACHED:
                 # --- does the step cross a barrier? ---
                 # Barrier tests run on the mirrored step (_mirror) for a barrier below, which keeps
                 # every theta.
                 impact = False
-                dense_ready = False
                 theta_turn = math.nan
                 hit = -1  # the barrier the step meets first, between theta hit_low and hit_high
                 hit_low = hit_high = 0.0
@@ -822,13 +828,8 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                     slot = BARRIER + BARRIER_VALUES * barrier
                     side = coefficients[slot + SIDE]
                     level = side * coefficients[slot + POSITION]
-                    # Every step that the ends alone cannot place far from the barrier gets its dense
-                    # output and the exact test on it (find_crossing: Bernstein form).
-                    if not dense_ready:
-                        prepare(t, h_try, coefficients, scratch, True)
-                        n_rhs += dense_output(stage_rhs, t, y, h_try, coefficients, K, y_new, dense, stage, scratch,
-                                              n_dynamic)
-                        dense_ready = True
+                    # Every step that the ends alone cannot place far from the barrier has its dense
+                    # output (above) and the exact test on it (find_crossing: Bernstein form).
                     pushed = side * y[X] >= level and barrier_force(t, coefficients, barrier) > 0.0
                     if side < 0.0:
                         _mirror(y, y_new, dense)
@@ -872,16 +873,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
             # --- observers: samples and the period's extremes, on the step's dense output ---
             t_new = t_boundary if (clipped and not impact) else t + h_taken
             if next_sample < sample_times.shape[0] and sample_times[next_sample] <= t_new:
-                if not dense_ready:
-                    prepare(t, h_taken, coefficients, scratch, True)
-                    n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
-                                          n_dynamic)
-                    dense_ready = True
                 next_sample = emit_samples(sample_times, samples, next_sample, t, h_taken, y, dense, t_new)
-            if y[V] * y_new[V] < 0.0 and not dense_ready:
-                prepare(t, h_taken, coefficients, scratch, True)
-                n_rhs += dense_output(stage_rhs, t, y, h_taken, coefficients, K, y_new, dense, stage, scratch,
-                                      n_dynamic)
             update_extremes(record, dense, y, y_new, h_taken, theta_turn)
             if transparent:
                 window_x_max = window_top(window_x_max, dense, y, y_new, h_taken)
