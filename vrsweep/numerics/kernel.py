@@ -225,28 +225,21 @@ def integrate_rk45_lyapunov(coefficients, initial_state, settings, period_record
 
     The same steps, impacts and records as integrate_rk45 (the tangent vectors take no part in
     error control), plus REC_LOG_STRETCH, REC_LOG_AREA per period and SUM_LYAPUNOV, SUM_LYAPUNOV_SUM.
+    It is integrate_rk45_monodromy keeping no period's map, called, not inlined: one compiled loop
+    serves both (a model swept with exponents and continued compiles it once; the call is one per
+    point, the same speed, benchmarks/README.md).
     """
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, no_preparations,
-                      RK45_RULES, dp54_step, error_norm, dp54_dense, accepted_step_factor,
-                      certain_growth, rejected_step_factor, True,
-                      (np.empty((N_STAGES + 1, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET)), no_scratch(0.0),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
+    return integrate_rk45_monodromy(coefficients, initial_state, settings, period_records, summary,
+                                    sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
 def integrate_dop853_lyapunov(coefficients, initial_state, settings, period_records, summary,
                               sample_times, samples, impact_log, stick_log):
-    """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py)."""
-    return _integrate(oscillator_tangent_rhs, oscillator_tangent_rhs_rotated, oscillator_tangent, force_at_barrier, no_switches, no_saltation, no_sliding, prepare_rotations_for,
-                      DOP853_ROTATED_RULES, dop853_step, dop853_error_norm, dop853_dense,
-                      dop853_accepted_step_factor, dop853_certain_growth, dop853_rejected_step_factor, True,
-                      (np.empty((dop853.N_STAGES_EXTENDED, N_STATE_WITH_TANGENTS)), np.empty((N_STATE_WITH_TANGENTS, dop853.DENSE_ORDER)),
-                      np.empty((N_VECTORS, N_STATE_WITH_TANGENTS)), np.empty(N_BRACKET)),
-                      dop853_rotation_scratch(coefficients[MAX_STEP]),
-                      coefficients, initial_state, settings, period_records, summary,
-                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)), lanes_apart)
+    """integrate_dop853 with the tangent vectors (integration.lyapunov: true; tangent.py):
+    integrate_dop853_monodromy keeping no period's map, as integrate_rk45_lyapunov."""
+    return integrate_dop853_monodromy(coefficients, initial_state, settings, period_records, summary,
+                                      sample_times, samples, impact_log, stick_log, np.empty((0, 4)))
 
 
 @kernel_jit
