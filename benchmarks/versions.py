@@ -1,10 +1,11 @@
 """This version's kernel speed against another checkout's, in one run, alternating.
 
-    python benchmarks/versions.py /path/to/old/checkout [--rounds 2] [--repeats 5]
+    python benchmarks/versions.py /path/to/old/checkout [--rounds 2] [--repeats 5] [--lyapunov]
 
 For each of bench_speed.py's nine points and both methods, rtol 1e-9 (atol 1e-11), 100 + 100
 periods: the calling thread's CPU time of trajectory.simulate, best of --repeats, in a fresh process
 per version and round (old, new, old, new ...), after a warm-up call that compiles or loads.
+--lyapunov: with the tangent vectors (integration.lyapunov), the kernels of a Lyapunov map.
 Prints new/old speed per point and the geometric mean per method.
 """
 
@@ -20,32 +21,33 @@ NEW = HERE.parent
 CHILD = r"""
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
-sys.path.insert(0, sys.argv[3])  # the checkout first: before '' (the working folder), which python -c puts first
+sys.path.insert(0, sys.argv[4])  # the checkout first: before '' (the working folder), which python -c puts first
 import vrsweep
 from bench_speed import POINTS, V0
 from vrsweep.numerics.model import kernel_coefficients
 from vrsweep.numerics.trajectory import settings_vector, simulate
 
 repeats = int(sys.argv[2])
+lyapunov = sys.argv[3] == "lyapunov"
 settings = settings_vector(rtol=1e-9, atol=1e-11, transient_periods=100, measure_periods=100)
 out = {}
 for method in ("rk45", "dop853"):
     for label, model, parameters, x0, _ in POINTS:
         c = kernel_coefficients(parameters, model)
-        simulate(c, [x0, V0], settings, method=method)
+        simulate(c, [x0, V0], settings, method=method, lyapunov=lyapunov)
         best = float("inf")
         for _ in range(repeats):
             began = time.thread_time()
-            simulate(c, [x0, V0], settings, method=method)
+            simulate(c, [x0, V0], settings, method=method, lyapunov=lyapunov)
             best = min(best, time.thread_time() - began)
         out[f"{method}|{label}"] = best
 print(json.dumps({"vrsweep": vrsweep.__file__, "times": out}))
 """
 
 
-def timings(checkout, repeats):
+def timings(checkout, repeats, lyapunov=False):
     """The child's times, from the checkout's own vrsweep (_timing.checkout_child)."""
-    return checkout_child(checkout, CHILD, [str(HERE), str(repeats)])["times"]
+    return checkout_child(checkout, CHILD, [str(HERE), str(repeats), "lyapunov" if lyapunov else "state"])["times"]
 
 
 def main():
@@ -53,11 +55,12 @@ def main():
     parser.add_argument("old")
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--lyapunov", action="store_true", help="with the tangent vectors")
     args = parser.parse_args()
     old, new = {}, {}
     for _ in range(args.rounds):
         for store, checkout in ((old, args.old), (new, NEW)):
-            for key, value in timings(checkout, args.repeats).items():
+            for key, value in timings(checkout, args.repeats, args.lyapunov).items():
                 store[key] = min(store.get(key, math.inf), value)
     for method in ("rk45", "dop853"):
         ratios = []
