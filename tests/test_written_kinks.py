@@ -25,10 +25,14 @@ from vrsweep.numerics import codegen
 # (real Floquet multipliers -0.636 and -0.717: the exponent is not the damping's -zeta).
 ZETA, K, D, F, OMEGA = 0.05, 3.0, 0.5, 1.0, 0.8
 TRANSIENT, MEASURED = 200, 20
+# With a stop out of reach (x <= 1000; the orbit stays below 3): the parameters, in their order,
+# and the stop of test_written_models' LINEAR_WITH_A_KINK, so that both compile one kernel (the
+# suite's time is mostly compiling). A stop never near changes no step.
 BILINEAR = f"""
 model:
   acceleration: "-2*zeta*v - x - k*max(x - d, 0) + F*cos(omega*t)"
-  parameters: {{zeta: {ZETA}, k: {K}, d: {D}, F: {F}, omega: {OMEGA}}}
+  parameters: {{k: {K}, d: {D}, zeta: {ZETA}, F: {F}, omega: {OMEGA}, Delta: 1000.0, r: 0.8}}
+  barriers: [{{position: Delta, side: above, restitution: r}}]
   period: "2*pi/omega"
   response: {{frequency: omega, scale: F}}
 initial: {{x: 0.0, v: 0.0}}
