@@ -155,3 +155,25 @@ def test_the_branch_file_holds_the_branch_point_and_info_and_plot_show_it(tmp_pa
     curve = CliRunner().invoke(main, ["continue", str(out), "--point", "0", "--along", "F", "--to", "0.35", "0.45",
                                       "-o", str(tmp_path / "curve.h5")])
     assert curve.exit_code == 2 and len(curve.output.strip().splitlines()) == 1, curve.output
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e-3, 1.0, 1e3, 1e6])
+def test_the_rank_test_does_not_depend_on_the_parameters_unit(scale):
+    """[M - I | F_lam] at a fold (F_lam out of the range of M - I) and at a branch point (F_lam in
+    it), with F_lam scaled as a parameter in another unit scales it. Up to 0.7.10 the test was the
+    ratio of the singular values, which F_lam's size sets: the fold at scale 1e-3 (|F_lam| = 1e-3
+    against |M - I| = 0.5) had a ratio of 1.2e-3 and was taken for a branch point."""
+    from types import SimpleNamespace
+
+    angle = 0.3
+    rotation = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    monodromy = np.eye(2) + rotation @ np.diag([1e-9, -0.5]) @ rotation.T  # a multiplier at 1 + 1e-9
+    singular_direction, range_direction = rotation[:, 0], rotation[:, 1]
+    fold = SimpleNamespace(monodromy=monodromy,
+                           parameter_derivative=scale * (0.6 * singular_direction + 0.8 * range_direction))
+    branch_point = SimpleNamespace(monodromy=monodromy, parameter_derivative=scale * 0.7 * range_direction)
+    # the sine of F_lam's angle to the range of M - I: 0.6 at the fold, 0 (to rounding) at the branch point
+    assert continuation._rank_ratio(fold) == pytest.approx(0.6, rel=1e-6)
+    assert continuation._rank_ratio(fold) > continuation.BRANCH_POINT_RANK
+    assert continuation._rank_ratio(branch_point) <= 1e-12 < continuation.BRANCH_POINT_RANK
+

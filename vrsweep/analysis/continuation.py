@@ -1402,19 +1402,28 @@ def _flips(previous, orbit, tangent):
 
 
 # A located sign change of the fold test is a branch point when [M - I | F_lam] has rank 1 there:
-# its smaller singular value below this fraction of the larger (a fold keeps rank 2, F_lam out of
-# the range of M - I). On the symmetric Duffing oscillator's branch in omega (F = 0.4) the
-# located branch point at omega = 1.0689612 has a ratio of 1.5e-5 (multiplier 0.99999998).
+# F_lam lies in the range of M - I (at a fold it does not, and the rank stays 2). Measured as the
+# sine of F_lam's angle to that range, |u . F_lam| / |F_lam| with u the left singular vector of
+# M - I's smaller singular value: free of the parameter's unit. (Up to 0.7.10 it was the ratio of
+# [M - I | F_lam]'s singular values, which F_lam's size sets: a fold in a parameter whose unit
+# moves the orbit little, |F_lam| = 1e-3 against |M - I| = 0.5, had the ratio 2e-3 and was taken
+# for a branch point.) On the symmetric Duffing oscillator's branch in omega (F = 0.4) the located
+# branch point at omega = 1.0689612 has a sine of 7.6e-5 (the old ratio 1.5e-5).
 BRANCH_POINT_RANK = 1e-2
 BRANCH_POINT = "branch_point"
 
 
 def _rank_ratio(orbit):
-    rows = np.zeros((2, 3))
-    rows[:, :2] = orbit.monodromy - np.eye(2)
-    rows[:, 2] = orbit.parameter_derivative
-    singular = np.linalg.svd(rows, compute_uv=False)
-    return float(singular[1] / singular[0]) if singular[0] > 0.0 else 0.0
+    """How far [M - I | F_lam] is from rank 1: the sine of the angle between F_lam and the range of
+    M - I (0: in it, a branch point; a fold's is of order 1). 0 where F_lam = 0 (the parameter
+    moves no orbit) or M = I."""
+    jump = orbit.monodromy - np.eye(2)
+    derivative = np.asarray(orbit.parameter_derivative, dtype=float)
+    size = float(np.linalg.norm(derivative))
+    left, singular, _ = np.linalg.svd(jump)
+    if size == 0.0 or singular[0] == 0.0:
+        return 0.0
+    return abs(float(left[:, 1] @ derivative)) / size
 
 
 def _branch_point(problem, previous, orbit, tangent, step, periods):
