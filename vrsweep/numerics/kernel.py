@@ -432,7 +432,7 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
     reaching = False
     newton_steps = 0
     h_try = h_taken = 0.0
-    clipped = impact = False
+    clipped = impact = sampling = False
     hit = -1
     position = side = restitution = 1.0
     theta_turn = math.nan
@@ -786,9 +786,10 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
                                 or hermite_reach(side * y[X], side * y[V], side * f[V], side * y_new[X],
                                                  side * y_new[V], side * K[n_stages, V], h_try, level) >= 0.0):
                             near |= 1 << barrier
-                if vote != APART and (held == REACHED or near != 0 or y[V] * y_new[V] < 0.0
-                                      or (next_sample < sample_times.shape[0]
-                                          and sample_times[next_sample] <= t + h_try)):
+                # a sample inside the step (its end if it has no impact): read by the branches below
+                sampling = next_sample < sample_times.shape[0] and sample_times[next_sample] <= (
+                    t_boundary if clipped else t + h_try)
+                if vote != APART and (held == REACHED or near != 0 or y[V] * y_new[V] < 0.0 or sampling):
                     continue  # on a GPU: the step is kept, its branches taken with the warp's others
             # --- the step's branches (at once on the CPU; on a GPU when the warp releases them) ---
             kept = held
@@ -798,8 +799,6 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
             # test); a sample inside the step; a turn of v (the period's extremes). The same
             # condition as a GPU's held step above. One call site, not one per branch: dop853's
             # dense output inlines three more stages of the model, and each site was compiled anew.
-            sampling = next_sample < sample_times.shape[0] and sample_times[next_sample] <= (
-                t_boundary if clipped else t + h_try)  # the step's end if it has no impact
             if kept == REACHED or near != 0 or sampling or y[V] * y_new[V] < 0.0:
                 h_dense = h_taken if kept == REACHED else h_try
                 prepare(t, h_dense, coefficients, scratch, True)
