@@ -37,11 +37,18 @@ import numba
 import numpy as np
 from numba import cuda
 
-from vrsweep.numerics import codegen, kernel, numba_cache, rhs
+from vrsweep.numerics import codegen, kernel, numba_cache, numba_inline, rhs
 from vrsweep.numerics.impact import bracket_size
 from vrsweep.numerics.jit import kernel_jit
 from vrsweep.numerics.lines import next_start
 from vrsweep.numerics.state import N_STATE, N_STATE_WITH_TANGENTS
+
+try:  # numba-cuda inlines with its own copy of numba's inliner (numba_inline.py)
+    from numba.cuda.core import inline_closurecall as _cuda_inliner
+except ImportError:  # a numba-cuda that inlines with numba's
+    pass
+else:
+    numba_inline.share_scope_copies(_cuda_inliner)
 
 # Threads per block: a block of 64 lets every multiprocessor hold several blocks of a kernel that
 # needs about 250 registers a thread.
