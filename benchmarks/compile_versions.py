@@ -5,13 +5,15 @@
 What a user waits for before a first sweep's first point: a fresh process with an empty numba
 cache folder (XDG_CACHE_HOME of its own, NUMBA_CACHE_DIR unset) imports vrsweep and sweeps two
 points of one period each, for the paper's original model and a written one-stop model (rk45),
-the original with dop853, and the original with the tangent vectors (rk45). Wall time of the whole
-process, best of --rounds; the old checkout and this one alternate per case and round. Prints
+the original with dop853, and the original with the tangent vectors (rk45); where numba-cuda is
+installed, also the GPU's line kernel for the original model (rk45), compiled to PTX for sm_90
+without a card (cuda.compile_for). Wall time of the whole process, best of --rounds; the old checkout and this one alternate per case and round. Prints
 old / new time per case and the geometric mean. Sympy's derivation of the written model is
 included (about a second).
 """
 
 import argparse
+import importlib.util
 import math
 import os
 import tempfile
@@ -33,15 +35,21 @@ CASES = {
     "original, rk45, tangent vectors": ("model: original\nparameters: {g: 30.0, Omega: 4.0}\n",
                                         "method: rk45, lyapunov: true"),
 }
+if importlib.util.find_spec("numba_cuda") is not None:
+    CASES["GPU kernel, original, rk45 (PTX)"] = ("ptx rk45", "")
 
 CHILD = r"""
 import json, sys
 sys.path.insert(0, sys.argv[3])  # the checkout first: before '' (the working folder), which python -c puts first
 import vrsweep
-axis = "F: [0.9, 1.0]" if "F:" in sys.argv[1] else "g: [29.0, 30.0]"
-vrsweep.sweep(sys.argv[1] + "initial: {x: 0.0, v: 0.0}\n" + f"sweep: {{{axis}}}\n"
-              + f"integration: {{transient_periods: 1, measure_periods: 1, strobe_periods: 1, {sys.argv[2]}}}\n",
-              progress=False)
+if sys.argv[1].startswith("ptx "):  # the GPU's kernel, compiled for a card this machine need not have
+    from vrsweep.numerics import cuda, rhs
+    cuda.compile_for(sys.argv[1].split()[1], False, *rhs.paper_functions(False), compute_capability=(9, 0))
+else:
+    axis = "F: [0.9, 1.0]" if "F:" in sys.argv[1] else "g: [29.0, 30.0]"
+    vrsweep.sweep(sys.argv[1] + "initial: {x: 0.0, v: 0.0}\n" + f"sweep: {{{axis}}}\n"
+                  + f"integration: {{transient_periods: 1, measure_periods: 1, strobe_periods: 1, {sys.argv[2]}}}\n",
+                  progress=False)
 print(json.dumps({"vrsweep": vrsweep.__file__}))
 """
 

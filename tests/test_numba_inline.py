@@ -121,6 +121,11 @@ def test_numbas_and_numba_cudas_inliners_share_scope_copies_where_they_copy_bloc
     wrapped = inline_closurecall.InlineWorker.inline_ir
     numba_inline.share_scope_copies(inline_closurecall)
     assert inline_closurecall.InlineWorker.inline_ir is wrapped  # not wrapped twice
+    # Outside an inline_ir call the module's copy is the copy module's, memo and all.
+    nested = [1.0, [2.0]]
+    copied = inline_closurecall.copy.deepcopy(nested)
+    assert copied == nested and copied[1] is not nested[1]
+    assert inline_closurecall.copy.copy is copy.copy
     cuda_inliner = pytest.importorskip("numba.cuda.core.inline_closurecall")
     from vrsweep.numerics import cuda  # noqa: F401 - applies it to numba-cuda's
 

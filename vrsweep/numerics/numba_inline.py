@@ -21,25 +21,26 @@ does).
 import copy
 import functools
 import inspect
+import threading
 
 # What the inliner's source says where it copies block by block (numba and numba-cuda alike).
 _PER_BLOCK_COPY = "copy.deepcopy(block)", "copy.deepcopy(the_ir.blocks[block_label])"
 
 
-class _OneMemoPerScope:
-    """The copy module as one ``inline_ir`` call sees it: the blocks of one IR (one scope) are
-    copied with one memo, so the scope and every variable are copied once. Everything else is
-    the copy module's."""
+class _OneMemoPerScope(threading.local):
+    """The copy module as the inliner's module sees it. Inside an ``inline_ir`` call (``memos`` set,
+    per thread) the blocks of one IR, which share one scope, are copied with one memo, so the
+    scope and its variables are copied once; outside, and for everything else, it is the copy
+    module."""
 
-    def __init__(self):
-        self._memos = {}  # id(scope) -> (scope, memo): the scope kept, so its id stays its own
+    memos = None  # id(scope) -> (scope, memo): the scope kept, so its id stays its own
 
     def deepcopy(self, x, memo=None):
         scope = getattr(x, "scope", None)
-        if memo is None and scope is not None and hasattr(x, "body"):
-            entry = self._memos.get(id(scope))
+        if memo is None and self.memos is not None and scope is not None and hasattr(x, "body"):
+            entry = self.memos.get(id(scope))
             if entry is None:
-                entry = self._memos[id(scope)] = (scope, {})
+                entry = self.memos[id(scope)] = (scope, {})
             memo = entry[1]
         return copy.deepcopy(x, memo)
 
@@ -67,18 +68,19 @@ def share_scope_copies(module) -> bool:
     if not _copies_block_by_block(module):
         return False
     inline_ir = worker.inline_ir
+    copies = _OneMemoPerScope()
 
     @functools.wraps(inline_ir)
     def inline_ir_sharing_scope_copies(self, *args, **kwargs):
-        # The module's name ``copy`` is read by copy_ir only; one memo table per call, because
-        # two calls may inline the same IR (an overload's cached IR) and must not share copies.
-        found = module.copy
-        module.copy = _OneMemoPerScope()
+        # One memo table per call: two calls may inline the same IR (an overload's cached IR),
+        # and their copies must not share anything.
+        found, copies.memos = copies.memos, {}
         try:
             return inline_ir(self, *args, **kwargs)
         finally:
-            module.copy = found
+            copies.memos = found
 
     inline_ir_sharing_scope_copies.shares_scope_copies = True
+    module.copy = copies  # the module's name ``copy`` is read by copy_ir only
     worker.inline_ir = inline_ir_sharing_scope_copies
     return True
