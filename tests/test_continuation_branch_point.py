@@ -97,7 +97,7 @@ def test_the_symmetric_branch_goes_through_its_branch_point_where_scipy_puts_it(
     assert not any(b.kind in ("fold", continuation.UNLOCATED_PREFIX + "fold") for b in found)
     point = points[0]
     assert abs(max(point.multipliers.real) - 1.0) <= continuation.LOCATED_MULTIPLIER
-    assert continuation._rank_ratio(point) <= continuation.BRANCH_POINT_RANK
+    assert continuation._sine_to_range(point) <= continuation.BRANCH_POINT_RANK
     # The branch goes on through it: orbits on both sides.
     assert min(o.parameter for o in orbits.orbits) < point.parameter - 0.01
     assert max(o.parameter for o in orbits.orbits) > point.parameter + 0.01
@@ -113,7 +113,7 @@ def test_the_symmetric_branch_goes_through_its_branch_point_where_scipy_puts_it(
     crossing = point.parameter - delta + 2 * delta * (1.0 - sides[0]) / (sides[1] - sides[0])
     assert abs(crossing - point.parameter) < 1e-6, (crossing, point.parameter, sides)
     # Measured: located at omega = 1.06896121, SciPy's crossing 3.8e-8 from it (multipliers 1.0036768
-    # and 0.9963261 at -+1e-4), rank ratio 1.5e-5, multiplier 0.99999998.
+    # and 0.9963261 at -+1e-4), range sine 7.6e-5 (0.7.10's rank ratio 1.5e-5), multiplier 0.99999998.
     #
     # The branch's orbits on both sides are SciPy's symmetric orbits: its flow with both stops takes
     # each to its mirror image in half a period.
@@ -173,7 +173,7 @@ def test_the_rank_test_does_not_depend_on_the_parameters_unit(scale):
                            parameter_derivative=scale * (0.6 * singular_direction + 0.8 * range_direction))
     branch_point = SimpleNamespace(monodromy=monodromy, parameter_derivative=scale * 0.7 * range_direction)
     # the sine of F_lam's angle to the range of M - I: 0.6 at the fold, 0 (to rounding) at the branch point
-    assert continuation._rank_ratio(fold) == pytest.approx(0.6, rel=1e-6)
-    assert continuation._rank_ratio(fold) > continuation.BRANCH_POINT_RANK
-    assert continuation._rank_ratio(branch_point) <= 1e-12 < continuation.BRANCH_POINT_RANK
+    assert continuation._sine_to_range(fold) == pytest.approx(0.6, rel=1e-6)
+    assert continuation._sine_to_range(fold) > continuation.BRANCH_POINT_RANK
+    assert continuation._sine_to_range(branch_point) <= 1e-12 < continuation.BRANCH_POINT_RANK
 

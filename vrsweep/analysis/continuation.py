@@ -1413,7 +1413,7 @@ BRANCH_POINT_RANK = 1e-2
 BRANCH_POINT = "branch_point"
 
 
-def _rank_ratio(orbit):
+def _sine_to_range(orbit):
     """How far [M - I | F_lam] is from rank 1: the sine of the angle between F_lam and the range of
     M - I (0: in it, a branch point; a fold's is of order 1). 0 where F_lam = 0 (the parameter
     moves no orbit) or M = I."""
@@ -1436,7 +1436,7 @@ def _branch_point(problem, previous, orbit, tangent, step, periods):
         return None
     located = _locate(problem, previous, tangent, step, "fold", _fold_test(previous), _fold_test(orbit), periods,
                       impacts=previous.impacts_per_period)
-    if located is None or not _located("fold", located) or _rank_ratio(located) > BRANCH_POINT_RANK:
+    if located is None or not _located("fold", located) or _sine_to_range(located) > BRANCH_POINT_RANK:
         return None
     return located
 
