@@ -18,8 +18,11 @@ import math
 import os
 import tempfile
 import time
+from pathlib import Path
 
 from _timing import checkout_child  # python benchmarks/NAME.py puts this folder first on sys.path
+
+NEW = Path(__file__).resolve().parent.parent  # this checkout, as versions.py's
 
 CASES = {
     "original, rk45": ("model: original\nparameters: {g: 30.0, Omega: 4.0}\n", "method: rk45"),
@@ -69,13 +72,12 @@ def main():
     parser.add_argument("old")
     parser.add_argument("--rounds", type=int, default=1)
     args = parser.parse_args()
-    new_checkout = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     ratios = []
     for name, (text, options) in CASES.items():
         old = new = math.inf
         for _ in range(args.rounds):
             old = min(old, cold_seconds(args.old, text, options))
-            new = min(new, cold_seconds(new_checkout, text, options))
+            new = min(new, cold_seconds(str(NEW), text, options))
         ratios.append(old / new)
         print(f"{name:34s} old {old:6.1f} s   new {new:6.1f} s   old/new {ratios[-1]:.3f}", flush=True)
     mean = math.exp(sum(math.log(r) for r in ratios) / len(ratios))
