@@ -346,9 +346,10 @@ def _capped_threads(threads):
 
 
 # What a first run's notice says compiling takes (`vrsweep run` and the API's bar alike). The CPU's:
-# measured with an empty cache on a loaded 2-core machine, rk45 29 s wall (11 s of CPU), dop853
-# 17-19 s in benchmarks/README.md's runs, up to 30 s at load 3-4. The CUDA kernel's: 20 to 65 s
-# on an H100's host (benchmarks/README.md, "GPU").
+# a first sweep with an empty cache on 2 idle cores, 0.7.12 (benchmarks/compile_versions.py): 16 s
+# rk45, 20 s with the tangent vectors, 28 s dop853; a loaded machine takes longer. The CUDA
+# kernel's: 20 to 65 s on an H100's host (benchmarks/README.md, "GPU"; before 0.7.12's shorter
+# inlining, which took its PTX 18 -> 13 s here).
 COMPILE_SECONDS = "about 30 s"
 GPU_COMPILE_SECONDS = "20 to 65 s"
 
