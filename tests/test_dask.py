@@ -142,3 +142,37 @@ def test_a_stop_with_no_worker_connected_takes_effect_at_once(single, tmp_path, 
         assert time.monotonic() - began < 10
     assert stopped.value.exit_code == 143
     assert done_count(tmp_path / "out.h5") == 0  # the file is there, for --resume
+
+
+
+# A process of its own: distributed installs its stderr handler only where the root logger has
+# none (a command's process; pytest's has its own).
+_DISTRIBUTED_LINES = """
+import logging, sys
+from distributed.comm.core import CommClosedError
+from vrsweep.execution import distributed as vrsweep_distributed
+
+vrsweep_distributed._no_tracebacks_below_warning()
+vrsweep_distributed._no_tracebacks_below_warning()  # idempotent: one filter
+(handler,) = logging.getLogger("distributed").handlers
+assert sum(f is vrsweep_distributed._info_without_traceback for f in handler.filters) == 1
+for name, level, message in (("distributed.batched", logging.INFO, "Batched Comm Closed <TCP (closed)>"),
+                             ("distributed.core", logging.WARNING, "something failed")):
+    try:
+        raise CommClosedError()
+    except CommClosedError:
+        logging.getLogger(name).log(level, message, exc_info=True)
+    print("@@", file=sys.stderr)
+"""
+
+
+def test_distributeds_info_lines_carry_no_traceback_its_warnings_do():
+    """A scheduler closed with its workers still connected (after every stop of a Dask-on-SLURM
+    run) logs "Batched Comm Closed" at INFO with a CommClosedError traceback: it printed beneath
+    vrsweep's "Interrupted (SIGTERM)" line (test_shards' dask_slurm test, once in a CI run). The
+    line stays, its traceback goes; a warning keeps its traceback."""
+    done = subprocess.run([sys.executable, "-c", _DISTRIBUTED_LINES], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    info, warning, _ = done.stderr.split("@@")
+    assert "Batched Comm Closed" in info and "Traceback" not in info and "CommClosedError" not in info, info
+    assert "something failed" in warning and "Traceback" in warning and "CommClosedError" in warning, warning

@@ -124,10 +124,35 @@ def dask_setup(worker):
     # is in the client's process, so it is never lost otherwise): no warning per worker for these.
     _drop_messages("distributed.worker.state_machine", "ended with CancelledError")
     _drop_messages("distributed.worker", "Failed to communicate with scheduler during heartbeat")
+    _no_tracebacks_below_warning()
 
 
 def _drop_messages(logger, text):
     logging.getLogger(logger).addFilter(lambda record: text not in record.getMessage())
+
+
+def _no_tracebacks_below_warning():
+    """distributed's own lines (its handler on the "distributed" logger, stderr) keep their
+    tracebacks to warnings and errors. Its INFO lines carry one where a connection closed while
+    it was sending: a scheduler closed with its workers still connected, after every stop, logged
+    "Batched Comm Closed" with a CommClosedError traceback beneath vrsweep's "Interrupted" line (the
+    Dask-on-SLURM client, on a loaded machine). That is the expected end of a cluster, not a fault:
+    the line stays, its traceback goes. Idempotent."""
+    import distributed  # noqa: F401 - its import installs the handler
+
+    for handler in logging.getLogger("distributed").handlers:
+        if not any(getattr(f, "vrsweep_info_without_traceback", False) for f in handler.filters):
+            handler.addFilter(_info_without_traceback)
+
+
+def _info_without_traceback(record):
+    if record.levelno < logging.WARNING and record.exc_info:
+        record.exc_info = None
+        record.exc_text = None
+    return True
+
+
+_info_without_traceback.vrsweep_info_without_traceback = True
 
 
 def _worker_threads():
@@ -230,6 +255,7 @@ class DaskExecutor:
     def _client(self):
         from dask.distributed import Client, LocalCluster
 
+        _no_tracebacks_below_warning()  # this process may hold the scheduler (LocalCluster, dask_slurm.py)
         if self.n_local is not None:
             # Worker processes (not threads): each has its own numba thread pool. No dashboard, and
             # the scheduler's small HTTP server on any free local port, not on 8787 (which a
