@@ -721,13 +721,14 @@ def _graze_between(problem, previous, current, before=None, memo=None):
     jumped onto another branch that happens to lie near (next to a grazing corner, the stable
     branch on the free side and the unstable one beyond are a square root apart), and the step is
     refused; so is a step over two grazes at once (each is crossed and located on its own at a
-    shorter step). Without a window no graze can be located: the step stands, and _detect
-    brackets it. With the same impact count on both sides, a step from next to a graze (or
-    heading for one: ``before``, the orbit before ``previous``, gives the trend) that passes the
-    graze's parameter has jumped too: beyond a graze the orbit has one impact more or less, so an
-    orbit there with the same count belongs to another branch (the end of Fig. 1's period-3
-    window, g = 17.796, has one 0.002 away). ``memo`` (a dict kept along the branch) holds the
-    graze such a check located last: the next steps towards the same touch reuse it.
+    shorter step). Without a window no graze can be located: the step is UNLOCATED, retried
+    shorter, and stands only at min_step, where _detect brackets the change. With the same impact
+    count on both sides, a step from next to a graze (or heading for one: ``before``, the orbit
+    before ``previous``, gives the trend) that passes the graze's parameter has jumped too: beyond
+    a graze the orbit has one impact more or less, so an orbit there with the same count belongs to
+    another branch (the end of Fig. 1's period-3 window, g = 17.796, has one 0.002 away). ``memo``
+    (a dict kept along the branch) holds the graze such a check located last: the next steps
+    towards the same touch reuse it.
     """
     if previous.impacts_per_period == current.impacts_per_period:
         site = _graze_site(problem, previous, JUMP_PROXIMITY)
@@ -763,7 +764,12 @@ def _graze_between(problem, previous, current, before=None, memo=None):
         return None, JUMP
     window = _new_impact_window(problem, free_side, impacting_side)
     if window is False:
-        return None, None
+        # No window fits, so no graze is located here, and nothing says the step did not jump:
+        # it is retried shorter and stands only at min_step, where _detect brackets the change
+        # (one step of 0.07 from the asymmetric orbit at omega = 1.0731461 of the two-stop Duffing
+        # oscillator's pitchfork, two impacts a period, landed on an orbit of one at omega =
+        # 1.0305 and was taken, up to 0.7.12; its branch ends at a zero-speed impact at 1.0742503).
+        return None, UNLOCATED
     located = grazing.locate_graze(problem, free_side.z, free_side.periods, _tolerance(problem, free_side.state),
                                    window)
     if located is None:
