@@ -21,7 +21,8 @@ down over [17.55, 17.8] through its grazes 9 -> 10 and 8 -> 9, and locating one 
 
 import argparse
 
-from vrsweep.analysis import continuation, grazing, period_doubling
+from vrsweep.analysis import continuation, grazing
+from vrsweep.analysis import switching as branch_switching
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.numerics.trajectory import settings_vector, simulate
@@ -94,7 +95,7 @@ def switching(method):
     whole, (branch, bifurcations) = best_of(
         lambda: continuation.continue_branch(problem, start, 17.8255, 17.87, 40), repeats=1)
     switched, (branches, _, failures) = best_of(
-        lambda: period_doubling.switch_all(problem, branch, bifurcations, 17.8255, 17.87, 40, 4), repeats=1)
+        lambda: branch_switching.switch_all(problem, branch, bifurcations, 17.8255, 17.87, 40, 4), repeats=1)
     assert len(branches) == 2 and not failures, failures
     n, m = len(branch.orbits), len(branches[1].orbits)
     print(f"original model, Omega = 4, method {method}, rtol 1e-12")

@@ -10,7 +10,10 @@ hopping onto another family of orbits" (at omega = 1.0689639).
 
 The test checks the located branch point against SciPy's own symmetric orbits (fsolve on a map
 with impact events on both stops) on both sides of it: their largest real multiplier crosses +1
-at the located omega, and they exist on both sides (the parameter does not turn there).
+at the located omega, and they exist on both sides (the parameter does not turn there). With
+--switch (analysis/branch_point.py) the asymmetric orbits born there are followed, each half a
+branch of its own: SciPy's map returns to them, its flow does not take them to their mirror
+images, and the mirror images are the other half's orbits.
 """
 
 import math
@@ -20,7 +23,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
 
-from vrsweep.analysis import continuation
+from vrsweep.analysis import branch_point, continuation
 from vrsweep.config import load_config
 from vrsweep.execution.continuation import run_continuation
 
@@ -42,6 +45,15 @@ continuation: {parameter: omega, from: 1.1, to: [1.05, 1.1], max_step: 0.05}
 
 
 @pytest.fixture(scope="module")
+def switched(tmp_path_factory):
+    path = tmp_path_factory.mktemp("branch_point_switched") / "config.yaml"
+    path.write_text(CONFIG.replace("max_step: 0.05", "max_step: 0.005"))  # orbits enough on each half to check
+    failures = []
+    branches, found = run_continuation(load_config(path), switch=True, failures=failures)
+    return branches, found, failures
+
+
+@pytest.fixture(scope="module")
 def branch(tmp_path_factory):
     path = tmp_path_factory.mktemp("branch_point") / "config.yaml"
     path.write_text(CONFIG)
@@ -49,7 +61,7 @@ def branch(tmp_path_factory):
     return branches[0], found
 
 
-def _flow(y0, omega, t0, t1):
+def _flow(y0, omega, t0, t1, max_step=math.inf):
     """SciPy's flow from t0 to t1 with both stops (events, x' -> -r x'): (end state, impacts)."""
     def rhs(t, y):
         return [y[1], -2 * ZETA * y[1] - y[0] - BETA * y[0] ** 3 + F * math.cos(omega * t)]
@@ -64,7 +76,8 @@ def _flow(y0, omega, t0, t1):
 
     t, y, impacts = t0, np.array(y0, dtype=float), 0
     while True:
-        solution = solve_ivp(rhs, (t, t1), y, method="DOP853", rtol=1e-12, atol=1e-14, events=(top, bottom))
+        solution = solve_ivp(rhs, (t, t1), y, method="DOP853", rtol=1e-12, atol=1e-14, events=(top, bottom),
+                             max_step=max_step)
         if solution.status != 1:
             return solution.y[:, -1], impacts
         hit = 0 if solution.t_events[0].size else 1
@@ -130,6 +143,78 @@ def test_the_symmetric_branch_goes_through_its_branch_point_where_scipy_puts_it(
                                rtol=0, atol=2e-4)
 
 
+def _mirror(orbit):
+    """SciPy's mirror image of ``orbit``: -(its state half a period later), the state at t = 0 of
+    the orbit x -> -x, t -> t + T/2 maps it to."""
+    return -_flow(orbit.state, orbit.parameter, 0.0, math.pi / orbit.parameter)[0]
+
+
+def _distance_to_polyline(z, orbits):
+    """The distance in (x, v, omega) from z to the polyline through ``orbits``, and the length of
+    its nearest segment."""
+    best = (np.inf, np.inf)
+    for before, after in zip(orbits, orbits[1:]):
+        segment = after.z - before.z
+        s = float(np.clip((z - before.z) @ segment / (segment @ segment), 0.0, 1.0))
+        best = min(best, (float(np.linalg.norm(before.z + s * segment - z)), float(np.linalg.norm(segment))))
+    return best
+
+
+def test_switching_at_the_branch_point_follows_the_asymmetric_orbits_and_their_mirror_images(switched):
+    branches, found, failures = switched
+    assert not failures, failures
+    assert len(branches) == 3, [(len(b.orbits), b.ends) for b in branches]
+    point = next(b.orbit for b in found if b.kind == continuation.BRANCH_POINT and b.branch == 0)
+    # The pitchfork's vertex is no fold of the switched branches (and up to 0.7.12 nothing was switched).
+    assert [b for b in found if b.branch > 0] == [], [(b.kind, b.branch, b.orbit.parameter) for b in found]
+    halves = branches[1:]
+    for half in halves:
+        assert half.periods == 1
+        assert half.orbits[0] is point
+        assert half.ends["down"][0] == branch_point.ENDED_BRANCH_POINT, half.ends
+        assert f"{point.parameter:.8g}" in half.ends["down"][1]
+        # Each half ends where its second impact slows to zero: the multiplier grows like 1/u.
+        assert half.ends["up"][0] == continuation.ENDED_GRAZING and "zero speed" in half.ends["up"][1], half.ends
+        # A subcritical pitchfork: the asymmetric orbits lie on the side where the symmetric ones are
+        # stable (above omega*), and are unstable.
+        assert min(o.parameter for o in half.orbits) >= point.parameter - continuation.DEFAULTS["location_tolerance"]
+        assert not any(o.stable for o in half.orbits[1:])
+        # They leave the branch point with the parameter fixed to first order (lam - lam* ~ a^2).
+        first = half.orbits[1]
+        assert abs(first.parameter - point.parameter) < 0.05 * np.linalg.norm(first.state - point.state)
+    # The two halves are one another's mirror images, so they end at one zero-speed impact: each
+    # end is approached to continuation.min_step (1e-5). Up to 0.7.12 one half stepped from omega =
+    # 1.0731461 over that end onto orbits of one impact (no window to locate a graze in) and went on
+    # to 1.05 as if through a graze at 1.0738354.
+    ends = [half.orbits[-1].parameter for half in halves]
+    assert abs(ends[0] - ends[1]) <= 2 * continuation.DEFAULTS["min_step"], ends
+    # SciPy, away from the branch point and from the zero-speed impact (where its events, without a
+    # small max_step, miss the slow impact): its map returns to the orbit with two impacts, its flow
+    # does not take the orbit to its mirror image, and that mirror image lies on the other half.
+    checked = 0
+    for this, other in (halves, halves[::-1]):
+        sample = [o for o in this.orbits if point.parameter + 5e-4 < o.parameter < 1.0725]
+        assert len(sample) >= 3
+        for orbit in sample[::max(1, len(sample) // 3)]:
+            end, impacts = _flow(orbit.state, orbit.parameter, 0.0, 2.0 * math.pi / orbit.parameter)
+            assert impacts == 2
+            np.testing.assert_allclose(end, orbit.state, rtol=0, atol=1e-8)
+            mirror = _mirror(orbit)
+            assert np.max(np.abs(mirror - orbit.state)) > 1e-2
+            distance, segment = _distance_to_polyline(np.array([*mirror, orbit.parameter]), other.orbits)
+            # The other half's polyline is its curve to within a sagitta, small against its segments.
+            assert distance < 2e-2 * segment, (orbit.parameter, distance, segment)
+            checked += 1
+    assert checked >= 6
+    # SciPy's monodromy of one asymmetric orbit (fsolve from vrsweep's state): the same orbit and
+    # the same unstable multiplier.
+    orbit = min(halves[0].orbits, key=lambda o: abs(o.parameter - 1.0715))
+    y, mu, _ = _scipy_orbit(orbit.state, orbit.parameter)
+    np.testing.assert_allclose(y, orbit.state, rtol=0, atol=1e-8)
+    assert mu > 1.0
+    assert abs(mu - max(orbit.multipliers.real)) < 1e-4 * mu, (mu, orbit.multipliers)
+
+
 def test_the_branch_file_holds_the_branch_point_and_info_and_plot_show_it(tmp_path):
     from click.testing import CliRunner
 
@@ -155,6 +240,53 @@ def test_the_branch_file_holds_the_branch_point_and_info_and_plot_show_it(tmp_pa
     curve = CliRunner().invoke(main, ["continue", str(out), "--point", "0", "--along", "F", "--to", "0.35", "0.45",
                                       "-o", str(tmp_path / "curve.h5")])
     assert curve.exit_code == 2 and len(curve.output.strip().splitlines()) == 1, curve.output
+
+
+def test_continue_switch_writes_both_halves_and_info_and_plot_read_them(tmp_path):
+    from click.testing import CliRunner
+
+    import vrsweep
+    from vrsweep.cli import main
+
+    config = tmp_path / "config.yaml"
+    config.write_text(CONFIG)
+    out = tmp_path / "branches.h5"
+    result = CliRunner().invoke(main, ["continue", str(config), "--switch", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "no second branch" not in result.output
+    with vrsweep.open_results(out) as ds:
+        assert list(ds["branch_periods"].values) == [1, 1, 1]
+        assert [str(s) for s in ds["branch_end_first_status"].values[1:]] == ["branch_point", "branch_point"]
+        assert [str(kind) for kind in ds["bifurcation_kind"].values] == ["branch_point"]
+    info = CliRunner().invoke(main, ["info", str(out)])
+    assert info.exit_code == 0, info.output
+    assert "branch 2:" in info.output and "meets the branch it was born on at its branch point" in info.output
+    figure = CliRunner().invoke(main, ["plot", str(out), "-o", str(tmp_path / "branches.png")])
+    assert figure.exit_code == 0, figure.output
+
+
+def test_a_branch_point_with_no_second_branch_is_reported_once_and_the_run_goes_on(tmp_path, monkeypatch):
+    """Where the quadratic form at the point is definite (no two real directions: an isolated
+    point of F = 0 on the null space, not a crossing), nothing is switched, the command says so in
+    one line, and the branch is written."""
+    from click.testing import CliRunner
+
+    import vrsweep
+    from vrsweep.cli import main
+
+    measured = branch_point.quadratic_form
+    monkeypatch.setattr(branch_point, "quadratic_form",
+                        lambda problem, point, periods: (np.eye(2), measured(problem, point, periods)[1]))
+    config = tmp_path / "config.yaml"
+    config.write_text(CONFIG)
+    out = tmp_path / "branch.h5"
+    result = CliRunner().invoke(main, ["continue", str(config), "--switch", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.output.splitlines() if "no second branch" in line]
+    assert len(lines) == 1, result.output  # one line for the point, not one per side
+    assert lines[0].startswith("branch point at omega = 1.06896") and "no two real directions" in lines[0], lines
+    with vrsweep.open_results(out) as ds:
+        assert list(ds["branch_periods"].values) == [1]
 
 
 @pytest.mark.parametrize("scale", [1e-6, 1e-3, 1.0, 1e3, 1e6])

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from reference import reference_trajectory
-from vrsweep.analysis import continuation, period_doubling
+from vrsweep.analysis import continuation, period_doubling, switching
 from vrsweep.analysis.diagnostics import detect_period
 from vrsweep.numerics import kernel
 from vrsweep.numerics.model import DEFAULT_PARAMETERS, kernel_coefficients
@@ -41,7 +41,7 @@ def cascade():
                                                dict(continuation.DEFAULTS, max_step=0.3))
     start = continuation.find_start(problem, [0.99, 0.5], 17.86, 300, 16)
     branch, bifurcations = continuation.continue_branch(problem, start, LOW, HIGH, 40)
-    branches, found, failures = period_doubling.switch_all(problem, branch, bifurcations, LOW, HIGH, 40, 4)
+    branches, found, failures = switching.switch_all(problem, branch, bifurcations, LOW, HIGH, 40, 4)
     return problem, branches, found, failures
 
 

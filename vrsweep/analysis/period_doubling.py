@@ -21,10 +21,9 @@ switching"):
   orbit is a p-orbit again (within a step of a doubling: meeting that doubling), and the doubling
   point itself (as a 2p-orbit) is the branch's first point.
 
-Switching is repeated on the new branches' own period doublings while 2p <= max_period (a
-cascade), at most MAX_BRANCHES branches in all. A doubling point that an earlier switched branch
-already reached (a period-doubling "bubble" closes on the p-branch at its second doubling) is
-not switched twice.
+analysis/switching.py repeats this on the new branches' own period doublings while 2p <=
+max_period (a cascade). A doubling point that an earlier switched branch already reached (a
+period-doubling "bubble" closes on the p-branch at its second doubling) is not switched twice.
 """
 
 import dataclasses
@@ -60,7 +59,6 @@ GENUINE_MARGIN = 10.0
 # the doubling is located to location_tolerance in the parameter, and where the multiplier moves
 # fast (next to a graze: -1.3 to -0.7 within 1e-4 in g) that leaves it a few 1e-2 from -1.
 MULTIPLIER_TOLERANCE = 0.1
-MAX_BRANCHES = 8
 
 
 def doubling_vectors(orbit):
@@ -243,58 +241,3 @@ def without_birth_folds(problem, doubling, bifurcations):
     birth = BIRTH_TOLERANCE * problem.options["location_tolerance"] * max(1.0, abs(doubling.parameter))
     return [(kind, orbit) for kind, orbit in bifurcations
             if not (kind in ("fold", "branch_point") and abs(orbit.parameter - doubling.parameter) <= birth)]
-
-
-def _doublings(bifurcations, failures):
-    """The orbits of the period doublings among ``bifurcations`` whose multiplier is near -1; the
-    others go to ``failures`` as (parameter, reason)."""
-    orbits = []
-    for bifurcation in bifurcations:
-        if bifurcation.kind != "period_doubling":
-            continue
-        if is_doubling(bifurcation.orbit):
-            orbits.append(bifurcation.orbit)
-        else:
-            nearest = bifurcation.orbit.multipliers[np.argmin(np.abs(bifurcation.orbit.multipliers + 1.0))]
-            failures.append((bifurcation.orbit.parameter, f"no real multiplier within {MULTIPLIER_TOLERANCE:g} of -1 "
-                                                          f"at the located point (nearest {nearest:.4g})"))
-    return orbits
-
-
-def switch_all(problem, branch, bifurcations, lo, hi, max_points, max_period, progress=None):
-    """``branch`` (a Branch) and the branches switched at its period doublings, and at theirs while
-    2p <= max_period, at most MAX_BRANCHES in all. ``bifurcations``: [Bifurcation] of ``branch``.
-
-    Returns (branches, bifurcations, failures): every Bifurcation's ``branch`` set to its branch's
-    index, and [(parameter, reason)] for doublings where no 2p-branch was found.
-    """
-    branches = [branch]
-    found = list(bifurcations)
-    for bifurcation in found:
-        bifurcation.branch = 0
-    failures = []
-    pending = [(0, _doublings(found, failures))]
-    reached = []  # doublings a switched branch already ended at
-    while pending and len(branches) < MAX_BRANCHES:
-        _, doublings = pending.pop(0)
-        for doubling in doublings:
-            if len(branches) >= MAX_BRANCHES or 2 * doubling.periods > max_period:
-                continue
-            if any(doubling is other for other in reached):
-                continue  # a bubble: the branch switched at the other doubling already closed here
-            switched, detail, met = doubled_branch(problem, doubling, lo, hi, max_points, progress, doublings)
-            if switched is None:
-                failures.append((doubling.parameter, detail))
-                continue
-            number = len(branches)
-            branches.append(switched)
-            if continuation.interrupted(switched):  # a signal: keep what is followed, switch no more
-                found.extend(continuation.Bifurcation(kind, orbit, number) for kind, orbit in detail)
-                pending.clear()
-                break
-            reached.extend(met)
-            new = [continuation.Bifurcation(kind, orbit, number) for kind, orbit in detail]
-            found.extend(new)
-            pending.append((number, _doublings(new, failures)))
-    found.sort(key=lambda b: (b.branch, b.orbit.parameter))
-    return branches, found, failures

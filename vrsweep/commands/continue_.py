@@ -43,8 +43,8 @@ def _parse_at(values):
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="The grid point of --start (nearest value per axis), e.g. --at g=23; repeatable.")
 @click.option("--switch", is_flag=True,
-              help="Also follow the branch of 2p periods born at each period doubling "
-                   "(as continuation.switch: true).")
+              help="Also follow the branch of 2p periods born at each period doubling, and the second "
+                   "branch through each branch point (as continuation.switch: true).")
 @click.option("--point", "point", type=WholeNumberRange(), multiple=True, metavar="K",
               help="With a branch file: the bifurcation (its index in the file's table, counted from 0 in the "
                    "order vrsweep info lists them) to follow; repeatable: one curve each, in one file.")
@@ -66,7 +66,8 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
     continuation.parameter within continuation.to, with its Floquet multipliers, folds, period
     doublings, Neimark-Sacker points and grazings (docs/continuation.md). With --switch (or
     continuation.switch: true) the branch of 2p periods born at each period doubling is followed
-    too, and at its own doublings while 2p <= continuation.max_period: several branches per file.
+    too, and at its own doublings while 2p <= continuation.max_period, and so is the second branch
+    through each branch point (a symmetric branch's asymmetric orbits): several branches per file.
 
     Given a branch file instead (the output of the above), --point K --along NAME follows its
     bifurcation K (a fold, period doubling or grazing) in the second parameter NAME, both ways
@@ -156,9 +157,9 @@ def command(config_path, overrides, output, start_path, at, switch, point, along
             where = f"branch {bifurcation.branch}, " if several else ""
             click.echo(f"{bifurcation.kind} at {name} = {bifurcation.orbit.parameter:.8g} "
                        f"({where}R = {bifurcation.orbit.R:.6g})", err=True)
-        for value, reason in missed:
-            click.echo(f"period doubling at {name} = {value:.8g}: no branch of twice its period found ({reason})",
-                       err=True)
+        for value, kind, reason in missed:
+            born = "no branch of twice its period" if kind == "period_doubling" else "no second branch through it"
+            click.echo(f"{kind.replace('_', ' ')} at {name} = {value:.8g}: {born} found ({reason})", err=True)
         click.echo(f"-> {one_line(path)}", err=True)
 
 

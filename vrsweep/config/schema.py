@@ -155,7 +155,8 @@ CONTINUATION_DOMAINS = {
     "newton_tolerance": _POSITIVE, "max_newton_iterations": _COUNT, "max_period": _COUNT,
     "location_tolerance": _POSITIVE,
 }
-# switch: start the branch of 2p periods at every period doubling (analysis/period_doubling.py).
+# switch: start the branch of 2p periods at every period doubling and the second branch through
+# every branch point (analysis/switching.py).
 CONTINUATION_KEYS = ("parameter", "from", "to", *CONTINUATION_DEFAULTS, "switch")
 LINEAR_KEYS = ("start", "stop", "num", "continuation")
 VALUES_KEYS = ("values", "continuation")
@@ -216,7 +217,8 @@ class Integration:
 class Continuation:
     """The config's continuation section: which parameter, where the first orbit is found
     (``start``, the key ``from``), the range [low, high] the branch stays in, and the numerics'
-    settings (CONTINUATION_DEFAULTS); ``switch``: follow the 2p-branch born at each period doubling."""
+    settings (CONTINUATION_DEFAULTS); ``switch``: follow the 2p-branch born at each period doubling
+    and the second branch through each branch point."""
 
     parameter: str
     start: float

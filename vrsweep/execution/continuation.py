@@ -99,16 +99,17 @@ def start_state_from_sweep(path, at):
 
 def run_continuation(config, start_state=None, progress=None, switch=None, failures=None):
     """The branch through the orbit found at the section's ``from`` and, with ``switch`` (default:
-    the section's ``switch``), the branches of 2p periods born at its period doublings
-    (analysis/period_doubling.py). Returns (branches, bifurcations); branch 0 is the first.
+    the section's ``switch``), the branches born on it: of 2p periods at its period doublings, the
+    second branch through each branch point (analysis/switching.py). Returns (branches,
+    bifurcations); branch 0 is the first.
 
     start_state: (2,) where the transient starts (default: the config's initial state).
     progress(orbit): called after each orbit; a KeyboardInterrupt it raises stops the continuation
     there, keeping what is followed (each branch's unreached ends: "interrupted").
-    failures: a list that receives (parameter, reason) for each period doubling where no branch of
-    2p periods was found.
+    failures: a list that receives (parameter, kind, reason) for each period doubling ("period_doubling")
+    or branch point ("branch_point") where no branch was found.
     """
-    from vrsweep.analysis import continuation, period_doubling
+    from vrsweep.analysis import continuation, switching
 
     problem = problem_of(config)
     section = config.continuation
@@ -120,8 +121,8 @@ def run_continuation(config, start_state=None, progress=None, switch=None, failu
                                                         section.max_points, progress)
     if not (section.switch if switch is None else switch) or continuation.interrupted(branch):
         return [branch], bifurcations
-    branches, bifurcations, missed = period_doubling.switch_all(problem, branch, bifurcations, section.low, section.high,
-                                                           section.max_points, section.max_period, progress)
+    branches, bifurcations, missed = switching.switch_all(problem, branch, bifurcations, section.low, section.high,
+                                                      section.max_points, section.max_period, progress)
     if failures is not None:
         failures.extend(missed)
     return branches, bifurcations

@@ -30,7 +30,8 @@ root attributes: ``vrsweep_file = "branch"``, ``vrsweep_format_version``, ``vrsw
     branch_periods, branch_end_first_status, branch_end_first_reason, branch_end_last_status,
     branch_end_last_reason (branch_id): why each branch stops at its first and last point
     (statuses: left_range, max_points, newton_failed, sticking, integration_failed, grazing, period_doubling,
-    interrupted, domain_edge: the next point would lie outside the model's domain, config/domains.py)
+    branch_point: a switched branch back at the point it was born at, interrupted, domain_edge: the next
+    point would lie outside the model's domain, config/domains.py)
 
 Built in memory and written whole through ``fileio.write_bytes`` (atomic). Every numeric array
 carries a Fletcher-32 checksum, and ``check_branch`` (the one check every reader goes through:
@@ -240,7 +241,7 @@ def is_branch_file(path) -> bool:
 # What check_branch expects: each array's dimensions and kind of number ("i" whole, "f" real,
 # "s" text). A file written by this version has all of them.
 STATUSES = ("left_range", "max_points", "newton_failed", "sticking", "integration_failed", "grazing", "period_doubling",
-            "interrupted", "domain_edge")
+            "branch_point", "interrupted", "domain_edge")
 # branch_point: a real multiplier through +1 where the parameter does not turn (a symmetric
 # branch's pitchfork, analysis/continuation._branch_point); the branch goes on through it.
 LOCATED_KINDS = ("fold", "period_doubling", "neimark_sacker", "grazing", "branch_point")
