@@ -294,3 +294,38 @@ def test_the_periods_colours_are_the_projects_and_apart_in_grey(tmp_path):
         light = sorted(lightness(colour) for colour in colours)
         assert count == 1 or min(np.diff(light)) >= 8.0, (count, light)
         assert abs(lightness(colours[0]) - lightness(THEORY_COLOUR)) >= 8.0
+
+
+@pytest.mark.parametrize("kind", ["fold", "branch_point", "period_doubling"])
+def test_a_branch_changes_style_at_its_located_bifurcation_not_at_the_next_orbit(tmp_path, kind):
+    """Five orbits in g, 1 apart, stable up to 23, the bifurcation located at 23.4: the solid line
+    ends and the dashed one begins there, in both panels, and the multipliers meet it at its
+    own moduli. Up to 0.7.12 the solid line went on to the next orbit, 24 (the symmetric Duffing
+    oscillator's branch point, on steps of 0.025 in omega, was drawn stable 0.0045 past it)."""
+    from handmade import CONFIG, orbit
+
+    from vrsweep.analysis.continuation import Bifurcation, Branch
+    from vrsweep.config.validate import config_from_dict
+    from vrsweep.store import branch_file
+
+    orbits = [orbit(g, g <= 23.0) for g in (22.0, 23.0, 24.0, 25.0, 26.0)]
+    located = orbit(23.4, True)
+    located.monodromy = np.diag([1.0, 0.3])
+    ends = {"down": ("left_range", "g left [21, 27]"), "up": ("left_range", "g left [21, 27]")}
+    path = tmp_path / "branch.h5"
+    branch_file.write_branch(path, branch_file.branch_arrays([Branch(periods=1, orbits=orbits, ends=ends)],
+                                                             [Bifurcation(kind, located)], 1.0),
+                             config_from_dict(CONFIG), "rk45")
+    fig = plot.plot(path)
+    top, bottom = fig.axes[:2]
+    for ax in (top, bottom):
+        lines = _data_lines(ax)
+        solid = [line for line in lines if line.get_linestyle() == "-"]
+        dashed = [line for line in lines if line.get_linestyle() == "--"]
+        assert {(float(min(line.get_xdata())), float(max(line.get_xdata()))) for line in solid} == {(22.0, 23.4)}
+        assert {(float(min(line.get_xdata())), float(max(line.get_xdata()))) for line in dashed} == {(23.4, 26.0)}
+    # The gain's line passes through the located point's R; the larger multiplier's through 1.
+    top_line = next(line for line in _data_lines(top) if line.get_linestyle() == "-")
+    assert float(np.asarray(top_line.get_ydata())[-1]) == pytest.approx(located.R)
+    larger = next(line for line in _data_lines(bottom) if line.get_gid() == "multiplier 1" and line.get_linestyle() == "-")
+    assert float(np.asarray(larger.get_ydata())[-1]) == pytest.approx(1.0)
