@@ -10,7 +10,7 @@ from the algebraic bifurcation equation (docs/design.md, "Branch switching at a 
 
 - psi, the left null vector of dF, and (n1, n2) an orthonormal basis of its null space;
 - on the null space, psi . F(z* + a n1 + b n2) = (1/2) Q(a, b) + O(3), Q the quadratic form
-  psi . d2F[n, n], measured by central second differences of psi . F (SECOND_DIFFERENCE, so that
+  psi . d2F[n, n], measured by central second differences of psi . F (SECOND_DIFFERENCES, so that
   the located point's own error, which is first order, cancels);
 - the two branches leave z* along the two real roots of Q(a, b) = 0; the one nearer the chord of
   the branch followed is that branch, the other is the branch switched to, t_new.
@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from vrsweep.analysis import continuation
+from vrsweep.analysis import continuation, period_doubling
 from vrsweep.results import Status
 
 ENDED_BRANCH_POINT = "branch_point"
@@ -46,7 +46,7 @@ ENDED_BRANCH_POINT = "branch_point"
 # (the map is only piecewise smooth: the second difference across a graze is no curvature).
 SECOND_DIFFERENCES = (1e-3, 1e-4, 1e-5)
 # eps's floor, in units of sqrt(tol / |Q(t_new, t_old)|): Newton's tolerance band across the
-# branch followed is then 1 / (2 SEPARATION^2) of eps, 2e-3 of it.
+# branch followed, tol / (eps |Q(t_new, t_old)|) on either side, is then eps / SEPARATION^2.
 SEPARATION = 16.0
 # eps, in units of that floor (and at least 1e-6 of max(1, |y*|)), tried in turn.
 SWITCH_AMPLITUDES = (1.0, 3.0, 10.0, 30.0, 100.0)
@@ -184,32 +184,24 @@ def _chord_through(branch, point):
 def _meets_branch_points(problem, point, u, others):
     """follow's stop test on a switched branch: it ends where a step passes back through its birth
     ``point`` (the sign of u . (z - z*), its amplitude across the branch followed, changes on a
-    chord that passes by z*) or passes one of the parent branch's ``others`` branch points (a
-    bubble). Returns (stop, met): ``met`` collects the branch points it stopped at, ``point`` too."""
+    chord that passes by z*: period_doubling's test) or passes one of the parent branch's
+    ``others`` branch points (a bubble). Returns (stop, met): ``met`` collects the branch points
+    it stopped at, ``point`` too."""
     met = []
+    passes_by = period_doubling._passes_by
 
     def stop(previous, orbit):
-        back = (float(u @ (previous.z - point.z)) * float(u @ (orbit.z - point.z)) <= 0.0
-                and _passes_by(previous.z, orbit.z, point.z))
-        for other in [point] if back else [other for other in others if _passes_by(previous.z, orbit.z, other.z)]:
-            met.append(other)
-            return (ENDED_BRANCH_POINT, f"meets the branch it was born on at its branch point at "
-                                        f"{problem.parameter} = {other.parameter:.8g}")
-        return None
+        crosses = float(u @ (previous.z - point.z)) * float(u @ (orbit.z - point.z)) <= 0.0
+        if crosses and passes_by(previous.z, orbit.z, point.z):
+            reached = [point]
+        else:
+            reached = [other for other in others if passes_by(previous.z, orbit.z, other.z)]
+        if not reached:
+            return None
+        met.append(reached[0])
+        return (ENDED_BRANCH_POINT, f"meets the branch it was born on at its branch point at "
+                                    f"{problem.parameter} = {reached[0].parameter:.8g}")
     return stop, met
-
-
-# A chord passes a branch point when it comes within this share of its length of it.
-PASSING_FRACTION = 0.1
-
-
-def _passes_by(z_from, z_to, point):
-    chord = z_to - z_from
-    length = float(np.linalg.norm(chord))
-    if length == 0.0:
-        return False
-    s = min(1.0, max(0.0, float((point - z_from) @ chord) / (length * length)))
-    return bool(np.linalg.norm(z_from + s * chord - point) <= PASSING_FRACTION * length)
 
 
 def switched_branch(problem, point, parent, lo, hi, max_points, progress=None, others=(), side=1):
