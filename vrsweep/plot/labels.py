@@ -165,11 +165,33 @@ def _number(value) -> str:
     return f"{value:.6g}"
 
 
+def literal(text) -> str:
+    """``text`` from outside vrsweep (a file's name, a written model's name) as a figure draws it:
+    every $ escaped. matplotlib reads a text with an even number of $ as mathtext: a model named
+    'a $\\frac{$ b' (or a file 'p$\\frac{$.h5') stopped every figure with a traceback from its
+    parser, and one $ in a file's name ('p$.h5') made the caption's count odd, so every symbol
+    of it was drawn as raw markup ('$\\gamma$ = 0.22'). ``description`` gives the text back as it
+    was (its \\, { and } too, which it drops from the markup around)."""
+    text = str(text)
+    shown = text.replace("$", "\\$")
+    if any(character in text for character in "$\\{}"):
+        _LITERALS[shown] = text
+    return shown
+
+
+_LITERALS = {}  # text from outside as a figure draws it (``literal``) -> as it was, for ``description``
+
+
+def model_title(model) -> str:
+    """A written model's title (its name, or 'written model') as a figure draws it (``literal``)."""
+    return literal(model.title)
+
+
 def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
     """File and model, then the parameters held fixed (swept ones and ``omit`` left out), initial
     state and run length, wrapped at ``width`` characters between items (never inside 'name = value')."""
     selected = dict(selected or {})
-    items = [os.path.basename(path), MODEL_EQUATIONS.get(model, model)]
+    items = [literal(os.path.basename(path)), MODEL_EQUATIONS.get(model, model)]
     if config is not None:
         if config.written:
             items[1] = written_equation(config.model)
@@ -207,14 +229,14 @@ def written_equation(model) -> str:
 
     from vrsweep.numerics.written import acceleration_latex
 
-    written = f"{model.title}: x'' = {model.acceleration}"
+    written = f"{model_title(model)}: x'' = {model.acceleration}"
     try:
         latex = f"${_spaced_functions(acceleration_latex(model))}$"
         MathTextParser("path").parse(latex)
     except Exception:  # noqa: BLE001 -- anything sympy prints that mathtext does not draw
         return written
     _PLAIN_EQUATIONS[latex] = f"x'' = {model.acceleration}"
-    return f"{model.title}: {latex}"
+    return f"{model_title(model)}: {latex}"
 
 
 class Wrapped(str):
@@ -574,9 +596,16 @@ def description(fig) -> str:
     text = f"{what}\n{plain_text(caption)}".strip()
     for equation, plain in _PLAIN_EQUATIONS.items():  # a written model's, as its config wrote it
         text = text.replace(equation, plain)
+    # Text from outside (``literal``) is kept as it was: set aside while the markup goes.
+    kept = sorted(_LITERALS.items(), key=lambda item: -len(item[0]))
+    for number, (shown, _) in enumerate(kept):
+        text = text.replace(shown, f"\x00{number}\x00")
     for markup, plain in MATHTEXT_PLAIN.items():
         text = text.replace(markup, plain)
-    return text.replace("$", "").replace("\\", "")
+    text = text.replace("$", "").replace("\\", "")
+    for number, (_, original) in enumerate(kept):
+        text = text.replace(f"\x00{number}\x00", original)
+    return text
 
 
 def _greek() -> dict:

@@ -1,0 +1,59 @@
+"""Round 5 of the hostile inputs: text from outside drawn in figures, and written models that
+cost sympy minutes before anything compiles."""
+
+import numpy as np
+import pytest
+from matplotlib.cbook import is_math_text
+
+from vrsweep.analysis.continuation import Bifurcation, Branch, Orbit
+from vrsweep.config.validate import config_from_dict
+from vrsweep.store import branch_file
+
+WRITTEN = {
+    "model": {"name": None, "acceleration": "-2*zeta*v - x + F*cos(omega*t)",
+              "parameters": {"zeta": 0.05, "F": 1.0, "omega": 0.8, "Delta": 3.0, "r": 0.8},
+              "symbols": {"zeta": "\\zeta", "omega": "\\omega"},
+              "barriers": [{"position": "Delta", "side": "above", "restitution": "r"}],
+              "period": "2*pi/omega", "response": {"frequency": "omega", "scale": "F"}},
+    "initial": {"x": 0.0, "v": 0.0},
+    "continuation": {"parameter": "Delta", "from": 3.0, "to": [2.0, 3.5]},
+}
+
+
+def _written_branch_file(path, name):
+    """A branch file of a written model named ``name``: nine orbits in Delta, a fold at the fifth."""
+    config = {**WRITTEN, "model": {**WRITTEN["model"], "name": name}}
+    orbits = [Orbit(parameter=value, state=np.array([0.5, -0.2]), periods=1,
+                    monodromy=np.diag([0.5 if value < 2.75 else 1.5, 0.3]), R=2.0 + value, Q_amplitude=0.4,
+                    impacts_per_period=1.0, x_max=1.0, slowest_impact=0.5, residual=1e-11, newton_iterations=2)
+              for value in np.linspace(2.5, 3.0, 9)]
+    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "Delta left [2, 3.5]"),
+                                                       "up": ("left_range", "Delta left [2, 3.5]")})]
+    branch_file.write_branch(path, branch_file.branch_arrays(branches, [Bifurcation("fold", orbits[4])], 1.0),
+                             config_from_dict(config), "rk45")
+    return path
+
+
+@pytest.mark.parametrize("name, file_name", [
+    ("a $\\frac{$ b", "branch.h5"),        # mathtext matplotlib's parser refuses: a traceback
+    ("cost $5 model", "branch.h5"),         # one $: the caption's count odd, its symbols drawn raw
+    ("oscillator", "p$\\frac{$.h5"),       # the same from the file's name
+    ("oscillator", "run$1.h5"),
+])
+def test_a_dollar_in_a_model_or_file_name_is_drawn_as_text(tmp_path, invoke, name, file_name):
+    """A written model's name and a file's name are text: a figure draws their $ as $. A model
+    named 'a $\\frac{$ b', or a file 'p$\\frac{$.h5', stopped `vrsweep plot` with a traceback from
+    matplotlib's mathtext parser (exit 1); one $ in either ('run$1.h5') made the caption's $ odd,
+    and matplotlib drew the whole caption as text: '$\\zeta$ = 0.05' with its markup."""
+    from vrsweep import plot
+    from vrsweep.plot.labels import description
+
+    path = _written_branch_file(tmp_path / file_name, name)
+    figure = plot.plot(str(path))
+    caption = figure._suptitle.get_text()
+    assert is_math_text(caption), caption  # the symbols' $ pairs are mathtext, the names' $ escaped
+    assert f"{name}:" in description(figure) and file_name in description(figure)
+    result = invoke("plot", path, "-o", tmp_path / "f.png")
+    assert result.exit_code == 0, result.output
+    shown = invoke("info", tmp_path / "f.png")
+    assert name in shown.output and file_name in shown.output, shown.output
