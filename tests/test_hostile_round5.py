@@ -57,3 +57,26 @@ def test_a_dollar_in_a_model_or_file_name_is_drawn_as_text(tmp_path, invoke, nam
     assert result.exit_code == 0, result.output
     shown = invoke("info", tmp_path / "f.png")
     assert name in shown.output and file_name in shown.output, shown.output
+
+
+@pytest.mark.parametrize("keywords, says", [
+    ({"rtol": [1e-8, 1e-9]}, "integration.rtol is a setting, not a sweep axis"),
+    ({"integration.method": ("rk45", "dop853")}, "integration.method is a setting, not a sweep axis"),
+    ({"continuation.from": [20, 30]}, "continuation.from is a setting, not a sweep axis"),
+    ({"model": {"acceleration": "-x", "parameters": {}}}, "a written model is the config's model section"),
+    ({"model": ["original", "effective"]}, "model= takes one model's name"),
+    ({"parameters.g": [5, 6]}, 'give its axis in the config, e.g. {"sweep": {"g": [5.0, 6.0]}}'),
+    ({"initial.x": [0.1, 0.2]}, 'give its axis in the config, e.g. {"sweep": {"x0": [5.0, 6.0]}}'),
+])
+def test_several_values_for_a_setting_are_not_told_to_be_swept(keywords, says):
+    """vrsweep.sweep(config, rtol=[...]) or model={...} (a written model as a keyword) was told
+    to give 'its axis in the config, e.g. {"sweep": {"model": [5.0, 6.0]}}', an axis no config
+    can have; parameters.g=[...] to write sweep: {parameters.g: ...}, which is no axis's name."""
+    from vrsweep.errors import ConfigError
+    from vrsweep.execution.api import resolve_config
+
+    with pytest.raises(ConfigError) as caught:
+        resolve_config("model: effective\ncontinuation: {parameter: g, from: 20, to: [10, 30]}\n", keywords)
+    message = str(caught.value)
+    assert says in message, message
+    assert "sweep: {model" not in message and "sweep: {rtol" not in message and "{parameters." not in message
