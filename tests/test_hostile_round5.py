@@ -80,3 +80,37 @@ def test_several_values_for_a_setting_are_not_told_to_be_swept(keywords, says):
     message = str(caught.value)
     assert says in message, message
     assert "sweep: {model" not in message and "sweep: {rtol" not in message and "{parameters." not in message
+
+
+def test_kinks_of_different_surfaces_are_told_apart_without_simplify(monkeypatch):
+    """An acceleration with eight kinks abs(sin(x + k*v)) spent 86 s in sympy.simplify (twenty:
+    274 s) before numba compiled anything, the notice saying about 30 s: each switch was compared
+    with every other by simplify, at each look-up. Surfaces that differ at a point are two, told
+    by their values; simplify is left for those that agree there."""
+    import sympy
+
+    from vrsweep.config import parse_config
+    from vrsweep.numerics import codegen
+
+    terms = " + ".join(f"abs(sin(x + {k}*v))" for k in range(1, 9))
+    model = parse_config(f"""
+model:
+  acceleration: "-x + F*cos(omega*t) - 0.01*({terms})"
+  parameters: {{F: 1.0, omega: 0.8}}
+  period: "2*pi/omega"
+  response: {{frequency: omega}}
+initial: {{x: 0.0, v: 0.0}}
+""").model
+    acceleration, _, _, _, state = codegen.derived(model)
+    calls = []
+    simplify = sympy.simplify
+    monkeypatch.setattr(sympy, "simplify", lambda *args, **kwargs: calls.append(args) or simplify(*args, **kwargs))
+    switches = codegen.switching_functions(acceleration, state)
+    assert len(switches) == 8 and calls == []
+    frozen, sides = codegen.frozen_acceleration(acceleration, switches)
+    assert len(sides) == 8 and not frozen.has(sympy.Abs) and calls == []
+    # The same surface written otherwise is still one switch, oriented: simplify confirms it
+    x, v, t = state
+    assert codegen._switch_index(-sympy.sin(x + 3 * v), switches) == (2, -1)
+    assert codegen._switch_index(sympy.sin(x + 3 * v) + sympy.cos(x)**2 + sympy.sin(x)**2 - 1, switches) == (2, 1)
+    assert codegen._switch_index(sympy.sin(x + 3.5 * v), switches) is None
