@@ -108,6 +108,14 @@ class ModelSection:
         symbols = self._model_symbols(value.get("symbols"), names)
         ranges = self._model_ranges(value.get("ranges"), parameters or {})
         acceleration = self._expression(value, ("acceleration",), names + expressions.STATE_NAMES, parameters)
+        if acceleration is not None:
+            switches = expressions.switch_count(expressions.parse(acceleration, names + expressions.STATE_NAMES))
+            if switches > expressions.MAX_SWITCHES:
+                self.report(("model", "acceleration"),
+                            f"has kinks or jumps (abs, sign, min, max of x, v or t) on {switches} surfaces; the kernel "
+                            f"locates at most {expressions.MAX_SWITCHES}: write a law of that many segments with "
+                            f"fewer, or a smooth one (tanh)")
+                acceleration = None
         barriers = self._model_barriers(value.get("barriers"), names, parameters)
         period = self._expression(value, ("period",), names, parameters)
         response = value.get("response")

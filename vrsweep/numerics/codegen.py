@@ -435,8 +435,9 @@ def derived(model):
 
 
 # Bits of switch_signs' int64: at most this many switching functions are located (the frozen mode
-# travels in a double of the rhs's scratch, exact up to 2**53).
-MAX_SWITCHES = 52
+# travels in a double of the rhs's scratch, exact up to 2**53). The config refuses an acceleration
+# with more (expressions.switch_count), so none is ever dropped here.
+MAX_SWITCHES = expressions.MAX_SWITCHES
 
 
 def switching_functions(acceleration, state):
