@@ -158,3 +158,21 @@ def test_as_many_kinks_as_the_kernel_locates_are_all_located():
     assert len(codegen.switching_functions(acceleration, state)) == 52
     # the same surface written twice, or a kink in the parameters alone, counts once or not at all
     assert parse_config(_kinked(52).replace("0.01*(", "abs(x - 0.0) + abs(-(x - 0.0)) + abs(F) + 0.01*(")).model
+
+
+@pytest.mark.parametrize("option", ["--xlim", "--ylim"])
+@pytest.mark.parametrize("ends", ["-8e307,8e307", "-1e301,0", "0,1.7e308"])
+def test_axis_limits_beyond_what_ticks_can_span_are_one_line(tmp_path, invoke, option, ends):
+    """`plot --xlim -8e307,8e307` drew the figure, then matplotlib's tick locator overflowed:
+    a traceback, "ValueError: arange: cannot compute length", exit 1."""
+    path = _written_branch_file(tmp_path / "branch.h5", "oscillator")
+    result = invoke("plot", path, "-o", tmp_path / "f.png", option, ends)
+    assert result.exit_code == 2, result.output
+    assert result.output.startswith(f"Error: {option} {ends}: both ends must be of magnitude at most 1e+300")
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_axis_limits_up_to_1e300_are_drawn(tmp_path, invoke):
+    path = _written_branch_file(tmp_path / "branch.h5", "oscillator")
+    result = invoke("plot", path, "-o", tmp_path / "f.png", "--xlim", "-1e300,1e300", "--ylim", "-1e300,1e300")
+    assert result.exit_code == 0, result.output
