@@ -176,3 +176,20 @@ def test_axis_limits_up_to_1e300_are_drawn(tmp_path, invoke):
     path = _written_branch_file(tmp_path / "branch.h5", "oscillator")
     result = invoke("plot", path, "-o", tmp_path / "f.png", "--xlim", "-1e300,1e300", "--ylim", "-1e300,1e300")
     assert result.exit_code == 0, result.output
+
+
+def test_options_a_trajectory_figure_cannot_use_are_refused_not_ignored():
+    """`plot TRAJ.h5 --var R` drew the trajectory, the option dropped without a word, and
+    `--kind impacts --periods 1:2` drew every period."""
+    from test_plot_trajectory_titles import PAPER, trajectory
+
+    from vrsweep import plot
+    from vrsweep.errors import UsageError
+
+    data = trajectory(PAPER.replace("E", "0.9"), "original", "t.h5")
+    with pytest.raises(UsageError, match="^at, x_axis, var, amplitude and log/linear are for sweep results"):
+        plot.plot(data, var="R")
+    with pytest.raises(UsageError, match="^periods is for kind trajectory and kind slowflow; kind impacts draws"):
+        plot.plot(data, kind="impacts", periods=(1, 2))
+    assert plot.plot(data, periods=(1, 2)) is not None
+    assert plot.plot(data, kind="impacts") is not None

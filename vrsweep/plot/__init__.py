@@ -149,9 +149,12 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
         if kind not in TRAJECTORY_KINDS:
             raise UsageError.naming("{kind} {value} is for sweep results; a trajectory file takes {kinds}",
                                     value=kind, kinds=", ".join(TRAJECTORY_KINDS))
-        if at or x_axis or amplitude or log is not None:
-            raise UsageError.naming("{at}, {x_axis}, {amplitude} and {log}/{linear} are for sweep results, "
+        if at or x_axis or amplitude or log is not None or var is not None:  # never ignored quietly
+            raise UsageError.naming("{at}, {x_axis}, {var}, {amplitude} and {log}/{linear} are for sweep results, "
                                     "not trajectory files")
+        if kind == "impacts" and periods is not None:  # it was drawn over every period, without a word
+            raise UsageError.naming("{periods} is for {kind} trajectory and {kind} slowflow; {kind} impacts draws "
+                                    "every period of each file")
         if kind == "impacts":
             return impacts_per_period_figure(data, **options, **limits)
         if kind == "slowflow":
