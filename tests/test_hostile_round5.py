@@ -193,3 +193,16 @@ def test_options_a_trajectory_figure_cannot_use_are_refused_not_ignored():
         plot.plot(data, kind="impacts", periods=(1, 2))
     assert plot.plot(data, periods=(1, 2)) is not None
     assert plot.plot(data, kind="impacts") is not None
+
+
+def test_a_bifurcation_named_twice_is_refused_before_anything_is_followed(tmp_path, invoke):
+    """`continue BRANCH.h5 --point 0 --point 0 --along Omega` followed the fold twice, into one
+    file holding the same curve twice (and named it BRANCH_curve_0_0_Omega.h5)."""
+    from handmade import write_branch_file
+
+    path = write_branch_file(tmp_path / "branch.h5")
+    result = invoke("continue", path, "--point", "0", "--point", "0", "--along", "Omega", "--to", "3", "5")
+    assert result.exit_code == 2
+    assert result.output.strip() == ("Error: --point 0 is given twice: each --point follows its bifurcation into a "
+                                     "curve of its own; give each once")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["branch.h5"]
