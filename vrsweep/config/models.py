@@ -51,7 +51,10 @@ STORED_NAMES = frozenset((
     "point", "multiplier", "curve_id", "special", "curve", "periods", "barrier_distance", "residual",
     "multiplier_real", "multiplier_imag", "multiplier_modulus", "curve_kind", "curve_periods",
     "curve_end_first_status", "curve_end_first_reason", "curve_end_last_status", "curve_end_last_reason",
-    "special_kind", "special_curve"))
+    "special_kind", "special_curve",
+    # dimensions: a sweep with continuation: both has one named direction (config/grid.py), and a
+    # parameter of that name swept beside it stopped the run with "duplicate axis names"
+    "direction"))
 # A grid this large is checked point by point; a larger one along each axis through the fixed values.
 FULL_CHECK_POINTS = 1_000_000
 
