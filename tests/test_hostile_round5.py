@@ -206,3 +206,34 @@ def test_a_bifurcation_named_twice_is_refused_before_anything_is_followed(tmp_pa
     assert result.output.strip() == ("Error: --point 0 is given twice: each --point follows its bifurcation into a "
                                      "curve of its own; give each once")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["branch.h5"]
+
+
+@pytest.mark.parametrize("options, says", [
+    (dict(title="no"), "title must be True or False, got 'no'"),
+    (dict(amplitude="no"), "amplitude must be True or False, got 'no'"),
+    (dict(log="no"), "log must be True or False, got 'no'"),
+    (dict(table="yes"), "table must be True or False, got 'yes'"),
+    (dict(at="Delta=2.75"), "at must be a mapping of axis -> value, e.g. {'g': 20}, got 'Delta=2.75'"),
+    (dict(at=[("Delta", 2.75)]), "at must be a mapping of axis -> value"),
+    (dict(style=5), "style must be a style sheet's name or a .mplstyle file's path, got 5"),
+])
+def test_plots_arguments_of_the_wrong_type_are_refused(tmp_path, options, says):
+    """vrsweep.plot.plot(..., title="no") drew the title and log="no" a logarithmic axis (a
+    non-empty string is true); at="g=20" was an AttributeError, style=5 a TypeError from inside
+    matplotlib. As vrsweep.sweep's flags are (FlagTypeError), they are checked first."""
+    from vrsweep import plot
+    from vrsweep.errors import UsageError
+
+    path = _written_branch_file(tmp_path / "branch.h5", "oscillator")
+    with pytest.raises(UsageError) as caught:
+        plot.plot(str(path), **options)
+    assert str(caught.value).startswith(says), str(caught.value)
+
+
+@pytest.mark.parametrize("value", ["a", True, [1.0]])
+def test_a_colour_scale_end_that_is_no_number_is_refused(value):
+    from vrsweep.errors import UsageError
+    from vrsweep.plot import map_figure
+
+    with pytest.raises(UsageError, match="^vmin must be a number, got "):
+        map_figure(None, vmin=value)

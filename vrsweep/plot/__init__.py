@@ -107,6 +107,17 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     """
     from vrsweep.store.trajectory_file import TrajectoryData
 
+    from collections.abc import Mapping
+
+    from vrsweep.plot.labels import check_flags
+
+    # The library's arguments are typed, as the command line's options are parsed: amplitude="no"
+    # and log="no" acted as True (a log axis), at="g=20" failed in an AttributeError.
+    check_flags(amplitude=amplitude, table=table)
+    if log is not None:
+        check_flags(log=log)
+    if at is not None and not isinstance(at, Mapping):
+        raise UsageError.naming("{at} must be a mapping of axis -> value, e.g. {{'g': 20}}, got {value!r}", value=at)
     options = dict(title=title, size=size, style=style, xlim=xlim, ylim=ylim, legend=legend)
     limits = dict(vmin=vmin, vmax=vmax)
     if not isinstance(sources, (list, tuple)):  # one source; a Dataset or a dict iterates over names

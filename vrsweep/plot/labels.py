@@ -6,11 +6,13 @@ from __future__ import annotations
 import contextvars
 import functools
 import inspect
+import numbers
 import os
 import re
 import warnings
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError, clip
@@ -353,6 +355,16 @@ def _width(fig):
 # --------------------------------------------------------------------------------------------
 
 
+def check_flags(**flags):
+    """FlagTypeError for the first figure option that is not True or False (numpy's included):
+    ``title="no"`` drew the title, as any non-empty string is true."""
+    from vrsweep.errors import FlagTypeError
+
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise FlagTypeError(name, value)
+
+
 def resolve_style(style):
     """A matplotlib style sheet's name (``matplotlib.style.available``, e.g. 'seaborn-v0_8-paper')
     or the path of a .mplstyle file; UsageError naming ``style`` otherwise. None: no style."""
@@ -531,6 +543,10 @@ def figure_options(function):
                 legend=None, **kwargs):
         import matplotlib.style
 
+        check_flags(title=title)
+        if style is not None and not isinstance(style, (str, os.PathLike)):
+            raise UsageError.naming("{style} must be a style sheet's name or a .mplstyle file's path, got {value!r}",
+                                    value=style)
         style = resolve_style(style)
         size = parse_size(size) if size is not None else None
         xlim, ylim = layout.parse_limits(xlim, "xlim"), layout.parse_limits(ylim, "ylim")
@@ -545,6 +561,9 @@ def figure_options(function):
             for key, value in (("vmin", vmin), ("vmax", vmax)):
                 # matplotlib's colour bar does arithmetic on its ends (tick steps, bin middles): near
                 # the float64 limit it overflows, with a page of RuntimeWarnings and a wrong bar.
+                if value is not None and (isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real)):
+                    # vmin="a" was a ValueError from float(); vmin=True a colour scale from 1
+                    raise UsageError.naming("{" + key + "} must be a number, got {value!r}", value=value)
                 if value is not None and not abs(float(value)) <= LIMIT_MAGNITUDE:
                     raise UsageError.naming("{" + key + "} {value}: the end of a colour scale must be a finite "
                                             "number of magnitude at most {limit:g}", value=value,
