@@ -237,3 +237,40 @@ def test_a_colour_scale_end_that_is_no_number_is_refused(value):
 
     with pytest.raises(UsageError, match="^vmin must be a number, got "):
         map_figure(None, vmin=value)
+
+
+def _many_axes(count, both=False):
+    import yaml
+
+    names = [f"p{i}" for i in range(count)]
+    sweep = {name: [1.0] for name in names}
+    if both:
+        sweep[names[0]] = {"values": [1.0, 2.0], "continuation": "both"}
+    return yaml.safe_dump({
+        "model": {"acceleration": "-x + cos(t)*(" + " + ".join(names) + ")", "parameters": dict.fromkeys(names, 1.0),
+                  "period": "2*pi", "response": {"frequency": 1}},
+        "initial": {"x": 0.0, "v": 0.0}, "sweep": sweep,
+        "integration": {"transient_periods": 1, "measure_periods": 2, "strobe_periods": 1}}, sort_keys=False)
+
+
+@pytest.mark.parametrize("count, both, limit", [(32, False, 31), (40, False, 31), (31, True, 30)])
+def test_more_axes_than_a_file_holds_are_refused(count, both, limit):
+    """A written model swept over 32 axes (of one value each) ran, then h5py stopped it: "Chunk
+    dimensionality is too large" (HDF5 holds 32 dimensions, and each variable has one more, the
+    strobe's, and a two-way sweep's direction); over 33, validate stopped in numpy's "only supports
+    up to 32 dimensions". Both were tracebacks."""
+    from vrsweep.config import parse_config
+    from vrsweep.errors import ConfigError
+
+    with pytest.raises(ConfigError) as caught:
+        parse_config(_many_axes(count, both), "m.yaml")
+    assert [problem.split(": ", 2)[1:] for problem in caught.value.problems] == [
+        ["sweep", f"has {count} axes; a result file holds at most {limit} (HDF5's 32 dimensions, less the strobe's"
+                  + (" and the direction" if both else "") + "): fix the others at one value in the parameters"]]
+
+
+def test_as_many_axes_as_a_file_holds_are_read():
+    from vrsweep.config import parse_config
+
+    assert len(parse_config(_many_axes(31)).axes) == 31
+    assert len(parse_config(_many_axes(30, both=True)).axes) == 30
