@@ -274,3 +274,26 @@ def test_as_many_axes_as_a_file_holds_are_read():
 
     assert len(parse_config(_many_axes(31)).axes) == 31
     assert len(parse_config(_many_axes(30, both=True)).axes) == 30
+
+
+@pytest.mark.parametrize("steps", ["min_step: 1, max_step: 0.1", "max_step: 1.0e-6"])
+def test_a_smallest_step_above_the_largest_is_named_not_the_first_step(tmp_path, invoke, steps):
+    """continuation: {min_step: 1, max_step: 0.1} was refused as 'continuation.initial_step = 0.1
+    must lie between continuation.min_step = 1 and continuation.max_step = 0.1', of a first step
+    the config never gave (its default, set between the two)."""
+    path = tmp_path / "c.yaml"
+    path.write_text(f"model: effective\ncontinuation: {{parameter: g, from: 20, to: [10, 30], {steps}}}\n")
+    result = invoke("validate", path)
+    assert result.exit_code == 2
+    assert "is above continuation.max_step" in result.output and "initial_step" not in result.output, result.output
+
+
+def test_a_curves_smallest_step_above_the_largest_is_named(tmp_path, invoke):
+    from handmade import write_branch_file
+
+    path = write_branch_file(tmp_path / "branch.h5")
+    result = invoke("continue", path, "--point", "0", "--along", "Omega", "--to", "3", "5",
+                    "--set", "continuation.min_step=1", "--set", "continuation.max_step=0.1")
+    assert result.exit_code == 2
+    assert result.output.strip() == ("Error: continuation.min_step = 1 is above continuation.max_step = 0.1: the "
+                                     "smallest step cannot exceed the largest")
