@@ -297,3 +297,19 @@ def test_a_curves_smallest_step_above_the_largest_is_named(tmp_path, invoke):
     assert result.exit_code == 2
     assert result.output.strip() == ("Error: continuation.min_step = 1 is above continuation.max_step = 0.1: the "
                                      "smallest step cannot exceed the largest")
+
+
+@pytest.mark.parametrize("value", ["[1, 2]", "{acceleration: -x}"])
+def test_a_model_setting_that_is_no_value_is_one_problem(value):
+    """`--set model={acceleration: -x}` on a config with a written model gave two problems, the
+    second blaming the config's own (valid) model under the setting's name: "--set model=...:
+    model: must be one of original, effective, got {'name': 'lin', 'acceleration': ...}"."""
+    from vrsweep.config import parse_config
+    from vrsweep.errors import ConfigError
+
+    text = ("model:\n  acceleration: \"-x + F*cos(omega*t)\"\n  parameters: {F: 1.0, omega: 0.8}\n"
+            "  period: \"2*pi/omega\"\n  response: {frequency: omega}\ninitial: {x: 0.0, v: 0.0}\n")
+    with pytest.raises(ConfigError) as caught:
+        parse_config(text, "m.yaml", (f"model={value}",))
+    assert len(caught.value.problems) == 1, caught.value.problems
+    assert "VALUE must be a single number or word" in caught.value.problems[0]
