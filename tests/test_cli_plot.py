@@ -57,7 +57,8 @@ def test_an_explicit_kind_names_the_default_output(sweep, invoke):
 def test_trajectory_kinds(trajectory, tmp_path, invoke):
     for kind in ("trajectory", "impacts", "slowflow"):
         out = tmp_path / f"{kind}.png"
-        result = invoke("plot", trajectory, "--kind", kind, "-o", out, "--periods", "1:4")
+        periods = () if kind == "impacts" else ("--periods", "1:4")  # impacts draws every period
+        result = invoke("plot", trajectory, "--kind", kind, "-o", out, *periods)
         assert result.exit_code == 0, result.output
         assert out.stat().st_size > 10_000
 
@@ -239,10 +240,10 @@ def test_cli_messages_name_the_flags_the_library_names_arguments(sweep, trajecto
     with pytest.raises(UsageError) as info:
         plot.plot(sweep, x_axis="Omega")
     assert str(info.value) == f"x_axis Omega: not a swept axis of {sweep} (axes: g)"
-    with pytest.raises(UsageError, match="^at, x_axis, amplitude and log/linear are for sweep results"):
+    with pytest.raises(UsageError, match="^at, x_axis, var, amplitude and log/linear are for sweep results"):
         plot.plot(trajectory, at={"g": "1"})
     result = invoke("plot", trajectory, "--at", "g=1", "-o", tmp_path / "f.png")
-    assert "Error: --at, --x, --amplitude and --log/--linear are for sweep results" in result.output
+    assert "Error: --at, --x, --var, --amplitude and --log/--linear are for sweep results" in result.output
 
 
 # --- curves over a map (issue 21): vrsweep plot MAP.h5 CURVES.h5 ... -------------------------------

@@ -178,6 +178,14 @@ def test_the_taken_names_cover_every_array_a_result_file_names_itself():
     integration = Integration(**dict(INTEGRATION_DEFAULTS, lyapunov=True))
     stored = {spec[0] for spec in point_variables(integration)} | {"strobe"} | set(BOOKKEEPING)
     stored |= set(curve_file.layout([]))
+    # and the dimensions: each variable's extra ones, and a two-way sweep's direction (a parameter
+    # named direction, swept beside a continuation: both axis, stopped the run: duplicate axis names)
+    stored |= {dim[0] if isinstance(dim, tuple) else dim for spec in point_variables(integration) for dim in spec[2]}
+    from vrsweep.config import parse_config
+    from vrsweep.config.grid import Grid
+
+    grid = Grid.from_config(parse_config("sweep:\n  g: {values: [1, 2], continuation: both}\n"))
+    stored |= set(grid.axis_names) - {"g"}
     assert stored <= STORED_NAMES | expressions.RESERVED, stored - STORED_NAMES - expressions.RESERVED
 
 

@@ -178,6 +178,10 @@ def _curves(path, overrides, output, start_path, point, along, to, within, overw
                          "e.g. --point 0 --along Omega (vrsweep info lists its bifurcations)")
     if start_path:
         raise UsageError("--start and --at go with a config, not with a branch file")
+    repeated = next((index for number, index in enumerate(point) if index in point[:number]), None)
+    if repeated is not None:  # it followed the same curve twice, into one file, as two curves
+        raise UsageError(f"--point {repeated} is given twice: each --point follows its bifurcation into a curve "
+                         "of its own; give each once")
     flags = {**OUTPUT_FLAGS, "point": "--point", "along": "--along", "to": "--to", "within": "--within",
              "set": "--set", **{key: f"continuation.{key}" for key in ("initial_step", "min_step", "max_step")}}
     with flag_wording(flags):

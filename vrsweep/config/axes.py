@@ -16,6 +16,9 @@ from vrsweep.config.wording import did_you_mean, show, show_number
 from vrsweep.numerics.model import INITIAL_STATE_AXES, INITIAL_STATE_KEYS
 
 
+MAX_DIMENSIONS = 32  # of an HDF5 dataset (H5S_MAX_RANK)
+
+
 class SweepAxes:
     """Checks of ``sweep``: mixed into the validation run, which provides ``report``."""
 
@@ -64,6 +67,16 @@ class SweepAxes:
             values = self.axis_values(path, axis, kind)
             if values is not None:
                 axes[name] = (values, continuation, kind)
+        # Each variable of the file is an HDF5 dataset over the axes, a two-way sweep's direction
+        # and its own dimension (the strobe's): HDF5 holds 32 dimensions at most. A written model
+        # swept over 32 axes ended its run in h5py's "Chunk dimensionality is too large", over 33
+        # validate in numpy's "only supports up to 32 dimensions", both tracebacks.
+        limit = MAX_DIMENSIONS - 1 - any(spec[1] == "both" for spec in axes.values())
+        if len(axes) > limit:
+            self.report(("sweep",), f"has {len(axes)} axes; a result file holds at most {limit} (HDF5's {MAX_DIMENSIONS} "
+                                    f"dimensions, less the strobe's{' and the direction' if limit < MAX_DIMENSIONS - 1 else ''}"
+                                    f"): fix the others at one value in the parameters")
+            return {}
         return axes
 
     def axis_values(self, path, axis, kind):

@@ -51,7 +51,10 @@ STORED_NAMES = frozenset((
     "point", "multiplier", "curve_id", "special", "curve", "periods", "barrier_distance", "residual",
     "multiplier_real", "multiplier_imag", "multiplier_modulus", "curve_kind", "curve_periods",
     "curve_end_first_status", "curve_end_first_reason", "curve_end_last_status", "curve_end_last_reason",
-    "special_kind", "special_curve"))
+    "special_kind", "special_curve",
+    # dimensions: a sweep with continuation: both has one named direction (config/grid.py), and a
+    # parameter of that name swept beside it stopped the run with "duplicate axis names"
+    "direction"))
 # A grid this large is checked point by point; a larger one along each axis through the fixed values.
 FULL_CHECK_POINTS = 1_000_000
 
@@ -108,6 +111,14 @@ class ModelSection:
         symbols = self._model_symbols(value.get("symbols"), names)
         ranges = self._model_ranges(value.get("ranges"), parameters or {})
         acceleration = self._expression(value, ("acceleration",), names + expressions.STATE_NAMES, parameters)
+        if acceleration is not None:
+            switches = expressions.switch_count(expressions.parse(acceleration, names + expressions.STATE_NAMES))
+            if switches > expressions.MAX_SWITCHES:
+                self.report(("model", "acceleration"),
+                            f"has kinks or jumps (abs, sign, min, max of x, v or t) on {switches} surfaces; the kernel "
+                            f"locates at most {expressions.MAX_SWITCHES}: write a law of that many segments with "
+                            f"fewer, or a smooth one (tanh)")
+                acceleration = None
         barriers = self._model_barriers(value.get("barriers"), names, parameters)
         period = self._expression(value, ("period",), names, parameters)
         response = value.get("response")

@@ -193,6 +193,9 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
                 try:
                     return parse_scalar(value)
                 except ValueError:
+                    # reported by parse_overrides ("VALUE must be a single number or word"); the
+                    # file's model is not checked in its place (validate_document)
+                    self.model_setting_unreadable = True
                     return value
         return data.get("model") if isinstance(data, dict) else None
 
@@ -326,8 +329,10 @@ class _Validator(Report, ModelSection, SweepAxes, CrossFieldRules):
         data = {key: ({} if value is None and key in ("parameters", "initial", "sweep", "integration")
                       else value) for key, value in data.items()}
         written = isinstance(self.model, WrittenModel)
-        if written:
-            data = {key: value for key, value in data.items() if key != "model"}  # read_model's
+        if written or getattr(self, "model_setting_unreadable", False):
+            # read_model's; or a --set model=[1, 2] that was no value: the file's written model
+            # was then refused under that setting's name, "must be one of original, effective"
+            data = {key: value for key, value in data.items() if key != "model"}
         try:
             document = (written_document(self.model.parameters, tuple(sorted(
                 (name, domain) for name, domain in self.parameter_domains.items() if domain != ANY)))

@@ -138,9 +138,7 @@ def resolve_config(config, overrides=None, *, keywords=()):
         # g=[5, 6] reads as "sweep g over 5 and 6" to a caller, and was refused as a --set VALUE
         # ("VALUE must be a single number or word"), words this caller never typed.
         if _several(value) and str(name).rpartition(".")[2] != "to":
-            raise ConfigError([f"keyword argument {clip(f'{name}={value!r}')}: a keyword sets one value ({name}=5 "
-                               f"fixes {name}); to sweep {name} over values, give its axis in the config, e.g. "
-                               f'{{"sweep": {{"{name}": [5.0, 6.0]}}}} (a dict config) or sweep: {{{name}: [5.0, 6.0]}}'],
+            raise ConfigError([f"keyword argument {clip(f'{name}={value!r}')}: {_several_words(str(name), value)}"],
                               source="keyword arguments")
     settings = tuple(setting_text(name, value) for name, value in overrides.items())
     # A problem names the keyword argument as the caller wrote it: this user never typed --set.
@@ -170,6 +168,30 @@ def resolve_config(config, overrides=None, *, keywords=()):
         return config_from_dict(config, "<dict>", settings, override_words=words)
     raise UsageError.naming("{config} must be a path, YAML text, a dict or a vrsweep Config, got {kind}",
                             kind=type(config).__name__)
+
+
+def _several_words(name, value) -> str:
+    """Why a keyword holding several values is refused, and what to write instead: a parameter's
+    or the initial state's axis in the config, under the axis's own name (g, not parameters.g;
+    x0, not initial.x); a setting (rtol, method, continuation.KEY) takes one value, a written model
+    (a dict) is the config's model section. Every keyword was told to sweep itself: rtol=[...] and
+    model={...} to write sweep: {model: [5.0, 6.0]}, parameters.g=[...] sweep: {parameters.g: ...}."""
+    from vrsweep.config.schema import INTEGRATION_DEFAULTS
+
+    section, _, key = name.rpartition(".")
+    if key == "model" and not section:
+        if isinstance(value, dict):
+            return ("a written model is the config's model section, not a keyword: give it in the config "
+                    '({"model": {"acceleration": ..., ...}}, a dict config); model= takes the name of one of the '
+                    "paper's models (original, effective)")
+        return "model= takes one model's name (original, effective); to compare models, run each"
+    if section == "continuation" or (key in INTEGRATION_DEFAULTS and section in ("", "integration")):
+        setting = name if section else f"integration.{key}"
+        return (f"a keyword sets one value, and {setting} is a setting, not a sweep axis (a parameter, x0 or v0 "
+                f"is one): run once for each value")
+    axis = {"initial.x": "x0", "initial.v": "v0"}.get(name, key if section == "parameters" else name)
+    return (f"a keyword sets one value ({axis}=5 fixes {axis}); to sweep {axis} over values, give its axis in the "
+            f'config, e.g. {{"sweep": {{"{axis}": [5.0, 6.0]}}}} (a dict config) or sweep: {{{axis}: [5.0, 6.0]}}')
 
 
 def _several(value) -> bool:

@@ -15,6 +15,22 @@ SECTION_WORDS = {"from_key": "continuation.from", "to": "continuation.to", "init
                  "min_step": "continuation.min_step", "max_step": "continuation.max_step"}
 
 
+def check_steps(section):
+    """Refuse (UsageError) steps a branch or a curve cannot take: min_step above max_step (said so:
+    an initial_step the config never gave, set between them, was blamed for it), or an initial_step
+    outside [min_step, max_step]."""
+    if not section.min_step <= section.max_step:
+        raise UsageError.naming("{min_step} = {low} is above {max_step} = {high}: the smallest step cannot exceed "
+                                "the largest", SECTION_WORDS, low=f"{section.min_step:g}",
+                                high=f"{section.max_step:g}")
+    # A first step beyond max_step was taken whole, and the branch ended after it claiming
+    # left_range; one below min_step ends the branch at its first failed correction.
+    if not section.min_step <= section.initial_step <= section.max_step:
+        raise UsageError.naming("{initial_step} = {value} must lie between {min_step} = {low} and {max_step} = "
+                                "{high}", SECTION_WORDS, value=f"{section.initial_step:g}",
+                                low=f"{section.min_step:g}", high=f"{section.max_step:g}")
+
+
 def check_section(config):
     """Refuse (UsageError) a config whose continuation section ``continue`` cannot run, before
     anything is integrated: for ``continue`` and ``validate`` alike, without importing numba (the
@@ -27,12 +43,7 @@ def check_section(config):
     if not section.low <= section.start <= section.high:
         raise UsageError.naming("{from_key} = {value} lies outside {to} = [{low}, {high}]", SECTION_WORDS,
                                 value=section.start, low=section.low, high=section.high)
-    # A first step beyond max_step was taken whole, and the branch ended after it claiming
-    # left_range; one below min_step ends the branch at its first failed correction.
-    if not section.min_step <= section.initial_step <= section.max_step:
-        raise UsageError.naming("{initial_step} = {value} must lie between {min_step} = {low} and {max_step} = "
-                                "{high}", SECTION_WORDS, value=f"{section.initial_step:g}",
-                                low=f"{section.min_step:g}", high=f"{section.max_step:g}")
+    check_steps(section)
     from vrsweep.analysis.commensurate import check_commensurate  # plain Python: validate imports no numba
 
     check_commensurate(config.parameters, config.model, section.parameter, section.max_period)

@@ -123,7 +123,7 @@ def _with_settings(config, overrides):
     """The branch's config with the curve's settings (CURVE_SETTINGS) over its continuation section;
     the section's own rule (min_step <= initial_step <= max_step) holds for them too."""
     from vrsweep.config import with_overrides
-    from vrsweep.execution.continuation import SECTION_WORDS
+    from vrsweep.execution.continuation import check_steps
 
     for setting in overrides:
         name = str(setting).partition("=")[0].strip()
@@ -141,10 +141,7 @@ def _with_settings(config, overrides):
         start = min(max(section.initial_step, section.min_step), section.max_step)
         section = dataclasses.replace(section, initial_step=start)
         config = dataclasses.replace(config, continuation=section)
-    if not section.min_step <= section.initial_step <= section.max_step:
-        raise UsageError.naming("{initial_step} = {value} must lie between {min_step} = {low} and {max_step} = "
-                                "{high}", SECTION_WORDS, value=f"{section.initial_step:g}",
-                                low=f"{section.min_step:g}", high=f"{section.max_step:g}")
+    check_steps(section)
     return config
 
 

@@ -435,8 +435,9 @@ def derived(model):
 
 
 # Bits of switch_signs' int64: at most this many switching functions are located (the frozen mode
-# travels in a double of the rhs's scratch, exact up to 2**53).
-MAX_SWITCHES = 52
+# travels in a double of the rhs's scratch, exact up to 2**53). The config refuses an acceleration
+# with more (expressions.switch_count), so none is ever dropped here.
+MAX_SWITCHES = expressions.MAX_SWITCHES
 
 
 def switching_functions(acceleration, state):
@@ -472,15 +473,50 @@ def _switch_candidates(node):
 
 
 def _switch_index(candidate, found):
-    """(k, orientation) if ``candidate`` is found[k] (orientation 1) or -found[k] (-1), else None."""
+    """(k, orientation) if ``candidate`` is found[k] (orientation 1) or -found[k] (-1), else None.
+
+    Two switching functions that differ at a point are two surfaces, and most do: they are told
+    apart by their values at a few points (_differ) before sympy.simplify is asked whether their
+    sum or difference is zero, which takes a second or more for each pair of trigonometric
+    arguments. Asked of every pair, each time a switch was looked up, simplify alone took 86 s
+    for an acceleration with eight kinks abs(sin(x + k*v)) and 274 s for twenty, before numba
+    compiled anything (the notice said about 30 s)."""
     import sympy
 
     for k, known in enumerate(found):
-        if sympy.simplify(candidate - known) == 0:
-            return k, 1
-        if sympy.simplify(candidate + known) == 0:
-            return k, -1
+        for orientation, combined in ((1, candidate - known), (-1, candidate + known)):
+            if combined == 0 or (not _differ(candidate, orientation * known)
+                                 and sympy.simplify(combined) == 0):
+                return k, orientation
     return None
+
+
+# Where _differ compares two expressions: values of no special meaning (no zero of a written
+# function, no multiple of pi), a different one for each symbol.
+_PROBES = ((0.3183098862, 0.7071067812, 1.2247448714, 0.5772156649, 1.6180339887, 0.8660254038),
+           (1.4142135624, 0.4342944819, 0.6931471806, 1.7320508076, 0.2718281828, 1.1447298858))
+
+
+def _differ(first, second):
+    """Whether ``first`` and ``second`` (sympy expressions) certainly differ: their values at one
+    of _PROBES' points are finite and apart by more than rounding. False where they agree, or
+    cannot be evaluated there (then sympy decides)."""
+    import sympy
+
+    symbols = sorted(first.free_symbols | second.free_symbols, key=str)
+    for probe in _PROBES:
+        values = {symbol: sympy.Float(probe[n % len(probe)] * (1 + n // len(probe)), 30)
+                  for n, symbol in enumerate(symbols)}
+        try:
+            a = complex(first.evalf(30, subs=values))
+            b = complex(second.evalf(30, subs=values))
+        except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+            continue
+        if not all(math.isfinite(part) for part in (a.real, a.imag, b.real, b.imag)):
+            continue
+        if abs(a - b) > 1e-12 * max(1.0, abs(a), abs(b)):
+            return True
+    return False
 
 
 def frozen_acceleration(acceleration, switches):

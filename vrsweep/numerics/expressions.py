@@ -30,6 +30,10 @@ MAX_LENGTH = 2000   # characters: an equation of motion is a line, not a program
 MAX_DEPTH = 60      # nesting of the syntax tree (parentheses, operators, calls)
 MAX_EXPONENT = 64   # a constant power beyond this is a typo (and x**10**9 would never finish)
 
+# The kinks and jumps (abs, sign, min, max of x, v or t) the kernel locates: a bit each of an int64
+# held in a double, exact up to 2**53 (codegen.switching_functions).
+MAX_SWITCHES = 52
+SWITCHES = ("abs", "sign", "min", "max")
 FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs", "tanh", "sign", "min", "max")
 CONSTANTS = {"pi": math.pi}
 STATE_NAMES = ("x", "v", "t")
@@ -205,6 +209,37 @@ def _check(node, names, depth):
         what = f"the operator {type(node.op).__name__}"
     raise ExpressionError(f"may not hold {what}: {_token(node)} (only numbers, names, + - * / ** and the "
                           f"functions {', '.join(FUNCTIONS)})")
+
+
+def switch_count(tree) -> int:
+    """How many surfaces the kinks and jumps of ``tree`` lie on (an upper bound: each distinct
+    argument of abs and sign, and each pair of distinct arguments of min and max, nested calls of
+    one merged as sympy merges them, that holds x, v or t; s and -s are one). Beyond MAX_SWITCHES
+    the kernel located the first 52 and stepped across the rest unlocated, the method's order lost
+    there, and nothing said so."""
+    surfaces = set()
+
+    def text(node):
+        while isinstance(node, ast.UnaryOp):  # -s and +s: the surface of s
+            node = node.operand
+        return ast.unparse(node)
+
+    def arguments(node, function):
+        for argument in node.args:
+            if isinstance(argument, ast.Call) and isinstance(argument.func, ast.Name) and argument.func.id == function:
+                yield from arguments(argument, function)
+            else:
+                yield argument
+
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in SWITCHES):
+            continue
+        every = {text(argument): names_in(argument) & set(STATE_NAMES) for argument in arguments(node, node.func.id)}
+        if node.func.id in ("abs", "sign"):
+            surfaces.update(argument for argument, moves in every.items() if moves)
+        else:
+            surfaces.update(frozenset((a, b)) for a in every for b in every if a < b and every[a] | every[b])
+    return len(surfaces)
 
 
 def names_in(tree) -> set[str]:

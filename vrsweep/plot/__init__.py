@@ -107,6 +107,17 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
     """
     from vrsweep.store.trajectory_file import TrajectoryData
 
+    from collections.abc import Mapping
+
+    from vrsweep.plot.labels import check_flags
+
+    # The library's arguments are typed, as the command line's options are parsed: amplitude="no"
+    # and log="no" acted as True (a log axis), at="g=20" failed in an AttributeError.
+    check_flags(amplitude=amplitude, table=table)
+    if log is not None:
+        check_flags(log=log)
+    if at is not None and not isinstance(at, Mapping):
+        raise UsageError.naming("{at} must be a mapping of axis -> value, e.g. {{'g': 20}}, got {value!r}", value=at)
     options = dict(title=title, size=size, style=style, xlim=xlim, ylim=ylim, legend=legend)
     limits = dict(vmin=vmin, vmax=vmax)
     if not isinstance(sources, (list, tuple)):  # one source; a Dataset or a dict iterates over names
@@ -149,9 +160,12 @@ def plot(sources, kind=None, amplitude=False, at=None, x_axis=None, log=None, pe
         if kind not in TRAJECTORY_KINDS:
             raise UsageError.naming("{kind} {value} is for sweep results; a trajectory file takes {kinds}",
                                     value=kind, kinds=", ".join(TRAJECTORY_KINDS))
-        if at or x_axis or amplitude or log is not None:
-            raise UsageError.naming("{at}, {x_axis}, {amplitude} and {log}/{linear} are for sweep results, "
+        if at or x_axis or amplitude or log is not None or var is not None:  # never ignored quietly
+            raise UsageError.naming("{at}, {x_axis}, {var}, {amplitude} and {log}/{linear} are for sweep results, "
                                     "not trajectory files")
+        if kind == "impacts" and periods is not None:  # it was drawn over every period, without a word
+            raise UsageError.naming("{periods} is for {kind} trajectory and {kind} slowflow; {kind} impacts draws "
+                                    "every period of each file")
         if kind == "impacts":
             return impacts_per_period_figure(data, **options, **limits)
         if kind == "slowflow":

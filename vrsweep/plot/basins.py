@@ -12,7 +12,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from vrsweep.errors import ResultFileError, UsageError
-from vrsweep.plot.labels import MODEL_EQUATIONS, written_equation, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words, gain_words
+from vrsweep.plot.labels import MODEL_EQUATIONS, literal, written_equation, parameter_symbol, _legend_columns, _wrap, figure_options, _new_figure, _number, _title, _width, period_words, gain_words
 from vrsweep.plot.palettes import QUALITATIVE, categorical
 from vrsweep.plot.selection import cell_ticks, _grid_axes, _path, _progress_note, _Sweep, load, select
 from vrsweep.results import Status
@@ -239,7 +239,7 @@ def _basin_handle(view, label, colour):
 
 def _basin_caption(view, width):
     """The caption of a basin plot: the slice's parameters (not the config's unused initial state)."""
-    items = [os.path.basename(view.path), MODEL_EQUATIONS.get(view.model, view.model)]
+    items = [literal(os.path.basename(view.path)), MODEL_EQUATIONS.get(view.model, view.model)]
     if view.config is not None:
         parameters = view.parameters()
         if view.config.written:

@@ -16,7 +16,7 @@ from vrsweep.plot.analytic import _draw_branches, analytic_branches
 from vrsweep.plot.layout import fit_y_to_view
 from vrsweep.plot.palettes import LINE_COLOURS, QUALITATIVE, categorical
 from vrsweep.plot.labels import (
-    parameter_symbol,
+    model_title, parameter_symbol,
     _caption, _legend_columns, _new_figure, _title, _width, figure_options, parameter_label,
     written_response_label,
 )
@@ -192,7 +192,7 @@ def branch_figure(ds, sweeps=(), more_branches=(), zoom=None, table=False, xlim=
     _mark_bifurcations(top, bottom, kinds, places, heights, tags, name)
     written = config is not None and config.written
     top.set_ylabel(written_response_label(config.model) if written else "gain $R = |Q|/c$")
-    model_words = config.model.title if written else f"{ds.attrs.get('model', '')} model"
+    model_words = model_title(config.model) if written else f"{ds.attrs.get('model', '')} model"
     what = f"Periodic orbits continued in {parameter_symbol(name)} ({model_words})"
     path = str(ds.encoding.get("source", "") or ds.attrs.get("path", "") or "branch")
     # Continuation holds every parameter but its own at the config's value, sweep axes too: the

@@ -24,7 +24,7 @@ from matplotlib.lines import Line2D
 
 from vrsweep.errors import UsageError
 from vrsweep.plot.palettes import cased
-from vrsweep.plot.labels import Wrapped, _legend_columns, _parse_config, _title, _width, caption_lines, figure_options
+from vrsweep.plot.labels import Wrapped, literal, _legend_columns, _parse_config, _title, _width, caption_lines, figure_options
 from vrsweep.plot.selection import _limits, _map_axes, _Sweep, fine_grid
 
 FILE_KIND = "curves"
@@ -119,7 +119,7 @@ def curves_figure(ds, curve_files, name="R", x_axis=None, log=False, vmin=None, 
         ax.set_ylim(y_limits)
     _relegend(fig, handles)
     what, caption = getattr(fig, "_vrsweep_description", ("", ""))
-    files = [_path(curves) + ("," if number < len(curve_files) - 1 else "")
+    files = [literal(_path(curves)) + ("," if number < len(curve_files) - 1 else "")
              for number, curves in enumerate(curve_files)]
     counts = _curve_counts(curve_files)
     head, grey, tail = what.partition(" (light grey")  # the map's note on grey cells stays last

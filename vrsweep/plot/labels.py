@@ -6,11 +6,13 @@ from __future__ import annotations
 import contextvars
 import functools
 import inspect
+import numbers
 import os
 import re
 import warnings
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
 
 from vrsweep.errors import UsageError, clip
@@ -165,11 +167,33 @@ def _number(value) -> str:
     return f"{value:.6g}"
 
 
+def literal(text) -> str:
+    """``text`` from outside vrsweep (a file's name, a written model's name) as a figure draws it:
+    every $ escaped. matplotlib reads a text with an even number of $ as mathtext: a model named
+    'a $\\frac{$ b' (or a file 'p$\\frac{$.h5') stopped every figure with a traceback from its
+    parser, and one $ in a file's name ('p$.h5') made the caption's count odd, so every symbol
+    of it was drawn as raw markup ('$\\gamma$ = 0.22'). ``description`` gives the text back as it
+    was (its \\, { and } too, which it drops from the markup around)."""
+    text = str(text)
+    shown = text.replace("$", "\\$")
+    if any(character in text for character in "$\\{}"):
+        _LITERALS[shown] = text
+    return shown
+
+
+_LITERALS = {}  # text from outside as a figure draws it (``literal``) -> as it was, for ``description``
+
+
+def model_title(model) -> str:
+    """A written model's title (its name, or 'written model') as a figure draws it (``literal``)."""
+    return literal(model.title)
+
+
 def _caption(path, config, model, selected=None, extra="", width=100, omit=()):
     """File and model, then the parameters held fixed (swept ones and ``omit`` left out), initial
     state and run length, wrapped at ``width`` characters between items (never inside 'name = value')."""
     selected = dict(selected or {})
-    items = [os.path.basename(path), MODEL_EQUATIONS.get(model, model)]
+    items = [literal(os.path.basename(path)), MODEL_EQUATIONS.get(model, model)]
     if config is not None:
         if config.written:
             items[1] = written_equation(config.model)
@@ -207,14 +231,14 @@ def written_equation(model) -> str:
 
     from vrsweep.numerics.written import acceleration_latex
 
-    written = f"{model.title}: x'' = {model.acceleration}"
+    written = f"{model_title(model)}: x'' = {model.acceleration}"
     try:
         latex = f"${_spaced_functions(acceleration_latex(model))}$"
         MathTextParser("path").parse(latex)
     except Exception:  # noqa: BLE001 -- anything sympy prints that mathtext does not draw
         return written
     _PLAIN_EQUATIONS[latex] = f"x'' = {model.acceleration}"
-    return f"{model.title}: {latex}"
+    return f"{model_title(model)}: {latex}"
 
 
 class Wrapped(str):
@@ -329,6 +353,16 @@ def _width(fig):
 # --------------------------------------------------------------------------------------------
 # Options every figure takes: title, size, style (and vmin/vmax where there is a colour scale)
 # --------------------------------------------------------------------------------------------
+
+
+def check_flags(**flags):
+    """FlagTypeError for the first figure option that is not True or False (numpy's included):
+    ``title="no"`` drew the title, as any non-empty string is true."""
+    from vrsweep.errors import FlagTypeError
+
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise FlagTypeError(name, value)
 
 
 def resolve_style(style):
@@ -509,6 +543,10 @@ def figure_options(function):
                 legend=None, **kwargs):
         import matplotlib.style
 
+        check_flags(title=title)
+        if style is not None and not isinstance(style, (str, os.PathLike)):
+            raise UsageError.naming("{style} must be a style sheet's name or a .mplstyle file's path, got {value!r}",
+                                    value=style)
         style = resolve_style(style)
         size = parse_size(size) if size is not None else None
         xlim, ylim = layout.parse_limits(xlim, "xlim"), layout.parse_limits(ylim, "ylim")
@@ -523,6 +561,9 @@ def figure_options(function):
             for key, value in (("vmin", vmin), ("vmax", vmax)):
                 # matplotlib's colour bar does arithmetic on its ends (tick steps, bin middles): near
                 # the float64 limit it overflows, with a page of RuntimeWarnings and a wrong bar.
+                if value is not None and (isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real)):
+                    # vmin="a" was a ValueError from float(); vmin=True a colour scale from 1
+                    raise UsageError.naming("{" + key + "} must be a number, got {value!r}", value=value)
                 if value is not None and not abs(float(value)) <= LIMIT_MAGNITUDE:
                     raise UsageError.naming("{" + key + "} {value}: the end of a colour scale must be a finite "
                                             "number of magnitude at most {limit:g}", value=value,
@@ -574,9 +615,16 @@ def description(fig) -> str:
     text = f"{what}\n{plain_text(caption)}".strip()
     for equation, plain in _PLAIN_EQUATIONS.items():  # a written model's, as its config wrote it
         text = text.replace(equation, plain)
+    # Text from outside (``literal``) is kept as it was: set aside while the markup goes.
+    kept = sorted(_LITERALS.items(), key=lambda item: -len(item[0]))
+    for number, (shown, _) in enumerate(kept):
+        text = text.replace(shown, f"\x00{number}\x00")
     for markup, plain in MATHTEXT_PLAIN.items():
         text = text.replace(markup, plain)
-    return text.replace("$", "").replace("\\", "")
+    text = text.replace("$", "").replace("\\", "")
+    for number, (_, original) in enumerate(kept):
+        text = text.replace(f"\x00{number}\x00", original)
+    return text
 
 
 def _greek() -> dict:

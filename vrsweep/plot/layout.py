@@ -55,7 +55,16 @@ def parse_limits(text, option):
         raise UsageError.naming("{" + option + "} {value}: both ends must be finite numbers", value=clip(text))
     if not low < high:
         raise UsageError.naming("{" + option + "} {value}: LOW must be below HIGH", value=clip(text))
+    if max(abs(low), abs(high)) > LIMIT_MAX:
+        # matplotlib's tick locator spaces ticks over HIGH - LOW and beyond it: -8e307,8e307 overflowed
+        # it, a traceback ("arange: cannot compute length") after the figure was drawn
+        raise UsageError.naming("{" + option + "} {value}: both ends must be of magnitude at most {limit:g} (an axis "
+                                "wider is beyond what matplotlib's ticks compute in doubles)", value=clip(text),
+                                limit=LIMIT_MAX)
     return low, high
+
+
+LIMIT_MAX = 1e300  # the largest end of --xlim, --ylim: ticks are computed over twice the range and more
 
 
 LEGEND_COLUMN_WIDTH = 2.6  # inches a column of legend entries needs at the legends' font size

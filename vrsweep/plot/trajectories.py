@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from vrsweep.errors import UsageError, clip
 from vrsweep.numbertext import read_int
 from vrsweep.plot.analytic import barrier_positions
-from vrsweep.plot.labels import figure_options, _caption, _legend_columns, _new_figure, _number, _parse_config, _symbol, _title, _width, period_words
+from vrsweep.plot.labels import figure_options, literal, model_title, _caption, _legend_columns, _new_figure, _number, _parse_config, _symbol, _title, _width, period_words
 from vrsweep.results import Status
 
 
@@ -166,7 +166,7 @@ def trajectory_figure(data, periods=None) -> Figure:
             # A written model's one row is named by the caption: its name in each panel's title ran
             # off the canvas ("single-well Duffing impact oscillator with two forces: phase portr").
             row_title = ("" if config is not None and config.written and len(runs) == 1
-                         else f"{config.model.title}: " if config is not None and config.written
+                         else f"{model_title(config.model)}: " if config is not None and config.written
                          else f"{ROW_TITLES.get(run.model, run.model)}: ")
             ax.set_title(f"({next(letters)}) {row_title}{what}{status}", fontsize="small")
             ax.grid(alpha=0.3)
@@ -243,9 +243,9 @@ def impacts_per_period_figure(datasets) -> Figure:
         counts = np.asarray(run.impacts_per_period)
         counts = counts[counts >= 0]  # -1: periods a failed run did not reach, drawn as none
         periods = np.arange(1, len(counts) + 1)
-        model_title = config.model.title if config is not None and config.written else ROW_TITLES.get(run.model,
-                                                                                                      run.model)
-        ax.plot(periods, counts, "o-", color=STEADY_COLOUR, lw=0.7, ms=2.5, label=model_title)
+        row_title = model_title(config.model) if config is not None and config.written else ROW_TITLES.get(run.model,
+                                                                                                          run.model)
+        ax.plot(periods, counts, "o-", color=STEADY_COLOUR, lw=0.7, ms=2.5, label=row_title)
         if config is not None:
             n_transient = config.integration.transient_periods
             if 0 < n_transient < len(counts):
@@ -257,7 +257,7 @@ def impacts_per_period_figure(datasets) -> Figure:
                           label=f"mean over the measured periods: {mean:.2f}")
         letter = f"({'abcdefgh'[k]}) " if len(datasets) > 1 else ""
         point = _point_text(config, headline)
-        ax.set_title(f"{letter}{point + '  ·  ' if point else ''}{os.path.basename(data.path or '')}  ·  "
+        ax.set_title(f"{letter}{point + '  ·  ' if point else ''}{literal(os.path.basename(data.path or ''))}  ·  "
                      f"{int(counts.sum())} impacts in {len(counts)} {period_words(symbol=False)}s", fontsize="small")
         ax.set_ylabel(f"impacts per {period_words(symbol=False)}")
         top = max(1.0, float(counts.max(initial=0)))
