@@ -103,13 +103,18 @@ def quadratic_form(problem, point, periods):
         if len(values) < 3:
             continue
         centre_map = continuation.evaluate(problem, point.state, point.parameter, periods)
+        if centre_map.status != Status.OK:
+            return None, reason
         centre = float(psi @ (centre_map.end_state - point.state))
 
         def second(name):
             return (values[name][0] + values[name][1] - 2.0 * centre) / (h * h)
         q11, q22 = second("11"), second("22")
         q12 = second("12") - 0.5 * (q11 + q22)  # Q(n1 + n2)/2 = (q11 + 2 q12 + q22)/2
-        return np.array([[q11, q12], [q12, q22]]), basis
+        form = np.array([[q11, q12], [q12, q22]])
+        if not np.all(np.isfinite(form)):
+            return None, "the map's second differences around the branch point are not finite"
+        return form, basis
     return None, reason
 
 
