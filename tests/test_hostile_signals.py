@@ -101,10 +101,11 @@ def test_a_signal_keeps_the_curve_followed_so_far(tmp_path, invoke, hysteresis_b
     points (the SIGTERM of the issue kept nothing, and once exited 0)."""
     branch = hysteresis_branch
     with vrsweep.open_results(branch) as ds:
-        fold = list(ds["bifurcation_kind"].values).index("fold")
+        kinds = [str(kind) for kind in ds["bifurcation_kind"].values]
+    fold, graze = kinds.index("fold"), kinds.index("grazing")
     out = tmp_path / "curve.h5"
     _stop_after(monkeypatch, 2, signum)
-    result = invoke("continue", branch, "--point", fold, "--point", fold, "--along", "Omega", "--to", "3.9", "4.1",
+    result = invoke("continue", branch, "--point", fold, "--point", graze, "--along", "Omega", "--to", "3.9", "4.1",
                     "--within", "20", "30", "-o", out, "-q")
     name = signal.Signals(signum).name
     assert result.exit_code == 128 + signum, result.output
