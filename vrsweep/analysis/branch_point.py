@@ -53,9 +53,6 @@ SWITCH_AMPLITUDES = (1.0, 3.0, 10.0, 30.0, 100.0)
 # The corrected first orbit must lie within this share of eps of its predictor: the predictor
 # is on the switched branch to second order.
 NEAR_PREDICTOR = 0.5
-# A fold or branch point of the switched branch this close to the branch point it was born at
-# (in location tolerances of the parameter) is that branch point: the pitchfork's vertex.
-BIRTH_TOLERANCE = 10
 # The corrector at the smallest eps converges linearly at first (the Jacobian nearly singular):
 # it gets this many times max_newton_iterations.
 SWITCH_NEWTON_FACTOR = 4
@@ -243,7 +240,6 @@ def switched_branch(problem, point, parent, lo, hi, max_points, progress=None, o
     if any(m is point for m in back_met):
         orbits.insert(0, point)
     branch = continuation.Branch(periods=periods, orbits=orbits, ends={"down": back_end, "up": away_end})
-    birth = BIRTH_TOLERANCE * problem.options["location_tolerance"] * max(1.0, abs(point.parameter))
-    found = [(kind, orbit) for kind, orbit in back_found + away_found
-             if not (kind in ("fold", continuation.BRANCH_POINT) and abs(orbit.parameter - point.parameter) <= birth)]
+    # The pitchfork's vertex is a fold of the switched branch at its birth: not one of its bifurcations.
+    found = period_doubling.without_birth_folds(problem, point, back_found + away_found)
     return branch, found, [m for m in met if m is not point]

@@ -235,7 +235,8 @@ def doubled_branch(problem, doubling, lo, hi, max_points, progress=None, doublin
 
 def without_birth_folds(problem, doubling, bifurcations):
     """``bifurcations`` [(kind, Orbit)] of the 2p-branch born at ``doubling`` without the "fold" at
-    its birth: there the 2p-orbit's monodromy M^2 has the multiplier +1 (the pitchfork), so
+    its birth (also a branch switched to at a branch point, ``doubling`` that point: the
+    pitchfork's vertex, branch_point.py): there the 2p-orbit's monodromy M^2 has the multiplier +1 (the pitchfork), so
     det(M - I) changes sign too; that is the doubling point itself, not a fold of the 2p-branch
     (nor a branch point of it, which continuation._detect may call it: the parameter does not turn)."""
     birth = BIRTH_TOLERANCE * problem.options["location_tolerance"] * max(1.0, abs(doubling.parameter))
