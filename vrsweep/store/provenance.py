@@ -134,6 +134,8 @@ RESULT_EPOCHS = (
               "arrival, and its slide's exit scan shortens where the sliding margin falls: short sticks and short "
               "pulls were stepped over"),
     ("0.7.10", "a sliding model's n_rhs counts the two fields evaluated at each slide's start"),
+    ("0.7.14", "a written model's fractional power of a kinked quantity (Hertz's max(x - d, 0)**1.5, "
+               "sqrt(abs(x))) is 0 beyond its surface in the steps that hold a side, where it was NaN"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -177,7 +179,11 @@ with status ok (belt friction at omega 1.5, mu 0.72: dop853 logged 27 to 38 stic
 fast belt a double-well spring's short pull past mu was stepped over: the exit at t = 0.46 for
 0.207); every sliding model's step counts change; the paper's models unchanged bit for bit; 0.7.10 counts in
 n_rhs the two fields a slide's exit scan evaluates at the slide's start (a sliding model's n_rhs
-was 2 short per slide; every other result unchanged bit for bit). Versions of one epoch
+was 2 short per slide; every other result unchanged bit for bit); 0.7.14 takes a written model's
+fractional power b**p of a kinked quantity as 0 where b < 0 in the steps that hold a side (the
+stages a rounding beyond its surface computed NaN: every point of a Hertzian contact
+max(x - d, 0)**1.5 ended non_finite at its first contact; codegen.held_in_domain), and every
+model without such a power is unchanged bit for bit, its generated code the same text. Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]

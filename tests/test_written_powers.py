@@ -1,0 +1,178 @@
+"""Fractional powers of a kinked quantity in a written acceleration: Hertz's contact law
+k*max(x - d, 0)**1.5 and the square-root spring sqrt(abs(x))*sign(x).
+
+The steps that end on a kink and leave it hold its side (the frozen mode), and their first and
+last stages lie a rounding beyond the surface, where a held side's base is negative: (x - d)**1.5
+of -1e-17 is NaN, and every point of either model ended non_finite at its first crossing (0.7.13).
+codegen.held_in_domain takes such a power as 0 beyond its surface, the surface's own value, and
+leaves every value that was computed before as it was, bit for bit.
+
+The references are SciPy's solve_ivp (DOP853, rtol 1e-13) restarted at each crossing by a
+terminal event, with each side's own right-hand side written here (no max() or abs() in it).
+"""
+
+import math
+
+import numpy as np
+import pytest
+import sympy
+import xarray as xr
+from scipy.integrate import solve_ivp
+
+import vrsweep
+from vrsweep.config import parse_config
+from vrsweep.numerics import codegen
+from vrsweep.results import Status
+
+ZETA, K, D, F, OMEGA = 0.05, 3.0, 0.5, 1.0, 0.8
+TRANSIENT, MEASURED = 200, 20
+# The stop out of reach and the parameters in test_written_kinks' order: a stop never near
+# changes no step.
+HERTZ = f"""
+model:
+  acceleration: "-2*zeta*v - x - k*max(x - d, 0)**1.5 + F*cos(omega*t)"
+  parameters: {{k: {K}, d: {D}, zeta: {ZETA}, F: {F}, omega: {OMEGA}, Delta: 1000.0, r: 0.8}}
+  barriers: [{{position: Delta, side: above, restitution: r}}]
+  period: "2*pi/omega"
+  response: {{frequency: omega, scale: F}}
+initial: {{x: 0.0, v: 0.0}}
+integration: {{transient_periods: {TRANSIENT}, measure_periods: {MEASURED}}}
+"""
+# The square-root spring, its force continuous at x = 0 and its stiffness infinite there.
+# Started off its surface: from x = 0 at rest the first crossing would be at t = 0.
+ROOT = (HERTZ.replace("-2*zeta*v - x - k*max(x - d, 0)**1.5", "-2*zeta*v - k*sqrt(abs(x))*sign(x)")
+        .replace("initial: {x: 0.0", "initial: {x: 0.3"))
+
+
+def _reference(force, stiffness, surface, x0=0.0):
+    """(R over the measured periods, the one-period monodromy matrix at the transient's end) of
+    x'' = -2 zeta x' + force(x, side) + F cos(omega t), restarted at each crossing of x = surface,
+    with the variational equation of each side (stiffness: d force / dx on that side)."""
+    period = 2 * math.pi / OMEGA
+
+    def rhs(t, y, side):
+        x, v = y[0], y[1]
+        out = [v, -2 * ZETA * v + force(x, side) + F * math.cos(OMEGA * t),
+               x * math.sin(OMEGA * t), x * math.cos(OMEGA * t)]
+        for column in range(2):
+            dx, dv = y[4 + 2 * column], y[5 + 2 * column]
+            out += [dv, stiffness(x, side) * dx - 2 * ZETA * dv]
+        return out
+
+    def run(t, t_end, y):
+        while t < t_end:
+            side = 1 if (y[0] > surface or (y[0] == surface and y[1] > 0)) else -1
+            event = lambda t, y, side: y[0] - surface  # noqa: E731
+            event.terminal = True
+            event.direction = -side
+            solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-15, events=event,
+                                 args=(side,))
+            if solution.status == 1:
+                t, y = solution.t_events[0][0], solution.y_events[0][0].copy()
+                y[0] = surface
+                if y[1] == 0.0:
+                    raise AssertionError("a crossing at rest: not transversal")
+            else:
+                t, y = solution.t[-1], solution.y[:, -1].copy()
+        return y
+
+    start = np.array([x0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0])
+    y = run(0.0, TRANSIENT * period, start)
+    y[2:4] = 0.0
+    y[4:] = [1.0, 0.0, 0.0, 1.0]
+    after_one = run(TRANSIENT * period, (TRANSIENT + 1) * period, y.copy())
+    monodromy = np.array([[after_one[4], after_one[6]], [after_one[5], after_one[7]]])
+    end = run(TRANSIENT * period, (TRANSIENT + MEASURED) * period, y)
+    window = MEASURED * period
+    return math.hypot(2 * end[2] / window, 2 * end[3] / window) / F, monodromy
+
+
+# SciPy's steps put stages beyond the surface too, before its event cuts the step: there each
+# side's power is taken at the surface, max(base, 0), where it is real.
+def _hertz_reference():
+    # engaged (side +1): -x - k (x - d)^1.5; the stiffness -1 - 1.5 k (x - d)^0.5, continuous at d
+    return _reference(lambda x, side: -x - (K * max(x - D, 0.0) ** 1.5 if side > 0 else 0.0),
+                      lambda x, side: -1.0 - (1.5 * K * math.sqrt(max(x - D, 0.0)) if side > 0 else 0.0), D)
+
+
+def _root_reference():
+    return _reference(lambda x, side: -K * side * math.sqrt(max(side * x, 0.0)), lambda x, side: 0.0, 0.0,
+                      x0=0.3)
+
+
+def test_hertz_contact_converges_with_the_tolerance_and_its_tangents_are_finite():
+    """Every point ended non_finite at its first contact (0.7.13). The force is C1 at the surface
+    (its stiffness continuous, its third derivative infinite), located and held there as a kink:
+    R within 10 rtol of SciPy's (measured: 0.7 rtol). The tangent vectors step through the held
+    Jacobian, whose sqrt(x - d) is held too: at these values the multipliers are a complex pair,
+    so lambda_1 is the damping's -zeta (Liouville), which SciPy's monodromy confirms."""
+    R_reference, monodromy = _hertz_reference()
+    period = 2 * math.pi / OMEGA
+    # the reference's own check: the damping's Liouville determinant exp(-2 zeta T)
+    assert np.linalg.det(monodromy) == pytest.approx(math.exp(-2 * ZETA * period), rel=1e-10)
+    exponent = math.log(max(abs(np.linalg.eigvals(monodromy)))) / period
+    assert exponent == pytest.approx(-ZETA, rel=1e-9)
+    for rtol in (1e-8, 1e-10):
+        result = vrsweep.sweep(HERTZ, rtol=rtol, atol=rtol * 1e-2, lyapunov=True, progress=False)
+        assert int(result.status) == Status.OK, Status(int(result.status)).name
+        assert int(result.period) == 1
+        assert abs(float(result.R) - R_reference) < 10 * rtol, (rtol, float(result.R) - R_reference)
+        assert abs(float(result.lyapunov) - exponent) < 10 * rtol, (rtol, float(result.lyapunov) - exponent)
+
+
+def test_hertz_contact_with_dop853():
+    """dop853's stages take the force's phases rotated: the held power is in that rhs too."""
+    R_reference, _ = _hertz_reference()
+    for rtol in (1e-8, 1e-10):
+        result = vrsweep.sweep(HERTZ, rtol=rtol, atol=rtol * 1e-2, method="dop853", progress=False)
+        assert int(result.status) == Status.OK, Status(int(result.status)).name
+        assert abs(float(result.R) - R_reference) < 10 * rtol, (rtol, float(result.R) - R_reference)
+
+
+def test_the_square_root_spring_agrees_with_scipy_and_its_lyapunov_is_nan_with_a_note(tmp_path, invoke):
+    """Every point ended non_finite at its first crossing of x = 0 (0.7.13). Its stiffness is
+    infinite there, so the steps next to the surface are short, and R still converges. The tangent
+    vectors cannot be stepped across an infinite stiffness: lyapunov is NaN, the point ok (its other
+    results stand), and `run` says so. (Run with tangents, one compile: R's steps are the same.)"""
+    R_reference, _ = _root_reference()
+    config = tmp_path / "root.yaml"
+    config.write_text(ROOT)
+    out = tmp_path / "root.h5"
+    result = invoke("run", config, "-o", out, "--set", "rtol=1e-7", "--set", "atol=1e-9", "--set", "lyapunov=true")
+    assert result.exit_code == 0, result.output
+    assert "1 of the 1 points ended ok with a NaN lyapunov" in " ".join(result.output.split())
+    with xr.open_dataset(out, engine="h5netcdf") as stored:
+        assert int(stored.status) == Status.OK
+        assert math.isnan(float(stored.lyapunov))
+        assert abs(float(stored.R) - R_reference) < 1e-6, float(stored.R) - R_reference
+    result = vrsweep.sweep(ROOT, rtol=1e-10, atol=1e-12, lyapunov=True, progress=False)
+    assert int(result.status) == Status.OK, Status(int(result.status)).name
+    assert abs(float(result.R) - R_reference) < 1e-9, float(result.R) - R_reference
+
+
+def test_held_powers_are_zero_beyond_their_surface_and_unchanged_elsewhere():
+    x, v, t = sympy.symbols("x v t", real=True)
+    m, n = sympy.Symbol("m_0", real=True), sympy.Symbol("p_n", real=True)
+    engaged = sympy.Piecewise((x - D, m > 0), (0, True))
+    held = codegen.held_in_domain(engaged ** sympy.Rational(3, 2) + engaged ** n, (x, v, t))
+    for x_value in (D - 1e-17, D - 0.1, D, D + 1e-17, D + 0.3):
+        for n_value in (1.5, 2.0, 3.0):
+            value = float(held.subs({x: x_value, m: 1, n: n_value}))
+            base = x_value - D
+            # the original's value where it has one; 0 where it was NaN (a negative base of a
+            # fractional power); an integer power of a negative base is kept (a real value)
+            expected = (max(base, 0.0) ** 1.5
+                        + (base ** n_value if (base >= 0 or n_value.is_integer()) else 0.0))
+            assert value == pytest.approx(expected, rel=1e-15, abs=1e-300), (x_value, n_value)
+    # integer powers, a power of the state alone (its sign decided by sympy) and a smooth model
+    # are left as they are: their generated code is unchanged
+    for expression in (engaged ** 3, sympy.sqrt(1 + x ** 2) * engaged, -x - 0.1 * v):
+        assert codegen.held_in_domain(expression, (x, v, t)) == expression
+
+
+def test_models_without_fractional_powers_of_kinks_generate_the_same_code():
+    """Bit for bit: the bilinear spring's rhs is the same text with and without held_in_domain."""
+    bilinear = parse_config(HERTZ.replace("max(x - d, 0)**1.5", "max(x - d, 0)"), "m.yaml").model
+    acceleration, _, _, _, state = codegen.derived(bilinear)
+    frozen, _ = codegen.frozen_acceleration(acceleration, codegen.switching_functions(acceleration, state))
+    assert codegen.held_in_domain(frozen, state) == frozen
