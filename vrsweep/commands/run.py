@@ -160,9 +160,9 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
             click.echo(f"time:        {format_duration(time.perf_counter() - began)} (the cost model's estimate: "
                        f"{format_duration(guess.seconds * report.n_run / max(1, guess.n_points))}; "
                        "--dry-run measures one)", err=True)
-        note = report.motion_note()
-        if note:
-            click.echo(note, err=True)
+        for note in (report.motion_note(), report.lyapunov_note()):
+            if note:
+                click.echo(note, err=True)
         click.echo(one_line(report.summary_line()), err=True)
     for item in report.advice():  # even with --quiet: the file holds mostly failures
         example = f", e.g. --set {item.setting}" if item.setting else ""

@@ -52,6 +52,12 @@ def _remedy(status, run):
         return ("the written force has a jump (sign) that holds the motion on it there (stick-slip), on a surface "
                 "other than v = constant, the one vrsweep slides on: write a "
                 "smooth law instead, such as -mu*tanh(v/v0) with v0 small against the motion's speeds", None)
+    if status == Status.NON_FINITE:
+        # Where the motion is bounded, a NaN is mostly a force undefined on the way: a written
+        # model's sqrt or log of a quantity that turns negative, or a division by one that passes 0.
+        return ("check the parameters of those points (vrsweep info FILE lists them), and that the force is "
+                "defined along the motion (a square root, power or log of a quantity that turns negative, "
+                "a division by one that passes zero)", None)
     return "check the parameters of those points (vrsweep info FILE lists them)", None
 
 
@@ -74,6 +80,7 @@ class JobReport:
     counts: dict = field(default_factory=dict)  # Status -> points, over the points run now
     integration: object = None  # the config's Integration, for advice on failed points
     motions: dict = field(default_factory=dict)  # Motion -> points, over the points run now
+    lyapunov_nan: int = 0  # points run now that ended ok with a NaN lyapunov (their tangents failed)
 
     def motion_note(self) -> str | None:
         """A note when many points were called chaotic without Lyapunov exponents: a response
@@ -91,6 +98,16 @@ class JobReport:
                 f"the window ({chaotic / computed:.0%}), and are called chaotic; some may be responses locked to "
                 "a quasi-periodic forcing, which integration.lyapunov: true tells apart (a negative exponent; "
                 "docs/trust.md)")
+
+    def lyapunov_note(self) -> str | None:
+        """A note when points ended ok but their tangent vectors did not: the point's other results
+        stand, and its lyapunov is NaN (a force whose stiffness is infinite on the way, such as a
+        written sqrt(abs(x)), or overflowing tangents); None otherwise."""
+        if not self.lyapunov_nan:
+            return None
+        return (f"Note: {self.lyapunov_nan} of the {self.n_run} points ended ok with a NaN lyapunov: their "
+                "tangent vectors became non-finite (a force whose stiffness is infinite somewhere on the motion, "
+                "such as sqrt(abs(x)) at x = 0, or one that overflows); their other results stand")
 
     def summary_line(self):
         parts = [f"{n} {status.name.lower()}" for status, n in sorted(self.counts.items())]
@@ -382,6 +399,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         left = [n_owned - n_done]
 
         motions = {}
+        lyapunov_nan = [0]
         solver_sample = SolverErrorSample(config, grid, writer)
         solver_sample.check()  # (a resumed run's sample may be done already)
 
@@ -389,6 +407,8 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
             writer.write_points(flat_indices, values)
             for code, n in zip(*np.unique(values["motion"], return_counts=True)):
                 motions[Motion(int(code))] = motions.get(Motion(int(code)), 0) + int(n)
+            if "lyapunov" in values:
+                lyapunov_nan[0] += int(np.sum((values["status"] == Status.OK) & np.isnan(values["lyapunov"])))
             left[0] -= len(flat_indices)
             solver_sample.check()
             if stop is not None and left[0] > 0:  # after the last chunk, finishing is better
@@ -406,7 +426,7 @@ def run_job(config, output=None, *, threads=None, resume=False, overwrite=False,
         extras.update(attractors)
     writer.finish(extra=extras, coords=coords,
                   attributes=solver_error_attributes(config, grid, shard, writer, solver_sample.sample))
-    return JobReport(path, n_owned, sum(counts.values()), counts, config.integration, motions)
+    return JobReport(path, n_owned, sum(counts.values()), counts, config.integration, motions, lyapunov_nan[0])
 
 
 def points_left(config, output=None, shard=(0, 1)):
