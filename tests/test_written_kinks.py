@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+import sympy
 from scipy.integrate import solve_ivp
 
 import vrsweep
@@ -97,6 +98,36 @@ def test_the_switching_functions_are_the_arguments_of_each_kink():
     # a kink in the parameters alone is none in time; a smooth model has none
     assert switches("-x + abs(F)*cos(omega*t) + max(k, d)") == []
     assert switches("-2*zeta*v - x + F*cos(omega*t)") == []
+
+
+def test_constant_multiples_of_a_switching_function_are_one_surface():
+    """A nested max of x + k*v (k = 0..9) has the pair differences -v, -2*v, ..., -9*v: one surface,
+    v = 0. Taken as nine, they flipped together, a corner of nine switches at every crossing, and
+    codegen spent minutes in sympy on the sides' products (8 arguments: 20 s; now under a second).
+    The frozen acceleration holds the side's argument: x + 9v above, x below."""
+    nested = "x"
+    for k in range(1, 10):
+        nested = f"max({nested}, x + {k}*v)"
+    model = parse_config(BILINEAR.replace("-2*zeta*v - x - k*max(x - d, 0) + F*cos(omega*t)", nested), "m.yaml").model
+    acceleration, _, _, _, state = codegen.derived(model)
+    switches = codegen.switching_functions(acceleration, state)
+    assert [str(s) for s in switches] in (["v"], ["-v"])
+    assert codegen.jump_switches(acceleration, switches, state) == []  # a kink: max is continuous
+    frozen, (side,) = codegen.frozen_acceleration(acceleration, switches)
+    x, v, _ = state
+    above = 1 if str(switches[0]) == "v" else -1  # the side m on which v > 0
+    assert sympy.simplify(frozen.subs(side, above) - (x + 9 * v)) == 0
+    assert sympy.simplify(frozen.subs(side, -above) - x) == 0
+    # a multiple by a number, written otherwise: abs(2*x - 2), sign(1 - x), max(0.5*x, 0.5) are x = 1
+    model = parse_config(BILINEAR.replace("-2*zeta*v - x - k*max(x - d, 0) + F*cos(omega*t)",
+                                          "-x + abs(2*x - 2) + sign(1 - x) + max(0.5*x, 0.5)"), "m.yaml").model
+    acceleration, _, _, _, state = codegen.derived(model)
+    assert len(codegen.switching_functions(acceleration, state)) == 1
+    # a parameter's multiple is not: k*v and v are one surface only where k != 0, unknown here
+    model = parse_config(BILINEAR.replace("-2*zeta*v - x - k*max(x - d, 0) + F*cos(omega*t)",
+                                          "-x - sign(k*v) - sign(v)"), "m.yaml").model
+    acceleration, _, _, _, state = codegen.derived(model)
+    assert len(codegen.switching_functions(acceleration, state)) == 2
 
 
 def test_a_bilinear_springs_response_converges_with_the_tolerance():

@@ -444,8 +444,8 @@ def switching_functions(acceleration, state):
     """The acceleration's switching functions: where each changes sign, the acceleration has a
     kink (abs, max, min: its derivative jumps, its value does not) or a jump (sign): the argument
     of abs and of sign, the difference of each two of max's and min's arguments. Only those that
-    move with x, v or t (a kink in the parameters alone is none in time); each surface once (s and
-    -s are one). At most MAX_SWITCHES.
+    move with x, v or t (a kink in the parameters alone is none in time); each surface once (s, -s
+    and any constant multiple are one). At most MAX_SWITCHES.
 
     The kernel locates each crossing and cuts the step to end on it; the step that ends there and
     the step that leaves it evaluate each switch on a side held for the whole step (the frozen
@@ -488,6 +488,39 @@ def _switch_index(candidate, found):
             if combined == 0 or (not _differ(candidate, orientation * known)
                                  and sympy.simplify(combined) == 0):
                 return k, orientation
+    # A constant multiple is the same surface too: max(x, x + v, x + 2*v, ...) has the differences
+    # -v, -2*v, -v, ... Taken as surfaces of their own, they flipped together, each a bit of the
+    # frozen mode, and the frozen acceleration's sides multiplied (a nested max of 8 such
+    # arguments: 7 surfaces and 30 s in sympy; 10, minutes).
+    for k, known in enumerate(found):
+        ratio = _constant_ratio(candidate, known)
+        if ratio is not None:
+            return k, (1 if ratio > 0 else -1)
+    return None
+
+
+def _constant_ratio(first, second):
+    """The number first / second where it is one (a constant multiple, nonzero), else None; the
+    probes first (_differ's points), sympy.cancel only where the ratio is the same at both."""
+    import sympy
+
+    symbols = sorted(first.free_symbols | second.free_symbols, key=str)
+    seen = []
+    for probe in _PROBES:
+        values = {symbol: sympy.Float(probe[n % len(probe)] * (1 + n // len(probe)), 30)
+                  for n, symbol in enumerate(symbols)}
+        try:
+            ratio = complex((first / second).evalf(30, subs=values))
+        except (TypeError, ValueError, ZeroDivisionError, OverflowError):
+            return None
+        if not (math.isfinite(ratio.real) and ratio.imag == 0 and ratio.real != 0):
+            return None
+        seen.append(ratio.real)
+    if abs(seen[0] - seen[1]) > 1e-12 * abs(seen[0]):
+        return None
+    ratio = sympy.cancel(first / second)
+    if ratio.is_Number and ratio.is_finite and ratio != 0:
+        return float(ratio)
     return None
 
 

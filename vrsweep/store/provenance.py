@@ -135,7 +135,8 @@ RESULT_EPOCHS = (
               "pulls were stepped over"),
     ("0.7.10", "a sliding model's n_rhs counts the two fields evaluated at each slide's start"),
     ("0.7.14", "a written model's fractional power of a kinked quantity (Hertz's max(x - d, 0)**1.5, "
-               "sqrt(abs(x))) is 0 beyond its surface in the steps that hold a side, where it was NaN"),
+               "sqrt(abs(x))) is 0 beyond its surface in the steps that hold a side, where it was NaN, and "
+               "constant multiples of a switching function are one surface (v and -2*v flipped as two)"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -183,7 +184,10 @@ was 2 short per slide; every other result unchanged bit for bit); 0.7.14 takes a
 fractional power b**p of a kinked quantity as 0 where b < 0 in the steps that hold a side (the
 stages a rounding beyond its surface computed NaN: every point of a Hertzian contact
 max(x - d, 0)**1.5 ended non_finite at its first contact; codegen.held_in_domain), and every
-model without such a power is unchanged bit for bit, its generated code the same text. Versions of one epoch
+model without such a power is unchanged bit for bit, its generated code the same text; it also takes
+constant multiples of a switching function as one surface (a nested max of x + k*v had the surfaces
+-v, -2*v, ..., each a bit of the frozen mode, flipping together as a corner; only models with two such
+switches change). Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
