@@ -33,3 +33,47 @@ def test_init_writes_a_name_that_is_a_configs(tmp_path, invoke, name):
     assert (tmp_path / name).read_text().startswith("# Quickstart")
 
 
+# --------------------------------------------------------------------------------------------
+# info: a file named as a figure that is none
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name, contents, holds", [
+    ("text.png", b"hello\n", "text, not a PNG image"),
+    ("text.svg", b"just words, no svg\n", "text, not an SVG image"),
+    ("empty.pdf", b"", "nothing (0 bytes), not a PDF"),
+    ("noise.png", bytes(range(256)) * 4, "data of another kind, not a PNG image"),
+    ("image.pdf", b"\x89PNG\r\n\x1a\n" + bytes(64), "a PNG image, not a PDF"),
+])
+def test_info_says_what_a_file_named_as_a_figure_holds(tmp_path, invoke, name, contents, holds):
+    """`vrsweep info text.png` (a text file) said "text.png: a figure without a vrsweep
+    description in its metadata", exit 0: it went by the name alone."""
+    path = tmp_path / name
+    path.write_bytes(contents)
+    result = invoke("info", path)
+    assert result.exit_code == 2, result.output
+    assert result.output.strip() == (f"Error: {path} holds {holds} as its name says: info describes the figures "
+                                     "vrsweep plot writes and vrsweep's HDF5 files")
+
+
+@pytest.mark.parametrize("suffix", [".png", ".pdf", ".svg"])
+def test_info_still_describes_a_figure_of_each_format(tmp_path, invoke, suffix):
+    branch = _written_branch_file(tmp_path / "branch.h5", "oscillator")
+    assert invoke("plot", branch, "-o", tmp_path / f"f{suffix}").exit_code == 0
+    result = invoke("info", tmp_path / f"f{suffix}")
+    assert result.exit_code == 0, result.output
+    assert result.output.startswith(f"{tmp_path / f'f{suffix}'}: figure\nPeriodic orbits continued in Delta")
+    # a figure of another program (no vrsweep metadata) is still a figure
+    other = tmp_path / "other.png"
+    other.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(64))
+    assert "a figure without a vrsweep description" in invoke("info", other).output
+
+
+def test_info_describes_an_hdf5_file_named_as_a_figure_as_what_it_is(tmp_path, invoke):
+    branch = _written_branch_file(tmp_path / "branch.h5", "oscillator")
+    os.rename(branch, tmp_path / "branch.png")
+    result = invoke("info", tmp_path / "branch.png")
+    assert result.exit_code == 0, result.output
+    assert result.output.startswith(f"{tmp_path / 'branch.png'}: vrsweep branch, format"), result.output
+
+

@@ -710,6 +710,44 @@ def legend_note(fig) -> str:
 
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+FIGURE_WORDS = {".png": "a PNG image", ".pdf": "a PDF", ".svg": "an SVG image"}
+# Bytes that open a file of each format: a PNG's signature, a PDF's header (matplotlib writes it
+# first), and an SVG's root element (after an XML declaration, a doctype or comments).
+_FIGURE_STARTS = {".png": re.compile(rb"\A\x89PNG\r\n\x1a\n"), ".pdf": re.compile(rb"\A%PDF-"),
+                  ".svg": re.compile(rb"\A(?:\xef\xbb\xbf)?\s*(?:<\?xml[^>]*>\s*|<!--.*?-->\s*|<!DOCTYPE[^>]*>\s*)*<svg[\s>]",
+                                     re.S | re.I)}
+_HEAD_BYTES = 4096
+
+
+def figure_format(path) -> str | None:
+    """The figure format (a FIGURE_SUFFIXES entry) the bytes of the file at ``path`` are, whatever
+    its name; None for any other file (``file_contents`` says what it holds)."""
+    with open(path, "rb") as handle:
+        head = handle.read(_HEAD_BYTES)
+    return next((suffix for suffix, start in _FIGURE_STARTS.items() if start.match(head)), None)
+
+
+def file_contents(path) -> str:
+    """What the file at ``path`` holds, in a few words ('text', 'an HDF5 file', 'a PNG image'...),
+    as its bytes say, for a file that is not what its name says."""
+    from vrsweep.store.fileio import is_hdf5
+
+    found = figure_format(path)
+    if found is not None:
+        return FIGURE_WORDS[found]
+    if is_hdf5(path):
+        return "an HDF5 file"
+    with open(path, "rb") as handle:
+        head = handle.read(_HEAD_BYTES)
+    if not head:
+        return "nothing (0 bytes)"
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError as error:
+        text = head[:error.start].decode("utf-8") if error.start > len(head) - 4 else None
+    if text is not None and "\x00" not in text:
+        return "text"
+    return "data of another kind"
 
 
 def read_description(path) -> dict:
