@@ -77,3 +77,39 @@ def test_info_describes_an_hdf5_file_named_as_a_figure_as_what_it_is(tmp_path, i
     assert result.output.startswith(f"{tmp_path / 'branch.png'}: vrsweep branch, format"), result.output
 
 
+# --------------------------------------------------------------------------------------------
+# merge: a file of another kind is named as such
+# --------------------------------------------------------------------------------------------
+
+
+def _trajectory_file(path):
+    from test_plot_trajectory_titles import PAPER, trajectory
+
+    from vrsweep.config import parse_config
+    from vrsweep.store.trajectory_file import write_trajectory
+
+    text = PAPER.replace("E", "0.9")
+    write_trajectory(path, trajectory(text, "original", str(path)), parse_config(text))
+    return path
+
+
+@pytest.mark.parametrize("kind, says", [("trajectory", "a trajectory (vrsweep simulate)"),
+                                        ("branch", "a branch (vrsweep continue)")])
+def test_merge_says_a_trajectory_or_a_branch_is_no_sweeps_results(tmp_path, invoke, kind, says):
+    """`vrsweep merge TRAJ.h5 -o out.h5` said "TRAJ.h5 is a vrsweep file but not a sweep result
+    (no 'done' mask)": what a sweep's file has, not what this file is, nor what merge takes."""
+    path = (_trajectory_file if kind == "trajectory" else lambda p: _written_branch_file(p, "osc"))(tmp_path / "in.h5")
+    result = invoke("merge", path, "-o", tmp_path / "out.h5", "-q")
+    assert result.exit_code == 2, result.output
+    assert result.output.strip() == (f"Error: {path} is {says}, not a sweep's results: merge takes the result files "
+                                     "of one sweep (those of vrsweep run, each --shard of it)")
+    assert sorted(os.listdir(tmp_path)) == ["in.h5"]
+
+
+def test_a_reader_of_sweeps_names_the_kind_of_file_it_was_given(tmp_path):
+    from vrsweep.errors import ResultFileError
+    from vrsweep.store.reader import open_checked
+
+    path = _trajectory_file(tmp_path / "t.h5")
+    with pytest.raises(ResultFileError, match=r"t\.h5 is a trajectory \(vrsweep simulate\) but not a sweep's results"):
+        open_checked(path)
