@@ -113,3 +113,89 @@ def test_a_reader_of_sweeps_names_the_kind_of_file_it_was_given(tmp_path):
     path = _trajectory_file(tmp_path / "t.h5")
     with pytest.raises(ResultFileError, match=r"t\.h5 is a trajectory \(vrsweep simulate\) but not a sweep's results"):
         open_checked(path)
+
+
+# --------------------------------------------------------------------------------------------
+# A written model of forty parameters: its caption inside the canvas
+# --------------------------------------------------------------------------------------------
+
+
+def _many_parameters_branch_file(path, count):
+    """A branch file of a written model of ``count`` parameters k0, k1, ..., each a term of the
+    acceleration (in sums of twenty: a chain of more is refused as nested too deep)."""
+    import numpy as np
+
+    from test_hostile_round5 import WRITTEN
+
+    from vrsweep.analysis.continuation import Bifurcation, Branch, Orbit
+    from vrsweep.config.validate import config_from_dict
+    from vrsweep.store import branch_file
+
+    terms = [f"k{i}*x**{i % 5 + 1}" for i in range(count)]
+    sums = " + ".join("(" + " + ".join(terms[i:i + 20]) + ")" for i in range(0, count, 20))
+    model = WRITTEN["model"]
+    config = {**WRITTEN, "model": {**model, "name": "many", "acceleration": f"{model['acceleration']} - ({sums})",
+                                   "parameters": {**model["parameters"],
+                                                  **{f"k{i}": 0.001 * (i + 1) for i in range(count)}}}}
+    orbits = [Orbit(parameter=value, state=np.array([0.5, -0.2]), periods=1, monodromy=np.diag([0.5, 0.3]),
+                    R=2.0 + value, Q_amplitude=0.4, impacts_per_period=1.0, x_max=1.0, slowest_impact=0.5,
+                    residual=1e-11, newton_iterations=2)
+              for value in np.linspace(2.5, 3.0, 5)]
+    branches = [Branch(periods=1, orbits=orbits, ends={"down": ("left_range", "Delta left [2, 3.5]"),
+                                                       "up": ("left_range", "Delta left [2, 3.5]")})]
+    branch_file.write_branch(path, branch_file.branch_arrays(branches, [], 1.0), config_from_dict(config), "rk45")
+    return path
+
+
+def _title_box(figure):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(figure)
+    renderer = figure.canvas.get_renderer()
+    figure.draw(renderer)
+    return figure._suptitle.get_window_extent(renderer), figure.bbox
+
+
+@pytest.mark.parametrize("count", [40, 59])
+def test_the_caption_of_a_written_model_of_many_parameters_stays_inside_the_figure(tmp_path, invoke, count):
+    """A written model of 40 parameters: its equation, one item of mathtext never broken, ran off
+    both edges of the canvas (the caption's widest line about twice the figure's width)."""
+    from vrsweep import plot
+    from vrsweep.plot.labels import description
+
+    path = _many_parameters_branch_file(tmp_path / "many.h5", count)
+    for size in (None, (3.4, 2.6)):
+        figure = plot.plot(str(path), size=size)
+        box, canvas = _title_box(figure)
+        assert box.x0 >= -1 and box.x1 <= canvas.width + 1, (size, box, canvas)
+        # the title and caption take less than half the height (40 parameters at the default size: whole)
+        assert box.height <= 0.5 * canvas.height, (size, box, canvas)
+        shown = figure._suptitle.get_text()
+        assert all(line.replace("\\$", "").count("$") % 2 == 0 for line in shown.split("\n")), shown
+        whole = description(figure)  # the file's metadata keeps every parameter and the equation unbroken
+        assert f"k{count - 1} = " in whole and f"k{count - 1} * x ** " in whole
+        if size is None and count == 40:
+            assert "lines more" not in shown and f"k{count - 1} = " in shown
+        if size is not None:
+            assert "lines more" in shown
+    result = invoke("plot", path, "-o", tmp_path / "many.png")
+    assert result.exit_code == 0, result.output
+
+
+def test_an_equation_is_broken_between_its_terms_and_each_line_is_mathtext():
+    from matplotlib.mathtext import MathTextParser
+
+    from vrsweep.plot.labels import _wrap
+
+    equation = ("many: $\\ddot{x} = F\\,\\cos{\\left(\\omega t + \\varphi - 1 \\right)} - "
+                + " - ".join(f"k_{{{i}}} x^{{{i % 5 + 1}}}" for i in range(40)) + " + x^{2 - 1}$")
+    lines = _wrap(["many.h5", equation, "$\\zeta$ = 0.05"], 60).split("\n")
+    assert len(lines) > 5
+    for line in lines:
+        assert len(line.replace("$", "").replace("\\", "")) <= 60, line
+        assert line.count("$") % 2 == 0, line
+        for math in line.split("$")[1::2]:
+            MathTextParser("path").parse(f"${math}$")  # no break inside \left( ... \right) or braces
+    assert "\\left(\\omega t + \\varphi - 1 \\right)" in "".join(lines)
+    # the break is before a + or - of the sum, the mathtext closed and opened again around it
+    assert all(line.startswith(("$- ", "$+ ")) for line in lines[2:-1]), lines
