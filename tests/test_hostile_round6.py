@@ -10,6 +10,90 @@ from test_hostile_round5 import _written_branch_file
 
 
 # --------------------------------------------------------------------------------------------
+# theory: parameters where the first-order theory has no numbers
+# --------------------------------------------------------------------------------------------
+
+FIG1 = os.path.join(os.path.dirname(__file__), "..", "vrsweep", "examples", "fig1.yaml")
+FIG3 = os.path.join(os.path.dirname(__file__), "..", "vrsweep", "examples", "fig3.yaml")
+
+
+@pytest.mark.parametrize("config", [FIG1, FIG3])  # g swept (0..40), g fixed (5)
+@pytest.mark.parametrize("settings, says", [
+    (["Omega=1e-300"], "Omega = 1e-300 is not above omega = 0.5: the effective system (eq2.10) averages over the "
+                       "fast force, which must be faster than the slow one; the theory has nothing to say there"),
+    (["Omega=0.4"], "Omega = 0.4 is not above omega = 0.5"),
+    (["Omega=1e-300", "omega=1e-301"], "Omega^4, by which wt2 and K divide (eq2.11, eq2.12), is beyond a double's "
+                                       "range at Omega = 1e-300: the theory has no numbers there"),
+    (["Omega=1e100"], "Omega^4, by which wt2 and K divide (eq2.11, eq2.12), is beyond a double's range at "
+                      "Omega = 1e+100"),
+    (["Omega=1e300"], "Omega^4, by which wt2 and K divide"),
+    (["alpha=1e-320"], "g_res = Omega^2 sqrt(2 (omega^2 + omega0^2) / (3 alpha)) (eq3.4) is beyond a double's range "
+                       "at Omega = 4, alpha = 9.99989e-321"),
+    (["omega=1e-200", "Omega=1"], "the slow flow's coefficients gamma/omega, alpha/omega^2, c/omega^2 (eq2.13) are "
+                                  "beyond a double's range at omega = 1e-200"),
+    (["Omega=1e77"], "the fixed points' cubic (eq2.27) at g_res = 1.317e+154 (eq3.4) is beyond a double's range at "
+                     "Omega = 1e+77, omega = 0.5"),
+])
+@pytest.mark.parametrize("as_json", [False, True])
+def test_theory_where_it_has_no_numbers_says_why_in_one_line(invoke, config, settings, says, as_json):
+    """`vrsweep theory fig1.yaml --set Omega=1e-300` printed wt2 and K as "nan..nan", every other
+    number as "-", and blamed a limit cycle: "no stable fixed point on the g grid: the slow flow
+    may settle on a limit cycle"; exit 0. Omega^4 underflowed to 0: wt2 and K were 0/0 and g^2/0.
+    (--json wrote them as null, with the same note.)"""
+    args = [arg for setting in settings for arg in ("--set", setting)] + (["--json"] if as_json else [])
+    result = invoke("theory", config, *args)
+    assert result.exit_code == 2, result.output
+    (line,) = result.output.strip().splitlines()
+    assert line.startswith(f"Error: {config}: {says}"), line
+    assert "nan" not in line and "limit cycle" not in line
+
+
+def test_theory_rows_outside_it_are_dashes_with_their_reason(tmp_path, invoke):
+    """An Omega axis partly outside the theory: those rows show '-' and say why, the others their
+    numbers (Omega = 1e100 printed g_res as 201 digits, and "inf" and "nan" for wt2 and K)."""
+    import json
+
+    config = tmp_path / "omega.yaml"
+    config.write_text("model: original\nparameters: {g: 5.0}\nsweep:\n  Omega: [0.4, 4.0, 1.0e100]\n")
+    result = invoke("theory", config)
+    assert result.exit_code == 0, result.output
+    table = result.output.splitlines()
+    assert table[2].split() == ["0.4", "-", "5.000", "-", "-", "-", "-", "-", "-", "-"]
+    assert table[3].split()[:2] == ["4", "21.065"]
+    assert table[4].split() == ["1e+100", "-", "5.000", "-", "-", "-", "-", "-", "-", "-"]
+    text = " ".join(result.output.split())
+    assert "Omega = 0.4 is not above omega = 0.5" in text and "range at Omega = 1e+100: the theory has no" in text
+    assert "nan" not in text and "inf" not in text and "limit cycle" not in text
+    rows = json.loads(invoke("theory", config, "--json").stdout)
+    assert [row["outside_theory"] for row in rows] == [True, False, True]
+    assert rows[0]["g_res"] is None and rows[0]["wt2_range"] == [None, None] and rows[1]["g_res"] > 21
+
+
+@pytest.mark.parametrize("config", [FIG1, FIG3])
+def test_theory_at_a_g_beyond_range_says_so_and_blames_no_limit_cycle(tmp_path, invoke, config):
+    """A g (or Omega and omega) for which the cubic of the amplitudes overflows: the other values
+    are shown, and a note says where there is no amplitude and why (it said "no stable fixed
+    point on the g grid: the slow flow may settle on a limit cycle", or nothing)."""
+    result = invoke("theory", config, "--set", "Omega=1e-60", "--set", "omega=1e-61")
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    assert "nan" not in text
+    assert ("the fixed points' cubic (eq2.27) is beyond a double's range at Omega = 1e-60, omega = 1e-61 and "
+            + ("80 of the 81 values of g the peak is searched over (from g = 0.5)" if config == FIG1 else "g = 5")
+            + ": no amplitude there") in text, text
+    result = invoke("theory", config, "--set", "g=1e200")
+    assert result.exit_code == 0, result.output
+    assert "beyond a double's range at Omega = 4, omega = 0.5 and g = 1e+200: no amplitude" in " ".join(
+        result.output.split())
+
+
+def test_theory_writes_a_large_finite_number_with_an_exponent(invoke):
+    result = invoke("theory", FIG1, "--set", "Omega=1e50")
+    assert result.exit_code == 0, result.output
+    assert result.output.splitlines()[2].split()[:2] == ["1e+50", "1.317e+100"]
+
+
+# --------------------------------------------------------------------------------------------
 # init: what it writes is a config, named as one
 # --------------------------------------------------------------------------------------------
 
