@@ -186,7 +186,7 @@ def test_merge_says_a_trajectory_or_a_branch_is_no_sweeps_results(tmp_path, invo
     result = invoke("merge", path, "-o", tmp_path / "out.h5", "-q")
     assert result.exit_code == 2, result.output
     assert result.output.strip() == (f"Error: {path} is {says}, not a sweep's results: merge takes the result files "
-                                     "of one sweep (those of vrsweep run, each --shard of it)")
+                                     "of one sweep (those vrsweep run writes, whole or in shards)")
     assert sorted(os.listdir(tmp_path)) == ["in.h5"]
 
 

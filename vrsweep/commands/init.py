@@ -34,7 +34,8 @@ def command(path, name, list_only, overwrite):
     The quickstart by default (a coarse R(g) sweep that runs in seconds), or any shipped example
     with --example: the paper's figures, a g-Omega map, a hysteresis sweep. Then:
     `vrsweep validate PATH`, `vrsweep run PATH`. An existing file is never replaced without
-    --overwrite; if PATH is a directory, the config is written into it as NAME.yaml.
+    --overwrite; if PATH is a directory, the config is written into it as NAME.yaml, else PATH
+    ends in .yaml or .yml.
     """
     from vrsweep.errors import UsageError
 

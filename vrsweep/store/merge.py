@@ -106,7 +106,7 @@ class _Shard(StoredLayout):
         kind = stored_kind(path)
         if kind in NAMED_KINDS:  # open_checked says only that it is no sweep's: say what merge takes
             raise ResultFileError(f"{path} is {KIND_WORDS[kind]}, not a sweep's results: merge takes the result "
-                                  "files of one sweep (those of vrsweep run, each --shard of it)")
+                                  "files of one sweep (those vrsweep run writes, whole or in shards)")
         f = open_checked(path, "r")
         try:
             super().__init__(path, f)
