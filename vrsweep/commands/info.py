@@ -47,7 +47,7 @@ def command(path, as_json, show_config):
 
     from vrsweep.plot.labels import FIGURE_SUFFIXES
 
-    if Path(path).suffix.lower() in FIGURE_SUFFIXES:
+    if Path(path).suffix.lower() in FIGURE_SUFFIXES and not _hdf5_named_as_figure(path):
         _describe_figure(path, as_json)
         return
     summary = describe(path)
@@ -63,6 +63,7 @@ def _describe_figure(path, as_json):
 
     if not os.path.isfile(path):
         raise ResultFileError(f"{path}: no such file")
+    _refuse_what_is_no_figure(path)
     try:
         found = read_description(path)
     except (OSError, ValueError) as error:
@@ -77,6 +78,31 @@ def _describe_figure(path, as_json):
         if len(description) > DESCRIPTION_LINES:
             shown.append(f"... ({len(description) - DESCRIPTION_LINES} more lines; --json prints them all)")
         click.echo("\n".join([f"{one_line(path)}: figure"] + shown))
+
+
+def _hdf5_named_as_figure(path):
+    """True for an HDF5 file named as a figure (results.png): described as the file it is."""
+    from vrsweep.store.fileio import is_hdf5
+
+    return is_hdf5(path)
+
+
+def _refuse_what_is_no_figure(path):
+    """ResultFileError (one line) for a file named as a figure whose bytes are none of that
+    format: a text file named text.png was "a figure without a vrsweep description"."""
+    from pathlib import Path
+
+    from vrsweep.plot.labels import FIGURE_WORDS, figure_format, file_contents
+
+    suffix = Path(path).suffix.lower()
+    try:
+        if figure_format(path) == suffix:
+            return
+        holds = file_contents(path)
+    except OSError as error:
+        raise ResultFileError(f"cannot read {path}: {error.strerror or error}") from None
+    raise ResultFileError(f"{path} holds {holds}, not {FIGURE_WORDS[suffix]} as its name says: info describes "
+                          "the figures vrsweep plot writes and vrsweep's HDF5 files")
 
 
 # A figure's metadata is any file's to write: a description of a megabyte (a PNG made elsewhere,

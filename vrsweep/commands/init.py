@@ -17,6 +17,8 @@ from vrsweep.commands.options import PathText
 from vrsweep.errors import one_line
 
 DEFAULT_EXAMPLE = "quickstart"
+# What init writes is a config: its name says so (plot's -o goes by its suffix the same way).
+CONFIG_SUFFIXES = (".yaml", ".yml")
 
 
 @click.command("init")
@@ -32,7 +34,8 @@ def command(path, name, list_only, overwrite):
     The quickstart by default (a coarse R(g) sweep that runs in seconds), or any shipped example
     with --example: the paper's figures, a g-Omega map, a hysteresis sweep. Then:
     `vrsweep validate PATH`, `vrsweep run PATH`. An existing file is never replaced without
-    --overwrite; if PATH is a directory, the config is written into it as NAME.yaml.
+    --overwrite; if PATH is a directory, the config is written into it as NAME.yaml, else PATH
+    ends in .yaml or .yml.
     """
     from vrsweep.errors import UsageError
 
@@ -63,6 +66,11 @@ def command(path, name, list_only, overwrite):
                          "create it first, or give the file's name (without the slash)")
     if target.is_dir():
         target = target / f"{name}.yaml"
+    elif target.suffix.lower() not in CONFIG_SUFFIXES:
+        # `init x.h5` wrote YAML into a file named as results (which `run` then refused as "not
+        # HDF5" only if given it as a result); validate, run and a reader of the folder go by the name.
+        raise UsageError(f"PATH {one_line(path)}: a config is YAML, named .yaml or .yml: give a name ending in "
+                         f"one of them (or a folder that exists, to write {name}.yaml into it)")
 
     shown = target
     target = Path(output_target(target, overwrite=overwrite, writes="a config", exists_error=lambda: UsageError(

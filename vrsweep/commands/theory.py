@@ -18,12 +18,21 @@ import click
 from vrsweep.commands.options import config_argument, set_option
 from vrsweep.analysis.theory import DEFAULT_G_POINTS, theory_rows
 
+# Beyond this a number is written with an exponent: g_res = 1.3e200 (Omega = 1e100) was 201
+# digits of ".3f", one column wider than the terminal.
+_FIXED_AT_MOST = 1e9
+
+
 def _number(value, spec):
-    return "-" if value is None else format(value, spec)
+    if value is None:
+        return "-"  # the theory has no such number (a row outside it: its note says why)
+    if math.isfinite(value) and abs(value) >= _FIXED_AT_MOST:
+        return format(value, ".4g")
+    return format(value, spec)
 
 
 def _span(low, high, spec):
-    return format(low, spec) if low == high else f"{format(low, spec)}..{format(high, spec)}"
+    return _number(low, spec) if low == high else f"{_number(low, spec)}..{_number(high, spec)}"
 
 
 def format_table(rows) -> str:
@@ -47,7 +56,8 @@ def format_table(rows) -> str:
             _number(row["amplitude_at_g_res"], ".4f"),
         ]
         if fixed_g:
-            cells.append(", ".join(format(A, ".4f") for A in row["stable_amplitudes_at_g"]) or "none")
+            stable = row["stable_amplitudes_at_g"]
+            cells.append("-" if stable is None else ", ".join(_number(A, ".4f") for A in stable) or "none")
         cells += [_number(row["peak_g"], ".3f"), _number(row["peak_amplitude"], ".4f"),
                   _number(row["peak_gain"], ".2f")]
         lines.append(cells)
@@ -57,8 +67,9 @@ def format_table(rows) -> str:
     text.insert(1, "  ".join("-" * width for width in widths))
 
     notes = []
-    if rows and rows[0]["g_swept"]:
-        search = rows[0]["peak_search"]
+    searches = [row["peak_search"] for row in rows if row["peak_search"] is not None]  # a row outside the theory has none
+    if rows and rows[0]["g_swept"] and searches:
+        search = searches[0]
         notes.append(f"peak: largest stable A over the sweep's {search['num']} values of g in "
                      f"[{search['g_min']:g}, {search['g_max']:g}]")
     elif any(row["peak_search"] is not None for row in rows):

@@ -276,28 +276,47 @@ def _wrap(items, width):
             line = ""
         if not line:
             # An item wider than the line (a written model's equation) ran off the canvas: broken
-            # at its own spaces, never inside $...$ (nor inside the items after it).
+            # at its own spaces, or inside $...$ before a + or - outside any brackets, the
+            # mathtext closed at the end of the line and opened again on the next.
             while visible(item) > width:
                 cut = _break_at(item, width, visible)
                 if cut is None:
                     break
-                lines.append(item[:cut].rstrip())
-                item = item[cut:].lstrip()
+                head, item = cut
+                lines.append(head)
         line = f"{line},  {item}" if line else item
     return Wrapped("\n".join(lines + [line]), ", ".join(items))
 
 
+_SIZED = re.compile(r"\\(left|right)(?![a-zA-Z])")  # \left( ... \right): brackets mathtext pairs
+
+
 def _break_at(text, width, visible):
-    """Where to break ``text``: after its last space outside mathtext that leaves at most ``width``
-    visible characters before it; None where there is none."""
-    best, in_math = None, False
+    """(the line, the rest) of ``text`` broken at the last place that leaves at most ``width``
+    visible characters on the line: a space outside mathtext, or a + or - (with a space either
+    side) inside it at the top level, neither in braces nor between \\left and \\right, where
+    the line ends the mathtext ($) and the rest opens it again. None where there is none.
+
+    A $ after a backslash is text, as matplotlib reads it (``literal``'s escaped names): one
+    taken for mathtext put a name's '\\$' out of step with the caption's real markup."""
+    best, in_math, depth, start = None, False, 0, None
     for index, char in enumerate(text):
-        if char == "$":
-            in_math = not in_math
+        if char == "$" and text[index - 1:index] != "\\":
+            in_math, depth, start = not in_math, 0, index
+        elif in_math and char in "{}" and text[index - 1:index] != "\\":
+            depth += 1 if char == "{" else -1
+        elif in_math and char == "\\" and _SIZED.match(text, index):
+            depth += 1 if _SIZED.match(text, index).group(1) == "left" else -1
         elif char == " " and not in_math and index > 0:
             if visible(text[:index]) > width:
                 break
-            best = index
+            best = (text[:index].rstrip(), text[index:].lstrip())
+        elif (in_math and depth == 0 and char in "+-" and text[index - 1:index] == " "
+              and text[index + 1:index + 2] == " " and text[start + 1:index].strip()):
+            head = text[:index].rstrip() + "$"
+            if visible(head) > width:
+                break
+            best = (head, "$" + text[index:])
     return best
 
 
@@ -333,8 +352,36 @@ def _title(fig, what, caption):
     # Wrapped as the caption is: a title wider than the figure (a trajectory's, with its warning
     # that the samples alias the fast force) ran off both edges of the canvas.
     shown = _wrap([what], _width(fig))
-    fig.suptitle(f"{shown}\n{caption}", fontsize="small")  # relative: follows the style's font size
+    fig.suptitle(f"{shown}\n{_within_height(fig, caption, shown.count(chr(10)) + 1)}",
+                 fontsize="small")  # relative: follows the style's font size
     fig._vrsweep_description = (what, caption)
+
+
+# The share of a figure's height its title and caption may take, and the height of one of their
+# lines in font sizes (mathtext's sub- and superscripts make a line taller than text's 1.2).
+TITLE_HEIGHT_SHARE = 0.4
+TITLE_LINE_HEIGHT = 1.35
+
+
+def _within_height(fig, caption, title_lines):
+    """``caption`` as drawn under a title of ``title_lines`` lines: whole where it fits in
+    TITLE_HEIGHT_SHARE of the figure's height, else its first and last lines with the middle
+    left out (a written model of forty parameters: an equation and a list of them that took half
+    the canvas). The figure's description (its file's metadata) keeps the whole caption."""
+    from matplotlib.font_manager import FontProperties
+
+    lines = str(caption).split("\n")
+    points = FontProperties(size="small").get_size_in_points() * TITLE_LINE_HEIGHT
+    room = max(2, int(TITLE_HEIGHT_SHARE * fig.get_figheight() * 72.0 / points) - title_lines)
+    if len(lines) <= room:
+        return str(caption)
+    tail = (room - 1) // 2
+    head = room - 1 - tail
+    cut = len(lines) - head - tail
+    marker = f"... ({cut} lines more in the figure's description: vrsweep info FIGURE)"
+    if len(marker) > _width(fig):
+        marker = f"... ({cut} lines more)"
+    return "\n".join([*lines[:head], marker, *lines[len(lines) - tail:]])
 
 
 # A legend's columns on a narrow figure: layout.legend_columns (there, as layout re-makes legends).
@@ -710,6 +757,44 @@ def legend_note(fig) -> str:
 
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+FIGURE_WORDS = {".png": "a PNG image", ".pdf": "a PDF", ".svg": "an SVG image"}
+# Bytes that open a file of each format: a PNG's signature, a PDF's header (matplotlib writes it
+# first), and an SVG's root element (after an XML declaration, a doctype or comments).
+_FIGURE_STARTS = {".png": re.compile(rb"\A\x89PNG\r\n\x1a\n"), ".pdf": re.compile(rb"\A%PDF-"),
+                  ".svg": re.compile(rb"\A(?:\xef\xbb\xbf)?\s*(?:<\?xml[^>]*>\s*|<!--.*?-->\s*|<!DOCTYPE[^>]*>\s*)*<svg[\s>]",
+                                     re.S | re.I)}
+_HEAD_BYTES = 4096
+
+
+def figure_format(path) -> str | None:
+    """The figure format (a FIGURE_SUFFIXES entry) the bytes of the file at ``path`` are, whatever
+    its name; None for any other file (``file_contents`` says what it holds)."""
+    with open(path, "rb") as handle:
+        head = handle.read(_HEAD_BYTES)
+    return next((suffix for suffix, start in _FIGURE_STARTS.items() if start.match(head)), None)
+
+
+def file_contents(path) -> str:
+    """What the file at ``path`` holds, in a few words ('text', 'an HDF5 file', 'a PNG image'...),
+    as its bytes say, for a file that is not what its name says."""
+    from vrsweep.store.fileio import is_hdf5
+
+    found = figure_format(path)
+    if found is not None:
+        return FIGURE_WORDS[found]
+    if is_hdf5(path):
+        return "an HDF5 file"
+    with open(path, "rb") as handle:
+        head = handle.read(_HEAD_BYTES)
+    if not head:
+        return "nothing (0 bytes)"
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError as error:
+        text = head[:error.start].decode("utf-8") if error.start > len(head) - 4 else None
+    if text is not None and "\x00" not in text:
+        return "text"
+    return "data of another kind"
 
 
 def read_description(path) -> dict:

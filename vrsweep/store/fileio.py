@@ -440,6 +440,13 @@ KIND_WORDS = {"sweep": "a sweep (vrsweep run)", "shard": "a shard of a sweep (vr
 
 # The kinds a file names in its root attribute vrsweep_file (a sweep or shard names none).
 _NAMED_KINDS = ("branch", "curves", "trajectory")
+NAMED_KINDS = _NAMED_KINDS
+
+
+def stored_kind(path):
+    """The kind of vrsweep file at ``path`` (a KIND_WORDS key: its root attributes say it), None
+    for a file vrsweep did not write or cannot read."""
+    return _kind_of(path)
 
 
 def _kind_of(path):

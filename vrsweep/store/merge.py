@@ -31,7 +31,7 @@ from typing import Iterable
 import numpy as np
 
 from vrsweep.errors import ResultFileError, UsageError, VrsweepError
-from vrsweep.store.fileio import LIBVER, atomic_write, open_hdf5, output_target, prepare_output_directory, writing_hdf5
+from vrsweep.store.fileio import KIND_WORDS, LIBVER, NAMED_KINDS, atomic_write, stored_kind, open_hdf5, output_target, prepare_output_directory, writing_hdf5
 from vrsweep.store.provenance import (
     RESULTS_CHANGE, RESULTS_SINCE_VERSION, cf_attributes, results_epoch, same_results_as_now,
 )
@@ -103,6 +103,10 @@ class _Shard(StoredLayout):
     def __init__(self, path, stop):
         stop()
         self._stop = stop
+        kind = stored_kind(path)
+        if kind in NAMED_KINDS:  # open_checked says only that it is no sweep's: say what merge takes
+            raise ResultFileError(f"{path} is {KIND_WORDS[kind]}, not a sweep's results: merge takes the result "
+                                  "files of one sweep (those vrsweep run writes, whole or in shards)")
         f = open_checked(path, "r")
         try:
             super().__init__(path, f)

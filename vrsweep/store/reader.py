@@ -16,7 +16,7 @@ import h5py
 import numpy as np
 
 from vrsweep.errors import ResultFileError, clip
-from vrsweep.store.fileio import _errno_of, open_hdf5, refuse_a_special_file
+from vrsweep.store.fileio import KIND_WORDS, NAMED_KINDS, _errno_of, open_hdf5, refuse_a_special_file
 from vrsweep.store.layout import (
     BOOKKEEPING, FORMAT_VERSION, VariableSpec, clean_attrs, decode, point_label, point_variables_of, scale_names,
 )
@@ -71,7 +71,12 @@ def open_checked(path, mode="r"):
             raise ResultFileError(f"{path} was written by an older vrsweep (format {version}; this "
                                   f"vrsweep reads format {FORMAT_VERSION})" + unless_changed(f, path))
         if "done" not in f or "point_variables" not in f["done"].attrs:
-            raise ResultFileError(f"{path} is a vrsweep file but not a sweep result (no 'done' mask)"
+            # A trajectory, a branch or curves say what they are: "not a sweep result (no 'done'
+            # mask)" named what a sweep's file has, not what this file is.
+            kind = f.attrs.get("vrsweep_file", "")
+            kind = kind.decode(errors="replace") if isinstance(kind, bytes) else kind
+            what = KIND_WORDS[kind] if isinstance(kind, str) and kind in NAMED_KINDS else "a vrsweep file"
+            raise ResultFileError(f"{path} is {what} but not a sweep's results (no 'done' mask)"
                                   + unless_changed(f, path))
         check_structure(f, path)
     except ResultFileError:

@@ -47,7 +47,7 @@ from vrsweep.analysis.theory.slowflow import (  # noqa: F401
 from vrsweep.analysis.theory.response import (  # noqa: F401
     AnalyticPeak, DEFAULT_G_POINTS, FixedPoints, ResponseBranches, THEORY_PARAMETERS,
     analytic_columns, analytic_peak, fixed_point_cubic, fixed_point_phase, fixed_points,
-    response_branches, theory_rows,
+    outside_theory, response_branches, theory_rows,
 )
 from vrsweep.analysis.theory.curves import (  # noqa: F401
     BISECTION_STEPS, FOLD_SAMPLES, ParameterCurve, THEORY_PLANE_PARAMETERS,
@@ -61,7 +61,7 @@ __all__ = [
     "reconstruct", "slow_flow", "slow_flow_cartesian", "slow_flow_coefficients", "slow_flow_jacobian",
     "AnalyticPeak", "DEFAULT_G_POINTS", "FixedPoints", "ResponseBranches", "THEORY_PARAMETERS",
     "analytic_columns", "analytic_peak", "fixed_point_cubic", "fixed_point_phase", "fixed_points",
-    "response_branches", "theory_rows", "BISECTION_STEPS", "FOLD_SAMPLES", "ParameterCurve",
+    "outside_theory", "response_branches", "theory_rows", "BISECTION_STEPS", "FOLD_SAMPLES", "ParameterCurve",
     "THEORY_PLANE_PARAMETERS", "fold_amplitude", "fold_curve", "fold_discriminant", "hopf_curve",
     "hopf_function",
 ]

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from vrsweep.analysis.theory.slowflow import (
-    AMPLITUDE_NOTE, BARRIER_NOTE, THEORY_NOTE, _get, damping_level, effective_frequency_squared, g_res,
+    AMPLITUDE_NOTE, BARRIER_NOTE, THEORY_NOTE, _get, damping_level, effective_frequency_squared, fast_force, g_res,
     slow_flow_coefficients, slow_flow_jacobian,
 )
 
@@ -309,6 +309,91 @@ def _stable_amplitudes(params):
     return [float(R) for R in points.R[points.stable]]
 
 
+def outside_theory(params: Mapping) -> str | None:
+    """Why the first-order theory has no numbers at ``params`` (one line naming the parameters),
+    None where it has. ``vrsweep theory --set Omega=1e-300`` printed wt2 and K as "nan..nan" and
+    blamed a limit cycle ("no stable fixed point on the g grid"): Omega^4 underflowed to 0, and
+    every number of the row was 0/0 or g^2/0.
+
+    - Omega <= omega: the effective system (eq2.10) is the original one averaged over the fast
+      force's period, and there is no fast force to average over (``fast_force``; the figures
+      leave the theory out there too).
+    - A term every number of a row goes through beyond a double's range (about 1.8e308, or
+      below its smallest): Omega^4 (wt2 and K divide by it, eq2.11, eq2.12), g_res (eq3.4), the
+      slow flow's coefficients gamma/omega, alpha/omega^2, c/omega^2 (eq2.13), and the cubic
+      whose roots are the amplitudes at g_res and 2 g_res (the peak's default grid).
+
+    A g of the config's own beyond the range (a g axis to 1e200) is not the theory's: that g's
+    wt2 and K are inf (null in JSON), the other values are shown.
+    """
+    p = {name: float(params[name]) for name in ("gamma", "alpha", "c", "omega0", "omega", "Omega")}
+    if not bool(fast_force(p)):
+        return (f"Omega = {p['Omega']:g} is not above omega = {p['omega']:g}: the effective system (eq2.10) averages "
+                "over the fast force, which must be faster than the slow one; the theory has nothing to say there")
+    with np.errstate(all="ignore"):
+        fourth = np.float64(p["Omega"]) ** 4
+        if fourth == 0.0 or not np.isfinite(fourth):
+            return (f"Omega^4, by which wt2 and K divide (eq2.11, eq2.12), is beyond a double's range at "
+                    f"Omega = {p['Omega']:g}: the theory has no numbers there")
+        resonance = float(g_res(p["alpha"], p["omega0"], p["omega"], p["Omega"]))
+        if p["alpha"] > 0.0 and not math.isfinite(resonance):
+            return (f"g_res = Omega^2 sqrt(2 (omega^2 + omega0^2) / (3 alpha)) (eq3.4) is beyond a double's range "
+                    f"at Omega = {p['Omega']:g}, alpha = {p['alpha']:g}: the theory has no numbers there")
+        co = slow_flow_coefficients(dict(p, g=0.0))
+        if not all(np.isfinite(value) for value in (co.Gamma, co.Lambda, co.F)):
+            return (f"the slow flow's coefficients gamma/omega, alpha/omega^2, c/omega^2 (eq2.13) are beyond a "
+                    f"double's range at omega = {p['omega']:g}: the theory has no numbers there")
+        if math.isfinite(resonance) and not all(np.all(np.isfinite(term)) for term in fixed_point_cubic(
+                dict(p, g=np.array([resonance, 2.0 * resonance])))):
+            return (f"the fixed points' cubic (eq2.27) at g_res = {resonance:.4g} (eq3.4) is beyond a double's range "
+                    f"at Omega = {p['Omega']:g}, omega = {p['omega']:g}: the theory has no numbers there")
+    return None
+
+
+def _cubic_finite(params, g_values) -> np.ndarray:
+    """Whether the fixed points' cubic (eq2.27) is within a double's range at each of ``g_values``."""
+    g = np.atleast_1d(np.asarray(g_values, dtype=np.float64))
+    with np.errstate(all="ignore"):
+        coefficients = fixed_point_cubic(dict(params, g=g))
+    return np.logical_and.reduce([np.isfinite(np.broadcast_to(c, g.shape)) for c in coefficients])
+
+
+def _beyond_range(params, g_values, g=None):
+    """A row's note where the cubic whose roots are the amplitudes is beyond a double's range at
+    some of its g (a g of 1e200, or Omega and omega so small that g^2/(Omega^4 omega^2)
+    overflows): no amplitude there, and no limit cycle to blame for it. None where it is not.
+    ``g_values``: the peak's grid; ``g``: the config's g where it is not swept."""
+    where = []
+    if g is not None and not _cubic_finite(params, [g]).all():
+        where.append(f"g = {float(g):g}")
+    grid = np.atleast_1d(np.asarray(g_values, dtype=np.float64))
+    finite = _cubic_finite(params, grid) if grid.size else np.ones(0, dtype=bool)
+    if not finite.all():
+        first = float(np.min(np.abs(grid[~finite])))
+        where.append(f"{int((~finite).sum())} of the {grid.size} values of g the peak is searched over "
+                     f"(from g = {first:g})")
+    if not where:
+        return None
+    return (f"the fixed points' cubic (eq2.27) is beyond a double's range at Omega = {float(params['Omega']):g}, "
+            f"omega = {float(params['omega']):g} and {' and at '.join(where)}: no amplitude there")
+
+
+def _row_without_theory(config, params, row_axes, g_swept, g_values, reason):
+    """A row of ``theory_rows`` where the theory has no numbers (``outside_theory``): every one
+    of them None ('-' in the table), and the reason its note."""
+    return {
+        "Omega": params["Omega"],
+        "parameters": {name: (None if name == "g" and g_swept else params[name]) for name in config.parameters},
+        "swept": {name: params[name] for name in row_axes if name != "Omega"},
+        "g_res": None, "g_swept": g_swept, "g": None if g_swept else params["g"],
+        "g_range": [float(np.min(g_values)), float(np.max(g_values))],
+        "wt2_at_g": None, "K_at_g": None, "wt2_range": [None, None], "K_range": [None, None], "K_at_g_res": None,
+        "stable_amplitudes_at_g": None, "stable_amplitudes_at_g_res": [], "amplitude_at_g_res": None,
+        "peak_search": None, "peak_g": None, "peak_amplitude": None, "peak_gain": None,
+        "notes": [reason], "outside_theory": True,
+    }
+
+
 def theory_rows(config) -> list[dict]:
     """The paper's predictions for a config, one dict per Omega (and per value of any other swept
     parameter that enters the theory): g_res (eq3.4), wt2 and K (eq2.11, eq2.12) at the config's g
@@ -331,6 +416,12 @@ def theory_rows(config) -> list[dict]:
         params = dict(config.parameters)
         params.update({name: float(value) for name, value in zip(row_axes, row_values)})
         notes = [THEORY_NOTE, AMPLITUDE_NOTE]
+        reason = outside_theory(params)
+        if reason is not None:
+            rows.append(_row_without_theory(config, params, row_axes, g_swept,
+                                            np.asarray(axes["g"] if g_swept else [params["g"]], dtype=np.float64),
+                                            reason))
+            continue
         resonance_g = float(g_res(params["alpha"], params["omega0"], params["omega"], params["Omega"]))
 
         if g_swept:
@@ -364,7 +455,12 @@ def theory_rows(config) -> list[dict]:
             peak_g, peak_A, peak_gain = float(peak.g), float(peak.amplitude), float(peak.gain)
         else:
             peak_g = peak_A = peak_gain = math.nan
-        if g_values is not None and not math.isfinite(peak_A):
+        beyond = _beyond_range(params, g_values if g_values is not None else [], None if g_swept else params["g"])
+        if beyond is not None:
+            notes.append(beyond)
+        if g_values is not None and not math.isfinite(peak_A) and not _cubic_finite(params, g_values).any():
+            pass  # no number on the grid at all: ``beyond`` says why, no limit cycle is to blame
+        elif g_values is not None and not math.isfinite(peak_A):
             notes.append("no stable fixed point on the g grid: the slow flow may settle on a limit cycle "
                          "(a modulated, quasi-periodic response) that the fixed points do not describe")
         elif g_values is not None and peak_g in (float(g_values.min()), float(g_values.max())):
@@ -404,5 +500,11 @@ def theory_rows(config) -> list[dict]:
             "peak_amplitude": _finite_or_none(peak_A),
             "peak_gain": _finite_or_none(peak_gain),
             "notes": notes,
+            "outside_theory": False,
         })
+    if rows and all(row["outside_theory"] for row in rows):
+        # Nothing to show: the one reason (of the first row) is the answer, not a table of '-'.
+        from vrsweep.errors import UsageError
+
+        raise UsageError.naming("{source}: {reason}", source=config.source_name, reason=rows[0]["notes"][0])
     return rows
