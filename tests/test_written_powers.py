@@ -26,13 +26,11 @@ from vrsweep.results import Status
 
 ZETA, K, D, F, OMEGA = 0.05, 3.0, 0.5, 1.0, 0.8
 TRANSIENT, MEASURED = 200, 20
-# The stop out of reach and the parameters in test_written_kinks' order: a stop never near
-# changes no step.
+# Hertz's soft stop on the linear oscillator (contact beyond x = d; no rigid barrier).
 HERTZ = f"""
 model:
   acceleration: "-2*zeta*v - x - k*max(x - d, 0)**1.5 + F*cos(omega*t)"
-  parameters: {{k: {K}, d: {D}, zeta: {ZETA}, F: {F}, omega: {OMEGA}, Delta: 1000.0, r: 0.8}}
-  barriers: [{{position: Delta, side: above, restitution: r}}]
+  parameters: {{k: {K}, d: {D}, zeta: {ZETA}, F: {F}, omega: {OMEGA}}}
   period: "2*pi/omega"
   response: {{frequency: omega, scale: F}}
 initial: {{x: 0.0, v: 0.0}}
