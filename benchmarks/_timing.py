@@ -25,7 +25,7 @@ def best_of(function, repeats=3, warm_up=False):
     return min(times), result
 
 
-def checkout_child(checkout, child, arguments, env=None):
+def checkout_child(checkout, child, arguments, env=None, timeout=None):
     """The JSON a child process prints last, ``python -c child *arguments checkout``, run with the
     checkout's own vrsweep: the child puts its last argument first on sys.path and prints
     ``{"vrsweep": vrsweep.__file__, ...}``, checked here to lie in the checkout. Up to 0.7.8 the
@@ -35,7 +35,7 @@ def checkout_child(checkout, child, arguments, env=None):
     checkout = os.path.realpath(checkout)
     env = dict(os.environ if env is None else env, PYTHONPATH=checkout)
     done = subprocess.run([sys.executable, "-c", child, *arguments, checkout], env=env, capture_output=True, text=True,
-                          check=True)
+                          check=True, timeout=timeout)
     result = json.loads(done.stdout.strip().splitlines()[-1])
     imported = os.path.realpath(result["vrsweep"])
     if not imported.startswith(checkout + os.sep):
