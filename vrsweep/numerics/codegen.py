@@ -491,7 +491,7 @@ def _switch_index(candidate, found):
     # A constant multiple is the same surface too: max(x, x + v, x + 2*v, ...) has the differences
     # -v, -2*v, -v, ... Taken as surfaces of their own, they flipped together, each a bit of the
     # frozen mode, and the frozen acceleration's sides multiplied (a nested max of 8 such
-    # arguments: 7 surfaces and 30 s in sympy; 10, minutes).
+    # arguments: 7 surfaces and 10 to 20 s in sympy; 10, minutes).
     for k, known in enumerate(found):
         ratio = _constant_ratio(candidate, known)
         if ratio is not None:
