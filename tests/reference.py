@@ -328,3 +328,48 @@ def reference_point(point, **kwargs):
     """reference_run on one CONVERGED_POINTS entry (kwargs: rtol, atol, method, ...)."""
     return reference_run(point_coefficients(point), point["x0"], point["v0"],
                          point["transient_periods"], point["measure_periods"], **kwargs)
+
+
+def forced_with_a_surface(force, stiffness, surface, zeta, F, omega, transient, measured, x0=0.0):
+    """(R over the measured periods, the one-period monodromy matrix at the transient's end) of a
+    written model's kink or power at x = surface: x'' = -2 zeta x' + force(x, side) + F cos(omega t)
+    from (x0, 0), restarted at each crossing by a terminal event, each side (+1 beyond the surface,
+    -1 before it) with its own force and the variational equation of its own stiffness
+    d force / dx. R is |Q| / F over ``measured`` periods 2 pi / omega after ``transient``."""
+    period = 2 * math.pi / omega
+
+    def rhs(t, y, side):
+        x, v = y[0], y[1]
+        out = [v, -2 * zeta * v + force(x, side) + F * math.cos(omega * t),
+               x * math.sin(omega * t), x * math.cos(omega * t)]
+        for column in range(2):
+            dx, dv = y[4 + 2 * column], y[5 + 2 * column]
+            out += [dv, stiffness(x, side) * dx - 2 * zeta * dv]
+        return out
+
+    def run(t, t_end, y):
+        while t < t_end:
+            side = 1 if (y[0] > surface or (y[0] == surface and y[1] > 0)) else -1
+            event = lambda t, y, side: y[0] - surface  # noqa: E731
+            event.terminal = True
+            event.direction = -side
+            solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-15, events=event,
+                                 args=(side,))
+            if solution.status == 1:
+                t, y = solution.t_events[0][0], solution.y_events[0][0].copy()
+                y[0] = surface
+                if y[1] == 0.0:
+                    raise AssertionError("a crossing at rest: not transversal")
+            else:
+                t, y = solution.t[-1], solution.y[:, -1].copy()
+        return y
+
+    start = np.array([x0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0])
+    y = run(0.0, transient * period, start)
+    y[2:4] = 0.0
+    y[4:] = [1.0, 0.0, 0.0, 1.0]
+    after_one = run(transient * period, (transient + 1) * period, y.copy())
+    monodromy = np.array([[after_one[4], after_one[6]], [after_one[5], after_one[7]]])
+    end = run(transient * period, (transient + measured) * period, y)
+    window = measured * period
+    return math.hypot(2 * end[2] / window, 2 * end[3] / window) / F, monodromy

@@ -22,6 +22,8 @@ import vrsweep
 from vrsweep.config import parse_config
 from vrsweep.numerics import codegen
 
+from reference import forced_with_a_surface
+
 # The bilinear spring: a second spring of stiffness k engages at x = d. Period 1 at these values
 # (real Floquet multipliers -0.636 and -0.717: the exponent is not the damping's -zeta).
 ZETA, K, D, F, OMEGA = 0.05, 3.0, 0.5, 1.0, 0.8
@@ -41,46 +43,12 @@ integration: {{transient_periods: {TRANSIENT}, measure_periods: {MEASURED}}}
 """
 
 
-def _bilinear_reference(tangents=False):
-    """(R over the measured periods, the one-period monodromy matrix at the transient's end)."""
-    period = 2 * math.pi / OMEGA
-
-    def rhs(t, y, engaged):
-        x, v = y[0], y[1]
-        stiffness = 1.0 + (K if engaged else 0.0)
-        spring = K * D if engaged else 0.0  # -x - k (x - d) = -(1 + k) x + k d
-        out = [v, -2 * ZETA * v - stiffness * x + spring + F * math.cos(OMEGA * t),
-               x * math.sin(OMEGA * t), x * math.cos(OMEGA * t)]
-        for column in range(2):  # the variational equation of each side, continuous across
-            dx, dv = y[4 + 2 * column], y[5 + 2 * column]
-            out += [dv, -stiffness * dx - 2 * ZETA * dv]
-        return out
-
-    def run(t, t_end, y):
-        while t < t_end:
-            engaged = y[0] > D or (y[0] == D and y[1] > 0)
-            event = lambda t, y, engaged: y[0] - D  # noqa: E731
-            event.terminal = True
-            event.direction = -1 if engaged else 1
-            solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-15, events=event,
-                                 args=(engaged,))
-            if solution.status == 1:
-                t, y = solution.t_events[0][0], solution.y_events[0][0].copy()
-                y[0] = D
-            else:
-                t, y = solution.t[-1], solution.y[:, -1].copy()
-        return y
-
-    start = np.array([0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0])
-    y = run(0.0, TRANSIENT * period, start)
-    y[2:4] = 0.0
-    y[4:] = [1.0, 0.0, 0.0, 1.0]
-    after_one = run(TRANSIENT * period, (TRANSIENT + 1) * period, y.copy())
-    monodromy = np.array([[after_one[4], after_one[6]], [after_one[5], after_one[7]]])
-    end = run(TRANSIENT * period, (TRANSIENT + MEASURED) * period, y)
-    window = MEASURED * period
-    R = math.hypot(2 * end[2] / window, 2 * end[3] / window) / F
-    return R, monodromy
+def _bilinear_reference():
+    """(R over the measured periods, the one-period monodromy matrix at the transient's end).
+    Engaged (side +1): -x - k (x - d), stiffness -(1 + k); the variational equation of each side."""
+    return forced_with_a_surface(lambda x, side: -x - (K * (x - D) if side > 0 else 0.0),
+                                 lambda x, side: -1.0 - (K if side > 0 else 0.0), D,
+                                 ZETA, F, OMEGA, TRANSIENT, MEASURED)
 
 
 def test_the_switching_functions_are_the_arguments_of_each_kink():

@@ -8,7 +8,8 @@ codegen.held_in_domain takes such a power as 0 beyond its surface, the surface's
 leaves every value that was computed before as it was, bit for bit.
 
 The references are SciPy's solve_ivp (DOP853, rtol 1e-13) restarted at each crossing by a
-terminal event, with each side's own right-hand side written here (no max() or abs() in it).
+terminal event (tests/reference.forced_with_a_surface), with each side's own right-hand side
+written here (no max() or abs() in it).
 """
 
 import math
@@ -17,12 +18,13 @@ import numpy as np
 import pytest
 import sympy
 import xarray as xr
-from scipy.integrate import solve_ivp
 
 import vrsweep
 from vrsweep.config import parse_config
 from vrsweep.numerics import codegen
 from vrsweep.results import Status
+
+from reference import forced_with_a_surface
 
 ZETA, K, D, F, OMEGA = 0.05, 3.0, 0.5, 1.0, 0.8
 TRANSIENT, MEASURED = 200, 20
@@ -42,60 +44,18 @@ ROOT = (HERTZ.replace("-2*zeta*v - x - k*max(x - d, 0)**1.5", "-2*zeta*v - k*sqr
         .replace("initial: {x: 0.0", "initial: {x: 0.3"))
 
 
-def _reference(force, stiffness, surface, x0=0.0):
-    """(R over the measured periods, the one-period monodromy matrix at the transient's end) of
-    x'' = -2 zeta x' + force(x, side) + F cos(omega t), restarted at each crossing of x = surface,
-    with the variational equation of each side (stiffness: d force / dx on that side)."""
-    period = 2 * math.pi / OMEGA
-
-    def rhs(t, y, side):
-        x, v = y[0], y[1]
-        out = [v, -2 * ZETA * v + force(x, side) + F * math.cos(OMEGA * t),
-               x * math.sin(OMEGA * t), x * math.cos(OMEGA * t)]
-        for column in range(2):
-            dx, dv = y[4 + 2 * column], y[5 + 2 * column]
-            out += [dv, stiffness(x, side) * dx - 2 * ZETA * dv]
-        return out
-
-    def run(t, t_end, y):
-        while t < t_end:
-            side = 1 if (y[0] > surface or (y[0] == surface and y[1] > 0)) else -1
-            event = lambda t, y, side: y[0] - surface  # noqa: E731
-            event.terminal = True
-            event.direction = -side
-            solution = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-15, events=event,
-                                 args=(side,))
-            if solution.status == 1:
-                t, y = solution.t_events[0][0], solution.y_events[0][0].copy()
-                y[0] = surface
-                if y[1] == 0.0:
-                    raise AssertionError("a crossing at rest: not transversal")
-            else:
-                t, y = solution.t[-1], solution.y[:, -1].copy()
-        return y
-
-    start = np.array([x0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0])
-    y = run(0.0, TRANSIENT * period, start)
-    y[2:4] = 0.0
-    y[4:] = [1.0, 0.0, 0.0, 1.0]
-    after_one = run(TRANSIENT * period, (TRANSIENT + 1) * period, y.copy())
-    monodromy = np.array([[after_one[4], after_one[6]], [after_one[5], after_one[7]]])
-    end = run(TRANSIENT * period, (TRANSIENT + MEASURED) * period, y)
-    window = MEASURED * period
-    return math.hypot(2 * end[2] / window, 2 * end[3] / window) / F, monodromy
-
-
 # SciPy's steps put stages beyond the surface too, before its event cuts the step: there each
 # side's power is taken at the surface, max(base, 0), where it is real.
 def _hertz_reference():
     # engaged (side +1): -x - k (x - d)^1.5; the stiffness -1 - 1.5 k (x - d)^0.5, continuous at d
-    return _reference(lambda x, side: -x - (K * max(x - D, 0.0) ** 1.5 if side > 0 else 0.0),
-                      lambda x, side: -1.0 - (1.5 * K * math.sqrt(max(x - D, 0.0)) if side > 0 else 0.0), D)
+    return forced_with_a_surface(lambda x, side: -x - (K * max(x - D, 0.0) ** 1.5 if side > 0 else 0.0),
+                                 lambda x, side: -1.0 - (1.5 * K * math.sqrt(max(x - D, 0.0)) if side > 0 else 0.0), D,
+                                 ZETA, F, OMEGA, TRANSIENT, MEASURED)
 
 
 def _root_reference():
-    return _reference(lambda x, side: -K * side * math.sqrt(max(side * x, 0.0)), lambda x, side: 0.0, 0.0,
-                      x0=0.3)
+    return forced_with_a_surface(lambda x, side: -K * side * math.sqrt(max(side * x, 0.0)), lambda x, side: 0.0, 0.0,
+                                 ZETA, F, OMEGA, TRANSIENT, MEASURED, x0=0.3)
 
 
 def test_hertz_contact_converges_with_the_tolerance_and_its_tangents_are_finite():
