@@ -504,11 +504,8 @@ def _constant_ratio(first, second):
     probes first (_differ's points), sympy.cancel only where the ratio is the same at both."""
     import sympy
 
-    symbols = sorted(first.free_symbols | second.free_symbols, key=str)
     seen = []
-    for probe in _PROBES:
-        values = {symbol: sympy.Float(probe[n % len(probe)] * (1 + n // len(probe)), 30)
-                  for n, symbol in enumerate(symbols)}
+    for values in _probe_values(first, second):
         try:
             ratio = complex((first / second).evalf(30, subs=values))
         except (TypeError, ValueError, ZeroDivisionError, OverflowError):
@@ -530,16 +527,20 @@ _PROBES = ((0.3183098862, 0.7071067812, 1.2247448714, 0.5772156649, 1.6180339887
            (1.4142135624, 0.4342944819, 0.6931471806, 1.7320508076, 0.2718281828, 1.1447298858))
 
 
+def _probe_values(first, second):
+    """For each of _PROBES' points, the values (30 digits) of the symbols of ``first`` and ``second``."""
+    import sympy
+
+    symbols = sorted(first.free_symbols | second.free_symbols, key=str)
+    return [{symbol: sympy.Float(probe[n % len(probe)] * (1 + n // len(probe)), 30) for n, symbol in enumerate(symbols)}
+            for probe in _PROBES]
+
+
 def _differ(first, second):
     """Whether ``first`` and ``second`` (sympy expressions) certainly differ: their values at one
     of _PROBES' points are finite and apart by more than rounding. False where they agree, or
     cannot be evaluated there (then sympy decides)."""
-    import sympy
-
-    symbols = sorted(first.free_symbols | second.free_symbols, key=str)
-    for probe in _PROBES:
-        values = {symbol: sympy.Float(probe[n % len(probe)] * (1 + n // len(probe)), 30)
-                  for n, symbol in enumerate(symbols)}
+    for values in _probe_values(first, second):
         try:
             a = complex(first.evalf(30, subs=values))
             b = complex(second.evalf(30, subs=values))

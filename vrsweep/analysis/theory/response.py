@@ -458,11 +458,11 @@ def theory_rows(config) -> list[dict]:
         beyond = _beyond_range(params, g_values if g_values is not None else [], None if g_swept else params["g"])
         if beyond is not None:
             notes.append(beyond)
-        if g_values is not None and not math.isfinite(peak_A) and not _cubic_finite(params, g_values).any():
-            pass  # no number on the grid at all: ``beyond`` says why, no limit cycle is to blame
-        elif g_values is not None and not math.isfinite(peak_A):
-            notes.append("no stable fixed point on the g grid: the slow flow may settle on a limit cycle "
-                         "(a modulated, quasi-periodic response) that the fixed points do not describe")
+        if g_values is not None and not math.isfinite(peak_A):
+            # where the grid has no number at all, ``beyond`` says why: no limit cycle is to blame
+            if _cubic_finite(params, g_values).any():
+                notes.append("no stable fixed point on the g grid: the slow flow may settle on a limit cycle "
+                             "(a modulated, quasi-periodic response) that the fixed points do not describe")
         elif g_values is not None and peak_g in (float(g_values.min()), float(g_values.max())):
             notes.append(f"the largest stable amplitude lies at the end g = {peak_g:g} of the g range: "
                          "no interior peak on the stable branch (while K > 0 small amplitudes are "
