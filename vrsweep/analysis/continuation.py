@@ -50,7 +50,7 @@ from vrsweep.analysis.commensurate import RATIO_TOLERANCE, check_commensurate  #
 from vrsweep.analysis.diagnostics import detect_period, orbit_gain
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
-from vrsweep.numerics.coefficients import N_BARRIERS, PERIOD, barrier_position, grazing_barrier
+from vrsweep.numerics.coefficients import N_BARRIERS, PERIOD, barrier_position, grazing_barrier, grazing_scale
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
@@ -245,7 +245,7 @@ def _parameter_derivative(problem, state, value, periods, orbit_map, relative=No
     the step), when both ends keep the orbit's impacts."""
     relative = PARAMETER_DIFFERENCE if relative is None else relative
     step = relative * max(1.0, abs(value))
-    scale = max(1.0, abs(grazing_barrier(problem.coefficients(value))))
+    scale = grazing_scale(problem.coefficients(value))
     if orbit_map.slowest_impact ** 2 < SLOW_IMPACT * scale:
         ends = [evaluate(problem, state, value + direction * step, periods) for direction in (1.0, -1.0)]
         if not any(_failure(end) or end.impacts != orbit_map.impacts for end in ends):
@@ -917,12 +917,14 @@ def follow(problem, start, direction, lo, hi, max_points, progress=None, stop=No
                         "may follow it" if strayed else "")
                 # A corrector that fails at every step down to min_step may converge at a smaller one:
                 # Fig. 1's bubble of six periods ends so 1e-5 short of its other doubling, which
-                # min_step = 1e-6 reaches (docs/continuation.md). Say where the lever is.
-                if status == ENDED_NEWTON and not curl:
+                # min_step = 1e-6 reaches (docs/continuation.md). Say where the lever is, unless
+                # the orbit's impact lies on the section, where no step carries the branch over.
+                section = _section_note(problem, current)
+                if status == ENDED_NEWTON and not curl and not section:
                     curl = (f"; a smaller continuation.min_step (now {options['min_step']:g}) may carry the branch "
                             "further")
                 reason = (f"{reason} at {problem.parameter} = {current.parameter:.8g} with the smallest step"
-                          f"{curl}{_section_note(problem, current)}")
+                          f"{curl}{section}")
                 return orbits, bifurcations, (status, reason)
         else:
             located, verdict = _graze_between(problem, current, orbit, before, memo)
@@ -1208,7 +1210,7 @@ def march_in_speed(problem, graze, predictor, impacts_beyond):
     45.122) the march goes on while it converges, and follow ends the branch after its last orbit.
     """
     periods, window = graze.periods, graze.window
-    scale = max(1.0, abs(grazing.barrier(problem, graze.z[2])))
+    scale = grazing.scale(problem, graze.z[2])
     tolerance = _tolerance(problem, graze.z[:2])
     speeds, points, orbits = [], [], []
     speed, growth, retries = SPEED_START * math.sqrt(scale), SPEED_GROWTH, 0
@@ -1322,7 +1324,7 @@ def _near_grazing(problem, orbit, proximity=GRAZING_PROXIMITY):
     to appear), or an impact slower than the root of that: reached with a speed v, an impact
     penetrates about v^2 / (2 a), a ~ 1, so both are one scale (grazing.graze_site's)."""
     touch, speed = _gaps(problem, orbit)
-    scale = max(1.0, abs(_barrier(problem, orbit)))
+    scale = grazing_scale(problem.coefficients(orbit.parameter))
     return touch < proximity * scale or speed ** 2 < proximity * scale
 
 

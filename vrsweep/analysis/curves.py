@@ -67,7 +67,7 @@ from vrsweep.analysis import continuation, grazing
 from vrsweep.analysis.diagnostics import orbit_gain
 from vrsweep.errors import UsageError
 from vrsweep.numerics import model as model_metadata
-from vrsweep.numerics.coefficients import grazing_barrier
+from vrsweep.numerics.coefficients import grazing_barrier, grazing_scale
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import ATOL, RTOL
 from vrsweep.numerics.shooting import periodic_map
@@ -145,6 +145,10 @@ class CurveProblem:
 
     def delta(self, values):
         return grazing_barrier(self.coefficients(values))
+
+    def scale(self, values):
+        """grazing_scale at (lam1, lam2): the length of the grazing tests."""
+        return grazing_scale(self.coefficients(values))
 
     def one_parameter(self, lam2):
         """The ContinuationProblem in lam1 at fixed lam2 (for the one-parameter test functions)."""
@@ -356,7 +360,7 @@ CLAIM_TOLERANCE = 1e-3
 def _off_the_bifurcation(problem, point):
     """None, or why ``point`` is not the bifurcation its curve claims (CLAIM_TOLERANCE)."""
     if point.kind == "grazing":
-        scale = max(1.0, abs(problem.delta(point.values)))
+        scale = problem.scale(point.values)
         if abs(point.barrier_distance) > CLAIM_TOLERANCE * scale:
             return f"converged {point.barrier_distance:.2g} from the barrier: not a graze"
         return None
@@ -462,7 +466,7 @@ def _near_barrier(problem, point):
     have penetrated about v^2 / 2 without the barrier). Not the difference steps' reach for
     impacting orbits: an orbit of the paper's parameters (g = 9.7, a period doubling) whose
     impacts stay at 0.078 was called a graze with it."""
-    scale = max(1.0, abs(problem.delta(point.values)))
+    scale = problem.scale(point.values)
     if point.impacts_per_period > 0:
         return point.slowest_impact < np.sqrt(GRAZING_PROXIMITY * scale)
     reach = max(GRAZING_PROXIMITY * scale, 10.0 * problem.step * max(1.0, float(np.max(np.abs(point.z)))))

@@ -50,7 +50,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from vrsweep.numerics.coefficients import (BARRIER, BARRIER_VALUES, N_BARRIERS, PERIOD, POSITION, SIDE,
-                                           free_of_barriers, grazing_barrier, only_barrier, shortest_period)
+                                           free_of_barriers, grazing_barrier, grazing_scale, only_barrier,
+                                           shortest_period)
 from vrsweep.numerics.shooting import periodic_map
 from vrsweep.results import Status
 
@@ -129,6 +130,10 @@ def free_map(problem, state, value, periods, window=None):
 
 def barrier(problem, value):
     return grazing_barrier(problem.coefficients(value))
+
+
+def scale(problem, value):
+    return grazing_scale(problem.coefficients(value))
 
 
 def barrier_gaps(coefficients, orbit_map):
@@ -291,7 +296,7 @@ def impacting_monodromy(problem, graze):
         normal_form = _double_normal_form(problem, graze)
         if normal_form is None:
             return None
-        speed = math.sqrt(normal_form[1].kappa * PROBE_PENETRATION * max(1.0, abs(barrier(problem, graze.z[2]))))
+        speed = math.sqrt(normal_form[1].kappa * PROBE_PENETRATION * scale(problem, graze.z[2]))
         probe = normal_form[1](speed)
         real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods,
                             problem.method, model=problem.model)
@@ -308,7 +313,7 @@ def _probe(problem, graze):
     one impact over the free map's there (the normal form's assumption)."""
     z_g = graze.z
     gradient = graze.jacobian[2]
-    penetration = PROBE_PENETRATION * max(1.0, abs(barrier(problem, z_g[2])))
+    penetration = PROBE_PENETRATION * scale(problem, z_g[2])
     probe = z_g - (penetration + graze.gap) * gradient / (gradient @ gradient)
     real = periodic_map(problem.coefficients(probe[2]), probe[:2], problem.settings, graze.periods, problem.method,
                         model=problem.model)
@@ -459,9 +464,9 @@ def graze_site(problem, orbit_map, value, periods, proximity):
     distance from Delta are compared on one scale; the nearer graze is taken.
     """
     delta = barrier(problem, value)
-    scale = max(1.0, abs(delta))
-    touch = (delta - orbit_map.free_x_max) / scale
-    stop = orbit_map.slowest_impact ** 2 / scale if orbit_map.impacts else np.inf
+    length = scale(problem, value)
+    touch = (delta - orbit_map.free_x_max) / length
+    stop = orbit_map.slowest_impact ** 2 / length if orbit_map.impacts else np.inf
     if not min(touch, stop) < proximity:
         return None
     if touch <= stop:

@@ -60,6 +60,15 @@ def grazing_barrier(coefficients):
     return np.inf
 
 
+def grazing_scale(coefficients):
+    """The length on which grazing tests measure a smooth maximum's gap to grazing_barrier's
+    Delta and an impact's squared speed: max(1, |Delta|), and 1 where no barrier is above. (With
+    |inf| as the scale every impact was "slow": a model whose only stop is below was next to a
+    graze at every orbit, so its branches ended as grazes at folds and at the section.)"""
+    barrier = grazing_barrier(coefficients)
+    return max(1.0, abs(barrier)) if np.isfinite(barrier) else 1.0
+
+
 def barrier_slot(barrier, value):
     """The index of one value (POSITION, SIDE, RESTITUTION) of barrier ``barrier``."""
     return BARRIER + BARRIER_VALUES * barrier + value
