@@ -329,3 +329,23 @@ def test_a_branch_changes_style_at_its_located_bifurcation_not_at_the_next_orbit
     assert float(np.asarray(top_line.get_ydata())[-1]) == pytest.approx(located.R)
     larger = next(line for line in _data_lines(bottom) if line.get_gid() == "multiplier 1" and line.get_linestyle() == "-")
     assert float(np.asarray(larger.get_ydata())[-1]) == pytest.approx(1.0)
+
+
+def test_a_fold_beyond_a_steep_segment_is_drawn_into_it():
+    """The bouncing ball's branch (configs/bouncing_ball.yaml at the default max_step) turned at
+    its fold within one arclength step: the segment where the stability changes spans 0.003 in
+    Gamma and 0.31 in R, and the located fold lies 0.016 beyond it. The line ran past F1 without
+    touching it (the fold was left out: within one segment's width only); it now runs through it."""
+    from vrsweep.plot.branches import _with_bifurcations
+
+    values = np.array([1.2, 1.11, 1.063, 1.066, 1.10, 1.2])
+    gain = np.array([2.32, 2.33, 2.27, 1.96, 1.75, 1.5])
+    stable = np.array([True, True, True, False, False, False])
+    modulus = np.tile([0.5, 0.5], (6, 1))
+    impacts = np.ones(6)
+    drawn = _with_bifurcations(values, gain, stable, modulus, impacts, [(1.0472, 2.156, np.array([1.0, 0.25]))])
+    assert list(drawn[0]) == [1.2, 1.11, 1.063, 1.0472, 1.066, 1.10, 1.2]
+    assert drawn[1][3] == 2.156 and not drawn[2][3] and list(drawn[3][3]) == [1.0, 0.25]
+    # a fold far from every segment where the stability changes is still left out
+    far = _with_bifurcations(values, gain, stable, modulus, impacts, [(0.5, 2.156, np.array([1.0, 0.25]))])
+    assert len(far[0]) == 6

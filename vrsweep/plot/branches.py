@@ -115,7 +115,15 @@ def _with_bifurcations(values, gain, stable, modulus, impacts, points):
             continue
         low = np.minimum(values[changes], values[changes + 1])
         high = np.maximum(values[changes], values[changes + 1])
-        reach = high - low
+        # How far beyond its segment a fold's tip may lie: the segment's length on the figure (in
+        # the parameter's units, R scaled as the axes scale it). Where one arclength step turns
+        # at the fold, its ends differ little in the parameter and much in R: the bouncing ball's
+        # fold lay 0.016 beyond a segment 0.004 wide and 0.31 tall, and was left off the line.
+        span_values = np.ptp(values) or 1.0
+        span_gain = np.ptp(gain[np.isfinite(gain)]) if np.isfinite(gain).any() else 1.0
+        chord = span_values * np.hypot((values[changes + 1] - values[changes]) / span_values,
+                                       (gain[changes + 1] - gain[changes]) / (span_gain or 1.0))
+        reach = np.maximum(high - low, np.nan_to_num(chord))
         near = changes[(low - reach <= at) & (at <= high + reach)]
         if near.size == 0:
             continue
