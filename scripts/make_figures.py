@@ -19,7 +19,7 @@ attraction of that bistable example at g = 23 (configs/basins_g23.yaml) and of f
 orbits of the original model at g = 5 (configs/basins_g5_original.yaml); the map of R over g
 and Omega (configs/map_g_Omega.yaml); bifurcation curves over an effective (g, Omega) map and an
 original (g, Delta) map (curves_g_Omega_effective, curves_original: docs/bifurcation-curves.md);
-two written models' figures (impact_linear_branch, impact_two_sided: docs/models.md).
+three written models' figures (impact_linear_branch, impact_two_sided, bouncing_ball: docs/models.md).
 """
 
 import argparse
@@ -224,6 +224,12 @@ COMMANDS = {
     "impact_two_sided": [
         ["run", "configs/impact_two_sided.yaml", "-o", "results/impact_two_sided.h5", "--overwrite"],
         ["plot", "results/impact_two_sided.h5", "-o", "docs/figures/impact_two_sided.png"],
+    ],
+    "bouncing_ball": [
+        ["run", "configs/bouncing_ball.yaml", "-o", "results/bouncing_ball.h5", "--overwrite"],
+        ["plot", "results/bouncing_ball.h5", "--kind", "bifurcation", "-o", "docs/figures/bouncing_ball_bifurcation.png"],
+        ["continue", "configs/bouncing_ball.yaml", "-o", "results/bouncing_ball_branch.h5", "--overwrite"],
+        ["plot", "results/bouncing_ball_branch.h5", "-o", "docs/figures/bouncing_ball_branch.png"],
     ],
 }
 
