@@ -148,3 +148,18 @@ def test_a_model_with_its_only_stop_below_is_near_a_graze_only_where_an_impact_i
 
     assert not continuation._near_grazing(problem, orbit(2 * math.pi / (1 + R)))
     assert continuation._near_grazing(problem, orbit(1e-3))
+
+
+def test_a_stop_written_as_moving_says_how_to_write_it(tmp_path, invoke):
+    text = EXAMPLE.read_text().replace("position: 0, side: below", 'position: "0.1*cos(t)", side: below')
+    (tmp_path / "moving.yaml").write_text(text)
+    done = invoke("validate", tmp_path / "moving.yaml")
+    assert done.exit_code == 2
+    lines = done.output.strip().splitlines()
+    assert len(lines) == 1 and "model.barriers[0].position: depends on t" in lines[0], done.output
+    assert 'y = x - s(t)' in lines[0] and '"A moving stop: write the model in the distance to it"' in lines[0]
+    # a restitution or a period that depends on t keeps the plain message
+    text = EXAMPLE.read_text().replace("restitution: r}", 'restitution: "r*cos(t)"}')
+    (tmp_path / "restitution.yaml").write_text(text)
+    done = invoke("validate", tmp_path / "restitution.yaml")
+    assert done.exit_code == 2 and "depends on t" in done.output and "a stop that moves" not in done.output, done.output

@@ -279,7 +279,11 @@ class ModelSection:
         except expressions.ExpressionError as error:
             if parameters is None and ("unknown name" in str(error) or isinstance(error, expressions.NonAsciiError)):
                 return None  # the parameters themselves are broken: that is the problem reported
-            self.report(path, str(error))
+            message = str(error)
+            if key_path[0] == "barriers" and key_path[-1] == "position" and "depends on t," in message:
+                message += ("; a stop that moves is written in the distance y = x - s(t) to it, where it stands "
+                            "still at 0 (docs/models.md, \"A moving stop: write the model in the distance to it\")")
+            self.report(path, message)
             return None
         return expressions.canonical(text)
 
