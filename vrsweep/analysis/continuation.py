@@ -50,7 +50,7 @@ from vrsweep.analysis.commensurate import RATIO_TOLERANCE, check_commensurate  #
 from vrsweep.analysis.diagnostics import detect_period, orbit_gain
 from vrsweep.errors import UsageError
 from vrsweep.numerics import kernel
-from vrsweep.numerics.coefficients import N_BARRIERS, PERIOD, barrier_position, grazing_barrier, grazing_scale
+from vrsweep.numerics.coefficients import N_BARRIERS, PERIOD, barrier_position, grazing_barrier
 from vrsweep.numerics.models import kernels_for
 from vrsweep.numerics.settings import CONTINUATION_DEFAULTS
 from vrsweep.numerics.shooting import periodic_map
@@ -245,7 +245,7 @@ def _parameter_derivative(problem, state, value, periods, orbit_map, relative=No
     the step), when both ends keep the orbit's impacts."""
     relative = PARAMETER_DIFFERENCE if relative is None else relative
     step = relative * max(1.0, abs(value))
-    scale = grazing_scale(problem.coefficients(value))
+    scale = grazing.scale(problem, value)
     if orbit_map.slowest_impact ** 2 < SLOW_IMPACT * scale:
         ends = [evaluate(problem, state, value + direction * step, periods) for direction in (1.0, -1.0)]
         if not any(_failure(end) or end.impacts != orbit_map.impacts for end in ends):
@@ -1324,7 +1324,7 @@ def _near_grazing(problem, orbit, proximity=GRAZING_PROXIMITY):
     to appear), or an impact slower than the root of that: reached with a speed v, an impact
     penetrates about v^2 / (2 a), a ~ 1, so both are one scale (grazing.graze_site's)."""
     touch, speed = _gaps(problem, orbit)
-    scale = grazing_scale(problem.coefficients(orbit.parameter))
+    scale = grazing.scale(problem, orbit.parameter)
     return touch < proximity * scale or speed ** 2 < proximity * scale
 
 
