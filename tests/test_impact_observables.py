@@ -95,6 +95,20 @@ def test_every_impact_at_one_phase_has_no_spread():
     assert values["impact_speed_mean"][0] == 0.5
 
 
+def test_an_impact_at_zero_speed_on_a_stop_below_has_speed_plus_zero():
+    """The kernel logs side * v-: -0.0 for a touch of a stop below at v- = +0.0 (the bouncing ball at
+    Gamma = 1, released where the table's pull is zero). A speed reads +0, as `info` and a map show it."""
+    measured = np.zeros((1, 2, kernel.N_RECORD))
+    measured[0, :, kernel.REC_IMPACTS] = 1
+    measured[0, :, kernel.REC_IMPACT_SPEED_MIN] = -0.0
+    measured[0, :, kernel.REC_IMPACT_SPEED_MAX] = -0.0
+    measured[0, :, kernel.REC_IMPACT_SPEED_SUM] = -0.0
+    measured[0, :, kernel.REC_IMPACT_COS] = 1.0
+    values = impact_observables(measured, np.array([True]), np.array([1.0]))
+    for name in ("impact_speed_min", "impact_speed_max", "impact_speed_mean"):
+        assert values[name][0] == 0.0 and not np.signbit(values[name][0]), name
+
+
 def test_a_sweep_file_holds_them_with_units(tmp_path, sweep_file):
     _, path = sweep_file(tmp_path, """
         model: original

@@ -405,9 +405,11 @@ def impact_observables(measured, ok, slow_period):
     impacts = measured[:, :, kernel.REC_IMPACTS].sum(axis=1)
     hit = ok & (impacts > 0)
     with np.errstate(invalid="ignore", divide="ignore"):
-        speed_min = np.min(measured[:, :, kernel.REC_IMPACT_SPEED_MIN], axis=1)
-        speed_max = np.max(measured[:, :, kernel.REC_IMPACT_SPEED_MAX], axis=1)
-        speed_mean = measured[:, :, kernel.REC_IMPACT_SPEED_SUM].sum(axis=1) / impacts
+        # (+ 0.0: an impact on a stop below at v- = +0.0 is logged with the speed -0.0, the kernel's
+        # side * v; a speed is written +0)
+        speed_min = np.min(measured[:, :, kernel.REC_IMPACT_SPEED_MIN], axis=1) + 0.0
+        speed_max = np.max(measured[:, :, kernel.REC_IMPACT_SPEED_MAX], axis=1) + 0.0
+        speed_mean = measured[:, :, kernel.REC_IMPACT_SPEED_SUM].sum(axis=1) / impacts + 0.0
         cos_sum = measured[:, :, kernel.REC_IMPACT_COS].sum(axis=1)
         sin_sum = measured[:, :, kernel.REC_IMPACT_SIN].sum(axis=1)
         phase = np.mod(np.arctan2(sin_sum, cos_sum), 2.0 * np.pi)
