@@ -7,15 +7,17 @@ raising ZeroDivisionError. Inside a ``prange`` loop such an exception cannot be 
 every non-finite value is already turned into a point status (``non_finite``, ``step_too_small``)
 by the kernel. It also drops the zero test before every division from the hot loop.
 
-One compile per argument *types*: numba compiles a jitted function called from another with a
+One compile per argument type: numba compiles a jitted function called from another with a
 constant argument once per constant (``rhs(t, h, 4, ...)`` is typed ``Literal[int](4)``), so
 dop853's step, which names its stages 1 to 15, compiled the model's right-hand side 15 times, and
-a dozen helpers called with constant flags twice or thrice. No function of the kernel needs its
-argument's value at typing time (none calls ``numba.literally`` or types its branches by a
-constant argument), so ``kernel_jit``'s functions are compiled for the argument's type alone; the
-constants are folded by LLVM where it inlines the call, as before. A cold dop853 sweep compiles
-in two thirds of the time, with the same results bit for bit (benchmarks/README.md, "One
-compile per argument type").
+a dozen helpers called with constant flags were compiled two to five times. No function of the
+kernel needs the constant's value to be typed (none calls ``numba.literally`` or relies on a
+branch pruned by a constant argument), so ``kernel_jit``'s functions are compiled for the
+argument's type alone, and LLVM folds the constant where it inlines the call. A cold dop853 sweep
+compiles in three quarters of the time, with the same results bit for bit and the same speed
+(benchmarks/README.md, "One compile per argument type"). The GPU's kernel is compiled from
+numba-cuda's own device copies of these functions, which keep numba-cuda's rule (the same section
+says why).
 """
 
 from numba import njit, types
