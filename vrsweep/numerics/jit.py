@@ -32,16 +32,19 @@ numba_inline.share_scope_copies(inline_closurecall)  # a fifth of each kernel's 
 
 
 def kernel_jit(function=None, **options):
-    """``njit(cache=True, error_model="numpy", **options)``, usable with or without arguments.
+    """``njit(cache=True, error_model="numpy", **options)``, compiled once per argument type
+    (_PerTypeDispatcher), usable with or without arguments.
 
     ``cache`` is False when vrsweep found no cache folder it can key by its sources
     (``numba_cache.enabled``): numba's own fallback, the package's ``__pycache__``, could load a
     kernel older than the installed code.
     """
     options = {"cache": numba_cache.enabled(), "error_model": "numpy", **options}
-    if function is None:
-        return lambda function: _compiled_per_type(njit(**options)(function))
-    return _compiled_per_type(njit(**options)(function))
+
+    def compiled(function):
+        return _compiled_per_type(njit(**options)(function))
+
+    return compiled if function is None else compiled(function)
 
 
 class _PerTypeDispatcher(CPUDispatcher):
