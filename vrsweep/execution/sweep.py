@@ -1,4 +1,4 @@
-"""A grid of points -> chunks -> the kernel in parallel (numba prange), with progress.
+"""A grid of points -> chunks -> the kernel on the CPU's threads (or a GPU), with progress.
 
 The unit of parallel work is a *line*: a sequence of grid points run one after the other,
 each starting from the previous point's final state. An ordinary sweep has lines of one
@@ -9,11 +9,9 @@ shards; each line writes only its own output slots, so the result is independent
 order, the chunking and the thread count, bit for bit.
 
 This module knows nothing of files: finished chunks are handed to a callback. The loops that
-numba compiles are in vrsweep/numerics/lines.py.
+numba compiles, and the threads that run them, are in vrsweep/numerics/lines.py.
 """
 
-import contextlib
-import threading
 import time
 
 import numba
@@ -41,38 +39,6 @@ from vrsweep.numerics.trajectory import settings_vector
 def integration_settings(integration):
     """The kernel's settings vector from a config's integration section."""
     return settings_vector(**vars(integration))
-
-
-_LAUNCH_LOCK = threading.Lock()
-
-
-@contextlib.contextmanager
-def numba_threads(threads):
-    """numba runs the kernel on ``threads`` threads (at most its pool's), and the calling thread's
-    count is put back after: numba keeps the count per Python thread, and ``vrsweep.sweep(cfg,
-    threads=1)`` left a notebook's own parallel numba code on one thread for the session."""
-    before = numba.get_num_threads()
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-    try:
-        yield
-    finally:
-        numba.set_num_threads(before)
-
-
-def kernel_launch_lock():
-    """Held around a parallel kernel's launch where numba's threading layer is not threadsafe.
-
-    numba's own ``workqueue`` layer (its fallback where neither OpenMP nor TBB loads, or asked for
-    by NUMBA_THREADING_LAYER) aborts the whole process ("Concurrent access has been detected") when
-    two Python threads launch parallel loops at once: two ``vrsweep.sweep`` calls from a notebook's
-    threads killed the kernel and every result in it. Until the first launch has picked a layer it
-    is unknown, so those launches are serialised too; ``omp`` and ``tbb`` launch concurrently.
-    """
-    try:
-        layer = numba.threading_layer()
-    except ValueError:  # no parallel loop has run yet: the layer is chosen by the first
-        return _LAUNCH_LOCK
-    return _LAUNCH_LOCK if layer == "workqueue" else contextlib.nullcontext()
 
 
 class LineRunner:
@@ -125,8 +91,7 @@ class LineRunner:
         if self.device == "cuda":
             chunk.launch = self.run_lines.launch(*arrays)
         else:
-            with kernel_launch_lock(), numba.parallel_chunksize(1), numba_threads(threads):
-                self.run_lines(*arrays)  # chunk size 1: dynamic scheduling, point costs differ tenfold
+            self.run_lines(*arrays, threads=threads)
         return chunk
 
     def finish(self, chunk):

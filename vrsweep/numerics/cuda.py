@@ -2,7 +2,7 @@
 
 One numerics source for both targets. The CPU's lines (lines.py) and the GPU's call the same
 ``kernel._integrate`` with the same method and model functions; numba compiles them for the
-CPU (njit, prange over lines) and, here, for CUDA: numba-cuda turns every njit function the loop
+CPU (njit, Python threads over lines) and, here, for CUDA: numba-cuda turns every njit function the loop
 calls into a device function. The loop allocates nothing: its work arrays come from its caller,
 which here are thread-local arrays of fixed size (cuda.local.array).
 

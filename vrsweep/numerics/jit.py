@@ -2,8 +2,9 @@
 sources), with numpy's floating-point error model.
 
 ``error_model="numpy"``: a float division by zero gives inf or nan, as in numpy, instead of
-raising ZeroDivisionError. Inside a ``prange`` loop such an exception cannot be raised cleanly
-(it surfaced as "SystemError: ... returned a result with an exception set" for g = 1e200), and
+raising ZeroDivisionError. Inside the parallel loop of 0.7.16 and before such an exception could
+not be raised cleanly (it surfaced as "SystemError: ... returned a result with an exception set"
+for g = 1e200), and
 every non-finite value is already turned into a point status (``non_finite``, ``step_too_small``)
 by the kernel. It also drops the zero test before every division from the hot loop.
 

@@ -5,7 +5,7 @@ paper's two models (model.py, kernel.py, lines.py) and for a written one (writte
     kernels_for(model).forcing_frequencies(vectors)  (..., K) every frequency of the forcing
     kernels_for(model).integrator(method, lyapunov)  one point (trajectory.simulate)
     kernels_for(model).monodromy(method)             one point with each period's tangent map
-    kernels_for(model).run_lines(method, lyapunov)   the sweep's parallel lines
+    kernels_for(model).run_lines(method, lyapunov)   the sweep's lines on the CPU's threads
     kernels_for(model).gpu_lines(method, lyapunov)   the same call, run on an NVIDIA GPU (cuda.py)
     kernels_for(model).is_cached(method, lyapunov, device)   whether the kernel compiles first (a hint)
 
@@ -110,7 +110,7 @@ class WrittenKernels:
         return self._function(f"integrate_{method}_monodromy")
 
     def run_lines(self, method, lyapunov=False):
-        return self._function(f"run_lines_{method}{'_lyapunov' if lyapunov else ''}")
+        return lines.ThreadedLines(self._function(f"run_lines_{method}{'_lyapunov' if lyapunov else ''}"))
 
     def is_cached(self, method, lyapunov=False, device="cpu"):
         from vrsweep.numerics import codegen
