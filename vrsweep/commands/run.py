@@ -54,7 +54,7 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
     from vrsweep.config import load_config
     from vrsweep.errors import UsageError
     from vrsweep.execution.estimate import check_size, format_duration
-    from vrsweep.execution.threads import available_threads, check_threading_layer
+    from vrsweep.execution.threads import available_threads
 
     if resume and overwrite:
         raise UsageError("--resume and --overwrite exclude each other")
@@ -63,8 +63,6 @@ def command(config_path, output, threads, device, overrides, quiet, resume, over
         overrides = (*overrides, f"integration.device={device}")
         words[f"integration.device={device}"] = f"--device {device}"  # a conflict names what was typed
     config = load_config(config_path, overrides, override_words=words)
-    if not dask_address or dask_address.startswith("local:"):  # remote workers run their own numba
-        check_threading_layer()
     announce_fixed_axes(config_path, overrides, config)
     requested_threads = threads
     # A remote Dask worker's thread count is the worker's business; a local one's is this machine's.

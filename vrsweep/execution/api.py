@@ -283,7 +283,7 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
     """
     from vrsweep.execution.estimate import check_size
     from vrsweep.execution.job import run_job
-    from vrsweep.execution.threads import available_threads, check_threading_layer
+    from vrsweep.execution.threads import available_threads
     from vrsweep.store.reading import load_results
 
     _check_flags(progress=progress, overwrite=overwrite, resume=resume, allow_large=allow_large)
@@ -294,7 +294,6 @@ def sweep(config, *, output=None, threads=None, progress=True, overwrite=False, 
     if resume and output is None:
         raise UsageError.naming("{resume} continues the run in a file: give its {output}", ARGUMENT_WORDS)
     threads = _capped_threads(threads)
-    check_threading_layer()
     check_size(resolved, threads or available_threads(), allow_large)  # its message says allow_large=True
     bars = []
     factory = _progress_factory(resolved, bars) if progress else None

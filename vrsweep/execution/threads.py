@@ -85,26 +85,3 @@ def word_numba_setting_warnings() -> None:
 def machine_cpus() -> int:
     """The machine's logical CPUs: the most threads (or local workers) vrsweep will start."""
     return os.cpu_count() or 1
-
-
-def check_threading_layer() -> None:
-    """UsageError (exit 2, one line) when numba cannot load the threading layer that
-    NUMBA_THREADING_LAYER (or NUMBA_THREADING_LAYER_PRIORITY) asks for: an unknown name ('bogus'), or
-    'tbb' without Intel TBB installed. numba finds out at the first parallel loop, with a traceback;
-    here its threads are started early, before any file is made. Without either variable numba's
-    default always loads (its own workqueue at worst): nothing is done."""
-    if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
-        return
-    from vrsweep.errors import UsageError
-
-    try:
-        from numba.np.ufunc import parallel
-
-        parallel._launch_threads()
-    except (ValueError, ImportError, OSError) as error:
-        words = " ".join(line.strip() for line in str(error).splitlines() if line.strip() and line.strip() != "HINT:")
-        settings = ", ".join(f"{name}={os.environ[name]}" for name in ("NUMBA_THREADING_LAYER", "NUMBA_THREADING_LAYER_PRIORITY")
-                             if name in os.environ)
-        raise UsageError(f"{settings}: numba cannot start its threads ({words}); unset it, or choose a layer "
-                         "installed here (workqueue always is)") from None
-
