@@ -153,7 +153,7 @@ class WholeNumberRange(click.ParamType):
 MAX_THREADS = 65536
 threads_option = click.option(
     "--threads", type=WholeNumberRange(min=1, max=MAX_THREADS), default=None,
-    help="Numba threads (default: all cores, or NUMBA_NUM_THREADS).",
+    help="Threads for the kernel (default: all cores, or NUMBA_NUM_THREADS).",
 )
 quiet_option = click.option("--quiet", "-q", is_flag=True, help="No progress bar or summary.")
 overwrite_option = click.option("--overwrite", is_flag=True, help="Replace an existing output file.")

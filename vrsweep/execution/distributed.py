@@ -12,11 +12,10 @@ Dask is an optional extra (``pip install "vrsweep[dask]"``, from a clone ``pip i
 ``[slurm]`` adds dask-jobqueue for examples/slurm/dask_slurm.py): nothing here imports it at module
 level, so ``vrsweep run`` without ``--dask`` never loads it.
 
-Threads: a task runs the kernel with ``--threads`` numba threads, or with as many as its worker
+Threads: a task runs the kernel's lines on ``--threads`` threads, or on as many as its worker
 has (``--nthreads``) when not given. Tasks in one worker process take a lock around the kernel,
-so a worker with several Dask threads still runs one parallel kernel at a time (numba's thread
-pool is per process; two kernels at once would oversubscribe the cores, and the ``workqueue``
-threading layer aborts on concurrent launches).
+so a worker with several Dask threads still runs one chunk's lines at a time: each chunk already
+spreads over the worker's threads, and two at once would oversubscribe its cores.
 """
 
 import contextlib
@@ -78,7 +77,7 @@ def parse_local(address):
     if n < 1:
         raise InvalidArgument("Dask address", address, "expected local:N with N >= 1 workers (e.g. local:4)")
     most = machine_cpus()
-    if n > most:  # each worker is a process with its own numba threads: more is only slower
+    if n > most:  # each worker is a process with its own kernel threads: more is only slower
         raise InvalidArgument("Dask address", address,
                               f"local:N starts N worker processes; this machine has {most} CPUs, so N <= {most}")
     return n
