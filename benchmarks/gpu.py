@@ -5,7 +5,7 @@
 On a (g, Omega) map of g in [5, 35] x Omega in [3, 6], rtol 1e-9, 100 + 100 periods (the issue's
 map), for each model (original: eq2.1, effective: eq2.10):
 
-- CPU: vrsweep's sweep lines (lines.py, prange over every core numba has) with each method, on a
+- CPU: vrsweep's sweep lines (lines.py, a thread on every core numba has) with each method, on a
   random sample of the map's points (the whole map would take the CPU hours): points per second.
 - GPU: the same lines on the card (numerics/cuda.py, a thread per point) with each method, on the
   whole map where the time budget allows, else on as many points as it does: points per second,
