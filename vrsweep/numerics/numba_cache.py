@@ -11,7 +11,7 @@ left-over folder as an empty namespace package named ``vrsweep`` ahead of a late
 or, when ``NUMBA_CACHE_DIR`` is set, to the same sub-folder of it.
 
 Why a digest of the sources in the name: numba checks a cached function against its *own* source
-file only. The parallel loops in ``sweep.py`` have the whole kernel compiled into them, so after
+file only. The sweep's loops in ``lines.py`` have the whole kernel compiled into them, so after
 an edit of ``kernel.py`` alone (a ``git pull`` into an editable install, a patched release with
 the same version number) numba would load the old kernel and compute with it, silently. A folder
 per state of the package's sources makes every change compile afresh; the old folders are inert
