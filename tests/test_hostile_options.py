@@ -196,14 +196,14 @@ def test_out_of_memory_anywhere_is_one_line(branch, tmp_path, invoke, monkeypatc
 # ---------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("setting", [{"NUMBA_THREADING_LAYER": "bogus"}, {"NUMBA_THREADING_LAYER": "tbb"},
-                                     {"NUMBA_THREADING_LAYER_PRIORITY": "tbb omp"}])
-def test_a_threading_layer_numba_cannot_load_does_not_stop_a_run(tmp_path, write_config, setting):
-    """A real process. numba's threading layers are for its parallel loops, and vrsweep's lines run on
-    Python's threads (numerics/lines.py): the setting is read by nothing, and the run computes. Up to
-    0.7.16 it was refused in one line, exit 2, where numba would have failed at the first loop."""
+def test_a_threading_layer_numba_cannot_load_does_not_stop_a_run(tmp_path, write_config):
+    """A real process (one: it may have to compile the kernel). numba's threading layers are for its
+    parallel loops, and vrsweep's lines run on Python's threads (numerics/lines.py): the settings are
+    read by nothing, and the run computes. Up to 0.7.16 each was refused in one line, exit 2, where
+    numba would have failed at the first loop."""
     config = write_config(tmp_path, TINY)
     out = tmp_path / "out.h5"
+    setting = {"NUMBA_THREADING_LAYER": "bogus", "NUMBA_THREADING_LAYER_PRIORITY": "tbb omp"}
     done = subprocess.run([sys.executable, "-m", "vrsweep", "run", str(config), "-o", str(out), "-q",
                            "--threads", "2"],
                           capture_output=True, text=True, env={**os.environ, **setting}, timeout=300)
