@@ -370,3 +370,38 @@ def test_the_stackless_walk_finds_what_a_stack_of_pieces_finds_to_the_last_bit(d
         np.testing.assert_array_equal(bracket_turning, turning)
         walked += 1
     assert walked > 200
+
+
+
+def test_a_force_that_only_touches_zero_keeps_the_mass_and_one_that_pulls_releases_it_at_the_root():
+    """impact.release_time on the bouncing ball's force on the table, 1 - Gamma cos t, from t = 1 in
+    scans of 2 pi / 64. At Gamma = 1 it touches 0 at t = 2 pi (1 - cos t is 0 in doubles within
+    1.5e-8 of it, and at the double nearest 2 pi, where the kernel's scan lands as a period ends)
+    and presses again, so the ball stays. At Gamma > 1 it pulls from t = 2 pi - arccos(1/Gamma) on,
+    and the release is the first t found past that root. (A pull shorter than a scan,
+    arccos(1/Gamma) < pi / 64 below Gamma = 1.0122, may be stepped over: docs/models.md,
+    max_step.)"""
+    import math
+
+    import numba
+
+    from vrsweep.numerics.impact import release_time
+
+    @numba.njit
+    def force(t, c, barrier):  # into the table, as barrier_force's are
+        return 1.0 - c[0] * math.cos(t)
+
+    @numba.njit
+    def scan(c, t_limit):
+        return release_time(force, 0, 1.0, t_limit, c, 2 * math.pi / 64, 10_000)
+
+    ball = np.array([1.0])
+    assert force(2 * math.pi, ball, 0) == 0.0  # the touch, as the scan meets it
+    for t_limit in (2 * math.pi, 1.0 + 2 * math.pi):
+        t, _ = scan(ball, t_limit)
+        assert t == t_limit + 1.0  # still stuck at the end (up to 0.7.17: let go at t = 2 pi)
+    for gamma in (1.02, 1.1, 1.5):
+        c = np.array([gamma])
+        t, _ = scan(c, 1.0 + 2 * math.pi)
+        assert force(t, c, 0) < 0.0 <= force(np.nextafter(t, 0.0), c, 0), gamma  # to the last bit
+        assert t == pytest.approx(2 * math.pi - math.acos(1.0 / gamma), rel=1e-14), gamma

@@ -176,14 +176,15 @@ def test_a_checkpoint_of_a_version_whose_points_differ_refuses_naming_it(tmp_pat
 
 
 @pytest.mark.parametrize("written_by", ["0.7.0", "0.7.1", "0.7.2", "0.7.3", "0.7.4", "0.7.5", "0.7.6", "0.7.7",
-                                        "0.7.8", "0.7.9", "0.7.10", "0.7.13"])
+                                        "0.7.8", "0.7.9", "0.7.10", "0.7.13", "0.7.14", "0.7.17"])
 def test_a_checkpoint_of_070_refuses_naming_what_changed(tmp_path, written_by):
     """0.7.1 reads a periodic point's R over whole cycles of the response frequency too, 0.7.2
     takes R_err from the spread of |Q| (its last digits), 0.7.3 sticks a rebound whose flight
     is below rounding, 0.7.4 locates a written model's kinks and 0.7.5 its jumps, with a frozen
     mode, 0.7.6 jumps the tangent vectors there, 0.7.7 slides on them, 0.7.8 leaves a slide on a
     short step, 0.7.9 slides from the arrival, 0.7.10 counts a slide's first fields in n_rhs and
-    0.7.14 holds a fractional power of a kink beyond its surface: a checkpoint of any is not this
+    0.7.14 holds a fractional power of a kink beyond its surface, 0.7.18 lets a stuck mass go only where
+    the force pulls it away: a checkpoint of any is not this
     version's, so it is not continued; the message names the latest change."""
     from vrsweep.execution.job import run_job
 
@@ -193,7 +194,7 @@ def test_a_checkpoint_of_070_refuses_naming_what_changed(tmp_path, written_by):
     with h5py.File(out, "r+") as f:
         f.attrs["vrsweep_version"] = written_by
     before = out.read_bytes()
-    with pytest.raises(ResultFileError, match=f"written by vrsweep {written_by}.*fractional power of a kinked quantity"
-                                              ".*since 0.7.14"):
+    with pytest.raises(ResultFileError, match=f"written by vrsweep {written_by}.*where the force at rest on its stop"
+                                              ".*since 0.7.18"):
         run_job(config, out, threads=1, resume=True)
     assert out.read_bytes() == before

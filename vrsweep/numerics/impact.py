@@ -440,7 +440,7 @@ def hermite_reach(x0, v0, a0, x1, v1, a1, h, level):
 
 @kernel_jit(inline="always")  # a function passed to a call numba does not inline is a dynamic global: no cache
 def release_time(barrier_force, barrier, t_start, t_limit, coefficients, scan_step, max_scans):
-    """First t in (t_start, t_limit] where the force at the barrier stops pushing into it.
+    """First t in (t_start, t_limit] where the force at the barrier pulls the mass away from it.
 
     barrier_force(t, coefficients, barrier): the model's acceleration of a mass at rest on that
     barrier, positive into it. The force is an explicit function of t, so it is scanned in steps of ``scan_step``
@@ -448,6 +448,12 @@ def release_time(barrier_force, barrier, t_start, t_limit, coefficients, scan_st
     sign change is bisected to rounding. Returns (t, scans): t = t_limit + 1 if the mass stays
     stuck, NaN if ``max_scans`` scan intervals did not reach either (a fast forcing period
     so short that the scan would never end, e.g. Omega = 1e12).
+
+    The mass leaves where the force is negative, not where it is zero: a force that only touches
+    zero and presses again (the bouncing ball at Gamma = 1, 1 - cos t, which rounds to 0 within
+    1.5e-8 of each t = 2 pi k) leaves the mass at rest, where releasing it there logged an impact
+    of speed 0 moments later, a rounding's worth of times a period (up to 0.7.17). Where the force
+    does change sign nothing moves: the mass at rest under no force stays at rest until the pull.
     """
     t_a = t_start
     scans = 0
@@ -456,12 +462,12 @@ def release_time(barrier_force, barrier, t_start, t_limit, coefficients, scan_st
             return np.nan, scans
         scans += 1
         t_b = min(t_a + scan_step, t_limit)
-        if barrier_force(t_b, coefficients, barrier) <= 0.0:
+        if barrier_force(t_b, coefficients, barrier) < 0.0:
             for _ in range(MAX_ROOT_ITERATIONS):
                 t_mid = 0.5 * (t_a + t_b)
                 if t_mid <= t_a or t_mid >= t_b:
                     break
-                if barrier_force(t_mid, coefficients, barrier) <= 0.0:
+                if barrier_force(t_mid, coefficients, barrier) < 0.0:
                     t_b = t_mid
                 else:
                     t_a = t_mid
