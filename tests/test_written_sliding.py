@@ -403,3 +403,31 @@ def test_continuations_tops_count_a_stick_at_the_top_of_the_swing():
     inside = (top[0] + 0.1 * (top[1] - top[0]), top[1] - 0.1 * (top[1] - top[0]))
     windowed = periodic_map(coefficients, states[first - 1], settings, 1, model=config.model, transparent=inside)
     assert abs(windowed.window_x_max - x_s) < 1e-8, (windowed.window_x_max, x_s)
+
+
+def test_a_force_that_only_reaches_mu_keeps_the_mass_at_rest():
+    """x'' = -mu sign(v) + F cos(omega t) at F = mu exactly: the force on the mass at rest never
+    exceeds friction, it only reaches mu at t = 2 pi k / omega, so the mass at rest stays at rest
+    (x constant, stuck the whole window). There F cos(omega t) is mu in doubles within 1.5e-8 of
+    each period's end, where the slide's exit scan ends its period: up to 0.7.17 the slide ended
+    there (a field tangent to v = 0 taken for one leading away), and the mass crept by 1e-18 a
+    period between sticks (stuck 0.99999945 of the window, 231 steps for 13)."""
+    import vrsweep
+
+    config = """
+model:
+  acceleration: "-mu*sign(v) + F*cos(omega*t)"
+  parameters: {mu: 1.0, F: 1.0, omega: 1.0}
+  period: "2*pi/omega"
+  response: {frequency: omega, scale: F}
+initial: {x: 0.0, v: 0.0}
+sweep:
+  F: {values: [0.5, 1.0]}
+integration: {transient_periods: 20, measure_periods: 20}
+"""
+    result = vrsweep.sweep(config, progress=False)
+    for F in (0.5, 1.0):
+        point = result.sel(F=F)
+        assert int(point["status"]) == Status.OK
+        assert float(point["stuck_fraction"]) == 1.0, F
+        assert float(point["x_min"]) == float(point["x_max"]), F  # at rest through the window

@@ -1093,10 +1093,12 @@ SLIDE_SCAN_SMALLEST = 1.0 / 1024.0
 def _sliding_exit(rhs, switch_signs, t_start, t_limit, t0, x0, speed, gain, bit, coefficients, y, f, scratch,
                   scan_step, max_scans):
     """The end of a sliding motion x = x0 + speed (t - t0), v = speed, from t_start: the first t in
-    (t_start, t_limit] where the field on one side no longer points into the surface
-    (_sliding_rates), scanned and bisected to rounding, as a stuck mass's release
-    (impact.release_time): the t returned is the first found past the root, where that side's
-    field leads away. Returns (t, scans, side): side -1 or +1, the side of s it leaves to; 0
+    (t_start, t_limit] where the field on one side leads away from the surface (_sliding_rates),
+    scanned and bisected to rounding, as a stuck mass's release (impact.release_time): the t
+    returned is the first found past the root. A field that only turns tangent (its ds/dt 0) and
+    back keeps the slide, as a force that only touches zero keeps a stuck mass: dry friction
+    mu sign(v) against F cos t at F = mu exactly (0 in doubles at the double nearest 2 pi, where a
+    period's scan ends) let the resting mass go there, up to 0.7.17, and it crept by 1e-18 a period. Returns (t, scans, side): side -1 or +1, the side of s it leaves to; 0
     and t_limit + 1 if it still slides at t_limit; t NaN if max_scans intervals reached neither.
     The fields are evaluated at scans + 1 points (_sliding_rates: two each), the start's included.
 
@@ -1126,7 +1128,7 @@ def _sliding_exit(rhs, switch_signs, t_start, t_limit, t0, x0, speed, gain, bit,
         t_b = min(t_a + step, t_limit)
         below, above = _sliding_rates(rhs, switch_signs, t_b, x0 + speed * (t_b - t0), speed, gain, bit,
                                       coefficients, y, f, scratch)
-        if not (below > 0.0 and above < 0.0):
+        if below < 0.0 or above > 0.0:
             for _ in range(MAX_ROOT_ITERATIONS):
                 t_mid = 0.5 * (t_a + t_b)
                 if t_mid <= t_a or t_mid >= t_b:
@@ -1134,7 +1136,7 @@ def _sliding_exit(rhs, switch_signs, t_start, t_limit, t0, x0, speed, gain, bit,
                 middle_below, middle_above = _sliding_rates(rhs, switch_signs, t_mid, x0 + speed * (t_mid - t0), speed,
                                                             gain, bit, coefficients, y, f, scratch)
                 scans += 1
-                if middle_below > 0.0 and middle_above < 0.0:
+                if middle_below >= 0.0 and middle_above <= 0.0:
                     t_a = t_mid
                 else:
                     t_b = t_mid

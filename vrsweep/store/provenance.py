@@ -138,7 +138,8 @@ RESULT_EPOCHS = (
                "sqrt(abs(x))) is 0 beyond its surface in the steps that hold a side, where it was NaN, and "
                "constant multiples of a switching function are one surface (v and -2*v flipped as two)"),
     ("0.7.18", "a stuck mass is let go where the force at rest on its stop pulls it away, not where that force "
-               "only touches zero (the bouncing ball at Gamma = 1 was let go at each period's end)"),
+               "only touches zero (the bouncing ball at Gamma = 1 was let go at each period's end), and a slide "
+               "ends where a field leads away from its surface, not where one only turns tangent"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -192,8 +193,10 @@ constant multiples of a switching function as one surface (a nested max of x + k
 switches change); 0.7.18 lets a stuck mass go where the force at rest on its stop is negative, not
 where it is zero (impact.release_time: the bouncing ball's 1 - cos t at Gamma = 1 is 0 at the
 double nearest 2 pi, where each period's scan ends, so the ball lying on the table was let go
-there and met it again at speed 0, 1.28 impacts a period; the paper's models and every force that
-changes sign where no scan lands on its zero unchanged bit for bit). Versions of one epoch
+there and met it again at speed 0, 1.28 impacts a period), and ends a slide where a side's field
+leads away from the surface, not where it is tangent (kernel._sliding_exit: dry friction mu sign(v)
+against F cos t at F = mu let the resting mass go at each period's end); the paper's models, and
+every force that changes sign where no scan lands on its zero, unchanged bit for bit. Versions of one epoch
 compute the same points; one file must not mix epochs (a resume, a merge). Add an epoch whenever
 a change of the numerics or of the estimators changes results."""
 RESULTS_SINCE_VERSION, RESULTS_CHANGE = RESULT_EPOCHS[-1]
