@@ -1098,8 +1098,9 @@ def _sliding_exit(rhs, switch_signs, t_start, t_limit, t0, x0, speed, gain, bit,
     returned is the first found past the root. A field that only turns tangent (its ds/dt 0) and
     back keeps the slide, as a force that only touches zero keeps a stuck mass: dry friction
     mu sign(v) against F cos t at F = mu exactly (0 in doubles at the double nearest 2 pi, where a
-    period's scan ends) let the resting mass go there, up to 0.7.17, and it crept by 1e-18 a period. Returns (t, scans, side): side -1 or +1, the side of s it leaves to; 0
-    and t_limit + 1 if it still slides at t_limit; t NaN if max_scans intervals reached neither.
+    period's scan ends) let the resting mass go there, up to 0.7.17, and it crept by 1e-18 a period.
+    Returns (t, scans, side): side -1 or +1, the side of s it leaves to; 0 and t_limit + 1 if it
+    still slides at t_limit; t NaN if max_scans intervals reached neither.
     The fields are evaluated at scans + 1 points (_sliding_rates: two each), the start's included.
 
     The scan step is scan_step (a share of the fastest force's period: the explicit time), cut
