@@ -104,6 +104,24 @@ def test_the_ball_lies_below_gamma_1_and_bounces_once_a_period_as_the_closed_for
     assert int(result.sel(Gamma=1.6)["period"]) == 2  # beyond DOUBLING = 1.5268
 
 
+@pytest.mark.parametrize("gamma", [0.5, 1.0])
+def test_a_ball_laid_on_the_table_lies_there_with_no_impact(gamma):
+    """Laid on the table at t = 0 (y = 0, y' = 0), where its force on it, 1 - Gamma cos t, is 0 at
+    Gamma = 1 and presses from there on: the ball is stuck from t = 0 to the end, and nothing hits
+    the table (up to 0.7.17 a ball under no force was let fly, and met the table at speed 8e-25
+    at t = 1.5e-8)."""
+    from vrsweep.config import parse_config
+    from vrsweep.numerics.trajectory import settings_vector, simulate
+
+    config = parse_config(EXAMPLE.read_text(), "ball.yaml", [f"Gamma={gamma}", "initial.v=0"])
+    coefficients = kernels_for(config.model).coefficients(config.parameters)
+    settings = settings_vector(rtol=1e-10, atol=1e-12, transient_periods=2, measure_periods=2)
+    run = simulate(coefficients, [0.0, 0.0], settings, method="rk45", model=config.model)
+    assert run.status == Status.OK
+    assert len(run.impacts) == 0, run.impacts
+    assert run.sticks.tolist() == [[0.0, 4 * 2 * math.pi]]
+
+
 def test_continuation_finds_the_fold_and_the_doubling_and_follows_them_in_r(tmp_path, invoke):
     branch = tmp_path / "branch.h5"
     done = invoke("continue", EXAMPLE, "-o", branch, "-q")

@@ -220,6 +220,21 @@ def test_a_start_at_rest_pressed_onto_the_stop_is_stuck_from_t0_not_an_impact():
     np.testing.assert_allclose(run.impacts[:, 0], ref["impact_times"], rtol=0, atol=1e-8)
 
 
+def test_a_start_at_rest_under_no_force_is_stuck_until_the_force_pulls_and_then_moves_as_scipy():
+    """x(0) = Delta, v(0) = 0 with F = Delta: the force at rest, -Delta + F cos(omega t), is 0 at
+    t = 0 and pulls from there on. The mass under no force stays at rest until the pull (a zero
+    keeps the mode, as at a release: impact.release_time), which in doubles begins where
+    cos(omega t) falls below 1, 1.5e-8 / omega on; from there it moves as SciPy's free start does."""
+    config, run = _run(LINEAR, 0, 4, ["initial.x=0.5", "initial.v=0", "F=0.5", "r=0.5"])
+    p = config.parameters
+    assert run.status == Status.OK
+    assert run.sticks[0, 0] == 0.0 and 0.0 < run.sticks[0, 1] < 2e-8 / p["omega"]
+    ref = reference(_linear(p), [(p["Delta"], 1.0, 0.5)], 0.5, 0.0, p["omega"], 0, 4)
+    assert len(run.impacts) == len(ref["impact_times"]) > 0
+    assert run.impacts[0, 0] > 0.1  # nothing at t = 0
+    np.testing.assert_allclose(run.impacts[:, 0], ref["impact_times"], rtol=0, atol=1e-8)
+
+
 @pytest.mark.parametrize("v0, F", [(0.0, 0.3), (-0.4, 1.0)])
 def test_a_start_on_the_stop_leaving_it_matches_scipy(v0, F):
     """At rest with the force pulling away (-Delta + 0.3 < 0), or moving away: the state after a

@@ -455,13 +455,16 @@ def _integrate(rhs, stage_rhs, tangent, barrier_force, switch_signs, switch_salt
     t_boundary = slow_period
     start_period(period_records[0], y[X], tangents)
     next_sample = emit_state(sample_times, samples, 0, 0.0, y[X], y[V])
-    # A start at rest on a barrier that the force presses it into is stuck from t = 0 (a mass laid
-    # on the stop): no impact happened, where the first step would log one of speed 0.
+    # A start at rest on a barrier that the force does not pull away from is stuck from t = 0 (a
+    # mass laid on the stop): no impact happened, where the first step would log one of speed 0.
+    # Under no force at all it is stuck too, as a zero keeps a stuck mass (impact.release_time):
+    # it leaves where the force pulls, and a force that presses next no longer logs that impact
+    # (the bouncing ball laid on the table at Gamma = 1, up to 0.7.17).
     for barrier in range(n_barriers):
         slot = BARRIER + BARRIER_VALUES * barrier
         on_side = coefficients[slot + SIDE]
         if (not stuck and y[V] == 0.0 and on_side * y[X] >= on_side * coefficients[slot + POSITION]
-                and barrier_force(t, coefficients, barrier) > 0.0):
+                and barrier_force(t, coefficients, barrier) >= 0.0):
             stuck = True
             stuck_at = barrier
             n_sticks = log_stick_start(stick_log, n_sticks, t)

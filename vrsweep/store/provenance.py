@@ -138,8 +138,9 @@ RESULT_EPOCHS = (
                "sqrt(abs(x))) is 0 beyond its surface in the steps that hold a side, where it was NaN, and "
                "constant multiples of a switching function are one surface (v and -2*v flipped as two)"),
     ("0.7.18", "a stuck mass is let go where the force at rest on its stop pulls it away, not where that force "
-               "only touches zero (the bouncing ball at Gamma = 1 was let go at each period's end), and a slide "
-               "ends where a field leads away from its surface, not where one only turns tangent"),
+               "only touches zero (the bouncing ball at Gamma = 1 was let go at each period's end), a mass laid on a "
+               "stop under no force is stuck, and a slide ends where a field leads away from its surface, not where "
+               "one only turns tangent"),
 )
 """The versions from which points changed, and why: 0.2.0 decides impacts on each step's dense
 output (Bernstein form) and takes longer steps on the effective model, so a point of an earlier
@@ -193,7 +194,8 @@ constant multiples of a switching function as one surface (a nested max of x + k
 switches change); 0.7.18 lets a stuck mass go where the force at rest on its stop is negative, not
 where it is zero (impact.release_time: the bouncing ball's 1 - cos t at Gamma = 1 is 0 at the
 double nearest 2 pi, where each period's scan ends, so the ball lying on the table was let go
-there and met it again at speed 0, 1.28 impacts a period), and ends a slide where a side's field
+there and met it again at speed 0, 1.28 impacts a period; a start at rest on a stop under no force
+is stuck from t = 0, where it flew and met the stop at speed 0), and ends a slide where a side's field
 leads away from the surface, not where it is tangent (kernel._sliding_exit: dry friction mu sign(v)
 against F cos t at F = mu let the resting mass go at each period's end); the paper's models, and
 every force that changes sign where no scan lands on its zero, unchanged bit for bit. Versions of one epoch
